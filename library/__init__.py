@@ -1,0 +1,19 @@
+"""mbcomp's standard component library, written only against mbcomp's public API.
+
+Importable as ``mbcomp.library``. Every class here is an example of a role contract
+(:mod:`mbcomp.roles`); user libraries are written the same way.
+"""
+from .sources import World, Fixed
+from .parts import FixedTranslation, FixedRotation, RigidBody, PointMass
+from .joints import Revolute, Prismatic, Spherical, Weld, FreeMotion
+from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
+from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
+                   TranslationalSpringDamper, Torque, Force, PrescribedMotion)
+
+__all__ = [
+    "World", "Fixed", "FixedTranslation", "FixedRotation", "RigidBody", "PointMass",
+    "Revolute", "Prismatic", "Spherical", "Weld", "FreeMotion",
+    "Spring", "Damper", "SpringDamper", "WorldForce", "WorldTorque",
+    "RotationalSpring", "RotationalDamper", "RotationalSpringDamper", "TranslationalSpringDamper",
+    "Torque", "Force", "PrescribedMotion",
+]

@@ -1,0 +1,197 @@
+"""One-dimensional elements on joint axes: springs, dampers, actuators, prescribed motion.
+
+Connect them to a 1-DOF joint's ``axis`` flange (moves with the joint coordinate) and, for
+two-flange elements, its ``support`` flange (the joint's zero, fixed to frame_a). A force
+put on ``axis`` acts on frame_b along/about the joint axis, with the reaction on frame_a.
+"""
+import numpy as np
+import sympy as sp
+
+from mbcomp import Drive, Flange, FlangeElement, Param
+from mbcomp.errors import Problem, SimulationError
+
+
+class _TwoFlange(FlangeElement):
+    flange_a = Flange("first flange (e.g. a joint's support)")
+    flange_b = Flange("second flange (e.g. a joint's axis)")
+
+    def flange_forces(self, t, states, p):
+        (sa, va), (sb, vb) = states["flange_a"], states["flange_b"]
+        f = self.law(sb - sa, vb - va, p)  # > 0 opposes a positive relative motion
+        return {"flange_a": f, "flange_b": -f}
+
+
+class RotationalSpring(_TwoFlange):
+    """Linear torsional spring: torque ``c (phi_rel - phi_rel0)`` with ``phi_rel = phi_b - phi_a``.
+
+    Examples
+    --------
+    >>> from mbcomp.library import RotationalSpring
+    >>> RotationalSpring(c=5.0).p.c
+    5.0
+    """
+
+    c = Param(1.0, unit="N m/rad", doc="spring rate", check="nonnegative")
+    phi_rel0 = Param(0.0, unit="rad", doc="unstretched relative angle")
+
+    def law(self, s, v, p):
+        return p.c * (s - p.phi_rel0)
+
+    def potential(self, states, p):
+        return 0.5 * p.c * (states["flange_b"][0] - states["flange_a"][0] - p.phi_rel0) ** 2
+
+
+class RotationalDamper(_TwoFlange):
+    """Linear torsional damper: torque ``d w_rel``.
+
+    Examples
+    --------
+    >>> from mbcomp.library import RotationalDamper
+    >>> RotationalDamper(d=0.1).p.d
+    0.1
+    """
+
+    d = Param(0.0, unit="N m s/rad", doc="damping coefficient", check="nonnegative")
+
+    def law(self, s, v, p):
+        return p.d * v
+
+
+class RotationalSpringDamper(RotationalSpring):
+    """Torsional spring and damper in parallel.
+
+    Examples
+    --------
+    >>> from mbcomp.library import RotationalSpringDamper
+    >>> RotationalSpringDamper(c=1.0, d=0.2).p.d
+    0.2
+    """
+
+    d = Param(0.0, unit="N m s/rad", doc="damping coefficient", check="nonnegative")
+
+    def law(self, s, v, p):
+        return p.c * (s - p.phi_rel0) + p.d * v
+
+
+class TranslationalSpringDamper(_TwoFlange):
+    """Linear spring and damper along a slider axis: force ``c (s_rel - s_rel0) + d v_rel``.
+
+    Examples
+    --------
+    >>> from mbcomp.library import TranslationalSpringDamper
+    >>> TranslationalSpringDamper(c=100.0).p.c
+    100.0
+    """
+
+    c = Param(0.0, unit="N/m", doc="spring rate", check="nonnegative")
+    d = Param(0.0, unit="N s/m", doc="damping coefficient", check="nonnegative")
+    s_rel0 = Param(0.0, unit="m", doc="unstretched relative position")
+
+    def law(self, s, v, p):
+        return p.c * (s - p.s_rel0) + p.d * v
+
+    def potential(self, states, p):
+        return 0.5 * p.c * (states["flange_b"][0] - states["flange_a"][0] - p.s_rel0) ** 2
+
+
+class _Actuator(FlangeElement):
+    flange_b = Flange("the driven flange (a joint's axis)")
+
+    def flange_forces(self, t, states, p):
+        s, v = states["flange_b"]
+        law = getattr(p, self.value_name)
+        val = law(t, s, v) if callable(law) else law
+        try:
+            val = float(val)
+        except (TypeError, ValueError):
+            val = np.nan
+        if not np.isfinite(val):
+            raise SimulationError(f"{self.path}: the {self.value_name} law returned a non-finite value at t={t:g} "
+                                  f"(s={s:g}, v={v:g}) -> fix the law")
+        return {"flange_b": val}
+
+
+class Torque(_Actuator):
+    """Torque on a rotational flange: a constant or a law ``tau(t, phi, w)``.
+
+    The seed's motor law ``Md = M0 - dM*w`` is one line:
+
+    Examples
+    --------
+    >>> from mbcomp.library import Torque
+    >>> M0, dM = 1.0, 0.5
+    >>> motor = Torque(tau=lambda t, phi, w: M0 - dM * w)
+    >>> motor.p.tau(0.0, 0.0, 2.0)
+    0.0
+    """
+
+    value_name = "tau"
+    tau = Param(0.0, unit="N m", kind="law", doc="torque about the axis, or tau(t, phi, w)")
+
+
+class Force(_Actuator):
+    """Force on a translational flange: a constant or a law ``f(t, s, v)``.
+
+    Examples
+    --------
+    >>> from mbcomp.library import Force
+    >>> Force(f=lambda t, s, v: -3.0 * s).p.f(0, 1.0, 0)
+    -3.0
+    """
+
+    value_name = "f"
+    f = Param(0.0, unit="N", kind="law", doc="force along the axis, or f(t, s, v)")
+
+
+class PrescribedMotion(Drive):
+    """Prescribes the coordinate of the joint axis on ``flange_b``: ``s = s(t)``.
+
+    A rheonomic constraint: the joint's degree of freedom is removed, and the force or
+    torque needed to impose the motion is the joint's reaction along its axis (output
+    ``tau``/``f`` of the drive). ``s`` is a number, a string in ``t`` (``"0.1*sin(2*t)"``),
+    or a callable; a callable must either accept a sympy symbol (so mbcomp differentiates it
+    once) or come with ``v`` and ``a`` callables.
+
+    Examples
+    --------
+    >>> from mbcomp.library import PrescribedMotion
+    >>> d = PrescribedMotion(s="0.5*t**2")
+    >>> d.motion(2.0, d.p)
+    (2.0, 2.0, 1.0)
+    """
+
+    s = Param(0.0, unit="m or rad", kind="any", doc="coordinate law s(t)")
+    v = Param(None, unit="m/s or rad/s", kind="any", doc="rate law ds/dt (optional)")
+    a = Param(None, unit="m/s^2 or rad/s^2", kind="any", doc="acceleration law (optional)")
+
+    def __init__(self, **values):
+        super().__init__(**values)
+        self._laws, self._why = self._derive(self.p)
+
+    @staticmethod
+    def _derive(p):
+        if p.v is not None and p.a is not None and callable(p.s):
+            return (p.s, p.v, p.a), None
+        t = sp.Symbol("t", real=True)
+        try:
+            if callable(p.s):
+                expr = sp.sympify(p.s(t))
+            else:
+                expr = sp.sympify(p.s, locals={"t": t})
+            if expr.free_symbols - {t}:
+                return None, f"s(t) has unknown symbols {sorted(map(str, expr.free_symbols - {t}))}"
+        except Exception as exc:  # numpy functions on a symbol, bad strings
+            return None, f"s(t) could not be differentiated symbolically ({type(exc).__name__}: {exc})"
+        fs = [sp.lambdify(t, e, "numpy") for e in (expr, sp.diff(expr, t), sp.diff(expr, t, 2))]
+        return tuple(fs), None
+
+    def check_params(self, p):
+        why = getattr(self, "_why", None)
+        if why:
+            return [Problem(f"{self.path}.s", why,
+                            "write s with sympy functions or as a string in t, or pass v= and a= callables")]
+        return []
+
+    def motion(self, t, p):
+        s, v, a = (float(f(t)) for f in self._laws)
+        return s, v, a

@@ -1,0 +1,247 @@
+"""Joints: relative kinematics, loop-closure constraints, and 1-D axis flanges.
+
+Each joint is three short pieces: its relative motion (tree edge), its constraint
+equations (cut joint), and its axis (where drives and springs act). Reactions are computed
+by the assembler for every joint: ``f``/``tau`` exerted on frame_b through the joint,
+resolved in frame_b.
+"""
+import numpy as np
+
+from mbcomp import Flange, Joint, Param
+from mbcomp.jets import local_point, local_vector, position_constraints, rigid_constraints
+from mbcomp.kinematics import cross, matrix_to_quat, perpendicular_pair, quat_multiply, quat_rate, quat_to_matrix, rot_axis
+from mbcomp.roles import split_start
+
+from .checks import rotation_matrix
+from .parts import _Rigid
+
+_E = np.eye(3)
+
+
+def _axis(p):
+    return p.n / np.linalg.norm(p.n)
+
+
+def _rotvec_quat(d):
+    ang = np.linalg.norm(d)
+    if ang < 1e-300:
+        return np.array([1.0, 0.0, 0.0, 0.0])
+    return np.concatenate(([np.cos(ang / 2)], np.sin(ang / 2) * d / ang))
+
+
+def _quat_increment(Q, d):
+    Qn = quat_multiply(Q, _rotvec_quat(d))
+    return Qn / np.linalg.norm(Qn)
+
+
+class Revolute(Joint):
+    """Hinge: frame_b rotates about ``n`` (frame_a coordinates) by angle ``phi``.
+
+    Coordinates ``phi`` (rad) and speed ``w`` (rad/s). Flanges ``axis``/``support`` let
+    drives, springs and dampers act on ``phi``.
+
+    Examples
+    --------
+    >>> from mbcomp.library import Revolute
+    >>> j = Revolute(n=(0, 0, 1), phi0=0.5, w0=1.0)
+    >>> j.start(j.p)[0]
+    array([0.5])
+    """
+
+    coordinates = (("phi", "rad"),)
+    speeds = (("w", "rad/s"),)
+    axis_kind = "rotational"
+    axis = Flange("rotational axis flange (phi, torque about the axis)", optional=True)
+    support = Flange("support flange at phi = 0 (fixed to frame_a)", optional=True)
+    n = Param((0.0, 0.0, 1.0), unit="1", shape=(3,), doc="hinge axis direction, frame_a coordinates", check="nonzero")
+    phi0 = Param(None, unit="rad", kind="start", doc="start angle (fixed; wrap in Guess to let init move it)")
+    w0 = Param(None, unit="rad/s", kind="start", doc="start angular rate (fixed unless a Guess)")
+
+    def start(self, p):
+        q, qf = split_start(p.phi0, 1)
+        u, uf = split_start(p.w0, 1)
+        return q, np.array([qf]), u, np.array([uf])
+
+    def relative(self, q, p):
+        return rot_axis(p.n, q[0]), np.zeros(3)
+
+    def motion(self, q, p):
+        return _axis(p)[:, None], np.zeros((3, 1))
+
+    def constraints(self, a, b, p):
+        n = _axis(p)
+        t1, t2 = perpendicular_pair(n)
+        nb = local_vector(b, n, 1)
+        return position_constraints(a, b) + [
+            ("tilt_1", nb.dot_(local_vector(a, t1, 0))), ("tilt_2", nb.dot_(local_vector(a, t2, 0)))]
+
+    def axis_world(self, R_a, p):
+        return R_a @ _axis(p)
+
+    def measure(self, a, b, p):
+        n = _axis(p)
+        t1, t2 = perpendicular_pair(n)
+        tb = b.R @ t1
+        phi = np.arctan2((a.R @ t2) @ tb, (a.R @ t1) @ tb)
+        return phi, (b.w - a.w) @ (a.R @ n)
+
+
+class Prismatic(Joint):
+    """Slider: frame_b translates along ``n`` (frame_a coordinates) by ``s``.
+
+    Coordinate ``s`` (m), speed ``v`` (m/s); flanges ``axis``/``support`` along the axis.
+
+    Examples
+    --------
+    >>> from mbcomp.library import Prismatic
+    >>> j = Prismatic(n=(1, 0, 0), s0=0.2)
+    >>> j.relative([0.2], j.p)[1]
+    array([0.2, 0. , 0. ])
+    """
+
+    coordinates = (("s", "m"),)
+    speeds = (("v", "m/s"),)
+    axis_kind = "translational"
+    axis = Flange("translational axis flange (s, force along the axis)", optional=True)
+    support = Flange("support flange at s = 0 (fixed to frame_a)", optional=True)
+    n = Param((1.0, 0.0, 0.0), unit="1", shape=(3,), doc="sliding axis direction, frame_a coordinates", check="nonzero")
+    s0 = Param(None, unit="m", kind="start", doc="start position (fixed unless a Guess)")
+    v0 = Param(None, unit="m/s", kind="start", doc="start velocity (fixed unless a Guess)")
+
+    def start(self, p):
+        q, qf = split_start(p.s0, 1)
+        u, uf = split_start(p.v0, 1)
+        return q, np.array([qf]), u, np.array([uf])
+
+    def relative(self, q, p):
+        return np.eye(3), _axis(p) * q[0]
+
+    def motion(self, q, p):
+        return np.zeros((3, 1)), _axis(p)[:, None]
+
+    def constraints(self, a, b, p):
+        n = _axis(p)
+        t1, t2 = perpendicular_pair(n)
+        d = local_point(b, 1) - local_point(a, 0)
+        rot = rigid_constraints(a, b, np.eye(3), np.zeros(3))[3:]
+        return [("off_1", d.dot_(local_vector(a, t1, 0))), ("off_2", d.dot_(local_vector(a, t2, 0)))] + rot
+
+    def axis_world(self, R_a, p):
+        return R_a @ _axis(p)
+
+    def measure(self, a, b, p):
+        n = a.R @ _axis(p)
+        d = b.r - a.r
+        return d @ n, (b.v - a.v) @ n + d @ cross(a.w, n)
+
+
+class Spherical(Joint):
+    """Ball joint: frame_b rotates freely about the common origin.
+
+    Coordinates: unit quaternion ``Q`` (frame_b -> frame_a), singularity free; speeds: the
+    relative angular velocity ``w`` (rad/s) resolved in frame_b.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.library import Spherical
+    >>> j = Spherical(w0=(0, 0, 10.0))
+    >>> j.start(j.p)[2]
+    array([ 0.,  0., 10.])
+    """
+
+    coordinates = (("Q.w", "1"), ("Q.x", "1"), ("Q.y", "1"), ("Q.z", "1"))
+    speeds = (("w.x", "rad/s"), ("w.y", "rad/s"), ("w.z", "rad/s"))
+    R0 = Param(None, unit="1", shape=(3, 3), kind="start", check=rotation_matrix,
+               doc="start orientation of frame_b relative to frame_a (fixed unless a Guess)")
+    w0 = Param(None, unit="rad/s", shape=(3,), kind="start", doc="start relative angular velocity, frame_b axes")
+
+    def start(self, p):
+        R, rf = split_start(p.R0, 9)
+        u, uf = split_start(p.w0, 3)
+        Q = matrix_to_quat(R.reshape(3, 3)) if R.size == 9 else np.array([1.0, 0, 0, 0])
+        return Q, np.full(3, rf), (u if u.size == 3 else np.zeros(3)), np.full(3, uf)
+
+    def relative(self, q, p):
+        return quat_to_matrix(q), np.zeros(3)
+
+    def motion(self, q, p):
+        return quat_to_matrix(q), np.zeros((3, 3))
+
+    def q_rate(self, q, u, p):
+        return quat_rate(q, u)
+
+    def increment(self, q, du, p):
+        return _quat_increment(q, du)
+
+    def constraints(self, a, b, p):
+        return position_constraints(a, b)
+
+
+class FreeMotion(Joint):
+    """Six-DOF joint: frame_b moves freely relative to frame_a.
+
+    Coordinates: position ``r`` (m, frame_a coordinates) and quaternion ``Q``; speeds:
+    ``v = dr/dt`` (m/s, frame_a coordinates) and angular velocity ``w`` (rad/s, frame_b axes).
+    A body connected to nothing gets one automatically from the world frame.
+
+    Examples
+    --------
+    >>> from mbcomp.library import FreeMotion
+    >>> j = FreeMotion(r0=(0, 1, 0), w0=(0, 0.1, 3.0))
+    >>> j.nq, j.nu
+    (7, 6)
+    """
+
+    coordinates = (("r.x", "m"), ("r.y", "m"), ("r.z", "m"),
+                   ("Q.w", "1"), ("Q.x", "1"), ("Q.y", "1"), ("Q.z", "1"))
+    speeds = (("v.x", "m/s"), ("v.y", "m/s"), ("v.z", "m/s"),
+              ("w.x", "rad/s"), ("w.y", "rad/s"), ("w.z", "rad/s"))
+    r0 = Param(None, unit="m", shape=(3,), kind="start", doc="start position, frame_a coordinates")
+    R0 = Param(None, unit="1", shape=(3, 3), kind="start", check=rotation_matrix,
+               doc="start orientation, frame_b -> frame_a")
+    v0 = Param(None, unit="m/s", shape=(3,), kind="start", doc="start velocity, frame_a coordinates")
+    w0 = Param(None, unit="rad/s", shape=(3,), kind="start", doc="start angular velocity, frame_b axes")
+
+    def start(self, p):
+        r, rf = split_start(p.r0, 3)
+        R, Rf = split_start(p.R0, 9)
+        v, vf = split_start(p.v0, 3)
+        w, wf = split_start(p.w0, 3)
+        Q = matrix_to_quat(R.reshape(3, 3)) if R.size == 9 else np.array([1.0, 0, 0, 0])
+        r = r if r.size == 3 else np.zeros(3)
+        v = v if v.size == 3 else np.zeros(3)
+        w = w if w.size == 3 else np.zeros(3)
+        return (np.concatenate((r, Q)), np.array([rf] * 3 + [Rf] * 3),
+                np.concatenate((v, w)), np.array([vf] * 3 + [wf] * 3))
+
+    def relative(self, q, p):
+        return quat_to_matrix(q[3:]), q[:3]
+
+    def motion(self, q, p):
+        Hw = np.zeros((3, 6))
+        Hw[:, 3:] = quat_to_matrix(q[3:])
+        Hv = np.zeros((3, 6))
+        Hv[:, :3] = np.eye(3)
+        return Hw, Hv
+
+    def q_rate(self, q, u, p):
+        return np.concatenate((u[:3], quat_rate(q[3:], u[3:])))
+
+    def increment(self, q, du, p):
+        return np.concatenate((q[:3] + du[:3], _quat_increment(q[3:], du[3:])))
+
+    def constraints(self, a, b, p):
+        return []
+
+
+class Weld(_Rigid):
+    """Rigid connection: frame_b coincides with frame_a (0 DOF); its reaction is the
+    full cut wrench.
+
+    Examples
+    --------
+    >>> from mbcomp.library import Weld
+    >>> Weld().nq
+    0
+    """

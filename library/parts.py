@@ -1,0 +1,96 @@
+"""Rigid offsets and mass carriers."""
+import numpy as np
+
+from mbcomp import Body, Joint, Param
+from mbcomp.jets import rigid_constraints
+
+from .checks import inertia_tensor, rotation_matrix
+
+
+
+class _Rigid(Joint):
+    """A 0-DOF joint: frame_b fixed relative to frame_a."""
+
+    def offset(self, p):
+        return np.eye(3), np.zeros(3)
+
+    def relative(self, q, p):
+        return self.offset(p)
+
+    def constraints(self, a, b, p):
+        R0, r0 = self.offset(p)
+        return rigid_constraints(a, b, R0, r0)
+
+
+class FixedTranslation(_Rigid):
+    """Massless rigid link: frame_b is frame_a translated by ``r`` (frame_a coordinates).
+
+    Examples
+    --------
+    >>> from mbcomp.library import FixedTranslation
+    >>> FixedTranslation(r=(0.5, 0, 0)).p.r
+    array([0.5, 0. , 0. ])
+    """
+
+    r = Param((0.0, 0.0, 0.0), unit="m", shape=(3,), doc="origin of frame_b, frame_a coordinates")
+
+    def offset(self, p):
+        return np.eye(3), p.r
+
+
+class FixedRotation(_Rigid):
+    """Massless rigid offset with rotation: ``R_b = R_a R`` and ``r_b = r_a + R_a r``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.kinematics import rot_axis
+    >>> from mbcomp.library import FixedRotation
+    >>> FixedRotation(R=rot_axis([0, 0, 1], np.pi / 2)).p.R.shape
+    (3, 3)
+    """
+
+    r = Param((0.0, 0.0, 0.0), unit="m", shape=(3,), doc="origin of frame_b, frame_a coordinates")
+    R = Param(np.eye(3), unit="1", shape=(3, 3), doc="orientation of frame_b: frame_b -> frame_a", check=rotation_matrix)
+
+    def offset(self, p):
+        return p.R, p.r
+
+
+class RigidBody(Body):
+    """Rigid body: mass ``m``, centre of mass ``r_cm`` and inertia ``I`` about it (frame_a axes).
+
+    ``m = 0`` with ``I = 0`` is a massless link, legal where its motion is determined by
+    its neighbours.
+
+    Examples
+    --------
+    >>> from mbcomp.library import RigidBody
+    >>> b = RigidBody(m=2.0, r_cm=(0.5, 0, 0), I=[[0.01, 0, 0], [0, 0.2, 0], [0, 0, 0.2]])
+    >>> b.p.m
+    2.0
+    """
+
+    m = Param(1.0, unit="kg", doc="mass", check="nonnegative")
+    r_cm = Param((0.0, 0.0, 0.0), unit="m", shape=(3,), doc="centre of mass, frame_a coordinates")
+    I = Param(np.zeros((3, 3)), unit="kg m^2", shape=(3, 3), doc="inertia about the centre of mass, frame_a axes",
+              check=inertia_tensor)
+
+    def mass_properties(self, p):
+        return p.m, p.r_cm, p.I
+
+
+class PointMass(Body):
+    """A particle of mass ``m`` at the origin of frame_a (no rotational inertia).
+
+    Examples
+    --------
+    >>> from mbcomp.library import PointMass
+    >>> PointMass(m=0.5).p.m
+    0.5
+    """
+
+    m = Param(1.0, unit="kg", doc="mass", check="nonnegative")
+
+    def mass_properties(self, p):
+        return p.m, np.zeros(3), np.zeros((3, 3))

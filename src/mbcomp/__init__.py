@@ -1,0 +1,45 @@
+"""mbcomp: Modelica-style, object-oriented modelling and simulation of mechanisms.
+
+Compose bodies, joints, force elements and drives into a :class:`Model`, then
+:func:`simulate` it. The standard components live in :mod:`mbcomp.library`.
+
+Examples
+--------
+>>> import mbcomp
+>>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+>>> m = mbcomp.Model()
+>>> w = m.add("world", World())
+>>> j = m.add("hinge", Revolute(n=(0, 0, 1), phi0=0.5))
+>>> rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+>>> bob = m.add("bob", PointMass(m=1.0))
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+>>> res = mbcomp.simulate(m, t_end=1.0)
+>>> res.status
+'success'
+"""
+from .component import Component, Flange, Frame, Guess, Param
+from .errors import InitializationError, ModelError, SimulationError
+from .model import Model
+from .roles import Body, Drive, FlangeElement, ForceElement, FrameState, Ground, Joint
+
+__all__ = [
+    "Component", "Param", "Frame", "Flange", "Guess", "Model",
+    "Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState",
+    "ModelError", "InitializationError", "SimulationError",
+    "assemble", "simulate", "Result",
+]
+
+
+def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles with mbcomp.library
+    if name == "assemble":
+        from .system import assemble
+        return assemble
+    if name == "simulate":
+        from .simulation import simulate
+        return simulate
+    if name == "Result":
+        from .result import Result
+        return Result
+    raise AttributeError(f"module 'mbcomp' has no attribute {name!r}")
+
+__version__ = "0.1.0"

@@ -1,0 +1,283 @@
+"""Components, parameters and connectors.
+
+A component declares its parameters (:class:`Param`) and its ports (:class:`Frame`,
+:class:`Flange`) as class attributes. Parameter values are checked by
+:meth:`Component.problems`, which :meth:`mbcomp.Model.validate` collects for every
+component before raising once.
+
+Examples
+--------
+>>> from mbcomp import Component, Param, Frame
+>>> class Marker(Component):
+...     '''A massless marker frame.'''
+...     frame_a = Frame("the marked frame")
+...     size = Param(0.1, unit="m", doc="drawing size", check="positive")
+>>> Marker(size=0.2).p.size
+0.2
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from .errors import Problem
+
+__all__ = ["Param", "Frame", "Flange", "Port", "Component", "Guess"]
+
+
+class Guess:
+    """A start value that initialization may change (not fixed).
+
+    Examples
+    --------
+    >>> from mbcomp import Guess
+    >>> Guess(0.3).value
+    0.3
+    """
+
+    def __init__(self, value):
+        self.value = value
+
+    def __repr__(self):
+        return f"Guess({self.value!r})"
+
+
+_CHECKS = {
+    "positive": (lambda v: np.all(v > 0), "must be > 0"),
+    "nonnegative": (lambda v: np.all(v >= 0), "must be >= 0"),
+    "nonzero": (lambda v: np.linalg.norm(np.atleast_1d(v)) > 0, "must not be zero"),
+}
+
+
+class Param:
+    """A documented, validated parameter in SI units.
+
+    Parameters
+    ----------
+    default : float, array_like, callable or None
+        Default value. ``None`` means the parameter is optional.
+    unit : str
+        SI unit, e.g. ``"kg"``, ``"N/m"``, ``"rad"``.
+    doc : str
+        One-line meaning, including the frame a vector is resolved in.
+    shape : tuple, optional
+        Required array shape; scalars when omitted.
+    check : str or callable, optional
+        ``"positive"``, ``"nonnegative"``, ``"nonzero"``, or ``f(value) -> str | None``
+        returning a message when the value is bad.
+    kind : {"number", "start", "law", "any"}
+        ``"start"`` values may be a :class:`Guess`; ``"law"`` values may be callables.
+    """
+
+    def __init__(self, default, unit="1", doc="", shape=(), check=None, kind="number"):
+        self.default, self.unit, self.doc = default, unit, doc
+        self.shape, self.check, self.kind = tuple(shape), check, kind
+        self.name = None
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        return obj.p.__dict__[self.name]
+
+    def coerce(self, value):
+        """Return ``(value, problem_text)``: the value as stored, or why it is bad."""
+        if value is None:
+            return None, None
+        if self.kind == "any":
+            return value, None
+        if self.kind == "law" and callable(value):
+            return value, None
+        if self.kind == "start" and isinstance(value, Guess):
+            inner, msg = self.coerce(value.value)
+            return (Guess(inner) if msg is None else value), msg
+        try:
+            arr = np.array(value, dtype=float)
+        except (TypeError, ValueError):
+            return value, f"{value!r} is not a number{'' if not self.shape else ' array'}"
+        if arr.shape != self.shape:
+            return value, f"has shape {arr.shape}, expected {self.shape or 'a scalar'}"
+        if not np.all(np.isfinite(arr)):
+            return value, f"{value!r} is not finite"
+        if self.check is not None:
+            if isinstance(self.check, str):
+                ok, msg = _CHECKS[self.check]
+                if not ok(arr):
+                    return value, f"{_fmt(arr)} {self.unit} {msg}"
+            else:
+                msg = self.check(arr)
+                if msg:
+                    return value, msg
+        return (float(arr) if arr.shape == () else arr), None
+
+
+def _fmt(arr):
+    return f"{float(arr):g}" if np.ndim(arr) == 0 else np.array2string(np.asarray(arr), precision=4)
+
+
+class Port:
+    """Declaration of a connector on a component class (see :class:`Frame`, :class:`Flange`)."""
+
+    kind = "port"
+
+    def __init__(self, doc="", optional=False):
+        self.doc, self.optional, self.name = doc, optional, None
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        return PortRef(obj, self.name, self.kind)
+
+
+class Frame(Port):
+    """Frame connector: position and orientation (3x3) and their rates as potentials,
+    force and torque (resolved in the world frame) as flows. Connecting frames makes them
+    one rigid frame; any number of components may attach to it."""
+
+    kind = "frame"
+
+
+class Flange(Port):
+    """1-D connector: coordinate and rate (m or rad, m/s or rad/s) as potentials,
+    force or torque as flow. Drives, springs and dampers act on a joint's axis through it."""
+
+    kind = "flange"
+
+
+class PortRef:
+    """A port of a component instance: what :meth:`Model.connect` takes."""
+
+    __slots__ = ("component", "name", "kind")
+
+    def __init__(self, component, name, kind):
+        self.component, self.name, self.kind = component, name, kind
+
+    def __eq__(self, other):
+        return isinstance(other, PortRef) and other.component is self.component and other.name == self.name
+
+    def __hash__(self):
+        return hash((id(self.component), self.name))
+
+    @property
+    def path(self):
+        return f"{self.component.path}.{self.name}"
+
+    def __repr__(self):
+        return f"<{self.kind} {self.path}>"
+
+
+class Component:
+    """Base class of every component: parameters, ports, a name given by the model.
+
+    Subclasses declare ``Param`` and ``Frame``/``Flange`` class attributes and implement
+    one role (see :mod:`mbcomp.roles`). Parameter values are available as ``self.p.<name>``
+    (construction-time values); the assembled system passes runtime values to the role
+    methods, so changing a parameter never re-derives anything.
+
+    Examples
+    --------
+    >>> from mbcomp.library import PointMass
+    >>> PointMass(m=2.0).p.m
+    2.0
+    """
+
+    role = None
+
+    def __init__(self, **values):
+        self.name = None
+        self.parent = None
+        params = self.params()
+        unknown = [k for k in values if k not in params]
+        if unknown:
+            raise TypeError(
+                f"{type(self).__name__} has no parameter {', '.join(map(repr, unknown))}; "
+                f"its parameters are: {', '.join(params) or 'none'}"
+            )
+        self._raw = {}
+        self._bad = {}
+        store = {}
+        for name, par in params.items():
+            raw = values.get(name, par.default)
+            self._raw[name] = raw
+            val, msg = par.coerce(raw)
+            if msg:
+                self._bad[name] = msg
+            store[name] = val
+        self.p = SimpleNamespace(**store)
+
+    @classmethod
+    def params(cls):
+        """Dictionary ``name -> Param`` of the class's parameters, in declaration order."""
+        out = {}
+        for klass in reversed(cls.__mro__):
+            for k, v in vars(klass).items():
+                if isinstance(v, Param):
+                    out[k] = v
+        return out
+
+    @classmethod
+    def ports(cls):
+        """Dictionary ``name -> Port`` of the class's connectors."""
+        out = {}
+        for klass in reversed(cls.__mro__):
+            for k, v in vars(klass).items():
+                if isinstance(v, Port):
+                    out[k] = v
+        return out
+
+    @property
+    def path(self):
+        """Dotted name inside the top-level model (``"arm.link1"``)."""
+        if self.name is None:
+            return f"<unnamed {type(self).__name__}>"
+        if self.parent is not None and self.parent.parent is not None:
+            return f"{self.parent.path}.{self.name}"
+        return self.name
+
+    def problems(self):
+        """Every problem with this component's parameters, as :class:`Problem` objects."""
+        out = []
+        for name, msg in self._bad.items():
+            par = self.params()[name]
+            out.append(
+                Problem(f"{self.path}.{name}", f"parameter {msg}",
+                        f"give {name} ({par.doc or 'see docs'}) in {par.unit}")
+            )
+        out.extend(self.check_params(self.p))
+        return out
+
+    def check_params(self, p):
+        """Cross-parameter checks; subclasses return a list of :class:`Problem`."""
+        return []
+
+    def runtime_params(self, overrides=None):
+        """Parameter namespace with ``overrides`` (name -> value) applied and checked."""
+        if not overrides:
+            return self.p
+        vals = dict(vars(self.p))
+        params = self.params()
+        probs = []
+        for k, v in overrides.items():
+            if k not in params:
+                probs.append(Problem(f"{self.path}.{k}", "no such parameter",
+                                     f"use one of: {', '.join(params)}"))
+                continue
+            val, msg = params[k].coerce(v)
+            if msg:
+                probs.append(Problem(f"{self.path}.{k}", f"parameter {msg}", f"give {k} in {params[k].unit}"))
+            vals[k] = val
+        ns = SimpleNamespace(**vals)
+        probs.extend(self.check_params(ns))
+        if probs:
+            from .errors import ModelError
+            raise ModelError(probs, header="bad parameter values")
+        return ns
+
+    def __repr__(self):
+        return f"<{type(self).__name__} {self.path}>"

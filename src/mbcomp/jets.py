@@ -1,0 +1,196 @@
+"""Second-order kinematic jets: a quantity with its velocity Jacobian and bias acceleration.
+
+Every frame in an assembled model is described by a :class:`FrameJet`: its pose, its
+velocity split into ``J @ u`` plus any prescribed (rheonomic) part, and its *bias*
+acceleration (the acceleration when ``du/dt = 0``). Chaining joints along the spanning
+tree with :meth:`FrameJet.through` gives every frame's jet in one pass, so the mass
+matrix, forces, constraint Jacobians and the acceleration right-hand side follow without
+symbolic differentiation.
+
+Cut-joint constraints are written with :class:`VecJet`/:class:`ScalarJet`, whose Jacobians
+are taken with respect to the 12 local twist components ``(v_a, w_a, v_b, w_b)`` of the
+joint's two frames (world coordinates). The product rule is applied to value, velocity and
+bias together, so a joint only writes its position-level constraint.
+
+Examples
+--------
+>>> import numpy as np
+>>> from mbcomp.jets import FrameJet
+>>> g = FrameJet.ground(nu=1)
+>>> arm = g.through(np.eye(3), np.zeros(3), Hw=np.array([[0.], [0.], [1.]]),
+...                 Hv=np.zeros((3, 1)), cols=slice(0, 1), w_rel=np.array([0, 0, 2.0]))
+>>> tip = arm.offset(np.eye(3), np.array([1.0, 0, 0]))
+>>> tip.v, tip.a  # velocity and centripetal (bias) acceleration of the tip
+(array([0., 2., 0.]), array([-4.,  0.,  0.]))
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .kinematics import cross as _cross, skew
+
+__all__ = ["FrameJet", "VecJet", "ScalarJet", "local_point", "local_vector", "rigid_constraints",
+           "position_constraints"]
+
+
+class FrameJet:
+    """Pose, velocity and bias acceleration of a frame, with Jacobians w.r.t. speeds ``u``.
+
+    Attributes
+    ----------
+    R : ndarray (3, 3)
+        Orientation: frame coordinates -> world coordinates.
+    r : ndarray (3,)
+        Origin position in m, world coordinates.
+    w, v : ndarray (3,)
+        Angular velocity (rad/s) and origin velocity (m/s), world coordinates, total.
+    Jw, Jv : ndarray (3, nu)
+        Their Jacobians with respect to the speeds ``u``.
+    alpha, a : ndarray (3,)
+        Bias angular and linear accelerations (those at ``du/dt = 0``), world coordinates.
+    """
+
+    __slots__ = ("R", "r", "w", "v", "Jw", "Jv", "alpha", "a")
+
+    def __init__(self, R, r, w, v, Jw, Jv, alpha, a):
+        self.R, self.r, self.w, self.v = R, r, w, v
+        self.Jw, self.Jv, self.alpha, self.a = Jw, Jv, alpha, a
+
+    @classmethod
+    def ground(cls, nu, R=None, r=None):
+        z = np.zeros(3)
+        return cls(np.eye(3) if R is None else np.asarray(R, float), z.copy() if r is None else np.asarray(r, float),
+                   z.copy(), z.copy(), np.zeros((3, nu)), np.zeros((3, nu)), z.copy(), z.copy())
+
+    def offset(self, R0, p0):
+        """Jet of a frame rigidly attached at ``p0`` (m, this frame's coordinates), rotated by ``R0``."""
+        rho = self.R @ p0
+        wxr = _cross(self.w, rho)
+        return FrameJet(self.R @ R0, self.r + rho, self.w, self.v + wxr, self.Jw, self.Jv - skew(rho) @ self.Jw,
+                        self.alpha, self.a + _cross(self.alpha, rho) + _cross(self.w, wxr))
+
+    def through(self, R_rel, r_rel, Hw, Hv, cols, w_rel, v_rel=None, bw=None, bv=None):
+        """Jet of a joint's ``frame_b`` given this jet as its ``frame_a``.
+
+        Parameters
+        ----------
+        R_rel, r_rel : pose of frame_b in frame_a coordinates.
+        Hw, Hv : ndarray (3, k)
+            Relative angular velocity / d(r_rel)/dt in frame_a coordinates per joint speed.
+        cols : slice or index array
+            Columns of the joint's speeds in the global ``u``.
+        w_rel, v_rel : ndarray (3,)
+            Total relative angular velocity and d(r_rel)/dt (frame_a coordinates).
+        bw, bv : ndarray (3,), optional
+            Relative bias accelerations in frame_a coordinates (e.g. a prescribed ``a(t)``).
+        """
+        Ra = self.R
+        rho = Ra @ r_rel
+        wr = Ra @ w_rel
+        Jw = self.Jw.copy()
+        Jv = self.Jv - skew(rho) @ self.Jw
+        if Hw.shape[1]:
+            Jw[:, cols] += Ra @ Hw
+            Jv[:, cols] += Ra @ Hv
+        vr = Ra @ v_rel if v_rel is not None else np.zeros(3)
+        wxr = _cross(self.w, rho)
+        alpha = self.alpha + _cross(self.w, wr)
+        a = self.a + _cross(self.alpha, rho) + _cross(self.w, wxr) + 2.0 * _cross(self.w, vr)
+        if bw is not None:
+            alpha = alpha + Ra @ bw
+        if bv is not None:
+            a = a + Ra @ bv
+        return FrameJet(Ra @ R_rel, self.r + rho, self.w + wr, self.v + wxr + vr, Jw, Jv, alpha, a)
+
+    def back_through(self, R_rel, r_rel, Hw, Hv, cols, w_rel, v_rel=None, bw=None, bv=None):
+        """Jet of a joint's ``frame_a`` given this jet as its ``frame_b`` (same arguments as
+        :meth:`through`): the joint traversed against its direction in the spanning tree."""
+        Ra = self.R @ R_rel.T
+        rho = Ra @ r_rel
+        wr = Ra @ w_rel
+        w = self.w - wr
+        Jw = self.Jw.copy()
+        if Hw.shape[1]:
+            Jw[:, cols] -= Ra @ Hw
+        alpha = self.alpha - _cross(w, wr) - (Ra @ bw if bw is not None else 0.0)
+        vr = Ra @ v_rel if v_rel is not None else np.zeros(3)
+        wxr = _cross(w, rho)
+        Jv = self.Jv + skew(rho) @ Jw
+        if Hv.shape[1]:
+            Jv[:, cols] -= Ra @ Hv
+        a = (self.a - _cross(alpha, rho) - _cross(w, wxr) - 2.0 * _cross(w, vr)
+             - (Ra @ bv if bv is not None else 0.0))
+        return FrameJet(Ra, self.r - rho, w, self.v - wxr - vr, Jw, Jv, alpha, a)
+
+
+class VecJet:
+    """A vector (world coordinates) with its Jacobian ``jac`` (3, 12) w.r.t. the local
+    twists ``(v_a, w_a, v_b, w_b)``, its total rate ``dot`` and its bias acceleration."""
+
+    __slots__ = ("val", "jac", "dot", "bias")
+
+    def __init__(self, val, jac, dot, bias):
+        self.val, self.jac, self.dot, self.bias = val, jac, dot, bias
+
+    def __sub__(self, o):
+        return VecJet(self.val - o.val, self.jac - o.jac, self.dot - o.dot, self.bias - o.bias)
+
+    def __add__(self, o):
+        return VecJet(self.val + o.val, self.jac + o.jac, self.dot + o.dot, self.bias + o.bias)
+
+    def dot_(self, o):
+        """Scalar product, as a :class:`ScalarJet`."""
+        return ScalarJet(
+            self.val @ o.val,
+            o.val @ self.jac + self.val @ o.jac,
+            self.dot @ o.val + self.val @ o.dot,
+            self.bias @ o.val + 2.0 * (self.dot @ o.dot) + self.val @ o.bias,
+        )
+
+
+class ScalarJet:
+    """A scalar with Jacobian ``jac`` (12,) w.r.t. the local twists, rate and bias."""
+
+    __slots__ = ("val", "jac", "dot", "bias")
+
+    def __init__(self, val, jac, dot, bias):
+        self.val, self.jac, self.dot, self.bias = val, jac, dot, bias
+
+
+def local_point(F: FrameJet, slot: int) -> VecJet:
+    """Origin of frame ``F`` as a :class:`VecJet`; ``slot`` 0 for frame_a, 1 for frame_b."""
+    jac = np.zeros((3, 12))
+    jac[:, 6 * slot: 6 * slot + 3] = np.eye(3)
+    return VecJet(F.r, jac, F.v, F.a)
+
+
+def local_vector(F: FrameJet, e, slot: int) -> VecJet:
+    """Vector ``e`` fixed in frame ``F`` (given in its coordinates) as a :class:`VecJet`."""
+    x = F.R @ e
+    jac = np.zeros((3, 12))
+    jac[:, 6 * slot + 3: 6 * slot + 6] = -skew(x)
+    wx = _cross(F.w, x)
+    return VecJet(x, jac, wx, _cross(F.alpha, x) + _cross(F.w, wx))
+
+
+_E = np.eye(3)
+
+
+def position_constraints(a: FrameJet, b: FrameJet, r0=None):
+    """Three constraints ``r_b = r_a + R_a r0`` (resolved along frame_a's axes), named x, y, z."""
+    d = local_point(b, 1) - local_point(a, 0)
+    if r0 is not None and np.any(r0):
+        d = d - local_vector(a, r0, 0)
+    return [(ax, d.dot_(local_vector(a, _E[i], 0))) for i, ax in enumerate("xyz")]
+
+
+def rigid_constraints(a: FrameJet, b: FrameJet, R0, r0):
+    """Six constraints ``r_b = r_a + R_a r0`` and ``R_b = R_a R0`` as named scalar jets:
+    positions along frame_a's axes (x, y, z), rotations as dot products of frame_b's axes
+    with the target axes (rx, ry, rz; first order in small rotations about x, y, z)."""
+    out = position_constraints(a, b, r0)
+    tgt = [local_vector(a, R0 @ _E[i], 0) for i in range(3)]
+    bb = [local_vector(b, _E[i], 1) for i in range(3)]
+    for name, (i, j) in (("rx", (1, 2)), ("ry", (2, 0)), ("rz", (0, 1))):
+        out.append((name, bb[i].dot_(tgt[j])))
+    return out

@@ -1,0 +1,160 @@
+"""Rotations, quaternions and small vector helpers (numeric, numpy).
+
+Conventions used throughout mbcomp
+----------------------------------
+* A rotation matrix ``R`` maps coordinates resolved in a moving frame to
+  coordinates resolved in the reference frame: ``x_ref = R @ x_moving``.
+  Its columns are the moving frame's unit vectors resolved in the reference frame.
+* Quaternions are ``(w, x, y, z)`` with ``w`` the scalar part; a unit
+  quaternion ``Q`` and its rotation matrix ``R(Q)`` follow the same mapping.
+
+Examples
+--------
+>>> import numpy as np
+>>> from mbcomp.kinematics import rot_axis, quat_to_matrix, matrix_to_quat
+>>> R = rot_axis([0, 0, 1], np.pi / 2)
+>>> np.allclose(R @ [1, 0, 0], [0, 1, 0])
+True
+>>> np.allclose(quat_to_matrix(matrix_to_quat(R)), R)
+True
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "cross",
+    "skew",
+    "unit",
+    "rot_axis",
+    "quat_to_matrix",
+    "matrix_to_quat",
+    "quat_multiply",
+    "quat_rate",
+    "perpendicular_pair",
+]
+
+
+def cross(a, b):
+    """Cross product of two 3-vectors (much faster than ``numpy.cross`` for single vectors)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def skew(a):
+    """Skew-symmetric matrix ``S`` with ``S @ b == cross(a, b)``.
+
+    Parameters
+    ----------
+    a : array_like, shape (3,)
+        Vector, any unit, any frame (the result is resolved in the same frame).
+    """
+    x, y, z = a
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def unit(a):
+    """Unit vector along ``a`` (shape (3,)); raises ``ValueError`` for a zero vector."""
+    a = np.asarray(a, dtype=float)
+    n = np.linalg.norm(a)
+    if not np.isfinite(n) or n == 0.0:
+        raise ValueError("zero or non-finite vector has no direction")
+    return a / n
+
+
+def rot_axis(axis, angle):
+    """Rotation matrix of a rotation by ``angle`` (rad) about ``axis`` (Rodrigues).
+
+    Parameters
+    ----------
+    axis : array_like, shape (3,)
+        Rotation axis (normalized here), resolved in the reference frame.
+    angle : float
+        Rotation angle in rad, right-handed about ``axis``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> np.round(rot_axis([1, 0, 0], np.pi / 2) @ [0, 1, 0], 12) + 0.0
+    array([0., 0., 1.])
+    """
+    n = unit(axis)
+    c, s = np.cos(angle), np.sin(angle)
+    N = skew(n)
+    return np.eye(3) + s * N + (1.0 - c) * (N @ N)
+
+
+def quat_to_matrix(Q):
+    """Rotation matrix of quaternion ``Q = (w, x, y, z)`` (normalized here)."""
+    Q = np.asarray(Q, dtype=float)
+    w, x, y, z = Q / np.sqrt(Q @ Q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def matrix_to_quat(R):
+    """Unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of rotation matrix ``R`` (Shepperd)."""
+    R = np.asarray(R, dtype=float)
+    tr = np.trace(R)
+    cands = np.array([tr, R[0, 0], R[1, 1], R[2, 2]])
+    k = int(np.argmax(cands))
+    if k == 0:
+        w = 0.5 * np.sqrt(1.0 + tr)
+        Q = [w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)]
+    elif k == 1:
+        x = 0.5 * np.sqrt(1.0 + 2 * R[0, 0] - tr)
+        Q = [(R[2, 1] - R[1, 2]) / (4 * x), x, (R[0, 1] + R[1, 0]) / (4 * x), (R[0, 2] + R[2, 0]) / (4 * x)]
+    elif k == 2:
+        y = 0.5 * np.sqrt(1.0 + 2 * R[1, 1] - tr)
+        Q = [(R[0, 2] - R[2, 0]) / (4 * y), (R[0, 1] + R[1, 0]) / (4 * y), y, (R[1, 2] + R[2, 1]) / (4 * y)]
+    else:
+        z = 0.5 * np.sqrt(1.0 + 2 * R[2, 2] - tr)
+        Q = [(R[1, 0] - R[0, 1]) / (4 * z), (R[0, 2] + R[2, 0]) / (4 * z), (R[1, 2] + R[2, 1]) / (4 * z), z]
+    Q = np.array(Q)
+    Q /= np.linalg.norm(Q)
+    return Q if Q[0] >= 0 else -Q
+
+
+def quat_multiply(p, q):
+    """Hamilton product ``p * q`` of two quaternions ``(w, x, y, z)``."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return np.array(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ]
+    )
+
+
+def quat_rate(Q, w_body):
+    """Time derivative of quaternion ``Q`` for angular velocity ``w_body``.
+
+    Parameters
+    ----------
+    Q : array_like, shape (4,)
+        Orientation of the moving frame.
+    w_body : array_like, shape (3,)
+        Angular velocity in rad/s, resolved in the *moving* frame.
+
+    Returns
+    -------
+    ndarray, shape (4,)
+        ``0.5 * Q * (0, w_body)``.
+    """
+    return 0.5 * quat_multiply(Q, np.concatenate(([0.0], w_body)))
+
+
+def perpendicular_pair(n):
+    """Two unit vectors ``t1, t2`` with ``(t1, t2, n)`` right-handed orthonormal."""
+    n = unit(n)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    t1 = unit(cross(helper, n))
+    t2 = cross(n, t1)
+    return t1, t2

@@ -1,0 +1,210 @@
+"""The roles a component can play, and the small contract of each.
+
+mbcomp is not a general equation compiler: the assembler knows these roles only.
+A library component subclasses exactly one of them and implements its methods; all
+vectors are numpy arrays, lengths in m, angles in rad, forces in N, torques in N m.
+
+* :class:`Ground` - a frame fixed in the world (``pose``), optionally the gravity field.
+* :class:`Body` - mass properties on ``frame_a`` (``mass_properties``).
+* :class:`Joint` - relative motion of ``frame_b`` w.r.t. ``frame_a`` in its own coordinates
+  (used as a spanning-tree edge) *and* the same motion as constraint equations between two
+  poses (used when the joint closes a kinematic loop). Rigid offsets are 0-DOF joints.
+* :class:`ForceElement` - wrenches on its frames from their kinematics, time and parameters,
+  plus its potential energy.
+* :class:`FlangeElement` - forces along 1-D flanges (joint axes) from their coordinates.
+* :class:`Drive` - prescribes the coordinate of the joint axis its flange is connected to.
+
+Examples
+--------
+A user-written force element: a constant world-frame force on a frame.
+
+>>> import numpy as np
+>>> from mbcomp import ForceElement, Frame, Param
+>>> class Push(ForceElement):
+...     '''Constant force ``f`` (N, world coordinates) on frame_b.'''
+...     frame_b = Frame("frame the force acts on (at its origin)")
+...     f = Param((0.0, 0.0, 0.0), unit="N", shape=(3,), doc="force, world coordinates")
+...     def wrenches(self, t, frames, p):
+...         return {"frame_b": (p.f, np.zeros(3))}
+>>> Push(f=(1, 0, 0)).p.f
+array([1., 0., 0.])
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .component import Component, Flange, Frame, Guess
+
+__all__ = ["Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState"]
+
+
+class FrameState:
+    """Kinematic state of a frame handed to force laws.
+
+    Attributes
+    ----------
+    r : ndarray (3,)  origin position, m, world coordinates
+    R : ndarray (3, 3)  orientation, frame -> world
+    v : ndarray (3,)  origin velocity, m/s, world coordinates
+    w : ndarray (3,)  angular velocity, rad/s, world coordinates
+    """
+
+    __slots__ = ("r", "R", "v", "w")
+
+    def __init__(self, r, R, v, w):
+        self.r, self.R, self.v, self.w = r, R, v, w
+
+
+class Ground(Component):
+    """A frame fixed in the world. Subclasses implement :meth:`pose`."""
+
+    role = "ground"
+    frame_b = Frame("the fixed frame")
+
+    def pose(self, p):
+        """Return ``(R, r)``: orientation (frame -> world) and origin position (m)."""
+        raise NotImplementedError
+
+    def gravity(self, p):
+        """Gravity acceleration (m/s^2, world coordinates), or ``None`` if not a field source."""
+        return None
+
+
+class Body(Component):
+    """Mass properties attached to ``frame_a``."""
+
+    role = "body"
+    frame_a = Frame("the body's reference frame")
+
+    def mass_properties(self, p):
+        """Return ``(m, r_cm, I_cm)``: mass (kg), centre of mass (m, frame_a coordinates),
+        inertia about the centre of mass (kg m^2, frame_a axes)."""
+        raise NotImplementedError
+
+
+class Joint(Component):
+    """Relative motion between ``frame_a`` and ``frame_b``.
+
+    Class attributes ``coordinates`` and ``speeds`` list ``(name, unit)`` of the joint's
+    position coordinates ``q`` and speeds ``u`` (``len(q) >= len(u)``; a quaternion has 4
+    coordinates and 3 speeds). ``axis_kind`` is ``"rotational"``/``"translational"`` for
+    1-DOF joints with ``axis``/``support`` flanges, else ``None``.
+    """
+
+    role = "joint"
+    frame_a = Frame("first frame of the joint")
+    frame_b = Frame("second frame of the joint")
+    coordinates: tuple = ()
+    speeds: tuple = ()
+    axis_kind = None
+
+    @property
+    def nq(self):
+        return len(self.coordinates)
+
+    @property
+    def nu(self):
+        return len(self.speeds)
+
+    # --- tree edge ----------------------------------------------------------------------
+    def relative(self, q, p):
+        """Pose of frame_b in frame_a: ``(R_rel, r_rel)`` with ``R_b = R_a R_rel`` and
+        ``r_b = r_a + R_a r_rel``."""
+        raise NotImplementedError
+
+    def motion(self, q, p):
+        """``(Hw, Hv)``, each (3, nu): relative angular velocity and d(r_rel)/dt, both in
+        frame_a coordinates, per unit speed. Their time derivative at constant ``u`` must
+        vanish (true for every joint in the standard library)."""
+        return np.zeros((3, self.nu)), np.zeros((3, self.nu))
+
+    def q_rate(self, q, u, p):
+        """Coordinate rates ``dq/dt`` from speeds ``u``."""
+        return np.asarray(u, dtype=float)
+
+    def increment(self, q, du, p):
+        """Coordinates moved by ``du`` along the speeds (used by Newton corrections)."""
+        return np.asarray(q, float) + du
+
+    def start(self, p):
+        """``(q0, q_fixed, u0, u_fixed)``: start values and which speeds-sized entries the
+        user fixed (``q_fixed`` has one flag per *speed* direction)."""
+        return np.zeros(self.nq), np.zeros(self.nu, bool), np.zeros(self.nu), np.zeros(self.nu, bool)
+
+    # --- loop closure -------------------------------------------------------------------
+    def constraints(self, a, b, p):
+        """Position constraints between the two frames when the joint closes a loop.
+
+        Parameters
+        ----------
+        a, b : FrameJet
+            Jets of frame_a and frame_b.
+
+        Returns
+        -------
+        list of (str, ScalarJet)
+            Named scalar constraints ``c(pose_a, pose_b) = 0`` built with
+            :func:`mbcomp.jets.local_point` / :func:`mbcomp.jets.local_vector` (slot 0 for a,
+            1 for b).
+        """
+        raise NotImplementedError
+
+    # --- 1-D axis -----------------------------------------------------------------------
+    def axis_world(self, R_a, p):
+        """Unit axis (world coordinates) along which an axis flange force/torque acts."""
+        raise NotImplementedError
+
+    def measure(self, a, b, p):
+        """Coordinate and rate ``(s, v)`` of a 1-DOF joint computed from its frames' jets."""
+        raise NotImplementedError
+
+
+def split_start(value, n):
+    """Helper for :meth:`Joint.start`: ``(array, fixed)`` from a start value or :class:`Guess`."""
+    if value is None:
+        return np.zeros(n), False
+    if isinstance(value, Guess):
+        return np.atleast_1d(np.asarray(value.value, float)), False
+    return np.atleast_1d(np.asarray(value, float)), True
+
+
+class ForceElement(Component):
+    """Wrenches on its frames. Subclasses declare ``Frame`` ports and implement
+    :meth:`wrenches` (and :meth:`potential` if conservative)."""
+
+    role = "force"
+
+    def wrenches(self, t, frames, p):
+        """Return ``{port_name: (f, tau)}``: force (N) at the frame origin and torque (N m),
+        both in world coordinates. ``frames`` maps port name -> :class:`FrameState`."""
+        raise NotImplementedError
+
+    def potential(self, frames, p):
+        """Potential energy in J (0 for non-conservative elements)."""
+        return 0.0
+
+
+class FlangeElement(Component):
+    """Forces along 1-D flanges. Subclasses declare ``Flange`` ports."""
+
+    role = "flange_force"
+
+    def flange_forces(self, t, states, p):
+        """Return ``{port_name: flow}``: force (N) or torque (N m) the element applies to each
+        flange, from ``states`` mapping port name -> ``(s, v)``."""
+        raise NotImplementedError
+
+    def potential(self, states, p):
+        return 0.0
+
+
+class Drive(Component):
+    """Prescribed motion of the joint axis connected to ``flange_b``: a rheonomic
+    constraint that removes the joint's degree of freedom (not a servo)."""
+
+    role = "drive"
+    flange_b = Flange("connect to a 1-DOF joint's axis flange")
+
+    def motion(self, t, p):
+        """``(s, v, a)``: coordinate, rate and acceleration of the driven axis at time t."""
+        raise NotImplementedError

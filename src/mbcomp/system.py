@@ -1,0 +1,371 @@
+"""The assembled multibody system: coordinates, M(q), forces, constraints, reactions.
+
+``assemble(model)`` validates the model, builds its :class:`~mbcomp.topology.Topology`
+and returns a :class:`MultibodySystem`. The system evaluates, for given ``(t, q, u)``:
+
+* ``M(q)`` (nu x nu) and the generalized forces ``f(q, u, t)`` (applied minus
+  velocity-product terms), so that the tree obeys ``M du/dt = f - C^T lam``;
+* the loop-closure constraints ``Phi(q, t)``, their velocity Jacobian ``C`` (``dPhi/dt =
+  C u + c_t``) and bias ``c_b`` (``d2Phi/dt2 = C du/dt + c_b``);
+* nonholonomic constraints ``B(q) u = b(q, t)`` (none in the standard library yet; the
+  rows are carried through every formulation);
+* reactions of every joint, energies, and named outputs.
+
+Parameters are runtime values: :meth:`MultibodySystem.with_params` returns a system with new
+values that shares the topology; nothing is re-derived.
+
+Examples
+--------
+>>> import numpy as np
+>>> from mbcomp import Model, assemble
+>>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+>>> m = Model(); w = m.add("world", World()); j = m.add("j", Revolute(n=(0, 0, 1)))
+>>> L = m.add("L", FixedTranslation(r=(1, 0, 0))); b = m.add("b", PointMass(m=2.0))
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, L.frame_a); m.connect(L.frame_b, b.frame_a)
+>>> sys = assemble(m)
+>>> ev = sys.evaluate(0.0, np.zeros(1), np.zeros(1))
+>>> float(ev.M[0, 0]), float(ev.f[0])   # m l^2 and the gravity torque -m g l
+(2.0, -19.62)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .component import PortRef
+from .errors import ModelError, Problem, SimulationError
+from .jets import FrameJet, rigid_constraints
+from .kinematics import cross, skew
+from .roles import FrameState
+from .topology import ROOT, Topology
+
+__all__ = ["assemble", "MultibodySystem", "Evaluation"]
+
+
+def assemble(model, params=None):
+    """Validate ``model`` and assemble it; ``params`` maps ``"component.param"`` to values."""
+    flat = model.validate()
+    return MultibodySystem(Topology(flat), params)
+
+
+@dataclass
+class Evaluation:
+    """Everything the formulations need at one ``(t, q, u)``."""
+
+    t: float
+    q: np.ndarray
+    u: np.ndarray
+    jets: dict
+    M: np.ndarray
+    f: np.ndarray
+    Phi: np.ndarray  # position constraints (m rows)
+    Phid: np.ndarray  # their time derivative
+    C: np.ndarray  # (m, nu)
+    cb: np.ndarray  # bias: d2Phi/dt2 = C du + cb
+    B: np.ndarray  # nonholonomic rows (k, nu): B u = b
+    b: np.ndarray
+    Bb: np.ndarray  # bias of d/dt(B u - b) at du = 0
+    local: list  # per cut edge: (edge, rows, jac (r,12))
+
+
+class MultibodySystem:
+    """Numeric evaluation of an assembled model (see module docstring)."""
+
+    def __init__(self, topology: Topology, params=None):
+        self.topology = topo = topology
+        self.P = {}
+        over = {}
+        for k, v in (params or {}).items():
+            comp, _, pname = k.rpartition(".")
+            if comp not in topo.flat.components:
+                raise ModelError([Problem(k, f"no component {comp!r} in the model",
+                                          f"use one of: {', '.join(sorted(topo.flat.components))}")],
+                                 header="bad parameter override")
+            over.setdefault(comp, {})[pname] = v
+        for path, comp in topo.flat.components.items():
+            self.P[path] = comp.runtime_params(over.get(path))
+        for e in topo.edges:
+            if e.implicit:
+                self.P[e.name] = e.comp.p
+        self.params = {k: dict(v) for k, v in over.items()}
+        g = None
+        if topo.gravity_source:
+            g = topo.flat.components[topo.gravity_source].gravity(self.P[topo.gravity_source])
+        self.g = np.zeros(3) if g is None else np.asarray(g, float)
+        self.nq, self.nu = topo.nq, topo.nu
+        self._edge = {e.name: e for e in topo.edges}
+        self.row_mask = None  # independent constraint rows, set by consistent initialization
+        self._row_names = None
+        self._check_static()
+
+    def with_params(self, params):
+        """A system with parameter values changed (topology shared, nothing re-derived)."""
+        merged = {f"{c}.{k}": v for c, d in self.params.items() for k, v in d.items()}
+        merged.update(params)
+        new = MultibodySystem(self.topology, merged)
+        new.row_mask = self.row_mask
+        return new
+
+    def _check_static(self):
+        topo, probs = self.topology, []
+        if self.nu == 0 and not topo.cut:
+            pass
+        for n in topo.unreached:
+            probs.append(Problem(", ".join(topo.node_ports[n]), "frame is joined neither to the world nor to any body with mass",
+                                 "connect it to the mechanism or remove the components that use it"))
+        if probs:
+            raise ModelError(probs)
+
+    # --- names ----------------------------------------------------------------------------
+    @property
+    def q_names(self):
+        return self.topology.q_names
+
+    @property
+    def u_names(self):
+        return self.topology.u_names
+
+    def constraint_names(self, all_rows=False):
+        """Names ``"<cut joint>.<row>"`` of the loop-closure constraint rows."""
+        if self._row_names is None:
+            q0 = self.default_q()
+            ev = self.evaluate(0.0, q0, np.zeros(self.nu), masked=False)
+            self._row_names = [f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows]
+        if all_rows or self.row_mask is None:
+            return list(self._row_names)
+        return [n for n, k in zip(self._row_names, self.row_mask) if k]
+
+    def default_q(self):
+        q = np.zeros(self.nq)
+        for e in self.topology.tree:
+            if e.q.stop > e.q.start:
+                q[e.q] = e.comp.start(self.P[e.name])[0]
+        return q
+
+    # --- evaluation -----------------------------------------------------------------------
+    def _joint_motion(self, e, t, q, u):
+        p = self.P[e.name]
+        if e.kind == "ground":
+            R, r = e.comp.pose(p)
+            z = np.zeros((3, 0))
+            return R, r, z, z, np.zeros(3), np.zeros(3), None, None, np.zeros(0), np.zeros(0)
+        if e.drive:
+            s, v, a = self.topology.flat.components[e.drive].motion(t, self.P[e.drive])
+            qj = np.array([s])
+            Hw, Hv = e.comp.motion(qj, p)
+            R, r = e.comp.relative(qj, p)
+            z = np.zeros((3, 0))
+            return R, r, z, z, Hw[:, 0] * v, Hv[:, 0] * v, Hw[:, 0] * a, Hv[:, 0] * a, qj, np.array([v])
+        qj, uj = q[e.q], u[e.u]
+        R, r = e.comp.relative(qj, p)
+        Hw, Hv = e.comp.motion(qj, p)
+        return R, r, Hw, Hv, Hw @ uj, Hv @ uj, None, None, qj, uj
+
+    def kinematics(self, t, q, u):
+        """Jets of every frame node (dict node -> :class:`~mbcomp.jets.FrameJet`)."""
+        jets = {ROOT: FrameJet.ground(self.nu)}
+        for e in self.topology.tree:
+            R, r, Hw, Hv, wr, vr, bw, bv, _, _ = self._joint_motion(e, t, q, u)
+            pj = jets[e.parent]
+            if e.forward:
+                jets[e.child] = pj.through(R, r, Hw, Hv, e.u, wr, vr, bw, bv)
+            else:
+                jets[e.child] = pj.back_through(R, r, Hw, Hv, e.u, wr, vr, bw, bv)
+        return jets
+
+    def _frame_state(self, J):
+        return FrameState(J.r, J.R, J.v, J.w)
+
+    def flange_state(self, root, jets, t, q, u):
+        owner = self.topology.flange_owner[root]
+        if owner[1] == "support":
+            return 0.0, 0.0
+        e = self._edge[owner[0]]
+        if e.drive:
+            s, v, _ = self.topology.flat.components[e.drive].motion(t, self.P[e.drive])
+            return s, v
+        if e.name in self.topology.cut:
+            return e.comp.measure(jets[e.node_a], jets[e.node_b], self.P[e.name])
+        return float(q[e.q][0]), float(u[e.u][0])
+
+    def applied(self, t, q, u, jets):
+        """Applied wrenches per frame node: dict node -> [f (3), tau (3)] (world, about origin)."""
+        out = {}
+
+        def add(node, f, tau):
+            w = out.setdefault(node, [np.zeros(3), np.zeros(3)])
+            w[0] = w[0] + f
+            w[1] = w[1] + tau
+
+        for path, comp, ports in self.topology.forces:
+            states = {pn: self._frame_state(jets[n]) for pn, n in ports.items()}
+            for pn, (f, tau) in comp.wrenches(t, states, self.P[path]).items():
+                add(ports[pn], np.asarray(f, float), np.asarray(tau, float))
+        for path, comp in self.topology.flange_elements:
+            roots = {pn: self.topology.flange_of[PortRef(comp, pn, "flange")]
+                     for pn, pt in comp.ports().items() if pt.kind == "flange"}
+            states = {pn: self.flange_state(r, jets, t, q, u) for pn, r in roots.items()}
+            for pn, flow in comp.flange_forces(t, states, self.P[path]).items():
+                jname, which = self.topology.flange_owner[roots[pn]]
+                if which != "axis":
+                    continue  # the support is fixed to frame_a: the reaction is already applied there
+                e = self._edge[jname]
+                n = e.comp.axis_world(jets[e.node_a].R, self.P[e.name]) * flow
+                z = np.zeros(3)
+                if e.comp.axis_kind == "rotational":
+                    add(e.node_b, z, n)
+                    add(e.node_a, z, -n)
+                else:
+                    add(e.node_b, n, z)
+                    add(e.node_a, -n, z)
+        return out
+
+    def _body(self, comp, path, J):
+        m, rc, I = comp.mass_properties(self.P[path])
+        rho = J.R @ rc
+        Iw = J.R @ I @ J.R.T
+        return m, rho, Iw
+
+    def evaluate(self, t, q, u, masked=True) -> Evaluation:
+        """Mass matrix, forces and constraints at ``(t, q, u)``."""
+        nu = self.nu
+        jets = self.kinematics(t, q, u)
+        M = np.zeros((nu, nu))
+        f = np.zeros(nu)
+        g = self.g
+        for path, comp, node in self.topology.bodies:
+            J = jets[node]
+            m, rho, Iw = self._body(comp, path, J)
+            Jv = J.Jv - skew(rho) @ J.Jw
+            wxr = cross(J.w, rho)
+            a = J.a + cross(J.alpha, rho) + cross(J.w, wxr)
+            M += m * (Jv.T @ Jv) + J.Jw.T @ Iw @ J.Jw
+            f += Jv.T @ (m * (g - a)) - J.Jw.T @ (Iw @ J.alpha + cross(J.w, Iw @ J.w))
+        for node, (F, T) in self.applied(t, q, u, jets).items():
+            J = jets[node]
+            f += J.Jv.T @ F + J.Jw.T @ T
+        Phi, Phid, Crows, cb, local = [], [], [], [], []
+        for name in self.topology.cut:
+            e = self._edge[name]
+            p = self.P[name]
+            a, b = jets[e.node_a], jets[e.node_b]
+            if e.kind == "ground":
+                R0, r0 = e.comp.pose(p)
+                cons = rigid_constraints(a, b, R0, r0)
+            else:
+                cons = e.comp.constraints(a, b, p)
+            if not cons:
+                continue
+            jac = np.array([c.jac for _, c in cons])
+            Jab = np.vstack((a.Jv, a.Jw, b.Jv, b.Jw))
+            Crows.append(jac @ Jab)
+            Phi += [c.val for _, c in cons]
+            Phid += [c.dot for _, c in cons]
+            cb += [c.bias for _, c in cons]
+            local.append((e, [n for n, _ in cons], jac))
+        C = np.vstack(Crows) if Crows else np.zeros((0, nu))
+        Phi, Phid, cb = np.array(Phi, float), np.array(Phid, float), np.array(cb, float)
+        if masked and self.row_mask is not None:
+            C, Phi, Phid, cb = C[self.row_mask], Phi[self.row_mask], Phid[self.row_mask], cb[self.row_mask]
+        z = np.zeros((0, nu))
+        return Evaluation(t, q, u, jets, M, f, Phi, Phid, C, cb, z, np.zeros(0), np.zeros(0), local)
+
+    def q_rate(self, q, u):
+        """``dq/dt`` from the speeds ``u`` (quaternion kinematics where needed)."""
+        qd = np.empty(self.nq)
+        for e in self.topology.tree:
+            if e.q.stop > e.q.start:
+                qd[e.q] = e.comp.q_rate(q[e.q], u[e.u], self.P[e.name])
+        return qd
+
+    def increment(self, q, du):
+        """Coordinates moved by ``du`` along the speeds (for Newton corrections)."""
+        qn = q.copy()
+        for e in self.topology.tree:
+            if e.q.stop > e.q.start:
+                qn[e.q] = e.comp.increment(q[e.q], du[e.u], self.P[e.name])
+        return qn
+
+    def normalize(self, q):
+        """Coordinates with every quaternion scaled to unit length."""
+        return self.increment(q, np.zeros(self.nu))
+
+    # --- post-processing ------------------------------------------------------------------
+    def energies(self, ev: Evaluation):
+        """``(kinetic, potential)`` in J; potential of gravity (zero at the world origin) and
+        of every conservative element."""
+        T = V = 0.0
+        jets = ev.jets
+        for path, comp, node in self.topology.bodies:
+            J = jets[node]
+            m, rho, Iw = self._body(comp, path, J)
+            v = J.v + cross(J.w, rho)
+            T += 0.5 * m * (v @ v) + 0.5 * J.w @ Iw @ J.w
+            V -= m * (self.g @ (J.r + rho))
+        for path, comp, ports in self.topology.forces:
+            V += comp.potential({pn: self._frame_state(jets[n]) for pn, n in ports.items()}, self.P[path])
+        for path, comp in self.topology.flange_elements:
+            states = {pn: self.flange_state(self.topology.flange_of[PortRef(comp, pn, "flange")], jets, ev.t, ev.q, ev.u)
+                      for pn, pt in comp.ports().items() if pt.kind == "flange"}
+            V += comp.potential(states, self.P[path])
+        return T, V
+
+    def reactions(self, ev: Evaluation, ud, lam):
+        """Reaction wrench of every edge: dict name -> (f, tau), the force and torque exerted on
+        frame_b through the joint (flange-element forces excluded; a drive's force is included),
+        resolved in frame_b, torque about frame_b's origin."""
+        jets = ev.jets
+        D = {n: [np.zeros(3), np.zeros(3)] for n in jets}
+        for path, comp, node in self.topology.bodies:
+            J = jets[node]
+            m, rho, Iw = self._body(comp, path, J)
+            wxr = cross(J.w, rho)
+            acc = (J.Jv - skew(rho) @ J.Jw) @ ud + J.a + cross(J.alpha, rho) + cross(J.w, wxr)
+            al = J.Jw @ ud + J.alpha
+            F = m * (acc - self.g)
+            D[node][0] += F
+            D[node][1] += Iw @ al + cross(J.w, Iw @ J.w) + cross(rho, F)
+        for node, (F, T) in self.applied(ev.t, ev.q, ev.u, jets).items():
+            D[node][0] -= F
+            D[node][1] -= T
+        out = {}
+        full_lam = np.zeros(len(self.constraint_names(all_rows=True)))
+        if self.row_mask is not None:
+            full_lam[self.row_mask] = lam
+        elif lam.size:
+            full_lam[:] = lam
+        k = 0
+        for e, rows, jac in ev.local:
+            lr = full_lam[k:k + len(rows)]
+            k += len(rows)
+            wa, wb = -(jac[:, :6].T @ lr), -(jac[:, 6:].T @ lr)  # constraint wrenches on a and b
+            D[e.node_a][0] -= wa[:3]
+            D[e.node_a][1] -= wa[3:]
+            D[e.node_b][0] -= wb[:3]
+            D[e.node_b][1] -= wb[3:]
+            Rb = jets[e.node_b].R
+            out[e.name] = (Rb.T @ wb[:3], Rb.T @ wb[3:])
+        for e in reversed(self.topology.tree):
+            F, Mc = D[e.child]
+            rc, rp = jets[e.child].r, jets[e.parent].r
+            D[e.parent][0] += F
+            D[e.parent][1] += Mc + cross(rc - rp, F)
+            if e.forward:
+                fb, tb, Rb = F, Mc, jets[e.child].R
+            else:
+                rb = jets[e.parent].r
+                fb, tb, Rb = -F, -Mc + cross(rc - rb, -F), jets[e.parent].R
+            out[e.name] = (Rb.T @ fb, Rb.T @ tb)
+        return out
+
+    def summary(self):
+        """Human-readable description: bodies, DOF, coordinates, constraints, eliminations."""
+        from .report import summary
+
+        return summary(self)
+
+
+def check_finite(name, arr, t):
+    if not np.all(np.isfinite(arr)):
+        raise SimulationError(f"non-finite {name} at t={t:g}: the model produced NaN or inf")

@@ -1,0 +1,253 @@
+"""Topology: which frames are one, the spanning tree from the ground, cut joints, DOF.
+
+Built once from a validated :class:`~mbcomp.model.FlatModel`; immutable afterwards.
+
+* Connected frame ports are merged into *frame nodes* (union-find); the world is node
+  ``ROOT``. Every two-frame component that is a :class:`~mbcomp.roles.Joint` (rigid offsets are
+  0-DOF joints) is an edge; every :class:`~mbcomp.roles.Ground` is an edge from ``ROOT``.
+* A minimum spanning tree (networkx, Kruskal) keeps rigid offsets, driven joints and joints
+  with fixed start values in the tree and cuts the joints with most freedom: a cut joint with
+  ``k`` DOF adds ``6 - k`` constraints, so this gives the fewest constraint equations.
+* A group of frames carrying mass but joined to nothing gets an implicit FreeMotion.
+
+Examples
+--------
+>>> from mbcomp import Model
+>>> from mbcomp.library import World, Revolute, PointMass, FixedTranslation
+>>> m = Model(); w = m.add("world", World()); j = m.add("j", Revolute())
+>>> L = m.add("L", FixedTranslation(r=(1, 0, 0))); b = m.add("b", PointMass())
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, L.frame_a); m.connect(L.frame_b, b.frame_a)
+>>> topo = Topology(m.validate())
+>>> [e.name for e in topo.tree], topo.cut
+(['world', 'j', 'L'], [])
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import networkx as nx
+
+from .component import PortRef
+from .errors import ModelError, Problem
+
+__all__ = ["Topology", "Edge", "ROOT"]
+
+ROOT = -1
+
+
+@dataclass
+class Edge:
+    """A two-frame component (joint, rigid offset) or a ground frame (``node_a = ROOT``)."""
+
+    name: str
+    comp: object
+    node_a: int
+    node_b: int
+    kind: str  # "joint" | "ground"
+    dof: int = 0
+    parent: int = None
+    child: int = None
+    forward: bool = True  # frame_a on the parent side
+    drive: str = None  # name of the Drive prescribing this joint's coordinate
+    q: slice = field(default_factory=lambda: slice(0, 0))
+    u: slice = field(default_factory=lambda: slice(0, 0))
+    implicit: bool = False
+
+
+class _UnionFind:
+    def __init__(self):
+        self.parent = {}
+
+    def find(self, x):
+        self.parent.setdefault(x, x)
+        while self.parent[x] != x:
+            self.parent[x] = self.parent[self.parent[x]]
+            x = self.parent[x]
+        return x
+
+    def union(self, a, b):
+        self.parent[self.find(a)] = self.find(b)
+
+
+class Topology:
+    """Frame nodes, spanning tree, cut joints and coordinates of a flat model."""
+
+    def __init__(self, flat):
+        self.flat = flat
+        comps = flat.components
+        probs = []
+        frames, flanges = _UnionFind(), _UnionFind()
+        for path, comp in comps.items():
+            for pname, port in comp.ports().items():
+                uf = frames if port.kind == "frame" else flanges
+                uf.find(PortRef(comp, pname, port.kind))
+        for a, b in flat.connections:
+            (frames if a.kind == "frame" else flanges).union(a, b)
+        roots = sorted({frames.find(x) for x in frames.parent}, key=lambda r: r.path)
+        index = {r: i for i, r in enumerate(roots)}
+        self.port_node = {x: index[frames.find(x)] for x in frames.parent}
+        self.node_ports = {i: sorted(x.path for x in frames.parent if index[frames.find(x)] == i) for i in index.values()}
+        self.n_nodes = len(roots)
+
+        def node(comp, pname):
+            return self.port_node[PortRef(comp, pname, "frame")]
+
+        self.edges, self.bodies, self.forces, self.flange_elements, self.drives = [], [], [], [], []
+        self.gravity_source = None
+        for path, comp in comps.items():
+            role = comp.role
+            if role == "ground":
+                self.edges.append(Edge(path, comp, ROOT, node(comp, "frame_b"), "ground"))
+                if comp.gravity(comp.p) is not None:
+                    if self.gravity_source is not None:
+                        probs.append(Problem(path, f"a second gravity source besides {self.gravity_source}",
+                                             "keep one World in the model"))
+                    else:
+                        self.gravity_source = path
+            elif role == "joint":
+                self.edges.append(Edge(path, comp, node(comp, "frame_a"), node(comp, "frame_b"), "joint", dof=comp.nu))
+            elif role == "body":
+                self.bodies.append((path, comp, node(comp, "frame_a")))
+            elif role == "force":
+                self.forces.append((path, comp, {pn: node(comp, pn) for pn, pt in comp.ports().items()
+                                                  if pt.kind == "frame"}))
+            elif role == "flange_force":
+                self.flange_elements.append((path, comp))
+            elif role == "drive":
+                self.drives.append((path, comp))
+            else:
+                probs.append(Problem(path, f"{type(comp).__name__} has no known role",
+                                     "subclass one of Ground, Body, Joint, ForceElement, FlangeElement, Drive"))
+
+        # --- flanges: which joint axis each flange node belongs to -------------------------
+        self.flange_owner = {}  # flange root -> (edge name, "axis" | "support")
+        self.flange_of = {}  # PortRef -> flange root
+        members = {}
+        for x in flanges.parent:
+            members.setdefault(flanges.find(x), []).append(x)
+        edge_by_name = {e.name: e for e in self.edges}
+        for root, ports in members.items():
+            owners = [x for x in ports if x.component.role == "joint"]
+            users = [x for x in ports if x.component.role != "joint"]
+            for x in ports:
+                self.flange_of[x] = root
+            if len(owners) > 1:
+                probs.append(Problem(", ".join(x.path for x in owners),
+                                     "joint flanges are connected directly to each other",
+                                     "connect each joint flange to elements (springs, drives), not to another joint"))
+            elif not owners and users:
+                probs.append(Problem(", ".join(x.path for x in users), "flange is connected to no joint axis",
+                                     "connect it to a Revolute/Prismatic axis or support flange"))
+            elif owners:
+                self.flange_owner[root] = (owners[0].component.path, owners[0].name)
+        for path, comp in self.drives:
+            root = self.flange_of[PortRef(comp, "flange_b", "flange")]
+            owner = self.flange_owner.get(root)
+            if owner is None or owner[1] != "axis":
+                probs.append(Problem(f"{path}.flange_b", "drive is not connected to a joint's axis flange",
+                                     "connect it to joint.axis of a Revolute or Prismatic"))
+                continue
+            e = edge_by_name[owner[0]]
+            if e.drive is not None:
+                probs.append(Problem(path, f"joint {e.name} is already driven by {e.drive}", "keep one drive per joint"))
+            e.drive = path
+        if probs:
+            raise ModelError(probs)
+
+        self._spanning_tree()
+        self._coordinates()
+
+    # --------------------------------------------------------------------------------------
+    def _weight(self, e):
+        if e.kind == "ground" or e.dof == 0:
+            return 0.0
+        if e.drive:
+            return -100.0
+        w = float(e.dof)
+        q0, qf, u0, uf = e.comp.start(e.comp.p)
+        if any(qf) or any(uf):
+            w -= 0.5
+        return w
+
+    def _spanning_tree(self):
+        G = nx.MultiGraph()
+        G.add_node(ROOT)
+        G.add_nodes_from(range(self.n_nodes))
+        for e in self.edges:
+            G.add_edge(e.node_a, e.node_b, key=e.name, weight=self._weight(e))
+        # groups of frames joined to nothing that carry mass float freely
+        reach = nx.node_connected_component(G, ROOT)
+        mass_nodes = {n for _, _, n in self.bodies}
+        self.floating = []
+        for comp_nodes in sorted(nx.connected_components(G), key=min):
+            if ROOT in comp_nodes:
+                continue
+            carriers = sorted(n for n in comp_nodes if n in mass_nodes)
+            if not carriers:
+                continue  # massless and unconnected: nothing moves it (checked in the system)
+            from mbcomp.library import FreeMotion  # the standard free joint
+
+            fm = FreeMotion()
+            name = f"{self.node_ports[carriers[0]][0].rsplit('.', 1)[0]}.free"
+            fm.name = name
+            e = Edge(name, fm, ROOT, carriers[0], "joint", dof=6, implicit=True)
+            self.edges.append(e)
+            self.floating.append(name)
+            G.add_edge(ROOT, carriers[0], key=name, weight=6.0)
+        del reach
+        tree = nx.minimum_spanning_tree(G, algorithm="kruskal")
+        tree_keys = {k for _, _, k in tree.edges(keys=True)}
+        by_name = {e.name: e for e in self.edges}
+        self.tree, self.cut = [], []
+        # breadth-first from the root gives parents before children
+        visited = {ROOT}
+        frontier = [ROOT]
+        while frontier:
+            nxt = []
+            for n in frontier:
+                for _, m, k in sorted(tree.edges(n, keys=True), key=lambda x: x[2]):
+                    if m in visited:
+                        continue
+                    e = by_name[k]
+                    e.parent, e.child = n, m
+                    e.forward = e.node_a == n
+                    visited.add(m)
+                    self.tree.append(e)
+                    nxt.append(m)
+            frontier = nxt
+        self.cut = [e.name for e in self.edges if e.name not in tree_keys]
+        self.unreached = sorted(set(range(self.n_nodes)) - visited)
+        self.graph = G
+        probs = []
+        for name in self.cut:
+            e = by_name[name]
+            if e.drive:
+                probs.append(Problem(e.name, f"driven joint closes a kinematic loop and cannot be a tree joint",
+                                     "drive a different joint of the loop"))
+        if probs:
+            raise ModelError(probs)
+
+    def _coordinates(self):
+        nq = nu = 0
+        self.q_names, self.u_names, self.q_units, self.u_units = [], [], [], []
+        for e in self.tree:
+            if e.kind != "joint" or e.drive or e.dof == 0:
+                continue
+            c = e.comp
+            e.q, e.u = slice(nq, nq + c.nq), slice(nu, nu + c.nu)
+            nq, nu = nq + c.nq, nu + c.nu
+            self.q_names += [f"{e.name}.{n}" for n, _ in c.coordinates]
+            self.q_units += [u for _, u in c.coordinates]
+            self.u_names += [f"{e.name}.{n}" for n, _ in c.speeds]
+            self.u_units += [u for _, u in c.speeds]
+        self.nq, self.nu = nq, nu
+
+    def edge(self, name) -> Edge:
+        for e in self.edges:
+            if e.name == name:
+                return e
+        raise KeyError(name)
+
+    @property
+    def n_bodies(self):
+        return len(self.bodies)
