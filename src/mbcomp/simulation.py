@@ -111,7 +111,7 @@ def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress):
         if progress:
             from tqdm.auto import tqdm
 
-            bar = tqdm(total=float(t1 - t0), unit="s sim", delay=2.0, leave=False,
+            bar = tqdm(total=float(t1 - t0), unit="s sim", delay=2.0, leave=False, disable=None,
                        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")
         while k < len(t_out):
             if solver.status != "running":
@@ -142,8 +142,7 @@ def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress):
                         solver = make(solver.t, yp)
                         stats["restarts"] += 1
             if bar is not None:
-                bar.n = float(solver.t - t0)
-                bar.refresh()
+                bar.update(float(solver.t - t_prev))
     except SimulationError as exc:
         status, message = "failed", str(exc)
     except np.linalg.LinAlgError as exc:

@@ -1,0 +1,150 @@
+"""Command line: ``mbcomp simulate MODEL.py`` and ``mbcomp info MODEL.py``.
+
+A model file defines ``build(**params) -> Model`` and may set ``SIMULATION = dict(t_end=...,
+rtol=..., atol=..., method=..., stabilization=...)`` as defaults. ``-p name=value`` passes
+``name`` to ``build`` when it has no dot, and sets a component parameter at run time when it
+has one (``-p spring.c=200``: nothing is re-derived).
+
+Examples
+--------
+>>> from mbcomp.cli import parse_value
+>>> parse_value("1e-3"), parse_value("(0, 0, 1)"), parse_value("RK45")
+(0.001, (0, 0, 1), 'RK45')
+"""
+from __future__ import annotations
+
+import argparse
+import ast
+import importlib.util
+import inspect
+import pathlib
+import sys
+
+import numpy as np
+
+from .errors import ModelError
+
+__all__ = ["main", "load_model_file", "parse_value"]
+
+
+def parse_value(text):
+    """A Python literal if ``text`` is one, else the string itself."""
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
+
+
+def load_model_file(path):
+    """Import a model file and return the module (must define ``build``)."""
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise SystemExit(f"mbcomp: model file {path} does not exist")
+    spec = importlib.util.spec_from_file_location(path.stem.replace("-", "_"), path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    if not callable(getattr(mod, "build", None)):
+        raise SystemExit(f"mbcomp: {path} defines no build(**params) -> Model function")
+    return mod
+
+
+def _split_params(pairs, build):
+    build_kw, runtime = {}, {}
+    for pair in pairs or []:
+        if "=" not in pair:
+            raise SystemExit(f"mbcomp: -p expects name=value, got {pair!r}")
+        k, v = pair.split("=", 1)
+        (runtime if "." in k else build_kw)[k.strip()] = parse_value(v.strip())
+    sig = inspect.signature(build)
+    accepts_any = any(p.kind == p.VAR_KEYWORD for p in sig.parameters.values())
+    unknown = [k for k in build_kw if k not in sig.parameters and not accepts_any]
+    if unknown:
+        raise SystemExit(f"mbcomp: build() takes no parameter {', '.join(unknown)}; it takes: "
+                         f"{', '.join(sig.parameters) or 'none'} (use component.param=value for component parameters)")
+    return build_kw, runtime
+
+
+def _build(args):
+    mod = load_model_file(args.model)
+    build_kw, runtime = _split_params(args.param, mod.build)
+    model = mod.build(**build_kw)
+    return mod, model, runtime
+
+
+def cmd_info(args):
+    from .system import assemble
+
+    _, model, runtime = _build(args)
+    system = assemble(model, runtime)
+    print(system.summary())
+    return 0
+
+
+def cmd_simulate(args):
+    from .simulation import simulate
+
+    mod, model, runtime = _build(args)
+    opts = dict(getattr(mod, "SIMULATION", {}))
+    for key in ("t_end", "rtol", "atol", "method", "stabilization", "n_out"):
+        val = getattr(args, key)
+        if val is not None:
+            opts[key] = val
+    res = simulate(model, params=runtime, progress=not args.quiet, **opts)
+    E = res["energy.total"]
+    print(f"status: {res.status} ({res.message})")
+    print(f"t = {res.time[0]:g} .. {res.time[-1]:g} s, {res.stats['steps']} steps, {res.stats['nfev']} f-evals, "
+          f"{res.stats['cpu_time']:.2f} s")
+    if len(E):
+        print(f"energy drift max|E - E0| = {np.nanmax(np.abs(E - E[0])):.3e} J; "
+              f"max position residual {np.nanmax(res['residual.position']):.3e}, "
+              f"velocity residual {np.nanmax(res['residual.velocity']):.3e}")
+    if args.out:
+        res.to_csv(args.out)
+        print(f"wrote {args.out} ({len(res.names) + 1} columns, {len(res.time)} rows)")
+    if args.plot:
+        res.plot(path=args.plot, title=pathlib.Path(args.model).name)
+        print(f"wrote {args.plot}")
+    return 0 if res.success else 1
+
+
+def make_parser():
+    ap = argparse.ArgumentParser(prog="mbcomp", description="Modelica-style multibody modelling and simulation")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    def common(p):
+        p.add_argument("model", help="model file defining build(**params) -> Model")
+        p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",
+                       help="build() argument, or component.param runtime value (repeatable)")
+
+    s = sub.add_parser("simulate", help="simulate a model file")
+    common(s)
+    s.add_argument("--t-end", dest="t_end", type=float)
+    s.add_argument("--rtol", type=float)
+    s.add_argument("--atol", type=float)
+    s.add_argument("--method", help="RK23, RK45, DOP853, Radau, BDF or LSODA")
+    s.add_argument("--stabilization", choices=["baumgarte", "projection", "none"])
+    s.add_argument("--n-out", dest="n_out", type=int, help="number of output points")
+    s.add_argument("--out", help="write results to this CSV file")
+    s.add_argument("--plot", help="write a plot to this PNG file")
+    s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    s.set_defaults(func=cmd_simulate)
+    i = sub.add_parser("info", help="print the model summary (bodies, DOF, coordinates, constraints)")
+    common(i)
+    i.set_defaults(func=cmd_info)
+    return ap
+
+
+def main(argv=None):
+    args = make_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except ModelError as exc:
+        print(f"mbcomp: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:
+        print(f"mbcomp: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
