@@ -2,8 +2,11 @@
 
 :class:`LagrangeIndex1` - Lagrange multipliers with acceleration-level constraints::
 
-    [ M  C^T ] [ du/dt ]   [ f                              ]
-    [ C   0  ] [  lam  ] = [ -c_b - 2 alpha dPhi/dt - beta^2 Phi ]
+    [ M  C^T  B^T ] [ du/dt ]   [ f                                   ]
+    [ C   0    0  ] [  lam  ] = [ -c_b - 2 alpha dPhi/dt - beta^2 Phi ]
+    [ B   0    0  ] [  mu   ]   [ -B_b - alpha (B u - b)               ]
+
+with holonomic rows ``C`` (loop closure) and nonholonomic rows ``B u = b``.
 
 Stabilization ``"baumgarte"`` keeps the ``alpha``/``beta`` terms (1/s), ``"projection"``
 drops them and instead moves positions and velocities back onto the constraint manifold
@@ -54,7 +57,7 @@ class LagrangeIndex1:
 
     def solve(self, ev, stabilize=True):
         """Accelerations ``du/dt`` and multipliers ``lam`` at an evaluation."""
-        M, f, C = ev.M, ev.f, ev.C
+        M, f, C = ev.M, ev.f, ev.A
         m = C.shape[0]
         self.nlu += 1
         if m == 0:
@@ -65,8 +68,11 @@ class LagrangeIndex1:
                                       "inertia; give the bodies mass or prescribe that motion") from None
             return sla.cho_solve(c, f), np.zeros(0)
         rhs = -ev.cb
+        rhs_nh = -ev.Bb
         if stabilize and self.stabilization == "baumgarte":
             rhs = rhs - 2.0 * self.alpha * ev.Phid - self.beta ** 2 * ev.Phi
+            rhs_nh = rhs_nh - self.alpha * ev.g
+        rhs = np.concatenate((rhs, rhs_nh))
         n = self.nu
         K = np.zeros((n + m, n + m))
         K[:n, :n] = M
@@ -78,7 +84,7 @@ class LagrangeIndex1:
             raise SimulationError(f"the saddle-point matrix is singular at t={ev.t:g}") from None
         d = np.abs(np.diag(lu[0]))
         if d.min() <= 1e-13 * d.max():
-            names = self.system.constraint_names()
+            names = self.system.constraint_names() + [f"{e.name}.{r}" for e, rows, _ in ev.local_nh for r in rows]
             raise SimulationError(
                 f"the constraint Jacobian lost rank at t={ev.t:g} (a singular position of the mechanism, "
                 f"e.g. a loop passing a flat/dead-centre configuration; constraints: {', '.join(names)})")
@@ -112,6 +118,6 @@ class LagrangeIndex1:
             if np.linalg.norm(ev.Phi) > 1e3 * tol:
                 raise SimulationError(f"position projection did not converge at t={t:g} "
                                       f"(residual {np.linalg.norm(ev.Phi):.3g}); the mechanism may be near a singular position")
-        if ev.Phi.size:
-            u = u - np.linalg.lstsq(ev.C, ev.Phid, rcond=None)[0]
+        if ev.Phi.size or ev.g.size:
+            u = u - np.linalg.lstsq(ev.A, np.concatenate((ev.Phid, ev.g)), rcond=None)[0]
         return np.concatenate((q, u))

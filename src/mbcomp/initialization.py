@@ -35,7 +35,8 @@ class InitialState:
     row_mask: np.ndarray
     dropped: list = field(default_factory=list)  # names of redundant constraint rows
     iterations: int = 0
-    rank: int = 0
+    rank: int = 0  # rank of the holonomic constraint Jacobian
+    nonholonomic: int = 0  # number of velocity-level constraint rows
 
 
 def _starts(system):
@@ -172,8 +173,8 @@ def initialize(system, t0=0.0, tol=1e-12, max_iter=60):
     system.row_mask = mask
     ev = system.evaluate(t0, q, u)
     r2, C2, _ = _measure_rows(system, t0, q, u, cut_fixed, "u")
-    Cv = np.vstack((ev.C, C2))
-    rv = np.concatenate((ev.Phid, r2))
+    Cv = np.vstack((ev.A, C2))
+    rv = np.concatenate((ev.Phid, ev.g, r2))
     ufree = ~ufix
     if rv.size and np.linalg.norm(rv) > 1e-12:
         if ufree.any():
@@ -181,7 +182,7 @@ def initialize(system, t0=0.0, tol=1e-12, max_iter=60):
             u = u.copy()
             u[ufree] += du
         ev = system.evaluate(t0, q, u)
-        rv2 = np.concatenate((ev.Phid, _measure_rows(system, t0, q, u, cut_fixed, "u")[0]))
+        rv2 = np.concatenate((ev.Phid, ev.g, _measure_rows(system, t0, q, u, cut_fixed, "u")[0]))
         if np.linalg.norm(rv2) > 1e-8 * max(1.0, np.linalg.norm(u)):
             fixed = [names_u[i] for i in range(system.nu) if ufix[i] and np.any(np.abs(Cv[:, i]) > 1e-12)]
             raise InitializationError([Problem(
@@ -189,14 +190,14 @@ def initialize(system, t0=0.0, tol=1e-12, max_iter=60):
                 f"fixed start speeds over-specify the mechanism (velocity constraint residual {np.linalg.norm(rv2):.3g})",
                 "fix fewer start speeds: wrap the others in Guess(...), e.g. w0=Guess(0.0)")])
     _check_inertia(system, ev)
-    return InitialState(q, u, mask, dropped, it, _rank(ev.C))
+    return InitialState(q, u, mask, dropped, it, _rank(ev.C), ev.B.shape[0])
 
 
 def _check_inertia(system, ev):
     """The mass matrix restricted to the admissible motions must be positive definite."""
     if system.nu == 0:
         return
-    C = ev.C
+    C = ev.A
     N = sla.null_space(C) if C.size else np.eye(system.nu)
     if N.shape[1] == 0:
         return

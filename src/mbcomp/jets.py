@@ -30,7 +30,7 @@ import numpy as np
 from .kinematics import cross as _cross, skew
 
 __all__ = ["FrameJet", "VecJet", "ScalarJet", "local_point", "local_vector", "rigid_constraints",
-           "position_constraints"]
+           "position_constraints", "velocity_along"]
 
 
 class FrameJet:
@@ -171,6 +171,16 @@ def local_vector(F: FrameJet, e, slot: int) -> VecJet:
     jac[:, 6 * slot + 3: 6 * slot + 6] = -skew(x)
     wx = _cross(F.w, x)
     return VecJet(x, jac, wx, _cross(F.alpha, x) + _cross(F.w, wx))
+
+
+def velocity_along(point: VecJet, direction: VecJet) -> ScalarJet:
+    """Velocity-level constraint ``g = (d point/dt) . direction`` (e.g. no lateral slip).
+
+    ``g`` is linear in the twists: its gradient is ``direction . jac(point)``; its time
+    derivative at ``du/dt = 0`` is ``bias(point) . direction + (d point/dt) . (d direction/dt)``.
+    """
+    d = direction.val
+    return ScalarJet(point.dot @ d, d @ point.jac, np.nan, point.bias @ d + point.dot @ direction.dot)
 
 
 _E = np.eye(3)

@@ -37,6 +37,7 @@ def dof_report(system, init=None):
     if init is None:
         from .initialization import initialize
 
+
         try:
             init = initialize(system)
         except Exception:
@@ -50,8 +51,18 @@ def dof_report(system, init=None):
 def summary(system, init=None):
     """Multi-line text: bodies, DOF, chosen coordinates, constraints, what was eliminated."""
     topo = system.topology
+    if init is None:
+        from .initialization import initialize
+
+        try:
+            init = initialize(system)
+        except Exception as exc:  # the summary must still describe a model that cannot start
+            init = None
+            why = str(exc).splitlines()[0]
     d = dof_report(system, init)
     lines = ["mbcomp model summary", "===================="]
+    if init is None:
+        lines.append(f"initialization failed: {why}")
     lines.append(f"bodies ({len(topo.bodies)}): " + ", ".join(
         f"{p} (m={system.P[p].m:g} kg)" if hasattr(system.P[p], "m") else p for p, _, _ in topo.bodies))
     g = system.g
@@ -67,7 +78,9 @@ def summary(system, init=None):
                  f"rank {d['rank']}")
     if d["redundant"]:
         lines.append(f"redundant constraint rows dropped: {', '.join(d['redundant'])}")
-    lines.append("nonholonomic constraints: 0")
+    nh = init.nonholonomic if init is not None else "?"
+    lines.append(f"nonholonomic constraints (velocity level): {nh}"
+                 + (f"; motion DOF {d['mobility'] - nh}" if init is not None and nh else ""))
     drives = [f"{e.name} by {e.drive}" for e in topo.edges if e.drive]
     if drives:
         lines.append(f"prescribed (eliminated, rheonomic): {', '.join(drives)}")

@@ -11,7 +11,8 @@ Variable names are ``<component>.<variable>``:
 * bodies: ``<body>.r.x|y|z`` (m, origin of frame_a, world), ``<body>.Q.w|x|y|z`` (orientation
   quaternion, frame_a -> world), ``<body>.v.*`` (m/s), ``<body>.w.*`` (rad/s, world);
 * ``energy.kinetic``, ``energy.potential``, ``energy.total`` (J);
-* ``residual.position`` (norm of Phi, m or 1), ``residual.velocity`` (norm of dPhi/dt);
+* ``residual.position`` (norm of Phi, m or 1), ``residual.velocity`` (norm of dPhi/dt),
+  ``residual.nonholonomic`` (norm of B u - b);
 * model aliases under their alias name.
 
 Examples
@@ -136,7 +137,7 @@ def postprocess(system, form, t, Y, status, message, stats, init):
         try:
             ud, lam = form.solve(ev, stabilize=True)
         except Exception:
-            ud, lam = np.full(system.nu, np.nan), np.full(ev.C.shape[0], np.nan)
+            ud, lam = np.full(system.nu, np.nan), np.full(ev.A.shape[0], np.nan)
         for i, name in enumerate(system.q_names):
             put(name, k, q[i])
         for i, name in enumerate(system.u_names):
@@ -183,7 +184,8 @@ def postprocess(system, form, t, Y, status, message, stats, init):
         evf = system.evaluate(t[k], q, u, masked=False) if ev.local else ev
         put("residual.position", k, np.linalg.norm(evf.Phi) if evf.Phi.size else 0.0)
         put("residual.velocity", k, np.linalg.norm(evf.Phid) if evf.Phid.size else 0.0)
-        for i, name in enumerate(system.constraint_names()):
+        put("residual.nonholonomic", k, np.linalg.norm(ev.g) if ev.g.size else 0.0)
+        for i, name in enumerate(system.constraint_names() + [f"{e.name}.{rr}" for e, rows, _ in ev.local_nh for rr in rows]):
             put(f"lambda.{name}", k, lam[i] if i < lam.size else np.nan)
     for alias, var in topo.flat.aliases.items():
         if var in series:

@@ -149,6 +149,24 @@ class Joint(Component):
         """
         raise NotImplementedError
 
+    # --- nonholonomic (velocity-level) constraints -----------------------------------------
+    def velocity_constraints(self, a, b, p):
+        """Velocity-level constraints ``g = B(q) u - b(q, t) = 0`` between the two frames,
+        whether the joint is a tree edge or closes a loop (rolling, knife edges).
+
+        Returns
+        -------
+        list of (str, ScalarJet)
+            ``val`` the residual ``g``, ``jac`` its gradient with respect to the local twists
+            ``(v_a, w_a, v_b, w_b)``, ``bias`` its time derivative at ``du/dt = 0``; build
+            them with :func:`mbcomp.jets.velocity_along`. Empty for holonomic joints.
+        """
+        return []
+
+    @property
+    def has_velocity_constraints(self):
+        return type(self).velocity_constraints is not Joint.velocity_constraints
+
     # --- 1-D axis -----------------------------------------------------------------------
     def axis_world(self, R_a, p):
         """Unit axis (world coordinates) along which an axis flange force/torque acts."""

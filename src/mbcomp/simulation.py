@@ -95,7 +95,8 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="RK45", rtol=
 
 def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress):
     fun = form.rhs
-    proj = form.stabilization == "projection" and (form.system.topology.cut or form.system.nq != form.system.nu)
+    sysm = form.system
+    proj = form.stabilization == "projection" and bool(sysm.topology.cut or sysm.nq != sysm.nu or sysm._nonholonomic)
     y = form.project(t0, y0) if proj else y0
     ys = [y.copy()]
     k = 1

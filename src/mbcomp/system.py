@@ -65,8 +65,15 @@ class Evaluation:
     cb: np.ndarray  # bias: d2Phi/dt2 = C du + cb
     B: np.ndarray  # nonholonomic rows (k, nu): B u = b
     b: np.ndarray
-    Bb: np.ndarray  # bias of d/dt(B u - b) at du = 0
+    Bb: np.ndarray  # bias: d/dt(B u - b) = B du + Bb
+    g: np.ndarray  # nonholonomic residual B u - b
     local: list  # per cut edge: (edge, rows, jac (r,12))
+    local_nh: list  # per edge with velocity constraints: (edge, rows, jac (k,12))
+
+    @property
+    def A(self):
+        """All constraint rows acting on du/dt: holonomic ``C`` then nonholonomic ``B``."""
+        return np.vstack((self.C, self.B)) if self.B.size else self.C
 
 
 class MultibodySystem:
@@ -95,6 +102,7 @@ class MultibodySystem:
         self.g = np.zeros(3) if g is None else np.asarray(g, float)
         self.nq, self.nu = topo.nq, topo.nu
         self._edge = {e.name: e for e in topo.edges}
+        self._nonholonomic = [e for e in topo.edges if e.kind == "joint" and e.comp.has_velocity_constraints]
         self.row_mask = None  # independent constraint rows, set by consistent initialization
         self._row_names = None
         self._check_static()
@@ -268,8 +276,21 @@ class MultibodySystem:
         Phi, Phid, cb = np.array(Phi, float), np.array(Phid, float), np.array(cb, float)
         if masked and self.row_mask is not None:
             C, Phi, Phid, cb = C[self.row_mask], Phi[self.row_mask], Phid[self.row_mask], cb[self.row_mask]
-        z = np.zeros((0, nu))
-        return Evaluation(t, q, u, jets, M, f, Phi, Phid, C, cb, z, np.zeros(0), np.zeros(0), local)
+        Brows, gval, Bb, local_nh = [], [], [], []
+        for e in self._nonholonomic:
+            cons = e.comp.velocity_constraints(jets[e.node_a], jets[e.node_b], self.P[e.name])
+            if not cons:
+                continue
+            jac = np.array([c.jac for _, c in cons])
+            a, b = jets[e.node_a], jets[e.node_b]
+            Brows.append(jac @ np.vstack((a.Jv, a.Jw, b.Jv, b.Jw)))
+            gval += [c.val for _, c in cons]
+            Bb += [c.bias for _, c in cons]
+            local_nh.append((e, [n for n, _ in cons], jac))
+        B = np.vstack(Brows) if Brows else np.zeros((0, nu))
+        gval = np.array(gval, float)
+        return Evaluation(t, q, u, jets, M, f, Phi, Phid, C, cb, B, B @ u - gval, np.array(Bb, float), gval,
+                          local, local_nh)
 
     def q_rate(self, q, u):
         """``dq/dt`` from the speeds ``u`` (quaternion kinematics where needed)."""
@@ -331,10 +352,11 @@ class MultibodySystem:
             D[node][1] -= T
         out = {}
         full_lam = np.zeros(len(self.constraint_names(all_rows=True)))
+        lam_h = lam[: lam.size - ev.B.shape[0]]
         if self.row_mask is not None:
-            full_lam[self.row_mask] = lam
-        elif lam.size:
-            full_lam[:] = lam
+            full_lam[self.row_mask] = lam_h
+        elif lam_h.size:
+            full_lam[:] = lam_h
         k = 0
         for e, rows, jac in ev.local:
             lr = full_lam[k:k + len(rows)]
@@ -346,6 +368,18 @@ class MultibodySystem:
             D[e.node_b][1] -= wb[3:]
             Rb = jets[e.node_b].R
             out[e.name] = (Rb.T @ wb[:3], Rb.T @ wb[3:])
+        lam_nh = lam[lam.size - ev.B.shape[0]:] if ev.B.shape[0] else np.zeros(0)
+        k = 0
+        nh_on_b = {}
+        for e, rows, jac in ev.local_nh:
+            lr = lam_nh[k:k + len(rows)]
+            k += len(rows)
+            wa, wb = -(jac[:, :6].T @ lr), -(jac[:, 6:].T @ lr)
+            D[e.node_a][0] -= wa[:3]
+            D[e.node_a][1] -= wa[3:]
+            D[e.node_b][0] -= wb[:3]
+            D[e.node_b][1] -= wb[3:]
+            nh_on_b[e.name] = wb
         for e in reversed(self.topology.tree):
             F, Mc = D[e.child]
             rc, rp = jets[e.child].r, jets[e.parent].r
@@ -357,6 +391,10 @@ class MultibodySystem:
                 rb = jets[e.parent].r
                 fb, tb, Rb = -F, -Mc + cross(rc - rb, -F), jets[e.parent].R
             out[e.name] = (Rb.T @ fb, Rb.T @ tb)
+        for name, wb in nh_on_b.items():
+            Rb = jets[self._edge[name].node_b].R
+            f0, t0 = out.get(name, (np.zeros(3), np.zeros(3)))
+            out[name] = (f0 + Rb.T @ wb[:3], t0 + Rb.T @ wb[3:])
         return out
 
     def summary(self):
