@@ -102,8 +102,11 @@ def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress):
     k = 1
     stats = dict(steps=0, restarts=0, projections=0)
 
+    solvers = []
+
     def make(t, y):
-        return METHODS[method](fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step)
+        solvers.append(METHODS[method](fun, t, y, t1, rtol=rtol, atol=atol, max_step=max_step))
+        return solvers[-1]
 
     bar = None
     status, message = "success", "reached t_end"
@@ -151,4 +154,6 @@ def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress):
     finally:
         if bar is not None:
             bar.close()
+    stats["njev"] = int(sum(getattr(s, "njev", 0) for s in solvers))
+    stats["nlu_integrator"] = int(sum(getattr(s, "nlu", 0) for s in solvers))
     return ys, status, message, stats
