@@ -68,7 +68,8 @@ def summary(system, init=None):
     g = system.g
     lines.append(f"gravity: {np.array2string(g, precision=4)} m/s^2" + (f" from {topo.gravity_source}"
                                                                         if topo.gravity_source else " (no World)"))
-    lines.append(f"degrees of freedom: {d['mobility']}   (Gruebler M = 6N - C - L = 6*{d['N']} - {d['C']} - {d['L']}"
+    dof = d["mobility"] if d["mobility"] is not None else "unknown (initialization failed)"
+    lines.append(f"degrees of freedom: {dof}   (Gruebler M = 6N - C - L = 6*{d['N']} - {d['C']} - {d['L']}"
                  f" = {d['gruebler']})")
     lines.append(f"coordinates ({system.nq} q, {system.nu} speeds): {', '.join(system.q_names) or 'none'}")
     tree = [e.name for e in topo.tree if e.kind == "joint" and e.dof > 0 and not e.drive]

@@ -74,7 +74,7 @@ class Body(Component):
     """Mass properties attached to ``frame_a``."""
 
     role = "body"
-    frame_a = Frame("the body's reference frame")
+    frame_a = Frame("the body's reference frame (a body connected to nothing floats freely)", optional=True)
 
     def mass_properties(self, p):
         """Return ``(m, r_cm, I_cm)``: mass (kg), centre of mass (m, frame_a coordinates),

@@ -83,18 +83,17 @@ class MultibodySystem:
         self.topology = topo = topology
         self.P = {}
         over = {}
+        owners = dict(topo.flat.components)
+        owners.update({e.name: e.comp for e in topo.edges if e.implicit})  # "<body>.free" start values
         for k, v in (params or {}).items():
             comp, _, pname = k.rpartition(".")
-            if comp not in topo.flat.components:
+            if comp not in owners:
                 raise ModelError([Problem(k, f"no component {comp!r} in the model",
-                                          f"use one of: {', '.join(sorted(topo.flat.components))}")],
+                                          f"use one of: {', '.join(sorted(owners))}")],
                                  header="bad parameter override")
             over.setdefault(comp, {})[pname] = v
-        for path, comp in topo.flat.components.items():
+        for path, comp in owners.items():
             self.P[path] = comp.runtime_params(over.get(path))
-        for e in topo.edges:
-            if e.implicit:
-                self.P[e.name] = e.comp.p
         self.params = {k: dict(v) for k, v in over.items()}
         g = None
         if topo.gravity_source:
@@ -174,8 +173,12 @@ class MultibodySystem:
         """Jets of every frame node (dict node -> :class:`~mbcomp.jets.FrameJet`)."""
         jets = {ROOT: FrameJet.ground(self.nu)}
         for e in self.topology.tree:
-            R, r, Hw, Hv, wr, vr, bw, bv, _, _ = self._joint_motion(e, t, q, u)
             pj = jets[e.parent]
+            if e.dof == 0:  # rigid offsets and ground frames: constant transforms
+                R, r = e.comp.pose(self.P[e.name]) if e.kind == "ground" else e.comp.relative(None, self.P[e.name])
+                jets[e.child] = pj.offset(R, r) if e.forward else pj.offset(R.T, -(R.T @ r))
+                continue
+            R, r, Hw, Hv, wr, vr, bw, bv, _, _ = self._joint_motion(e, t, q, u)
             if e.forward:
                 jets[e.child] = pj.through(R, r, Hw, Hv, e.u, wr, vr, bw, bv)
             else:
