@@ -143,6 +143,15 @@ class Force(_Actuator):
     f = Param(0.0, unit="N", kind="law", doc="force along the axis, or f(t, s, v)")
 
 
+def _law_key(law):
+    """Hashable identity of a law value (numbers and strings by value, callables by id)."""
+    try:
+        hash(law)
+        return law
+    except TypeError:
+        return id(law)
+
+
 class PrescribedMotion(Drive):
     """Prescribes the coordinate of the joint axis on ``flange_b``: ``s = s(t)``.
 
@@ -166,7 +175,14 @@ class PrescribedMotion(Drive):
 
     def __init__(self, **values):
         super().__init__(**values)
-        self._laws, self._why = self._derive(self.p)
+        self._cache = {}
+
+    def _laws(self, p):
+        """(s, v, a) callables for the law in ``p``, derived once per distinct law."""
+        key = (_law_key(p.s), _law_key(p.v), _law_key(p.a))
+        if key not in self._cache:
+            self._cache[key] = self._derive(p)
+        return self._cache[key]
 
     @staticmethod
     def _derive(p):
@@ -186,12 +202,15 @@ class PrescribedMotion(Drive):
         return tuple(fs), None
 
     def check_params(self, p):
-        why = getattr(self, "_why", None)
+        laws, why = self._laws(p)
         if why:
             return [Problem(f"{self.path}.s", why,
                             "write s with sympy functions or as a string in t, or pass v= and a= callables")]
         return []
 
     def motion(self, t, p):
-        s, v, a = (float(f(t)) for f in self._laws)
+        laws, why = self._laws(p)
+        if why:
+            raise ValueError(f"{self.path}.s: {why}")
+        s, v, a = (float(f(t)) for f in laws)
         return s, v, a

@@ -83,6 +83,18 @@ class Param:
             return self
         return obj.p.__dict__[self.name]
 
+    def _unit_suffix(self):
+        return "" if self.unit in ("1", "") else f" {self.unit}"
+
+    def hint(self):
+        """The fix to suggest for a bad value: what the parameter means, its unit and shape."""
+        what = f" ({self.doc})" if self.doc else ""
+        shape = f" as an array of shape {self.shape}" if self.shape else ""
+        unit = " (dimensionless)" if self.unit in ("1", "") else f" in {self.unit}"
+        req = {"positive": ", > 0", "nonnegative": ", >= 0", "nonzero": ", not zero"}.get(
+            self.check if isinstance(self.check, str) else None, "")
+        return f"give {self.name}{what}{shape}{unit}{req}"
+
     def coerce(self, value):
         """Return ``(value, problem_text)``: the value as stored, or why it is bad."""
         if value is None:
@@ -106,7 +118,7 @@ class Param:
             if isinstance(self.check, str):
                 ok, msg = _CHECKS[self.check]
                 if not ok(arr):
-                    return value, f"{_fmt(arr)} {self.unit} {msg}"
+                    return value, f"{_fmt(arr)}{self._unit_suffix()} {msg}"
             else:
                 msg = self.check(arr)
                 if msg:
@@ -247,7 +259,7 @@ class Component:
             par = self.params()[name]
             out.append(
                 Problem(f"{self.path}.{name}", f"parameter {msg}",
-                        f"give {name} ({par.doc or 'see docs'}) in {par.unit}")
+                        par.hint())
             )
         out.extend(self.check_params(self.p))
         return out
@@ -270,7 +282,7 @@ class Component:
                 continue
             val, msg = params[k].coerce(v)
             if msg:
-                probs.append(Problem(f"{self.path}.{k}", f"parameter {msg}", f"give {k} in {params[k].unit}"))
+                probs.append(Problem(f"{self.path}.{k}", f"parameter {msg}", params[k].hint()))
             vals[k] = val
         ns = SimpleNamespace(**vals)
         probs.extend(self.check_params(ns))

@@ -56,6 +56,29 @@ def _starts(system):
     return q, u, qfix, ufix, cut_fixed
 
 
+def _position_names(system):
+    """For each speed index, the name of the position coordinate it moves.
+
+    Joints whose coordinates and speeds pair one to one (hinges, sliders) give the
+    coordinate name (``crank_joint.phi``); joints with a quaternion (spherical, free
+    motion) give ``"<joint> (start position/orientation)"``.
+    """
+    names = [""] * system.nu
+    for e in system.topology.tree:
+        if e.kind != "joint" or e.drive or e.dof == 0:
+            continue
+        c = e.comp
+        qn = [f"{e.name}.{n}" for n, _ in c.coordinates]
+        un = range(e.u.start, e.u.stop)
+        if c.nq == c.nu:
+            for i, n in zip(un, qn):
+                names[i] = n
+        else:
+            for i in un:
+                names[i] = f"{e.name} (start position/orientation)"
+    return names
+
+
 def _measure_rows(system, t, q, u, cut_fixed, which):
     """Residuals and Jacobian rows (finite differences on the speeds) for start values fixed
     on cut joints (1-DOF joints only)."""
@@ -157,8 +180,10 @@ def initialize(system, t0=0.0, tol=1e-12, max_iter=60):
         dropped = [row_names[i] for i in range(n_phi) if not mask[i]]
     if r.size and norm > 1e-8 * scale:
         bad_rows = sorted({row_names[i].rsplit(".", 1)[0] for i in range(n_phi) if abs(r[i]) > 1e-8})
-        fixed = [names_u[i] for i in range(system.nu) if qfix[i] and np.any(np.abs(C[:, i]) > 1e-12)]
-        fixed += [c[0].name for c in cut_fixed if np.any(c[2])]
+        pos_names = _position_names(system)
+        fixed = list(dict.fromkeys(pos_names[i] for i in range(system.nu)
+                                   if qfix[i] and np.any(np.abs(C[:, i]) > 1e-12)))
+        fixed += [f"{c[0].name}.{c[0].comp.coordinates[0][0]}" for c in cut_fixed if np.any(c[2])]
         if fixed and newton(q_start, np.ones(system.nu, bool))[4] <= 1e-8 * scale:
             raise InitializationError([Problem(
                 ", ".join(fixed),

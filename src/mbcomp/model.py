@@ -15,7 +15,7 @@ A pendulum: a hinge at the world origin and a point mass 1 m below it.
 >>> m.connect(hinge.frame_b, rod.frame_a)
 >>> m.connect(rod.frame_b, bob.frame_a)
 >>> m.alias("theta", "hinge.phi")
->>> m.validate()
+>>> flat = m.validate()
 """
 from __future__ import annotations
 

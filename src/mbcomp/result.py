@@ -20,7 +20,7 @@ Examples
 >>> import numpy as np
 >>> from mbcomp.result import Result
 >>> r = Result(np.array([0.0, 1.0]), {"a.phi": np.array([0.0, 2.0])})
->>> r["a.phi"][-1]
+>>> float(r["a.phi"][-1])
 2.0
 """
 from __future__ import annotations
