@@ -70,7 +70,10 @@ def summary(system, init=None):
                                                                         if topo.gravity_source else " (no World)"))
     dof = d["mobility"] if d["mobility"] is not None else "unknown (initialization failed)"
     lines.append(f"degrees of freedom: {dof}   (Gruebler M = 6N - C - L = 6*{d['N']} - {d['C']} - {d['L']}"
-                 f" = {d['gruebler']})")
+                 f" = {d['gruebler']}"
+                 + (f"; mobility exceeds it by {d['mobility'] - d['gruebler']} because "
+                    f"{d['mobility'] - d['gruebler']} constraint rows are redundant, e.g. a planar loop"
+                    if isinstance(d["mobility"], int) and d["mobility"] > d["gruebler"] else "") + ")")
     lines.append(f"coordinates ({system.nq} q, {system.nu} speeds): {', '.join(system.q_names) or 'none'}")
     tree = [e.name for e in topo.tree if e.kind == "joint" and e.dof > 0 and not e.drive]
     lines.append(f"tree joints (minimal coordinates): {', '.join(tree) or 'none'}")
