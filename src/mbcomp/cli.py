@@ -18,6 +18,7 @@ import ast
 import importlib.util
 import inspect
 import pathlib
+import os
 import sys
 
 import numpy as np
@@ -144,6 +145,10 @@ def main(argv=None):
     except ValueError as exc:
         print(f"mbcomp: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into e.g. `head`, which closed early
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
 
 
 if __name__ == "__main__":
