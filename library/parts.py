@@ -61,7 +61,8 @@ class RigidBody(Body):
     """Rigid body: mass ``m``, centre of mass ``r_cm`` and inertia ``I`` about it (frame_a axes).
 
     ``m = 0`` with ``I = 0`` is a massless link, legal where its motion is determined by
-    its neighbours.
+    its neighbours. Standard shapes and composed parts come from :mod:`mbcomp.inertia`
+    through :meth:`from_mass_properties`.
 
     Examples
     --------
@@ -78,6 +79,32 @@ class RigidBody(Body):
 
     def mass_properties(self, p):
         return p.m, p.r_cm, p.I
+
+    @classmethod
+    def from_mass_properties(cls, mp):
+        """A rigid body with the mass properties ``mp`` given in its ``frame_a``.
+
+        Parameters
+        ----------
+        mp : mbcomp.inertia.MassProperties
+            Mass (kg), centre of mass (m, frame_a coordinates) and inertia about the centre of
+            mass (kg m^2, frame_a axes), e.g. a shape placed where frame_a sees it.
+
+        Examples
+        --------
+        >>> from mbcomp.inertia import box
+        >>> from mbcomp.library import RigidBody
+        >>> b = RigidBody.from_mass_properties(box(1.0, 0.1, 0.2, 0.05).placed(r=(0.05, 0.1, 0)))
+        >>> b.p.r_cm.tolist()
+        [0.05, 0.1, 0.0]
+        """
+        from mbcomp.inertia import MassProperties  # mbcomp.inertia imports this package lazily too
+
+        if not isinstance(mp, MassProperties):
+            raise TypeError(f"RigidBody.from_mass_properties: {mp!r} is not a MassProperties -> fix: build it "
+                            f"with mbcomp.inertia (box, cylinder, ... placed/combined), or call "
+                            f"RigidBody(m=..., r_cm=..., I=...)")
+        return cls(m=mp.m, r_cm=np.array(mp.r_cm), I=np.array(mp.I))
 
 
 class PointMass(Body):
