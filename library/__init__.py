@@ -5,14 +5,14 @@ Importable as ``mbcomp.library``. Every class here is an example of a role contr
 """
 from .sources import World, Fixed
 from .parts import FixedTranslation, FixedRotation, RigidBody, PointMass
-from .joints import Revolute, Prismatic, Spherical, Weld, FreeMotion
+from .joints import Revolute, Prismatic, Cylindrical, Spherical, Weld, FreeMotion
 from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
 
 __all__ = [
     "World", "Fixed", "FixedTranslation", "FixedRotation", "RigidBody", "PointMass",
-    "Revolute", "Prismatic", "Spherical", "Weld", "FreeMotion",
+    "Revolute", "Prismatic", "Cylindrical", "Spherical", "Weld", "FreeMotion",
     "Spring", "Damper", "SpringDamper", "WorldForce", "WorldTorque",
     "RotationalSpring", "RotationalDamper", "RotationalSpringDamper", "TranslationalSpringDamper",
     "Torque", "Force", "PrescribedMotion",

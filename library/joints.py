@@ -135,6 +135,56 @@ class Prismatic(Joint):
         return d @ n, (b.v - a.v) @ n + d @ cross(a.w, n)
 
 
+class Cylindrical(Joint):
+    """Cylindrical joint: frame_b slides along ``n`` by ``s`` and turns about it by ``phi``.
+
+    Two degrees of freedom (four constraints: two transverse offsets, two tilts); the
+    book's "slider" that keeps its rotation about the rail. Coordinates ``s`` (m) and
+    ``phi`` (rad), speeds ``v`` (m/s) and ``w`` (rad/s), axis ``n`` in frame_a coordinates.
+    It has no 1-D flange; to drive or spring one of its motions, compose a
+    :class:`Prismatic` and a :class:`Revolute` on the same axis instead.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.library import Cylindrical
+    >>> j = Cylindrical(n=(0, 0, 1), s0=0.1, phi0=np.pi / 2)
+    >>> R, r = j.relative([0.1, np.pi / 2], j.p)
+    >>> np.round(R @ [1, 0, 0], 12).tolist(), r.tolist()
+    ([0.0, 1.0, 0.0], [0.0, 0.0, 0.1])
+    """
+
+    coordinates = (("s", "m"), ("phi", "rad"))
+    speeds = (("v", "m/s"), ("w", "rad/s"))
+    n = Param((0.0, 0.0, 1.0), unit="1", shape=(3,), doc="axis direction, frame_a coordinates", check="nonzero")
+    s0 = Param(None, unit="m", kind="start", doc="start position along the axis (fixed unless a Guess)")
+    phi0 = Param(None, unit="rad", kind="start", doc="start angle about the axis (fixed unless a Guess)")
+    v0 = Param(None, unit="m/s", kind="start", doc="start sliding velocity (fixed unless a Guess)")
+    w0 = Param(None, unit="rad/s", kind="start", doc="start angular rate (fixed unless a Guess)")
+
+    def start(self, p):
+        (s, sf), (phi, pf) = split_start(p.s0, 1), split_start(p.phi0, 1)
+        (v, vf), (w, wf) = split_start(p.v0, 1), split_start(p.w0, 1)
+        return np.concatenate((s, phi)), np.array([sf, pf]), np.concatenate((v, w)), np.array([vf, wf])
+
+    def relative(self, q, p):
+        n = _axis(p)
+        return rot_axis(n, q[1]), n * q[0]
+
+    def motion(self, q, p):
+        n = _axis(p)[:, None]
+        z = np.zeros((3, 1))
+        return np.hstack((z, n)), np.hstack((n, z))
+
+    def constraints(self, a, b, p):
+        n = _axis(p)
+        t1, t2 = perpendicular_pair(n)
+        d = local_point(b, 1) - local_point(a, 0)
+        nb = local_vector(b, n, 1)
+        return [("off_1", d.dot_(local_vector(a, t1, 0))), ("off_2", d.dot_(local_vector(a, t2, 0))),
+                ("tilt_1", nb.dot_(local_vector(a, t1, 0))), ("tilt_2", nb.dot_(local_vector(a, t2, 0)))]
+
+
 class Spherical(Joint):
     """Ball joint: frame_b rotates freely about the common origin.
 
