@@ -92,3 +92,19 @@ def test_unknown_variable_names_similar_ones():
     res = mbcomp.simulate(double_pendulum(), t_end=0.1, n_out=3)
     with pytest.raises(KeyError, match="upper"):
         res["upper.joint.psi"]
+
+
+def test_derived_outputs_compose_through_nested_models():
+    """``Model.output``: the lower bob's absolute angle, built from the lower link's own
+    sub-model output (its tip height) and an outer output, equals the reference a2; a
+    failing user function is reported in the message and every other result is kept."""
+    m = double_pendulum()
+    m["lower"].output("bob_height", lambda y: y - 0.0, "bob.r.y")
+    m.output("a2", lambda p1, p2: p1 + p2, "upper.joint.phi", "lower.joint.phi")
+    m.output("broken", lambda p: p[:3], "upper.joint.phi")
+    res = mbcomp.simulate(m, t_end=2.0, rtol=1e-10, atol=1e-12, n_out=101)
+    a1, a2 = reference(res.time)
+    np.testing.assert_allclose(res["a2"], a2, atol=1e-7)
+    np.testing.assert_allclose(res["lower.bob_height"], -np.cos(a1) - 0.7 * np.cos(a2), atol=1e-7)
+    assert "output 'broken' failed" in res.message and "broken" not in res
+    assert res.status == "success"

@@ -39,6 +39,7 @@ class Model(Component):
         self._components: dict[str, Component] = {}
         self._connections: list[tuple[PortRef, PortRef]] = []
         self._aliases: dict[str, str] = {}
+        self._outputs: dict[str, tuple] = {}
         self._exposed: dict[str, PortRef] = {}
         self.defaults: dict = {}
 
@@ -72,6 +73,30 @@ class Model(Component):
         """Expose ``variable`` (e.g. ``"crank.phi"``) in results under ``name``."""
         self._aliases[name] = variable
 
+    def output(self, name: str, function, *variables: str):
+        """Derived output ``name = function(*series)`` computed from result variables.
+
+        Parameters
+        ----------
+        name : str
+            Column name in results (prefixed with the model's path when nested).
+        function : callable
+            Takes one numpy array per variable (same length, one value per output time)
+            and returns an array of that length; units are the caller's.
+        *variables : str
+            Result variables relative to this model, e.g. ``"top.Q.x"``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from mbcomp import Model
+        >>> m = Model()
+        >>> m.output("phi_deg", np.degrees, "hinge.phi")
+        """
+        if not callable(function):
+            raise TypeError(f"output {name!r}: function must be callable, got {function!r}")
+        self._outputs[name] = (function, tuple(variables))
+
     def expose(self, name: str, port: PortRef):
         """Make an inner port reachable as ``model.<name>`` from an enclosing model."""
         self._exposed[name] = port
@@ -92,7 +117,7 @@ class Model(Component):
     # --- flattening and validation --------------------------------------------------------
     def flatten(self) -> "FlatModel":
         """Leaf components by dotted path, every connection, and aliases with full paths."""
-        leaves, conns, aliases = {}, [], {}
+        leaves, conns, aliases, outputs = {}, [], {}, {}
 
         def walk(model, prefix):
             for name, comp in model._components.items():
@@ -103,9 +128,11 @@ class Model(Component):
             conns.extend(model._connections)
             for k, v in model._aliases.items():
                 aliases[f"{prefix}{k}"] = f"{prefix}{v}"
+            for k, (fn, vs) in model._outputs.items():
+                outputs[f"{prefix}{k}"] = (fn, tuple(f"{prefix}{v}" for v in vs))
 
         walk(self, "")
-        return FlatModel(leaves, conns, aliases)
+        return FlatModel(leaves, conns, aliases, outputs)
 
     def validate(self):
         """Collect every problem (parameters, unconnected ports, foreign components) and raise
@@ -136,9 +163,11 @@ class Model(Component):
 
 
 class FlatModel:
-    """Leaf components by path, connections between their ports, aliases (immutable hand-off)."""
+    """Leaf components by path, connections between their ports, aliases and derived
+    outputs (immutable hand-off)."""
 
-    def __init__(self, components, connections, aliases):
+    def __init__(self, components, connections, aliases, outputs=None):
         self.components = dict(components)
         self.connections = tuple(connections)
         self.aliases = dict(aliases)
+        self.outputs = dict(outputs or {})

@@ -192,6 +192,17 @@ def postprocess(system, form, t, Y, status, message, stats, init):
             series[alias] = series[var]
         else:
             message += f"; alias {alias!r} -> {var!r} names no variable"
+    for name, (fn, variables) in topo.flat.outputs.items():
+        missing = [v for v in variables if v not in series]
+        if missing:
+            message += f"; output {name!r} needs {', '.join(map(repr, missing))}, which name no variable"
+            continue
+        try:
+            val = np.broadcast_to(np.asarray(fn(*(series[v] for v in variables)), float), t.shape).copy()
+        except Exception as exc:  # a user's function: report, keep every other result
+            message += f"; output {name!r} failed ({type(exc).__name__}: {exc})"
+            continue
+        series[name] = val
     stats = dict(stats)
     stats["coordinates"] = list(system.q_names)
     from .report import summary
