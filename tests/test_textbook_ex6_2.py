@@ -1,46 +1,31 @@
 """Seed Example 6.2: a cart on a spring carrying a pendulum (two degrees of freedom).
 
-The cart (mass m1) slides along the world x axis on a Prismatic joint and is tied to the
-ground by a linear spring of rate k (a TranslationalSpringDamper between the slider's
-support and axis flanges). A point mass m2 hangs from the cart at distance L on a Revolute
-about z. Gravity acts along -y; the book's theta is measured from the downward vertical,
-which is the revolute angle here (the rod points along -y at phi = 0 and phi > 0 swings the
-bob towards +x). The book's equations of motion are
+The model is ``models/textbook/ex6_2_cart_pendulum.py`` (moved from the former
+``tests/test_example_6_2.py``, whose assertions are all kept here). The book's equations
 
     (m1 + m2) x'' + m2 L th'' cos th - m2 L th'^2 sin th + k x = 0        (6.36)
     m2 L^2 th'' + m2 L x'' cos th + m2 g L sin th = 0                      (6.37)
 
-and the energy (6.24) + (6.25) is conserved.
+are checked to follow from the book's energies (6.24), (6.25) by Lagrange in sympy, are
+integrated independently with scipy and compared with the simulation, and the energy
+(6.24) + (6.25) is conserved.
 """
 import numpy as np
 import pytest
+import sympy as sp
 from scipy.integrate import solve_ivp
 
 import mbcomp
-from mbcomp.library import FixedTranslation, PointMass, Prismatic, Revolute, TranslationalSpringDamper, World
+from conftest import load_model
 
+MOD = load_model("models/textbook/ex6_2_cart_pendulum.py")
 M1, M2, L, K, G = 2.0, 0.7, 0.9, 35.0, 9.81
 X0, XD0, TH0, THD0 = 0.15, -0.3, 1.1, 0.8
 T_END = 5.0
 
 
-def cart_pendulum(m1=M1, m2=M2, L=L, k=K, x0=X0, xd0=XD0, th0=TH0, thd0=THD0):
-    mdl = mbcomp.Model()
-    world = mdl.add("world", World(g=(0, -G, 0)))
-    slider = mdl.add("slider", Prismatic(n=(1, 0, 0), s0=x0, v0=xd0))
-    spring = mdl.add("spring", TranslationalSpringDamper(c=k))
-    cart = mdl.add("cart", PointMass(m=m1))
-    hinge = mdl.add("hinge", Revolute(n=(0, 0, 1), phi0=th0, w0=thd0))
-    rod = mdl.add("rod", FixedTranslation(r=(0, -L, 0)))
-    bob = mdl.add("bob", PointMass(m=m2))
-    mdl.connect(world.frame_b, slider.frame_a)
-    mdl.connect(slider.frame_b, cart.frame_a)
-    mdl.connect(slider.support, spring.flange_a)
-    mdl.connect(slider.axis, spring.flange_b)
-    mdl.connect(slider.frame_b, hinge.frame_a)
-    mdl.connect(hinge.frame_b, rod.frame_a)
-    mdl.connect(rod.frame_b, bob.frame_a)
-    return mdl
+def cart_pendulum():
+    return MOD.build(m1=M1, m2=M2, L=L, k=K, g=G, x0=X0, xd0=XD0, th0=TH0, thd0=THD0)
 
 
 def book_rhs(t, y, m1=M1, m2=M2, L=L, k=K, g=G):
@@ -57,6 +42,28 @@ def book_energy(x, th, xd, thd, m1=M1, m2=M2, L=L, k=K, g=G):
     T = 0.5 * (m1 + m2) * xd ** 2 + m2 * L * xd * thd * np.cos(th) + 0.5 * m2 * L ** 2 * thd ** 2  # (6.24)
     V = 0.5 * k * x ** 2 - m2 * g * L * np.cos(th)  # (6.25)
     return T + V
+
+
+def test_eqs_6_36_6_37_follow_from_energies_by_lagrange():
+    """Lagrange in sympy from the bob's position (not from (6.24)) reproduces (6.24), (6.36), (6.37)."""
+    t = sp.Symbol("t")
+    m1, m2, Ls, k, g = sp.symbols("m1 m2 L k g", positive=True)
+    x, th = sp.Function("x")(t), sp.Function("theta")(t)
+    r2 = sp.Matrix([x + Ls * sp.sin(th), -Ls * sp.cos(th)])
+    v2 = r2.diff(t)
+    T = m1 * x.diff(t) ** 2 / 2 + m2 * v2.dot(v2) / 2
+    V = k * x ** 2 / 2 + m2 * g * r2[1]
+    xd, thd = x.diff(t), th.diff(t)
+    T_book = (m1 + m2) * xd ** 2 / 2 + m2 * Ls * xd * thd * sp.cos(th) + m2 * Ls ** 2 * thd ** 2 / 2  # (6.24)
+    assert sp.simplify(T - T_book) == 0
+    Lag = T - V
+    eq_x = Lag.diff(xd).diff(t) - Lag.diff(x)
+    eq_th = Lag.diff(thd).diff(t) - Lag.diff(th)
+    xdd, thdd = x.diff(t, 2), th.diff(t, 2)
+    assert sp.simplify(eq_x - ((m1 + m2) * xdd + m2 * Ls * thdd * sp.cos(th)
+                               - m2 * Ls * thd ** 2 * sp.sin(th) + k * x)) == 0  # (6.36)
+    assert sp.simplify(eq_th - (m2 * Ls ** 2 * thdd + m2 * Ls * xdd * sp.cos(th)
+                                + m2 * g * Ls * sp.sin(th))) == 0  # (6.37)
 
 
 @pytest.fixture(scope="module")
@@ -89,6 +96,9 @@ def test_trajectory_matches_eqs_6_36_6_37(result, reference):
     np.testing.assert_allclose(result["hinge.phi"], th, rtol=0, atol=1e-7)
     np.testing.assert_allclose(result["slider.v"], xd, rtol=0, atol=1e-7)
     np.testing.assert_allclose(result["hinge.w"], thd, rtol=0, atol=1e-7)
+    # the book's names are aliases of the same series
+    np.testing.assert_array_equal(result["x"], result["slider.s"])
+    np.testing.assert_array_equal(result["theta"], result["hinge.phi"])
 
 
 def test_bob_position_is_cart_plus_pendulum(result):
@@ -105,3 +115,12 @@ def test_energy_is_conserved_and_equals_book_energy(result):
     np.testing.assert_allclose(E, E_book, rtol=0, atol=1e-9)
     scale = np.abs(result["energy.kinetic"]).max()
     assert np.abs(E - E[0]).max() < 1e-8 * scale
+
+
+def test_spring_force_balances_horizontal_momentum(result):
+    """Newton for the whole system along x: (m1 x'' + m2 x_bob'') = -k x (the slider reaction is normal)."""
+    x, th, thd = result["slider.s"], result["hinge.phi"], result["hinge.w"]
+    xdd, thdd = result["slider.v.der"], result["hinge.w.der"]
+    x_bob_dd = xdd + L * (thdd * np.cos(th) - thd ** 2 * np.sin(th))
+    scale = K * np.abs(x).max()
+    np.testing.assert_allclose(M1 * xdd + M2 * x_bob_dd, -K * x, rtol=0, atol=1e-9 * scale)
