@@ -39,7 +39,7 @@ import numpy as np
 
 from .errors import ModelError, Problem
 
-__all__ = ["MassProperties", "combine", "steiner", "rod", "box", "cylinder", "disk", "sphere", "point_mass"]
+__all__ = ["MassProperties", "combine", "steiner", "rod", "box", "cylinder", "disk", "sphere", "point_mass", "inertia_problem"]
 
 _E = np.eye(3)
 _HEADER = "bad mass properties"
@@ -55,11 +55,36 @@ def _frozen(a):
     return a
 
 
-def _inertia_problem(I):
-    # One definition of "a physically realizable inertia tensor" for the whole project: the
-    # check RigidBody's parameter uses. Imported at call time: mbcomp.library imports mbcomp.
-    from mbcomp.library.checks import inertia_tensor
-    return inertia_tensor(I)
+def inertia_problem(I):
+    """Why ``I`` (3x3, kg m^2) is not a physically realizable inertia tensor, or ``None``.
+
+    The one definition for the whole project (``RigidBody``'s parameter check uses it):
+    symmetric, non-negative principal moments, each at most the sum of the other two.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.inertia import inertia_problem
+    >>> inertia_problem(np.diag([1.0, 1.0, 3.0]))[:40]
+    'principal moments 1, 1, 3 kg m^2 violate'
+    >>> inertia_problem(np.diag([1.0, 2.0, 2.5])) is None
+    True
+    """
+    I = np.asarray(I, dtype=float)
+    if not np.allclose(I, I.T, atol=1e-12 * max(1.0, np.abs(I).max())):
+        return "inertia tensor is not symmetric"
+    ev = np.linalg.eigvalsh(0.5 * (I + I.T))
+    tol = 1e-12 * max(1.0, np.abs(ev).max())
+    if ev.min() < -tol:
+        return f"inertia tensor has a negative principal moment {ev.min():g} kg m^2"
+    a, b, c = ev
+    if a + b < c - tol:
+        return (f"principal moments {a:g}, {b:g}, {c:g} kg m^2 violate the triangle inequality "
+                f"(no real mass distribution has them: each must be <= the sum of the other two)")
+    return None
+
+
+
 
 
 def steiner(m, d):
@@ -128,7 +153,7 @@ class MassProperties:
         if I.shape != (3, 3) or not np.all(np.isfinite(I)):
             _fail("MassProperties.I", f"inertia {self.I!r} is not a finite 3x3 array",
                   "give the inertia tensor about the centre of mass in kg m^2, frame F axes, shape (3, 3)")
-        msg = _inertia_problem(I)
+        msg = inertia_problem(I)
         if msg:
             _fail("MassProperties.I", msg,
                   "give the inertia about the centre of mass (not about another point: use "
@@ -271,7 +296,7 @@ class MassProperties:
         m = max(m, 0.0)
         r = (self.m * self.r_cm - other.m * other.r_cm) / m if m > 0 else np.zeros(3)
         I = self.I + steiner(self.m, self.r_cm - r) - other.I - steiner(other.m, other.r_cm - r)
-        msg = _inertia_problem(0.5 * (I + I.T))
+        msg = inertia_problem(0.5 * (I + I.T))
         if msg:
             _fail("MassProperties.__sub__", f"the remaining part has no real mass distribution ({msg})",
                   "remove only material that lies inside the part, described in the same frame")
