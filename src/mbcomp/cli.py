@@ -1,7 +1,7 @@
 """Command line: ``mbcomp simulate MODEL.py`` and ``mbcomp info MODEL.py``.
 
 A model file defines ``build(**params) -> Model`` and may set ``SIMULATION = dict(t_end=...,
-rtol=..., atol=..., method=..., stabilization=...)`` as defaults. ``-p name=value`` passes
+rtol=..., atol=..., method=..., stabilization=..., formulation=...)`` as defaults. ``-p name=value`` passes
 ``name`` to ``build`` when it has no dot, and sets a component parameter at run time when it
 has one (``-p spring.c=200``: nothing is re-derived).
 
@@ -86,7 +86,7 @@ def cmd_simulate(args):
 
     mod, model, runtime = _build(args)
     opts = dict(getattr(mod, "SIMULATION", {}))
-    for key in ("t_end", "rtol", "atol", "method", "stabilization", "n_out"):
+    for key in ("t_end", "rtol", "atol", "method", "stabilization", "formulation", "n_out"):
         val = getattr(args, key)
         if val is not None:
             opts[key] = val
@@ -124,6 +124,8 @@ def make_parser():
     s.add_argument("--atol", type=float)
     s.add_argument("--method", help="RK23, RK45, DOP853, Radau, BDF or LSODA")
     s.add_argument("--stabilization", choices=["baumgarte", "projection", "none"])
+    s.add_argument("--formulation", choices=["lagrange", "dalembert"],
+                   help="lagrange: multipliers at index 1 (default); dalembert: ODE in independent speeds")
     s.add_argument("--n-out", dest="n_out", type=int, help="number of output points")
     s.add_argument("--out", help="write results to this CSV file")
     s.add_argument("--plot", help="write a plot to this PNG file")

@@ -30,21 +30,23 @@ import numpy as np
 import scipy.integrate as si
 
 from .errors import SimulationError
-from .formulations import LagrangeIndex1
+from .formulations import DAlembert, LagrangeIndex1
 from .initialization import initialize
 from .result import Result, postprocess
 from .system import MultibodySystem, assemble
 
-__all__ = ["simulate", "METHODS"]
+__all__ = ["simulate", "METHODS", "FORMULATIONS"]
+
+FORMULATIONS = ("lagrange", "dalembert")
 
 METHODS = {"RK23": si.RK23, "RK45": si.RK45, "DOP853": si.DOP853, "Radau": si.Radau, "BDF": si.BDF, "LSODA": si.LSODA}
 _ONE_STEP = {"RK23", "RK45", "DOP853", "Radau"}
 
 
 def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="RK45", rtol=1e-6, atol=1e-8,
-             stabilization="baumgarte", alpha=10.0, beta=10.0, n_out=None, dt_out=None, max_step=np.inf,
-             progress=False) -> Result:
-    """Simulate a model with the index-1 Lagrange-multiplier formulation.
+             formulation="lagrange", stabilization="baumgarte", alpha=10.0, beta=10.0, n_out=None, dt_out=None,
+             max_step=np.inf, progress=False, independent=None) -> Result:
+    """Simulate a model: Lagrange multipliers at index 1, or D'Alembert projection to an ODE.
 
     Parameters
     ----------
@@ -57,12 +59,20 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="RK45", rtol=
         A ``scipy.integrate.solve_ivp`` method name.
     rtol, atol : float
         Integrator tolerances.
+    formulation : {"lagrange", "dalembert"}
+        ``"lagrange"``: multipliers, index 1 (:class:`~mbcomp.formulations.LagrangeIndex1`);
+        ``"dalembert"``: projection onto independent speeds, a minimal ODE whose positions are
+        corrected onto the constraint manifold after every step
+        (:class:`~mbcomp.formulations.DAlembert`; ``stabilization`` does not apply).
     stabilization : {"baumgarte", "projection", "none"}
-        Constraint stabilization (see :mod:`mbcomp.formulations`).
+        Constraint stabilization of the Lagrange formulation (see :mod:`mbcomp.formulations`).
     alpha, beta : float
         Baumgarte parameters (1/s).
     n_out, dt_out : int, float, optional
         Output grid: ``n_out`` points or a step ``dt_out`` (default 501 points).
+    independent : list of str, optional
+        D'Alembert only: speed names to start with as independent (re-chosen automatically
+        when they become ill-conditioned).
     progress : bool
         Show a progress bar (tqdm) when the run lasts more than two seconds.
 
@@ -72,23 +82,32 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="RK45", rtol=
     """
     if method not in METHODS:
         raise ValueError(f"method {method!r} is unknown; use one of {', '.join(METHODS)}")
+    if formulation not in FORMULATIONS:
+        raise ValueError(f"formulation {formulation!r} is unknown; use one of {', '.join(FORMULATIONS)}")
     if not t_end > t_start:
         raise ValueError(f"t_end ({t_end}) must be greater than t_start ({t_start})")
     system = model.with_params(params) if isinstance(model, MultibodySystem) and params else (
         model if isinstance(model, MultibodySystem) else assemble(model, params))
     init = initialize(system, t_start)
-    form = LagrangeIndex1(system, stabilization, alpha, beta)
+    if formulation == "dalembert":
+        form = DAlembert(system, independent=independent)
+        y0 = form.initial_state(t_start, init.q, init.u)
+    else:
+        form = LagrangeIndex1(system, stabilization, alpha, beta)
+        y0 = np.concatenate((init.q, init.u))
     if dt_out is not None:
         t_out = np.arange(t_start, t_end + 0.5 * dt_out, dt_out)
         t_out[-1] = min(t_out[-1], t_end)
     else:
         t_out = np.linspace(t_start, t_end, n_out or 501)
-    y0 = np.concatenate((init.q, init.u))
     wall0 = _time.perf_counter()
     ys, status, message, stats = _integrate(form, y0, t_start, t_end, t_out, method, rtol, atol, max_step, progress)
     wall = _time.perf_counter() - wall0
-    stats.update(nfev=form.nfev, nlu=form.nlu, cpu_time=wall, method=method, stabilization=stabilization,
-                 projected_rows_dropped=list(init.dropped), init_iterations=init.iterations)
+    stats.update(nfev=form.nfev, nlu=form.nlu, cpu_time=wall, method=method, formulation=formulation,
+                 stabilization=form.stabilization, projected_rows_dropped=list(init.dropped),
+                 init_iterations=init.iterations)
+    if formulation == "dalembert":
+        stats.update(repartitions=form.repartitions, independent_speeds=[system.u_names[i] for i in form.ind])
     t_done = t_out[: len(ys)]
     return postprocess(system, form, t_done, np.array(ys).reshape(len(ys), -1), status, message, stats, init)
 
@@ -97,8 +116,12 @@ def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress):
     fun = form.rhs
     sysm = form.system
     proj = form.stabilization == "projection" and bool(sysm.topology.cut or sysm.nq != sysm.nu or sysm._nonholonomic)
+    if isinstance(form, DAlembert):
+        proj = bool(sysm.topology.cut or sysm.nq != sysm.nu)
     y = form.project(t0, y0) if proj else y0
-    ys = [y.copy()]
+    full = getattr(form, "full", lambda t, yy: yy)
+    repartition = hasattr(form, "needs_repartition")
+    ys = [full(t0, y).copy()]
     k = 1
     stats = dict(steps=0, restarts=0, projections=0)
 
@@ -131,7 +154,7 @@ def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress):
             dense = solver.dense_output()
             while k < len(t_out) and t_out[k] <= solver.t:
                 yk = dense(t_out[k])
-                ys.append(form.project(t_out[k], yk) if proj else yk)
+                ys.append(full(t_out[k], form.project(t_out[k], yk) if proj else yk))
                 k += 1
             if proj:
                 yp = form.project(solver.t, solver.y)
@@ -145,6 +168,9 @@ def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress):
                     if np.max(np.abs(yp - solver.y) / scale) > 1.0:
                         solver = make(solver.t, yp)
                         stats["restarts"] += 1
+            if repartition and form.needs_repartition(solver.t, solver.y):
+                solver = make(solver.t, form.repartition(solver.t, solver.y))
+                stats["restarts"] += 1
             if bar is not None:
                 bar.update(float(solver.t - t_prev))
     except SimulationError as exc:
