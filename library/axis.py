@@ -9,6 +9,7 @@ import sympy as sp
 
 from mbcomp import Drive, Flange, FlangeElement, Param
 from mbcomp.errors import Problem, SimulationError
+from mbcomp.jets import is_traced
 
 
 class _TwoFlange(FlangeElement):
@@ -101,6 +102,8 @@ class _Actuator(FlangeElement):
         s, v = states["flange_b"]
         law = getattr(p, self.value_name)
         val = law(t, s, v) if callable(law) else law
+        if is_traced(val):  # a traced run (mbcomp.symbolic, code generation): no number to check
+            return {"flange_b": val}
         try:
             val = float(val)
         except (TypeError, ValueError):
@@ -212,5 +215,7 @@ class PrescribedMotion(Drive):
         laws, why = self._laws(p)
         if why:
             raise ValueError(f"{self.path}.s: {why}")
+        if is_traced(t):  # traced time (mbcomp.symbolic, code generation): keep the expressions
+            return tuple(f(t) for f in laws)
         s, v, a = (float(f(t)) for f in laws)
         return s, v, a

@@ -3,6 +3,7 @@ import numpy as np
 
 from mbcomp import ForceElement, Frame, Param
 from mbcomp.errors import SimulationError
+from mbcomp.jets import is_traced
 
 
 class _LineForce(ForceElement):
@@ -15,7 +16,7 @@ class _LineForce(ForceElement):
         a, b = frames["frame_a"], frames["frame_b"]
         d = b.r - a.r
         L = np.sqrt(d @ d)
-        if L < 1e-12:
+        if not is_traced(L) and L < 1e-12:
             raise SimulationError(f"{self.path}: the attachment points coincide (length 0), so the force "
                                   "direction is undefined -> fix: attach frame_a and frame_b at distinct points")
         e = d / L
@@ -88,6 +89,9 @@ class SpringDamper(Spring):
 
 def _law(value, t, state, path, what):
     out = value(t, state) if callable(value) else value
+    out = np.asarray(out)
+    if out.dtype == object and out.shape == (3,) and any(map(is_traced, out)):  # traced run (mbcomp.symbolic)
+        return out
     out = np.asarray(out, dtype=float)
     if out.shape != (3,) or not np.all(np.isfinite(out)):
         raise SimulationError(f"{path}: the {what} law returned {out!r} at t={t:g}; it must return 3 finite "

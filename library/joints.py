@@ -269,8 +269,9 @@ class FreeMotion(Joint):
         return quat_to_matrix(q[3:]), q[:3]
 
     def motion(self, q, p):
-        Hw = np.zeros((3, 6))
-        Hw[:, 3:] = quat_to_matrix(q[3:])
+        R = quat_to_matrix(q[3:])
+        Hw = np.zeros((3, 6), dtype=R.dtype)  # object when traced (mbcomp.symbolic)
+        Hw[:, 3:] = R
         Hv = np.zeros((3, 6))
         Hv[:, :3] = np.eye(3)
         return Hw, Hv

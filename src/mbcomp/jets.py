@@ -22,6 +22,35 @@ Examples
 >>> tip = arm.offset(np.eye(3), np.array([1.0, 0, 0]))
 >>> tip.v, tip.a  # velocity and centripetal (bias) acceleration of the tip
 (array([0., 2., 0.]), array([-4.,  0.,  0.]))
+
+Tracing (object scalars)
+------------------------
+The jet recursion, :meth:`mbcomp.system.MultibodySystem.evaluate` and the standard library
+are plain numpy arithmetic, so they also run on numpy *object* arrays whose elements are
+*traced scalars*: a sympy-backed scalar gives the symbolic equations of motion
+(:mod:`mbcomp.symbolic`), a graph-building scalar gives a straight-line program. The
+protocol a traced scalar class must follow:
+
+* class attribute ``__mbcomp_traced__ = True`` (what :func:`is_traced` tests; library code
+  skips numeric-only checks such as ``isfinite`` or ``L < 1e-12`` for such values);
+* arithmetic ``+ - * / **`` with plain numbers (Python or numpy ints and floats) and with other
+  traced scalars, on both sides (``__radd__``, ``__rsub__``, ``__rmul__``, ``__rtruediv__``,
+  ``__rpow__``), and unary ``-``, ``+``, ``abs()``;
+* every binary operator returns ``NotImplemented`` when the other operand is an
+  ``np.ndarray``, so that numpy broadcasts the operation over the array elementwise;
+* no ``__array_priority__``/``__array_ufunc__``;
+* methods called by numpy's object-dtype ufuncs: ``cos``, ``sin``, ``tan``, ``arcsin``,
+  ``arccos``, ``arctan``, ``arctan2(other)``, ``sqrt``, ``exp``, ``log``, ``sinh``, ``cosh``,
+  ``tanh`` (``np.cos(x)`` calls ``x.cos()``, ``np.linalg.norm`` uses ``*``, ``+`` and ``sqrt``);
+* no truth value and no number: ``__bool__`` should raise ``TypeError`` with a clear message
+  (``if x < 0`` in a law cannot be traced), and ``__float__``/``__int__`` should not be defined
+  (``float(x)``, ``math.sin(x)`` then raise ``TypeError``; sympy's ``sympify`` calls ``__float__``
+  on any object that has it).
+
+A traced evaluation passes ``q`` and ``u`` as object arrays (``t`` may be a traced scalar);
+arrays created inside an evaluation then take dtype ``object``, numeric ones stay ``float``
+(the dtype is chosen once per call, so the numeric path is unchanged). Parameters, joint
+axes and start values may stay numbers: they meet traced values in ordinary arithmetic.
 """
 from __future__ import annotations
 
@@ -30,7 +59,39 @@ import numpy as np
 from .kinematics import cross as _cross, skew
 
 __all__ = ["FrameJet", "VecJet", "ScalarJet", "local_point", "local_vector", "rigid_constraints",
-           "position_constraints", "velocity_along"]
+           "position_constraints", "velocity_along", "is_traced", "as_array"]
+
+
+def is_traced(x):
+    """True if ``x`` is a traced scalar (see *Tracing* above) or an object array.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.jets import is_traced
+    >>> is_traced(1.5), is_traced(np.zeros(2)), is_traced(np.zeros(2, dtype=object))
+    (False, False, True)
+    """
+    if isinstance(x, np.ndarray):
+        return x.dtype == object
+    return getattr(type(x), "__mbcomp_traced__", False)
+
+
+def as_array(x):
+    """``x`` as a float array, or as an object array if it holds traced scalars.
+
+    Examples
+    --------
+    >>> from mbcomp.jets import as_array
+    >>> as_array([1, 2]).dtype
+    dtype('float64')
+    """
+    a = np.asarray(x)
+    return a if a.dtype == object else a.astype(float, copy=False)
+
+
+def _obj(J):
+    return J if J.dtype == object else J.astype(object)
 
 
 class FrameJet:
@@ -59,7 +120,7 @@ class FrameJet:
     @classmethod
     def ground(cls, nu, R=None, r=None):
         z = np.zeros(3)
-        return cls(np.eye(3) if R is None else np.asarray(R, float), z.copy() if r is None else np.asarray(r, float),
+        return cls(np.eye(3) if R is None else as_array(R), z.copy() if r is None else as_array(r),
                    z.copy(), z.copy(), np.zeros((3, nu)), np.zeros((3, nu)), z.copy(), z.copy())
 
     def offset(self, R0, p0):
@@ -90,8 +151,13 @@ class FrameJet:
         Jw = self.Jw.copy()
         Jv = self.Jv - skew(rho) @ self.Jw
         if Hw.shape[1]:
-            Jw[:, cols] += Ra @ Hw
-            Jv[:, cols] += Ra @ Hv
+            try:
+                Jw[:, cols] += Ra @ Hw
+                Jv[:, cols] += Ra @ Hv
+            except TypeError:  # traced update of a float Jacobian: widen to object (see Tracing)
+                Jw, Jv = self.Jw.astype(object), _obj(Jv)
+                Jw[:, cols] += Ra @ Hw
+                Jv[:, cols] += Ra @ Hv
         vr = Ra @ v_rel if v_rel is not None else np.zeros(3)
         wxr = _cross(self.w, rho)
         alpha = self.alpha + _cross(self.w, wr)
@@ -111,13 +177,21 @@ class FrameJet:
         w = self.w - wr
         Jw = self.Jw.copy()
         if Hw.shape[1]:
-            Jw[:, cols] -= Ra @ Hw
+            try:
+                Jw[:, cols] -= Ra @ Hw
+            except TypeError:  # traced update of a float Jacobian
+                Jw = self.Jw.astype(object)
+                Jw[:, cols] -= Ra @ Hw
         alpha = self.alpha - _cross(w, wr) - (Ra @ bw if bw is not None else 0.0)
         vr = Ra @ v_rel if v_rel is not None else np.zeros(3)
         wxr = _cross(w, rho)
         Jv = self.Jv + skew(rho) @ Jw
         if Hv.shape[1]:
-            Jv[:, cols] -= Ra @ Hv
+            try:
+                Jv[:, cols] -= Ra @ Hv
+            except TypeError:  # traced update of a float Jacobian
+                Jv = Jv.astype(object)
+                Jv[:, cols] -= Ra @ Hv
         a = (self.a - _cross(alpha, rho) - _cross(w, wxr) - 2.0 * _cross(w, vr)
              - (Ra @ bv if bv is not None else 0.0))
         return FrameJet(Ra, self.r - rho, w, self.v - wxr - vr, Jw, Jv, alpha, a)
@@ -167,8 +241,9 @@ def local_point(F: FrameJet, slot: int) -> VecJet:
 def local_vector(F: FrameJet, e, slot: int) -> VecJet:
     """Vector ``e`` fixed in frame ``F`` (given in its coordinates) as a :class:`VecJet`."""
     x = F.R @ e
-    jac = np.zeros((3, 12))
-    jac[:, 6 * slot + 3: 6 * slot + 6] = -skew(x)
+    S = skew(x)
+    jac = np.zeros((3, 12), dtype=S.dtype)
+    jac[:, 6 * slot + 3: 6 * slot + 6] = -S
     wx = _cross(F.w, x)
     return VecJet(x, jac, wx, _cross(F.alpha, x) + _cross(F.w, wx))
 
@@ -189,7 +264,7 @@ _E = np.eye(3)
 def position_constraints(a: FrameJet, b: FrameJet, r0=None):
     """Three constraints ``r_b = r_a + R_a r0`` (resolved along frame_a's axes), named x, y, z."""
     d = local_point(b, 1) - local_point(a, 0)
-    if r0 is not None and np.any(r0):
+    if r0 is not None and (is_traced(r0) or np.any(r0)):
         d = d - local_vector(a, r0, 0)
     return [(ax, d.dot_(local_vector(a, _E[i], 0))) for i, ax in enumerate("xyz")]
 

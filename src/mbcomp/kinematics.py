@@ -1,5 +1,8 @@
 """Rotations, quaternions and small vector helpers (numeric, numpy).
 
+``cross``, ``skew``, ``rot_axis`` (with a numeric axis), ``quat_to_matrix``, ``quat_multiply``
+and ``quat_rate`` also accept traced scalars (see :mod:`mbcomp.jets`, *Tracing*).
+
 Conventions used throughout mbcomp
 ----------------------------------
 * A rotation matrix ``R`` maps coordinates resolved in a moving frame to
@@ -84,8 +87,13 @@ def rot_axis(axis, angle):
 
 
 def quat_to_matrix(Q):
-    """Rotation matrix of quaternion ``Q = (w, x, y, z)`` (normalized here)."""
-    Q = np.asarray(Q, dtype=float)
+    """Rotation matrix of quaternion ``Q = (w, x, y, z)`` (normalized here).
+
+    Traced (object) quaternions give an object matrix (see :mod:`mbcomp.jets`, *Tracing*).
+    """
+    Q = np.asarray(Q)
+    if Q.dtype != object:
+        Q = Q.astype(float, copy=False)
     w, x, y, z = Q / np.sqrt(Q @ Q)
     return np.array(
         [

@@ -35,12 +35,18 @@ import numpy as np
 
 from .component import PortRef
 from .errors import ModelError, Problem, SimulationError
-from .jets import FrameJet, rigid_constraints
+from .jets import FrameJet, as_array, is_traced, rigid_constraints
 from .kinematics import cross, skew
 from .roles import FrameState
 from .topology import ROOT, Topology
 
 __all__ = ["assemble", "MultibodySystem", "Evaluation"]
+
+
+def _dtype(t, q, u):
+    """Array dtype of one evaluation: ``object`` when it is traced (object ``q``/``u`` or a
+    traced ``t``, see :mod:`mbcomp.jets`), else ``float``; chosen once per call."""
+    return object if q.dtype == object or u.dtype == object or is_traced(t) else float
 
 
 def assemble(model, params=None):
@@ -98,7 +104,7 @@ class MultibodySystem:
         g = None
         if topo.gravity_source:
             g = topo.flat.components[topo.gravity_source].gravity(self.P[topo.gravity_source])
-        self.g = np.zeros(3) if g is None else np.asarray(g, float)
+        self.g = np.zeros(3) if g is None else as_array(g)
         self.nq, self.nu = topo.nq, topo.nu
         self._edge = {e.name: e for e in topo.edges}
         self._nonholonomic = [e for e in topo.edges if e.kind == "joint" and e.comp.has_velocity_constraints]
@@ -198,11 +204,13 @@ class MultibodySystem:
             return s, v
         if e.name in self.topology.cut:
             return e.comp.measure(jets[e.node_a], jets[e.node_b], self.P[e.name])
-        return float(q[e.q][0]), float(u[e.u][0])
+        s, v = q[e.q.start], u[e.u.start]
+        return (s, v) if q.dtype == object or u.dtype == object else (float(s), float(v))
 
     def applied(self, t, q, u, jets):
         """Applied wrenches per frame node: dict node -> [f (3), tau (3)] (world, about origin)."""
         out = {}
+        dt = _dtype(t, q, u)
 
         def add(node, f, tau):
             w = out.setdefault(node, [np.zeros(3), np.zeros(3)])
@@ -212,7 +220,7 @@ class MultibodySystem:
         for path, comp, ports in self.topology.forces:
             states = {pn: self._frame_state(jets[n]) for pn, n in ports.items()}
             for pn, (f, tau) in comp.wrenches(t, states, self.P[path]).items():
-                add(ports[pn], np.asarray(f, float), np.asarray(tau, float))
+                add(ports[pn], np.asarray(f, dt), np.asarray(tau, dt))
         for path, comp in self.topology.flange_elements:
             roots = {pn: self.topology.flange_of[PortRef(comp, pn, "flange")]
                      for pn, pt in comp.ports().items() if pt.kind == "flange"}
@@ -241,9 +249,10 @@ class MultibodySystem:
     def evaluate(self, t, q, u, masked=True) -> Evaluation:
         """Mass matrix, forces and constraints at ``(t, q, u)``."""
         nu = self.nu
+        dt = _dtype(t, q, u)
         jets = self.kinematics(t, q, u)
-        M = np.zeros((nu, nu))
-        f = np.zeros(nu)
+        M = np.zeros((nu, nu), dt)
+        f = np.zeros(nu, dt)
         g = self.g
         for path, comp, node in self.topology.bodies:
             J = jets[node]
@@ -275,8 +284,8 @@ class MultibodySystem:
             Phid += [c.dot for _, c in cons]
             cb += [c.bias for _, c in cons]
             local.append((e, [n for n, _ in cons], jac))
-        C = np.vstack(Crows) if Crows else np.zeros((0, nu))
-        Phi, Phid, cb = np.array(Phi, float), np.array(Phid, float), np.array(cb, float)
+        C = np.vstack(Crows) if Crows else np.zeros((0, nu), dt)
+        Phi, Phid, cb = np.array(Phi, dt), np.array(Phid, dt), np.array(cb, dt)
         if masked and self.row_mask is not None:
             C, Phi, Phid, cb = C[self.row_mask], Phi[self.row_mask], Phid[self.row_mask], cb[self.row_mask]
         Brows, gval, Bb, local_nh = [], [], [], []
@@ -290,9 +299,9 @@ class MultibodySystem:
             gval += [c.val for _, c in cons]
             Bb += [c.bias for _, c in cons]
             local_nh.append((e, [n for n, _ in cons], jac))
-        B = np.vstack(Brows) if Brows else np.zeros((0, nu))
-        gval = np.array(gval, float)
-        return Evaluation(t, q, u, jets, M, f, Phi, Phid, C, cb, B, B @ u - gval, np.array(Bb, float), gval,
+        B = np.vstack(Brows) if Brows else np.zeros((0, nu), dt)
+        gval = np.array(gval, dt)
+        return Evaluation(t, q, u, jets, M, f, Phi, Phid, C, cb, B, B @ u - gval, np.array(Bb, dt), gval,
                           local, local_nh)
 
     def q_rate(self, q, u):
