@@ -26,7 +26,7 @@ __all__ = [
     "Component", "Param", "Frame", "Flange", "Guess", "Model",
     "Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState",
     "ModelError", "InitializationError", "SimulationError",
-    "assemble", "simulate", "Result",
+    "assemble", "simulate", "Result", "equations",
 ]
 
 
@@ -40,6 +40,9 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name == "Result":
         from .result import Result
         return Result
+    if name == "equations":  # symbolic equations of motion (imports sympy)
+        from .symbolic import equations
+        return equations
     raise AttributeError(f"module 'mbcomp' has no attribute {name!r}")
 
 __version__ = "0.1.0"
