@@ -18,6 +18,14 @@ bench/scaling.png (log-log time vs N).
 
 Run: python bench/scaling.py [--quick] [--Ns 2,5,10,20,50,100] [--no-c] [--no-sympy]
 """
+import os
+
+# one BLAS thread: the matrices here are small, and a threaded BLAS on a shared 2-core
+# machine made the same Cholesky 5x slower (oversubscription), swamping what is measured
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
 import argparse
 import csv
 import json

@@ -262,16 +262,19 @@ class DAlembert:
     def accelerations(self, ev):
         """``du/dt`` at an evaluation whose speeds satisfy the constraints."""
         self.nlu += 1
-        N, w = self._reduce(ev)
-        Mr = N.T @ ev.M @ N
-        fr = N.T @ (ev.f - ev.M @ w)
+        if self.dep.size == 0:  # open tree, no velocity rows: N = I, w = 0 -- the minimal ODE itself
+            N, w, Mr, fr = None, None, ev.M, ev.f
+        else:
+            N, w = self._reduce(ev)
+            Mr = N.T @ ev.M @ N
+            fr = N.T @ (ev.f - ev.M @ w)
         try:
             c = sla.cho_factor(Mr, check_finite=False)
         except np.linalg.LinAlgError:
             raise SimulationError(f"the projected mass matrix is singular at t={ev.t:g}: some independent "
                                   "coordinate carries no inertia; give the bodies mass or prescribe that motion") from None
         vd = sla.cho_solve(c, fr, check_finite=False)
-        return N @ vd + w
+        return vd if N is None else N @ vd + w
 
     def solve(self, ev, stabilize=True):
         """Accelerations and multipliers (least squares on ``A^T lam = f - M du/dt``), with the
