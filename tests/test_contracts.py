@@ -120,6 +120,8 @@ def test_every_param_and_port_is_documented(cls):
 
 MODULES = (["mbcomp"] + [f"mbcomp.{p.stem}" for p in sorted((ROOT / "src" / "mbcomp").glob("*.py"))
                          if p.stem != "__init__"]
+           + ["mbcomp.solvers"] + [f"mbcomp.solvers.{p.stem}" for p in sorted((ROOT / "src" / "mbcomp" / "solvers").glob("*.py"))
+                                   if p.stem != "__init__"]
            + ["mbcomp.library"] + [f"mbcomp.library.{p.stem}" for p in sorted((ROOT / "library").glob("*.py"))
                                    if p.stem != "__init__"])
 

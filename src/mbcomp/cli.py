@@ -1,4 +1,4 @@
-"""Command line: ``mbcomp simulate MODEL.py`` and ``mbcomp info MODEL.py``.
+"""Command line: ``mbcomp simulate MODEL.py``, ``mbcomp info MODEL.py`` and ``mbcomp bench MODEL.py``.
 
 A model file defines ``build(**params) -> Model`` and may set ``SIMULATION = dict(t_end=...,
 rtol=..., atol=..., method=..., stabilization=..., formulation=...)`` as defaults. ``-p name=value`` passes
@@ -86,7 +86,7 @@ def cmd_simulate(args):
 
     mod, model, runtime = _build(args)
     opts = dict(getattr(mod, "SIMULATION", {}))
-    for key in ("t_end", "rtol", "atol", "method", "stabilization", "formulation", "n_out"):
+    for key in ("t_end", "rtol", "atol", "method", "stabilization", "formulation", "n_out", "index", "h", "backend"):
         val = getattr(args, key)
         if val is not None:
             opts[key] = val
@@ -108,6 +108,41 @@ def cmd_simulate(args):
     return 0 if res.success else 1
 
 
+def cmd_bench(args):
+    from . import workprecision as wp
+
+    mod = load_model_file(args.model)
+    build_kw, runtime = _split_params(args.param, mod.build)
+    combos = wp.default_combos()
+    if args.combos:
+        keys = [k.strip().lower() for k in args.combos.split(",")]
+        combos = [c for c in combos if any(k in c.label.lower() for k in keys)]
+        if not combos:
+            raise SystemExit(f"mbcomp: no combination matches --combos {args.combos!r}; labels: "
+                             + "; ".join(c.label for c in wp.default_combos()))
+    tols = [float(x) for x in args.tols.split(",")] if args.tols else None
+    rows = wp.work_precision(mod, combos, tols=tols, build_kw=build_kw, params=runtime or None, t_end=args.t_end,
+                             max_cpu=args.max_cpu)
+    best = wp.fastest(rows, args.target)
+    name = pathlib.Path(args.model).stem
+    print(f"\n{name}: fastest run reaching a relative position error <= {args.target:g}")
+    print(f"{'combination':<38}{'cpu [s]':>10}{'nfev':>9}{'error':>11}  setting")
+    for combo in dict.fromkeys(r["combo"] for r in rows):
+        b = best.get(combo)
+        if b is None:
+            fails = [r for r in rows if r["combo"] == combo and r["status"] != "success"]
+            why = f"  ({fails[0]['message'][:70]})" if fails else ""
+            print(f"{combo:<38}{'-':>10}{'-':>9}{'-':>11}  not reached{why}")
+        else:
+            print(f"{combo:<38}{b['cpu_s']:>10.3f}{b['nfev']:>9}{b['error']:>11.2e}  {b['setting']}={b['value']:.3g}")
+    out = args.out or f"{name}_work_precision.csv"
+    wp.write_csv(rows, out)
+    png = args.plot or f"{name}_work_precision.png"
+    wp.plot(rows, png, title=name, target=args.target)
+    print(f"wrote {out} and {png}")
+    return 0
+
+
 def make_parser():
     ap = argparse.ArgumentParser(prog="mbcomp", description="Modelica-style multibody modelling and simulation")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -122,7 +157,13 @@ def make_parser():
     s.add_argument("--t-end", dest="t_end", type=float)
     s.add_argument("--rtol", type=float)
     s.add_argument("--atol", type=float)
-    s.add_argument("--method", help="RK23, RK45, DOP853, Radau, BDF or LSODA")
+    s.add_argument("--method", help="ODE forms: RK23, RK45, DOP853, Radau, BDF, LSODA; DAE forms: radau5 "
+                   "(index 1-3), ida (index 1-2), genalpha (index 3, fixed step --h)")
+    s.add_argument("--index", type=int, choices=[1, 2, 3],
+                   help="with a DAE method: constraints at acceleration (1), velocity + GGL (2) or position level (3)")
+    s.add_argument("--h", type=float, help="step size (s) of fixed-step methods (genalpha)")
+    s.add_argument("--backend", choices=["numeric", "python", "c", "auto"],
+                   help="numeric jets (default) or a generated program: python, c (system compiler, cached), auto")
     s.add_argument("--stabilization", choices=["baumgarte", "projection", "none"])
     s.add_argument("--formulation", choices=["lagrange", "dalembert"],
                    help="lagrange: multipliers at index 1 (default); dalembert: ODE in independent speeds")
@@ -131,6 +172,17 @@ def make_parser():
     s.add_argument("--plot", help="write a plot to this PNG file")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=cmd_simulate)
+    b = sub.add_parser("bench", help="work-precision study: every formulation x solver over a tolerance sweep")
+    common(b)
+    b.add_argument("--t-end", dest="t_end", type=float, help="end time (default: the model's REFERENCE or SIMULATION)")
+    b.add_argument("--target", type=float, default=1e-6, help="relative position error for the summary table")
+    b.add_argument("--tols", help="comma-separated rtol values (default 1e-3 ... 1e-10)")
+    b.add_argument("--combos", help="comma-separated substrings selecting combinations, e.g. 'radau5,DOP853'")
+    b.add_argument("--max-cpu", dest="max_cpu", type=float, default=60.0,
+                   help="stop a combination's sweep after a run slower than this (s)")
+    b.add_argument("--out", help="CSV file (default MODEL_work_precision.csv)")
+    b.add_argument("--plot", help="PNG file (default MODEL_work_precision.png)")
+    b.set_defaults(func=cmd_bench)
     i = sub.add_parser("info", help="print the model summary (bodies, DOF, coordinates, constraints)")
     common(i)
     i.set_defaults(func=cmd_info)

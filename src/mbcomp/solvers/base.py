@@ -1,0 +1,159 @@
+"""The stepping interface every mbcomp integrator follows, and the problems it steps.
+
+Modelled on ``scipy.integrate.OdeSolver``: a solver is constructed at ``(t0, y0)`` with a
+``t_bound``; the driver calls :meth:`Stepper.step` until ``status`` is ``"finished"`` or
+``"failed"``, reads ``t``, ``y`` and interpolates inside the last step with
+:meth:`Stepper.dense_output`. Each class *declares* what it can do (``implicit``,
+``adaptive``, ``max_index``, the ``problem`` kind it accepts) so the driver never
+special-cases a solver by name, and counts its work in :attr:`Stepper.stats`.
+
+Problem kinds
+-------------
+``"ode"``
+    ``dy/dt = fun(t, y)``: any object with ``fun(t, y)`` and ``n``.
+``"dae"`` (:class:`SemiExplicitDAE`)
+    ``E dy/dt = fun(t, y)`` with a constant diagonal ``E = diag(mass)`` (1 for a
+    differential row, 0 for an algebraic one) and, per variable, its DAE ``index``
+    (1, 2 or 3: how often the constraints must be differentiated to give its derivative);
+    index-aware error control scales index-2 variables by ``h`` and index-3 by ``h**2``.
+``"mechanical"`` (:class:`MechanicalDAE`)
+    ``M(q) du/dt + C(q)^T lam = f(t, q, u)``, ``Phi(t, q) = 0``, ``dq/dt = H(q) u``: the
+    second-order structure a generalized-alpha scheme needs; coordinates are moved with
+    ``increment(q, dq)`` (``dq`` in speed space), which is a rotation-vector update for
+    quaternion coordinates (a Lie-group step).
+
+Examples
+--------
+>>> import numpy as np
+>>> from mbcomp.solvers.base import Stepper
+>>> Stepper.capabilities()
+{'implicit': False, 'adaptive': False, 'max_index': 0, 'problem': 'ode'}
+"""
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+__all__ = ["Stepper", "SemiExplicitDAE", "MechanicalDAE", "StepFailure"]
+
+
+class StepFailure(RuntimeError):
+    """A solver could not continue; the message names the cause (Newton failure, step-size
+    collapse, singular iteration matrix) and where (``t``)."""
+
+
+class SemiExplicitDAE(Protocol):
+    """``E dy/dt = fun(t, y)`` with ``E = diag(mass)`` constant.
+
+    Attributes
+    ----------
+    n : int
+        Number of variables.
+    mass : ndarray (n,)
+        1.0 for a differential equation row, 0.0 for an algebraic row.
+    index : ndarray (n,) of int
+        DAE index of each variable (1 for differential and index-1 algebraic variables).
+    """
+
+    n: int
+    mass: np.ndarray
+    index: np.ndarray
+
+    def fun(self, t: float, y: np.ndarray) -> np.ndarray: ...
+
+    def jac(self, t: float, y: np.ndarray) -> np.ndarray | None:
+        """``d fun / d y`` (n, n), or ``None`` to let the solver use finite differences."""
+
+
+class MechanicalDAE(Protocol):
+    """``M(q) a + C(q)^T lam = f(t, q, u)``, ``Phi(t, q) = 0``, ``dq/dt = q_rate(q, u)``.
+
+    Attributes
+    ----------
+    nq, nu, m : int
+        Coordinates, speeds, constraint rows.
+    """
+
+    nq: int
+    nu: int
+    m: int
+
+    def dynamics(self, t: float, q: np.ndarray, u: np.ndarray):
+        """``(M (nu, nu), f (nu,), Phi (m,), C (m, nu))`` at ``(t, q, u)``."""
+
+    def increment(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """``q`` moved by ``dq`` given in speed space (nu,)."""
+
+    def q_rate(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """``dq/dt`` (nq,)."""
+
+
+class Stepper:
+    """Base class of every mbcomp integrator (one step at a time).
+
+    Parameters
+    ----------
+    problem : object
+        Of the kind named by the class attribute ``problem``.
+    t0 : float
+        Start time (s).
+    y0 : ndarray
+        Consistent start state (for ``"mechanical"``: ``[q, u, udot, a, lam]``).
+    t_bound : float
+        Do not step past this time.
+    rtol, atol : float
+        Tolerances (adaptive solvers) -- fixed-step solvers use ``first_step`` as ``h``.
+    first_step, max_step : float, optional
+
+    Attributes
+    ----------
+    t, y, t_old : current time, state, time before the last step.
+    status : {"running", "finished", "failed"}
+    stats : dict with ``nsteps, nreject, nfev, njev, nlu`` (and solver-specific counters).
+    """
+
+    implicit = False
+    adaptive = False
+    max_index = 0
+    problem = "ode"
+
+    @classmethod
+    def capabilities(cls):
+        return dict(implicit=cls.implicit, adaptive=cls.adaptive, max_index=cls.max_index, problem=cls.problem)
+
+    def __init__(self, problem, t0, y0, t_bound, rtol=1e-6, atol=1e-8, first_step=None, max_step=np.inf):
+        self.prob = problem
+        self.t = float(t0)
+        self.t_old = None
+        self.y = np.array(y0, dtype=float)
+        self.t_bound = float(t_bound)
+        self.rtol, self.atol = rtol, atol
+        self.first_step, self.max_step = first_step, max_step
+        self.status = "running" if self.t < self.t_bound else "finished"
+        self.stats = dict(nsteps=0, nreject=0, nfev=0, njev=0, nlu=0)
+
+    def step(self):
+        """Advance one step; returns ``None`` or, on failure, the message (status ``"failed"``)."""
+        if self.status != "running":
+            raise RuntimeError("step() on a solver that is not running")
+        try:
+            self._step()
+        except StepFailure as exc:
+            self.status = "failed"
+            return str(exc)
+        if self.t >= self.t_bound - 1e-14 * max(1.0, abs(self.t_bound)):
+            self.status = "finished"
+        return None
+
+    def reset_state(self, y):
+        """Continue from a modified state ``y`` at the current time (the driver's projection);
+        solvers that keep derived data (``fun`` at ``y``) override this to refresh it."""
+        self.y = np.array(y, dtype=float)
+
+    def _step(self):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def dense_output(self):
+        """Callable ``y(t)`` for ``t`` in ``[t_old, t]`` (the last step)."""
+        raise NotImplementedError

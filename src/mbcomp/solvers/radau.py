@@ -1,0 +1,619 @@
+"""Radau IIA of order 5 (3 stages) for semi-explicit DAEs ``E dy/dt = fun(t, y)`` of index <= 3.
+
+The method and its implementation follow Hairer & Wanner, *Solving Ordinary Differential
+Equations II*, sec. IV.8 and VI/VII (the code RADAU5); every coefficient below is derived
+at import time from the method's definition (collocation at the Radau points
+``c = ((4 - sqrt 6)/10, (4 + sqrt 6)/10, 1)``) rather than typed in.
+
+Stage equations
+    With ``Z_i = Y_i - y0`` the collocation conditions read
+    ``(A^{-1} (x) E) Z = h F(Z)``, ``F_i = fun(t0 + c_i h, y0 + Z_i)``. They are solved by
+    simplified Newton iterations with the matrix ``A^{-1} (x) E - h I (x) J``; the
+    transformation ``T^{-1} A^{-1} T = diag(gamma, [[alpha, -beta], [beta, alpha]])``
+    decouples it into one real system ``(gamma/h) E - J`` and one complex system
+    ``((alpha + i beta)/h) E - J`` of size ``n``.
+Error estimate
+    ``err = ((gamma/h) E - J)^{-1} (fun(t0, y0) + E (d_1 Z_1 + d_2 Z_2 + d_3 Z_3)/h)``: the
+    difference to an embedded order-3 formula that uses ``fun(t0, y0)``, filtered through the
+    real iteration matrix (the filter keeps the estimate bounded for stiff components and
+    for the algebraic ones). After a rejection or on the first step the estimate is
+    re-filtered once with ``fun(t0, y0 + err)`` (RADAU5's improvement for very stiff
+    problems). Index-2 components are weighted by ``h`` and index-3 components by ``h**2``
+    before the scaled RMS norm is taken (Hairer, Lubich & Roche), because their local errors
+    are one and two powers of ``h`` larger than the differential ones.
+Step size
+    ``h_new = h * clip(fac * err**(-1/4), 1/5, 8)`` with a safety factor that shrinks with the
+    number of Newton iterations used, combined with Gustafsson's predictive controller after
+    accepted steps. Diverging or too slow Newton iterations shrink ``h`` and retry, with a
+    fresh Jacobian first when the current one is stale. The Jacobian is reused from step to
+    step while Newton converges fast (contraction rate below ``1e-3``), and the LU factors
+    are kept when the new step would only grow by less than 20 %.
+Dense output
+    The collocation polynomial (degree 3) through ``y0`` and the three stage values.
+
+Examples
+--------
+>>> import numpy as np
+>>> from types import SimpleNamespace
+>>> from mbcomp.solvers.radau import Radau5
+>>> Radau5.capabilities()
+{'implicit': True, 'adaptive': True, 'max_index': 3, 'problem': 'dae'}
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from scipy.linalg import LinAlgWarning, lu_factor, lu_solve
+
+from .base import StepFailure, Stepper
+
+__all__ = ["Radau5", "RadauDenseOutput"]
+
+EPS = np.finfo(float).eps
+
+
+# ==========================================================================================
+# method coefficients, derived from the collocation definition
+# ==========================================================================================
+def _radau_iia_coefficients():
+    """Coefficients of the 3-stage Radau IIA method and of its RADAU5 implementation.
+
+    Returns
+    -------
+    dict
+        ``c`` (3,) nodes; ``A`` (3, 3) Butcher matrix; ``T``, ``TI`` (3, 3) with
+        ``TI @ inv(A) @ T = LAM``; ``LAM`` (3, 3) block form; ``gamma`` real eigenvalue of
+        ``inv(A)``; ``mu`` complex eigenvalue ``alpha + i beta`` used in the complex system;
+        ``d`` (3,) error-estimate weights; ``P`` (3, 3) collocation-polynomial coefficients:
+        ``y(t0 + s h) = y0 + sum_i Z_i sum_k P[i, k] s**(k+1)``.
+    """
+    s6 = np.sqrt(6.0)
+    c = np.array([(4.0 - s6) / 10.0, (4.0 + s6) / 10.0, 1.0])
+    # Lagrange basis l_j on the nodes; A_ij = int_0^{c_i} l_j(s) ds
+    A = np.empty((3, 3))
+    for j in range(3):
+        others = np.delete(c, j)
+        poly = np.poly1d(others, r=True) / np.prod(c[j] - others)
+        integ = np.polyint(poly)
+        A[:, j] = integ(c) - integ(0.0)
+    b = A[2].copy()  # stiffly accurate: b = last row of A
+    Ainv = np.linalg.inv(A)
+    lam, vec = np.linalg.eig(Ainv)
+    ireal = int(np.argmin(np.abs(lam.imag)))
+    icplx = int(np.argmin(lam.imag))  # eigenvalue alpha - i beta (beta > 0)
+    gamma = float(lam[ireal].real)
+    v1 = vec[:, ireal].real
+    v2 = vec[:, icplx]
+    T = np.column_stack([v1 / np.max(np.abs(v1)), v2.real, v2.imag])
+    TI = np.linalg.inv(T)
+    LAM = TI @ Ainv @ T
+    LAM[np.abs(LAM) < 1e-13] = 0.0
+    # complex block [[a, b], [-b, a]] -> system ((a - i b)/h) E - J  (see _newton)
+    mu = complex(LAM[1, 1], -LAM[1, 2])
+    # embedded order-3 formula with nodes (0, c1, c2, c3) and bhat_0 = gamma0 = 1/gamma
+    gamma0 = 1.0 / gamma
+    V = np.vstack([np.ones(3), c, c ** 2])
+    bhat = np.linalg.solve(V, np.array([1.0 - gamma0, 0.5, 1.0 / 3.0]))
+    e = (bhat - b) @ Ainv  # yhat - y = gamma0 h f0 + sum_j e_j Z_j
+    d = gamma * e  # scaled to the form (gamma/h E - J)^{-1} (f0 + E sum d_j Z_j / h)
+    # collocation polynomial: L_i(s) = sum_k P[i, k] s**(k+1), L_i(c_j) = delta_ij
+    Vc = np.column_stack([c, c ** 2, c ** 3])  # Vc[j, k] = c_j**(k+1)
+    P = np.linalg.inv(Vc.T)
+    return dict(c=c, A=A, b=b, T=T, TI=TI, LAM=LAM, gamma=gamma, mu=mu, d=d, P=P)
+
+
+_COEF = _radau_iia_coefficients()
+C = _COEF["c"]
+T = _COEF["T"]
+TI = _COEF["TI"]
+LAM = _COEF["LAM"]
+GAMMA = _COEF["gamma"]
+MU = _COEF["mu"]
+D_ERR = _COEF["d"]
+P_DENSE = _COEF["P"]
+
+NEWTON_MAXITER = 7  # RADAU5's NIT
+THETA_JAC = 1e-3  # reuse the Jacobian when Newton contracts faster than this (THET)
+SAFETY = 0.9
+FAC_MAX = 8.0  # largest step increase
+FAC_MIN = 0.2  # largest step decrease after an error-test rejection
+QUOT_KEEP = (1.0, 1.2)  # keep h (and the LU factors) when h_new/h lies in here
+MAX_SINGULAR = 5  # consecutive singular iteration matrices before giving up
+MAX_FAILURES = 60  # consecutive failed attempts within one step before giving up
+PIVOT_TOL = 50 * EPS  # |pivot| of the equilibrated matrix below this: singular (rank deficient)
+
+
+class _Singular(Exception):
+    """The iteration matrix is (numerically) singular; the message says where.
+
+    ``structural`` is True for a zero row or column (no step size can cure it)."""
+
+    def __init__(self, msg, structural=False):
+        super().__init__(msg)
+        self.structural = structural
+
+
+def _factor(M):
+    """Equilibrated LU factorization of a square matrix.
+
+    Parameters
+    ----------
+    M : ndarray (n, n), float or complex
+
+    Returns
+    -------
+    tuple
+        ``(lu, piv, r, s)`` with ``diag(r) M diag(s) = P L U``.
+
+    Raises
+    ------
+    _Singular
+        When a row or column of ``M`` is zero, an entry is not finite, or a pivot of the
+        equilibrated matrix is below ``PIVOT_TOL``.
+    """
+    if not np.all(np.isfinite(M)):
+        raise _Singular("it contains non-finite entries")
+    absM = np.abs(M)
+    rowmax = absM.max(axis=1)
+    if np.any(rowmax == 0.0):
+        i = int(np.flatnonzero(rowmax == 0.0)[0])
+        raise _Singular(f"equation {i} involves no variable (row {i} is zero)", structural=True)
+    r = 1.0 / rowmax
+    colmax = (absM * r[:, None]).max(axis=0)
+    if np.any(colmax == 0.0):
+        j = int(np.flatnonzero(colmax == 0.0)[0])
+        raise _Singular(f"variable {j} enters no equation (column {j} is zero)", structural=True)
+    s = 1.0 / colmax
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", LinAlgWarning)
+        warnings.simplefilter("ignore", RuntimeWarning)
+        lu, piv = lu_factor(M * r[:, None] * s[None, :], check_finite=False)
+    pivots = np.abs(np.diag(lu))
+    k = int(np.argmin(pivots))
+    if not np.isfinite(pivots[k]) or pivots[k] <= PIVOT_TOL:
+        raise _Singular(f"pivot {k} of the equilibrated matrix is {pivots[k]:.3g} (rank deficient)")
+    return lu, piv, r, s
+
+
+def _solve(fac, rhs):
+    """Solve ``M x = rhs`` with the factors of :func:`_factor`."""
+    lu, piv, r, s = fac
+    return s * lu_solve((lu, piv), r * rhs, check_finite=False)
+
+
+class RadauDenseOutput:
+    """The collocation polynomial of one Radau IIA step, ``y(t)`` for ``t`` in ``[t_old, t]``.
+
+    Parameters
+    ----------
+    t_old, h : float
+        Start (s) and length (s) of the step.
+    y_old : ndarray (n,)
+        State at ``t_old``.
+    Z : ndarray (3, n)
+        Stage increments ``Y_i - y_old`` at ``t_old + c_i h``.
+
+    Notes
+    -----
+    Calling with a scalar ``t`` returns shape ``(n,)``; with an array of ``m`` times, shape
+    ``(n, m)`` (as scipy's ``DenseOutput``). Evaluation outside the step extrapolates the
+    polynomial (used internally to predict the next step's stages).
+    """
+
+    def __init__(self, t_old, h, y_old, Z):
+        self.t_old, self.h = float(t_old), float(h)
+        self.t_min, self.t_max = self.t_old, self.t_old + self.h
+        self.y_old = np.array(y_old, dtype=float)
+        self.Q = P_DENSE.T @ Z  # (3, n): y = y_old + sum_k Q[k] s**(k+1)
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=float)
+        s = (t - self.t_old) / self.h
+        if t.ndim == 0:
+            return self.y_old + self.Q.T @ np.array([s, s * s, s ** 3])
+        powers = np.vstack([s, s * s, s ** 3])  # (3, m)
+        return self.y_old[:, None] + self.Q.T @ powers
+
+
+class Radau5(Stepper):
+    """Radau IIA of order 5 (RADAU5) for ``E dy/dt = fun(t, y)``, ``E = diag(mass)``, index <= 3.
+
+    Implicit, L-stable, stiffly accurate collocation method with adaptive step size,
+    simplified Newton iterations on the stage equations (real + complex decoupled systems),
+    Jacobian reuse, and index-aware error control (index-2 errors weighted by ``h``, index-3
+    errors by ``h**2``). See the module docstring for the algorithm.
+
+    Parameters
+    ----------
+    problem : SemiExplicitDAE
+        ``n``; ``mass`` (n,) diagonal of ``E`` (1 differential row, 0 algebraic row);
+        ``index`` (n,) DAE index of each variable (1, 2 or 3); ``fun(t, y)`` -> (n,); and
+        optionally ``jac(t, y)`` -> (n, n) ``d fun / d y`` (``None`` or absent: forward
+        finite differences). Missing ``mass``/``index`` default to ones (an ODE).
+    t0 : float
+        Start time (s).
+    y0 : array_like (n,)
+        Consistent initial state (algebraic equations satisfied, for index 2 and 3 also the
+        hidden constraints).
+    t_bound : float
+        End time (s); integration runs forward only (``t_bound > t0``).
+    rtol, atol : float or array_like (n,)
+        Relative and absolute tolerance; a component's weight is
+        ``atol + rtol * max(|y_old|, |y_new|)`` (divided by ``h**(index-1)``).
+    first_step : float, optional
+        Initial step (s). Default: ``0.01 * ||y0|| / ||dy/dt||`` on the differential rows
+        (weighted), at most ``|t_bound - t0|`` and ``max_step``.
+    max_step : float, optional
+        Largest step (s); default unbounded.
+
+    Attributes
+    ----------
+    t, y, t_old, status
+        As for :class:`~mbcomp.solvers.base.Stepper`.
+    h : float
+        Step size (s) the next step will try.
+    stats : dict
+        ``nsteps`` accepted steps, ``nreject`` rejected attempts (error test, Newton failure
+        or singular matrix), ``nfev`` calls of ``fun`` (finite-difference Jacobians
+        included), ``njev`` Jacobians, ``nlu`` LU factorizations (real and complex each
+        count), ``nnewton`` Newton iterations, ``nfail_newton`` Newton failures,
+        ``nfail_singular`` singular iteration matrices.
+
+    Raises
+    ------
+    ValueError
+        From the constructor on inconsistent shapes or an index outside 1..3.
+
+    Notes
+    -----
+    :meth:`step` returns ``None`` or, on failure, the message of the :class:`StepFailure`
+    (status ``"failed"``): a collapsed step size (with the reason of the last failed
+    attempt), a singular iteration matrix (the DAE is of index > 3 or structurally
+    singular), or non-finite values of ``fun``/``jac``.
+
+    Examples
+    --------
+    Index-1 DAE ``y' = z``, ``0 = z + y`` (so ``y = exp(-t)``, ``z = -y``):
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from mbcomp.solvers.radau import Radau5
+    >>> dae = SimpleNamespace(n=2, mass=np.array([1.0, 0.0]), index=np.array([1, 1]),
+    ...                       fun=lambda t, y: np.array([y[1], y[1] + y[0]]),
+    ...                       jac=lambda t, y: None)
+    >>> s = Radau5(dae, 0.0, [1.0, -1.0], 2.0, rtol=1e-8, atol=1e-10)
+    >>> while s.status == "running":
+    ...     msg = s.step()
+    >>> s.status, s.t, round(float(s.y[0]), 8), round(float(np.exp(-2.0)), 8)
+    ('finished', 2.0, 0.13533528, 0.13533528)
+    >>> bool(abs(s.y[1] + s.y[0]) < 1e-12)  # the algebraic equation holds at the step ends
+    True
+    >>> tm = 0.5 * (s.t_old + s.t)  # dense output inside the last step
+    >>> bool(abs(s.dense_output()(tm)[0] - np.exp(-tm)) < 1e-8)
+    True
+    """
+
+    implicit = True
+    adaptive = True
+    max_index = 3
+    problem = "dae"
+
+    def __init__(self, problem, t0, y0, t_bound, rtol=1e-6, atol=1e-8, first_step=None, max_step=np.inf):
+        super().__init__(problem, t0, y0, t_bound, rtol=rtol, atol=atol, first_step=first_step, max_step=max_step)
+        n = self.y.size
+        if self.y.ndim != 1 or n != int(getattr(problem, "n", n)):
+            raise ValueError(f"Radau5: y0 has shape {self.y.shape}, the problem has n={getattr(problem, 'n', '?')}")
+        self.n = n
+        self.mass = np.array(getattr(problem, "mass", np.ones(n)), dtype=float).reshape(-1)
+        self.index = np.array(getattr(problem, "index", np.ones(n, dtype=int)), dtype=int).reshape(-1)
+        if self.mass.shape != (n,) or self.index.shape != (n,):
+            raise ValueError("Radau5: problem.mass and problem.index must have shape (n,)")
+        if np.any((self.index < 1) | (self.index > 3)):
+            raise ValueError(f"Radau5: variable indices must be 1, 2 or 3, got {self.index.tolist()}")
+        self.rtol = np.broadcast_to(np.asarray(rtol, dtype=float), (n,)).copy()
+        self.atol = np.broadcast_to(np.asarray(atol, dtype=float), (n,)).copy()
+        if np.any(self.rtol < 0) or np.any(self.atol < 0) or not np.all(self.rtol + self.atol > 0):
+            raise ValueError("Radau5: tolerances must be >= 0 and not both zero")
+        rmin = float(np.min(self.rtol)) if np.any(self.rtol > 0) else 1e-3
+        self.newton_tol = max(10.0 * EPS / rmin, min(0.03, rmin ** 0.5))
+        self.max_step = float(max_step)
+        if not self.max_step > 0:
+            raise ValueError("Radau5: max_step must be positive")
+        self.stats.update(nnewton=0, nfail_newton=0, nfail_singular=0)
+        self.h = None if first_step is None else float(first_step)
+        if self.h is not None and not self.h > 0:
+            raise ValueError("Radau5: first_step must be positive")
+        self.f = None  # fun(t, y)
+        self.J = None
+        self.J_current = False  # J was evaluated at the current (t, y)
+        self.LU_real = self.LU_complex = None
+        self.h_lu = None
+        self.faccon = 1.0  # Newton contraction factor carried between steps (RADAU5)
+        self.theta = THETA_JAC
+        self.first = True  # no step accepted yet
+        self.h_acc = self.err_acc = None  # Gustafsson's controller memory
+        self._dense = None  # collocation polynomial of the last accepted step
+        self._hasjac = callable(getattr(problem, "jac", None))
+
+    # ------------------------------------------------------------------ evaluations
+    def _fun(self, t, y):
+        self.stats["nfev"] += 1
+        return np.asarray(self.prob.fun(t, y), dtype=float).reshape(self.n)
+
+    def _fun_checked(self, t, y, what):
+        f = self._fun(t, y)
+        if not np.all(np.isfinite(f)):
+            bad = np.flatnonzero(~np.isfinite(f)).tolist()
+            raise StepFailure(f"Radau5: fun returned non-finite values at t={t:.17g} ({what}; components {bad})")
+        return f
+
+    def _jacobian(self):
+        """``d fun / d y`` (n, n) at the current point: ``problem.jac`` or forward differences."""
+        t, y = self.t, self.y
+        self.stats["njev"] += 1
+        J = self.prob.jac(t, y) if self._hasjac else None
+        if J is not None:
+            if hasattr(J, "toarray"):
+                J = J.toarray()
+            J = np.array(J, dtype=float)
+            if J.shape != (self.n, self.n):
+                raise ValueError(f"Radau5: problem.jac returned shape {J.shape}, expected {(self.n, self.n)}")
+            if not np.all(np.isfinite(J)):
+                raise StepFailure(f"Radau5: problem.jac returned non-finite values at t={t:.17g}")
+        else:
+            J = np.empty((self.n, self.n))
+            f0 = self.f
+            for j in range(self.n):
+                delta = np.sqrt(EPS * max(1e-5, abs(y[j])))
+                yp = y.copy()
+                yp[j] += delta
+                delta = yp[j] - y[j]  # exactly representable increment
+                J[:, j] = (self._fun_checked(t, yp, "finite-difference Jacobian") - f0) / delta
+        self.J, self.J_current = J, True
+
+    def _factorize(self, h):
+        M = self.mass
+        try:
+            self.LU_real = _factor(np.diag(GAMMA / h * M) - self.J)
+            self.stats["nlu"] += 1
+            self.LU_complex = _factor(np.diag(MU / h * M) - self.J)
+            self.stats["nlu"] += 1
+        except _Singular:
+            self.LU_real = self.LU_complex = self.h_lu = None
+            raise
+        self.h_lu = h
+
+    def reset_state(self, y):
+        """Continue from a modified state ``y`` at the current time (after a projection):
+        refresh ``fun(t, y)``; the last collocation polynomial still serves as predictor."""
+        self.y = np.array(y, dtype=float)
+        self.f = self._fun_checked(self.t, self.y, "projected state")
+
+    # ------------------------------------------------------------------ norms
+    def _scale(self, h, y_a, y_b=None):
+        """Error weights (n,): ``atol + rtol*|y|``, divided by ``h**(index-1)``."""
+        ya = np.abs(y_a) if y_b is None else np.maximum(np.abs(y_a), np.abs(y_b))
+        sc = self.atol + self.rtol * ya
+        return sc / h ** (self.index - 1)
+
+    @staticmethod
+    def _norm(x, scale):
+        return float(np.sqrt(np.mean((x / scale) ** 2)))
+
+    # ------------------------------------------------------------------ initial step
+    def _initial_step(self):
+        span = self.t_bound - self.t
+        # only index-1 differential variables: a mechanism at rest has large accelerations on its
+        # speed rows (index 2 in the index-3 form), and a step sized by them (1e-9 s for Andrews)
+        # makes the index-3 iteration matrix numerically singular (its condition grows like h^-3)
+        diff = (self.mass != 0) & (self.index == 1)
+        h0 = 1e-6
+        if np.any(diff):
+            sc = self.atol + self.rtol * np.abs(self.y)
+            d0 = self._norm(self.y[diff], sc[diff])
+            d1 = self._norm(self.f[diff] / self.mass[diff], sc[diff])
+            if d0 > 1e-5 and d1 > 1e-5:
+                h0 = 0.01 * d0 / d1
+        return min(h0, span, self.max_step)
+
+    # ------------------------------------------------------------------ Newton
+    def _newton(self, t, y, h, Z0, scale):
+        """Simplified Newton iteration for the stage increments.
+
+        Returns
+        -------
+        tuple
+            ``(ok, Z (3, n), n_iter, info)``; on failure ``info`` is ``(reason, factor)`` with
+            the suggested step-size factor, on success the contraction rate ``theta``.
+        """
+        M = self.mass
+        W = TI @ Z0
+        Z = Z0.copy()
+        F = np.empty((3, self.n))
+        faccon = max(self.faccon, EPS) ** 0.8
+        theta = THETA_JAC
+        dnorm_old = thq_old = None
+        for k in range(NEWTON_MAXITER):
+            self.stats["nnewton"] += 1
+            for i in range(3):
+                F[i] = self._fun(t + C[i] * h, y + Z[i])
+            if not np.all(np.isfinite(F)):
+                return False, Z, k + 1, ("fun returned non-finite values at a Newton iterate", 0.5)
+            R = TI @ F - (LAM @ W) * (M / h)
+            dW = np.empty_like(W)
+            dW[0] = _solve(self.LU_real, R[0])
+            dc = _solve(self.LU_complex, R[1] + 1j * R[2])
+            dW[1], dW[2] = dc.real, dc.imag
+            dnorm = self._norm(dW, scale)
+            if not np.isfinite(dnorm):
+                return False, Z, k + 1, ("the Newton increment is not finite", 0.5)
+            if k >= 1:
+                thq = dnorm / dnorm_old if dnorm_old > 0 else 0.0
+                theta = thq if k == 1 else np.sqrt(thq * thq_old)
+                thq_old = thq
+                if theta < 0.99:
+                    faccon = theta / (1.0 - theta)
+                    # predicted error after the remaining iterations
+                    dyth = faccon * dnorm * theta ** (NEWTON_MAXITER - 1 - k) / self.newton_tol
+                    if dyth >= 1.0:
+                        qnewt = max(1e-4, min(20.0, dyth))
+                        fac = 0.8 * qnewt ** (-1.0 / (4 + NEWTON_MAXITER - 1 - k))
+                        return False, Z, k + 1, (f"Newton converges too slowly (rate {theta:.3g})", fac)
+                else:
+                    return False, Z, k + 1, (f"Newton diverges (rate {theta:.3g})", 0.5)
+            dnorm_old = dnorm
+            W += dW
+            Z = T @ W
+            if faccon * dnorm <= self.newton_tol:
+                self.faccon = faccon
+                return True, Z, k + 1, theta
+        return False, Z, NEWTON_MAXITER, (f"no convergence in {NEWTON_MAXITER} Newton iterations", 0.5)
+
+    # ------------------------------------------------------------------ one step
+    def _fail(self, h, kind, reason, n_fail):
+        """Raise the :class:`StepFailure` of a collapsed step size, naming the last cause."""
+        t = self.t
+        if kind == "newton":
+            msg = (f"Radau5: Newton iteration failed to converge at t={t:.17g} with h={h:.3g} "
+                   f"(step size collapsed): {reason} ({n_fail} consecutive failed attempts)")
+        elif kind == "error":
+            msg = (f"Radau5: step size collapsed at t={t:.17g} with h={h:.3g}: the local error test "
+                   f"keeps failing (last {reason}; {n_fail} consecutive failed attempts)")
+        elif kind == "singular":
+            msg = (f"Radau5: the iteration matrix is singular at t={t:.17g} with h={h:.3g} (step size "
+                   f"collapsed; the DAE is not of index <= 3 or a constraint lost rank): {reason}")
+        else:
+            msg = (f"Radau5: step size collapsed at t={t:.17g}: h={h:.3g} is below 1e-14*|t| without a "
+                   f"failed attempt in this step (the solution blows up or is not smooth there)")
+        raise StepFailure(msg)
+
+    def _step(self):
+        t, y = self.t, self.y
+        if self.f is None:
+            self.f = self._fun_checked(t, y, "initial state")
+        if self.h is None:
+            self.h = self._initial_step()
+        h = min(self.h, self.max_step)
+        M = self.mass
+        kind, reason, history = "none", "", ""
+        n_fail = n_singular = 0
+        while True:
+            hmin = 1e-14 * abs(t)
+            if h <= hmin or n_fail >= MAX_FAILURES:
+                self._fail(h, kind, reason, n_fail)
+            last = t + 1.0001 * h >= self.t_bound
+            if last:
+                h = self.t_bound - t
+            elif t + 2.0 * h > self.t_bound:
+                # no sliver of a last step: an index-3 multiplier's error grows as the step shrinks
+                h = 0.5 * (self.t_bound - t)
+            if self.J is None:
+                self._jacobian()
+            if self.LU_real is None or h != self.h_lu:
+                try:
+                    self._factorize(h)
+                except _Singular as exc:
+                    self.stats["nfail_singular"] += 1
+                    self.stats["nreject"] += 1
+                    n_singular += 1
+                    if n_singular == 1 and kind in ("newton", "error"):
+                        what = "local error test, " if kind == "error" else ""
+                        history = (f"; before that the step size had been cut by {n_fail} failed attempts "
+                                   f"(last: {what}{reason}) -- check the declared variable indices")
+                    if exc.structural or n_singular >= MAX_SINGULAR:
+                        raise StepFailure(
+                            f"Radau5: the iteration matrix is singular at t={t:.17g} with h={h:.3g} "
+                            f"(the DAE is not of index <= 3 or a constraint lost rank): {exc}{history}") from None
+                    kind, reason = "singular", str(exc)
+                    n_fail += 1
+                    h *= 0.5
+                    continue
+            # starting values: extrapolated collocation polynomial of the last step
+            if self._dense is not None:
+                Z0 = (self._dense(t + C * h) - y[:, None]).T
+                if not np.all(np.isfinite(Z0)):
+                    Z0 = np.zeros((3, self.n))
+            else:
+                Z0 = np.zeros((3, self.n))
+            scale0 = self._scale(h, y)
+            ok, Z, n_iter, info = self._newton(t, y, h, Z0, scale0)
+            if not ok:
+                reason, fac = info
+                kind = "newton"
+                self.stats["nfail_newton"] += 1
+                self.stats["nreject"] += 1
+                n_fail += 1
+                h *= fac
+                if not self.J_current:
+                    self._jacobian()
+                    self.LU_real = None
+                continue
+            theta = info
+            y_new = y + Z[2]
+            # ---- error estimate
+            ZE = (D_ERR @ Z) / h
+            MZE = M * ZE
+            err_vec = _solve(self.LU_real, self.f + MZE)
+            scale = self._scale(h, y, y_new)
+            err = self._norm(err_vec, scale)
+            if err >= 1.0 and (self.first or n_fail > 0) and np.isfinite(err):
+                f1 = self._fun(t, y + err_vec)
+                if np.all(np.isfinite(f1)):
+                    err_vec = _solve(self.LU_real, f1 + MZE)
+                    err = self._norm(err_vec, scale)
+            if not np.isfinite(err):
+                err = np.inf
+            err = max(err, 1e-10)
+            fac = min(SAFETY, SAFETY * (2 * NEWTON_MAXITER + 1) / (n_iter + 2 * NEWTON_MAXITER))
+            quot = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, err ** 0.25 / fac))
+            h_new = h / quot
+            if err >= 1.0:
+                self.stats["nreject"] += 1
+                kind, reason = "error", f"scaled error {err:.3g}"
+                n_fail += 1
+                h = 0.1 * h if self.first else h_new
+                if not self.J_current:
+                    self._jacobian()
+                    self.LU_real = None
+                continue
+            break
+        # ---- accepted
+        if not self.first and self.h_acc is not None:
+            facgus = (self.h_acc / h) * (err ** 2 / self.err_acc) ** 0.25 / SAFETY
+            facgus = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, facgus))
+            quot = max(quot, facgus)
+            h_new = h / quot
+        self.h_acc, self.err_acc = h, max(1e-2, err)
+        if n_fail > 0:
+            h_new = min(h_new, h)
+        self.first = False
+        self.theta = theta
+        self._dense = RadauDenseOutput(t, h, y, Z)
+        self.t_old = t
+        self.t = self.t_bound if last else t + h
+        self.y = y_new
+        self.f = self._fun_checked(self.t, self.y, "accepted step")
+        self.stats["nsteps"] += 1
+        # Jacobian and LU reuse for the next step
+        if theta > THETA_JAC:
+            self.J = None  # recompute at the new point (lazily, in the next step)
+        self.J_current = False
+        qt = h_new / h
+        if theta <= THETA_JAC and QUOT_KEEP[0] <= qt <= QUOT_KEEP[1] and not last:
+            self.h = h  # keep h and the LU factors
+        else:
+            self.h = min(h_new, self.max_step)
+
+    def dense_output(self):
+        """The collocation polynomial of the last step.
+
+        Returns
+        -------
+        RadauDenseOutput
+            Callable ``y(t)``: (n,) for scalar ``t``, (n, m) for ``m`` times, valid on
+            ``[t_old, t]``.
+        """
+        if self._dense is None:
+            raise RuntimeError("Radau5.dense_output(): no step has been taken yet")
+        return self._dense
