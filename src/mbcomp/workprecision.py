@@ -1,0 +1,245 @@
+"""Work-precision studies: every applicable formulation x solver over a tolerance sweep.
+
+:func:`work_precision` runs each :class:`Combo` of a model at a sweep of tolerances (or of
+step sizes, for fixed-step methods), measures the CPU time (``time.process_time`` around the
+whole ``simulate`` call, output reduced to the end point) and the function evaluations, and
+the error of the positions at ``t_end`` against a reference:
+
+* the model file's ``REFERENCE = dict(t_end=..., values={name: value})`` (a published
+  solution, e.g. Andrews' squeezing mechanism), or
+* a tight-tolerance run of a *different* method than the one measured (the D'Alembert ODE
+  with DOP853, or the index-1 ODE with projection when the model is measured with the
+  D'Alembert form), so that no method is judged against itself.
+
+The error is ``max_i |x_i - r_i| / max(|r_i|, floor)`` over the compared positions (the
+reference's names, or the model's joint coordinates), with ``floor = 1e-3 max |r|`` so a
+coordinate that happens to be zero does not make the relative error meaningless.
+
+Examples
+--------
+>>> from mbcomp.workprecision import default_combos
+>>> [c.label for c in default_combos()][:3]
+['ODE i1 Baumgarte / DOP853', 'ODE i1 projection / DOP853', 'ODE i1 projection / Radau']
+"""
+from __future__ import annotations
+
+import csv
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Combo", "default_combos", "work_precision", "reference_values", "fastest", "write_csv", "plot"]
+
+
+@dataclass(frozen=True)
+class Combo:
+    """One formulation x solver pair: ``simulate`` options and what the sweep varies.
+
+    Attributes
+    ----------
+    label : str
+    options : dict
+        Keyword arguments of :func:`mbcomp.simulate` (``formulation``, ``method``, ``index``...).
+    sweep : {"tol", "h"}
+        Tolerances (``rtol``; ``atol = rtol * atol_ratio``) or fixed step sizes.
+    family : str
+        For colouring charts: ``"ode"``, ``"dalembert"``, ``"dae"``, ``"peer"``.
+
+    Examples
+    --------
+    >>> from mbcomp.workprecision import Combo
+    >>> Combo("D'Alembert / DOP853", dict(formulation="dalembert", method="DOP853")).sweep
+    'tol'
+    """
+
+    label: str
+    options: dict = field(default_factory=dict)
+    sweep: str = "tol"
+    family: str = "ode"
+
+
+def default_combos(fixed_step=True):
+    """Every formulation x solver pair mbcomp offers (generalized-alpha with ``fixed_step``).
+
+    Examples
+    --------
+    >>> from mbcomp.workprecision import default_combos
+    >>> len(default_combos()) >= 12
+    True
+    """
+    c = [
+        Combo("ODE i1 Baumgarte / DOP853", dict(method="DOP853", stabilization="baumgarte")),
+        Combo("ODE i1 projection / DOP853", dict(method="DOP853", stabilization="projection")),
+        Combo("ODE i1 projection / Radau", dict(method="Radau", stabilization="projection")),
+        Combo("ODE i1 projection / LSODA", dict(method="LSODA", stabilization="projection")),
+        Combo("D'Alembert / DOP853", dict(formulation="dalembert", method="DOP853"), family="dalembert"),
+        Combo("D'Alembert / Radau", dict(formulation="dalembert", method="Radau"), family="dalembert"),
+        Combo("D'Alembert / LSODA", dict(formulation="dalembert", method="LSODA"), family="dalembert"),
+        Combo("D'Alembert / DOP853 / C program", dict(formulation="dalembert", method="DOP853", backend="auto"),
+              family="dalembert"),
+        Combo("DAE i1 Baumgarte / radau5", dict(method="radau5", index=1, stabilization="baumgarte"), family="dae"),
+        Combo("DAE i2 GGL / radau5", dict(method="radau5", index=2, stabilization="none"), family="dae"),
+        Combo("DAE i3 / radau5", dict(method="radau5", index=3, stabilization="none"), family="dae"),
+        Combo("DAE i1 Baumgarte / IDA", dict(method="ida", index=1, stabilization="baumgarte"), family="dae"),
+        Combo("DAE i2 GGL / IDA", dict(method="ida", index=2, stabilization="none"), family="dae"),
+    ]
+    if fixed_step:
+        c.append(Combo("DAE i3 / gen-alpha 0.9", dict(method="genalpha", index=3, stabilization="none"),
+                       sweep="h", family="dae"))
+    return c
+
+
+def _positions(res, names):
+    return np.array([float(res[n][-1]) for n in names])
+
+
+def reference_values(module, build_kw=None, params=None, t_end=None, rtol=1e-12, atol=1e-14):
+    """``(t_end, {name: value}, how)``: the model file's ``REFERENCE`` or a tight run.
+
+    The tight run uses the D'Alembert ODE with DOP853 and is cross-checked by the index-1
+    ODE with projection; ``how`` says which and how far the two agree.
+    """
+    from .simulation import simulate
+
+    ref = getattr(module, "REFERENCE", None)
+    if ref is not None and t_end in (None, ref["t_end"]):
+        return ref["t_end"], dict(ref["values"]), ref.get("source", "published reference")
+    sim = dict(getattr(module, "SIMULATION", {}))
+    t_end = t_end or sim.get("t_end", 1.0)
+    model = module.build(**(build_kw or {}))
+    a = simulate(model, t_end=t_end, params=params, formulation="dalembert", method="DOP853", rtol=rtol, atol=atol,
+                 n_out=2)
+    b = simulate(module.build(**(build_kw or {})), t_end=t_end, params=params, method="DOP853",
+                 stabilization="projection", rtol=rtol, atol=atol, n_out=2)
+    if not (a.success and b.success):
+        raise RuntimeError(f"the reference runs failed: {a.message} / {b.message}")
+    from .system import assemble
+
+    names = list(assemble(module.build(**(build_kw or {}))).q_names)
+    va, vb = _positions(a, names), _positions(b, names)
+    diff = _error(va, vb)
+    return t_end, dict(zip(names, va)), f"D'Alembert/DOP853 rtol={rtol:g} (index-1 ODE/projection agrees to {diff:.1e})"
+
+
+def _error(x, r):
+    floor = 1e-3 * max(np.max(np.abs(r)), 1e-300)
+    return float(np.max(np.abs(x - r) / np.maximum(np.abs(r), floor)))
+
+
+def work_precision(module, combos=None, tols=None, steps=None, build_kw=None, params=None, t_end=None,
+                   atol_ratio=1e-2, max_cpu=60.0, reference=None, log=print):
+    """Run every combo over the sweep; returns a list of row dicts.
+
+    Parameters
+    ----------
+    module : module
+        A model file's module (``build(**kw) -> Model``, optional ``SIMULATION``, ``REFERENCE``).
+    combos : list of Combo, optional
+        Default :func:`default_combos`.
+    tols : sequence of float
+        ``rtol`` values (default 1e-3 ... 1e-10); ``atol = rtol * atol_ratio``.
+    steps : sequence of int
+        Numbers of fixed steps over the span for ``sweep="h"`` combos (default 30 ... 10000).
+    max_cpu : float
+        A combo stops sweeping once one run took longer than this (s): tighter settings would
+        take longer still.
+    reference : tuple, optional
+        ``(t_end, values, how)`` to use instead of :func:`reference_values`.
+
+    Returns
+    -------
+    list of dict
+        ``combo, family, setting, value, status, cpu_s, nfev, steps, error, message``.
+    """
+    from .simulation import simulate
+
+    combos = default_combos() if combos is None else combos
+    tols = tols or [10.0 ** -k for k in range(3, 11)]
+    steps = steps or [30, 100, 300, 1000, 3000, 10000]
+    t_ref, values, how = reference or reference_values(module, build_kw, params, t_end)
+    names = list(values)
+    r = np.array([values[n] for n in names])
+    log(f"reference at t={t_ref:g}: {how}")
+    rows = []
+    for c in combos:
+        settings = [("rtol", tol) for tol in tols] if c.sweep == "tol" else [("h", t_ref / n) for n in steps]
+        for kind, val in settings:
+            kw = dict(c.options)
+            if kind == "rtol":
+                kw.update(rtol=val, atol=val * atol_ratio)
+            else:
+                kw.update(h=val, rtol=1e-8, atol=1e-10)
+            t0 = time.process_time()
+            try:
+                res = simulate(module.build(**(build_kw or {})), t_end=t_ref, params=params, n_out=2, **kw)
+                status, msg = res.status, res.message
+                nfev, nst = res.stats.get("nfev", 0), res.stats.get("steps", 0)
+                err = _error(_positions(res, names), r) if res.success else math.nan
+            except Exception as exc:  # noqa: BLE001 - a refused combination is a row, not a crash
+                status, msg, nfev, nst, err = "error", f"{type(exc).__name__}: {exc}", 0, 0, math.nan
+            cpu = time.process_time() - t0
+            rows.append(dict(combo=c.label, family=c.family, setting=kind, value=val, status=status, cpu_s=cpu,
+                             nfev=nfev, steps=nst, error=err, message=msg[:200]))
+            log(f"  {c.label:<36} {kind}={val:<9.2g} {status:<8} cpu {cpu:8.3f} s  nfev {nfev:>8}  "
+                f"error {err:9.2e}" + ("" if status == "success" else f"  ({msg[:90]})"))
+            if cpu > max_cpu or status == "error":
+                break
+    return rows
+
+
+def fastest(rows, target=1e-6):
+    """Per combo: the least CPU time of a run whose error is at most ``target`` (or None).
+
+    Examples
+    --------
+    >>> from mbcomp.workprecision import fastest
+    >>> rows = [dict(combo="a", cpu_s=2.0, error=1e-7, nfev=10), dict(combo="a", cpu_s=1.0, error=1e-5, nfev=5)]
+    >>> fastest(rows)["a"]["cpu_s"]
+    2.0
+    """
+    out = {}
+    for r in rows:
+        best = out.setdefault(r["combo"], None)
+        if r["error"] == r["error"] and r["error"] <= target and (best is None or r["cpu_s"] < best["cpu_s"]):
+            out[r["combo"]] = r
+    return out
+
+
+def write_csv(rows, path):
+    """Write the rows (one per run) to ``path``."""
+    keys = ["combo", "family", "setting", "value", "status", "cpu_s", "nfev", "steps", "error", "message"]
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=keys, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def plot(rows, path, title="", target=1e-6):
+    """Error versus CPU time and versus function evaluations (log-log), one curve per combo."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(13, 5.2))
+    styles = {"ode": "-o", "dalembert": "-s", "dae": "-^", "peer": "--D"}
+    for k, combo in enumerate(dict.fromkeys(r["combo"] for r in rows)):
+        rr = [r for r in rows if r["combo"] == combo and r["error"] == r["error"] and r["error"] > 0]
+        if not rr:
+            continue
+        st = styles.get(rr[0]["family"], "-o")
+        col = f"C{k % 10}"
+        a1.loglog([r["cpu_s"] for r in rr], [r["error"] for r in rr], st, color=col, ms=4, label=combo)
+        a2.loglog([max(r["nfev"], 1) for r in rr], [r["error"] for r in rr], st, color=col, ms=4, label=combo)
+    for a, xl in ((a1, "CPU time [s]"), (a2, "function evaluations")):
+        a.axhline(target, color="k", lw=0.6, ls=":")
+        a.set(xlabel=xl, ylabel="max relative position error at t_end")
+        a.grid(True, which="both", alpha=0.3)
+    a1.set_title(f"{title}: error vs CPU time")
+    a2.set_title(f"{title}: error vs function evaluations")
+    a2.legend(fontsize=6.5, loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
