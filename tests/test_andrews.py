@@ -185,14 +185,20 @@ def test_mass_matrix_forces_and_accelerations_at_other_states(system):
 # (scipy) passes too (1e-6/1e-8: 3e-8; 1e-8/1e-10: 6e-10) but needs 10-20x the evaluations
 # of DOP853 here: its embedded error estimate is of low order, so at tight tolerances it
 # takes ~10x the steps; it is left out to keep the test fast.
+# The DAE pairs keep the multipliers as unknowns (index 3 under Radau IIA, index 2 = GGL under
+# IDA) and run on the generated Python program (backend="python"), which gives the numeric
+# path's numbers ~10x faster. IDA's BDF error at rtol 1e-8 is 1.3e-7, so it runs at 1e-10.
 TOL = dict(rtol=1e-9, atol=1e-11, n_out=61)
 PAIRS = {"lagrange-projection-DOP853": dict(formulation="lagrange", stabilization="projection", method="DOP853"),
-         "dalembert-DOP853": dict(formulation="dalembert", method="DOP853")}
+         "dalembert-DOP853": dict(formulation="dalembert", method="DOP853"),
+         "index3-radau5": dict(method="radau5", index=3, stabilization="none", backend="python"),
+         "index2-GGL-IDA": dict(method="ida", index=2, stabilization="none", backend="python", rtol=1e-10,
+                                atol=1e-12)}
 
 
 @pytest.fixture(scope="module")
 def runs():
-    return {k: mbcomp.simulate(AND.build(), t_end=0.03, **TOL, **kw) for k, kw in PAIRS.items()}
+    return {k: mbcomp.simulate(AND.build(), t_end=0.03, **{**TOL, **kw}) for k, kw in PAIRS.items()}
 
 
 @pytest.mark.parametrize("pair", list(PAIRS))
@@ -204,7 +210,10 @@ def test_reference_solution_at_t_003(runs, pair):
     assert max(errs.values()) < 1e-7, errs
     # the crank has turned ~2.5 revolutions: a nontrivial run
     assert res["beta"][-1] - res["beta"][0] > 15.0
-    assert res["residual.position"].max() < 1e-10
+    # at step ends the loop is closed to the solver's tolerance; the other output points of the
+    # DAE pairs are interpolated (their residual is the interpolation error)
+    assert res["residual.position"][-1] < 1e-10
+    assert res["residual.position"].max() < (1e-10 if "DOP853" in pair else 1e-6)
     assert res.stats["cpu_time"] > 0 and res.stats["nfev"] > 0
 
 
