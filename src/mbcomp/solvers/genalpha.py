@@ -365,7 +365,7 @@ class GeneralizedAlpha(Stepper):
         A[nu:, :nu] = C
         if not np.isfinite(A).all():
             raise StepFailure(f"generalized-alpha: non-finite values in the iteration matrix {self._where(t, h)} "
-                              "(the solution diverged?); a smaller first_step may help")
+                              "(the solution diverged?); a smaller step size (h, first_step) may help")
         # Ruiz equilibration: the rank test must not depend on the units of masses/forces
         rs, cs = np.ones(nu + m), np.ones(nu + m)
         B = A.copy()
@@ -440,7 +440,7 @@ class GeneralizedAlpha(Stepper):
             rate_s = f"{rate:.3g}" if rate is not None else "n/a"
             raise StepFailure(f"generalized-alpha: Newton failed to converge {self._where(t1, h)}: {how} "
                               f"({total} iterations, {state['nref']} fresh iteration matrices; last scaled "
-                              f"correction {err:.3g}, rate {rate_s}); a smaller first_step may help")
+                              f"correction {err:.3g}, rate {rate_s}); a smaller step size (h, first_step) may help")
 
         x = x_pred.copy()
         # one norm for the whole step (iterates may wander far from the solution), scaled per
@@ -453,7 +453,7 @@ class GeneralizedAlpha(Stepper):
         if self._lu is None or abs(self._lu[4] - h) > 1e-3 * h:
             if not refresh(x, j):
                 raise StepFailure(f"generalized-alpha: non-finite values {self._where(t1, h)}; "
-                                  "a smaller first_step may help")
+                                  "a smaller step size (h, first_step) may help")
         prev = None  # (x, dx, err, j) of the previous iterate
         it, total, damp = 0, 0, 1.0
         err, rate = np.inf, None
@@ -474,7 +474,7 @@ class GeneralizedAlpha(Stepper):
                 rate = err / prev[2] if prev is not None and prev[2] > 0 else None
             elif prev is None:
                 raise StepFailure(f"generalized-alpha: non-finite values at the Newton predictor "
-                                  f"{self._where(t1, h)}; a smaller first_step may help")
+                                  f"{self._where(t1, h)}; a smaller step size (h, first_step) may help")
             else:
                 err, rate = np.inf, np.inf
             if rate is not None and rate >= 1.0:

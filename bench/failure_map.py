@@ -1,0 +1,216 @@
+"""Where methods fail: every formulation x solver on four hard cases, charted and tabulated.
+
+(a) drift: the seed's Example 6.5 pendulum with the rod as a loop-closing constraint
+    (coordinates r, theta and a cut pin), 1000 s: energy and constraint drift per method;
+(b) stiffness: Andrews' squeezing mechanism (spring c0 = 4530 N/m on 1e-2 kg bodies), to
+    t = 0.03 s at rtol 1e-6: steps, evaluations, CPU and error against the published solution;
+(c) singularity: a four-bar whose ground link is shortened by ``gap`` from the change-point
+    geometry, so it passes ``gap`` from its flat position (gap = 0: through it);
+(d) Baumgarte: the slider-crank with alpha = beta from 0 to 1e4 1/s, explicit and implicit.
+
+Each run records its status and the library's message: a failure must be a status with a
+cause (singular position, Newton failure, step-size collapse, divergence), never a numpy
+traceback and never a silently wrong answer. Writes bench/failure_map.csv and
+bench/failure_map.png and prints one table per case.
+
+Run: python bench/failure_map.py [--cases a,b,c,d] [--t-pendulum 1000]
+"""
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # small matrices; see bench/scaling.py
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import csv  # noqa: E402
+import pathlib  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "tests"))
+
+import mbcomp  # noqa: E402
+from conftest import load_model  # noqa: E402
+
+COMBOS = {
+    "ODE i1 none / DOP853": dict(method="DOP853", stabilization="none"),
+    "ODE i1 Baumgarte / DOP853": dict(method="DOP853", stabilization="baumgarte"),
+    "ODE i1 projection / DOP853": dict(method="DOP853", stabilization="projection"),
+    "ODE i1 projection / Radau": dict(method="Radau", stabilization="projection"),
+    "D'Alembert / DOP853": dict(formulation="dalembert", method="DOP853"),
+    "DAE i1 Baumgarte / radau5": dict(method="radau5", index=1, stabilization="baumgarte"),
+    "DAE i1 none / radau5": dict(method="radau5", index=1, stabilization="none"),
+    "DAE i2 GGL / radau5": dict(method="radau5", index=2, stabilization="none"),
+    "DAE i3 / radau5": dict(method="radau5", index=3, stabilization="none"),
+    "DAE i2 GGL / IDA": dict(method="ida", index=2, stabilization="none"),
+    "DAE i3 / gen-alpha": dict(method="genalpha", index=3, stabilization="none"),
+}
+ROWS = []
+
+
+def run(case, label, model, t_end, opts, extra=None, n_out=201, ref=None):
+    kw = dict(backend="python", n_out=n_out)
+    kw.update(opts)
+    c0 = time.process_time()
+    try:
+        res = mbcomp.simulate(model, t_end=t_end, **kw)
+    except Exception as exc:  # noqa: BLE001 - a refused request is a row of the map too
+        row = dict(case=case, combo=label, status="refused", message=f"{type(exc).__name__}: {exc}",
+                   cpu_s=time.process_time() - c0, **(extra or {}))
+        ROWS.append(row)
+        return row, None
+    E = res["energy.total"]
+    row = dict(case=case, combo=label, status=res.status, message=res.message, cpu_s=time.process_time() - c0,
+               t_reached=float(res.time[-1]), steps=res.stats.get("steps"), nfev=res.stats.get("nfev"),
+               energy_drift=float(np.nanmax(np.abs(E - E[0]))) if len(E) else np.nan,
+               residual=float(np.nanmax(res["residual.position"])), sigma_min=res.stats.get("min_constraint_sigma"),
+               **(extra or {}))
+    if ref is not None and res.success:
+        row["error"] = ref(res)
+    ROWS.append(row)
+    return row, res
+
+
+def show(case, keys):
+    rows = [r for r in ROWS if r["case"] == case]
+    print(f"\n--- case {case} ---")
+    head = "".join(f"{k:>13}" for k in keys)
+    print(f"{'combination':<30}{head}  status / message")
+    for r in rows:
+        vals = "".join(f"{_fmt(r.get(k)):>13}" for k in keys)
+        msg = "" if r["status"] == "success" else f"  {r['status']}: {r['message'][:110]}"
+        print(f"{r['combo']:<30}{vals}{msg or '  success'}")
+
+
+def _fmt(v):
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return "nan" if v != v else f"{v:.3g}"
+    return str(v)
+
+
+def case_a(t_end):
+    ex = load_model("models/textbook/ex6_5_pendulum.py")
+    for label, opts in COMBOS.items():
+        o = dict(opts, rtol=1e-6, atol=1e-8)
+        if opts["method"] == "genalpha":
+            o["h"] = 2e-3
+        run("a", label, ex.build(rod="constraint"), t_end, o, n_out=101)
+        print(f"  a {label}: {ROWS[-1]['status']} cpu {ROWS[-1]['cpu_s']:.1f} s", flush=True)
+    show("a", ["cpu_s", "steps", "energy_drift", "residual", "t_reached"])
+
+
+def case_b():
+    an = load_model("models/andrews.py")
+    ref = an.REFERENCE["values"]
+
+    def err(res):
+        return max(abs(res[n][-1] - v) / abs(v) for n, v in ref.items())
+
+    for label, opts in {**COMBOS, "ODE i1 Baumgarte / RK45": dict(method="RK45", stabilization="baumgarte"),
+                        "D'Alembert / LSODA": dict(formulation="dalembert", method="LSODA")}.items():
+        o = dict(opts, rtol=1e-6, atol=1e-8)
+        if opts["method"] == "genalpha":
+            o["h"] = 1e-5
+        run("b", label, an.build(), 0.03, o, n_out=2, ref=err)
+        print(f"  b {label}: {ROWS[-1]['status']} cpu {ROWS[-1]['cpu_s']:.1f} s", flush=True)
+    show("b", ["cpu_s", "steps", "nfev", "error", "residual"])
+
+
+def case_c():
+    fb = load_model("models/four_bar.py")
+    for gap in (1e-2, 1e-4, 1e-8, 1e-12, 0.0):
+        for label in ("ODE i1 Baumgarte / DOP853", "ODE i1 projection / DOP853", "ODE i1 projection / Radau",
+                      "D'Alembert / DOP853", "DAE i3 / radau5", "DAE i2 GGL / IDA", "DAE i3 / gen-alpha"):
+            o = dict(COMBOS[label], rtol=1e-8, atol=1e-10)
+            if o["method"] == "genalpha":
+                o["h"] = 1e-4
+            row, res = run("c", label, fb.build(gap=gap), 0.5, o, extra=dict(gap=gap), n_out=51)
+            if res is not None and res.success:
+                row["crank_end"] = float(res["crank_angle"][-1])
+        print(f"  c gap={gap:g} done", flush=True)
+    show("c", ["gap", "cpu_s", "sigma_min", "energy_drift", "crank_end"])
+
+
+def case_d():
+    sc = load_model("models/slider_crank.py")
+    for ab in (0.0, 1.0, 10.0, 100.0, 1e3, 1e4):
+        for method in ("RK45", "DOP853", "Radau"):
+            o = dict(method=method, stabilization="baumgarte" if ab else "none", alpha=ab, beta=ab,
+                     rtol=1e-6, atol=1e-8)
+            run("d", f"Baumgarte a=b={ab:g} / {method}", sc.build(), 10.0, o, extra=dict(alpha=ab), n_out=101)
+        print(f"  d alpha={ab:g} done", flush=True)
+    show("d", ["alpha", "cpu_s", "steps", "nfev", "residual", "energy_drift"])
+
+
+def chart():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(2, 2, figsize=(13, 9))
+    ok = {"success": "o", "failed": "x", "refused": "s"}
+    a = [r for r in ROWS if r["case"] == "a"]
+    for r in a:
+        ax[0, 0].scatter(r.get("energy_drift", np.nan), r.get("residual", np.nan), marker=ok[r["status"]], s=40)
+        ax[0, 0].annotate(r["combo"], (r.get("energy_drift", np.nan), r.get("residual", np.nan)), fontsize=6)
+    ax[0, 0].set(xscale="log", yscale="log", xlabel="max |E - E0| (J)", ylabel="max position residual",
+                 title="(a) pendulum with a loop-closing rod: drift over the run")
+    b = [r for r in ROWS if r["case"] == "b" and r.get("nfev")]
+    ax[0, 1].barh([r["combo"] for r in b], [r["cpu_s"] for r in b],
+                  color=["C0" if r["status"] == "success" else "C3" for r in b])
+    ax[0, 1].set(xscale="log", xlabel="CPU s to t = 0.03 at rtol 1e-6", title="(b) Andrews (stiff spring)")
+    ax[0, 1].tick_params(axis="y", labelsize=6)
+    c = [r for r in ROWS if r["case"] == "c"]
+    combos = list(dict.fromkeys(r["combo"] for r in c))
+    gaps = sorted({r["gap"] for r in c}, reverse=True)
+    grid = np.array([[{"success": 1, "failed": 0, "refused": -1}[next(r["status"] for r in c if r["combo"] == k
+                                                                       and r["gap"] == g)] for g in gaps]
+                     for k in combos])
+    ax[1, 0].imshow(grid, cmap="RdYlGn", vmin=-1, vmax=1, aspect="auto")
+    ax[1, 0].set_xticks(range(len(gaps)), [f"{g:g}" for g in gaps])
+    ax[1, 0].set_yticks(range(len(combos)), combos, fontsize=6)
+    ax[1, 0].set(xlabel="gap to the flat position (m)", title="(c) four-bar: green ran, red reported a failure")
+    d = [r for r in ROWS if r["case"] == "d"]
+    for method, col in (("RK45", "C0"), ("DOP853", "C1"), ("Radau", "C2")):
+        rr = [r for r in d if r["combo"].endswith(method) and r.get("nfev")]
+        x = [max(r["alpha"], 0.1) for r in rr]
+        ax[1, 1].loglog(x, [r["nfev"] for r in rr], "-o", color=col, label=f"{method}: f-evals")
+        ax[1, 1].loglog(x, [max(r["residual"], 1e-16) * 1e12 for r in rr], ":^", color=col,
+                        label=f"{method}: residual x 1e12")
+    ax[1, 1].set(xlabel="alpha = beta (1/s) (0 plotted at 0.1)", title="(d) slider-crank, 10 s: Baumgarte sweep")
+    ax[1, 1].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(HERE / "failure_map.png", dpi=110)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", default="a,b,c,d")
+    ap.add_argument("--t-pendulum", type=float, default=1000.0)
+    args = ap.parse_args(argv)
+    cases = args.cases.split(",")
+    if "a" in cases:
+        case_a(args.t_pendulum)
+    if "b" in cases:
+        case_b()
+    if "c" in cases:
+        case_c()
+    if "d" in cases:
+        case_d()
+    keys = sorted({k for r in ROWS for k in r}, key=lambda k: (k not in ("case", "combo", "status"), k))
+    with open(HERE / "failure_map.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=keys)
+        w.writeheader()
+        w.writerows(ROWS)
+    if set(cases) == {"a", "b", "c", "d"}:
+        chart()
+    print("\nwrote bench/failure_map.csv" + (" and bench/failure_map.png" if set(cases) == {"a", "b", "c", "d"} else ""))
+
+
+if __name__ == "__main__":
+    main()
