@@ -226,8 +226,14 @@ def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress, 
             stats["steps"] += 1
             if solver.t == t_prev:
                 continue
-            watch.check(solver.t, full(solver.t, solver.y))  # before this step's outputs are kept
             dense = solver.dense_output()
+            try:  # before this step's outputs are kept
+                watch.check(solver.t, full(solver.t, solver.y), t_prev, lambda tt, d=dense: full(tt, d(tt)))
+            except _Singular as exc:  # drop outputs already kept past the singular position
+                while len(ys) > 1 and t_out[len(ys) - 1] > exc.t:
+                    ys.pop()
+                k = len(ys)
+                raise SimulationError(str(exc)) from None
             while k < len(t_out) and t_out[k] <= solver.t:
                 yk = dense(t_out[k])
                 ys.append(full(t_out[k], form.project(t_out[k], yk) if proj else yk))
@@ -271,6 +277,12 @@ def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress, 
     return ys, status, message, stats
 
 
+class _Singular(Exception):
+    def __init__(self, msg, t):
+        super().__init__(msg)
+        self.t = t
+
+
 class _SingularityWatch:
     """Checks, at every accepted step of a model with loops, what the formulations cannot see.
 
@@ -280,8 +292,13 @@ class _SingularityWatch:
       start, and the loop would otherwise open silently.
     * The smallest relative singular value of the kept constraint Jacobian is tracked
       (``stats["min_constraint_sigma"]``: how close the run came to a singular position) and a
-      value at rounding level is reported as a singular position.
+      value at rounding level is reported as a singular position. A solver may step *over* a
+      singular position (BDF and fixed-step methods at a flat four-bar did, then followed
+      another branch): when the step-end values have a local minimum below ``BRACKET``, the
+      minimum is located along the dense output of the two steps around it.
     """
+
+    BRACKET = 1e-2
 
     SIGMA_MIN = 1e-6  # a four-bar 1e-8 m from flat: 4e-5; passing exactly through flat: <= 1.6e-7
 
@@ -292,9 +309,39 @@ class _SingularityWatch:
         self.dropped = None if mask is None or mask.all() else ~mask
         self.tol = 1e-6 + 1e3 * float(np.max(atol))
         self.sigma_min = 1.0
-        self._names = None
+        self._hist = []  # (t_start, t_end, sigma at t_end, dense) of the last two steps
 
-    def check(self, t, qu):
+    def _sigma(self, ev):
+        C = ev.C if self.dropped is None else ev.C[~self.dropped]
+        if not C.shape[0]:
+            return 1.0
+        sv = np.linalg.svd(C, compute_uv=False)
+        if not (sv.size and sv[0] > 0):
+            return 1.0
+        return float(sv[-1] / sv[0]) if sv.size == C.shape[0] else 0.0
+
+    def _singular(self, t, rel):
+        return _Singular(
+            f"the mechanism reached a singular position at t={t:g}: the constraint Jacobian lost "
+            f"rank (smallest relative singular value {rel:.2g}); beyond it the motion is not unique "
+            "(a flat or dead-centre position) -> change the geometry or the start so it is avoided", t)
+
+    def _locate(self):
+        """Minimize sigma along the dense output of the last two steps (bounded scalar search)."""
+        from scipy.optimize import minimize_scalar
+
+        (a0, a1, _, da), (b0, b1, _, db) = self._hist
+        sysm = self.system
+
+        def sig(tt):
+            qu = da(tt) if tt <= a1 else db(tt)
+            q, u = qu[: sysm.nq], qu[sysm.nq: sysm.nq + sysm.nu]
+            return self._sigma(sysm.evaluate(tt, sysm.normalize(q), u, masked=False))
+
+        r = minimize_scalar(sig, bounds=(a0, b1), method="bounded", options=dict(xatol=1e-12 * max(1.0, abs(b1))))
+        return float(r.x), float(r.fun)
+
+    def check(self, t, qu, t_prev=None, dense=None):
         if not self.active:
             return
         sysm = self.system
@@ -310,14 +357,20 @@ class _SingularityWatch:
                     f"others there) but is violated by {bad.max():.3g} at t={t:g}: the start position is "
                     "singular (a flat or dead-centre position where the loop's rank drops) -> start the "
                     "mechanism away from it (change the fixed start values)")
-        C = ev.C if self.dropped is None else ev.C[~self.dropped]
-        if C.shape[0]:
-            sv = np.linalg.svd(C, compute_uv=False)
-            if sv.size and sv[0] > 0:
-                rel = float(sv[-1] / sv[0]) if sv.size == C.shape[0] else 0.0
-                self.sigma_min = min(self.sigma_min, rel)
-                if rel < self.SIGMA_MIN:
-                    raise SimulationError(
-                        f"the mechanism reached a singular position at t={t:g}: the constraint Jacobian lost "
-                        f"rank (smallest relative singular value {rel:.2g}); beyond it the motion is not unique "
-                        "(a flat or dead-centre position) -> change the geometry or the start so it is avoided")
+        rel = self._sigma(ev)
+        self.sigma_min = min(self.sigma_min, rel)
+        if rel < self.SIGMA_MIN:
+            raise self._singular(t, rel)
+        if dense is None:
+            return
+        prev = self._hist[-1][2] if self._hist else None
+        self._hist = (self._hist + [(t_prev, t, rel, dense)])[-2:]
+        if len(self._hist) == 2 and prev is not None:
+            s0 = self._hist[0][2]
+            older = getattr(self, "_s_older", None)
+            if older is not None and s0 < older and s0 < rel and s0 < self.BRACKET:
+                ts, smin = self._locate()
+                self.sigma_min = min(self.sigma_min, smin)
+                if smin < self.SIGMA_MIN:
+                    raise self._singular(ts, smin)
+        self._s_older = prev
