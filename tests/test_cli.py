@@ -53,3 +53,23 @@ def test_bad_parameter_is_a_clear_error(capsys):
     code = main(["simulate", "models/slider_crank.py", "-p", "slider.m=-2", "-q"])
     err = capsys.readouterr().err
     assert code == 2 and "slider.m" in err and "fix" in err
+
+
+def test_bench_writes_a_work_precision_table_against_a_reference(tmp_path, capsys):
+    """``mbcomp bench`` on Andrews: two combinations at two tolerances, judged against the
+    published solution; the tighter tolerance is closer to it, and the table says which."""
+    import csv
+
+    from mbcomp.cli import main
+
+    out, png = tmp_path / "wp.csv", tmp_path / "wp.png"
+    code = main(["bench", "models/andrews.py", "--tols", "1e-5,1e-8", "--combos", "ODE i1 projection / DOP853,DAE i3 / radau5",
+                 "--out", str(out), "--plot", str(png), "--target", "1e-6"])
+    assert code == 0 and png.stat().st_size > 0
+    rows = list(csv.DictReader(open(out)))
+    for combo in {r["combo"] for r in rows}:
+        errs = {float(r["value"]): float(r["error"]) for r in rows if r["combo"] == combo}
+        assert errs[1e-8] < 1e-6 < errs[1e-5] or errs[1e-8] < errs[1e-5], (combo, errs)
+        assert errs[1e-8] < 1e-6
+    text = capsys.readouterr().out
+    assert "fastest run reaching a relative position error <= 1e-06" in text

@@ -116,7 +116,8 @@ def cmd_bench(args):
     combos = wp.default_combos()
     if args.combos:
         keys = [k.strip().lower() for k in args.combos.split(",")]
-        combos = [c for c in combos if any(k in c.label.lower() for k in keys)]
+        exact = [c for c in combos if c.label.lower() in keys]  # a full label selects just that one
+        combos = exact or [c for c in combos if any(k in c.label.lower() for k in keys)]
         if not combos:
             raise SystemExit(f"mbcomp: no combination matches --combos {args.combos!r}; labels: "
                              + "; ".join(c.label for c in wp.default_combos()))
