@@ -40,6 +40,7 @@ import numpy as np
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
+sys.path.insert(0, str(HERE))  # bench/peers
 
 import mbcomp  # noqa: E402
 from conftest import load_model  # noqa: E402
@@ -58,37 +59,10 @@ DALEMBERT = getattr(formulations, "DAlembert", None)
 # sympy KanesMethod worker (run in a subprocess: python bench/scaling.py --kane-worker N)
 # ------------------------------------------------------------------------------------------
 def kane_worker(N):
-    import sympy as sp
-    import sympy.physics.mechanics as me
+    from peers.sympy_pendulum import derive  # the sympy model of the work-precision peer
 
-    t0 = time.perf_counter()
-    q = me.dynamicsymbols(f"q:{N}")
-    u = me.dynamicsymbols(f"u:{N}")
-    frame_n = me.ReferenceFrame("N")
-    origin = me.Point("O")
-    origin.set_vel(frame_n, 0)
-    bodies, loads, kd = [], [], []
-    prev_f, prev_p = frame_n, origin
-    for i in range(N):
-        F = prev_f.orientnew(f"F{i}", "Axis", [q[i], prev_f.z])
-        F.set_ang_vel(prev_f, u[i] * prev_f.z)
-        cm = prev_p.locatenew(f"G{i}", -L_LINK / 2 * F.y)
-        cm.v2pt_theory(prev_p, frame_n, F)
-        tip = prev_p.locatenew(f"P{i}", -L_LINK * F.y)
-        tip.v2pt_theory(prev_p, frame_n, F)
-        It = M_LINK * L_LINK ** 2 / 12
-        inertia = me.inertia(F, It, 0, It)
-        bodies.append(me.RigidBody(f"B{i}", cm, F, M_LINK, (inertia, cm)))
-        loads.append((cm, -M_LINK * G * frame_n.y))
-        kd.append(q[i].diff() - u[i])
-        prev_f, prev_p = F, tip
-    km = me.KanesMethod(frame_n, q_ind=q, u_ind=u, kd_eqs=kd)
-    km.kanes_equations(bodies, loads)
-    t_kane = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    Mf = sp.lambdify([q, u], km.mass_matrix, cse=True)
-    Ff = sp.lambdify([q, u], km.forcing, cse=True)
-    t_lamb = time.perf_counter() - t0
+    d = derive(N, L_LINK, M_LINK, G)
+    Mf, Ff, t_kane, t_lamb = d.mass, d.forcing, d.t_derive, d.t_lambdify
     qv, uv = _state(N)
 
     def rhs():
