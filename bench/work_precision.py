@@ -78,21 +78,7 @@ def pendulum_peer(N, t_end, tols, ref, log):
 
 
 def summarize(name, rows, setup_peer=None):
-    best = wp.fastest(rows, TARGET)
-    peers = [b for c, b in best.items() if b is not None and b["family"] == "peer"]
-    peer = min(peers, key=lambda b: b["cpu_s"]) if peers else None
-    print(f"\n{name}: fastest CPU time reaching relative position error <= {TARGET:g}"
-          + (f" (ratio to {peer['combo']}, {peer['cpu_s']:.3f} s)" if peer else " (no sympy peer)"))
-    print(f"{'combination':<40}{'cpu [s]':>9}{'ratio':>8}{'nfev':>9}{'error':>10}  setting")
-    for combo in dict.fromkeys(r["combo"] for r in rows):
-        b = best.get(combo)
-        if b is None:
-            bad = [r for r in rows if r["combo"] == combo and r["status"] != "success"]
-            why = f" ({bad[0]['message'][:60]})" if bad else ""
-            print(f"{combo:<40}{'-':>9}{'-':>8}{'-':>9}{'-':>10}  not reached{why}")
-            continue
-        ratio = f"{b['cpu_s'] / peer['cpu_s']:8.2f}" if peer else f"{'-':>8}"
-        print(f"{combo:<40}{b['cpu_s']:>9.3f}{ratio}{b['nfev']:>9}{b['error']:>10.1e}  {b['setting']}={b['value']:.2g}")
+    print("\n" + wp.summary(rows, TARGET, title=name))
     if setup_peer is not None:
         print(f"(sympy's one-off derivation + lambdify: {setup_peer:.1f} s, not included above)")
 

@@ -72,4 +72,4 @@ def test_bench_writes_a_work_precision_table_against_a_reference(tmp_path, capsy
         assert errs[1e-8] < 1e-6 < errs[1e-5] or errs[1e-8] < errs[1e-5], (combo, errs)
         assert errs[1e-8] < 1e-6
     text = capsys.readouterr().out
-    assert "fastest run reaching a relative position error <= 1e-06" in text
+    assert "andrews: fastest CPU time reaching relative position error <= 1e-06" in text

@@ -124,18 +124,8 @@ def cmd_bench(args):
     tols = [float(x) for x in args.tols.split(",")] if args.tols else None
     rows = wp.work_precision(mod, combos, tols=tols, build_kw=build_kw, params=runtime or None, t_end=args.t_end,
                              max_cpu=args.max_cpu)
-    best = wp.fastest(rows, args.target)
     name = pathlib.Path(args.model).stem
-    print(f"\n{name}: fastest run reaching a relative position error <= {args.target:g}")
-    print(f"{'combination':<38}{'cpu [s]':>10}{'nfev':>9}{'error':>11}  setting")
-    for combo in dict.fromkeys(r["combo"] for r in rows):
-        b = best.get(combo)
-        if b is None:
-            fails = [r for r in rows if r["combo"] == combo and r["status"] != "success"]
-            why = f"  ({fails[0]['message'][:70]})" if fails else ""
-            print(f"{combo:<38}{'-':>10}{'-':>9}{'-':>11}  not reached{why}")
-        else:
-            print(f"{combo:<38}{b['cpu_s']:>10.3f}{b['nfev']:>9}{b['error']:>11.2e}  {b['setting']}={b['value']:.3g}")
+    print("\n" + wp.summary(rows, args.target, title=name))
     out = args.out or f"{name}_work_precision.csv"
     wp.write_csv(rows, out)
     png = args.plot or f"{name}_work_precision.png"

@@ -921,13 +921,6 @@ class _DriveInputs:
         return getattr(self._comp, name)
 
 
-def _owners(system):
-    topo = system.topology
-    owners = dict(topo.flat.components)
-    owners.update({e.name: e.comp for e in topo.edges if e.implicit})
-    return owners
-
-
 def _law_key(v):
     try:
         hash(v)
@@ -942,7 +935,7 @@ def _param_layout(system):
     Returns ``(layout, signature)``: ``layout`` lists ``(path, name, index)`` of every nonzero
     numeric parameter entry (``index`` None for scalars); ``signature`` is hashable and
     changes when anything baked into a program changes (zero pattern, shapes, laws)."""
-    owners = _owners(system)
+    owners = system.owners()
     drives = {e.drive for e in system.topology.tree if e.drive}  # evaluated numerically at every call
     layout, sig = [], []
     for path in sorted(system.P):
@@ -1019,7 +1012,7 @@ def _trace(system, max_nodes):
 
     topo = system.topology
     layout, sig = _param_layout(system)
-    owners = _owners(system)
+    owners = system.owners()
     t0, q0, u0 = _trace_point(system)
     g = Graph(max_nodes)
     with g:

@@ -386,13 +386,6 @@ class Equations:
 
 
 # ----------------------------------------------------------------------------- derivation
-def _owners(system):
-    topo = system.topology
-    owners = dict(topo.flat.components)
-    owners.update({e.name: e.comp for e in topo.edges if e.implicit})
-    return owners
-
-
 def _drive_like(comp):
     return comp.role == "drive" and {"s", "v", "a"} <= set(comp.params())
 
@@ -430,7 +423,7 @@ def _drive_laws(path, p, T):
 
 
 def _traced_params(system, params, T):
-    owners = _owners(system)
+    owners = system.owners()
     by_comp, probs = {}, []
     for key, value in (params or {}).items():
         path, _, name = key.rpartition(".")

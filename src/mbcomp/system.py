@@ -89,8 +89,7 @@ class MultibodySystem:
         self.topology = topo = topology
         self.P = {}
         over = {}
-        owners = dict(topo.flat.components)
-        owners.update({e.name: e.comp for e in topo.edges if e.implicit})  # "<body>.free" start values
+        owners = self.owners()
         for k, v in (params or {}).items():
             comp, _, pname = k.rpartition(".")
             if comp not in owners:
@@ -138,6 +137,14 @@ class MultibodySystem:
     @property
     def u_names(self):
         return self.topology.u_names
+
+    def owners(self):
+        """``{path: component}`` of every parameter owner: the model's components and the
+        implicit joints the topology added (``"<body>.free"`` start values)."""
+        topo = self.topology
+        out = dict(topo.flat.components)
+        out.update({e.name: e.comp for e in topo.edges if e.implicit})
+        return out
 
     def constraint_names(self, all_rows=False):
         """Names ``"<cut joint>.<row>"`` of the loop-closure constraint rows."""

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Combo", "default_combos", "work_precision", "reference_values", "fastest", "write_csv", "plot"]
+__all__ = ["Combo", "default_combos", "work_precision", "reference_values", "fastest", "summary", "write_csv", "plot"]
 
 
 @dataclass(frozen=True)
@@ -211,6 +211,37 @@ def fastest(rows, target=1e-6):
         if r["error"] == r["error"] and r["error"] <= target and (best is None or r["cpu_s"] < best["cpu_s"]):
             out[r["combo"]] = r
     return out
+
+
+def summary(rows, target=1e-6, title=""):
+    """Table (str): per combo the fastest run reaching ``target``, with its CPU-time ratio to the
+    fastest ``family="peer"`` run when there is one, or why the target was not reached.
+
+    Examples
+    --------
+    >>> from mbcomp.workprecision import summary
+    >>> rows = [dict(combo="a", family="ode", cpu_s=2.0, error=1e-7, nfev=10, setting="rtol", value=1e-8, status="success"),
+    ...         dict(combo="p", family="peer", cpu_s=1.0, error=1e-7, nfev=9, setting="rtol", value=1e-8, status="success")]
+    >>> print(summary(rows).splitlines()[2].split()[:3])
+    ['a', '2.000', '2.00']
+    """
+    best = fastest(rows, target)
+    peers = [b for b in best.values() if b is not None and b.get("family") == "peer"]
+    peer = min(peers, key=lambda b: b["cpu_s"]) if peers else None
+    lines = [f"{title}: fastest CPU time reaching relative position error <= {target:g}"
+             + (f" (ratio to {peer['combo']}, {peer['cpu_s']:.3f} s)" if peer else " (no sympy peer)"),
+             f"{'combination':<40}{'cpu [s]':>9}{'ratio':>8}{'nfev':>9}{'error':>10}  setting"]
+    for combo in dict.fromkeys(r["combo"] for r in rows):
+        b = best.get(combo)
+        if b is None:
+            bad = [r for r in rows if r["combo"] == combo and r["status"] != "success"]
+            why = f" ({bad[0]['message'][:60]})" if bad else ""
+            lines.append(f"{combo:<40}{'-':>9}{'-':>8}{'-':>9}{'-':>10}  not reached{why}")
+            continue
+        ratio = f"{b['cpu_s'] / peer['cpu_s']:8.2f}" if peer else f"{'-':>8}"
+        lines.append(f"{combo:<40}{b['cpu_s']:>9.3f}{ratio}{b['nfev']:>9}{b['error']:>10.1e}  "
+                     f"{b['setting']}={b['value']:.2g}")
+    return "\n".join(lines)
 
 
 def write_csv(rows, path):
