@@ -7,6 +7,7 @@ from .sources import World, Fixed
 from .parts import FixedTranslation, FixedRotation, RigidBody, PointMass
 from .joints import Revolute, Prismatic, Cylindrical, Spherical, Weld, FreeMotion
 from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
+from .contact import DiskContact, SphereContact, RollingDisk, RollingSphere
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
 
@@ -16,4 +17,5 @@ __all__ = [
     "Spring", "Damper", "SpringDamper", "WorldForce", "WorldTorque",
     "RotationalSpring", "RotationalDamper", "RotationalSpringDamper", "TranslationalSpringDamper",
     "Torque", "Force", "PrescribedMotion",
+    "DiskContact", "SphereContact", "RollingDisk", "RollingSphere",
 ]

@@ -35,8 +35,10 @@ from mbcomp.roles import FrameState
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 CLASSES = [getattr(lib, name) for name in lib.__all__]
-ROLES = (Ground, Body, Joint, ForceElement, FlangeElement, Drive)
-JOINTS = [c for c in CLASSES if issubclass(c, Joint)]
+ROLES = (Ground, Body, Joint, ForceElement, FlangeElement, Drive, mbcomp.Model)
+JOINTS = [c for c in CLASSES if issubclass(c, Joint) and c.tree_edge]  # tree-capable joints
+CONTACTS = [c for c in CLASSES if issubclass(c, Joint) and not c.tree_edge]  # constraint-only joints
+VELOCITY_JOINTS = [c for c in CLASSES if issubclass(c, Joint) and c.velocity_constraints is not Joint.velocity_constraints]
 FORCES = [c for c in CLASSES if issubclass(c, ForceElement)]
 FLANGE_ELEMENTS = [c for c in CLASSES if issubclass(c, FlangeElement)]
 DRIVES = [c for c in CLASSES if issubclass(c, Drive)]
@@ -94,7 +96,7 @@ def test_library_lists_components_of_known_roles():
     for cls in CLASSES:
         assert inspect.isclass(cls) and issubclass(cls, mbcomp.Component), cls
         assert sum(issubclass(cls, r) for r in ROLES) == 1, f"{cls.__name__} must play exactly one role"
-        assert cls.role in {"ground", "body", "joint", "force", "flange_force", "drive"}
+        assert cls.role in {"ground", "body", "joint", "force", "flange_force", "drive", "model"}
 
 
 @pytest.mark.parametrize("cls", CLASSES, ids=_ids(CLASSES))
@@ -265,8 +267,20 @@ def test_moving_frame_is_exact():
     np.testing.assert_allclose((Jp.r - Jm.r) / (2 * h), J0.v, atol=1e-8)
 
 
+def _two_poses(joint, p, rng):
+    """Poses of frame_a and frame_b: for a tree-capable joint near a consistent pose
+    (residuals of order 0.1, so all terms matter), for a contact independent random poses."""
+    Ra, ra = random_rotation(rng), rng.normal(size=3)
+    if not joint.tree_edge:
+        return Ra, ra, random_rotation(rng), rng.normal(size=3)
+    R_rel, r_rel = joint.relative(random_q(joint, p, rng), p)
+    Rb = Rotation.from_rotvec(0.2 * rng.normal(size=3)).as_matrix() @ Ra @ R_rel
+    rb = ra + Ra @ r_rel + 0.2 * rng.normal(size=3)
+    return Ra, ra, Rb, rb
+
+
 @pytest.mark.parametrize("seed", SEEDS)
-@pytest.mark.parametrize("cls", JOINTS, ids=_ids(JOINTS))
+@pytest.mark.parametrize("cls", JOINTS + CONTACTS, ids=_ids(JOINTS + CONTACTS))
 def test_joint_constraint_jets_match_finite_differences(cls, seed):
     """For two independently moving frames (constraints violated), ``dot`` and ``bias`` are
     the first and second time derivatives of ``val`` along the exact trajectory, ``jac``
@@ -274,18 +288,15 @@ def test_joint_constraint_jets_match_finite_differences(cls, seed):
     rng = _rng(cls, seed)
     joint = random_component(cls, rng)
     p = joint.p
-    # frame_b near a consistent pose (residuals of order 0.1), so all terms matter
-    Ra, ra = random_rotation(rng), rng.normal(size=3)
-    R_rel, r_rel = joint.relative(random_q(joint, p, rng), p)
-    Rb = Rotation.from_rotvec(0.2 * rng.normal(size=3)).as_matrix() @ Ra @ R_rel
-    rb = ra + Ra @ r_rel + 0.2 * rng.normal(size=3)
+    Ra, ra, Rb, rb = _two_poses(joint, p, rng)
     ta, tb = random_motion(rng, (Ra, ra)), random_motion(rng, (Rb, rb))
 
     def cons(t, ta=ta, tb=tb):
         return joint.constraints(ta(t), tb(t), p)
 
     c0 = cons(0.0)
-    assert len(c0) == 6 - joint.nu
+    if joint.tree_edge:
+        assert len(c0) == 6 - joint.nu
     if not c0:
         return
     names = [n for n, _ in c0]
@@ -312,6 +323,43 @@ def test_joint_constraint_jets_match_finite_differences(cls, seed):
         sb = moving_frame(Rb, rb, e[9:12], e[6:9], z, z)
         fd = (val(h, ta=sa, tb=sb) - val(-h, ta=sa, tb=sb)) / (2 * h)
         np.testing.assert_allclose(jac[:, k], fd, atol=1e-7, err_msg=f"jac column {k} of {names}")
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("cls", VELOCITY_JOINTS, ids=_ids(VELOCITY_JOINTS))
+def test_velocity_constraint_jets_match_finite_differences(cls, seed):
+    """Nonholonomic rows ``g = jac . twist`` of two independently moving, accelerating frames:
+    ``val`` is linear in the local twists with gradient ``jac``, and ``bias`` is the time
+    derivative of ``val`` along the exact trajectory (the frames carry no speeds, so every
+    acceleration is bias)."""
+    rng = _rng(cls, seed)
+    joint = random_component(cls, rng)
+    p = joint.p
+    Ra, ra, Rb, rb = _two_poses(joint, p, rng)
+    ta, tb = random_motion(rng, (Ra, ra)), random_motion(rng, (Rb, rb))
+
+    def vcons(t, ta=ta, tb=tb):
+        return joint.velocity_constraints(ta(t), tb(t), p)
+
+    c0 = vcons(0.0)
+    assert c0 and len({n for n, _ in c0}) == len(c0), "velocity rows must exist and have unique names"
+    names = [n for n, _ in c0]
+    val = lambda t, **kw: np.array([c.val for _, c in vcons(t, **kw)])
+    v0 = val(0.0)
+    jac = np.array([c.jac for _, c in c0])
+    bias = np.array([c.bias for _, c in c0])
+    assert jac.shape == (len(c0), 12)
+    assert np.abs(v0).max() > 1e-3, "the test should violate the constraints"
+    np.testing.assert_allclose(jac @ twist(ta(0.0), tb(0.0)), v0, atol=1e-12 * (1 + np.abs(v0).max()))
+    h = 1e-5
+    np.testing.assert_allclose((val(h) - val(-h)) / (2 * h), bias, atol=1e-6, err_msg=f"bias of {names}")
+    z = np.zeros(3)
+    for k in range(12):
+        e = np.zeros(12)
+        e[k] = 1.0
+        sa = moving_frame(Ra, ra, e[3:6], e[0:3], z, z)
+        sb = moving_frame(Rb, rb, e[9:12], e[6:9], z, z)
+        np.testing.assert_allclose(val(0.0, ta=sa, tb=sb), jac[:, k], atol=1e-12, err_msg=f"jac column {k} of {names}")
 
 
 def _vee(W):

@@ -59,7 +59,7 @@ import numpy as np
 from .kinematics import cross as _cross, skew
 
 __all__ = ["FrameJet", "VecJet", "ScalarJet", "local_point", "local_vector", "rigid_constraints",
-           "position_constraints", "velocity_along", "is_traced", "as_array"]
+           "position_constraints", "velocity_along", "slip_velocity", "is_traced", "as_array"]
 
 
 def is_traced(x):
@@ -221,6 +221,36 @@ class VecJet:
             self.bias @ o.val + 2.0 * (self.dot @ o.dot) + self.val @ o.bias,
         )
 
+    def cross_(self, o):
+        """Vector product ``self x o``, as a :class:`VecJet`."""
+        return VecJet(
+            _cross(self.val, o.val),
+            skew(self.val) @ o.jac - skew(o.val) @ self.jac,
+            _cross(self.dot, o.val) + _cross(self.val, o.dot),
+            _cross(self.bias, o.val) + 2.0 * _cross(self.dot, o.dot) + _cross(self.val, o.bias),
+        )
+
+    def times(self, c):
+        """The vector scaled by a constant ``c`` (number, or a parameter when traced)."""
+        return VecJet(self.val * c, self.jac * c, self.dot * c, self.bias * c)
+
+    def scaled(self, s):
+        """The vector scaled by a :class:`ScalarJet` ``s`` (product rule)."""
+        return VecJet(
+            self.val * s.val,
+            np.outer(self.val, s.jac) + self.jac * s.val,
+            self.val * s.dot + self.dot * s.val,
+            self.val * s.bias + 2.0 * self.dot * s.dot + self.bias * s.val,
+        )
+
+    def norm(self):
+        """Length ``|self|`` as a :class:`ScalarJet` (undefined for a zero vector)."""
+        return self.dot_(self).sqrt()
+
+    def unit(self):
+        """``self / |self|`` as a :class:`VecJet`."""
+        return self.scaled(self.norm().recip())
+
 
 class ScalarJet:
     """A scalar with Jacobian ``jac`` (12,) w.r.t. the local twists, rate and bias."""
@@ -229,6 +259,28 @@ class ScalarJet:
 
     def __init__(self, val, jac, dot, bias):
         self.val, self.jac, self.dot, self.bias = val, jac, dot, bias
+
+    def __add__(self, o):
+        return ScalarJet(self.val + o.val, self.jac + o.jac, self.dot + o.dot, self.bias + o.bias)
+
+    def __sub__(self, o):
+        return ScalarJet(self.val - o.val, self.jac - o.jac, self.dot - o.dot, self.bias - o.bias)
+
+    def times(self, c):
+        """The scalar scaled by a constant ``c``."""
+        return ScalarJet(self.val * c, self.jac * c, self.dot * c, self.bias * c)
+
+    def sqrt(self):
+        """``sqrt(self)`` (chain rule to second order; the value must be positive)."""
+        s = np.sqrt(self.val)
+        h = 0.5 / s
+        return ScalarJet(s, self.jac * h, self.dot * h, self.bias * h - self.dot * self.dot * h * h * h * 2.0)
+
+    def recip(self):
+        """``1 / self`` (chain rule to second order; the value must be nonzero)."""
+        r = 1.0 / self.val
+        r2 = r * r
+        return ScalarJet(r, -self.jac * r2, -self.dot * r2, -self.bias * r2 + 2.0 * self.dot * self.dot * r2 * r)
 
 
 def local_point(F: FrameJet, slot: int) -> VecJet:
@@ -256,6 +308,44 @@ def velocity_along(point: VecJet, direction: VecJet) -> ScalarJet:
     """
     d = direction.val
     return ScalarJet(point.dot @ d, d @ point.jac, np.nan, point.bias @ d + point.dot @ direction.dot)
+
+
+def slip_velocity(a: FrameJet, b: FrameJet, P: VecJet) -> VecJet:
+    """Velocity of frame_b's material point at ``P`` relative to frame_a's material point at
+    ``P`` (m/s, world coordinates), as a jet for :func:`velocity_along`: rolling without
+    slip is ``velocity_along(slip_velocity(a, b, P), t) = 0`` for the contact tangents ``t``.
+
+    ``P`` is the geometric contact point (a :class:`VecJet` built from the two frames); it
+    moves over both bodies, so the bias carries ``w x (dP/dt - v)`` for each body. The
+    returned jet's ``dot`` is the slip velocity itself, ``jac`` its gradient with respect to
+    the local twists, ``bias`` its time derivative at ``du/dt = 0``; ``val`` is ``P``.
+
+    Examples
+    --------
+    A wheel of radius 0.5 m spinning at 2 rad/s about y, its centre moving at 1 m/s along x,
+    on a ground plane (frame_a at rest): the point touching the ground has zero velocity.
+
+    >>> import numpy as np
+    >>> from mbcomp.jets import FrameJet, local_point, slip_velocity
+    >>> ground = FrameJet.ground(nu=0)
+    >>> z = np.zeros(3)
+    >>> wheel = FrameJet(np.eye(3), np.array([0, 0, 0.5]), np.array([0, 2.0, 0]), np.array([1.0, 0, 0]),
+    ...                  np.zeros((3, 0)), np.zeros((3, 0)), z, z)
+    >>> P = local_point(ground, 0)  # the contact point: the ground origin below the centre
+    >>> slip_velocity(ground, wheel, P).dot
+    array([0., 0., 0.])
+    """
+    ra, rb = P.val - a.r, P.val - b.r
+    jac = np.zeros((3, 12), dtype=skew(rb).dtype)
+    eye = np.eye(3)
+    jac[:, 0:3] = -eye
+    jac[:, 3:6] = skew(ra)
+    jac[:, 6:9] = eye
+    jac[:, 9:12] = -skew(rb)
+    dot = b.v + _cross(b.w, rb) - a.v - _cross(a.w, ra)
+    bias = (b.a + _cross(b.alpha, rb) + _cross(b.w, P.dot - b.v)
+            - a.a - _cross(a.alpha, ra) - _cross(a.w, P.dot - a.v))
+    return VecJet(P.val, jac, dot, bias)
 
 
 _E = np.eye(3)

@@ -28,11 +28,14 @@ def dof_report(system, init=None):
         return x
 
     for e in topo.edges:
-        if e.kind == "ground" or e.dof == 0:
+        if e.kind == "ground" or (e.dof == 0 and e.comp.tree_edge):
             parent[find(e.node_a)] = find(e.node_b)
     groups = {find(n) for n in range(topo.n_nodes)} - {find(-1)}
     N = len(groups)
     C = sum(6 - e.dof for e in topo.edges if e.kind == "joint" and e.dof > 0 and not e.implicit)
+    # constraint-only joints (contacts) remove as many DOF as they have holonomic rows
+    C += sum(1 for name in system.constraint_names(all_rows=True)
+             if not topo.edge(name.rsplit(".", 1)[0]).comp.tree_edge)
     L = sum(1 for e in topo.edges if e.drive)
     if init is None:
         from .initialization import initialize
@@ -88,7 +91,14 @@ def summary(system, init=None):
     drives = [f"{e.name} by {e.drive}" for e in topo.edges if e.drive]
     if drives:
         lines.append(f"prescribed (eliminated, rheonomic): {', '.join(drives)}")
-    rig = [e.name for e in topo.edges if e.kind == "joint" and e.dof == 0]
+    contacts = [e for e in topo.edges if e.kind == "joint" and not e.comp.tree_edge]
+    if contacts:
+        ev = system.evaluate(0.0, system.default_q(), np.zeros(system.nu), masked=False)
+        nh_rows = {e.name: len(rows) for e, rows, _ in ev.local_nh}
+        lines.append("contacts (constraint-only joints): " + ", ".join(
+            f"{e.name} ({sum(1 for n in cut_rows if n.rsplit('.', 1)[0] == e.name)} holonomic + "
+            f"{nh_rows.get(e.name, 0)} nonholonomic rows)" for e in contacts))
+    rig = [e.name for e in topo.edges if e.kind == "joint" and e.dof == 0 and e.comp.tree_edge]
     if rig:
         lines.append(f"rigid offsets merged into their bodies (no coordinates): {', '.join(rig)}")
     if topo.floating:

@@ -6,6 +6,8 @@ Variable names are ``<component>.<variable>``:
   ``ball.Q.w``.., ``ball.w.x``..), reactions ``<joint>.f.x|y|z`` (N) and
   ``<joint>.tau.x|y|z`` (N m): the force and torque exerted on frame_b through the joint,
   resolved in frame_b, torque about frame_b's origin (flange-element forces excluded);
+* joints with outputs of their own (:meth:`mbcomp.roles.Joint.outputs`), e.g. rolling
+  contacts: ``<contact>.N`` (normal force), ``<contact>.F_long``, ``<contact>.F_lat``;
 * drives: ``<drive>.tau`` (rotational) or ``<drive>.f`` (translational), the effort needed to
   impose the motion;
 * bodies: ``<body>.r.x|y|z`` (m, origin of frame_a, world), ``<body>.Q.w|x|y|z`` (orientation
@@ -30,6 +32,7 @@ import csv
 import numpy as np
 
 from .kinematics import matrix_to_quat
+from .roles import Joint
 
 __all__ = ["Result", "postprocess"]
 
@@ -131,6 +134,7 @@ def postprocess(system, form, t, Y, status, message, stats, init):
 
     one_dof = [e for e in topo.edges if e.kind == "joint" and e.dof == 1]
     drives = {e.drive: e for e in topo.edges if e.drive}
+    joint_outputs = [e for e in topo.edges if e.kind == "joint" and type(e.comp).outputs is not Joint.outputs]
     for k in range(n):
         q, u = Y[k, : system.nq], Y[k, system.nq:]
         ev = system.evaluate(t[k], q, u)
@@ -159,6 +163,12 @@ def postprocess(system, form, t, Y, status, message, stats, init):
                 put(f"{ename}.f.{ax}", k, fb[j])
             for j, ax in enumerate(_XYZ):
                 put(f"{ename}.tau.{ax}", k, tb[j])
+        if joint_outputs:
+            lam_rows = system.row_multipliers(ev, lam)
+            for e in joint_outputs:
+                extra = e.comp.outputs(ev.jets[e.node_a], ev.jets[e.node_b], system.P[e.name], lam_rows.get(e.name, {}))
+                for key, val in extra.items():
+                    put(f"{e.name}.{key}", k, val)
         for dname, e in drives.items():
             fb, tb = reac[e.name]
             axis_b = ev.jets[e.node_b].R.T @ e.comp.axis_world(ev.jets[e.node_a].R, system.P[e.name])

@@ -97,6 +97,7 @@ class Joint(Component):
     coordinates: tuple = ()
     speeds: tuple = ()
     axis_kind = None
+    tree_edge = True  # False: a constraint-only joint (no coordinates), always a cut joint
 
     @property
     def nq(self):
@@ -162,6 +163,26 @@ class Joint(Component):
             them with :func:`mbcomp.jets.velocity_along`. Empty for holonomic joints.
         """
         return []
+
+    def outputs(self, a, b, p, lam):
+        """Extra named result columns of this joint at one output time (optional).
+
+        Parameters
+        ----------
+        a, b : FrameJet
+            Jets of frame_a and frame_b.
+        lam : dict
+            Multiplier of each of this joint's constraint rows by row name (holonomic rows
+            from :meth:`constraints` when the joint is cut, and rows of
+            :meth:`velocity_constraints`), sign convention ``M du/dt + A^T lam = f``; a row
+            dropped as redundant is missing.
+
+        Returns
+        -------
+        dict
+            ``{suffix: float}``, reported as ``<joint>.<suffix>`` (e.g. a contact's normal force).
+        """
+        return {}
 
     @property
     def has_velocity_constraints(self):

@@ -416,6 +416,23 @@ class MultibodySystem:
             out[name] = (f0 + Rb.T @ wb[:3], t0 + Rb.T @ wb[3:])
         return out
 
+    def row_multipliers(self, ev: Evaluation, lam):
+        """Multipliers by joint and row name: ``{joint: {row: lam}}`` (holonomic rows of cut
+        joints, then nonholonomic rows; rows dropped as redundant are missing)."""
+        names = self.constraint_names(all_rows=True)
+        mask = self.row_mask if self.row_mask is not None else np.ones(len(names), bool)
+        nh = ev.B.shape[0]
+        out = {}
+        for name, val in zip([n for n, k in zip(names, mask) if k], lam[: lam.size - nh]):
+            joint, row = name.rsplit(".", 1)
+            out.setdefault(joint, {})[row] = val
+        k = lam.size - nh
+        for e, rows, _ in ev.local_nh:
+            for r in rows:
+                out.setdefault(e.name, {})[r] = lam[k]
+                k += 1
+        return out
+
     def summary(self):
         """Human-readable description: bodies, DOF, coordinates, constraints, eliminations."""
         from .report import summary

@@ -8,7 +8,10 @@ Built once from a validated :class:`~mbcomp.model.FlatModel`; immutable afterwar
 * A minimum spanning tree (networkx, Kruskal) keeps rigid offsets, driven joints and joints
   with fixed start values in the tree and cuts the joints with most freedom: a cut joint with
   ``k`` DOF adds ``6 - k`` constraints, so this gives the fewest constraint equations.
-* A group of frames carrying mass but joined to nothing gets an implicit FreeMotion.
+* Joints with ``tree_edge = False`` (rolling contacts: constraints only, no coordinates) are
+  never tree edges; they are always cut.
+* A group of frames carrying mass but joined to nothing gets an implicit FreeMotion (a wheel
+  touching the ground only through a rolling contact floats in the tree).
 
 Examples
 --------
@@ -174,6 +177,8 @@ class Topology:
         G.add_node(ROOT)
         G.add_nodes_from(range(self.n_nodes))
         for e in self.edges:
+            if e.kind == "joint" and not e.comp.tree_edge:
+                continue  # constraint-only joints (rolling contacts) are always cut
             G.add_edge(e.node_a, e.node_b, key=e.name, weight=self._weight(e))
         # groups of frames joined to nothing that carry mass float freely
         reach = nx.node_connected_component(G, ROOT)

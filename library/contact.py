@@ -1,0 +1,272 @@
+"""Rolling contact: wheels and balls rolling without slip on a plane carried by any body.
+
+A contact is a constraint-only joint (``tree_edge = False``: no coordinates, always cut)
+between the body carrying the plane (``frame_a``; the plane passes through its origin with
+normal ``n``) and the rolling body (``frame_b`` at the wheel's or ball's centre). It writes
+
+* one holonomic row ``normal``: the contact point lies on the plane;
+* two nonholonomic rows: the material points of the two bodies at the contact point have
+  the same velocity along the plane (no slip), built with :func:`mbcomp.jets.slip_velocity`.
+
+The normal velocity of the material points is the rate of the holonomic row, so the three
+rows together say the contact point is at rest relative to the plane. Reactions come from
+the rows' multipliers: ``N`` (normal force on the rolling body, N, positive when pressing)
+and two friction components (N) in the plane, reported as ``<contact>.N``, ``.F_long``,
+``.F_lat`` (disk) or ``.F_1``, ``.F_2`` (ball), with the contact point ``.p.x|y|z``
+(m, world coordinates). The composites :class:`RollingDisk` and :class:`RollingSphere` add
+the body, a free joint and start values given in rolling terms.
+"""
+import numpy as np
+
+from mbcomp import Joint, Model, Param, SimulationError
+from mbcomp.jets import is_traced, local_point, local_vector, slip_velocity, velocity_along
+from mbcomp.kinematics import perpendicular_pair, rot_axis
+
+from .joints import FreeMotion
+from .parts import RigidBody
+
+_E = np.eye(3)
+
+
+def _unit(v):
+    return np.asarray(v, float) / np.linalg.norm(v)
+
+
+class DiskContact(Joint):
+    """A thin disk (knife-edge wheel) of radius ``r`` rolling without slip on a plane.
+
+    ``frame_a`` carries the plane (through its origin, normal ``n`` in frame_a coordinates,
+    pointing to the wheel's side); ``frame_b`` is the wheel's centre with spin axis ``axis``
+    (frame_b coordinates). The contact point is the rim point nearest the plane,
+    ``P = c + r (axis x l)`` with ``l = unit(axis x n)`` the rolling direction (where the
+    centre goes for a positive spin about ``axis``). Rows: ``normal`` (holonomic, m),
+    ``longitudinal`` along ``l`` and ``lateral`` along ``n x l`` (nonholonomic, m/s). The
+    wheel may lean and turn; it may not lie flat (``axis`` parallel to ``n``).
+
+    Outputs: ``N`` normal force on the wheel (N), ``F_long``, ``F_lat`` friction force on the
+    wheel along ``l`` and ``n x l`` (N), contact point ``p.x|y|z`` (m, world).
+
+    Examples
+    --------
+    A wheel of radius 0.3 m on the ground, joined by the contact and nothing else (it floats
+    in the tree with an implicit free joint): 6 speeds, 1 holonomic and 2 velocity rows.
+
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import World, DiskContact, FreeMotion, RigidBody
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> free = m.add("free", FreeMotion(r0=(0, 0, 0.3), v0=(1.5, 0, 0), w0=(0, 5.0, 0)))
+    >>> wheel = m.add("wheel", RigidBody(m=2.0, I=np.diag([0.045, 0.09, 0.045])))
+    >>> c = m.add("contact", DiskContact(r=0.3))
+    >>> m.connect(w.frame_b, free.frame_a); m.connect(free.frame_b, wheel.frame_a)
+    >>> m.connect(w.frame_b, c.frame_a); m.connect(c.frame_b, wheel.frame_a)
+    >>> res = mbcomp.simulate(m, t_end=0.5)
+    >>> round(float(res["contact.N"][0]), 6)  # the wheel's weight: 2 kg * 9.81 m/s^2
+    19.62
+    """
+
+    tree_edge = False
+    r = Param(0.3, unit="m", doc="wheel radius", check="positive")
+    n = Param((0.0, 0.0, 1.0), unit="1", shape=(3,), check="nonzero",
+              doc="plane normal, frame_a coordinates, pointing to the wheel's side")
+    axis = Param((0.0, 1.0, 0.0), unit="1", shape=(3,), check="nonzero", doc="spin axis, frame_b coordinates")
+
+    def _geometry(self, a, b, p):
+        n = local_vector(a, _unit(p.n), 0)
+        ax = local_vector(b, _unit(p.axis), 1)
+        L = ax.cross_(n)
+        s = L.dot_(L).val
+        if not is_traced(s) and s < 1e-16:
+            raise SimulationError(f"{self.path}: the disk lies flat on the plane (spin axis parallel to the plane "
+                                  f"normal), where its contact point is undefined -> start it leaning less than 90 "
+                                  f"degrees, or model a flat-lying disk with a different contact")
+        lng = L.unit()
+        P = local_point(b, 1) + ax.cross_(lng).times(p.r)
+        return n, P, lng, n.cross_(lng)
+
+    def constraints(self, a, b, p):
+        n, P, _, _ = self._geometry(a, b, p)
+        return [("normal", (P - local_point(a, 0)).dot_(n))]
+
+    def velocity_constraints(self, a, b, p):
+        _, P, lng, lat = self._geometry(a, b, p)
+        slip = slip_velocity(a, b, P)
+        return [("longitudinal", velocity_along(slip, lng)), ("lateral", velocity_along(slip, lat))]
+
+    def outputs(self, a, b, p, lam):
+        _, P, _, _ = self._geometry(a, b, p)
+        out = {"N": -lam.get("normal", np.nan), "F_long": -lam.get("longitudinal", np.nan),
+               "F_lat": -lam.get("lateral", np.nan)}
+        out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
+        return out
+
+
+class SphereContact(Joint):
+    """A ball of radius ``r`` rolling without slip on a plane.
+
+    ``frame_a`` carries the plane (through its origin, normal ``n`` in frame_a coordinates,
+    pointing to the ball's side); ``frame_b`` is the ball's centre. The contact point is
+    ``P = c - r n``. Rows: ``normal`` (holonomic, m) and ``slip_1``, ``slip_2`` along the
+    plane directions ``t1, t2`` of :func:`mbcomp.kinematics.perpendicular_pair` (``n``)
+    (nonholonomic, m/s; ``t1 = x, t2 = y`` for ``n = z``).
+
+    Outputs: ``N`` normal force on the ball (N), ``F_1``, ``F_2`` friction force on the ball
+    along ``t1``, ``t2`` (N), contact point ``p.x|y|z`` (m, world).
+
+    Examples
+    --------
+    >>> from mbcomp.library import SphereContact
+    >>> c = SphereContact(r=0.1)
+    >>> c.tree_edge, c.nq
+    (False, 0)
+    """
+
+    tree_edge = False
+    r = Param(0.1, unit="m", doc="ball radius", check="positive")
+    n = Param((0.0, 0.0, 1.0), unit="1", shape=(3,), check="nonzero",
+              doc="plane normal, frame_a coordinates, pointing to the ball's side")
+
+    def _geometry(self, a, b, p):
+        n0 = _unit(p.n)
+        n = local_vector(a, n0, 0)
+        P = local_point(b, 1) - n.times(p.r)
+        t1, t2 = perpendicular_pair(n0)
+        return n, P, local_vector(a, t1, 0), local_vector(a, t2, 0)
+
+    def constraints(self, a, b, p):
+        n, P, _, _ = self._geometry(a, b, p)
+        return [("normal", (P - local_point(a, 0)).dot_(n))]
+
+    def velocity_constraints(self, a, b, p):
+        _, P, t1, t2 = self._geometry(a, b, p)
+        slip = slip_velocity(a, b, P)
+        return [("slip_1", velocity_along(slip, t1)), ("slip_2", velocity_along(slip, t2))]
+
+    def outputs(self, a, b, p, lam):
+        _, P, _, _ = self._geometry(a, b, p)
+        out = {"N": -lam.get("normal", np.nan), "F_1": -lam.get("slip_1", np.nan), "F_2": -lam.get("slip_2", np.nan)}
+        out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
+        return out
+
+
+def _numbers(owner, **values):
+    out = {}
+    for k, v in values.items():
+        try:
+            arr = np.asarray(v, float)
+        except (TypeError, ValueError):
+            arr = np.array(np.nan)
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{owner}: parameter {k}={v!r} must be a finite number (or numbers) -> fix: pass e.g. {k}=0.0")
+        out[k] = arr
+    return out
+
+
+class RollingDisk(Model):
+    """A thin disk of radius ``r`` and mass ``m`` rolling without slip on a plane.
+
+    A composite: ``free`` (:class:`FreeMotion` from the plane frame to the centre),
+    ``wheel`` (:class:`RigidBody`) and ``contact`` (:class:`DiskContact`). Connect its port
+    ``plane`` to the frame carrying the plane (the world's, a tilted :class:`FixedRotation`,
+    a moving platform); the plane is that frame's x-y plane, the disk on its +z side. Port
+    ``center`` is the wheel's frame: x the rolling direction and z towards the top of the
+    disk at zero lean and spin, y the spin axis.
+
+    Start values are rolling coordinates in the plane frame: contact point ``x0, y0`` (m),
+    ``heading0`` (rad, rolling direction from x about z), ``lean0`` (rad, rotation of the
+    disk about the rolling direction; 0 upright), and the rates ``heading_rate0``,
+    ``lean_rate0``, ``spin_rate0`` (rad/s; spin relative to the heading-and-lean frame, so
+    the centre moves forward at ``r (spin_rate0 + heading_rate0 sin lean0)``). The centre's
+    velocity is set by rolling, so the start is consistent with all three contact rows.
+
+    Parameters
+    ----------
+    r : float
+        Radius (m).
+    m : float
+        Mass (kg).
+    I : array_like (3, 3), optional
+        Inertia about the centre, wheel-frame axes (kg m^2); default a uniform thin disk,
+        ``diag(m r^2/4, m r^2/2, m r^2/4)``.
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, RollingDisk
+    >>> mdl = mbcomp.Model(); w = mdl.add("world", World(g=(0, 0, -9.81)))
+    >>> disk = mdl.add("disk", RollingDisk(r=0.5, m=1.0, spin_rate0=10.0))
+    >>> mdl.connect(w.frame_b, disk.plane)
+    >>> res = mbcomp.simulate(mdl, t_end=0.2)
+    >>> round(float(res["disk.wheel.v.x"][-1]), 9)  # upright, straight: r * spin rate
+    5.0
+    """
+
+    def __init__(self, r=0.3, m=1.0, I=None, x0=0.0, y0=0.0, heading0=0.0, lean0=0.0,
+                 heading_rate0=0.0, lean_rate0=0.0, spin_rate0=0.0):
+        super().__init__()
+        v = _numbers("RollingDisk", r=r, m=m, x0=x0, y0=y0, heading0=heading0, lean0=lean0,
+                     heading_rate0=heading_rate0, lean_rate0=lean_rate0, spin_rate0=spin_rate0)
+        if I is None:
+            I = np.diag([0.25, 0.5, 0.25]) * float(v["m"]) * float(v["r"]) ** 2
+        R = rot_axis(_E[2], float(v["heading0"])) @ rot_axis(_E[0], float(v["lean0"]))
+        rc = R @ np.array([0.0, 0.0, float(v["r"])])  # centre relative to the contact point
+        w = (float(v["heading_rate0"]) * _E[2] + float(v["lean_rate0"]) * R[:, 0]
+             + float(v["spin_rate0"]) * R[:, 1])  # world (plane-frame) angular velocity
+        vc = np.cross(w, rc)  # rolling: the contact point is at rest
+        r0 = np.array([float(v["x0"]), float(v["y0"]), 0.0]) + rc
+        self.add("contact", DiskContact(r=float(v["r"])))
+        self.add("free", FreeMotion(r0=r0, R0=R, v0=vc, w0=R.T @ w))
+        self.add("wheel", RigidBody(m=float(v["m"]), I=I))
+        self.connect(self["free"].frame_b, self["wheel"].frame_a)
+        self.connect(self["contact"].frame_b, self["wheel"].frame_a)
+        self.connect(self["free"].frame_a, self["contact"].frame_a)
+        self.expose("plane", self["contact"].frame_a)
+        self.expose("center", self["wheel"].frame_a)
+
+
+class RollingSphere(Model):
+    """A ball of radius ``r`` and mass ``m`` rolling without slip on a plane.
+
+    A composite: ``free`` (:class:`FreeMotion` from the plane frame to the centre),
+    ``ball`` (:class:`RigidBody`) and ``contact`` (:class:`SphereContact`). Connect ``plane``
+    to the frame carrying the plane (its x-y plane, the ball on the +z side); ``center`` is
+    the ball's frame. Start values in the plane frame: contact point ``x0, y0`` (m), centre
+    velocity ``v0 = (vx, vy)`` (m/s) and spin about the normal ``spin_rate0`` (rad/s); the
+    rolling angular velocity follows from no slip, ``w = z x v / r + spin z``.
+
+    Parameters
+    ----------
+    r, m : float
+        Radius (m) and mass (kg).
+    I : array_like (3, 3), optional
+        Inertia about the centre (kg m^2); default a solid ball, ``2/5 m r^2``.
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, RollingSphere
+    >>> mdl = mbcomp.Model(); w = mdl.add("world", World(g=(0, 0, -9.81)))
+    >>> ball = mdl.add("ball", RollingSphere(r=0.1, m=0.5, v0=(1.0, 0.0)))
+    >>> mdl.connect(w.frame_b, ball.plane)
+    >>> res = mbcomp.simulate(mdl, t_end=0.5)
+    >>> round(float(res["ball.ball.r.x"][-1]), 9)  # level plane: uniform rolling
+    0.5
+    """
+
+    def __init__(self, r=0.1, m=1.0, I=None, x0=0.0, y0=0.0, v0=(0.0, 0.0), spin_rate0=0.0):
+        super().__init__()
+        v = _numbers("RollingSphere", r=r, m=m, x0=x0, y0=y0, v0=v0, spin_rate0=spin_rate0)
+        if v["v0"].shape != (2,):
+            raise ValueError(f"RollingSphere: parameter v0={v0!r} must be two numbers (vx, vy) in the plane, m/s")
+        rr, mm = float(v["r"]), float(v["m"])
+        if I is None:
+            I = np.eye(3) * 0.4 * mm * rr ** 2
+        vc = np.array([v["v0"][0], v["v0"][1], 0.0])
+        w = np.cross(_E[2], vc) / rr + float(v["spin_rate0"]) * _E[2]
+        self.add("contact", SphereContact(r=rr))
+        self.add("free", FreeMotion(r0=(float(v["x0"]), float(v["y0"]), rr), R0=np.eye(3), v0=vc, w0=w))
+        self.add("ball", RigidBody(m=mm, I=I))
+        self.connect(self["free"].frame_b, self["ball"].frame_a)
+        self.connect(self["contact"].frame_b, self["ball"].frame_a)
+        self.connect(self["free"].frame_a, self["contact"].frame_a)
+        self.expose("plane", self["contact"].frame_a)
+        self.expose("center", self["ball"].frame_a)
