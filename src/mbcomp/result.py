@@ -197,6 +197,12 @@ def postprocess(system, form, t, Y, status, message, stats, init):
         put("residual.nonholonomic", k, np.linalg.norm(ev.g) if ev.g.size else 0.0)
         for i, name in enumerate(system.constraint_names() + [f"{e.name}.{rr}" for e, rows, _ in ev.local_nh for rr in rows]):
             put(f"lambda.{name}", k, lam[i] if i < lam.size else np.nan)
+    for e in joint_outputs:  # contacts hold bodies bilaterally: say where a real one would let go
+        N = series.get(f"{e.name}.N")
+        if not e.comp.tree_edge and N is not None and np.nanmin(N, initial=0.0) < 0.0:
+            k = int(np.argmax(N < 0.0))
+            message += (f"; {e.name}.N < 0 from t = {t[k]:.4g} s: the contact pulls the body onto the plane there "
+                        f"(contacts are bilateral; a real wheel or ball would lift off)")
     for alias, var in topo.flat.aliases.items():
         if var in series:
             series[alias] = series[var]
