@@ -20,7 +20,7 @@ import numpy as np
 
 from mbcomp import Joint, Model, Param, SimulationError
 from mbcomp.jets import is_traced, local_point, local_vector, slip_velocity, velocity_along
-from mbcomp.kinematics import perpendicular_pair, rot_axis
+from mbcomp.kinematics import rot_axis
 
 from .joints import FreeMotion
 from .parts import RigidBody
@@ -30,6 +30,14 @@ _E = np.eye(3)
 
 def _unit(v):
     return np.asarray(v, float) / np.linalg.norm(v)
+
+
+def _tangents(n):
+    """Plane directions ``t1, t2 = n x t1`` for the unit normal ``n``: ``t1`` is the frame axis
+    most nearly in the plane (x first), projected onto it; ``x, y`` for ``n = z``."""
+    e = _E[int(np.argmin(np.abs(n)))]
+    t1 = _unit(e - (e @ n) * n)
+    return t1, np.cross(n, t1)
 
 
 class DiskContact(Joint):
@@ -106,8 +114,8 @@ class SphereContact(Joint):
     ``frame_a`` carries the plane (through its origin, normal ``n`` in frame_a coordinates,
     pointing to the ball's side); ``frame_b`` is the ball's centre. The contact point is
     ``P = c - r n``. Rows: ``normal`` (holonomic, m) and ``slip_1``, ``slip_2`` along the
-    plane directions ``t1, t2`` of :func:`mbcomp.kinematics.perpendicular_pair` (``n``)
-    (nonholonomic, m/s; ``t1 = x, t2 = y`` for ``n = z``).
+    plane directions ``t1``, ``t2 = n x t1`` (nonholonomic, m/s), ``t1`` the frame_a axis
+    most nearly in the plane, projected onto it (``t1 = x, t2 = y`` for ``n = z``).
 
     Outputs: ``N`` normal force on the ball (N), ``F_1``, ``F_2`` friction force on the ball
     along ``t1``, ``t2`` (N), contact point ``p.x|y|z`` (m, world).
@@ -129,7 +137,7 @@ class SphereContact(Joint):
         n0 = _unit(p.n)
         n = local_vector(a, n0, 0)
         P = local_point(b, 1) - n.times(p.r)
-        t1, t2 = perpendicular_pair(n0)
+        t1, t2 = _tangents(n0)
         return n, P, local_vector(a, t1, 0), local_vector(a, t2, 0)
 
     def constraints(self, a, b, p):
