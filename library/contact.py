@@ -78,6 +78,14 @@ class DiskContact(Joint):
               doc="plane normal, frame_a coordinates, pointing to the wheel's side")
     axis = Param((0.0, 1.0, 0.0), unit="1", shape=(3,), check="nonzero", doc="spin axis, frame_b coordinates")
 
+    singularity_reason = ("the disk lies flat on the plane (spin axis parallel to the plane normal), where its "
+                          "contact point is undefined")
+    singularity_fix = "keep the disk from falling flat (more spin or speed, a smaller lean, a shorter run)"
+
+    def singularity(self, a, b, p):
+        """``|axis x n|``: the cosine of the lean from upright; 0 when the disk lies flat."""
+        return float(np.linalg.norm(np.cross(a.R @ _unit(p.n), b.R @ _unit(p.axis))))
+
     def _geometry(self, a, b, p):
         n = local_vector(a, _unit(p.n), 0)
         ax = local_vector(b, _unit(p.axis), 1)

@@ -184,6 +184,21 @@ class Joint(Component):
         """
         return {}
 
+    #: what breaks down near a zero of :meth:`singularity`, and how to avoid it (for messages)
+    singularity_reason = "the joint reached a singular position"
+    singularity_fix = "change the geometry or the start so it is avoided"
+
+    def singularity(self, a, b, p):
+        """Distance (dimensionless, >= 0) of the two frames from a position where this joint's
+        own equations break down (e.g. a rolling disk lying flat), or ``None``. Checked by the
+        simulation driver on accepted steps; the run fails below 1e-3 with
+        :attr:`singularity_reason` and :attr:`singularity_fix`."""
+        return None
+
+    @property
+    def has_singularity(self):
+        return type(self).singularity is not Joint.singularity
+
     @property
     def has_velocity_constraints(self):
         return type(self).velocity_constraints is not Joint.velocity_constraints

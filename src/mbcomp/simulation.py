@@ -37,6 +37,7 @@ from .errors import SimulationError
 from .formulations import DAlembert, LagrangeIndex1
 from .initialization import initialize
 from .result import Result, postprocess
+from .system import MultibodySystem
 from .system import MultibodySystem, assemble
 
 __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
@@ -290,6 +291,10 @@ class _SingularityWatch:
       that is dependent only at the start position (a four-bar started flat, a slider-crank
       started at a dead centre with a loop that closes there by coincidence) is a singular
       start, and the loop would otherwise open silently.
+    * Joints that know where their own equations break down (``Joint.singularity``: a rolling
+      disk lying flat) report their distance from it; below ``JOINT_MIN`` the run fails with
+      the joint's reason, and a local minimum of step-end distances below ``JOINT_BRACKET`` is
+      located along the dense output (a disk falling through flat between two steps).
     * The smallest relative singular value of the kept constraint Jacobian is tracked
       (``stats["min_constraint_sigma"]``: how close the run came to a singular position) and a
       value at rounding level is reported as a singular position. A solver may step *over* a
@@ -302,10 +307,15 @@ class _SingularityWatch:
 
     SIGMA_MIN = 1e-6  # a four-bar 1e-8 m from flat: 4e-5; passing exactly through flat: <= 1.6e-7
 
+    JOINT_MIN = 1e-3  # a joint's own distance from where its equations break down (a flat disk)
+    JOINT_BRACKET = 0.1
+
     def __init__(self, system, atol):
         self.system = system
         mask = system.row_mask
-        self.active = bool(system.topology.cut)
+        self.joints = [e for e in system.topology.edges if e.kind == "joint" and e.comp.has_singularity]
+        self.active = bool(system.topology.cut) or bool(self.joints)
+        self._jhist = []  # (t_start, t_end, {joint: distance} at t_end, dense) of the last two steps
         self.dropped = None if mask is None or mask.all() else ~mask
         self.tol = 1e-6 + 1e3 * float(np.max(atol))
         self.sigma_min = 1.0
@@ -341,11 +351,59 @@ class _SingularityWatch:
         r = minimize_scalar(sig, bounds=(a0, b1), method="bounded", options=dict(xatol=1e-12 * max(1.0, abs(b1))))
         return float(r.x), float(r.fun)
 
+    def _joint_distances(self, t, q, u):
+        sysm = self.system
+        jets = MultibodySystem.kinematics(sysm, t, q, u)
+        out = {}
+        for e in self.joints:
+            d = e.comp.singularity(jets[e.node_a], jets[e.node_b], sysm.P[e.name])
+            if d is not None:
+                out[e.name] = d
+        return out
+
+    def _joint_failure(self, name, t, dist):
+        e = self.system.topology.edge(name)
+        return _Singular(f"{name}: {e.comp.singularity_reason} at t={t:g} (distance {dist:.2g}); beyond it the "
+                         f"motion is not defined -> {e.comp.singularity_fix}", t)
+
+    def _check_joints(self, t, q, u, t_prev, dense):
+        dist = self._joint_distances(t, q, u)
+        for name, d in dist.items():
+            if d < self.JOINT_MIN:
+                raise self._joint_failure(name, t, d)
+        if dense is None:
+            return
+        self._jhist = (self._jhist + [(t_prev, t, dist, dense)])[-3:]
+        if len(self._jhist) < 3:
+            return
+        (_, _, d0, _), (a0, a1, d1, da), (_, b1, d2, db) = self._jhist
+        sysm = self.system
+        from scipy.optimize import minimize_scalar
+
+        for name in d1:
+            v0, v1, v2 = d0.get(name, np.inf), d1[name], d2.get(name, np.inf)
+            if not (v1 < v0 and v1 < v2 and v1 < self.JOINT_BRACKET):
+                continue
+
+            def dist_at(tt, name=name):
+                qu = da(tt) if tt <= a1 else db(tt)
+                qq, uu = sysm.normalize(qu[: sysm.nq]), qu[sysm.nq: sysm.nq + sysm.nu]
+                return self._joint_distances(tt, qq, uu).get(name, np.inf)
+
+            r = minimize_scalar(dist_at, bounds=(a0, b1), method="bounded",
+                                options=dict(xatol=1e-12 * max(1.0, abs(b1))))
+            if r.fun < self.JOINT_MIN:
+                raise self._joint_failure(name, float(r.x), float(r.fun))
+
     def check(self, t, qu, t_prev=None, dense=None):
         if not self.active:
             return
         sysm = self.system
         q, u = qu[: sysm.nq], qu[sysm.nq: sysm.nq + sysm.nu]
+        if self.joints:
+            self._check_joints(t, q, u, t_prev, dense)
+        if not sysm.topology.cut:
+            return
         ev = sysm.evaluate(t, q, u, masked=False)
         if self.dropped is not None and ev.Phi.size:
             bad = np.abs(ev.Phi[self.dropped])
