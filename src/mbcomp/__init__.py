@@ -26,7 +26,7 @@ __all__ = [
     "Component", "Param", "Frame", "Flange", "Guess", "Model",
     "Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState",
     "ModelError", "InitializationError", "SimulationError",
-    "assemble", "simulate", "Result", "equations",
+    "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",
 ]
 
 
@@ -43,6 +43,9 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name == "equations":  # symbolic equations of motion (imports sympy)
         from .symbolic import equations
         return equations
+    if name in ("linearize", "steady_states", "sweep"):  # stability analysis (seed Chapter 7)
+        from . import stability
+        return getattr(stability, name)
     raise AttributeError(f"module 'mbcomp' has no attribute {name!r}")
 
 __version__ = "0.1.0"
