@@ -149,21 +149,22 @@ class _Reduced:
         return q
 
     def speeds(self, q, dv):
+        """Speeds with the independent ones moved by ``dv``, the dependent ones solved from the
+        velocity constraints (linear in ``u``: one solve is exact); returns ``(u, evaluation)``."""
         s = self.s
         u = self.u0.copy()
         u[self.vind] += dv
+        ev = s.evaluate(self.t, q, u)
         if self.vdep.size:
-            for _ in range(3):  # linear in u: one step is exact, a second removes rounding
-                ev = s.evaluate(self.t, q, u)
-                res = np.concatenate((ev.Phid, ev.g))
-                u[self.vdep] -= np.linalg.solve(ev.A[:, self.vdep], res)
-        return u
+            res = np.concatenate((ev.Phid, ev.g))
+            u[self.vdep] -= np.linalg.solve(ev.A[:, self.vdep], res)
+            ev = s.evaluate(self.t, q, u)
+        return u, ev
 
     def rate(self, x, moving=None):
         npos = self.pind.size
         q = self.positions(x[:npos], moving)
-        u = self.speeds(q, x[npos:])
-        ev = self.s.evaluate(self.t, q, u)
+        u, ev = self.speeds(q, x[npos:])
         ud, _ = self.form.solve(ev, stabilize=False)
         return np.concatenate((u[self.pind], ud[self.vind]))
 
