@@ -42,7 +42,7 @@ The bead on a ring spinning at omega (seed Example 7.1): at the bottom the roots
 >>> lin.state_names, lin.classification
 (['hinge.phi', 'hinge.w'], 'unstable')
 >>> round(float(max(lin.eigenvalues.real)), 6)  # sqrt(36 - 9.81/0.5)
-4.04722
+4.047221
 """
 from __future__ import annotations
 
