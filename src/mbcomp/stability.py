@@ -385,8 +385,14 @@ def linearize(model, state=None, params=None, t=None, remove_ignorable=True):
     acc_tol = 1e-7 * uscale * (1.0 + uscale)
     if f0.size and np.abs(f0).max() > acc_tol:
         k = int(np.argmax(np.abs(f0)))
-        raise SimulationError(f"not a steady state: d/dt of {names[k]} is {f0[k]:.3g} (all must vanish) -> "
-                              "find the steady state first (mbcomp.stability.steady_states or --steady)")
+        hint = "find the steady state first (mbcomp.stability.steady_states or --steady)"
+        turning = [dnames[i] for i in red.moving if ".rot." in dnames[i]]
+        if turning:  # body-axis speeds of a quaternion joint turn with the body in any steady rotation
+            hint = ("if the motion is steady (e.g. a steady precession), it is not steady in these coordinates: "
+                    f"{', '.join(turning)} turn(s) the body-axis speeds of a quaternion joint, so no steady state "
+                    "exists here -> model the motion with Revolute chains whose angles are cyclic (precession, "
+                    "nutation, spin); otherwise " + hint)
+        raise SimulationError(f"not a steady state: d/dt of {names[k]} is {f0[k]:.3g} (all must vanish) -> {hint}")
     scale = np.concatenate((np.ones(red.pind.size), np.full(red.vind.size, uscale)))
     A = red.jacobian(red.rate, red.n, scale)
     moving = [dnames[i] for i in red.moving]
@@ -404,11 +410,24 @@ def linearize(model, state=None, params=None, t=None, remove_ignorable=True):
     keep = list(range(len(names)))
     if remove_ignorable and A.size:
         lim = 1e-7 * (1.0 + np.abs(A).max())
+        flim = 1e-10 * (1.0 + np.abs(A).max())
+
+        def inert(j):
+            """A finite perturbation (0.1 of the state's scale) changes no kept rate: the column
+            is zero structurally, not merely small at linear order (near a stability boundary)."""
+            e = np.zeros(red.n)
+            e[j] = 0.1 * scale[j]
+            try:
+                d = red.rate(e) - f0
+            except SimulationError:
+                return False
+            return np.abs(d[keep]).max() <= flim * 0.1 * scale[j]
+
         changed = True
         while changed:
             changed = False
             for j in list(keep):
-                if np.abs(A[keep, j]).max() <= lim:
+                if np.abs(A[keep, j]).max() <= lim and inert(j):
                     keep.remove(j)
                     removed.append(names[j])
                     changed = True
