@@ -1,9 +1,15 @@
-"""Command line: ``mbcomp simulate MODEL.py``, ``mbcomp info MODEL.py`` and ``mbcomp bench MODEL.py``.
+"""Command line: ``mbcomp simulate MODEL.py``, ``mbcomp info MODEL.py``, ``mbcomp bench MODEL.py`` and
+``mbcomp stability MODEL.py``.
 
 A model file defines ``build(**params) -> Model`` and may set ``SIMULATION = dict(t_end=...,
 rtol=..., atol=..., method=..., stabilization=..., formulation=...)`` as defaults. ``-p name=value`` passes
 ``name`` to ``build`` when it has no dot, and sets a component parameter at run time when it
 has one (``-p spring.c=200``: nothing is re-derived).
+
+``mbcomp stability MODEL.py`` linearizes about the model's start state (or, with
+``--steady "a=0, b=lo:hi"``, about every steady state found) and prints the eigenvalues and
+their classification; ``--sweep name=start:stop:count`` repeats that over a build() or
+component parameter and locates where the classification changes (:mod:`mbcomp.stability`).
 
 Examples
 --------
@@ -23,9 +29,9 @@ import sys
 
 import numpy as np
 
-from .errors import ModelError
+from .errors import ModelError, SimulationError
 
-__all__ = ["main", "load_model_file", "parse_value"]
+__all__ = ["main", "load_model_file", "parse_value", "parse_sweep"]
 
 
 def parse_value(text):
@@ -134,6 +140,283 @@ def cmd_bench(args):
     return 0
 
 
+# ------------------------------------------------------------------------------------------
+# mbcomp stability
+# ------------------------------------------------------------------------------------------
+_SWEEP_HINT = "write --sweep name=start:stop:count with start < stop and an integer count >= 2, e.g. spin=1:5:9"
+
+
+def parse_sweep(spec):
+    """``"name=start:stop:count"`` -> ``(name, grid)`` with ``grid = linspace(start, stop, count)``.
+
+    Examples
+    --------
+    >>> from mbcomp.cli import parse_sweep
+    >>> parse_sweep("spin=1:5:5")
+    ('spin', array([1., 2., 3., 4., 5.]))
+    """
+    text = str(spec).strip()
+    name, sep, rng = text.partition("=")
+    name, parts = name.strip(), rng.split(":")
+    if not sep or not name or len(parts) != 3:
+        raise ValueError(f"--sweep {text!r}: {_SWEEP_HINT}")
+    try:
+        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise ValueError(f"--sweep {text!r}: start and stop must be numbers and count an integer; "
+                         f"{_SWEEP_HINT}") from None
+    if not (np.isfinite(start) and np.isfinite(stop) and start < stop and count >= 2):
+        raise ValueError(f"--sweep {text!r}: {_SWEEP_HINT}")
+    return name, np.linspace(start, stop, count)
+
+
+def _one_line(exc):
+    """An error as one line: a ModelError's header and every problem, joined by ``;``."""
+    problems = getattr(exc, "problems", None)
+    if isinstance(exc, ModelError) and problems:
+        head = str(exc).splitlines()[0].rstrip(":")
+        head = head.rsplit(" (", 1)[0] if head.endswith(")") else head
+        return f"{head}: " + "; ".join(" ".join(str(p).split()) for p in problems)
+    return " ".join(str(exc).split())
+
+
+def _call_build(mod, kw, path):
+    try:
+        return mod.build(**kw)
+    except TypeError as exc:  # e.g. a text value where build() needs a number
+        args = ", ".join(f"{k}={v!r}" for k, v in kw.items())
+        raise ValueError(f"build({args}) of {path} failed ({exc}) -> fix: give numbers to -p / --sweep") from None
+
+
+def _complex(z):
+    return f"{z.real:+.6g}" if z.imag == 0 else f"{z.real:+.6g}{z.imag:+.6g}j"
+
+
+def _top(eigs):
+    """The eigenvalues whose real part is (within the classification tolerance) the largest."""
+    e = np.asarray(eigs, complex)
+    e = e[np.isfinite(e)]
+    if not e.size:
+        return "-"
+    tol = 1e-7 * (1.0 + np.abs(e).max())  # the classification's: parts below it print as 0
+    sel = e[e.real >= e.real.max() - tol]
+    sel = np.where(np.abs(sel.real) <= tol, 0.0, sel.real) + 1j * np.where(np.abs(sel.imag) <= tol, 0.0, sel.imag)
+    return ", ".join(_complex(z) for z in sel[:4]) + (", ..." if sel.size > 4 else "")
+
+
+def _eigen_plot(groups, path, title):
+    """Eigenvalues in the complex plane, one marker per group ``(label, eigenvalues)``."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.5, 4.5))
+    marks = "oxs^vD+*"
+    for k, (label, eigs) in enumerate(groups):
+        e = np.asarray(eigs, complex)
+        ax.plot(e.real, e.imag, marks[k % len(marks)], ms=7, mfc="none", label=label)
+    ax.axhline(0, color="0.5", lw=0.5)
+    ax.axvline(0, color="0.5", lw=0.5)
+    ax.set_xlabel("Re (1/s)")
+    ax.set_ylabel("Im (1/s)")
+    ax.set_title(title)
+    ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _steady_record(s, system, lin):
+    return dict(values=s.values, residual=s.residual, how=s.how, t=s.t,
+                q=dict(zip(system.q_names, map(float, s.q))), u=dict(zip(system.u_names, map(float, s.u))),
+                linearization=None if lin is None else lin.to_dict())
+
+
+def cmd_stability(args):
+    try:
+        return _stability(args)
+    except SystemExit as exc:  # the messages of load_model_file and _split_params
+        if isinstance(exc.code, str):
+            print(" ".join(exc.code.split()), file=sys.stderr)
+            return 2
+        raise
+    except (ValueError, SimulationError, np.linalg.LinAlgError) as exc:  # ModelError is a ValueError
+        print(f"mbcomp: {_one_line(exc)}", file=sys.stderr)
+        return 2
+
+
+def _stability(args):
+    from . import stability as st
+    from .system import assemble
+
+    mod = load_model_file(args.model)
+    build_kw, runtime = _split_params(args.param, mod.build)
+    title = pathlib.Path(args.model).name
+    steady = None
+    if args.steady is not None:
+        try:
+            steady = st.parse_steady(args.steady)
+        except ValueError as exc:
+            raise ValueError(f"--steady: {exc}") from None
+    if args.sweep:
+        return _stability_sweep(args, mod, build_kw, runtime, steady, title)
+    system = assemble(_call_build(mod, build_kw, args.model), runtime or None)
+    if steady is None:
+        lin = st.linearize(system)
+        print(f"{title}: about the start state")
+        print(lin.report())
+        if args.out:
+            st.to_json(lin, args.out)
+            print(f"wrote {args.out}")
+        if args.plot:
+            _eigen_plot([("start state", lin.eigenvalues)], args.plot, f"{title}: {lin.classification}")
+            print(f"wrote {args.plot}")
+        return 0
+    fixed, unknown = steady
+    sols = st.steady_states(system, unknown, fixed)
+    fixed_text = ", ".join(f"{k} = {v!r}" for k, v in fixed.items()) or "nothing"
+    if not sols:
+        ranges = ", ".join(f"{k} in [{a:g}, {b:g}]" for k, (a, b) in unknown.items())
+        print(f"{title}: no steady state found with {ranges} (fixed: {fixed_text}) -> widen the ranges, or fix "
+              "other values")
+        return 1
+    print(f"{title}: {len(sols)} steady state{'s' if len(sols) > 1 else ''} (fixed: {fixed_text})")
+    print(f"how: {sols[0].how}")
+    records, groups = [], []
+    for k, s in enumerate(sols, 1):
+        vals = ", ".join(f"{n} = {v!r}" for n, v in s.values.items())
+        print(f"\nsteady state {k}: {vals}  (residual max|du/dt| = {s.residual:.3g})")
+        try:
+            lin = st.linearize(system, state=s)
+        except SimulationError as exc:
+            lin = None
+            print(f"linearization failed: {_one_line(exc)}")
+        else:
+            print(lin.report())
+            groups.append((", ".join(f"{n} = {v:.6g}" for n, v in s.values.items()), lin.eigenvalues))
+        records.append(_steady_record(s, system, lin))
+    if args.out:
+        st.to_json(dict(model=title, fixed=fixed, unknown=unknown, steady_states=records), args.out)
+        print(f"\nwrote {args.out}")
+    if args.plot:
+        _eigen_plot(groups, args.plot, f"{title}: eigenvalues of the steady states")
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def _stability_sweep(args, mod, build_kw, runtime, steady, title):
+    from . import stability as st
+    from .initialization import initialize
+    from .system import MultibodySystem, assemble
+
+    name, grid = parse_sweep(args.sweep)
+    current = {}
+    if "." in name:  # a component parameter: one model, the value set at run time
+        base = assemble(_call_build(mod, build_kw, args.model), runtime or None)
+        try:
+            base.with_params({name: float(grid[0])})
+        except ModelError as exc:
+            raise ValueError(f"--sweep {name}: {_one_line(exc)}") from None
+
+        def make(v):
+            current["v"] = v
+            return base.with_params({name: v})
+        params = None
+    else:  # a build() parameter: the model (and its start state) built at each value
+        sig = inspect.signature(mod.build)
+        if name not in sig.parameters and not any(p.kind == p.VAR_KEYWORD for p in sig.parameters.values()):
+            raise ValueError(f"--sweep {name}: build() of {title} takes no parameter {name!r} -> fix: sweep one of "
+                             f"{', '.join(sig.parameters) or 'none'}, or a component parameter as component.param")
+
+        def make(v):
+            current["v"] = v
+            return _call_build(mod, {**build_kw, name: v}, args.model)
+        params = runtime or None
+
+    solved = {}  # parameter value -> the steady state's unknowns followed there
+    if steady is None:
+        def analyze(mdl):
+            return st.linearize(mdl, params=params)
+    else:
+        fixed, unknown = steady
+        names = list(unknown)
+        width = np.array([unknown[n][1] - unknown[n][0] for n in names])
+
+        def start_values(mdl):
+            system = mdl if isinstance(mdl, MultibodySystem) else assemble(mdl, params)
+            init = initialize(system, 0.0)
+            out = []
+            for n in names:
+                if n in system.q_names:
+                    out.append(init.q[system.q_names.index(n)])
+                elif n in system.u_names:
+                    out.append(init.u[system.u_names.index(n)])
+                else:
+                    out.append(0.5 * sum(unknown[n]))  # steady_states names the bad name
+            return np.array(out, float)
+
+        def analyze(mdl):
+            v = current["v"]
+            sols = st.steady_states(mdl, unknown, fixed, params=params)
+            if not sols:
+                raise SimulationError(f"no steady state with {args.steady} at {name} = {v!r}")
+            if solved:  # continuation: the branch followed at the nearest value solved so far
+                ref = solved[min(solved, key=lambda x: abs(x - v))]
+            else:  # first value: the branch nearest the model's start values
+                ref = start_values(mdl)
+            pick = min(sols, key=lambda s: np.abs((np.array([s.values[n] for n in names]) - ref) / width).max())
+            solved[v] = np.array([pick.values[n] for n in names])
+            return st.linearize(mdl, state=pick, params=params)
+
+    if steady is not None:  # check the names of --steady once, before the sweep records failures as "failed"
+        st.steady_states(make(float(grid[0])), unknown, fixed, params=params, starts=2)
+    sw = st.sweep(make, name, grid, analyze=analyze)
+
+    print(f"{title}: stability against {name} = {grid[0]:g} .. {grid[-1]:g} ({len(grid)} values)"
+          + (f", steady state {args.steady} solved at each value" if steady else ""))
+    head = f"{name:>12}  {'classification':<22}"
+    if steady is not None:
+        head += "  " + "  ".join(f"{n:>14}" for n in names)
+    print(head + "  eigenvalues with the largest real part (1/s)")
+    for k, v in enumerate(sw.values):
+        row = f"{v:>12.6g}  {sw.classifications[k]:<22}"
+        if steady is not None:
+            z = solved.get(float(v))
+            row += "  " + "  ".join(f"{x:>14.8g}" if z is not None else f"{'-':>14}" for x in
+                                    (z if z is not None else names))
+        print(row + "  " + (_top(sw.eigenvalues[k]) if sw.classifications[k] != "failed" else "-"))
+    print()
+    if sw.changes:
+        for c in sw.changes:
+            print(f"stability changes at {name} = {c['value']!r} ({c['from']} -> {c['to']}, {c['kind']}, "
+                  f"{c['method']})")
+    else:
+        print(f"no stability change for {name} in [{grid[0]:g}, {grid[-1]:g}]")
+    segs = sw.ranges()
+    for lo, hi, cls in segs:
+        print(f"  {name} in [{lo!r}, {hi!r}]: {cls}")
+    stable = [(lo, hi) for lo, hi, cls in segs if cls == "asymptotically stable"]
+    marginal = [(lo, hi) for lo, hi, cls in segs if cls == "marginally stable"]
+    print("stable ranges (asymptotically stable): "
+          + (", ".join(f"[{lo!r}, {hi!r}]" for lo, hi in stable) or "none"))
+    if marginal:
+        print("marginally stable ranges: " + ", ".join(f"[{lo!r}, {hi!r}]" for lo, hi in marginal))
+    if args.out:
+        data = sw.to_dict()
+        data.update(model=title, ranges=[dict(lo=lo, hi=hi, classification=c) for lo, hi, c in segs],
+                    stable_ranges=stable, marginally_stable_ranges=marginal)
+        if steady is not None:
+            data["steady"] = [None if float(v) not in solved else dict(zip(names, map(float, solved[float(v)])))
+                              for v in sw.values]
+        st.to_json(data, args.out)
+        print(f"wrote {args.out}")
+    if args.plot:
+        sw.plot(args.plot, title=f"{title}: eigenvalues against {name}")
+        print(f"wrote {args.plot}")
+    return 0
+
+
 def make_parser():
     ap = argparse.ArgumentParser(prog="mbcomp", description="Modelica-style multibody modelling and simulation")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -177,6 +460,18 @@ def make_parser():
     i = sub.add_parser("info", help="print the model summary (bodies, DOF, coordinates, constraints)")
     common(i)
     i.set_defaults(func=cmd_info)
+    st = sub.add_parser("stability", help="linearize about the start state or steady states: eigenvalues, "
+                        "classification, parameter sweeps with the stability changes located")
+    common(st)
+    st.add_argument("--steady", metavar="SPEC",
+                    help="solve for steady states first: comma-separated name=value (fixed) and name=lo:hi "
+                    "(searched) coordinates or speeds, e.g. 'hinge.w=0, hinge.phi=-3.2:3.2'")
+    st.add_argument("--sweep", metavar="NAME=START:STOP:COUNT",
+                    help="repeat over a build() parameter (no dot) or a component parameter (component.param) "
+                    "and locate where the classification changes")
+    st.add_argument("--out", help="write the results to this JSON file")
+    st.add_argument("--plot", help="PNG: eigenvalues against the swept parameter, else in the complex plane")
+    st.set_defaults(func=cmd_stability)
     return ap
 
 

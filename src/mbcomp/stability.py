@@ -608,8 +608,8 @@ class Sweep:
     >>> import numpy as np
     >>> from mbcomp.stability import Sweep
     >>> s = Sweep("v", np.array([0.0, 1.0]), np.array([[1.0 + 0j], [-1.0 + 0j]]), ["unstable", "asymptotically stable"], [])
-    >>> s.stable_ranges()
-    []
+    >>> s.ranges()  # no change located between the grid values: the segments end at them
+    [(0.0, 0.0, 'unstable'), (1.0, 1.0, 'asymptotically stable')]
     """
 
     parameter: str
@@ -618,15 +618,28 @@ class Sweep:
     classifications: list
     changes: list
 
-    def stable_ranges(self):
-        """``[(lo, hi), ...]`` between changes where the state is (asymptotically) stable."""
-        edges = [self.values[0]] + [c["value"] for c in self.changes] + [self.values[-1]]
-        out = []
-        for a, b in zip(edges[:-1], edges[1:]):
-            mid = self.classifications[int(np.argmin(np.abs(self.values - 0.5 * (a + b))))]
-            if mid == "asymptotically stable" and a != b and self.changes:
-                out.append((float(a), float(b)))
-        return out
+    def ranges(self):
+        """``[(lo, hi, classification), ...]``: runs of equal classification along the sweep,
+        their ends at the located changes (at the grid values where a change could not be
+        located, e.g. next to a failed point)."""
+        vals, cls = self.values, self.classifications
+        segs, lo, cur = [], float(vals[0]), cls[0]
+        for k in range(len(vals) - 1):
+            if cls[k + 1] == cls[k]:
+                continue
+            found = [c["value"] for c in self.changes if vals[k] <= c["value"] <= vals[k + 1]
+                     and c["from"] == cls[k] and c["to"] == cls[k + 1]]
+            hi, nxt = (found[0], found[0]) if found else (float(vals[k]), float(vals[k + 1]))
+            segs.append((lo, hi, cur))
+            lo, cur = nxt, cls[k + 1]
+        segs.append((lo, float(vals[-1]), cur))
+        return segs
+
+    def stable_ranges(self, include_marginal=False):
+        """``[(lo, hi), ...]`` where the state is asymptotically stable (and, with
+        ``include_marginal``, marginally stable)."""
+        ok = ("asymptotically stable", "marginally stable") if include_marginal else ("asymptotically stable",)
+        return [(a, b) for a, b, kind in self.ranges() if kind in ok]
 
     def to_dict(self):
         return dict(parameter=self.parameter, values=self.values.tolist(),
@@ -719,37 +732,54 @@ def sweep(build, parameter, values, analyze=None):
         if la is None or lb is None or (cls[k] == cls[k + 1] and unstable_count(la) == unstable_count(lb)):
             continue
         a, b = values[k], values[k + 1]
-        fa, fb = top_root(la).real, top_root(lb).real
-        ta, tb = _tol(la.eigenvalues), _tol(lb.eigenvalues)
-        if fa * fb < 0 and abs(fa) > ta and abs(fb) > tb:
-            x = brentq(lambda v: top_root(at(v)).real, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps)
-            method = "Brent's method on the largest real part"
-        else:
-            ca = (cls[k], unstable_count(la))
-            for _ in range(60):
-                mid = 0.5 * (a + b)
-                lm = at(mid)
-                if (lm.classification, unstable_count(lm)) == ca:
-                    a = mid
-                else:
-                    b = mid
-                if b - a <= 1e-13 * max(1.0, abs(a)):
-                    break
-            x = 0.5 * (a + b)
-            method = "bisection on the classification"
-        lx = at(x)
-        root = top_root(lx)
+        try:
+            x, method = _locate(at, la, lb, a, b, cls[k], unstable_count, top_root)
+        except (SimulationError, ModelError) as exc:
+            changes.append(dict(value=float("nan"), **{"from": cls[k], "to": cls[k + 1]}, eigenvalue=[np.nan, np.nan],
+                                kind="not located", method=f"analysis failed inside [{a:g}, {b:g}]: {exc}"))
+            continue
+        try:
+            root = top_root(at(x))
+        except (SimulationError, ModelError):
+            root = complex(np.nan, np.nan)
+        # the kind from the root that is unstable on one side (at the crossing itself a
+        # collision at zero leaves a ~1e-6 imaginary part of either sign)
+        un = lins[k + 1] if unstable_count(lins[k + 1]) > unstable_count(lins[k]) else lins[k]
+        ru = top_root(un)
         changes.append(dict(value=float(x), **{"from": cls[k], "to": cls[k + 1]},
                             eigenvalue=[float(root.real), float(root.imag)],
-                            kind="oscillatory" if abs(root.imag) > _tol(lx.eigenvalues) else "divergence",
+                            kind="oscillatory" if abs(ru.imag) > _tol(un.eigenvalues) else "divergence",
                             method=method))
     return Sweep(parameter, values, E, cls, changes)
+
+
+def _locate(at, la, lb, a, b, cls_a, unstable_count, top_root):
+    """The parameter in ``[a, b]`` where the classification changes: Brent on the largest
+    real part if it changes sign clearly, else bisection on the classification."""
+    fa, fb = top_root(la).real, top_root(lb).real
+    if fa * fb < 0 and abs(fa) > _tol(la.eigenvalues) and abs(fb) > _tol(lb.eigenvalues):
+        x = brentq(lambda v: top_root(at(v)).real, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps)
+        return x, "Brent's method on the largest real part"
+    ca = (cls_a, unstable_count(la))
+    for _ in range(60):
+        mid = 0.5 * (a + b)
+        lm = at(mid)
+        if (lm.classification, unstable_count(lm)) == ca:
+            a = mid
+        else:
+            b = mid
+        if b - a <= 1e-13 * max(1.0, abs(a)):
+            break
+    return 0.5 * (a + b), "bisection on the classification"
 
 
 def to_json(obj, path):
     """Write a :class:`Linearization`, :class:`Sweep` or list of :class:`SteadyState` as JSON."""
     if isinstance(obj, (Linearization, Sweep)):
         data = obj.to_dict()
+    elif isinstance(obj, (list, tuple)) and all(isinstance(x, SteadyState) for x in obj):
+        data = [dict(q=x.q.tolist(), u=x.u.tolist(), t=x.t, values=x.values, residual=x.residual, how=x.how)
+                for x in obj]
     else:
         data = obj
     with open(path, "w") as fh:
