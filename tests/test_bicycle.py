@@ -150,16 +150,18 @@ def test_info_counts_dof_and_nonholonomic_rows_separately():
 STATES = ["free.rot.x", "steer.phi", "free.w.x", "steer.w"]  # roll, steer and their rates at upright
 
 
+@pytest.mark.parametrize("backend", ["python", "numeric"])
 @pytest.mark.parametrize("v", [0.0, 3.0, 5.0])
-def test_linearization_reproduces_the_published_coefficient_matrices(v):
+def test_linearization_reproduces_the_published_coefficient_matrices(v, backend):
     """mbcomp.linearize of the composed nonlinear model (free rear frame, three hinges, two
     rolling contacts; positions projected onto the contact manifold, dependent speeds from the
     no-slip rows, multipliers in the saddle-point solve) against the paper's
     ``M q'' + v C1 q' + (g K0 + v^2 K2) q = 0``. At upright straight running the rear frame's
     rotation vector x component is the roll angle and its body x rate the roll rate (first
     order); the cyclic coordinates (x, wheel angles) move, the ignorable ones (y, yaw, the
-    conserved forward speed) are removed with their zero roots."""
-    lin = mbcomp.linearize(bicycle.build(v=v))
+    conserved forward speed) are removed with their zero roots. Both evaluation paths (the
+    generated program, the default, and the numeric one) must reproduce the paper."""
+    lin = mbcomp.linearize(bicycle.build(v=v), backend=backend)
     assert sorted(lin.state_names) == sorted(STATES)
     assert {"free.r.y", "free.rot.z", "rear_hub.w"} <= set(lin.removed)
     assert set(lin.moving) == (set() if v == 0 else {"free.r.x", "rear_hub.phi", "front_hub.phi"})

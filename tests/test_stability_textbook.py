@@ -348,3 +348,30 @@ def test_spherical_top_cannot_be_linearized():
 def test_spherical_top_refusal_says_not_steady_in_these_coordinates():
     with pytest.raises(mbcomp.SimulationError, match=r"not (a )?steady.* in these coordinates"):
         mbcomp.linearize(GYRO.build(**TOPP))
+
+
+def test_an_untraceable_model_is_linearized_on_the_numeric_path_with_a_warning():
+    """A law the code generator cannot trace (``math.sin`` of a state) must not stop the
+    analysis: the numeric path evaluates it, with a warning naming the component. The
+    pendulum with a restoring torque ``-k sin(phi)`` (on top of gravity) about the bottom has
+    the roots ``+-i sqrt((m g l + k) / (m l^2))``."""
+    import math
+
+    from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
+
+    m_, l_, k_, g_ = 0.7, 0.4, 1.3, 9.81
+    mdl = mbcomp.Model()
+    w = mdl.add("world", World(g=(0, -g_, 0)))
+    hinge = mdl.add("hinge", Revolute(n=(0, 0, 1), phi0=0.0, w0=0.0))
+    rod = mdl.add("rod", FixedTranslation(r=(0, -l_, 0)))
+    bob = mdl.add("bob", PointMass(m=m_))
+    spring = mdl.add("spring", Torque(tau=lambda t, phi, w: -k_ * math.sin(phi)))
+    mdl.connect(w.frame_b, hinge.frame_a)
+    mdl.connect(hinge.frame_b, rod.frame_a)
+    mdl.connect(rod.frame_b, bob.frame_a)
+    mdl.connect(spring.flange_b, hinge.axis)
+    with pytest.warns(UserWarning, match=r"numeric path.*'spring'"):
+        lin = mbcomp.linearize(mdl)
+    nu = np.sqrt((m_ * g_ * l_ + k_) / (m_ * l_ ** 2))
+    np.testing.assert_allclose(sorted(lin.eigenvalues.imag), [-nu, nu], rtol=1e-9)
+    assert np.abs(lin.eigenvalues.real).max() < 1e-9 and lin.classification == "marginally stable"
