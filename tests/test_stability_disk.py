@@ -85,8 +85,8 @@ def test_upright_rolling_linearizes_to_the_lean_equation(W, expected):
 
 def test_sweep_locates_the_critical_spin():
     """Below W_crit the real pair +-sqrt(-K/J) is unstable; above it the imaginary pair and
-    the zero root are on the imaginary axis (marginally stable), so the sweep bisects on the
-    classification."""
+    the zero root are on the imaginary axis (marginally stable): no real part changes sign, so
+    the sweep root-finds the signed square of the colliding pair (+a^2 below, -b^2 above)."""
     sw = mbcomp.sweep(lambda W: DISK.build(spin=W), "spin", [2.0, 3.0, 4.0])
     assert sw.classifications == ["unstable", "unstable", "marginally stable"]
     for W, eigs in zip(sw.values, sw.eigenvalues):
@@ -95,10 +95,10 @@ def test_sweep_locates_the_critical_spin():
         assert abs(np.abs(eigs.imag).max() - np.sqrt(max(K / J, 0.0))) < 1e-8
     assert len(sw.changes) == 1
     ch = sw.changes[0]
-    # measured: 3.3015148038438156 vs 3.301514803843836 (6e-15 relative)
-    assert abs(ch["value"] / W_CRIT - 1) < 1e-7, (ch["value"], W_CRIT)
+    # measured: 3.301514803843821 vs 3.301514803843836 (4e-15 relative)
+    assert abs(ch["value"] / W_CRIT - 1) < 1e-12, (ch["value"], W_CRIT)
     assert (ch["from"], ch["to"]) == ("unstable", "marginally stable")
-    assert ch["method"] == "bisection on the classification"
+    assert ch["method"] == "Brent's method on the signed square of the colliding roots"
 
 
 def test_radius_moves_the_boundary_and_mass_does_not():

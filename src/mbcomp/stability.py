@@ -22,8 +22,10 @@ The seed's Chapter 7 for any composed model, holonomic and nonholonomic alike:
   real part is unstable; roots on the imaginary axis (the rest stable) are marginally stable;
   all real parts negative is asymptotically stable.
 * :func:`sweep` repeats the analysis over a parameter and locates the values where the
-  classification changes by root finding (Brent on the largest real part where it changes
-  sign, bisection on the classification where it touches zero, as for conservative systems).
+  classification changes by root finding: Brent on the largest real part where it changes
+  sign; where a real pair meets at zero and leaves along the imaginary axis (conservative
+  systems), Brent on its signed square (``+a^2`` unstable, ``-b^2`` marginally stable); else
+  bisection on the classification.
 
 Examples
 --------
@@ -785,13 +787,39 @@ def sweep(build, parameter, values, analyze=None, backend="python"):
     return Sweep(parameter, values, E, cls, changes)
 
 
+class _Other(Exception):
+    """A classification other than the two of a bracket's ends turned up inside it."""
+
+
 def _locate(at, la, lb, a, b, cls_a, unstable_count, top_root):
     """The parameter in ``[a, b]`` where the classification changes: Brent on the largest
-    real part if it changes sign clearly, else bisection on the classification."""
+    real part if it changes sign clearly, Brent on the colliding pair's signed square between
+    unstable and marginally stable, else bisection on the classification."""
     fa, fb = top_root(la).real, top_root(lb).real
     if fa * fb < 0 and abs(fa) > _tol(la.eigenvalues) and abs(fb) > _tol(lb.eigenvalues):
         x = brentq(lambda v: top_root(at(v)).real, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps)
         return x, "Brent's method on the largest real part"
+    if {la.classification, lb.classification} == {"unstable", "marginally stable"}:
+        # a conservative boundary: a real pair +-a collides at zero and leaves as +-ib. Signed
+        # squares (+a^2 unstable, -b^2 stable, b the smallest nonzero frequency) are smooth
+        # across it, so Brent converges in a few steps where bisection takes ~45; the sign is
+        # the classification, so the root is the classification's change whatever the sizes.
+        def signed(v):
+            li = at(v)
+            tol = _tol(li.eigenvalues)
+            if li.classification == "unstable":
+                return float(top_root(li).real) ** 2
+            if li.classification != "marginally stable":
+                raise _Other()
+            freq = np.abs(li.eigenvalues.imag)
+            freq = freq[freq > tol]
+            return -(float(freq.min()) ** 2 if freq.size else tol ** 2)
+
+        try:
+            x = brentq(signed, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps)
+            return x, "Brent's method on the signed square of the colliding roots"
+        except _Other:
+            pass  # a third classification inside the bracket: bisection sorts it out
     ca = (cls_a, unstable_count(la))
     for _ in range(60):
         mid = 0.5 * (a + b)
