@@ -802,7 +802,7 @@ def _locate(at, la, lb, a, b, cls_a, unstable_count, top_root):
     if {la.classification, lb.classification} == {"unstable", "marginally stable"}:
         # a conservative boundary: a real pair +-a collides at zero and leaves as +-ib. Signed
         # squares (+a^2 unstable, -b^2 stable, b the smallest nonzero frequency) are smooth
-        # across it, so Brent converges in a few steps where bisection takes ~45; the sign is
+        # across it, so Brent converges in a few steps where bisection takes ~41; the sign is
         # the classification, so the root is the classification's change whatever the sizes.
         def signed(v):
             li = at(v)
