@@ -14,6 +14,7 @@
 * Decisions on state values become guards: a failed guard falls back to the numeric path.
 * Errors: an untraceable law names the component; no compiler is a clear error.
 """
+import importlib
 import math
 
 import numpy as np
@@ -127,7 +128,7 @@ def test_graph_shares_and_folds():
         src = g.python_source([s, x * 0.0, p1 * p2], "f")
     assert "+" in src and src.count(" * ") == 2, src  # x*y and p1*p2, nothing for x*0
     ns = {}
-    exec(src, dict(__import__("mbcomp.codegen").codegen._PY_ENV), ns)
+    exec(src, dict(importlib.import_module("mbcomp.codegen.program")._PY_ENV), ns)
     assert ns["f"]([0.3, -1.2], [], 0.0, [], [2.0, 5.0]) == pytest.approx([0.3 * -1.2 + 7.0, 0.0, 10.0])
 
 

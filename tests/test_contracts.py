@@ -120,10 +120,9 @@ def test_every_param_and_port_is_documented(cls):
         assert isinstance(port.doc, str) and port.doc.strip(), f"{cls.__name__}.{name} (port) has no doc"
 
 
-MODULES = (["mbcomp"] + [f"mbcomp.{p.stem}" for p in sorted((ROOT / "src" / "mbcomp").glob("*.py"))
-                         if p.stem != "__init__"]
-           + ["mbcomp.solvers"] + [f"mbcomp.solvers.{p.stem}" for p in sorted((ROOT / "src" / "mbcomp" / "solvers").glob("*.py"))
-                                   if p.stem != "__init__"]
+SRC = ROOT / "src" / "mbcomp"
+MODULES = (sorted(".".join(("mbcomp",) + p.relative_to(SRC).with_suffix("").parts).removesuffix(".__init__")
+                  for p in SRC.rglob("*.py"))
            + ["mbcomp.library"] + [f"mbcomp.library.{p.stem}" for p in sorted((ROOT / "library").glob("*.py"))
                                    if p.stem != "__init__"])
 

@@ -17,10 +17,13 @@ Examples
 >>> res.status
 'success'
 """
-from .component import Component, Flange, Frame, Guess, Param
+from . import _aliases
 from .errors import InitializationError, ModelError, SimulationError
-from .model import Model
-from .roles import Body, Drive, FlangeElement, ForceElement, FrameState, Ground, Joint
+from .modeling.component import Component, Flange, Frame, Guess, Param
+from .modeling.model import Model
+from .modeling.roles import Body, Drive, FlangeElement, ForceElement, FrameState, Ground, Joint
+
+_aliases.install()  # old module paths (mbcomp.kinematics, mbcomp.jets, ...) stay importable
 
 __all__ = [
     "Component", "Param", "Frame", "Flange", "Guess", "Model",
@@ -32,20 +35,20 @@ __all__ = [
 
 def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles with mbcomp.library
     if name == "assemble":
-        from .system import assemble
+        from .assembly.system import assemble
         return assemble
     if name == "simulate":
-        from .simulation import simulate
+        from .simulation.driver import simulate
         return simulate
     if name == "Result":
-        from .result import Result
+        from .simulation.result import Result
         return Result
     if name == "equations":  # symbolic equations of motion (imports sympy)
-        from .symbolic import equations
+        from .codegen.symbolic import equations
         return equations
     if name in ("linearize", "steady_states", "sweep"):  # stability analysis (seed Chapter 7)
-        from . import stability
-        return getattr(stability, name)
+        from . import analysis
+        return getattr(analysis, name)
     raise AttributeError(f"module 'mbcomp' has no attribute {name!r}")
 
 __version__ = "0.1.0"

@@ -88,7 +88,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .system import MultibodySystem
+from ..assembly.system import MultibodySystem
 
 __all__ = ["compile_system", "CompiledSystem", "CompiledEvaluation", "CodegenError", "Sym", "Graph", "c_compiler"]
 
@@ -981,7 +981,7 @@ def _trace_point(system):
 
 def _component_of(exc):
     """The innermost component whose method raised ``exc`` (from the traceback), or None."""
-    from .component import Component
+    from ..modeling.component import Component
 
     tb, found = exc.__traceback__, None
     while tb is not None:
@@ -1008,7 +1008,7 @@ def _where(exc):
 def _trace(system, max_nodes):
     """Trace ``system.evaluate`` and the coordinate rates; returns a namespace with the graph,
     the output groups, shapes, the parameter layout and the drive order."""
-    from .roles import Joint
+    from ..modeling.roles import Joint
 
     topo = system.topology
     layout, sig = _param_layout(system)

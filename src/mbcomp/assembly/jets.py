@@ -56,7 +56,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kinematics import cross as _cross, skew
+from ..geometry.kinematics import cross as _cross, skew
 
 __all__ = ["FrameJet", "VecJet", "ScalarJet", "local_point", "local_vector", "rigid_constraints",
            "position_constraints", "velocity_along", "slip_velocity", "is_traced", "as_array"]

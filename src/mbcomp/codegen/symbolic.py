@@ -55,7 +55,7 @@ from types import SimpleNamespace
 import numpy as np
 import sympy as sp
 
-from .errors import ModelError, Problem
+from ..errors import ModelError, Problem
 
 __all__ = ["SymbolicScalar", "Equations", "equations", "exact"]
 
@@ -463,7 +463,7 @@ def _traced_params(system, params, T):
 
 def _component_in(tb):
     """Path of the innermost mbcomp component whose method raised (from a traceback)."""
-    from .component import Component
+    from ..modeling.component import Component
 
     found = None
     while tb is not None:
@@ -575,7 +575,7 @@ def equations(model, params=None, simplify=True, drop_zero_rows=True, max_ops=20
     >>> eqs.M, eqs.f
     (Matrix([[2]]), Matrix([[-c*s.s - s.v/2]]))
     """
-    from .system import MultibodySystem, assemble
+    from ..assembly.system import MultibodySystem, assemble
 
     t0 = _time.perf_counter()
     base = model if isinstance(model, MultibodySystem) else assemble(model)
@@ -647,7 +647,7 @@ def equations(model, params=None, simplify=True, drop_zero_rows=True, max_ops=20
 
 
 def _qdot(system, q, u):
-    from .roles import Joint
+    from ..modeling.roles import Joint
 
     out = [None] * system.nq
     for e in system.topology.tree:

@@ -31,8 +31,8 @@ import csv
 
 import numpy as np
 
-from .kinematics import matrix_to_quat
-from .roles import Joint
+from ..geometry.kinematics import matrix_to_quat
+from ..modeling.roles import Joint
 
 __all__ = ["Result", "postprocess"]
 
@@ -221,6 +221,6 @@ def postprocess(system, form, t, Y, status, message, stats, init):
         series[name] = val
     stats = dict(stats)
     stats["coordinates"] = list(system.q_names)
-    from .report import summary
+    from ..assembly.summary import summary
 
     return Result(t, series, status, message, stats, summary(system, init))

@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 
-from .component import PortRef
-from .errors import ModelError, Problem
+from ..modeling.component import PortRef
+from ..errors import ModelError, Problem
 
 __all__ = ["Topology", "Edge", "ROOT"]
 

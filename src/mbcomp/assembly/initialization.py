@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from .errors import InitializationError, Problem
+from ..errors import InitializationError, Problem
 
 __all__ = ["initialize", "InitialState"]
 

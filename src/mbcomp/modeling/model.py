@@ -19,8 +19,8 @@ A pendulum: a hinge at the world origin and a point mass 1 m below it.
 """
 from __future__ import annotations
 
-from .component import Component, PortRef
-from .errors import ModelError, Problem
+from ..modeling.component import Component, PortRef
+from ..errors import ModelError, Problem
 
 __all__ = ["Model", "FlatModel"]
 

@@ -38,7 +38,7 @@ def dof_report(system, init=None):
              if not topo.edge(name.rsplit(".", 1)[0]).comp.tree_edge)
     L = sum(1 for e in topo.edges if e.drive)
     if init is None:
-        from .initialization import initialize
+        from ..assembly.initialization import initialize
 
 
         try:
@@ -55,7 +55,7 @@ def summary(system, init=None):
     """Multi-line text: bodies, DOF, chosen coordinates, constraints, what was eliminated."""
     topo = system.topology
     if init is None:
-        from .initialization import initialize
+        from ..assembly.initialization import initialize
 
         try:
             init = initialize(system)

@@ -52,8 +52,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import SimulationError
-from .formulations import LagrangeIndex1
+from ..errors import SimulationError
+from ..formulations.lagrange import LagrangeIndex1
 
 __all__ = ["Index1", "GGL", "Index3", "Mechanical", "DAE_FORMS"]
 

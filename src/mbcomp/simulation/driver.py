@@ -32,13 +32,13 @@ import time as _time
 import numpy as np
 import scipy.integrate as si
 
-from .daeforms import DAE_FORMS, Mechanical
-from .errors import SimulationError
-from .formulations import DAlembert, LagrangeIndex1
-from .initialization import initialize
-from .result import Result, postprocess
-from .system import MultibodySystem
-from .system import MultibodySystem, assemble
+from ..formulations.dae import DAE_FORMS, Mechanical
+from ..errors import SimulationError
+from ..formulations.lagrange import DAlembert, LagrangeIndex1
+from ..assembly.initialization import initialize
+from ..simulation.result import Result, postprocess
+from ..assembly.system import MultibodySystem
+from ..assembly.system import MultibodySystem, assemble
 
 __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
 
@@ -50,7 +50,7 @@ ALL_METHODS = tuple(METHODS) + ("radau5", "ida", "genalpha")
 
 
 def _solvers():
-    from .solvers import SOLVERS  # imported on use: keeps "import mbcomp" light
+    from ..solvers import SOLVERS  # imported on use: keeps "import mbcomp" light
 
     return SOLVERS
 
@@ -120,7 +120,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="RK45", rtol=
     system = model.with_params(params) if isinstance(model, MultibodySystem) and params else (
         model if isinstance(model, MultibodySystem) else assemble(model, params))
     if backend != "numeric":
-        from .codegen import CompiledSystem, compile_system
+        from ..codegen.program import CompiledSystem, compile_system
 
         if not isinstance(system, CompiledSystem):
             system = compile_system(system, backend)

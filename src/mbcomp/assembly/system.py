@@ -33,12 +33,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .component import PortRef
-from .errors import ModelError, Problem, SimulationError
-from .jets import FrameJet, as_array, is_traced, rigid_constraints
-from .kinematics import cross, skew
-from .roles import FrameState
-from .topology import ROOT, Topology
+from ..modeling.component import PortRef
+from ..errors import ModelError, Problem, SimulationError
+from ..assembly.jets import FrameJet, as_array, is_traced, rigid_constraints
+from ..geometry.kinematics import cross, skew
+from ..modeling.roles import FrameState
+from ..assembly.topology import ROOT, Topology
 
 __all__ = ["assemble", "MultibodySystem", "Evaluation"]
 
@@ -435,7 +435,7 @@ class MultibodySystem:
 
     def summary(self):
         """Human-readable description: bodies, DOF, coordinates, constraints, eliminations."""
-        from .report import summary
+        from ..assembly.summary import summary
 
         return summary(self)
 

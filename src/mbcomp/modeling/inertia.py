@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import ModelError, Problem
+from ..errors import ModelError, Problem
 
 __all__ = ["MassProperties", "combine", "steiner", "rod", "box", "cylinder", "disk", "sphere", "point_mass", "inertia_problem"]
 

@@ -47,8 +47,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .kinematics import cross, unit
-from .rotations import _is_symbolic, _sympy, _vector
+from ..geometry.kinematics import cross, unit
+from ..geometry.rotations import _is_symbolic, _sympy, _vector
 
 __all__ = [
     "homogeneous", "homogeneous_inverse", "compose", "transform_points", "screw_motion",

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .component import Component, Flange, Frame, Guess
+from ..modeling.component import Component, Flange, Frame, Guess
 
 __all__ = ["Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState"]
 

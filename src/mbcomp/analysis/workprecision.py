@@ -107,7 +107,7 @@ def reference_values(module, build_kw=None, params=None, t_end=None, rtol=1e-12,
     The tight run uses the D'Alembert ODE with DOP853 and is cross-checked by the index-1
     ODE with projection; ``how`` says which and how far the two agree.
     """
-    from .simulation import simulate
+    from ..simulation.driver import simulate
 
     ref = getattr(module, "REFERENCE", None)
     if ref is not None and t_end in (None, ref["t_end"]):
@@ -121,7 +121,7 @@ def reference_values(module, build_kw=None, params=None, t_end=None, rtol=1e-12,
                  stabilization="projection", rtol=rtol, atol=atol, n_out=2)
     if not (a.success and b.success):
         raise RuntimeError(f"the reference runs failed: {a.message} / {b.message}")
-    from .system import assemble
+    from ..assembly.system import assemble
 
     names = list(assemble(module.build(**(build_kw or {}))).q_names)
     va, vb = _positions(a, names), _positions(b, names)
@@ -159,7 +159,7 @@ def work_precision(module, combos=None, tols=None, steps=None, build_kw=None, pa
     list of dict
         ``combo, family, setting, value, status, cpu_s, nfev, steps, error, message``.
     """
-    from .simulation import simulate
+    from ..simulation.driver import simulate
 
     combos = default_combos() if combos is None else combos
     tols = tols or [10.0 ** -k for k in range(3, 11)]

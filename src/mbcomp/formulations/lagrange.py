@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from .errors import SimulationError
+from ..errors import SimulationError
 
 __all__ = ["LagrangeIndex1", "DAlembert"]
 

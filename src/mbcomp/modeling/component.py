@@ -21,7 +21,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .errors import Problem
+from ..errors import Problem
 
 __all__ = ["Param", "Frame", "Flange", "Port", "Component", "Guess"]
 
@@ -287,7 +287,7 @@ class Component:
         ns = SimpleNamespace(**vals)
         probs.extend(self.check_params(ns))
         if probs:
-            from .errors import ModelError
+            from ..errors import ModelError
             raise ModelError(probs, header="bad parameter values")
         return ns
 

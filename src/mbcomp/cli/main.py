@@ -29,7 +29,7 @@ import sys
 
 import numpy as np
 
-from .errors import ModelError, SimulationError
+from ..errors import ModelError, SimulationError
 
 __all__ = ["main", "load_model_file", "parse_value", "parse_sweep"]
 
@@ -79,7 +79,7 @@ def _build(args):
 
 
 def cmd_info(args):
-    from .system import assemble
+    from ..assembly.system import assemble
 
     _, model, runtime = _build(args)
     system = assemble(model, runtime)
@@ -88,7 +88,7 @@ def cmd_info(args):
 
 
 def cmd_simulate(args):
-    from .simulation import simulate
+    from ..simulation.driver import simulate
 
     mod, model, runtime = _build(args)
     opts = dict(getattr(mod, "SIMULATION", {}))
@@ -115,7 +115,7 @@ def cmd_simulate(args):
 
 
 def cmd_bench(args):
-    from . import workprecision as wp
+    from ..analysis import workprecision as wp
 
     mod = load_model_file(args.model)
     build_kw, runtime = _split_params(args.param, mod.build)
@@ -247,8 +247,8 @@ def cmd_stability(args):
 
 
 def _stability(args):
-    from . import stability as st
-    from .system import assemble
+    from ..analysis import stability as st
+    from ..assembly.system import assemble
 
     mod = load_model_file(args.model)
     build_kw, runtime = _split_params(args.param, mod.build)
@@ -306,9 +306,9 @@ def _stability(args):
 
 
 def _stability_sweep(args, mod, build_kw, runtime, steady, title):
-    from . import stability as st
-    from .initialization import initialize
-    from .system import MultibodySystem, assemble
+    from ..analysis import stability as st
+    from ..assembly.initialization import initialize
+    from ..assembly.system import MultibodySystem, assemble
 
     name, grid = parse_sweep(args.sweep)
     current = {}

@@ -57,10 +57,10 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import brentq, least_squares
 
-from .errors import ModelError, Problem, SimulationError
-from .formulations import LagrangeIndex1
-from .initialization import initialize
-from .system import MultibodySystem, assemble
+from ..errors import ModelError, Problem, SimulationError
+from ..formulations.lagrange import LagrangeIndex1
+from ..assembly.initialization import initialize
+from ..assembly.system import MultibodySystem, assemble
 
 __all__ = ["SteadyState", "Linearization", "Sweep", "steady_states", "linearize", "classify", "sweep",
            "parse_steady"]
@@ -110,7 +110,7 @@ def _system(model_or_system, params, backend="python"):
         system = assemble(model_or_system, params)
     if backend == "numeric":
         return system
-    from .codegen import CodegenError, CompiledSystem, compile_system
+    from ..codegen.program import CodegenError, CompiledSystem, compile_system
 
     if isinstance(system, CompiledSystem):
         return system

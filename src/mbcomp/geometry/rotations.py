@@ -64,7 +64,7 @@ import math
 
 import numpy as np
 
-from .kinematics import quat_multiply, quat_to_matrix, skew
+from ..geometry.kinematics import quat_multiply, quat_to_matrix, skew
 
 __all__ = [
     "C1", "C2", "C3",

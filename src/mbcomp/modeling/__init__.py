@@ -1,0 +1,5 @@
+"""Modelling: components, their parameters and ports, the role contracts, models, inertia.
+
+Imports only :mod:`mbcomp.geometry` and :mod:`mbcomp.errors`. The one joint the framework
+itself needs (the free joint the topology inserts for floating bodies) lives here too.
+"""
