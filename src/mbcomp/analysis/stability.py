@@ -183,7 +183,7 @@ class _Reduced:
         u[self.vind] += dv
         ev = s.evaluate(self.t, q, u)
         if self.vdep.size:
-            res = np.concatenate((ev.Phid, ev.g))
+            res = np.concatenate((ev.Phid, ev.Psi))
             u[self.vdep] -= np.linalg.solve(ev.A[:, self.vdep], res)
             ev = s.evaluate(self.t, q, u)
         return u, ev
@@ -579,14 +579,14 @@ def steady_states(model, unknown, fixed=None, params=None, t=0.0, starts=9, tol=
         for _ in range(2):
             ev = system.evaluate(t, q, u)
             if ev.A.shape[0]:
-                u[free_sp] -= np.linalg.lstsq(ev.A[:, free_sp], np.concatenate((ev.Phid, ev.g)), rcond=None)[0]
+                u[free_sp] -= np.linalg.lstsq(ev.A[:, free_sp], np.concatenate((ev.Phid, ev.Psi)), rcond=None)[0]
         return q, u
 
     def residual(z):
         q, u = state_of(z)
         ev = system.evaluate(t, q, u)
         ud, _ = form.solve(ev, stabilize=False)
-        return np.concatenate((ud, ev.Phi, ev.Phid, ev.g))
+        return np.concatenate((ud, ev.Phi, ev.Phid, ev.Psi))
 
     lo = np.array([unknown[n][0] for n in names])
     hi = np.array([unknown[n][1] for n in names])

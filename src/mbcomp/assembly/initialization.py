@@ -199,7 +199,7 @@ def initialize(system, t0=0.0, tol=1e-12, max_iter=60):
     ev = system.evaluate(t0, q, u)
     r2, C2, _ = _measure_rows(system, t0, q, u, cut_fixed, "u")
     Cv = np.vstack((ev.A, C2))
-    rv = np.concatenate((ev.Phid, ev.g, r2))
+    rv = np.concatenate((ev.Phid, ev.Psi, r2))
     ufree = ~ufix
     if rv.size and np.linalg.norm(rv) > 1e-12:
         if ufree.any():
@@ -207,7 +207,7 @@ def initialize(system, t0=0.0, tol=1e-12, max_iter=60):
             u = u.copy()
             u[ufree] += du
         ev = system.evaluate(t0, q, u)
-        rv2 = np.concatenate((ev.Phid, ev.g, _measure_rows(system, t0, q, u, cut_fixed, "u")[0]))
+        rv2 = np.concatenate((ev.Phid, ev.Psi, _measure_rows(system, t0, q, u, cut_fixed, "u")[0]))
         if np.linalg.norm(rv2) > 1e-8 * max(1.0, np.linalg.norm(u)):
             fixed = [names_u[i] for i in range(system.nu) if ufix[i] and np.any(np.abs(Cv[:, i]) > 1e-12)]
             raise InitializationError([Problem(

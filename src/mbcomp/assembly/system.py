@@ -72,7 +72,7 @@ class Evaluation:
     B: np.ndarray  # nonholonomic rows (k, nu): B u = b
     b: np.ndarray
     Bb: np.ndarray  # bias: d/dt(B u - b) = B du + Bb
-    g: np.ndarray  # nonholonomic residual B u - b
+    Psi: np.ndarray  # nonholonomic (velocity-constraint) residual B u - b
     local: list  # per cut edge: (edge, rows, jac (r,12))
     local_nh: list  # per edge with velocity constraints: (edge, rows, jac (k,12))
 

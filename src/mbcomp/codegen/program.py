@@ -92,7 +92,7 @@ from ..assembly.system import MultibodySystem
 
 __all__ = ["compile_system", "CompiledSystem", "CompiledEvaluation", "CodegenError", "Sym", "Graph", "c_compiler"]
 
-FIELDS = ("M", "f", "Phi", "Phid", "C", "cb", "B", "b", "Bb", "g")
+FIELDS = ("M", "f", "Phi", "Phid", "C", "cb", "B", "b", "Bb", "Psi")
 _ROWS = ("Phi", "Phid", "C", "cb")  # holonomic rows: masked by the independent-row mask
 _NUM = (int, float, np.number)
 _INF = float("inf")
@@ -1294,7 +1294,7 @@ class CompiledEvaluation:
     """The generated program's result at one ``(t, q, u)``: the attributes of
     :class:`mbcomp.system.Evaluation` that formulations use.
 
-    ``M, f, Phi, Phid, C, cb, B, b, Bb, g`` and ``A`` come from the program (holonomic rows
+    ``M, f, Phi, Phid, C, cb, B, b, Bb, Psi`` and ``A`` come from the program (holonomic rows
     masked like the numeric evaluation); ``jets``, ``local`` and ``local_nh`` (needed for
     reactions and post-processing only) are computed numerically on first access.
 
@@ -1311,7 +1311,7 @@ class CompiledEvaluation:
     ([[2.0]], [-19.62], (0, 1))
     """
 
-    __slots__ = ("t", "q", "u", "M", "f", "Phi", "Phid", "C", "cb", "B", "b", "Bb", "g", "_sys", "_masked", "_num")
+    __slots__ = ("t", "q", "u", "M", "f", "Phi", "Phid", "C", "cb", "B", "b", "Bb", "Psi", "_sys", "_masked", "_num")
 
     def __init__(self, system, t, q, u, flat, masked, slices, mask):
         self.t, self.q, self.u = t, q, u

@@ -9,11 +9,11 @@ form ``E dy/dt = fun(t, y)`` with ``E`` constant and diagonal:
 form                        state ``y`` and equations                   variable index
 =========================  ==========================================  ===========================
 :class:`Index3`             ``[q, u, a, lam]``:                          q 1, u 2, a 3, lam 3
-                            ``q' = H(q) u``, ``u' = a``,                 (nonholonomic mu: 2)
+                            ``q' = H(q) u``, ``u' = a``,                 (nonholonomic rows: 2)
                             ``0 = f - M a - A^T lam``, ``0 = Phi(t, q)``
                             (and ``0 = B u - b`` for velocity rows)
-:class:`GGL`                ``[q, u, a, lam, mu]``:                      q 1, u 1, a 2, lam 2, mu 2
-                            ``q' = H(q)(u - C^T mu)``, ``u' = a``,
+:class:`GGL`                ``[q, u, a, lam, eta]``:                     q 1, u 1, a 2, lam 2, eta 2
+                            ``q' = H(q)(u - C^T eta)``, ``u' = a``,
                             ``0 = f - M a - A^T lam``,
                             ``0 = dPhi/dt``, ``0 = B u - b``,
                             ``0 = Phi(t, q)``  (Gear-Gupta-Leimkuhler)
@@ -68,7 +68,7 @@ class _MultiplierDAE:
         self.system = system
         self.nq, self.nu = system.nq, system.nu
         ev = system.evaluate(0.0, system.default_q(), np.zeros(system.nu))  # row counts only
-        self.mh, self.mn = ev.Phi.size, ev.g.size  # holonomic and nonholonomic rows (independent ones)
+        self.mh, self.mn = ev.Phi.size, ev.Psi.size  # holonomic and nonholonomic rows (independent ones)
         self.m = self.mh + self.mn
         self.nfev = 0
         self.nlu = 0
@@ -120,7 +120,7 @@ class _MultiplierDAE:
         return ia, il
 
     def jac(self, t, y):
-        """``d fun / d y`` (n, n): forward differences over ``q``, ``u`` (and GGL's ``mu``), the
+        """``d fun / d y`` (n, n): forward differences over ``q``, ``u`` (and GGL's ``eta``), the
         linear ``a`` and ``lam`` columns exactly from ``M`` and ``A``."""
         y = np.asarray(y, float)
         f0 = self.fun(t, y)
@@ -167,14 +167,14 @@ class Index3(_MultiplierDAE):
         self._check(t, y)
         q, u, a, lam = self.split(y)
         ev, dyn = self._dyn(t, q, u, a, lam)
-        return np.concatenate((self.system.q_rate(q, u), a, dyn, -ev.Phi, -ev.g))
+        return np.concatenate((self.system.q_rate(q, u), a, dyn, -ev.Phi, -ev.Psi))
 
 
 class GGL(_MultiplierDAE):
     """Index-2 form of Gear, Gupta and Leimkuhler: velocity constraints enforced by ``lam``,
-    position constraints by the extra multiplier ``mu`` that moves ``q`` along ``C^T``.
+    position constraints by the extra multiplier ``eta`` that moves ``q`` along ``C^T``.
 
-    On the exact solution ``mu = 0``; numerically it absorbs the drift so both
+    On the exact solution ``eta = 0``; numerically it absorbs the drift so both
     ``Phi = 0`` and ``dPhi/dt = 0`` hold at every step.
 
     Parameters
@@ -203,10 +203,10 @@ class GGL(_MultiplierDAE):
 
     def fun(self, t, y):
         self._check(t, y)
-        q, u, a, lam, mu = self.split(y)
+        q, u, a, lam, eta = self.split(y)
         ev, dyn = self._dyn(t, q, u, a, lam)
-        w = u - ev.C.T @ mu if self.mh else u
-        return np.concatenate((self.system.q_rate(q, w), a, dyn, -ev.Phid, -ev.g, -ev.Phi))
+        w = u - ev.C.T @ eta if self.mh else u
+        return np.concatenate((self.system.q_rate(q, w), a, dyn, -ev.Phid, -ev.Psi, -ev.Phi))
 
 
 class Index1(_MultiplierDAE):
@@ -247,7 +247,7 @@ class Index1(_MultiplierDAE):
         ev, dyn = self._dyn(t, q, u, a, lam)
         bias = np.concatenate((ev.cb, ev.Bb))
         if self.stabilization == "baumgarte":
-            bias = bias + np.concatenate((2.0 * self.alpha * ev.Phid + self.beta ** 2 * ev.Phi, self.alpha * ev.g))
+            bias = bias + np.concatenate((2.0 * self.alpha * ev.Phid + self.beta ** 2 * ev.Phi, self.alpha * ev.Psi))
         return np.concatenate((self.system.q_rate(q, u), a, dyn, -(ev.A @ a + bias)))
 
     def project(self, t, y):

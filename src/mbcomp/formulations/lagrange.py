@@ -72,7 +72,7 @@ class LagrangeIndex1:
         rhs_nh = -ev.Bb
         if stabilize and self.stabilization == "baumgarte":
             rhs = rhs - 2.0 * self.alpha * ev.Phid - self.beta ** 2 * ev.Phi
-            rhs_nh = rhs_nh - self.alpha * ev.g
+            rhs_nh = rhs_nh - self.alpha * ev.Psi
         rhs = np.concatenate((rhs, rhs_nh))
         n = self.nu
         K = np.zeros((n + m, n + m))
@@ -123,8 +123,8 @@ class LagrangeIndex1:
             if np.linalg.norm(ev.Phi) > 1e3 * tol:
                 raise SimulationError(f"position projection did not converge at t={t:g} "
                                       f"(residual {np.linalg.norm(ev.Phi):.3g}); the mechanism may be near a singular position")
-        if ev.Phi.size or ev.g.size:
-            u = u - np.linalg.lstsq(ev.A, np.concatenate((ev.Phid, ev.g)), rcond=None)[0]
+        if ev.Phi.size or ev.Psi.size:
+            u = u - np.linalg.lstsq(ev.A, np.concatenate((ev.Phid, ev.Psi)), rcond=None)[0]
         return np.concatenate((q, u))
 
 
@@ -236,7 +236,7 @@ class DAlembert:
         if self.dep.size == 0:
             return u, None
         ev = self.system.evaluate(t, q, u)
-        res = np.concatenate((ev.Phid, ev.g))
+        res = np.concatenate((ev.Phid, ev.Psi))
         Ad = ev.A[:, self.dep]
         u[self.dep] -= np.linalg.solve(Ad, res)
         return u, ev

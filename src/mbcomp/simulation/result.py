@@ -194,7 +194,7 @@ def postprocess(system, form, t, Y, status, message, stats, init):
         evf = system.evaluate(t[k], q, u, masked=False) if ev.local else ev
         put("residual.position", k, np.linalg.norm(evf.Phi) if evf.Phi.size else 0.0)
         put("residual.velocity", k, np.linalg.norm(evf.Phid) if evf.Phid.size else 0.0)
-        put("residual.nonholonomic", k, np.linalg.norm(ev.g) if ev.g.size else 0.0)
+        put("residual.nonholonomic", k, np.linalg.norm(ev.Psi) if ev.Psi.size else 0.0)
         for i, name in enumerate(system.constraint_names() + [f"{e.name}.{rr}" for e, rows, _ in ev.local_nh for rr in rows]):
             put(f"lambda.{name}", k, lam[i] if i < lam.size else np.nan)
     for e in joint_outputs:  # contacts hold bodies bilaterally: say where a real one would let go
