@@ -130,12 +130,12 @@ def measure_rhs(system, init):
     """Per-call seconds of the Lagrange and D'Alembert right-hand sides, and the accelerations."""
     y = np.concatenate((init.q, init.u))
     lag = formulations.LagrangeIndex1(system)
-    out = dict(lagrange=per_call(lambda: lag.rhs(T0, y)))
-    acc = lag.rhs(T0, y)[system.nq:]
+    out = dict(lagrange=per_call(lambda: lag.fun(T0, y)))
+    acc = lag.fun(T0, y)[system.nq:]
     if DALEMBERT is not None:
         dal = DALEMBERT(system)
         yd = dal.initial_state(T0, init.q, init.u)
-        out["dalembert"] = per_call(lambda: dal.rhs(T0, yd))
+        out["dalembert"] = per_call(lambda: dal.fun(T0, yd))
     return out, acc
 
 

@@ -151,11 +151,11 @@ def test_rhs_of_both_formulations_accept_the_compiled_system(systems):
     c = compile_system(s)
     init = initialize(s)
     y = np.concatenate((init.q, init.u))
-    np.testing.assert_allclose(LagrangeIndex1(c).rhs(0.3, y), LagrangeIndex1(s).rhs(0.3, y), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(LagrangeIndex1(c).fun(0.3, y), LagrangeIndex1(s).fun(0.3, y), rtol=1e-12, atol=1e-12)
     d_num, d_gen = DAlembert(s), DAlembert(c)
     yd = d_num.initial_state(0.3, init.q, init.u)
     d_gen.initial_state(0.3, init.q, init.u)
-    np.testing.assert_allclose(d_gen.rhs(0.3, yd), d_num.rhs(0.3, yd), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(d_gen.fun(0.3, yd), d_num.fun(0.3, yd), rtol=1e-12, atol=1e-12)
 
 
 def test_changing_a_parameter_rederives_nothing(systems):

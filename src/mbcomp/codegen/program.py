@@ -1369,7 +1369,7 @@ class CompiledSystem(MultibodySystem):
     >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
     >>> s = mbcomp.assemble(m); fast = compile_system(s)
     >>> y = np.array([0.5, 0.0])
-    >>> bool(np.allclose(LagrangeIndex1(fast).rhs(0.0, y), LagrangeIndex1(s).rhs(0.0, y), rtol=1e-12))
+    >>> bool(np.allclose(LagrangeIndex1(fast).fun(0.0, y), LagrangeIndex1(s).fun(0.0, y), rtol=1e-12))
     True
     >>> res = mbcomp.simulate(fast, t_end=0.5)
     >>> res.status

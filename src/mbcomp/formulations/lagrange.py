@@ -96,7 +96,7 @@ class LagrangeIndex1:
             x = sla.lu_solve(lu, b, check_finite=False)
         return x[:n], x[n:]
 
-    def rhs(self, t, y):
+    def fun(self, t, y):
         """``dy/dt`` for ``y = [q, u]``."""
         self.nfev += 1
         q, u = self.split(y)
@@ -291,7 +291,7 @@ class DAlembert:
         lam = np.linalg.lstsq(A.T, ev.f - ev.M @ ud, rcond=None)[0]
         return ud, lam
 
-    def rhs(self, t, y):
+    def fun(self, t, y):
         """``dy/dt`` for ``y = [q, v]``."""
         self.nfev += 1
         if not np.all(np.isfinite(y)):

@@ -183,7 +183,7 @@ def _check_method(method, formulation, index, stabilization, h):
 
 
 def _integrate(form, y0, t0, t1, t_out, method, rtol, atol, max_step, progress, h=None):
-    fun = getattr(form, "rhs", None)
+    fun = getattr(form, "fun", None)
     sysm = form.system
     proj = form.stabilization == "projection" and bool(sysm.topology.cut or sysm.nq != sysm.nu or sysm._nonholonomic)
     if isinstance(form, DAlembert):
