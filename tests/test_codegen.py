@@ -29,7 +29,7 @@ from mbcomp.library import (Fixed, FixedTranslation, PrescribedMotion, Revolute,
 
 from conftest import load_model
 
-FIELDS = ("M", "f", "Phi", "Phid", "C", "cb", "B", "b", "Bb", "g")
+FIELDS = ("M", "f", "Phi", "Phid", "C", "cb", "B", "b", "Bb", "Psi")
 BACKENDS = ["python", pytest.param("c", marks=pytest.mark.skipif(c_compiler() is None, reason="no C compiler"))]
 
 
