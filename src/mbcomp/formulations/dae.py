@@ -22,22 +22,22 @@ form                        state ``y`` and equations                   variable
                             ``0 = A a + bias`` (+ Baumgarte terms)
 =========================  ==========================================  ===========================
 
-``A = [C; B]`` stacks the holonomic (loop-closure) and nonholonomic rows; ``lam`` has one
-entry per row with the sign convention of :class:`~mbcomp.formulations.LagrangeIndex1`
-(``M du/dt + A^T lam = f``), so reactions are the same in every form.
-:class:`Mechanical` offers the same system in second-order form for the generalized-alpha
-scheme (holonomic constraints only).
+``A = [C; B]`` stacks the holonomic (loop-closure) and nonholonomic rows; ``lam`` stacks their
+multipliers (the loop-closure ones, then the nonholonomic ``mu``) with the sign convention of
+:class:`~mbcomp.formulations.LagrangeIndex1` (``M du/dt + A^T lam = f``), so reactions are
+the same in every form. :class:`Mechanical` offers the same system in second-order form for
+the generalized-alpha scheme (holonomic constraints only).
 
-Every form has ``initial_state(t, q, u)`` (consistent ``y0`` from consistent positions and
-speeds), ``full(t, y) -> [q, u]`` for output, and ``solve(ev)`` (accelerations and
-multipliers at an output point, for reactions). Their ``fun`` counts evaluations in
-``nfev``.
+Every form is a :class:`~mbcomp.formulations.Formulation`: ``initial_state(t, q, u)``
+(consistent ``y0`` from consistent positions and speeds), ``full(t, y) -> [q, u]`` for
+output, and ``solve(ev)`` (accelerations and multipliers at an output point, for
+reactions). Their ``fun`` counts evaluations in ``nfev``.
 
 Examples
 --------
 >>> import numpy as np, mbcomp
->>> from mbcomp.daeforms import Index3
->>> from mbcomp.initialization import initialize
+>>> from mbcomp.formulations.dae import Index3
+>>> from mbcomp.assembly.initialization import initialize
 >>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
 >>> m = mbcomp.Model(); w = m.add("world", World())
 >>> j = m.add("j", Revolute(phi0=0.5)); rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
@@ -53,25 +53,20 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SimulationError
-from ..formulations.lagrange import LagrangeIndex1
+from .base import Formulation, projection_needed
+from .lagrange import LagrangeIndex1
 
 __all__ = ["Index1", "GGL", "Index3", "Mechanical", "DAE_FORMS"]
 
 
-class _MultiplierDAE:
-    """Common parts: sizes, the index-1 solve for consistent accelerations, output mapping."""
-
-    stabilization = "none"
-    index_of_form = 0
+class _Multipliers(Formulation):
+    """Common parts: row counts and the index-1 solve for consistent accelerations and multipliers."""
 
     def __init__(self, system):
-        self.system = system
-        self.nq, self.nu = system.nq, system.nu
+        super().__init__(system)
         ev = system.evaluate(0.0, system.default_q(), np.zeros(system.nu))  # row counts only
         self.mh, self.mn = ev.Phi.size, ev.Psi.size  # holonomic and nonholonomic rows (independent ones)
         self.m = self.mh + self.mn
-        self.nfev = 0
-        self.nlu = 0
         self._ode = LagrangeIndex1(system, "none")
 
     def solve(self, ev, stabilize=True):
@@ -79,28 +74,32 @@ class _MultiplierDAE:
         self.nlu += 1
         return self._ode.solve(ev, stabilize=False)
 
-    def _check(self, t, y):
-        self.nfev += 1
-        if not np.all(np.isfinite(y)):
-            raise SimulationError(f"the state became non-finite at t={t:g} (the integration diverged)")
-
-    def full(self, t, y):
-        return np.asarray(y[: self.nq + self.nu])
-
-    def project(self, t, y):
-        return y
-
     def consistent(self, t, q, u):
-        """``(a, lam)`` at consistent ``(q, u)``."""
-        ev = self.system.evaluate(t, q, u)
-        a, lam = self._ode.solve(ev, stabilize=False)
-        return a, lam
+        """``(a, lam)`` at consistent ``(q, u)``: accelerations (m/s^2, rad/s^2) and multipliers."""
+        return self._ode.solve(self.system.evaluate(t, q, u), stabilize=False)
+
+
+class _SemiExplicit(_Multipliers):
+    """``E dy/dt = fun(t, y)`` with ``y = [q, u, a, lam, ...]``: ``E``, the dynamic rows, the Jacobian."""
+
+    problem = "dae"
 
     @property
     def mass(self):
+        """Diagonal of ``E``: 1 for the differential rows (``q``, ``u``), 0 for the algebraic ones."""
         E = np.zeros(self.n)
         E[: self.nq + self.nu] = 1.0
         return E
+
+    def _split(self, y):
+        """``(q, u, a, lam)``, and GGL's ``eta`` in ``lam``'s tail when present."""
+        nq, nu = self.nq, self.nu
+        return y[:nq], y[nq:nq + nu], y[nq + nu:nq + 2 * nu], y[nq + 2 * nu:]
+
+    def initial_state(self, t, q, u):
+        """``[q, u, a, lam]`` with the accelerations and multipliers of the index-1 solve."""
+        a, lam = self.consistent(t, q, u)
+        return np.concatenate((q, u, a, lam))
 
     def _dyn(self, t, q, u, a, lam):
         ev = self.system.evaluate(t, q, u)
@@ -138,16 +137,30 @@ class _MultiplierDAE:
         return range(self.nq + self.nu)
 
 
-class Index3(_MultiplierDAE):
+class Index3(_SemiExplicit):
     """Index-3 form: position constraints ``Phi(t, q) = 0`` with ``[q, u, a, lam]`` as state.
 
     Parameters
     ----------
     system : MultibodySystem
         Assembled and consistently initialized.
-    """
 
-    index_of_form = 3
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.formulations.dae import Index3
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> form = Index3(mbcomp.assemble(m))
+    >>> y0 = form.initial_state(0.0, np.zeros(1), np.zeros(1))     # [s, v, a]: free fall, no constraint rows
+    >>> form.n, form.problem, form.index.tolist(), y0.round(12).tolist()
+    (3, 'dae', [1, 2, 3], [0.0, 0.0, -9.81])
+    >>> r = form.fun(0.0, y0)                        # [ds/dt, dv/dt, f - M a]: the dynamic row holds
+    >>> r[:2].round(12).tolist(), bool(abs(r[2]) < 1e-12)
+    ([0.0, -9.81], True)
+    """
 
     def __init__(self, system):
         super().__init__(system)
@@ -155,22 +168,15 @@ class Index3(_MultiplierDAE):
         self.index = np.concatenate((np.ones(self.nq, int), np.full(self.nu, 2), np.full(self.nu, 3),
                                      np.full(self.mh, 3), np.full(self.mn, 2)))
 
-    def split(self, y):
-        nq, nu = self.nq, self.nu
-        return y[:nq], y[nq:nq + nu], y[nq + nu:nq + 2 * nu], y[nq + 2 * nu:]
-
-    def initial_state(self, t, q, u):
-        a, lam = self.consistent(t, q, u)
-        return np.concatenate((q, u, a, lam))
-
     def fun(self, t, y):
-        self._check(t, y)
-        q, u, a, lam = self.split(y)
+        """``[dq/dt, du/dt, f - M a - A^T lam, -Phi, -Psi]``; ``E`` keeps the first two."""
+        self._check_finite(t, y)
+        q, u, a, lam = self._split(y)
         ev, dyn = self._dyn(t, q, u, a, lam)
         return np.concatenate((self.system.q_rate(q, u), a, dyn, -ev.Phi, -ev.Psi))
 
 
-class GGL(_MultiplierDAE):
+class GGL(_SemiExplicit):
     """Index-2 form of Gear, Gupta and Leimkuhler: velocity constraints enforced by ``lam``,
     position constraints by the extra multiplier ``eta`` that moves ``q`` along ``C^T``.
 
@@ -181,35 +187,43 @@ class GGL(_MultiplierDAE):
     ----------
     system : MultibodySystem
         Assembled and consistently initialized.
-    """
 
-    index_of_form = 2
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.formulations.dae import GGL
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> form = GGL(mbcomp.assemble(m))
+    >>> form.n, form.mh, form.index.tolist()      # an open tree: no rows, so no lam and no eta
+    (3, 0, [1, 1, 2])
+    """
 
     def __init__(self, system):
         super().__init__(system)
         self.n = self.nq + 2 * self.nu + self.m + self.mh
         self.index = np.concatenate((np.ones(self.nq + self.nu, int), np.full(self.nu + self.m + self.mh, 2)))
 
-    def split(self, y):
-        nq, nu, m = self.nq, self.nu, self.m
-        return y[:nq], y[nq:nq + nu], y[nq + nu:nq + 2 * nu], y[nq + 2 * nu:nq + 2 * nu + m], y[nq + 2 * nu + m:]
-
     def initial_state(self, t, q, u):
-        a, lam = self.consistent(t, q, u)
-        return np.concatenate((q, u, a, lam, np.zeros(self.mh)))
+        """``[q, u, a, lam, eta]`` with ``eta = 0``."""
+        return np.concatenate((super().initial_state(t, q, u), np.zeros(self.mh)))
 
     def _fd_columns(self):
         return list(range(self.nq + self.nu)) + list(range(self.n - self.mh, self.n))
 
     def fun(self, t, y):
-        self._check(t, y)
-        q, u, a, lam, eta = self.split(y)
+        """``[H(q)(u - C^T eta), du/dt, f - M a - A^T lam, -dPhi/dt, -Psi, -Phi]``."""
+        self._check_finite(t, y)
+        q, u, a, rest = self._split(y)
+        lam, eta = rest[: self.m], rest[self.m:]
         ev, dyn = self._dyn(t, q, u, a, lam)
         w = u - ev.C.T @ eta if self.mh else u
         return np.concatenate((self.system.q_rate(q, w), a, dyn, -ev.Phid, -ev.Psi, -ev.Phi))
 
 
-class Index1(_MultiplierDAE):
+class Index1(_SemiExplicit):
     """Index-1 form: constraints at acceleration level, ``a`` and ``lam`` algebraic.
 
     Parameters
@@ -217,24 +231,36 @@ class Index1(_MultiplierDAE):
     system : MultibodySystem
         Assembled and consistently initialized.
     stabilization : {"baumgarte", "projection", "none"}
-        As for :class:`~mbcomp.formulations.LagrangeIndex1`; ``"projection"`` is applied by
-        the driver after each step (one-step solvers only).
+        As for :class:`~mbcomp.formulations.LagrangeIndex1`; with ``"projection"`` the driver
+        calls :meth:`project` after each step.
     alpha, beta : float
         Baumgarte parameters (1/s).
-    """
 
-    index_of_form = 1
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.formulations.dae import Index1
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> form = Index1(mbcomp.assemble(m), "projection")
+    >>> form.index.tolist(), form.mass.tolist(), form.projects    # nothing to project on an open chain
+    ([1, 1, 1], [1.0, 1.0, 0.0], False)
+    """
 
     def __init__(self, system, stabilization="baumgarte", alpha=10.0, beta=10.0):
         super().__init__(system)
+        self._ode = LagrangeIndex1(system, stabilization, alpha, beta)  # solve() leaves stabilization out
         self.stabilization = stabilization
-        self._stab = LagrangeIndex1(system, stabilization, alpha, beta)
-        self.alpha, self.beta = float(alpha), float(beta)
+        self.alpha, self.beta = self._ode.alpha, self._ode.beta
         self.n = self.nq + 2 * self.nu + self.m
         self.index = np.ones(self.n, int)
 
-    split = Index3.split
-    initial_state = Index3.initial_state
+    @property
+    def projects(self):
+        """As for :class:`~mbcomp.formulations.LagrangeIndex1`."""
+        return self.stabilization == "projection" and projection_needed(self.system)
 
     def _linear_blocks(self, J, ev):
         ia, il = super()._linear_blocks(J, ev)
@@ -242,8 +268,9 @@ class Index1(_MultiplierDAE):
         return ia, il
 
     def fun(self, t, y):
-        self._check(t, y)
-        q, u, a, lam = self.split(y)
+        """``[dq/dt, du/dt, f - M a - A^T lam, -(A a + bias)]`` (bias with the Baumgarte terms)."""
+        self._check_finite(t, y)
+        q, u, a, lam = self._split(y)
         ev, dyn = self._dyn(t, q, u, a, lam)
         bias = np.concatenate((ev.cb, ev.Bb))
         if self.stabilization == "baumgarte":
@@ -252,13 +279,11 @@ class Index1(_MultiplierDAE):
 
     def project(self, t, y):
         """Positions and speeds onto the constraint manifold, then consistent ``a``, ``lam``."""
-        qu = self._stab.project(t, np.asarray(y[: self.nq + self.nu]))
-        q, u = qu[: self.nq], qu[self.nq:]
-        a, lam = self.consistent(t, q, u)
-        return np.concatenate((q, u, a, lam))
+        qu = self._ode.project(t, np.asarray(y[: self.nq + self.nu]))
+        return self.initial_state(t, qu[: self.nq], qu[self.nq:])
 
 
-class Mechanical(_MultiplierDAE):
+class Mechanical(_Multipliers):
     """Second-order form for :class:`~mbcomp.solvers.genalpha.GeneralizedAlpha`:
     ``M(q) du/dt + C^T lam = f``, ``Phi(t, q) = 0``; state ``[q, u, udot, a, lam]``.
 
@@ -267,9 +292,21 @@ class Mechanical(_MultiplierDAE):
     system : MultibodySystem
         Assembled and consistently initialized; velocity (nonholonomic) constraints are not
         supported by this form.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.formulations.dae import Mechanical
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> form = Mechanical(mbcomp.assemble(m))
+    >>> form.problem, form.initial_state(0.0, np.array([1.0]), np.array([0.5])).round(12).tolist()  # [q, u, udot, a]
+    ('mechanical', [1.0, 0.5, -9.81, -9.81])
     """
 
-    index_of_form = 3
+    problem = "mechanical"
 
     def __init__(self, system):
         super().__init__(system)
@@ -279,6 +316,7 @@ class Mechanical(_MultiplierDAE):
         self.n = self.nq + 3 * self.nu + self.mh
 
     def initial_state(self, t, q, u):
+        """``[q, u, udot, a, lam]`` with ``udot = a`` from the index-1 solve."""
         a, lam = self.consistent(t, q, u)
         return np.concatenate((q, u, a, a, lam))
 
@@ -291,9 +329,11 @@ class Mechanical(_MultiplierDAE):
         return ev.M, ev.f, ev.Phi, ev.C
 
     def increment(self, q, dq):
+        """``q`` moved by ``dq`` given in speed space (quaternions stay unit)."""
         return self.system.increment(q, dq)
 
     def q_rate(self, q, u):
+        """``dq/dt`` from the speeds."""
         return self.system.q_rate(q, u)
 
 
