@@ -39,11 +39,10 @@ import time
 import numpy as np
 
 HERE = pathlib.Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
+ROOT = HERE.parent
 sys.path.insert(0, str(HERE))  # bench/peers
 
 import mbcomp  # noqa: E402
-from conftest import load_model  # noqa: E402
 from mbcomp import formulations  # noqa: E402
 from mbcomp.codegen import CodegenError, c_compiler, compile_system  # noqa: E402
 from mbcomp.initialization import initialize  # noqa: E402
@@ -119,7 +118,7 @@ def run_kane(N, timeout):
 # mbcomp measurements
 # ------------------------------------------------------------------------------------------
 def build(model, N):
-    mod = load_model(MODELS[model])
+    mod = mbcomp.load_model_file(ROOT / MODELS[model])
     if model == "pendulum":
         q, u = _state(N)
         return mod.build(N=N, L=L_LINK, m=M_LINK, g=G, phi0=q, w0=u)

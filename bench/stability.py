@@ -42,7 +42,6 @@ import numpy as np  # noqa: E402
 from scipy.optimize import brentq  # noqa: E402
 
 import mbcomp  # noqa: E402
-from mbcomp.cli import load_model_file  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -88,10 +87,10 @@ def timed(fn, *args, **kw):
 def mbcomp_case(name):
     """``dict`` of timings, boundary values and a 101-point root locus for one problem."""
     if name == "disk":
-        mod, par, grid, probe = load_model_file(ROOT / "models/rolling_disk.py"), "spin", (1.0, 5.0), 6.0
+        mod, par, grid, probe = mbcomp.load_model_file(ROOT / "models/rolling_disk.py"), "spin", (1.0, 5.0), 6.0
         build = lambda x: mod.build(spin=x)  # noqa: E731
     else:
-        mod, par, grid, probe = load_model_file(ROOT / "models/bicycle.py"), "v", (0.0, 10.0), 5.0
+        mod, par, grid, probe = mbcomp.load_model_file(ROOT / "models/bicycle.py"), "v", (0.0, 10.0), 5.0
         build = lambda x: mod.build(v=x)  # noqa: E731
     first_lin, t_first = timed(lambda: mbcomp.linearize(build(probe)))
     values = np.linspace(*grid, 101)

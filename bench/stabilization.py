@@ -11,15 +11,13 @@ Run: python bench/stabilization.py [--t-end 10] [--method RK45]
 import argparse
 import csv
 import pathlib
-import sys
 
 import numpy as np
 
 HERE = pathlib.Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
+ROOT = HERE.parent
 
 import mbcomp  # noqa: E402
-from conftest import load_model  # noqa: E402
 
 
 def main(argv=None):
@@ -28,7 +26,7 @@ def main(argv=None):
     ap.add_argument("--method", default="RK45")
     ap.add_argument("--rtols", default="1e-6,1e-8")
     args = ap.parse_args(argv)
-    sc = load_model("models/slider_crank.py")
+    sc = mbcomp.load_model_file(ROOT / "models/slider_crank.py")
     rows = []
     results = {}
     for rtol in [float(x) for x in args.rtols.split(",")]:

@@ -29,17 +29,17 @@ import sys  # noqa: E402
 import numpy as np  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
-sys.path.insert(0, str(HERE.parent))
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))  # bench/peers
 
-from conftest import load_model  # noqa: E402
+import mbcomp  # noqa: E402
 from mbcomp import workprecision as wp  # noqa: E402
 
 TARGET = 1e-6
 
 
 def andrews_peer(tols, ref_names, ref, log):
-    from bench.peers import sympy_andrews as sa
+    from peers import sympy_andrews as sa
 
     d = sa.derive()
     log(f"  sympy Andrews: derivation {d.t_derive:.2f} s + lambdify {d.t_lambdify:.2f} s")
@@ -58,7 +58,7 @@ def andrews_peer(tols, ref_names, ref, log):
 
 
 def pendulum_peer(N, t_end, tols, ref, log):
-    from bench.peers import sympy_pendulum as spp
+    from peers import sympy_pendulum as spp
 
     d = spp.derive(N)
     log(f"  sympy pendulum N={N}: derivation {d.t_derive:.1f} s + lambdify {d.t_lambdify:.1f} s")
@@ -95,7 +95,7 @@ def main(argv=None):
         print(f"\n=== {name} ===", flush=True)
         setup = None
         if name == "andrews":
-            mod = load_model("models/andrews.py")
+            mod = mbcomp.load_model_file(ROOT / "models/andrews.py")
             t_ref, values, how = wp.reference_values(mod)
             rows = wp.work_precision(mod, tols=tols, steps=steps, max_cpu=args.max_cpu,
                                      reference=(t_ref, values, how))
@@ -103,11 +103,11 @@ def main(argv=None):
             peer, setup = andrews_peer(tols, names, np.array([values[n] for n in names]), print)
             rows += peer
         elif name == "slider_crank":
-            mod = load_model("models/slider_crank.py")
+            mod = mbcomp.load_model_file(ROOT / "models/slider_crank.py")
             rows = wp.work_precision(mod, tols=tols, steps=steps, t_end=1.0, max_cpu=args.max_cpu)
         elif name.startswith("pendulum"):
             N = int(name[len("pendulum"):] or 10)
-            mod = load_model("models/n_link_pendulum.py")
+            mod = mbcomp.load_model_file(ROOT / "models/n_link_pendulum.py")
             ref = wp.reference_values(mod, build_kw=dict(N=N), t_end=1.0)
             rows = wp.work_precision(mod, tols=tols, steps=steps, build_kw=dict(N=N), t_end=1.0,
                                      max_cpu=args.max_cpu, reference=ref)

@@ -4,12 +4,17 @@ Each joint is three short pieces: its relative motion (tree edge), its constrain
 equations (cut joint), and its axis (where drives and springs act). Reactions are computed
 by the assembler for every joint: ``f``/``tau`` exerted on frame_b through the joint,
 resolved in frame_b.
+
+:class:`FreeMotion` (six DOF) is the framework's own joint
+(:mod:`mbcomp.modeling.free_joint`: the topology inserts it for floating bodies); it is
+re-exported here, so ``mbcomp.library.FreeMotion`` is that class.
 """
 import numpy as np
 
 from mbcomp import Flange, Joint, Param
 from mbcomp.jets import local_point, local_vector, position_constraints, rigid_constraints
-from mbcomp.kinematics import cross, matrix_to_quat, perpendicular_pair, quat_multiply, quat_rate, quat_to_matrix, rot_axis
+from mbcomp.kinematics import cross, matrix_to_quat, perpendicular_pair, quat_rate, quat_to_matrix, rot_axis
+from mbcomp.modeling.free_joint import FreeMotion, quat_increment  # noqa: F401  (FreeMotion: re-exported)
 from mbcomp.roles import split_start
 
 from .checks import rotation_matrix
@@ -20,18 +25,6 @@ _E = np.eye(3)
 
 def _axis(p):
     return p.n / np.linalg.norm(p.n)
-
-
-def _rotvec_quat(d):
-    ang = np.linalg.norm(d)
-    if ang < 1e-300:
-        return np.array([1.0, 0.0, 0.0, 0.0])
-    return np.concatenate(([np.cos(ang / 2)], np.sin(ang / 2) * d / ang))
-
-
-def _quat_increment(Q, d):
-    Qn = quat_multiply(Q, _rotvec_quat(d))
-    return Qn / np.linalg.norm(Qn)
 
 
 class Revolute(Joint):
@@ -222,68 +215,10 @@ class Spherical(Joint):
         return quat_rate(q, u)
 
     def increment(self, q, du, p):
-        return _quat_increment(q, du)
+        return quat_increment(q, du)
 
     def constraints(self, a, b, p):
         return position_constraints(a, b)
-
-
-class FreeMotion(Joint):
-    """Six-DOF joint: frame_b moves freely relative to frame_a.
-
-    Coordinates: position ``r`` (m, frame_a coordinates) and quaternion ``Q``; speeds:
-    ``v = dr/dt`` (m/s, frame_a coordinates) and angular velocity ``w`` (rad/s, frame_b axes).
-    A body connected to nothing gets one automatically from the world frame.
-
-    Examples
-    --------
-    >>> from mbcomp.library import FreeMotion
-    >>> j = FreeMotion(r0=(0, 1, 0), w0=(0, 0.1, 3.0))
-    >>> j.nq, j.nu
-    (7, 6)
-    """
-
-    coordinates = (("r.x", "m"), ("r.y", "m"), ("r.z", "m"),
-                   ("Q.w", "1"), ("Q.x", "1"), ("Q.y", "1"), ("Q.z", "1"))
-    speeds = (("v.x", "m/s"), ("v.y", "m/s"), ("v.z", "m/s"),
-              ("w.x", "rad/s"), ("w.y", "rad/s"), ("w.z", "rad/s"))
-    r0 = Param(None, unit="m", shape=(3,), kind="start", doc="start position, frame_a coordinates")
-    R0 = Param(None, unit="1", shape=(3, 3), kind="start", check=rotation_matrix,
-               doc="start orientation, frame_b -> frame_a")
-    v0 = Param(None, unit="m/s", shape=(3,), kind="start", doc="start velocity, frame_a coordinates")
-    w0 = Param(None, unit="rad/s", shape=(3,), kind="start", doc="start angular velocity, frame_b axes")
-
-    def start(self, p):
-        r, rf = split_start(p.r0, 3)
-        R, Rf = split_start(p.R0, 9)
-        v, vf = split_start(p.v0, 3)
-        w, wf = split_start(p.w0, 3)
-        Q = matrix_to_quat(R.reshape(3, 3)) if R.size == 9 else np.array([1.0, 0, 0, 0])
-        r = r if r.size == 3 else np.zeros(3)
-        v = v if v.size == 3 else np.zeros(3)
-        w = w if w.size == 3 else np.zeros(3)
-        return (np.concatenate((r, Q)), np.array([rf] * 3 + [Rf] * 3),
-                np.concatenate((v, w)), np.array([vf] * 3 + [wf] * 3))
-
-    def relative(self, q, p):
-        return quat_to_matrix(q[3:]), q[:3]
-
-    def motion(self, q, p):
-        R = quat_to_matrix(q[3:])
-        Hw = np.zeros((3, 6), dtype=R.dtype)  # object when traced (mbcomp.symbolic)
-        Hw[:, 3:] = R
-        Hv = np.zeros((3, 6))
-        Hv[:, :3] = np.eye(3)
-        return Hw, Hv
-
-    def q_rate(self, q, u, p):
-        return np.concatenate((u[:3], quat_rate(q[3:], u[3:])))
-
-    def increment(self, q, du, p):
-        return np.concatenate((q[:3] + du[:3], _quat_increment(q[3:], du[3:])))
-
-    def constraints(self, a, b, p):
-        return []
 
 
 class Weld(_Rigid):

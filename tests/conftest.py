@@ -1,18 +1,25 @@
-import importlib.util
 import pathlib
 
 import pytest
+
+import mbcomp
+from mbcomp.modeling.loader import import_file
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def load_model(relpath):
-    """Import a model file (``models/...py``) as a module."""
+    """A model file (``models/...py``, relative to the repository root) as a module:
+    :func:`mbcomp.load_model_file`, so the tests load models as users and the CLI do."""
     path = ROOT / relpath
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    if path.parent == ROOT / "tests":  # a test module reused for its derivation: no build()
+        return load_module(relpath)
+    return mbcomp.load_model_file(path)
+
+
+def load_module(relpath):
+    """Any Python file (relative to the repository root) as a module, build() or not."""
+    return import_file(ROOT / relpath)
 
 
 @pytest.fixture

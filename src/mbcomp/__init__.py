@@ -1,7 +1,8 @@
 """mbcomp: Modelica-style, object-oriented modelling and simulation of mechanisms.
 
 Compose bodies, joints, force elements and drives into a :class:`Model`, then
-:func:`simulate` it. The standard components live in :mod:`mbcomp.library`.
+:func:`simulate` it. The standard components live in :mod:`mbcomp.library`. A model file
+(a ``.py`` file defining ``build(**params) -> Model``) loads with :func:`load_model`.
 
 Examples
 --------
@@ -30,6 +31,7 @@ __all__ = [
     "Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState",
     "ModelError", "InitializationError", "SimulationError",
     "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",
+    "load_model_file", "load_model",
 ]
 
 
@@ -46,6 +48,9 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name == "equations":  # symbolic equations of motion (imports sympy)
         from .codegen.symbolic import equations
         return equations
+    if name in ("load_model_file", "load_model"):  # model files: build(**params) -> Model
+        from .modeling import loader
+        return getattr(loader, name)
     if name in ("linearize", "steady_states", "sweep"):  # stability analysis (seed Chapter 7)
         from . import analysis
         return getattr(analysis, name)

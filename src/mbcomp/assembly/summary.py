@@ -1,14 +1,50 @@
 """Model summary: what was modelled, how many degrees of freedom, and why.
 
+Describing a system changes nothing in it: when no initialization is given, the summary
+initializes a copy (:func:`observer`: same topology and parameter values), so the
+system's ``row_mask`` and caches stay as they were.
+
 Examples
 --------
->>> # mbcomp info models/slider_crank.py prints this summary
+>>> import mbcomp
+>>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World()); j = m.add("hinge", Revolute())
+>>> rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0))); bob = m.add("bob", PointMass(m=2.0))
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+>>> system = mbcomp.assemble(m)
+>>> print(summary(system).splitlines()[4])
+degrees of freedom: 1   (Gruebler M = 6N - C - L = 6*1 - 5 - 0 = 1)
+>>> system.row_mask is None  # described, not initialized
+True
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["summary", "dof_report"]
+from .system import MultibodySystem
+
+__all__ = ["summary", "dof_report", "observer"]
+
+
+def observer(system):
+    """A numeric copy of ``system`` to initialize and evaluate while describing it.
+
+    Same topology (shared, not re-derived) and parameter values; its own ``row_mask`` and
+    caches. A generated-program system (:mod:`mbcomp.codegen`) is described by the numeric
+    evaluation it was verified against, so describing it traces nothing.
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Revolute, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World()); j = m.add("j", Revolute())
+    >>> b = m.add("b", PointMass()); m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, b.frame_a)
+    >>> s = mbcomp.assemble(m)
+    >>> copy = observer(s)
+    >>> copy is not s and copy.topology is s.topology
+    True
+    """
+    return MultibodySystem.with_params(system, {})
 
 
 def dof_report(system, init=None):
@@ -17,8 +53,37 @@ def dof_report(system, init=None):
     ``N`` counts rigid groups (frames joined by rigid offsets), ``C`` the constraints of the
     joints between them, ``L`` the prescribed motions. The rank count ``nu - rank(C_cut)`` is the
     true mobility; the difference is the number of redundant constraint rows.
+
+    Parameters
+    ----------
+    system : MultibodySystem
+        The assembled system; not changed (see :func:`observer`).
+    init : Initialization, optional
+        Its consistent initialization, if already computed; else a copy is initialized.
+
+    Returns
+    -------
+    dict
+        ``N``, ``C``, ``L``, ``gruebler`` (``6N - C - L``), ``mobility`` (``nu - rank``, or
+        ``None`` when initialization fails), ``rank`` and ``redundant`` (dropped row names).
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World()); j = m.add("j", Revolute())
+    >>> rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0))); b = m.add("b", PointMass())
+    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, b.frame_a)
+    >>> d = dof_report(mbcomp.assemble(m))
+    >>> d["gruebler"], d["mobility"]
+    (1, 1)
     """
-    topo = system.topology
+    return _dof_report(observer(system), init)
+
+
+def _dof_report(view, init):
+    """:func:`dof_report` of an observer copy ``view`` (initialized here when ``init`` is None)."""
+    topo = view.topology
     parent = {}
 
     def find(x):
@@ -33,36 +98,44 @@ def dof_report(system, init=None):
     groups = {find(n) for n in range(topo.n_nodes)} - {find(-1)}
     N = len(groups)
     C = sum(6 - e.dof for e in topo.edges if e.kind == "joint" and e.dof > 0 and not e.implicit)
-    # constraint-only joints (contacts) remove as many DOF as they have holonomic rows
-    C += sum(1 for name in system.constraint_names(all_rows=True)
+    # constraint-only joints (the library's contacts) remove as many DOF as they have holonomic rows
+    C += sum(1 for name in view.constraint_names(all_rows=True)
              if not topo.edge(name.rsplit(".", 1)[0]).comp.tree_edge)
     L = sum(1 for e in topo.edges if e.drive)
     if init is None:
-        from ..assembly.initialization import initialize
-
-
-        try:
-            init = initialize(system)
-        except Exception:
-            init = None
+        init, _ = _initialize(view)
     rank = init.rank if init is not None else None
-    mobility = system.nu - rank if rank is not None else None
+    mobility = view.nu - rank if rank is not None else None
     return dict(N=N, C=C, L=L, gruebler=6 * N - C - L, mobility=mobility, rank=rank,
                 redundant=list(init.dropped) if init is not None else [])
 
 
-def summary(system, init=None):
-    """Multi-line text: bodies, DOF, chosen coordinates, constraints, what was eliminated."""
-    topo = system.topology
-    if init is None:
-        from ..assembly.initialization import initialize
+def _initialize(view):
+    """``(init, None)``, or ``(None, why)`` when the model cannot start (first line of the error)."""
+    from .initialization import initialize
 
-        try:
-            init = initialize(system)
-        except Exception as exc:  # the summary must still describe a model that cannot start
-            init = None
-            why = str(exc).splitlines()[0]
-    d = dof_report(system, init)
+    try:
+        return initialize(view), None
+    except Exception as exc:  # the summary must still describe a model that cannot start
+        return None, str(exc).splitlines()[0]
+
+
+def summary(system, init=None):
+    """Multi-line text: bodies, DOF, chosen coordinates, constraints, what was eliminated.
+
+    Parameters
+    ----------
+    system : MultibodySystem
+        The assembled system; not changed (see :func:`observer`).
+    init : Initialization, optional
+        Its consistent initialization, if already computed; else a copy is initialized.
+    """
+    topo = system.topology
+    view = observer(system)
+    why = None
+    if init is None:
+        init, why = _initialize(view)
+    d = _dof_report(view, init)
     lines = ["mbcomp model summary", "===================="]
     if init is None:
         lines.append(f"initialization failed: {why}")
@@ -80,7 +153,7 @@ def summary(system, init=None):
     lines.append(f"coordinates ({system.nq} q, {system.nu} speeds): {', '.join(system.q_names) or 'none'}")
     tree = [e.name for e in topo.tree if e.kind == "joint" and e.dof > 0 and not e.drive]
     lines.append(f"tree joints (minimal coordinates): {', '.join(tree) or 'none'}")
-    cut_rows = system.constraint_names(all_rows=True)
+    cut_rows = view.constraint_names(all_rows=True)
     lines.append(f"cut joints (loop closure): {', '.join(topo.cut) or 'none'}; {len(cut_rows)} constraint rows, "
                  f"rank {d['rank']}")
     if d["redundant"]:
@@ -91,13 +164,13 @@ def summary(system, init=None):
     drives = [f"{e.name} by {e.drive}" for e in topo.edges if e.drive]
     if drives:
         lines.append(f"prescribed (eliminated, rheonomic): {', '.join(drives)}")
-    contacts = [e for e in topo.edges if e.kind == "joint" and not e.comp.tree_edge]
-    if contacts:
-        ev = system.evaluate(0.0, system.default_q(), np.zeros(system.nu), masked=False)
+    constraint_only = [e for e in topo.edges if e.kind == "joint" and not e.comp.tree_edge]
+    if constraint_only:
+        ev = view.evaluate(0.0, view.default_q(), np.zeros(view.nu), masked=False)
         nh_rows = {e.name: len(rows) for e, rows, _ in ev.local_nh}
-        lines.append("contacts (constraint-only joints): " + ", ".join(
+        lines.append("constraint-only joints (contacts): " + ", ".join(
             f"{e.name} ({sum(1 for n in cut_rows if n.rsplit('.', 1)[0] == e.name)} holonomic + "
-            f"{nh_rows.get(e.name, 0)} nonholonomic rows)" for e in contacts))
+            f"{nh_rows.get(e.name, 0)} nonholonomic rows)" for e in constraint_only))
     rig = [e.name for e in topo.edges if e.kind == "joint" and e.dof == 0 and e.comp.tree_edge]
     if rig:
         lines.append(f"rigid offsets merged into their bodies (no coordinates): {', '.join(rig)}")

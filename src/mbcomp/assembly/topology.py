@@ -8,10 +8,11 @@ Built once from a validated :class:`~mbcomp.model.FlatModel`; immutable afterwar
 * A minimum spanning tree (networkx, Kruskal) keeps rigid offsets, driven joints and joints
   with fixed start values in the tree and cuts the joints with most freedom: a cut joint with
   ``k`` DOF adds ``6 - k`` constraints, so this gives the fewest constraint equations.
-* Joints with ``tree_edge = False`` (rolling contacts: constraints only, no coordinates) are
-  never tree edges; they are always cut.
-* A group of frames carrying mass but joined to nothing gets an implicit FreeMotion (a wheel
-  touching the ground only through a rolling contact floats in the tree).
+* A *constraint-only joint* (``tree_edge = False``: constraint rows, no coordinates; the
+  library's rolling contacts) is never a tree edge; it is always cut.
+* A group of frames carrying mass but joined to nothing gets an implicit
+  :class:`~mbcomp.modeling.free_joint.FreeMotion` from the world (a wheel touching the
+  ground only through a rolling contact floats in the tree).
 
 Examples
 --------
@@ -30,8 +31,9 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 
-from ..modeling.component import PortRef
 from ..errors import ModelError, Problem
+from ..modeling.component import PortRef
+from ..modeling.free_joint import FreeMotion
 
 __all__ = ["Topology", "Edge", "ROOT"]
 
@@ -178,10 +180,9 @@ class Topology:
         G.add_nodes_from(range(self.n_nodes))
         for e in self.edges:
             if e.kind == "joint" and not e.comp.tree_edge:
-                continue  # constraint-only joints (rolling contacts) are always cut
+                continue  # constraint-only joints (the library's contacts) are always cut
             G.add_edge(e.node_a, e.node_b, key=e.name, weight=self._weight(e))
         # groups of frames joined to nothing that carry mass float freely
-        reach = nx.node_connected_component(G, ROOT)
         mass_nodes = {n for _, _, n in self.bodies}
         self.floating = []
         for comp_nodes in sorted(nx.connected_components(G), key=min):
@@ -190,8 +191,6 @@ class Topology:
             carriers = sorted(n for n in comp_nodes if n in mass_nodes)
             if not carriers:
                 continue  # massless and unconnected: nothing moves it (checked in the system)
-            from mbcomp.library import FreeMotion  # the standard free joint
-
             fm = FreeMotion()
             name = f"{self.node_ports[carriers[0]][0].rsplit('.', 1)[0]}.free"
             fm.name = name
@@ -199,7 +198,6 @@ class Topology:
             self.edges.append(e)
             self.floating.append(name)
             G.add_edge(ROOT, carriers[0], key=name, weight=6.0)
-        del reach
         tree = nx.minimum_spanning_tree(G, algorithm="kruskal")
         tree_keys = {k for _, _, k in tree.edges(keys=True)}
         by_name = {e.name: e for e in self.edges}

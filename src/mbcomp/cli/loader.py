@@ -1,0 +1,124 @@
+"""What every command shares: loading the model file, ``-p name=value``, checking output paths.
+
+``-p name=value`` passes ``name`` to the file's ``build`` when it has no dot, and sets a
+component parameter at run time when it has one (``-p spring.c=200``: nothing is
+re-derived). Values are Python literals when they parse as one (:func:`parse_value`).
+
+Errors are ``ValueError`` (a :class:`~mbcomp.errors.ModelError` is one) with the fix in the
+message; :func:`mbcomp.cli.main.main` prints them as ``mbcomp: ...`` and exits 2.
+
+Examples
+--------
+>>> from mbcomp.cli.loader import split_params
+>>> def build(m=1.0, L=2.0): ...
+>>> split_params(["m=2.5", "spring.c=200"], build)
+({'m': 2.5}, {'spring.c': 200})
+"""
+from __future__ import annotations
+
+import ast
+import inspect
+import os
+import pathlib
+
+from ..modeling.loader import build_model, load_model_file
+
+__all__ = ["parse_value", "load_model_file", "split_params", "load", "call_build", "check_output"]
+
+
+def parse_value(text):
+    """A Python literal if ``text`` is one, else the string itself.
+
+    Examples
+    --------
+    >>> from mbcomp.cli import parse_value
+    >>> parse_value("1e-3"), parse_value("(0, 0, 1)"), parse_value("RK45")
+    (0.001, (0, 0, 1), 'RK45')
+    """
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
+
+
+def takes(build, name):
+    """Whether ``build`` accepts the keyword ``name`` (by name or through ``**kwargs``)."""
+    sig = inspect.signature(build)
+    return name in sig.parameters or any(p.kind == p.VAR_KEYWORD for p in sig.parameters.values())
+
+
+def split_params(pairs, build):
+    """``-p`` pairs -> ``(build_kw, runtime)``: names without a dot go to ``build``, dotted
+    names (``component.param``) are runtime parameter values.
+
+    Raises
+    ------
+    ValueError
+        A pair without ``=``, or a build() parameter that ``build`` does not take.
+    """
+    build_kw, runtime = {}, {}
+    for pair in pairs or []:
+        if "=" not in pair:
+            raise ValueError(f"-p expects name=value, got {pair!r}")
+        k, v = pair.split("=", 1)
+        (runtime if "." in k else build_kw)[k.strip()] = parse_value(v.strip())
+    unknown = [k for k in build_kw if not takes(build, k)]
+    if unknown:
+        names = ", ".join(inspect.signature(build).parameters) or "none"
+        raise ValueError(f"build() takes no parameter {', '.join(unknown)}; it takes: {names} "
+                         "(use component.param=value for component parameters)")
+    return build_kw, runtime
+
+
+def load(args):
+    """``(module, model, runtime)`` of the command's model file and ``-p`` values."""
+    mod = load_model_file(args.model)
+    build_kw, runtime = split_params(args.param, mod.build)
+    return mod, build_model(mod, **build_kw), runtime
+
+
+def call_build(mod, kw, path):
+    """The model ``mod.build(**kw)``; a ``TypeError`` (e.g. a text value where build() needs a
+    number) becomes a ``ValueError`` naming the call and the fix."""
+    try:
+        return build_model(mod, **kw)
+    except TypeError as exc:
+        args = ", ".join(f"{k}={v!r}" for k, v in kw.items())
+        raise ValueError(f"build({args}) of {path} failed ({exc}) -> fix: give numbers to -p / --sweep") from None
+
+
+def check_output(path, option):
+    """Fail before any work when the file ``path`` (given as ``option``) cannot be written.
+
+    A long run must not end in "directory does not exist" with its results lost: every
+    command checks its output files before it loads the model.
+
+    Raises
+    ------
+    ValueError
+        Naming the path, what is wrong and the fix.
+
+    Examples
+    --------
+    >>> from mbcomp.cli.loader import check_output
+    >>> check_output(None, "--out")  # nothing asked for: nothing to check
+    >>> try:
+    ...     check_output("no/such/dir/x.csv", "--out")
+    ... except ValueError as exc:
+    ...     print(exc)
+    --out no/such/dir/x.csv: the directory no/such/dir does not exist -> fix: create it first (mkdir -p no/such/dir) or write elsewhere
+    """
+    if path is None:
+        return
+    p = pathlib.Path(path)
+    head = f"{option} {path}:"
+    if p.is_dir():
+        raise ValueError(f"{head} is a directory -> fix: give the name of a file (inside it, or elsewhere)")
+    parent = p.parent
+    if not parent.exists():
+        raise ValueError(f"{head} the directory {parent} does not exist -> fix: create it first "
+                         f"(mkdir -p {parent}) or write elsewhere")
+    if not parent.is_dir():
+        raise ValueError(f"{head} {parent} is a file, not a directory -> fix: choose another path")
+    if not os.access(parent, os.W_OK):
+        raise ValueError(f"{head} the directory {parent} is not writable -> fix: write to a directory you may write to")
