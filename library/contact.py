@@ -40,6 +40,16 @@ def _tangents(n):
     return t1, np.cross(n, t1)
 
 
+def _lift_off(name, t, outputs):
+    """The note of a contact whose normal force ``N`` pulls: from when a real one would lift off."""
+    N = outputs.get("N")
+    if N is None or not np.nanmin(N, initial=0.0) < 0.0:
+        return []
+    k = int(np.argmax(N < 0.0))
+    return [f"{name}.N < 0 from t = {t[k]:.4g} s: the contact pulls the body onto the plane there "
+            f"(contacts are bilateral; a real wheel or ball would lift off)"]
+
+
 class DiskContact(Joint):
     """A thin disk (knife-edge wheel) of radius ``r`` rolling without slip on a plane.
 
@@ -115,6 +125,10 @@ class DiskContact(Joint):
         out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
         return out
 
+    def result_notes(self, name, t, outputs):
+        """The contact holds the wheel bilaterally: where ``N < 0`` a real wheel would lift off."""
+        return _lift_off(name, t, outputs)
+
 
 class SphereContact(Joint):
     """A ball of radius ``r`` rolling without slip on a plane.
@@ -162,6 +176,10 @@ class SphereContact(Joint):
         out = {"N": -lam.get("normal", np.nan), "F_1": -lam.get("slip_1", np.nan), "F_2": -lam.get("slip_2", np.nan)}
         out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
         return out
+
+    def result_notes(self, name, t, outputs):
+        """The contact holds the ball bilaterally: where ``N < 0`` a real ball would lift off."""
+        return _lift_off(name, t, outputs)
 
 
 def _numbers(owner, **values):

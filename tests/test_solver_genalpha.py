@@ -280,7 +280,7 @@ def test_first_step_is_required():
         GeneralizedAlpha(Pendulum(), 0.0, pendulum_start(), 1.0)
     with pytest.raises(ValueError, match="rho_inf"):
         GeneralizedAlpha(Pendulum(), 0.0, pendulum_start(), 1.0, first_step=0.01, rho_inf=1.5)
-    assert GeneralizedAlpha.capabilities() == dict(implicit=True, adaptive=False, max_index=3,
+    assert GeneralizedAlpha.capabilities() == dict(implicit=True, adaptive=False, one_step=True, max_index=3,
                                                    problem="mechanical")
 
 

@@ -184,6 +184,38 @@ class Joint(Component):
         """
         return {}
 
+    def result_notes(self, name, t, outputs):
+        """Notes this joint adds to a simulation result's message (optional).
+
+        Called once per run by the post-processing, for every joint, with the joint's result
+        columns. A joint uses it to say what only it knows about its results, e.g. a contact
+        whose normal force pulls where a real contact would let go (the framework cannot tell
+        which columns mean what).
+
+        Parameters
+        ----------
+        name : str
+            The joint's name in the model (the column prefix).
+        t : ndarray (n,)
+            Output times (s).
+        outputs : dict
+            ``{suffix: ndarray (n,)}``: every column ``<name>.<suffix>`` of this joint
+            (coordinates, speeds, reactions ``f.x``.., and the entries of :meth:`outputs`).
+
+        Returns
+        -------
+        list of str
+            One sentence per note (default: none).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from mbcomp.modeling.roles import Joint
+        >>> Joint().result_notes("hinge", np.array([0.0, 1.0]), {"phi": np.zeros(2)})
+        []
+        """
+        return []
+
     #: what breaks down near a zero of :meth:`singularity`, and how to avoid it (for messages)
     singularity_reason = "the joint reached a singular position"
     singularity_fix = "change the geometry or the start so it is avoided"

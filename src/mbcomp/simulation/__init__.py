@@ -1,4 +1,10 @@
-"""Simulation: the driver (``simulate``), run monitors, post-processing and the ``Result``."""
+"""Simulation: the driver (``simulate``), run monitors, post-processing and the ``Result``.
+
+:mod:`.setup` checks a request and resolves the system, :mod:`.driver` steps it
+(:mod:`.stepping`: the run and its per-step hooks; :mod:`.monitors`: singular positions;
+:mod:`.stops`: how a run that stops early says why), :mod:`.postprocess` computes the
+result columns of :class:`~.result.Result`.
+"""
 from .driver import ALL_METHODS, FORMULATIONS, METHODS, simulate
 from .result import Result
 

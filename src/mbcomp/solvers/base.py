@@ -3,9 +3,11 @@
 Modelled on ``scipy.integrate.OdeSolver``: a solver is constructed at ``(t0, y0)`` with a
 ``t_bound``; the driver calls :meth:`Stepper.step` until ``status`` is ``"finished"`` or
 ``"failed"``, reads ``t``, ``y`` and interpolates inside the last step with
-:meth:`Stepper.dense_output`. Each class *declares* what it can do (``implicit``,
-``adaptive``, ``max_index``, the ``problem`` kind it accepts) so the driver never
-special-cases a solver by name, and counts its work in :attr:`Stepper.stats`.
+:meth:`Stepper.dense_output`, and moves the state after a step with
+:meth:`Stepper.reset_state` (a projection). Each class *declares* what it can do
+(``implicit``, ``adaptive``, ``one_step``, ``max_index``, the ``problem`` kind it accepts) so
+the driver never special-cases a solver by name, and counts its work in
+:attr:`Stepper.stats` under common names (``nsteps, nreject, nfev, njev, nlu, restarts``).
 
 Problem kinds
 -------------
@@ -27,7 +29,7 @@ Examples
 >>> import numpy as np
 >>> from mbcomp.solvers.base import Stepper
 >>> Stepper.capabilities()
-{'implicit': False, 'adaptive': False, 'max_index': 0, 'problem': 'ode'}
+{'implicit': False, 'adaptive': False, 'one_step': True, 'max_index': 0, 'problem': 'ode'}
 """
 from __future__ import annotations
 
@@ -110,17 +112,36 @@ class Stepper:
     ----------
     t, y, t_old : current time, state, time before the last step.
     status : {"running", "finished", "failed"}
-    stats : dict with ``nsteps, nreject, nfev, njev, nlu`` (and solver-specific counters).
+    stats : dict with ``nsteps, nreject, nfev, njev, nlu, restarts`` (and solver-specific
+        counters such as ``nnewton``); a counter a solver cannot know is left out.
+
+    Class attributes (declared, never inferred from a name)
+    -------------------------------------------------------
+    implicit : bool
+        Solves nonlinear equations per step (a Newton iteration with factorizations).
+    adaptive : bool
+        Chooses its step size from ``rtol``, ``atol``; ``False``: fixed step ``first_step``.
+    one_step : bool
+        Keeps no history of past steps, so it continues from a state moved by
+        :meth:`reset_state`; ``False`` (multistep methods): its history cannot be moved, so
+        :meth:`reset_state` restarts it when the move exceeds the tolerance.
+    max_index : int
+        Highest DAE index it steps (0: ODEs only).
+    problem : {"ode", "dae", "mechanical"}
+        The problem kind it steps.
     """
 
     implicit = False
     adaptive = False
+    one_step = True
     max_index = 0
     problem = "ode"
 
     @classmethod
     def capabilities(cls):
-        return dict(implicit=cls.implicit, adaptive=cls.adaptive, max_index=cls.max_index, problem=cls.problem)
+        """The declared class attributes as a dict."""
+        return dict(implicit=cls.implicit, adaptive=cls.adaptive, one_step=cls.one_step, max_index=cls.max_index,
+                    problem=cls.problem)
 
     def __init__(self, problem, t0, y0, t_bound, rtol=1e-6, atol=1e-8, first_step=None, max_step=np.inf):
         self.prob = problem
@@ -131,7 +152,7 @@ class Stepper:
         self.rtol, self.atol = rtol, atol
         self.first_step, self.max_step = first_step, max_step
         self.status = "running" if self.t < self.t_bound else "finished"
-        self.stats = dict(nsteps=0, nreject=0, nfev=0, njev=0, nlu=0)
+        self.stats = dict(nsteps=0, nreject=0, nfev=0, njev=0, nlu=0, restarts=0)
 
     def step(self):
         """Advance one step; returns ``None`` or, on failure, the message (status ``"failed"``)."""
@@ -147,9 +168,19 @@ class Stepper:
         return None
 
     def reset_state(self, y):
-        """Continue from a modified state ``y`` at the current time (the driver's projection);
-        solvers that keep derived data (``fun`` at ``y``) override this to refresh it."""
+        """Continue from a modified state ``y`` at the current time (the driver's projection).
+
+        One-step solvers that keep derived data (``fun`` at ``y``) override this to refresh
+        it; multistep solvers override it to restart from ``y`` when ``y`` differs from their
+        state by more than the tolerance (counted in ``stats["restarts"]``)."""
         self.y = np.array(y, dtype=float)
+
+    def moved_beyond_tolerance(self, y):
+        """Whether ``y`` differs from the current state by more than ``atol + rtol |y|`` in
+        some component (when a multistep solver must restart after a projection)."""
+        y = np.asarray(y, float)
+        scale = self.atol + self.rtol * np.abs(y)
+        return bool(np.max(np.abs(y - self.y) / scale, initial=0.0) > 1.0)
 
     def _step(self):  # pragma: no cover - abstract
         raise NotImplementedError

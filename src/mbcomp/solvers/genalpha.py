@@ -42,7 +42,7 @@ Examples
 --------
 >>> from mbcomp.solvers.genalpha import GeneralizedAlpha
 >>> GeneralizedAlpha.capabilities()
-{'implicit': True, 'adaptive': False, 'max_index': 3, 'problem': 'mechanical'}
+{'implicit': True, 'adaptive': False, 'one_step': True, 'max_index': 3, 'problem': 'mechanical'}
 """
 from __future__ import annotations
 
@@ -245,6 +245,7 @@ class GeneralizedAlpha(Stepper):
 
     implicit = True
     adaptive = False
+    one_step = True
     max_index = 3
     problem = "mechanical"
     #: fresh iteration matrices allowed per step
@@ -407,6 +408,28 @@ class GeneralizedAlpha(Stepper):
         sol, info = self._getrs(lu, piv, rs * r)
         return -cs * sol
 
+    def _newton_scale(self, x_n, x_pred):
+        """One norm for the whole step (iterates may wander far from the solution), scaled per
+        block (udot, lam) by its magnitude so that near-zero components do not dominate."""
+        scale = np.empty_like(x_pred)
+        for blk in (slice(0, self.nu), slice(self.nu, None)):
+            mag = max(float(np.max(np.abs(x_n[blk]), initial=0.0)), float(np.max(np.abs(x_pred[blk]), initial=0.0)))
+            scale[blk] = self.atol + self.rtol * mag
+        return scale
+
+    def _correction(self, t1, x):
+        """``(dx, q1, u1)``: the Newton correction at the iterate ``x`` and its stage values;
+        ``dx`` is ``None`` where something is not finite."""
+        nu = self.nu
+        q1, u1, _ = self._stage(x[:nu])
+        if q1 is None or not np.isfinite(q1).all():
+            return None, q1, u1
+        r = self._residual(t1, q1, u1, x[:nu], x[nu:])
+        if not np.isfinite(r).all():
+            return None, q1, u1
+        dx = self._solve(r)
+        return (dx if np.isfinite(dx).all() else None), q1, u1
+
     def _newton(self, t1, h, x_pred, x_n):
         """Solve the step equations for ``x = (udot_{n+1}, lam_{n+1})`` from ``x_pred``.
 
@@ -443,12 +466,7 @@ class GeneralizedAlpha(Stepper):
                               f"correction {err:.3g}, rate {rate_s}); a smaller step size (h, first_step) may help")
 
         x = x_pred.copy()
-        # one norm for the whole step (iterates may wander far from the solution), scaled per
-        # block (udot, lam) by its magnitude so that near-zero components do not dominate
-        scale = np.empty_like(x)
-        for blk in (slice(0, nu), slice(nu, None)):
-            mag = max(float(np.max(np.abs(x_n[blk]), initial=0.0)), float(np.max(np.abs(x_pred[blk]), initial=0.0)))
-            scale[blk] = self.atol + self.rtol * mag
+        scale = self._newton_scale(x_n, x_pred)
         j = 0  # index of the current iterate
         if self._lu is None or abs(self._lu[4] - h) > 1e-3 * h:
             if not refresh(x, j):
@@ -458,14 +476,8 @@ class GeneralizedAlpha(Stepper):
         it, total, damp = 0, 0, 1.0
         err, rate = np.inf, None
         while True:
-            q1, u1, _ = self._stage(x[:nu])
-            ok = q1 is not None and np.isfinite(q1).all()
-            if ok:
-                r = self._residual(t1, q1, u1, x[:nu], x[nu:])
-                ok = np.isfinite(r).all()
-            if ok:
-                dx = self._solve(r)
-                ok = np.isfinite(dx).all()
+            dx, q1, u1 = self._correction(t1, x)
+            ok = dx is not None
             total += 1
             it += 1
             self.stats["nnewton"] += 1

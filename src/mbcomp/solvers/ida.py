@@ -52,11 +52,12 @@ class IDA(Stepper):
     >>> from types import SimpleNamespace
     >>> from mbcomp.solvers.ida import IDA
     >>> IDA.capabilities()
-    {'implicit': True, 'adaptive': True, 'max_index': 2, 'problem': 'dae'}
+    {'implicit': True, 'adaptive': True, 'one_step': False, 'max_index': 2, 'problem': 'dae'}
     """
 
     implicit = True
     adaptive = True
+    one_step = False  # variable-order BDF: its history cannot be projected
     max_index = 2
     problem = "dae"
 
@@ -76,24 +77,40 @@ class IDA(Stepper):
         self._fail = None
         atol_v = np.full(problem.n, float(atol))
         atol_v[idx >= 2] = 1e20  # leave index-2 variables out of the error test
-        opts = dict(rtol=float(rtol), atol=atol_v, algebraic_idx=np.flatnonzero(E == 0.0).tolist() or None,
-                    max_order=int(max_order), max_num_steps=100000)
+        self._opts = dict(rtol=float(rtol), atol=atol_v, algebraic_idx=np.flatnonzero(E == 0.0).tolist() or None,
+                          max_order=int(max_order), max_num_steps=100000)
         if first_step:
-            opts["first_step"] = float(first_step)
+            self._opts["first_step"] = float(first_step)
         if np.isfinite(max_step):
-            opts["max_step"] = float(max_step)
-        self._ida = _IDA(self._res, **opts)
+            self._opts["max_step"] = float(max_step)
+        self._make = _IDA
+        self._njev_done = 0  # Jacobians of the SUNDIALS solvers before the last restart
+        self._start()
+        self._old = None
+
+    def _start(self):
+        """A fresh SUNDIALS solver at the current ``(t, y)`` (no history)."""
+        self._ida = self._make(self._res, **self._opts)
         self.yp = self._derivative(self.t, self.y)
         out = self._ida.init_step(self.t, self.y, self.yp)
         if not out.success:
             raise StepFailure(f"IDA could not start at t={self.t:g}: {out.message}")
-        self._old = None
+
+    def reset_state(self, y):
+        """Continue from a projected state ``y``: BDF's history cannot be projected, so IDA
+        restarts from ``y`` (at order 1) when ``y`` moved by more than the tolerance, else it
+        keeps its own state."""
+        if self.moved_beyond_tolerance(y):
+            self.y = np.array(y, dtype=float)
+            self._njev_done = self.stats["njev"]
+            self._start()
+            self.stats["restarts"] += 1
 
     def _res(self, t, y, yp, res):
         try:
             F = self.prob.fun(t, np.array(y))
-        except Exception as exc:  # noqa: BLE001 - reported as the step's failure, not from inside the C code
-            self._fail = exc
+        except BaseException as exc:  # noqa: BLE001 - re-raised by _step, not from inside the C code
+            self._fail = self._fail or exc  # the first: later calls see the NaN residual it leaves
             res[:] = np.nan
             return
         self.stats["nfev"] += 1
@@ -112,9 +129,9 @@ class IDA(Stepper):
             out = self._ida.step(self.t_bound, method="onestep", tstop=self.t_bound)
         except Exception as exc:  # noqa: BLE001
             raise StepFailure(f"IDA failed at t={self.t:g}: {exc}") from None
-        if self._fail is not None:
+        if self._fail is not None:  # the model's own exception (or Ctrl-C), with its traceback
             exc, self._fail = self._fail, None
-            raise StepFailure(f"IDA: the residual failed at t={self.t:g}: {exc}")
+            raise exc
         if not out.success:
             raise StepFailure(f"IDA failed at t={self.t:g}: {out.message} (error test or Newton failures with the "
                               "step size at its minimum: stiff or singular dynamics, an index above 2, or tolerances "
@@ -125,8 +142,8 @@ class IDA(Stepper):
         self.yp = np.array(np.atleast_2d(out.yp)[-1], dtype=float)
         self._old = (t0, y0, yp0)
         self.stats["nsteps"] += 1
-        self.stats["njev"] = int(out.njev)
-        self.stats["nlu"] = int(out.njev)
+        self.stats["njev"] = self._njev_done + int(out.njev)
+        self.stats["nlu"] = self.stats["njev"]
 
     def dense_output(self):
         t0, y0, yp0 = self._old

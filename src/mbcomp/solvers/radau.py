@@ -37,7 +37,7 @@ Examples
 >>> from types import SimpleNamespace
 >>> from mbcomp.solvers.radau import Radau5
 >>> Radau5.capabilities()
-{'implicit': True, 'adaptive': True, 'max_index': 3, 'problem': 'dae'}
+{'implicit': True, 'adaptive': True, 'one_step': True, 'max_index': 3, 'problem': 'dae'}
 """
 from __future__ import annotations
 
@@ -296,6 +296,7 @@ class Radau5(Stepper):
 
     implicit = True
     adaptive = True
+    one_step = True
     max_index = 3
     problem = "dae"
 
@@ -495,7 +496,6 @@ class Radau5(Stepper):
         if self.h is None:
             self.h = self._initial_step()
         h = min(self.h, self.max_step)
-        M = self.mass
         kind, reason, history = "none", "", ""
         n_fail = n_singular = 0
         while True:
@@ -529,15 +529,7 @@ class Radau5(Stepper):
                     n_fail += 1
                     h *= 0.5
                     continue
-            # starting values: extrapolated collocation polynomial of the last step
-            if self._dense is not None:
-                Z0 = (self._dense(t + C * h) - y[:, None]).T
-                if not np.all(np.isfinite(Z0)):
-                    Z0 = np.zeros((3, self.n))
-            else:
-                Z0 = np.zeros((3, self.n))
-            scale0 = self._scale(h, y)
-            ok, Z, n_iter, info = self._newton(t, y, h, Z0, scale0)
+            ok, Z, n_iter, info = self._newton(t, y, h, self._predict(t, y, h), self._scale(h, y))
             if not ok:
                 reason, fac = info
                 kind = "newton"
@@ -551,20 +543,7 @@ class Radau5(Stepper):
                 continue
             theta = info
             y_new = y + Z[2]
-            # ---- error estimate
-            ZE = (D_ERR @ Z) / h
-            MZE = M * ZE
-            err_vec = _solve(self.LU_real, self.f + MZE)
-            scale = self._scale(h, y, y_new)
-            err = self._norm(err_vec, scale)
-            if err >= 1.0 and (self.first or n_fail > 0) and np.isfinite(err):
-                f1 = self._fun(t, y + err_vec)
-                if np.all(np.isfinite(f1)):
-                    err_vec = _solve(self.LU_real, f1 + MZE)
-                    err = self._norm(err_vec, scale)
-            if not np.isfinite(err):
-                err = np.inf
-            err = max(err, 1e-10)
+            err = self._error(t, y, h, Z, y_new, n_fail)
             fac = min(SAFETY, SAFETY * (2 * NEWTON_MAXITER + 1) / (n_iter + 2 * NEWTON_MAXITER))
             quot = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, err ** 0.25 / fac))
             h_new = h / quot
@@ -578,7 +557,36 @@ class Radau5(Stepper):
                     self.LU_real = None
                 continue
             break
-        # ---- accepted
+        self._accept(t, y, h, Z, y_new, err, quot, h_new, n_fail, theta, last)
+
+    def _predict(self, t, y, h):
+        """Starting values of the stage increments (3, n): the last step's collocation
+        polynomial extrapolated (zero at the first step or if it is not finite)."""
+        if self._dense is not None:
+            Z0 = (self._dense(t + C * h) - y[:, None]).T
+            if np.all(np.isfinite(Z0)):
+                return Z0
+        return np.zeros((3, self.n))
+
+    def _error(self, t, y, h, Z, y_new, n_fail):
+        """Scaled local error of the step (>= 1e-10; ``inf`` if not finite), with the
+        improved estimate after a rejection or at the first step (Hairer-Wanner IV.8)."""
+        MZE = self.mass * ((D_ERR @ Z) / h)
+        err_vec = _solve(self.LU_real, self.f + MZE)
+        scale = self._scale(h, y, y_new)
+        err = self._norm(err_vec, scale)
+        if err >= 1.0 and (self.first or n_fail > 0) and np.isfinite(err):
+            f1 = self._fun(t, y + err_vec)
+            if np.all(np.isfinite(f1)):
+                err_vec = _solve(self.LU_real, f1 + MZE)
+                err = self._norm(err_vec, scale)
+        if not np.isfinite(err):
+            err = np.inf
+        return max(err, 1e-10)
+
+    def _accept(self, t, y, h, Z, y_new, err, quot, h_new, n_fail, theta, last):
+        """Take the accepted step; choose the next step size (Gustafsson's predictive
+        controller) and whether the Jacobian and LU factors are kept."""
         if not self.first and self.h_acc is not None:
             facgus = (self.h_acc / h) * (err ** 2 / self.err_acc) ** 0.25 / SAFETY
             facgus = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, facgus))

@@ -1,0 +1,266 @@
+"""Run monitors: what the formulations cannot see, checked at every accepted step.
+
+A formulation integrates whatever its equations say; near a singular position they still
+say something, only no longer the truth. The driver (:func:`mbcomp.simulate`) therefore
+hands every accepted step to the monitors a model needs (:func:`monitors_for`), each of
+which ends the run with a :class:`SingularPosition` naming the cause and the time:
+
+:class:`RedundantRows`
+    Rows dropped as redundant at the start (``system.row_mask``) must stay satisfied: a row
+    dependent only at the start position (a four-bar started flat, a slider-crank started at
+    a dead centre with a loop that closes there by coincidence) is a singular start, and the
+    loop would otherwise open silently.
+:class:`ConstraintRank`
+    The smallest relative singular value ``sigma_min / sigma_max`` of the kept constraint
+    Jacobian (``stats["min_constraint_sigma"]``: how close the run came to a singular
+    position); below :attr:`ConstraintRank.SIGMA_MIN` the position is singular.
+:class:`JointSingularities`
+    Joints that know where their own equations break down (``Joint.singularity``: a rolling
+    disk lying flat) report their distance from it; below
+    :attr:`JointSingularities.JOINT_MIN` the run fails with the joint's reason and fix.
+
+A solver may step *over* a singular position (BDF and fixed-step methods at a flat four-bar
+did, then followed another branch). Both the rank and the joint monitors therefore keep the
+step-end values of the last three steps in one :class:`StepWindow`; when the middle one is
+a local minimum below the monitor's bracket, the window locates the minimum along the dense
+output of the two steps around it.
+
+Examples
+--------
+>>> import numpy as np
+>>> from mbcomp.simulation.monitors import StepWindow
+>>> w = StepWindow(bracket=1.0)
+>>> line = lambda t: np.array([t, 1.0])          # dense output [q, u] of a step: q = t
+>>> for t0, t1 in ((-2.0, -1.0), (-1.0, 0.5), (0.5, 2.0)):
+...     w.push(t0, t1, {"dist": abs(t1)}, line)
+>>> w.dips()
+['dist']
+>>> t, d = w.locate(lambda t, q, u: abs(q[0] - 0.2), nq=1, nu=1)
+>>> round(t, 6), d < 1e-9
+(0.2, True)
+"""
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from ..assembly.system import MultibodySystem
+from ..errors import SimulationError
+
+__all__ = ["SingularPosition", "StepEnd", "StepWindow", "RedundantRows", "ConstraintRank", "JointSingularities",
+           "monitors_for"]
+
+
+class SingularPosition(SimulationError):
+    """A monitor ended the run; results after ``t`` (s) are not valid (the position where the
+    motion stopped being defined may lie inside a step whose outputs were already kept)."""
+
+    def __init__(self, msg, t):
+        super().__init__(msg)
+        self.t = t
+
+
+class StepEnd:
+    """The state ``qu = [q, u]`` at the end of an accepted step, with the unmasked evaluation
+    computed once for every monitor that needs it."""
+
+    def __init__(self, system, t, qu):
+        self.system, self.t = system, t
+        self.q, self.u = qu[: system.nq], qu[system.nq: system.nq + system.nu]
+
+    @cached_property
+    def ev(self):
+        return self.system.evaluate(self.t, self.q, self.u, masked=False)
+
+
+class StepWindow:
+    """Step-end values of the last three accepted steps and the dense output of the last two.
+
+    Parameters
+    ----------
+    bracket : float
+        A local minimum of the step-end values below this is located along the dense output.
+    """
+
+    def __init__(self, bracket):
+        self.bracket = bracket
+        self._steps = []  # (t_start, t_end, {name: value at t_end}, dense [q, u])
+
+    def push(self, t_prev, t, values, dense):
+        """Add an accepted step from ``t_prev`` to ``t`` (s) with its step-end ``values``."""
+        self._steps = (self._steps + [(t_prev, t, values, dense)])[-3:]
+
+    def dips(self):
+        """Names whose middle step-end value is a local minimum below :attr:`bracket`."""
+        if len(self._steps) < 3:
+            return []
+        (_, _, v0, _), (_, _, v1, _), (_, _, v2, _) = self._steps
+        return [n for n, v in v1.items() if v < v0.get(n, np.inf) and v < v2.get(n, np.inf) and v < self.bracket]
+
+    def locate(self, value, nq, nu, normalize=None):
+        """``(t, value)`` at the minimum of ``value(t, q, u)`` along the last two steps (bounded
+        scalar search on the dense output; ``q`` normalized by ``normalize`` if given)."""
+        from scipy.optimize import minimize_scalar
+
+        (a0, a1, _, da), (_, b1, _, db) = self._steps[-2:]
+
+        def at(tt):
+            qu = da(tt) if tt <= a1 else db(tt)
+            q = qu[:nq] if normalize is None else normalize(qu[:nq])
+            return value(tt, q, qu[nq: nq + nu])
+
+        r = minimize_scalar(at, bounds=(a0, b1), method="bounded", options=dict(xatol=1e-12 * max(1.0, abs(b1))))
+        return float(r.x), float(r.fun)
+
+
+class RedundantRows:
+    """Rows dropped as redundant at the start stay satisfied (else: a singular start).
+
+    Parameters
+    ----------
+    system : MultibodySystem
+        Initialized (``row_mask`` set) with rows dropped.
+    atol : float or array
+        The run's absolute tolerance; a dropped row may be violated by ``1e-6 + 1e3 atol``.
+    """
+
+    def __init__(self, system, atol):
+        self.system = system
+        self.dropped = ~system.row_mask
+        self.tol = 1e-6 + 1e3 * float(np.max(atol))
+
+    def check(self, end, t_prev, dense):
+        ev = end.ev
+        if not ev.Phi.size:
+            return
+        bad = np.abs(ev.Phi[self.dropped])
+        if bad.size and bad.max() > self.tol:
+            names = [n for n, d in zip(self.system.constraint_names(all_rows=True), self.dropped) if d]
+            worst = names[int(np.argmax(bad))]
+            raise SingularPosition(
+                f"the constraint row {worst} was dropped at the start as redundant (dependent on the "
+                f"others there) but is violated by {bad.max():.3g} at t={end.t:g}: the start position is "
+                "singular (a flat or dead-centre position where the loop's rank drops) -> start the "
+                "mechanism away from it (change the fixed start values)", end.t)
+
+    def stats(self):
+        return {}
+
+
+class ConstraintRank:
+    """The kept constraint Jacobian keeps its rank; tracks the closest approach.
+
+    Parameters
+    ----------
+    system : MultibodySystem
+        With loops (cut joints).
+    """
+
+    BRACKET = 1e-2
+    SIGMA_MIN = 1e-6  # a four-bar 1e-8 m from flat: 4e-5; passing exactly through flat: <= 1.6e-7
+
+    def __init__(self, system):
+        self.system = system
+        mask = system.row_mask
+        self.dropped = None if mask is None or mask.all() else ~mask
+        self.sigma_min = 1.0
+        self.window = StepWindow(self.BRACKET)
+
+    def sigma(self, ev):
+        """Smallest relative singular value of the kept rows of ``ev.C`` (0: rank lost)."""
+        C = ev.C if self.dropped is None else ev.C[~self.dropped]
+        if not C.shape[0]:
+            return 1.0
+        sv = np.linalg.svd(C, compute_uv=False)
+        if not (sv.size and sv[0] > 0):
+            return 1.0
+        return float(sv[-1] / sv[0]) if sv.size == C.shape[0] else 0.0
+
+    def _singular(self, t, rel):
+        return SingularPosition(
+            f"the mechanism reached a singular position at t={t:g}: the constraint Jacobian lost "
+            f"rank (smallest relative singular value {rel:.2g}); beyond it the motion is not unique "
+            "(a flat or dead-centre position) -> change the geometry or the start so it is avoided", t)
+
+    def check(self, end, t_prev, dense):
+        rel = self.sigma(end.ev)
+        self.sigma_min = min(self.sigma_min, rel)
+        if rel < self.SIGMA_MIN:
+            raise self._singular(end.t, rel)
+        self.window.push(t_prev, end.t, {"sigma": rel}, dense)
+        if self.window.dips():
+            sysm = self.system
+            ts, smin = self.window.locate(lambda tt, q, u: self.sigma(sysm.evaluate(tt, q, u, masked=False)),
+                                          sysm.nq, sysm.nu, sysm.normalize)
+            self.sigma_min = min(self.sigma_min, smin)
+            if smin < self.SIGMA_MIN:
+                raise self._singular(ts, smin)
+
+    def stats(self):
+        return {"min_constraint_sigma": self.sigma_min}
+
+
+class JointSingularities:
+    """Joints with a :meth:`~mbcomp.modeling.roles.Joint.singularity` stay away from it.
+
+    Parameters
+    ----------
+    system : MultibodySystem
+    edges : list
+        The topology edges of those joints.
+    """
+
+    JOINT_MIN = 1e-3  # a joint's own distance from where its equations break down (a flat disk)
+    JOINT_BRACKET = 0.1
+
+    def __init__(self, system, edges):
+        self.system, self.edges = system, edges
+        self.window = StepWindow(self.JOINT_BRACKET)
+
+    def distances(self, t, q, u):
+        """``{joint: distance}`` at ``(t, q, u)`` for the joints that report one."""
+        sysm = self.system
+        jets = MultibodySystem.kinematics(sysm, t, q, u)  # the numeric path: a program traced only evaluate
+        out = {}
+        for e in self.edges:
+            d = e.comp.singularity(jets[e.node_a], jets[e.node_b], sysm.P[e.name])
+            if d is not None:
+                out[e.name] = d
+        return out
+
+    def _failure(self, name, t, dist):
+        comp = self.system.topology.edge(name).comp
+        return SingularPosition(f"{name}: {comp.singularity_reason} at t={t:g} (distance {dist:.2g}); beyond it "
+                                f"the motion is not defined -> {comp.singularity_fix}", t)
+
+    def check(self, end, t_prev, dense):
+        dist = self.distances(end.t, end.q, end.u)
+        for name, d in dist.items():
+            if d < self.JOINT_MIN:
+                raise self._failure(name, end.t, d)
+        self.window.push(t_prev, end.t, dist, dense)
+        sysm = self.system
+        for name in self.window.dips():
+            t, d = self.window.locate(lambda tt, q, u, name=name: self.distances(tt, q, u).get(name, np.inf),
+                                      sysm.nq, sysm.nu, sysm.normalize)
+            if d < self.JOINT_MIN:
+                raise self._failure(name, t, d)
+
+    def stats(self):
+        return {}
+
+
+def monitors_for(system, atol):
+    """The monitors ``system`` needs, in the order they check a step: joint singularities,
+    dropped rows, the constraint Jacobian's rank (the last two only for loops)."""
+    out = []
+    joints = [e for e in system.topology.edges if e.kind == "joint" and e.comp.has_singularity]
+    if joints:
+        out.append(JointSingularities(system, joints))
+    if system.topology.cut:
+        mask = system.row_mask
+        if mask is not None and not mask.all():
+            out.append(RedundantRows(system, atol))
+        out.append(ConstraintRank(system))
+    return out

@@ -1,0 +1,236 @@
+"""One integration: the stepper, the kept outputs, and what happens after every accepted step.
+
+:class:`Run` holds the state of one integration of a formulation by a stepper class: the
+stepper now stepping (a new one after a restart), the outputs kept so far (``[q, u]`` at
+the output times), the counters. After every accepted step the driver calls the run's
+hooks in order, each a :class:`StepHook`:
+
+1. :class:`Monitoring` -- the run monitors (:mod:`mbcomp.simulation.monitors`), before the
+   step's outputs are kept;
+2. :class:`KeepOutputs` -- interpolate the step's outputs from its dense output (projected
+   when the formulation projects);
+3. :class:`Projection` -- move the state back onto the constraint manifold; the stepper
+   continues from it or restarts (:meth:`mbcomp.solvers.base.Stepper.reset_state`);
+4. :class:`Repartition` -- when the formulation must choose its coordinates again, restart
+   the stepper from the state written in the new ones;
+5. :class:`Progress` -- the progress bar.
+
+Examples
+--------
+>>> import numpy as np, mbcomp
+>>> from mbcomp.formulations import build
+>>> from mbcomp.solvers import STEPPERS
+>>> from mbcomp.simulation.stepping import Run, hooks_for
+>>> from mbcomp.library import World, Prismatic, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+>>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=1.0))
+>>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+>>> form = build("lagrange", "ode", mbcomp.assemble(m))
+>>> run = Run(form, STEPPERS["RK45"], np.linspace(0.0, 1.0, 3), np.zeros(2), rtol=1e-10, atol=1e-12)
+>>> hooks = hooks_for(run, monitors=[], progress=False)
+>>> _ = run.start()
+>>> while not run.done:
+...     if run.advance():
+...         for hook in hooks:
+...             hook(run)
+>>> np.round(np.array(run.ys)[:, 0], 6).tolist()    # s = -g t^2 / 2 at t = 0, 0.5, 1
+[0.0, -1.22625, -4.905]
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import SimulationError
+from .monitors import StepEnd
+
+__all__ = ["Run", "StepHook", "Monitoring", "KeepOutputs", "Projection", "Repartition", "Progress", "hooks_for"]
+
+
+class Run:
+    """The state of one integration.
+
+    Parameters
+    ----------
+    form : Formulation
+    stepper : type
+        A :class:`~mbcomp.solvers.base.Stepper` class whose ``problem`` is ``form.problem``.
+    t_out : ndarray
+        Output times (s); the run ends at ``t_out[-1]``.
+    y0 : ndarray
+        Start state of the formulation (projected first when it projects).
+    rtol, atol, max_step, h
+        Stepper options (``h``: the first or fixed step, s).
+
+    Attributes
+    ----------
+    stepper : Stepper
+        The stepper now stepping; ``steppers`` lists every one made (restarts).
+    ys : list of ndarray
+        ``[q, u]`` at ``t_out[:len(ys)]``.
+    t_prev : float
+        Start of the last step (s).
+    stats : dict
+        ``steps`` (step attempts), ``restarts`` (by repartition), ``projections``.
+    """
+
+    def __init__(self, form, stepper, t_out, y0, *, rtol=1e-6, atol=1e-8, max_step=np.inf, h=None):
+        self.form, self.stepper_class, self.t_out = form, stepper, t_out
+        self.options = dict(rtol=rtol, atol=atol, first_step=h, max_step=max_step)
+        self.projects = bool(form.projects)
+        t0 = t_out[0]
+        self.t_prev = t0
+        y = form.project(t0, y0) if self.projects else y0
+        self.ys = [np.array(form.full(t0, y), dtype=float)]
+        self.stats = dict(steps=0, restarts=0, projections=0)
+        self.steppers = []
+        self.stepper = None
+        self._y_start = y
+        self._dense = None
+
+    def start(self, t=None, y=None):
+        """Make a new stepper at ``(t, y)`` (default: the run's start)."""
+        t = self.t_out[0] if t is None else t
+        y = self._y_start if y is None else y
+        self.stepper = self.stepper_class(self.form, t, y, self.t_out[-1], **self.options)
+        self.steppers.append(self.stepper)
+        return self.stepper
+
+    @property
+    def done(self):
+        """Every output kept, or the stepper stopped."""
+        return len(self.ys) >= len(self.t_out) or self.stepper.status != "running"
+
+    @property
+    def t(self):
+        """Time reached (s): the end of the last accepted step."""
+        return self.stepper.t if self.stepper is not None else self.t_out[0]
+
+    @property
+    def t_kept(self):
+        """Time of the last output kept (s)."""
+        return self.t_out[len(self.ys) - 1]
+
+    def advance(self):
+        """One step; ``True`` when it moved (its hooks are due), ``SimulationError`` when the
+        stepper failed (its message names the cause)."""
+        s = self.stepper
+        self.t_prev = s.t
+        msg = s.step()
+        if s.status == "failed":
+            raise SimulationError(msg)
+        self.stats["steps"] += 1
+        self._dense = None
+        return s.t != self.t_prev
+
+    def step_dense(self):
+        """The stepper's dense output ``y(t)`` inside the last step (made once per step)."""
+        if self._dense is None:
+            self._dense = self.stepper.dense_output()
+        return self._dense
+
+    def dense(self):
+        """``[q, u](t)`` inside the last step."""
+        d, full = self.step_dense(), self.form.full
+        return lambda tt: full(tt, d(tt))
+
+    def trim(self, t):
+        """Forget outputs after ``t`` (s); the start is always kept."""
+        while len(self.ys) > 1 and self.t_out[len(self.ys) - 1] > t:
+            self.ys.pop()
+
+    def counters(self):
+        """The run's work: ``steps``, ``restarts``, ``projections``, and the steppers' counters
+        summed over restarts (``njev``, ``nlu_integrator``, ``nreject`` and ``nnewton`` where
+        the steppers count them)."""
+        out = dict(self.stats)
+        total = {}
+        for s in self.steppers:
+            for key, val in s.stats.items():
+                total[key] = total.get(key, 0) + int(val)
+        out["restarts"] += total.get("restarts", 0)
+        out["njev"] = total.get("njev", 0)
+        out["nlu_integrator"] = total.get("nlu", 0)
+        out.update({key: total[key] for key in ("nreject", "nnewton") if key in total})
+        return out
+
+
+class StepHook:
+    """Something done after every accepted step (``hook(run)``); ``close()`` when the run ends."""
+
+    def __call__(self, run):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def close(self):
+        """Release what the hook holds (the progress bar)."""
+
+
+class Monitoring(StepHook):
+    """The run monitors check the step's end state and its dense output."""
+
+    def __init__(self, monitors):
+        self.monitors = monitors
+
+    def __call__(self, run):
+        s = run.stepper
+        end = StepEnd(run.form.system, s.t, run.form.full(s.t, s.y))
+        for m in self.monitors:
+            m.check(end, run.t_prev, run.dense())
+
+
+class KeepOutputs(StepHook):
+    """Interpolate the outputs inside the step (projected when the formulation projects)."""
+
+    def __call__(self, run):
+        form, t_out, ys, t = run.form, run.t_out, run.ys, run.stepper.t
+        while len(ys) < len(t_out) and t_out[len(ys)] <= t:
+            tk = t_out[len(ys)]
+            yk = run.step_dense()(tk)
+            ys.append(np.array(form.full(tk, form.project(tk, yk) if run.projects else yk), dtype=float))
+
+
+class Projection(StepHook):
+    """Move the state back onto the constraint manifold; the stepper continues from it."""
+
+    def __call__(self, run):
+        s = run.stepper
+        s.reset_state(run.form.project(s.t, s.y))
+        run.stats["projections"] += 1
+
+
+class Repartition(StepHook):
+    """Restart from the state written in newly chosen coordinates, when the formulation asks."""
+
+    def __call__(self, run):
+        s = run.stepper
+        if run.form.needs_repartition(s.t, s.y):
+            run.start(s.t, run.form.repartition(s.t, s.y))
+            run.stats["restarts"] += 1
+
+
+class Progress(StepHook):
+    """A progress bar (tqdm) in simulated seconds, shown when the run lasts over two seconds."""
+
+    def __init__(self, t0, t1):
+        from tqdm.auto import tqdm
+
+        self.bar = tqdm(total=float(t1 - t0), unit="s sim", delay=2.0, leave=False, disable=None,
+                        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")
+
+    def __call__(self, run):
+        self.bar.update(float(run.stepper.t - run.t_prev))
+
+    def close(self):
+        self.bar.close()
+
+
+def hooks_for(run, monitors, progress):
+    """The hooks of a run, in order: monitors (if any), outputs, projection (if the
+    formulation projects), repartition, progress bar (if asked)."""
+    hooks = [Monitoring(monitors)] if monitors else []
+    hooks.append(KeepOutputs())
+    if run.projects:
+        hooks.append(Projection())
+    hooks.append(Repartition())
+    if progress:
+        hooks.append(Progress(run.t_out[0], run.t_out[-1]))
+    return hooks

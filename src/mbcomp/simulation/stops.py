@@ -1,0 +1,91 @@
+"""How a run stops early: the messages that say why, and SIGTERM as an interruption.
+
+The driver keeps the results of every accepted step whatever stops a run; these are the
+words it uses. A component's law that raises is named from the exception's traceback
+(:func:`mbcomp.modeling.blame.blame`: the component, the law and its line) with the time of
+the evaluation that raised; an interruption names what interrupted.
+
+Examples
+--------
+>>> from mbcomp.simulation.stops import law_failure
+>>> def tau(t, phi, w):
+...     raise ValueError("table ends at 0.3 s")
+>>> try:
+...     tau(0.31, 0.0, 0.0)
+... except ValueError as exc:
+...     msg = law_failure(exc, 0.3, 0.3)
+>>> msg.split(" (")[0]
+'the model: tau raised ValueError at t=0.31: table ends at 0.3 s'
+"""
+from __future__ import annotations
+
+import signal
+import threading
+from contextlib import contextmanager
+from numbers import Real
+
+from ..modeling.blame import blame
+
+__all__ = ["Terminated", "sigterm_interrupts", "law_failure", "interruption", "time_of"]
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived during the integration (raised by :func:`sigterm_interrupts`' handler).
+    A ``BaseException``, like ``KeyboardInterrupt``, so that no ``except Exception`` in a
+    model's code swallows it."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated("SIGTERM")
+
+
+@contextmanager
+def sigterm_interrupts():
+    """While the block runs, SIGTERM raises :class:`Terminated`; the previous handler is
+    restored after. Only in the main thread (the only one that receives signals), and only
+    when the previous handler was set from Python (else it could not be restored)."""
+    previous = signal.getsignal(signal.SIGTERM) if threading.current_thread() is threading.main_thread() else None
+    if previous is not None:
+        signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def time_of(exc):
+    """The time (s) of the innermost evaluation in the traceback of ``exc``: the ``t`` of the
+    deepest frame holding a real-valued ``t`` (``None`` if no frame does)."""
+    tb, t = exc.__traceback__, None
+    while tb is not None:
+        v = tb.tb_frame.f_locals.get("t")
+        if isinstance(v, Real) and not isinstance(v, bool):
+            t = float(v)
+        tb = tb.tb_next
+    return t
+
+
+def law_failure(exc, t_reached, t_kept):
+    """``"<Class> '<path>': <law> raised <Error> at t=<s>: <text> (<file:line in law>); ..."``.
+
+    Parameters
+    ----------
+    exc : Exception
+        Raised while evaluating the model, with its traceback.
+    t_reached : float
+        End of the last accepted step (s): the raising evaluation was in the step after it.
+    t_kept : float
+        Last output time kept (s).
+    """
+    b = blame(exc)
+    who = b.who if b.component is not None else "the model"
+    t = time_of(exc)
+    when = f"at t={t:g}" if t is not None else f"in the step from t={t_reached:g}"
+    return (f"{who}: {b.law} raised {type(exc).__name__} {when}: {exc} ({b.where}) -> fix the law or the "
+            f"model's parameters; the results up to t={t_kept:g} s are kept")
+
+
+def interruption(how, t_reached, t_kept):
+    """``"interrupted <how> at t=<s> s; the results up to t=<s> s are kept"``."""
+    return f"interrupted {how} at t={t_reached:g} s; the results up to t={t_kept:g} s are kept"

@@ -1,0 +1,170 @@
+"""A run that cannot go on still returns its results: a law that raises, Ctrl-C, SIGTERM.
+
+Every case uses a pendulum driven by a torque law that misbehaves from t = 0.3 s and is zero
+before: up to the last accepted step the run is the undisturbed pendulum's, so the kept
+results must equal an undisturbed run's at the same times (same steps, same dense output),
+stop before 0.3 s, and the message must say what stopped the run and when.
+"""
+import os
+import re
+import signal
+import threading
+
+import numpy as np
+import pytest
+
+import mbcomp
+from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World, WorldForce
+
+T_BAD = 0.3
+METHODS = ["RK45", "LSODA", "radau5", "ida", "genalpha"]
+
+
+def pendulum(law):
+    """A 1 m, 1 kg pendulum released at 0.5 rad, with a hinge torque ``law(t, phi, w)``."""
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("hinge", Revolute(phi0=0.5))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    motor = m.add("motor", Torque(tau=law))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    m.connect(j.axis, motor.flange_b)
+    return m
+
+
+def run(law, method):
+    extra = dict(h=1e-3) if method == "genalpha" else {}
+    return mbcomp.simulate(pendulum(law), t_end=1.0, method=method, n_out=101, rtol=1e-8, atol=1e-10, **extra)
+
+
+def quiet(t, phi, w):
+    return 0.0
+
+
+@pytest.fixture(scope="module")
+def undisturbed():
+    return {method: run(quiet, method) for method in METHODS}
+
+
+def assert_kept_as_undisturbed(res, ref):
+    n = len(res.time)
+    assert 1 < n < len(ref.time)
+    assert res.time[-1] < T_BAD and res.time[-1] >= T_BAD - 0.05  # up to the last accepted step
+    np.testing.assert_array_equal(res.time, ref.time[:n])
+    for name in ("hinge.phi", "hinge.w", "bob.r.x", "energy.total"):
+        np.testing.assert_allclose(res[name], ref[name][:n], rtol=0, atol=1e-12, err_msg=name)
+
+
+def torque_table(t, phi, w):
+    if t >= T_BAD:
+        raise ValueError("the torque table ends at 0.3 s")
+    return 0.0
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_law_that_raises_ends_the_run_as_a_failed_result_naming_component_law_and_time(method, undisturbed):
+    res = run(torque_table, method)
+    assert res.status == "failed"
+    assert "Torque 'motor'" in res.message and "torque_table raised ValueError" in res.message, res.message
+    assert "the torque table ends at 0.3 s" in res.message and "test_driver_keeps_results.py" in res.message
+    t_raised = float(re.search(r"raised ValueError at t=([0-9.e+-]+)", res.message).group(1))
+    assert T_BAD <= t_raised < T_BAD + 0.05  # the time of the evaluation that raised
+    assert f"results up to t={res.time[-1]:g} s are kept" in res.message
+    assert_kept_as_undisturbed(res, undisturbed[method])
+
+
+def test_a_force_law_that_raises_is_named_too(undisturbed):
+    """A WorldForce on the bob whose law fails at 0.3 s (zero before): same pendulum."""
+    def push(t, frame):
+        if t >= T_BAD:
+            raise RuntimeError("sensor lost")
+        return (0.0, 0.0, 0.0)
+
+    m = pendulum(quiet)
+    f = m.add("push", WorldForce(f=push))
+    m.connect(m["bob"].frame_a, f.frame_b)
+    res = mbcomp.simulate(m, t_end=1.0, method="RK45", n_out=101, rtol=1e-8, atol=1e-10)
+    assert res.status == "failed"
+    assert res.message.startswith("WorldForce 'push': push raised RuntimeError at t=0.3"), res.message
+    assert_kept_as_undisturbed(res, undisturbed["RK45"])
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_ctrl_c_returns_the_partial_result_as_interrupted(method, undisturbed):
+    def ctrl_c(t, phi, w):
+        if t >= T_BAD:
+            raise KeyboardInterrupt
+        return 0.0
+
+    res = run(ctrl_c, method)
+    assert res.status == "interrupted" and not res.success
+    assert res.message.startswith("interrupted by Ctrl-C"), res.message
+    assert_kept_as_undisturbed(res, undisturbed[method])
+
+
+def main_thread_only():
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signals reach the main thread only")
+
+
+@pytest.mark.parametrize("method", ["RK45", "ida"])
+def test_sigterm_returns_the_partial_result_and_restores_the_handler(method, undisturbed):
+    main_thread_only()
+    received = []
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: received.append(signum))  # never kill the run
+    sent = []
+
+    def terminate(t, phi, w):
+        if t >= T_BAD and not sent:
+            sent.append(t)
+            os.kill(os.getpid(), signal.SIGTERM)
+        return 0.0
+
+    try:
+        mine = signal.getsignal(signal.SIGTERM)
+        res = run(terminate, method)
+        assert signal.getsignal(signal.SIGTERM) is mine  # restored after the run
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert sent and not received  # the driver's handler took the signal, not the previous one
+    assert res.status == "interrupted"
+    assert res.message.startswith("interrupted by SIGTERM"), res.message
+    assert_kept_as_undisturbed(res, undisturbed[method])
+
+
+def test_sigterm_from_a_timer_interrupts_a_long_run():
+    """A run that would take most of a minute, stopped by SIGTERM from another thread 0.3 s
+    (wall clock) after it started integrating: interrupted, with what was reached kept."""
+    main_thread_only()
+    timers = []
+
+    def law(t, phi, w):  # starts the timer once the integration runs
+        if t > 0.0 and not timers:
+            timers.append(threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGTERM)))
+            timers[0].start()
+        return 0.0
+
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: None)
+    try:
+        res = mbcomp.simulate(pendulum(law), t_end=2000.0, method="RK45", dt_out=0.01, rtol=1e-10, atol=1e-12)
+    finally:
+        timers[0].cancel()
+        signal.signal(signal.SIGTERM, previous)
+    assert res.status == "interrupted" and "SIGTERM" in res.message
+    assert 0.1 < res.time[-1] < 2000.0
+    # what was kept is the pendulum: energy conserved to the tolerance
+    assert np.ptp(res["energy.total"]) < 1e-6
+
+
+def test_a_run_in_a_worker_thread_installs_no_handler():
+    """Signals can only be handled in the main thread: there the driver leaves them alone."""
+    out = {}
+    before = signal.getsignal(signal.SIGTERM)
+    worker = threading.Thread(target=lambda: out.update(res=run(quiet, "RK45")))
+    worker.start()
+    worker.join()
+    assert out["res"].success and signal.getsignal(signal.SIGTERM) is before
+    assert abs(out["res"]["hinge.phi"][-1] - run(quiet, "RK45")["hinge.phi"][-1]) < 1e-12
