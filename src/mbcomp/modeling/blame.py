@@ -3,7 +3,8 @@
 Used wherever mbcomp runs component code and must turn a failure into a message naming the
 component (the driver, the program tracer, the symbolic tracer): the innermost frame whose
 ``self`` is a :class:`~mbcomp.modeling.component.Component` names the component, the last
-frame outside mbcomp's own framework names the law (a user's function or method) and its line.
+frame outside mbcomp's own framework, the standard library and installed packages (numpy,
+scipy) names the law (a user's function or method, or a library component's) and its line.
 
 Examples
 --------
@@ -20,6 +21,7 @@ Examples
 from __future__ import annotations
 
 import pathlib
+import sysconfig
 from dataclasses import dataclass
 from typing import Any
 
@@ -60,11 +62,22 @@ class Blame:
         return f"{type(c).__name__} {c.path!r}" if c is not None else "a component"
 
 
-def _in_framework(filename):
+#: the interpreter's own library and installed packages: numpy or scipy raising inside a law
+#: is the law's failure, not theirs
+_NOT_LAWS = tuple({pathlib.Path(p).resolve() for p in (sysconfig.get_paths()["stdlib"], sysconfig.get_paths()["purelib"],
+                                                     sysconfig.get_paths()["platlib"])})
+
+
+def _in(filename, roots):
     try:
-        return pathlib.Path(filename).resolve().is_relative_to(FRAMEWORK)
+        path = pathlib.Path(filename).resolve()
     except (OSError, ValueError):
-        return False
+        return True  # <frozen ...>: not a user's source file
+    return any(path.is_relative_to(r) for r in roots)
+
+
+def _in_framework(filename):
+    return _in(filename, (FRAMEWORK,) + _NOT_LAWS)
 
 
 def blame(exc, component_types=None) -> Blame:
@@ -81,14 +94,18 @@ def blame(exc, component_types=None) -> Blame:
     from .component import Component
 
     kinds = component_types or (Component,)
-    tb, found, last = exc.__traceback__, None, None
+    tb, found, last, last_outside = exc.__traceback__, None, None, None
     while tb is not None:
         obj = tb.tb_frame.f_locals.get("self")
         if isinstance(obj, kinds):
             found = obj
-        if not _in_framework(tb.tb_frame.f_code.co_filename):
+        filename = tb.tb_frame.f_code.co_filename
+        if not _in_framework(filename):
             last = tb
+        if not _in(filename, (FRAMEWORK,)):
+            last_outside = tb  # fallback: the library installed among site-packages
         tb = tb.tb_next
+    last = last or last_outside
     if last is None:
         return Blame(found, "?", "?")
     co = last.tb_frame.f_code

@@ -44,7 +44,7 @@ from .postprocess import postprocess
 from .result import Result
 from .setup import ALL_METHODS, check_request, output_times, system_of
 from .stepping import Run, hooks_for
-from .stops import Terminated, interruption, law_failure, sigterm_interrupts
+from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts
 
 __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
 
@@ -148,8 +148,9 @@ def integrate(run, monitors, progress=False):
             status, message = "failed", str(exc)
         except (SimulationError, StepFailure) as exc:
             status, message = "failed", str(exc)
-        except np.linalg.LinAlgError as exc:
-            status, message = "failed", f"linear algebra failure: {exc}"
+        except np.linalg.LinAlgError as exc:  # the framework's own solves, or a law's (then name the law)
+            status, message = "failed", (law_failure(exc, run.t, run.t_kept) if raised_in_a_law(exc)
+                                         else f"linear algebra failure: {exc}")
         except Exception as exc:  # noqa: BLE001 - a component's law raised: say who, keep the results
             status, message = "failed", law_failure(exc, run.t, run.t_kept)
         except KeyboardInterrupt:

@@ -26,7 +26,7 @@ from numbers import Real
 
 from ..modeling.blame import blame
 
-__all__ = ["Terminated", "sigterm_interrupts", "law_failure", "interruption", "time_of"]
+__all__ = ["Terminated", "sigterm_interrupts", "law_failure", "raised_in_a_law", "interruption", "time_of"]
 
 
 class Terminated(BaseException):
@@ -84,6 +84,12 @@ def law_failure(exc, t_reached, t_kept):
     when = f"at t={t:g}" if t is not None else f"in the step from t={t_reached:g}"
     return (f"{who}: {b.law} raised {type(exc).__name__} {when}: {exc} ({b.where}) -> fix the law or the "
             f"model's parameters; the results up to t={t_kept:g} s are kept")
+
+
+def raised_in_a_law(exc):
+    """True when a user's or a component's code is in the traceback of ``exc`` (numpy's
+    ``LinAlgError`` from a law is the law's failure, not the formulation's)."""
+    return blame(exc).law != "?"
 
 
 def interruption(how, t_reached, t_kept):

@@ -1,0 +1,37 @@
+"""A failing law is named by its own name, wherever inside numpy or scipy the error surfaced."""
+import numpy as np
+
+import mbcomp
+from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
+from mbcomp.modeling.blame import blame
+
+
+def singular_gain(t, phi, w):
+    """A torque law that inverts a matrix that becomes singular at t = 0.3 s."""
+    K = np.array([[1.0, 0.0], [0.0, max(0.0, 0.3 - t)]])
+    return -float(np.linalg.inv(K)[1, 1]) * 1e-3 * w
+
+
+def test_numpy_raising_inside_a_law_blames_the_law():
+    try:
+        singular_gain(0.5, 0.0, 1.0)
+    except np.linalg.LinAlgError as exc:
+        b = blame(exc)
+    assert b.law == "singular_gain" and "test_blame.py" in b.where and b.component is None
+
+
+def test_the_run_names_component_and_law_not_numpy():
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("hinge", Revolute(phi0=0.5))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    motor = m.add("motor", Torque(tau=singular_gain))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    m.connect(j.axis, motor.flange_b)
+    res = mbcomp.simulate(m, t_end=1.0, n_out=101)
+    assert res.status == "failed"
+    assert "motor" in res.message and "singular_gain" in res.message and "LinAlgError" in res.message
+    assert 0.2 < res.time[-1] < 0.3  # results up to the last accepted step before the law failed
