@@ -37,7 +37,7 @@ import sympy as sm  # noqa: E402
 import sympy.physics.mechanics as me  # noqa: E402
 from scipy.integrate import solve_ivp  # noqa: E402
 
-REFERENCE_JSON = Path(__file__).resolve().parents[2] / "tests" / "data" / "andrews.json"
+REFERENCE_JSON = Path(__file__).resolve().parents[2] / "models" / "data" / "andrews.json"
 
 COORD_NAMES = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
 PARAM_NAMES = (

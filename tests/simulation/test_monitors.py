@@ -2,7 +2,7 @@
 output, the relative rank measure, which monitors a model gets, and what they report.
 
 The monitors' end-to-end behaviour on singular positions (a four-bar passing flat, started
-flat, a disk falling flat) is checked in tests/test_four_bar.py and tests/test_rolling.py.
+flat, a disk falling flat) is checked in tests/mechanisms/test_four_bar.py and tests/mechanisms/test_rolling.py.
 """
 from types import SimpleNamespace
 

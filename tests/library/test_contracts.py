@@ -33,7 +33,7 @@ from mbcomp import Body, Drive, FlangeElement, ForceElement, Ground, Joint
 from mbcomp.jets import FrameJet
 from mbcomp.roles import FrameState
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 CLASSES = [getattr(lib, name) for name in lib.__all__]
 ROLES = (Ground, Body, Joint, ForceElement, FlangeElement, Drive, mbcomp.Model)
 JOINTS = [c for c in CLASSES if issubclass(c, Joint) and c.tree_edge]  # tree-capable joints

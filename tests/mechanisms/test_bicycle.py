@@ -27,7 +27,7 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "models"))
 import bicycle  # noqa: E402
 

@@ -1,6 +1,6 @@
 """Methods that break down say so: a result status with the cause, results kept up to it.
 
-The four-bar's singular positions are in tests/test_four_bar.py; here the solver-level
+The four-bar's singular positions are in tests/mechanisms/test_four_bar.py; here the solver-level
 failures of bench/failure_map.py: a generalized-alpha step too long for Andrews' stiff
 spring (Newton diverges), a mechanism driven unstable until its state overflows, and the
 reports every failed result carries.

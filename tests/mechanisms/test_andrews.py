@@ -1,7 +1,7 @@
 """Andrews' squeezing mechanism (models/andrews.py) against the published problem.
 
 Reference: Hairer & Wanner, Solving ODEs II, sec. VII.7, and the IVP test set problem
-``andrews`` (shared/reference/andrews.md; the numbers in tests/data/andrews.json). The model is composed from
+``andrews`` (shared/reference/andrews.md; the numbers in models/data/andrews.json). The model is composed from
 library components; its tree coordinates are the published angles, so the assembled mass
 matrix, forces and constraints can be compared entry by entry with the published formulas
 (implemented independently below), and the trajectory with the published reference solution.
@@ -20,7 +20,7 @@ from conftest import load_model
 
 AND = load_model("models/andrews.py")
 # a copy of shared/reference/andrews.json (published data), so a clean checkout has it
-REF = json.loads((pathlib.Path(__file__).parent / "data" / "andrews.json").read_text())
+REF = json.loads((pathlib.Path(__file__).resolve().parents[2] / "models" / "data" / "andrews.json").read_text())
 P = REF["parameters"]
 NAMES = REF["coordinates"]  # published order: beta, Theta, gamma, Phi, delta, Omega, epsilon
 JOINT = dict(beta="hinge_O", Theta="hinge_F", gamma="hinge_B", Phi="hinge_G", delta="hinge_A_AG",

@@ -242,7 +242,7 @@ def test_book_equations_1_38_and_1_40_as_printed():
       (phi', theta', psi') = (roll, pitch, yaw), the reverse of the rotation order
       yaw-pitch-roll that mbcomp uses for the angles and rates. Its copy in Example 1.4,
       eq. 1.44, is misprinted: its (2, 3) entry reads cos(theta) sin(theta) instead of
-      cos(theta) sin(phi) (see tests/test_textbook_ch1.py). In eqs. 1.37 and 1.39 the
+      cos(theta) sin(phi) (see tests/textbook/test_textbook_ch1.py). In eqs. 1.37 and 1.39 the
       intermediate axes e_x' (line of nodes) and e_y' carry primes that the text extraction of
       the seed drops; they are not the body axes e_x, e_y.
     """
