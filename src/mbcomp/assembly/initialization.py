@@ -1,18 +1,51 @@
-"""Consistent initialization: positions, then velocities, by Newton least squares.
+"""Consistent initialization: positions, then velocities, on the constraint manifold.
 
 Start values the user gave as plain numbers are *fixed*; values wrapped in
 :class:`~mbcomp.Guess` (and unset values, guess 0) are free. Positions are corrected by
-Gauss-Newton steps of minimum norm in the free directions until the loop-closure
-constraints hold; then the free speeds are corrected so that the velocity constraints hold.
-At the assembled configuration a rank test (QR with column pivoting) finds redundant
-constraint rows, which are dropped and reported.
+Gauss-Newton steps of minimum norm in the free directions, with a line search (the guesses
+may be far off), until the loop-closure constraints hold
+(:func:`~mbcomp.assembly.manifold.close_positions`); then the free speeds are corrected so
+that the velocity constraints hold (:func:`~mbcomp.assembly.manifold.solve_speeds`). At the
+assembled configuration a rank test finds redundant constraint rows (a planar loop written
+with 3-D joints), which are dropped and reported.
+
+Tolerances, each with its reason
+--------------------------------
+``tol = 1e-12`` (:data:`~mbcomp.assembly.manifold.POSITION_TOL`)
+    The positions' Newton stops at ``||Phi|| <= tol``.
+``NOT_CLOSED = 1e-8``
+    A closure residual above it after the Newton steps means the loop cannot be assembled
+    (and a constraint row's residual above it names that row's joint). It is looser than the
+    manifold's acceptance ``ACCEPT_FACTOR * tol`` (1e-9) and kept so: no model of the project
+    ends between the two (all close below 1e-12, four-bars started 1 rad off at their flat
+    position too, converging linearly), but a user's start whose line search stalls there has
+    always been accepted, and 1e-9 would make it an error.
+``VELOCITY_TOL = 1e-12``
+    Velocity-constraint residual below which the start speeds are taken as they are (no
+    solve, so fixed and guessed speeds keep their exact values).
 
 Examples
 --------
->>> from mbcomp import assemble
->>> from mbcomp.initialization import initialize
->>> import importlib.util, pathlib
->>> # see tests/test_initialization.py for complete models
+A slider-crank: the crank angle is fixed, the rod angle and slider position are guesses;
+initialization closes the loop and solves the free speeds.
+
+>>> import mbcomp, numpy as np
+>>> from mbcomp.assembly.initialization import initialize
+>>> from mbcomp.library import World, Revolute, Prismatic, FixedTranslation, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
+>>> crank = m.add("crank", Revolute(n=(0, 0, 1), phi0=0.5, w0=2.0))
+>>> a = m.add("a", FixedTranslation(r=(0.2, 0, 0))); pa = m.add("pa", PointMass(m=1.0))
+>>> rod = m.add("rod", Revolute(n=(0, 0, 1), phi0=mbcomp.Guess(-0.3)))
+>>> b = m.add("b", FixedTranslation(r=(0.6, 0, 0))); pb = m.add("pb", PointMass(m=1.0))
+>>> slide = m.add("slide", Prismatic(n=(1, 0, 0), s0=mbcomp.Guess(0.7)))
+>>> pin = m.add("pin", Revolute(n=(0, 0, 1)))
+>>> m.connect(w.frame_b, crank.frame_a); m.connect(crank.frame_b, a.frame_a); m.connect(a.frame_b, pa.frame_a)
+>>> m.connect(a.frame_b, rod.frame_a); m.connect(rod.frame_b, b.frame_a); m.connect(b.frame_b, pb.frame_a)
+>>> m.connect(w.frame_b, slide.frame_a); m.connect(slide.frame_b, pin.frame_a); m.connect(pin.frame_b, b.frame_b)
+>>> s = mbcomp.assemble(m); init = initialize(s)
+>>> sin_rod = -0.2 * np.sin(0.5) / 0.6          # the rod end stays on the slider's line y = 0
+>>> bool(abs(np.sin(0.5 + init.q[1]) - sin_rod) < 1e-12), float(init.q[0]), float(init.u[0])
+(True, 0.5, 2.0)
 """
 from __future__ import annotations
 
@@ -22,8 +55,12 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import InitializationError, Problem
+from .manifold import POSITION_TOL, close_positions, pivot_partition, rank, solve_speeds
 
-__all__ = ["initialize", "InitialState"]
+__all__ = ["initialize", "InitialState", "NOT_CLOSED", "VELOCITY_TOL"]
+
+NOT_CLOSED = 1e-8
+VELOCITY_TOL = 1e-12
 
 
 @dataclass
@@ -112,15 +149,22 @@ def _measure_rows(system, t, q, u, cut_fixed, which):
     return np.array(res), np.array(rows).reshape(len(rows), system.nu), names
 
 
-def _rank(A, tol=1e-9):
-    if A.size == 0:
-        return 0
-    s = np.linalg.svd(A, compute_uv=False)
-    return int(np.sum(s > tol * max(1.0, s[0])))
-
-
-def initialize(system, t0=0.0, tol=1e-12, max_iter=60):
+def initialize(system, t0=0.0, tol=POSITION_TOL, max_iter=60):
     """Consistent ``(q, u)`` honouring fixed start values; sets ``system.row_mask``.
+
+    Parameters
+    ----------
+    system : MultibodySystem
+    t0 : float
+        Start time, s (prescribed motions).
+    tol : float
+        Position-constraint residual at which the Newton closure stops (m, rad).
+    max_iter : int
+        Newton steps at most.
+
+    Returns
+    -------
+    InitialState
 
     Raises
     ------
@@ -131,91 +175,91 @@ def initialize(system, t0=0.0, tol=1e-12, max_iter=60):
     system.row_mask = None
     q, u, qfix, ufix, cut_fixed = _starts(system)
     q = system.normalize(q)
-    free = ~qfix
-    names_u = system.u_names
-    it = 0
-    scale = 1.0
+    closure = _close_positions(system, t0, q, u, cut_fixed, ~qfix, tol, max_iter)
+    mask, dropped = _independent_rows(system, closure.data.C)
+    if closure.r.size and closure.norm > NOT_CLOSED:
+        def closes_when_free():
+            return _close_positions(system, t0, q, u, cut_fixed, None, tol, max_iter).norm <= NOT_CLOSED
+
+        raise _not_closed(system, closure, qfix, cut_fixed, closes_when_free)
+    system.row_mask = mask
+    u, ev = _close_speeds(system, t0, closure.q, u, ufix, cut_fixed)
+    _check_inertia(system, ev)
+    return InitialState(closure.q, u, mask, dropped, closure.iterations, rank(ev.C), ev.B.shape[0])
+
+
+def _close_positions(system, t0, q, u, cut_fixed, free, tol, max_iter):
+    """Gauss-Newton with line search on ``[Phi; fixed cut-joint coordinates] = 0``, moving the
+    ``free`` directions (all if ``None``); the closure's ``data`` is the unmasked evaluation."""
 
     def residual(qq):
         ev = system.evaluate(t0, qq, u, masked=False)
         r2, C2, _ = _measure_rows(system, t0, qq, u, cut_fixed, "q")
         return np.concatenate((ev.Phi, r2)), np.vstack((ev.C, C2)), ev
 
-    def newton(q, free):
-        r, C, ev = residual(q)
-        norm = np.linalg.norm(r) if r.size else 0.0
-        it = 0
-        while r.size and norm > tol * scale and it < max_iter:
-            it += 1
-            dfree = np.linalg.lstsq(C[:, free], -r, rcond=None)[0] if free.any() else np.zeros(0)
-            du = np.zeros(system.nu)
-            du[free] = dfree
-            step = 1.0
-            while True:
-                qn = system.increment(q, step * du)
-                rn, Cn, evn = residual(qn)
-                nn = np.linalg.norm(rn)
-                if nn < norm or step < 1e-4:
-                    break
-                step *= 0.5
-            if nn >= norm:
-                break
-            q, r, C, ev, norm = qn, rn, Cn, evn, nn
-        return q, r, C, ev, norm, it
+    return close_positions(residual, system.increment, q, columns=free, tol=tol, max_iter=max_iter,
+                           line_search=True)
 
-    q_start = q
-    q, r, C, ev, norm, it = newton(q, free)
-    n_phi = ev.Phi.size
-    # --- rank analysis at the reached configuration ---------------------------------------
-    Cphi = ev.C
-    rank_all = _rank(Cphi)
+
+def _independent_rows(system, C):
+    """Mask of independent rows of the position constraints ``C`` at the assembled
+    configuration (pivoted QR of ``C^T`` keeps the best-conditioned ``rank(C)`` rows) and the
+    names of the dropped ones."""
+    n_phi = C.shape[0]
     mask = np.ones(n_phi, bool)
-    dropped = []
+    rank_all = rank(C)
+    if not n_phi or rank_all == n_phi:
+        return mask, []
+    keep, _ = pivot_partition(C.T, rank_all, tol=0)
+    mask[:] = False
+    mask[keep] = True
     row_names = system.constraint_names(all_rows=True)
-    if n_phi and rank_all < n_phi:
-        _, _, piv = sla.qr(Cphi.T, pivoting=True, mode="economic")
-        keep = np.sort(piv[:rank_all])
-        mask[:] = False
-        mask[keep] = True
-        dropped = [row_names[i] for i in range(n_phi) if not mask[i]]
-    if r.size and norm > 1e-8 * scale:
-        bad_rows = sorted({row_names[i].rsplit(".", 1)[0] for i in range(n_phi) if abs(r[i]) > 1e-8})
-        pos_names = _position_names(system)
-        fixed = list(dict.fromkeys(pos_names[i] for i in range(system.nu)
-                                   if qfix[i] and np.any(np.abs(C[:, i]) > 1e-12)))
-        fixed += [f"{c[0].name}.{c[0].comp.coordinates[0][0]}" for c in cut_fixed if np.any(c[2])]
-        if fixed and newton(q_start, np.ones(system.nu, bool))[4] <= 1e-8 * scale:
-            raise InitializationError([Problem(
-                ", ".join(fixed),
-                f"fixed start values over-specify the mechanism: with them the loop through "
-                f"{', '.join(bad_rows) or 'the cut joints'} cannot close (residual {norm:.3g}), without them it can",
-                "fix fewer start values: wrap the others in Guess(...), e.g. phi0=Guess(0.3)")])
-        raise InitializationError([Problem(
-            ", ".join(bad_rows),
-            f"the kinematic loop cannot be assembled (closure residual {norm:.3g} after {it} Newton steps)",
-            "check lengths and joint axes of the loop (can it close at all?) or give better Guess(...) start values")])
-    # --- velocities ------------------------------------------------------------------------
-    system.row_mask = mask
+    return mask, [row_names[i] for i in range(n_phi) if not mask[i]]
+
+
+def _not_closed(system, closure, qfix, cut_fixed, closes_when_free):
+    """The error for a loop that did not close: over-specified by fixed start values (if
+    ``closes_when_free()``: it closes with all of them free), else not assemblable."""
+    r, C, norm = closure.r, closure.J, closure.norm
+    row_names = system.constraint_names(all_rows=True)
+    n_phi = closure.data.Phi.size
+    bad_rows = sorted({row_names[i].rsplit(".", 1)[0] for i in range(n_phi) if abs(r[i]) > NOT_CLOSED})
+    pos_names = _position_names(system)
+    fixed = list(dict.fromkeys(pos_names[i] for i in range(system.nu)
+                               if qfix[i] and np.any(np.abs(C[:, i]) > 1e-12)))
+    fixed += [f"{c[0].name}.{c[0].comp.coordinates[0][0]}" for c in cut_fixed if np.any(c[2])]
+    if fixed and closes_when_free():
+        return InitializationError([Problem(
+            ", ".join(fixed),
+            f"fixed start values over-specify the mechanism: with them the loop through "
+            f"{', '.join(bad_rows) or 'the cut joints'} cannot close (residual {norm:.3g}), without them it can",
+            "fix fewer start values: wrap the others in Guess(...), e.g. phi0=Guess(0.3)")])
+    return InitializationError([Problem(
+        ", ".join(bad_rows),
+        f"the kinematic loop cannot be assembled (closure residual {norm:.3g} after {closure.iterations} Newton steps)",
+        "check lengths and joint axes of the loop (can it close at all?) or give better Guess(...) start values")])
+
+
+def _close_speeds(system, t0, q, u, ufix, cut_fixed):
+    """Free speeds corrected (minimum norm) so that ``[dPhi/dt; Psi; fixed cut-joint speeds]``
+    vanish; returns ``(u, evaluation)``, or raises when fixed start speeds over-specify."""
     ev = system.evaluate(t0, q, u)
     r2, C2, _ = _measure_rows(system, t0, q, u, cut_fixed, "u")
     Cv = np.vstack((ev.A, C2))
     rv = np.concatenate((ev.Phid, ev.Psi, r2))
-    ufree = ~ufix
-    if rv.size and np.linalg.norm(rv) > 1e-12:
-        if ufree.any():
-            du = np.linalg.lstsq(Cv[:, ufree], -rv, rcond=None)[0]
-            u = u.copy()
-            u[ufree] += du
-        ev = system.evaluate(t0, q, u)
-        rv2 = np.concatenate((ev.Phid, ev.Psi, _measure_rows(system, t0, q, u, cut_fixed, "u")[0]))
-        if np.linalg.norm(rv2) > 1e-8 * max(1.0, np.linalg.norm(u)):
-            fixed = [names_u[i] for i in range(system.nu) if ufix[i] and np.any(np.abs(Cv[:, i]) > 1e-12)]
-            raise InitializationError([Problem(
-                ", ".join(fixed) or "start speeds",
-                f"fixed start speeds over-specify the mechanism (velocity constraint residual {np.linalg.norm(rv2):.3g})",
-                "fix fewer start speeds: wrap the others in Guess(...), e.g. w0=Guess(0.0)")])
-    _check_inertia(system, ev)
-    return InitialState(q, u, mask, dropped, it, _rank(ev.C), ev.B.shape[0])
+    if not rv.size or np.linalg.norm(rv) <= VELOCITY_TOL:
+        return u, ev
+    if (~ufix).any():
+        u = solve_speeds(Cv, rv, u, ~ufix, minimum_norm=True)
+    ev = system.evaluate(t0, q, u)
+    rv2 = np.concatenate((ev.Phid, ev.Psi, _measure_rows(system, t0, q, u, cut_fixed, "u")[0]))
+    if np.linalg.norm(rv2) > 1e-8 * max(1.0, np.linalg.norm(u)):
+        fixed = [system.u_names[i] for i in range(system.nu) if ufix[i] and np.any(np.abs(Cv[:, i]) > 1e-12)]
+        raise InitializationError([Problem(
+            ", ".join(fixed) or "start speeds",
+            f"fixed start speeds over-specify the mechanism (velocity constraint residual {np.linalg.norm(rv2):.3g})",
+            "fix fewer start speeds: wrap the others in Guess(...), e.g. w0=Guess(0.0)")])
+    return u, ev
 
 
 def _check_inertia(system, ev):

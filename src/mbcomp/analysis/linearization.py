@@ -1,0 +1,281 @@
+"""Linearization about a steady state in independent coordinates, eigenvalues, classification.
+
+:func:`linearize` builds the state matrix ``A`` of the perturbation equations
+``dY/dt = A Y`` (seed eq. 7.14) in independent coordinates: position increments along the
+joint speeds (quaternion joints by rotation vectors), minus the directions that moving
+coordinates take (they must be cyclic) and those the holonomic constraints determine, plus
+the independent speeds (:mod:`mbcomp.analysis.reduced`). A perturbed state is mapped onto the
+constraint manifold and its accelerations come from the full saddle-point system, so the
+multiplier terms of holonomic and nonholonomic constraints are in ``A`` exactly (no
+null-space shortcut that would drop them). Derivatives are central differences with
+Richardson extrapolation (error ~1e-11). States that influence nothing (zero columns of
+``A``: ignorable coordinates such as a bicycle's position and heading, conserved speeds) are
+removed and named; each removes one zero root.
+
+:func:`classify` follows seed Section 7.2: a real root > 0 or a complex root with positive
+real part is unstable; roots on the imaginary axis (the rest stable) are marginally stable;
+all real parts negative is asymptotically stable.
+
+Examples
+--------
+The bead on a ring spinning at omega (seed Example 7.1): at the bottom the roots are
+``+-sqrt(omega^2 - g/r)`` (7.34).
+
+>>> import mbcomp
+>>> from mbcomp.library import World, Revolute, PrescribedMotion, FixedTranslation, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
+>>> spin = m.add("spin", Revolute(n=(0, 1, 0))); drive = m.add("drive", PrescribedMotion(s=lambda t: 6.0 * t))
+>>> hinge = m.add("hinge", Revolute(n=(0, 0, 1), phi0=0.0, w0=0.0))
+>>> rod = m.add("rod", FixedTranslation(r=(0, -0.5, 0))); bead = m.add("bead", PointMass(m=0.1))
+>>> m.connect(w.frame_b, spin.frame_a); m.connect(drive.flange_b, spin.axis)
+>>> m.connect(spin.frame_b, hinge.frame_a); m.connect(hinge.frame_b, rod.frame_a); m.connect(rod.frame_b, bead.frame_a)
+>>> lin = mbcomp.linearize(m)
+>>> lin.state_names, lin.classification
+(['hinge.phi', 'hinge.w'], 'unstable')
+>>> round(float(max(lin.eigenvalues.real)), 6)  # sqrt(36 - 9.81/0.5)
+4.047221
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..assembly.initialization import initialize
+from ..errors import SimulationError
+from .evaluation import system_for
+from .reduced import Reduced, direction_names
+from .steady import SteadyState
+
+__all__ = ["Linearization", "linearize", "classify"]
+
+
+def _tol(eigs):
+    """The classification's zero: ``1e-7 (1 + max |lambda|)``, the linearization's accuracy."""
+    return 1e-7 * (1.0 + (np.abs(eigs).max() if len(eigs) else 0.0))
+
+
+def classify(eigenvalues, tol=None):
+    """Seed Section 7.2: ``"unstable"`` if a root has a positive real part (real or complex),
+    ``"marginally stable"`` if the largest real part is zero (roots on the imaginary axis),
+    ``"asymptotically stable"`` if all real parts are negative. Real parts within ``tol``
+    (default ``1e-7 (1 + max |lambda|)``, the accuracy of the linearization) count as zero.
+
+    Examples
+    --------
+    >>> from mbcomp.stability import classify
+    >>> classify([-1 + 2j, -1 - 2j]), classify([3j, -3j]), classify([0.5, -0.5])
+    ('asymptotically stable', 'marginally stable', 'unstable')
+    """
+    eigs = np.asarray(eigenvalues, complex)
+    if eigs.size == 0:
+        return "marginally stable"
+    tol = _tol(eigs) if tol is None else tol
+    top = eigs.real.max()
+    if top > tol:
+        return "unstable"
+    if top >= -tol:
+        return "marginally stable"
+    return "asymptotically stable"
+
+
+@dataclass(frozen=True)
+class Linearization:
+    """State matrix of the perturbation equations ``dY/dt = A Y`` about a steady state.
+
+    Attributes
+    ----------
+    A : ndarray (n, n)
+        In units of the states per second.
+    state_names : list of str
+        Position increments (``<joint>.<coordinate>``, or ``<joint>.rot.x|y|z`` for rotation
+        vectors of quaternion joints, body axes) then independent speeds (``<joint>.<speed>``).
+    eigenvalues : ndarray (n,), complex, 1/s
+        Sorted by decreasing real part.
+    eigenvectors : ndarray (n, n), complex
+        Columns, normalized to unit length, in the order of ``eigenvalues``.
+    classification : str
+        :func:`classify` of the eigenvalues.
+    removed : list of str
+        States that influence nothing (zero columns; each carried one zero root), removed.
+    moving : list of str
+        Position directions moving at constant rates (cyclic), not states.
+    state : SteadyState
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.stability import Linearization
+    >>> lin = Linearization(np.array([[0.0, 1.0], [-4.0, 0.0]]), ["x", "v"], np.array([2j, -2j]),
+    ...                     np.eye(2, dtype=complex), "marginally stable", [], [], None)
+    >>> lin.frequencies()
+    array([2., 2.])
+    """
+
+    A: np.ndarray
+    state_names: list
+    eigenvalues: np.ndarray
+    eigenvectors: np.ndarray
+    classification: str
+    removed: list
+    moving: list
+    state: SteadyState = field(repr=False)
+
+    def frequencies(self):
+        """``|Im lambda|`` (rad/s) of each eigenvalue."""
+        return np.abs(self.eigenvalues.imag)
+
+    def modes(self):
+        """Text: each eigenvalue with the states that dominate its eigenvector."""
+        lines = []
+        for k, lam in enumerate(self.eigenvalues):
+            v = self.eigenvectors[:, k]
+            big = np.argsort(-np.abs(v))[:3]
+            parts = ", ".join(f"{self.state_names[i]} {abs(v[i]):.2f}" for i in big if abs(v[i]) > 1e-3)
+            lines.append(f"  {lam.real:+.6g} {lam.imag:+.6g}j   ({parts})")
+        return "\n".join(lines)
+
+    def report(self):
+        head = [f"linearization: {len(self.state_names)} states ({', '.join(self.state_names)})",
+                f"classification: {self.classification}"]
+        if self.moving:
+            head.append(f"moving at constant rates (cyclic, not states): {', '.join(self.moving)}")
+        if self.removed:
+            head.append(f"removed (influence nothing; one zero root each): {', '.join(self.removed)}")
+        return "\n".join(head + ["eigenvalues (1/s), dominant states:", self.modes()])
+
+    def to_dict(self):
+        return dict(state_names=self.state_names, A=self.A.tolist(),
+                    eigenvalues=[[float(e.real), float(e.imag)] for e in self.eigenvalues],
+                    classification=self.classification, removed=self.removed, moving=self.moving)
+
+
+def linearize(model, state=None, params=None, t=None, remove_ignorable=True, backend="python"):
+    """Linearize about a steady state in independent coordinates (seed eqs. 7.9-7.14).
+
+    Parameters
+    ----------
+    model : Model or MultibodySystem
+    state : SteadyState or (q, u), optional
+        Default: the model's consistent start state (its start values must describe the
+        steady state; coordinates with nonzero rates must be cyclic).
+    params : dict, optional
+        Runtime parameter values ``{"component.param": value}``.
+    t : float, optional
+        Time of the linearization (default the state's, or 0); matters only for
+        prescribed motions.
+    remove_ignorable : bool
+        Remove states that influence nothing (zero columns of ``A``).
+    backend : {"python", "numeric", "c", "auto"}
+        What evaluates the model (see :func:`mbcomp.simulate`): the generated Python program
+        by default (10-20x faster here than ``"numeric"``, equal to rounding).
+
+    Returns
+    -------
+    Linearization
+
+    Raises
+    ------
+    SimulationError
+        The state is not steady (names the largest acceleration), or a moving coordinate
+        is not cyclic (the motion is not an equilibrium in these coordinates).
+    """
+    system = system_for(model, params, backend)
+    state = _steady_state(system, state, t)
+    if system.row_mask is None:
+        initialize(system, state.t)
+    red = Reduced(system, state.t if t is None else float(t), state.q, state.u)
+    dnames = direction_names(system)
+    names = [dnames[i] for i in red.pind] + [system.u_names[i] for i in red.vind]
+    moving = [dnames[i] for i in red.moving]
+    f0 = red.rate(np.zeros(red.n))
+    uscale = max(1.0, float(np.abs(state.u).max(initial=0.0)))
+    _check_steady(f0, uscale, names, moving)
+    scale = np.concatenate((np.ones(red.pind.size), np.full(red.vind.size, uscale)))
+    A = red.jacobian(red.rate, red.n, scale)
+    _check_cyclic(red, A, moving)
+    removed = _ignorable(red, A, f0, scale) if remove_ignorable and A.size else []
+    keep = [j for j in range(len(names)) if j not in removed]
+    A = A[np.ix_(keep, keep)]
+    if A.size:
+        lam, V = np.linalg.eig(A)
+        order = np.lexsort((-lam.imag, -lam.real))
+        lam, V = lam[order], V[:, order]
+    else:
+        lam, V = np.zeros(0, complex), np.zeros((0, 0), complex)
+    return Linearization(A, [names[j] for j in keep], lam, V, classify(lam), [names[j] for j in removed], moving,
+                         state)
+
+
+def _steady_state(system, state, t):
+    """``state`` as a :class:`SteadyState` (default: the system's consistent start state)."""
+    if state is None:
+        init = initialize(system, 0.0 if t is None else t)
+        return SteadyState(init.q, init.u, 0.0 if t is None else float(t), {}, np.nan, "the model's start state")
+    if not isinstance(state, SteadyState):
+        q, u = state
+        return SteadyState(np.asarray(q, float), np.asarray(u, float), 0.0 if t is None else float(t), {}, np.nan,
+                           "given")
+    return state
+
+
+def _check_steady(f0, uscale, names, moving):
+    """Refuse a state whose rates ``f0`` do not vanish, naming the largest and the likely cause."""
+    acc_tol = 1e-7 * uscale * (1.0 + uscale)
+    if not f0.size or np.abs(f0).max() <= acc_tol:
+        return
+    k = int(np.argmax(np.abs(f0)))
+    hint = "find the steady state first (mbcomp.stability.steady_states or --steady)"
+    turning = [n for n in moving if ".rot." in n]
+    if turning:  # body-axis speeds of a quaternion joint turn with the body in any steady rotation
+        hint = ("if the motion is steady (e.g. a steady precession), it is not steady in these coordinates: "
+                f"{', '.join(turning)} turn(s) the body-axis speeds of a quaternion joint, so no steady state "
+                "exists here -> model the motion with Revolute chains whose angles are cyclic (precession, "
+                "nutation, spin); otherwise " + hint)
+    raise SimulationError(f"not a steady state: d/dt of {names[k]} is {f0[k]:.3g} (all must vanish) -> {hint}")
+
+
+def _check_cyclic(red, A, moving):
+    """The motion is an equilibrium only if the moving coordinates are cyclic: their values
+    must not change any rate."""
+    if not red.moving.size:
+        return
+    Am = red.jacobian(lambda y: red.rate(np.zeros(red.n), moving=y), red.moving.size, np.ones(red.moving.size))
+    bad = np.abs(Am).max(axis=0) if Am.size else np.zeros(0)
+    lim = 1e-6 * (1.0 + np.abs(A).max(initial=0.0))
+    if bad.size and bad.max() > lim:
+        k = int(np.argmax(bad))
+        raise SimulationError(
+            f"not a steady motion in these coordinates: {moving[k]} moves at a constant rate but the dynamics "
+            f"depend on its value (sensitivity {bad[k]:.3g}) -> model that motion with a joint whose angle is "
+            "cyclic (e.g. Revolute chains for precession and spin instead of a Spherical/FreeMotion quaternion)")
+
+
+def _ignorable(red, A, f0, scale):
+    """Indices of the states that influence nothing, in the order they were removed: a zero
+    column of ``A`` among the kept rows, confirmed by a finite perturbation."""
+    lim = 1e-7 * (1.0 + np.abs(A).max())
+    flim = 1e-10 * (1.0 + np.abs(A).max())
+    keep = list(range(A.shape[1]))
+    removed = []
+
+    def inert(j):
+        """A finite perturbation (0.1 of the state's scale) changes no kept rate: the column
+        is zero structurally, not merely small at linear order (near a stability boundary)."""
+        e = np.zeros(red.n)
+        e[j] = 0.1 * scale[j]
+        try:
+            d = red.rate(e) - f0
+        except SimulationError:
+            return False
+        return np.abs(d[keep]).max() <= flim * 0.1 * scale[j]
+
+    changed = True
+    while changed:
+        changed = False
+        for j in list(keep):
+            if np.abs(A[keep, j]).max() <= lim and inert(j):
+                keep.remove(j)
+                removed.append(j)
+                changed = True
+    return removed
