@@ -11,10 +11,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 def load_model(relpath):
     """A model file (``models/...py``, relative to the repository root) as a module:
     :func:`mbcomp.load_model_file`, so the tests load models as users and the CLI do."""
-    path = ROOT / relpath
-    if path.parent == ROOT / "tests":  # a test module reused for its derivation: no build()
-        return load_module(relpath)
-    return mbcomp.load_model_file(path)
+    return mbcomp.load_model_file(ROOT / relpath)
 
 
 def load_module(relpath):
