@@ -56,19 +56,12 @@ from __future__ import annotations
 import json
 
 from .evaluation import BACKENDS, system_for  # noqa: F401  (BACKENDS: a name of this module)
-from .linearization import Linearization, _tol, classify, linearize  # noqa: F401
-from .reduced import Reduced, dependent_directions, direction_names
+from .linearization import Linearization, classify, linearize
 from .steady import SteadyState, parse_steady, steady_states
-from .sweep import Sweep, _locate, _Other, sweep  # noqa: F401
+from .sweep import Sweep, sweep
 
 __all__ = ["SteadyState", "Linearization", "Sweep", "steady_states", "linearize", "classify", "sweep",
-           "parse_steady"]
-
-# the names this module had before it was split (issue 14), for the CLI and user code
-_system = system_for
-_direction_names = direction_names
-_Reduced = Reduced
-_pivot_columns = dependent_directions
+           "parse_steady", "system_for", "to_json"]
 
 
 def to_json(obj, path):

@@ -145,7 +145,7 @@ def _stability(args):
         from .sweep import stability_sweep
 
         return stability_sweep(args, mod, build_kw, runtime, steady, title)
-    system = st._system(call_build(mod, build_kw, args.model), runtime or None, args.backend)
+    system = st.system_for(call_build(mod, build_kw, args.model), runtime or None, args.backend)
     if steady is None:
         return _start_state(args, system, title)
     return _steady_states(args, system, steady, title)

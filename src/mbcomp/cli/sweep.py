@@ -46,7 +46,7 @@ class Sweep:
         self.names = list(steady[1]) if steady is not None else []
         name = self.name
         if "." in name:  # a component parameter: one model, the value set at run time
-            self.base = st._system(call_build(mod, build_kw, args.model), runtime or None, args.backend)
+            self.base = st.system_for(call_build(mod, build_kw, args.model), runtime or None, args.backend)
             try:
                 self.base.with_params({name: float(self.grid[0])})
             except ModelError as exc:
@@ -75,7 +75,7 @@ class Sweep:
             return st.linearize(mdl, params=self.params, backend=self.args.backend)
         fixed, unknown = self.steady
         v = self.current
-        system = st._system(mdl, self.params, self.args.backend)  # traced once for both steps
+        system = st.system_for(mdl, self.params, self.args.backend)  # traced once for both steps
         sols = st.steady_states(system, unknown, fixed)
         if not sols:
             raise SimulationError(f"no steady state with {self.args.steady} at {self.name} = {v!r}")
