@@ -251,6 +251,3 @@ class Topology:
                 return e
         raise KeyError(name)
 
-    @property
-    def n_bodies(self):
-        return len(self.bodies)

@@ -142,14 +142,3 @@ class LagrangeIndex1(Formulation):
         ev = c.data
         u = solve_speeds(ev.A, np.concatenate((ev.Phid, ev.Psi)), u)
         return np.concatenate((c.q, u))
-
-
-
-def __getattr__(name):
-    # transitional: DAlembert lived here until issue 14; remove once simulation/driver.py
-    # imports it from mbcomp.formulations
-    if name == "DAlembert":
-        from .dalembert import DAlembert
-
-        return DAlembert
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -41,7 +41,6 @@ class Model(Component):
         self._aliases: dict[str, str] = {}
         self._outputs: dict[str, tuple] = {}
         self._exposed: dict[str, PortRef] = {}
-        self.defaults: dict = {}
 
     # --- building -------------------------------------------------------------------------
     def add(self, name: str, component: Component) -> Component:

@@ -35,7 +35,7 @@ class Terminated(BaseException):
     model's code swallows it."""
 
 
-def _raise_terminated(signum, frame):
+def _raise_terminated(_signum, _frame):
     raise Terminated("SIGTERM")
 
 
