@@ -27,7 +27,7 @@ from mbcomp.initialization import initialize
 from mbcomp.library import (Fixed, FixedTranslation, PrescribedMotion, Revolute, RigidBody, RotationalSpringDamper,
                             SpringDamper, Torque, World, WorldForce)
 
-from conftest import load_model
+from conftest import load_model, load_module
 
 FIELDS = ("M", "f", "Phi", "Phid", "C", "cb", "B", "b", "Bb", "Psi")
 BACKENDS = ["python", pytest.param("c", marks=pytest.mark.skipif(c_compiler() is None, reason="no C compiler"))]
@@ -70,7 +70,7 @@ MODELS = {
     "chain_3d": lambda: load_model("models/chain_3d.py").build(N=3),
     "pendulum_10": lambda: load_model("models/n_link_pendulum.py").build(N=10),
     "mixed": mixed_model,
-    "sleigh (nonholonomic, user-written joint)": lambda: __import__("test_nonholonomic").sleigh(),
+    "sleigh (nonholonomic, user-written joint)": lambda: load_module("tests/mechanisms/test_nonholonomic.py").sleigh(),
 }
 
 
@@ -112,6 +112,23 @@ def test_program_equals_numeric_evaluation(systems, name, backend, tmp_path):
         assert c.evaluate(0.0, q, u).C.shape[0] > 0
 
 
+def test_a_compiled_system_is_the_same_system_with_a_program_evaluator(systems):
+    """compile_system swaps the evaluator only: same class, topology, parameters and row mask;
+    the input stays numeric, and the compiled system's numeric evaluation is still there."""
+    s = systems["slider_crank"]
+    c = compile_system(s)
+    assert type(c) is type(s) and c is not s
+    assert c.topology is s.topology and c.row_mask is s.row_mask and c.P == s.P
+    assert (s.backend, c.backend, c.with_params({"crank.m": 2.0}).backend) == ("numeric", "python", "python")
+    rng = np.random.default_rng(3)
+    q, u = s.normalize(rng.normal(size=s.nq)), rng.normal(size=s.nu)
+    ev_gen, ev_num = c.evaluate(0.2, q, u), c.evaluate_numeric(0.2, q, u)
+    assert type(ev_gen) is not type(ev_num) and type(s.evaluate(0.2, q, u)) is type(ev_num)
+    assert_same(s.evaluate(0.2, q, u), ev_num, tol=0.0)  # the numeric path itself, bit for bit
+    assert_same(ev_num, ev_gen)
+    np.testing.assert_array_equal(c.q_rate_numeric(q, u), s.q_rate(q, u))
+
+
 def test_graph_shares_and_folds():
     """Hash-consing, folding and hoisting on the expression graph itself."""
     from mbcomp.codegen import Graph
@@ -128,7 +145,7 @@ def test_graph_shares_and_folds():
         src = g.python_source([s, x * 0.0, p1 * p2], "f")
     assert "+" in src and src.count(" * ") == 2, src  # x*y and p1*p2, nothing for x*0
     ns = {}
-    exec(src, dict(importlib.import_module("mbcomp.codegen.program")._PY_ENV), ns)
+    exec(src, dict(importlib.import_module("mbcomp.codegen.printers").PY_ENV), ns)
     assert ns["f"]([0.3, -1.2], [], 0.0, [], [2.0, 5.0]) == pytest.approx([0.3 * -1.2 + 7.0, 0.0, 10.0])
 
 

@@ -6,7 +6,7 @@
   every difference to zero); 6.3 after the change from the model's relative joint angles to
   the book's absolute angles, 6.4 with the spin prescribed (only beta remains).
 * Example 4.7: ``M q'' - f`` equals the independent Lagrange derivation of
-  ``tests/test_textbook_ex4_7.py`` and differs from the book's (4.20) by exactly its wrong
+  ``tests/textbook/test_textbook_ex4_7.py`` and differs from the book's (4.20) by exactly its wrong
   velocity-product terms; (4.21) is right.
 * Numeric identity: the lambdified symbolic ``M``, ``f``, ``dq/dt`` (and for the slider-crank
   ``Phi``, ``C``, ``cb``) equal ``evaluate`` at random states to 1e-12, for a 3-D model with a
@@ -20,7 +20,7 @@ import pytest
 import sympy as sp
 
 import mbcomp
-from conftest import load_model
+from conftest import load_model, load_module
 
 EX61 = load_model("models/textbook/ex6_1_pendulum.py")
 EX62 = load_model("models/textbook/ex6_2_cart_pendulum.py")
@@ -127,7 +127,7 @@ def test_ex6_4_spinning_pendulum_is_eq_6_63():
 @pytest.fixture(scope="module")
 def ex47():
     """The independent Lagrange derivation and the book's (4.20), (4.21) of test_textbook_ex4_7."""
-    return load_model("tests/test_textbook_ex4_7.py")
+    return load_module("tests/textbook/test_textbook_ex4_7.py")
 
 
 def test_ex4_7_equals_lagrange_and_shows_the_book_4_20_error(ex47):

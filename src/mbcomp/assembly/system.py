@@ -14,6 +14,15 @@ and returns a :class:`MultibodySystem`. The system evaluates, for given ``(t, q,
 Parameters are runtime values: :meth:`MultibodySystem.with_params` returns a system with new
 values that shares the topology; nothing is re-derived.
 
+Evaluators
+----------
+``evaluate`` and ``q_rate`` are delegated to the system's *evaluator*: by default a
+:class:`NumericEvaluator`, which runs the jet recursion (:meth:`MultibodySystem.evaluate_numeric`);
+:func:`mbcomp.codegen.compile_system` returns the same system with an evaluator running a
+generated program (``system.backend`` is then ``"python"`` or ``"c"``). Everything else --
+kinematics, reactions, energies, ``increment`` -- is the system's own numeric code, and the
+numeric evaluation stays reachable as ``evaluate_numeric`` and ``q_rate_numeric``.
+
 Examples
 --------
 >>> import numpy as np
@@ -40,7 +49,7 @@ from ..geometry.kinematics import cross, skew
 from ..modeling.roles import FrameState
 from ..assembly.topology import ROOT, Topology
 
-__all__ = ["assemble", "MultibodySystem", "Evaluation"]
+__all__ = ["assemble", "MultibodySystem", "Evaluation", "NumericEvaluator"]
 
 
 def _dtype(t, q, u):
@@ -82,8 +91,74 @@ class Evaluation:
         return np.vstack((self.C, self.B)) if self.B.size else self.C
 
 
+class NumericEvaluator:
+    """The default evaluator: the system's own numeric jet recursion.
+
+    An evaluator is bound to one system and gives its ``evaluate(t, q, u, masked)`` and
+    ``q_rate(q, u)``; ``backend`` names it, ``stats`` counts what it did, ``rebind(system)``
+    is the same evaluator for a system with other parameter values (see
+    :meth:`MultibodySystem.with_params`). A generated program
+    (:class:`mbcomp.codegen.ProgramEvaluator`) follows the same contract.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> system = mbcomp.assemble(m)
+    >>> type(system.evaluator).__name__, system.backend
+    ('NumericEvaluator', 'numeric')
+    >>> float(system.evaluator.evaluate(0.0, np.zeros(1), np.zeros(1)).f[0])   # -m g
+    -19.62
+    """
+
+    backend = "numeric"
+    __slots__ = ("system",)
+
+    def __init__(self, system):
+        self.system = system
+
+    def evaluate(self, t, q, u, masked=True):
+        return self.system.evaluate_numeric(t, q, u, masked)
+
+    def q_rate(self, q, u):
+        return self.system.q_rate_numeric(q, u)
+
+    def rebind(self, system):
+        return NumericEvaluator(system)
+
+    @property
+    def stats(self):
+        return {"backend": self.backend}
+
+    @property
+    def source(self):
+        raise AttributeError("a numeric system has no generated source: mbcomp.codegen.compile_system(system) "
+                             "generates one")
+
+
 class MultibodySystem:
-    """Numeric evaluation of an assembled model (see module docstring)."""
+    """Numeric evaluation of an assembled model (see module docstring).
+
+    ``evaluate`` and ``q_rate`` go through :attr:`evaluator` (:class:`NumericEvaluator` unless
+    the system was compiled, see :func:`mbcomp.codegen.compile_system`); ``backend`` says
+    which: ``"numeric"``, ``"python"`` or ``"c"``.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World()); j = m.add("j", Revolute())
+    >>> rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0))); bob = m.add("bob", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+    >>> system = mbcomp.assemble(m)
+    >>> system.backend, float(system.evaluate(0.0, np.zeros(1), np.zeros(1)).M[0, 0])   # m l^2
+    ('numeric', 2.0)
+    >>> float(system.with_params({"bob.m": 3.0}).evaluate_numeric(0.0, np.zeros(1), np.zeros(1)).M[0, 0])
+    3.0
+    """
 
     def __init__(self, topology: Topology, params=None):
         self.topology = topo = topology
@@ -109,15 +184,56 @@ class MultibodySystem:
         self._nonholonomic = [e for e in topo.edges if e.kind == "joint" and e.comp.has_velocity_constraints]
         self.row_mask = None  # independent constraint rows, set by consistent initialization
         self._row_names = None
+        self.evaluator = NumericEvaluator(self)
         self._check_static()
 
     def with_params(self, params):
-        """A system with parameter values changed (topology shared, nothing re-derived)."""
+        """A system with parameter values changed (topology shared, nothing re-derived; a
+        compiled system keeps its program)."""
         merged = {f"{c}.{k}": v for c, d in self.params.items() for k, v in d.items()}
         merged.update(params)
         new = MultibodySystem(self.topology, merged)
         new.row_mask = self.row_mask
+        new.evaluator = self.evaluator.rebind(new)
         return new
+
+    def with_evaluator(self, make=None):
+        """This system (same topology, parameter values and row mask) evaluated by
+        ``make(system)``, or by the jet recursion (``make=None``: a numeric copy)."""
+        new = self.variant()
+        if make is not None:
+            new.evaluator = make(new)
+        return new
+
+    def variant(self, *, topology=None, P=None, g=None):
+        """A numeric copy with its topology, parameter values ``P`` or gravity ``g`` replaced.
+
+        For tracers, which run the numeric code on traced parameter values (and stand-ins for
+        some components): nothing is validated or re-derived; the copy's evaluator is
+        :class:`NumericEvaluator` and it shares everything not replaced (row mask, caches)."""
+        new = object.__new__(MultibodySystem)
+        new.__dict__.update(vars(self))
+        for name, value in (("topology", topology), ("P", P), ("g", g)):
+            if value is not None:
+                setattr(new, name, value)
+        new.evaluator = NumericEvaluator(new)
+        return new
+
+    @property
+    def backend(self):
+        """What evaluates the system: ``"numeric"`` (the jets), ``"python"`` or ``"c"`` (a
+        generated program, :func:`mbcomp.codegen.compile_system`)."""
+        return self.evaluator.backend
+
+    @property
+    def stats(self):
+        """The evaluator's statistics (a generated program's build statistics and fallbacks)."""
+        return self.evaluator.stats
+
+    @property
+    def source(self):
+        """The generated program's source (compiled systems only)."""
+        return self.evaluator.source
 
     def _check_static(self):
         topo, probs = self.topology, []
@@ -150,7 +266,7 @@ class MultibodySystem:
         """Names ``"<cut joint>.<row>"`` of the loop-closure constraint rows."""
         if self._row_names is None:
             q0 = self.default_q()
-            ev = self.evaluate(0.0, q0, np.zeros(self.nu), masked=False)
+            ev = self.evaluate_numeric(0.0, q0, np.zeros(self.nu), masked=False)
             self._row_names = [f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows]
         if all_rows or self.row_mask is None:
             return list(self._row_names)
@@ -254,7 +370,16 @@ class MultibodySystem:
         return m, rho, Iw
 
     def evaluate(self, t, q, u, masked=True) -> Evaluation:
-        """Mass matrix, forces and constraints at ``(t, q, u)``."""
+        """Mass matrix, forces and constraints at ``(t, q, u)``, from the system's evaluator
+        (``masked``: only the independent constraint rows, see ``row_mask``)."""
+        return self.evaluator.evaluate(t, q, u, masked)
+
+    def q_rate(self, q, u):
+        """``dq/dt`` from the speeds ``u`` (quaternion kinematics where needed), from the evaluator."""
+        return self.evaluator.q_rate(q, u)
+
+    def evaluate_numeric(self, t, q, u, masked=True) -> Evaluation:
+        """Mass matrix, forces and constraints at ``(t, q, u)`` by the jet recursion."""
         nu = self.nu
         dt = _dtype(t, q, u)
         jets = self.kinematics(t, q, u)
@@ -311,8 +436,8 @@ class MultibodySystem:
         return Evaluation(t, q, u, jets, M, f, Phi, Phid, C, cb, B, B @ u - gval, np.array(Bb, dt), gval,
                           local, local_nh)
 
-    def q_rate(self, q, u):
-        """``dq/dt`` from the speeds ``u`` (quaternion kinematics where needed)."""
+    def q_rate_numeric(self, q, u):
+        """``dq/dt`` from the speeds ``u`` by the joints' own kinematics."""
         qd = np.empty(self.nq)
         for e in self.topology.tree:
             if e.q.stop > e.q.start:

@@ -1,7 +1,15 @@
-"""Generated programs: the assembled equations traced once and printed as Python or C;
-and the same trace as sympy expressions (:mod:`mbcomp.codegen.symbolic`).
-"""
-from .program import *  # noqa: F401,F403
-from .program import CodegenError, CompiledEvaluation, CompiledSystem, Graph, Sym, c_compiler, compile_system
+"""Generated programs: the assembled equations traced once and printed as Python or C; and the
+same trace as sympy expressions (:mod:`mbcomp.codegen.symbolic`).
 
-__all__ = ["compile_system", "CompiledSystem", "CompiledEvaluation", "CodegenError", "Graph", "Sym", "c_compiler"]
+One module per step: :mod:`~mbcomp.codegen.graph` (the traced scalars and their expression
+graph), :mod:`~mbcomp.codegen.tracing` (what both tracers share: the traced system, its
+parameters and drives), :mod:`~mbcomp.codegen.tracer` (tracing a system into a graph),
+:mod:`~mbcomp.codegen.printers` (Python and C source), :mod:`~mbcomp.codegen.compiler`
+(callables, the C compiler and its cache) and :mod:`~mbcomp.codegen.evaluator`
+(:func:`compile_system`: the program as a system's evaluator).
+"""
+from .evaluator import CompiledEvaluation, ProgramEvaluator, compile_system
+from .compiler import c_compiler
+from .graph import CodegenError, Graph, Sym
+
+__all__ = ["compile_system", "ProgramEvaluator", "CompiledEvaluation", "CodegenError", "Graph", "Sym", "c_compiler"]

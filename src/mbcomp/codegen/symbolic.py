@@ -44,237 +44,25 @@ Examples
 """
 from __future__ import annotations
 
-import contextvars
-import copy
-import math
 import time as _time
 from dataclasses import dataclass, field
-from functools import lru_cache
-from types import SimpleNamespace
 
 import numpy as np
 import sympy as sp
 
 from ..errors import ModelError, Problem
+from ..modeling.blame import blame
+from .sympy_scalar import UNIT_NORMS, SymbolicScalar, exact, traced_law, traced_value
+from .tracing import q_rates, traced_params, traced_system
 
 __all__ = ["SymbolicScalar", "Equations", "equations", "exact"]
-
-
-# ----------------------------------------------------------------------------- the traced scalar
-@lru_cache(maxsize=4096)
-def _exact_float(x: float):
-    if not math.isfinite(x):
-        raise ValueError(f"non-finite number {x!r} cannot be made exact")
-    if x == int(x) and abs(x) < 2 ** 53:
-        return sp.Integer(int(x))
-    return sp.Rational(repr(x))
-
-
-def exact(x):
-    """``x`` as an exact sympy number or expression.
-
-    Floats become the rational of their shortest decimal form (``0.1`` -> ``1/10``), integers
-    sympy integers; sympy objects and :class:`SymbolicScalar` give their expression.
-
-    Examples
-    --------
-    >>> from mbcomp.symbolic import exact
-    >>> exact(0.1), exact(2.0), exact(9.81)
-    (1/10, 2, 981/100)
-    """
-    if isinstance(x, SymbolicScalar):
-        return x.expr
-    if isinstance(x, sp.Basic):
-        return x
-    if isinstance(x, (bool, np.bool_)):
-        return sp.Integer(int(x))
-    if isinstance(x, (int, np.integer)):
-        return sp.Integer(int(x))
-    if isinstance(x, (float, np.floating)):
-        return _exact_float(float(x))
-    if isinstance(x, np.ndarray) and x.ndim == 0:
-        return exact(x.item())
-    raise TypeError(f"{x!r} ({type(x).__name__}) is not a number or a sympy expression")
-
-
-_NUMBER = (int, float, np.integer, np.floating, sp.Basic)
-# squared norms of quaternion coordinates taken as 1 during a trace (unit_quaternions=True)
-_UNIT_NORMS = contextvars.ContextVar("mbcomp_symbolic_unit_norms", default=frozenset())
-
-
-def _operand(o):
-    """The sympy expression of a binary operand, or ``None`` (-> ``NotImplemented``)."""
-    if isinstance(o, SymbolicScalar):
-        return o.expr
-    if isinstance(o, _NUMBER):
-        return exact(o)
-    return None
-
-
-class SymbolicScalar:
-    """A traced scalar holding a sympy expression (see :mod:`mbcomp.jets`, *Tracing*).
-
-    Arithmetic with numbers and other traced scalars builds sympy expressions; numbers are
-    made exact with :func:`exact`. Operations with ``np.ndarray`` return ``NotImplemented`` so
-    numpy applies them elementwise; numpy's object ufuncs call the methods ``cos``, ``sqrt``...
-
-    Examples
-    --------
-    >>> import numpy as np, sympy as sp
-    >>> from mbcomp.symbolic import SymbolicScalar
-    >>> x = SymbolicScalar(sp.Symbol("x"))
-    >>> v = np.array([x, 0.5]) * 2 + np.cos(x)
-    >>> [sp.sympify(e.expr) for e in v]
-    [2*x + cos(x), cos(x) + 1]
-    """
-
-    __slots__ = ("expr",)
-    __mbcomp_traced__ = True
-
-    def __init__(self, expr):
-        self.expr = expr
-
-    def __repr__(self):
-        return f"SymbolicScalar({self.expr})"
-
-    # -- arithmetic (NotImplemented for arrays: numpy broadcasts elementwise) --
-    def __add__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(self.expr + e)
-
-    def __radd__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(e + self.expr)
-
-    def __sub__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(self.expr - e)
-
-    def __rsub__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(e - self.expr)
-
-    def __mul__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(self.expr * e)
-
-    def __rmul__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(e * self.expr)
-
-    def __truediv__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(self.expr / e)
-
-    def __rtruediv__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(e / self.expr)
-
-    def __pow__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(self.expr ** e)
-
-    def __rpow__(self, o):
-        e = _operand(o)
-        return NotImplemented if e is None else SymbolicScalar(e ** self.expr)
-
-    def __neg__(self):
-        return SymbolicScalar(-self.expr)
-
-    def __pos__(self):
-        return self
-
-    def __abs__(self):
-        return SymbolicScalar(sp.Abs(self.expr))
-
-    # -- what numpy's object-dtype ufuncs call --
-    def cos(self):
-        return SymbolicScalar(sp.cos(self.expr))
-
-    def sin(self):
-        return SymbolicScalar(sp.sin(self.expr))
-
-    def tan(self):
-        return SymbolicScalar(sp.tan(self.expr))
-
-    def arccos(self):
-        return SymbolicScalar(sp.acos(self.expr))
-
-    def arcsin(self):
-        return SymbolicScalar(sp.asin(self.expr))
-
-    def arctan(self):
-        return SymbolicScalar(sp.atan(self.expr))
-
-    def arctan2(self, other):
-        return SymbolicScalar(sp.atan2(self.expr, exact(other)))
-
-    def sqrt(self):
-        if self.expr in _UNIT_NORMS.get():  # |Q| of a unit quaternion
-            return SymbolicScalar(sp.Integer(1))
-        return SymbolicScalar(sp.sqrt(self.expr))
-
-    def exp(self):
-        return SymbolicScalar(sp.exp(self.expr))
-
-    def log(self):
-        return SymbolicScalar(sp.log(self.expr))
-
-    def sinh(self):
-        return SymbolicScalar(sp.sinh(self.expr))
-
-    def cosh(self):
-        return SymbolicScalar(sp.cosh(self.expr))
-
-    def tanh(self):
-        return SymbolicScalar(sp.tanh(self.expr))
-
-    def conjugate(self):
-        return SymbolicScalar(sp.conjugate(self.expr))
-
-    # -- no truth value; no __float__ either (float() and math.* then raise TypeError, and sympy's
-    # sympify, which calls __float__ when it exists, does not mistake the scalar for a number) --
-    def __bool__(self):
-        raise TypeError(f"the traced value {self.expr} has no truth value: a comparison or branch on a "
-                        "coordinate, speed or time cannot be traced -> write the law without branching")
-
-
-def _traced(value):
-    """A parameter value for the traced run: sympy parts wrapped, numbers kept as they are."""
-    if isinstance(value, SymbolicScalar):
-        return value
-    if isinstance(value, sp.MatrixBase):
-        value = value.tolist()
-    if isinstance(value, sp.Basic):
-        return SymbolicScalar(value)
-    if isinstance(value, (list, tuple, np.ndarray)):
-        arr = np.array(value, dtype=object)
-        if any(isinstance(x, (sp.Basic, SymbolicScalar)) for x in arr.flat):
-            out = np.empty(arr.shape, dtype=object)
-            for i, x in np.ndenumerate(arr):
-                out[i] = _traced(x)
-            return out
-        return np.array(value, dtype=float)
-    return value
-
-
-def _traced_law(f):
-    """A user's law whose results are wrapped (a law may return a plain sympy expression)."""
-    def law(*args):
-        return _traced(f(*args))
-    return law
-
-
-def _expr(x):
-    """sympy expression of an element of a traced result."""
-    return exact(x)
 
 
 def _matrix(a, shape=None):
     a = np.asarray(a, dtype=object)
     if shape is not None:
         a = a.reshape(shape)
-    return sp.Matrix(a.shape[0], a.shape[1] if a.ndim > 1 else 1, [_expr(x) for x in a.flat])
+    return sp.Matrix(a.shape[0], a.shape[1] if a.ndim > 1 else 1, [exact(x) for x in a.flat])
 
 
 # ----------------------------------------------------------------------------- result
@@ -385,18 +173,20 @@ class Equations:
         return "\n".join(lines)
 
 
+
 # ----------------------------------------------------------------------------- derivation
 def _drive_like(comp):
     return comp.role == "drive" and {"s", "v", "a"} <= set(comp.params())
 
 
 def _drive_laws(path, p, T):
-    """Exact ``(s, v, a)`` laws of a drive with ``s``/``v``/``a`` parameters (PrescribedMotion's
+    """Exact ``(s, v, a)`` of a drive with ``s``/``v``/``a`` parameters (PrescribedMotion's
     contract: ``s`` a number, a string in ``t``, a sympy expression in ``t`` or a callable
-    accepting a sympy symbol; or callables ``s``, ``v``, ``a``)."""
+    accepting a sympy symbol), as traced scalars; None for three callables ``s``, ``v``,
+    ``a`` (they are traced as they are)."""
     s = p.s
-    if p.v is not None and p.a is not None and callable(s):  # three callables: traced as they are
-        return SimpleNamespace(**{**vars(p), "s": _traced_law(s), "v": _traced_law(p.v), "a": _traced_law(p.a)})
+    if p.v is not None and p.a is not None and callable(s):
+        return None
     try:
         if isinstance(s, SymbolicScalar):
             s = s.expr
@@ -413,16 +203,27 @@ def _drive_laws(path, p, T):
                                   "give s as a string or sympy expression in t, or as a callable using sympy "
                                   "functions, or pass traceable s, v and a callables")],
                          header="symbolic equations") from None
-    expr = expr.xreplace({x: _exact_float(float(x)) for x in expr.atoms(sp.Float)})
-    laws = (expr, sp.diff(expr, T), sp.diff(expr, T, 2))
-
-    def make(e):
-        return lambda t: SymbolicScalar(e.xreplace({T: exact(t)}))
-
-    return SimpleNamespace(**{**vars(p), "s": make(laws[0]), "v": make(laws[1]), "a": make(laws[2])})
+    expr = expr.xreplace({x: exact(float(x)) for x in expr.atoms(sp.Float)})
+    return tuple(SymbolicScalar(e) for e in (expr, sp.diff(expr, T), sp.diff(expr, T, 2)))
 
 
-def _traced_params(system, params, T):
+def _drive_motion(T):
+    """The drives' motion for :func:`~mbcomp.codegen.tracing.traced_system`: exact laws, or the
+    drive's own motion at the traced time."""
+    def motion(path, comp, p):
+        laws = _drive_laws(path, p, T) if _drive_like(comp) else None
+        if laws is not None:
+            return laws
+        try:
+            return tuple(traced_value(x) for x in comp.motion(SymbolicScalar(T), p))
+        except Exception as exc:  # noqa: BLE001 - re-raised naming the component
+            raise _blame(exc, "the equations of motion") from exc
+    return motion
+
+
+def _traced_params(system, params):
+    """The system's parameter values with the overrides ``params`` traced (sympy parts wrapped,
+    laws wrapped; a drive's ``s``, ``v``, ``a`` as given, made exact by :func:`_drive_laws`)."""
     owners = system.owners()
     by_comp, probs = {}, []
     for key, value in (params or {}).items():
@@ -436,50 +237,29 @@ def _traced_params(system, params, T):
             continue
         par = decl[name]
         if _drive_like(owners[path]) and name in ("s", "v", "a"):
-            val = value  # made exact with the drive's laws below
+            val = value  # made exact with the drive's laws
         elif callable(value) and not isinstance(value, sp.Basic):
             if par.kind not in ("law", "any"):
                 probs.append(Problem(key, "is not a law and cannot be a function", par.hint()))
                 continue
-            val = _traced_law(value)
+            val = traced_law(value)
         elif isinstance(value, str):
             val = value
         else:
-            val = _traced(value)
+            val = traced_value(value)
             if np.shape(val) != par.shape and not (par.kind in ("law", "any") and np.shape(val) == ()):
                 probs.append(Problem(key, f"has shape {np.shape(val)}, expected {par.shape or 'a scalar'}", par.hint()))
                 continue
         by_comp.setdefault(path, {})[name] = val
     if probs:
         raise ModelError(probs, header="bad symbolic parameters")
-    P = dict(system.P)
-    for path, vals in by_comp.items():
-        P[path] = SimpleNamespace(**{**vars(P[path]), **vals})
-    for path, comp in owners.items():
-        if _drive_like(comp):
-            P[path] = _drive_laws(path, P[path], T)
-    return P
-
-
-def _component_in(tb):
-    """Path of the innermost mbcomp component whose method raised (from a traceback)."""
-    from ..modeling.component import Component
-
-    found = None
-    while tb is not None:
-        obj = tb.tb_frame.f_locals.get("self")
-        if isinstance(obj, Component):
-            found = obj
-        tb = tb.tb_next
-    return found
+    return traced_params(system, by_comp)
 
 
 def _blame(exc, what):
-    comp = _component_in(exc.__traceback__)
-    where = comp.path if comp is not None else "model"
-    who = f"{type(comp).__name__} {where!r}" if comp is not None else "a component"
-    return ModelError([Problem(where, f"cannot be traced symbolically while computing {what}: {type(exc).__name__}: {exc}",
-                               f"{who} must compute with numpy/sympy arithmetic on coordinates, speeds and time "
+    b = blame(exc)
+    return ModelError([Problem(b.path, f"cannot be traced symbolically while computing {what}: {type(exc).__name__}: {exc}",
+                               f"{b.who} must compute with numpy/sympy arithmetic on coordinates, speeds and time "
                                "(np.sin, not math.sin; no float(), no comparisons); keep parameters it branches on "
                                "numeric")], header="symbolic equations")
 
@@ -580,82 +360,66 @@ def equations(model, params=None, simplify=True, drop_zero_rows=True, max_ops=20
     t0 = _time.perf_counter()
     base = model if isinstance(model, MultibodySystem) else assemble(model)
     T = sp.Symbol("t", real=True)
-    P = _traced_params(base, params, T)
-    system = copy.copy(base)
-    system.P = P
-    topo = base.topology
-    if topo.gravity_source:
-        try:
-            g = topo.flat.components[topo.gravity_source].gravity(P[topo.gravity_source])
-        except Exception as exc:  # noqa: BLE001
-            raise _blame(exc, "gravity") from exc
-        system.g = np.zeros(3) if g is None else (g if isinstance(g, np.ndarray) and g.dtype == object
-                                                  else np.asarray(g, float))
     qs = tuple(sp.Symbol(n, real=True) for n in base.q_names)
     us = tuple(sp.Symbol(n, real=True) for n in base.u_names)
-    uds = tuple(sp.Symbol(f"{n}.der", real=True) for n in base.u_names)
-    q = np.array([SymbolicScalar(s) for s in qs] or [], dtype=object)
-    u = np.array([SymbolicScalar(s) for s in us] or [], dtype=object)
-    t = SymbolicScalar(T)
     quats = _quaternions(base, qs) if unit_quaternions else []
     units = [(w, 1 - x ** 2 - y ** 2 - z ** 2) for w, x, y, z in quats]  # w^2 on the unit sphere
-    token = _UNIT_NORMS.set(frozenset(w ** 2 + x ** 2 + y ** 2 + z ** 2 for w, x, y, z in quats))
+    ev, qdot, T_kin, V_pot = _trace(base, _traced_params(base, params), T, qs, us, quats)
+
+    nu = base.nu
+    names = [f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows]
+    Phi = [exact(x) for x in ev.Phi]
+    C = [[exact(x) for x in row] for row in np.asarray(ev.C).reshape(len(names), nu)]
+    cb = [exact(x) for x in ev.cb]
+    keep = list(range(len(names)))
+    if drop_zero_rows:
+        keep = [i for i in keep if not (Phi[i] == 0 and cb[i] == 0 and all(c == 0 for c in C[i]))]
+    nh_names = [f"{e.name}.{r}" for e, rows, _ in ev.local_nh for r in rows]
+    nh = len(nh_names)
+
+    def simp(m):
+        return m.applyfunc(lambda e: _simplify(e, max_ops, units)) if simplify else m
+
+    eqs = Equations(
+        t=T, q=qs, u=us, ud=tuple(sp.Symbol(f"{n}.der", real=True) for n in base.u_names), qdot=simp(qdot),
+        M=simp(_matrix(ev.M, (nu, nu))), f=simp(_matrix(ev.f, (nu, 1))),
+        T=_simplify(exact(T_kin), max_ops, units) if simplify else exact(T_kin),
+        V=_simplify(exact(V_pot), max_ops, units) if simplify else exact(V_pot),
+        constraint_names=tuple(names[i] for i in keep),
+        Phi=simp(sp.Matrix(len(keep), 1, [Phi[i] for i in keep])),
+        C=simp(sp.Matrix(len(keep), nu, [c for i in keep for c in C[i]])),
+        cb=simp(sp.Matrix(len(keep), 1, [cb[i] for i in keep])),
+        lam=tuple(sp.Symbol(f"lambda.{names[i]}", real=True) for i in keep),
+        nonholonomic_names=tuple(nh_names), B=simp(_matrix(ev.B, (nh, nu))) if nh else sp.zeros(0, nu),
+        b=simp(_matrix(ev.b, (nh, 1))) if nh else sp.zeros(0, 1),
+        Bb=simp(_matrix(ev.Bb, (nh, 1))) if nh else sp.zeros(0, 1),
+        mu=tuple(sp.Symbol(f"mu.{n}", real=True) for n in nh_names),
+        dropped=tuple(names[i] for i in range(len(names)) if i not in keep), params=dict(params or {}), seconds=0.0)
+    object.__setattr__(eqs, "seconds", _time.perf_counter() - t0)
+    return eqs
+
+
+def _trace(base, P, T, qs, us, quats):
+    """The evaluation, ``dq/dt`` (a sympy column), kinetic and potential energy of ``base``
+    traced with parameter values ``P``, time ``T``, coordinates ``qs`` and speeds ``us``;
+    the squared norms of the quaternions ``quats`` are 1 while tracing."""
     try:
-        ev = system.evaluate(t, q, u, masked=False)
-        qdot = _qdot(system, q, u)
+        system = traced_system(base, P, _drive_motion(T))
+    except ModelError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - re-raised naming the component
+        raise _blame(exc, "gravity") from exc
+    q = np.array([SymbolicScalar(s) for s in qs] or [], dtype=object)
+    u = np.array([SymbolicScalar(s) for s in us] or [], dtype=object)
+    token = UNIT_NORMS.set(frozenset(w ** 2 + x ** 2 + y ** 2 + z ** 2 for w, x, y, z in quats))
+    try:
+        ev = system.evaluate_numeric(SymbolicScalar(T), q, u, masked=False)
+        qdot = q_rates(system, q, u)
         T_kin, V_pot = system.energies(ev)
     except ModelError:
         raise
     except Exception as exc:  # noqa: BLE001 - re-raised naming the component
         raise _blame(exc, "the equations of motion") from exc
     finally:
-        _UNIT_NORMS.reset(token)
-
-    nu = base.nu
-    M = _matrix(ev.M, (nu, nu))
-    f = _matrix(ev.f, (nu, 1))
-    names = [f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows]
-    Phi = [_expr(x) for x in ev.Phi]
-    C = [[_expr(x) for x in row] for row in np.asarray(ev.C).reshape(len(names), nu)]
-    cb = [_expr(x) for x in ev.cb]
-    keep = list(range(len(names)))
-    if drop_zero_rows:
-        keep = [i for i in keep if not (Phi[i] == 0 and cb[i] == 0 and all(c == 0 for c in C[i]))]
-    dropped = tuple(names[i] for i in range(len(names)) if i not in keep)
-    nh_names = [f"{e.name}.{r}" for e, rows, _ in ev.local_nh for r in rows]
-    B = _matrix(ev.B, (len(nh_names), nu)) if nh_names else sp.zeros(0, nu)
-
-    def simp(m):
-        return m.applyfunc(lambda e: _simplify(e, max_ops, units)) if simplify else m
-
-    eqs = Equations(
-        t=T, q=qs, u=us, ud=uds, qdot=simp(qdot), M=simp(M), f=simp(f),
-        T=_simplify(_expr(T_kin), max_ops, units) if simplify else _expr(T_kin),
-        V=_simplify(_expr(V_pot), max_ops, units) if simplify else _expr(V_pot),
-        constraint_names=tuple(names[i] for i in keep),
-        Phi=simp(sp.Matrix(len(keep), 1, [Phi[i] for i in keep])),
-        C=simp(sp.Matrix(len(keep), nu, [c for i in keep for c in C[i]])),
-        cb=simp(sp.Matrix(len(keep), 1, [cb[i] for i in keep])),
-        lam=tuple(sp.Symbol(f"lambda.{names[i]}", real=True) for i in keep),
-        nonholonomic_names=tuple(nh_names), B=simp(B),
-        b=simp(_matrix(ev.b, (len(nh_names), 1))) if nh_names else sp.zeros(0, 1),
-        Bb=simp(_matrix(ev.Bb, (len(nh_names), 1))) if nh_names else sp.zeros(0, 1),
-        mu=tuple(sp.Symbol(f"mu.{n}", real=True) for n in nh_names),
-        dropped=dropped, params=dict(params or {}), seconds=0.0)
-    object.__setattr__(eqs, "seconds", _time.perf_counter() - t0)
-    return eqs
-
-
-def _qdot(system, q, u):
-    from ..modeling.roles import Joint
-
-    out = [None] * system.nq
-    for e in system.topology.tree:
-        if e.q.stop > e.q.start:
-            if type(e.comp).q_rate is Joint.q_rate:  # the default: dq/dt = u
-                vals = u[e.u]
-            else:
-                vals = e.comp.q_rate(q[e.q], u[e.u], system.P[e.name])
-            for k, v in zip(range(e.q.start, e.q.stop), vals):
-                out[k] = v
-    return sp.Matrix(len(out), 1, [_expr(x) for x in out])
+        UNIT_NORMS.reset(token)
+    return ev, sp.Matrix(len(qdot), 1, [exact(x) for x in qdot]), T_kin, V_pot

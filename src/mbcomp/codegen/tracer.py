@@ -1,0 +1,203 @@
+"""Tracing a system into a :class:`~mbcomp.codegen.graph.Graph`: the runtime parameters, the
+drive inputs, and one run of the numeric evaluation on :class:`~mbcomp.codegen.graph.Sym`
+scalars.
+
+:func:`trace` runs :meth:`~mbcomp.assembly.system.MultibodySystem.evaluate_numeric` (unmasked)
+and the coordinate rates once at a generic state (:func:`trace_point`) on a traced copy of the
+system (:func:`mbcomp.codegen.tracing.traced_system`) whose inputs are
+
+* ``q``, ``u``, ``t``: the state;
+* ``d``: the ``(s, v, a)`` of every drive, evaluated numerically at every call;
+* ``p``: every nonzero entry of a numeric parameter (:func:`param_layout`); zero entries stay
+  zeros and fold away, so which entries are zero is part of the program's *signature*, with
+  the shapes and the laws (callables, strings) that are traced as they are.
+
+Examples
+--------
+>>> import mbcomp
+>>> from mbcomp.codegen.tracer import param_layout, trace
+>>> from mbcomp.library import World, Prismatic, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+>>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+>>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+>>> system = mbcomp.assemble(m)
+>>> param_layout(system)[0]       # the runtime parameters: axis z, mass, gravity z
+[('b', 'm', None), ('s', 'n', (np.int64(2),)), ('world', 'g', (np.int64(2),))]
+>>> tr = trace(system, max_nodes=1000)
+>>> tr.shapes["M"], [o.v for o in tr.groups["eval"][:2]]    # M = m, f = m g
+((1, 1), [2.0, -19.62])
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from ..modeling.blame import blame
+from .graph import CodegenError, Graph, Sym
+from .tracing import parameter_entries, q_rates, traced_params, traced_system
+
+__all__ = ["FIELDS", "param_layout", "param_vector", "trace_point", "trace"]
+
+#: the fields of an evaluation a program computes, in the order of its flat output
+FIELDS = ("M", "f", "Phi", "Phid", "C", "cb", "B", "b", "Bb", "Psi")
+
+_FIX = ("write its laws with numpy functions (np.sin, np.sqrt, ...) and plain arithmetic instead of math.* or "
+        "float(), or keep the numeric evaluation for this model (do not compile it)")
+
+
+def _law_key(v):
+    try:
+        hash(v)
+        return ("v", v)
+    except TypeError:
+        return ("id", id(v))
+
+
+def _traced_kind(kind, val):
+    """``"s"`` (a float scalar) or ``"a"`` (a float array) if the entry is traced, else None."""
+    if kind not in ("number", "law"):
+        return None
+    if isinstance(val, (float, np.floating)):
+        return "s"
+    if isinstance(val, np.ndarray) and val.dtype.kind == "f":
+        return "a"
+    return None
+
+
+def param_layout(system):
+    """Which parameter entries are runtime inputs, and the structural signature of the rest.
+
+    Returns ``(layout, signature)``: ``layout`` lists ``(path, name, index)`` of every nonzero
+    numeric parameter entry (``index`` None for scalars); ``signature`` is hashable and
+    changes when anything baked into a program changes (zero pattern, shapes, laws)."""
+    layout, sig = [], []
+    for path, name, kind, val in parameter_entries(system):
+        if kind == "start":
+            continue
+        traced = _traced_kind(kind, val)
+        if traced == "s":
+            if val != 0:
+                layout.append((path, name, None))
+            sig.append((path, name, "s", val != 0))
+        elif traced == "a":
+            nz = val != 0
+            layout.extend((path, name, idx) for idx in zip(*np.nonzero(nz)))
+            sig.append((path, name, "a", val.shape, nz.tobytes()))
+        else:
+            sig.append((path, name, "o", _law_key(val)))
+    return layout, tuple(sig)
+
+
+def param_vector(system, layout):
+    """The values of the runtime parameters ``layout`` (see :func:`param_layout`) of ``system``."""
+    P = system.P
+    return [float(getattr(P[path], name)) if idx is None else float(getattr(P[path], name)[idx])
+            for path, name, idx in layout]
+
+
+def trace_point(system):
+    """A generic state for the trace-time values: the start coordinates, nonzero speeds."""
+    q = system.normalize(system.default_q())
+    k = np.arange(system.nu)
+    u = 0.3 * np.sin(1.7 * k + 0.4) + 0.05
+    return 0.1234, q, u
+
+
+def _param_inputs(g, system, layout):
+    """The system's parameter values with every runtime entry a ``p`` input of ``g``."""
+    pindex = {key: k for k, key in enumerate(layout)}
+    values = {}
+    for path, name, kind, val in parameter_entries(system):
+        traced = _traced_kind(kind, val)
+        if traced == "s" and val != 0:
+            values.setdefault(path, {})[name] = g.input("p", pindex[(path, name, None)], val, state=False)
+        elif traced == "a":
+            arr = np.zeros(val.shape, dtype=object)
+            arr[...] = 0.0
+            for idx in zip(*np.nonzero(val)):
+                arr[idx] = g.input("p", pindex[(path, name, idx)], val[idx], state=False)
+            values.setdefault(path, {})[name] = arr
+    return traced_params(system, values)
+
+
+def _untraceable(exc):
+    """The CodegenError for an exception raised while tracing, naming the component."""
+    b = blame(exc)
+    at = f"at {b.where}" if b.where != "?" else "in the framework"
+    if b.component is not None:
+        comp = b.component
+        return CodegenError(f"cannot generate a program for component {comp.path!r} ({type(comp).__name__}): "
+                            f"{type(exc).__name__}: {exc} ({at}) -> fix: {_FIX}")
+    return CodegenError(f"cannot trace the model's evaluation ({type(exc).__name__}: {exc} {at}) -> fix: {_FIX}")
+
+
+def trace(system, max_nodes):
+    """Trace the evaluation and the coordinate rates of ``system``.
+
+    Returns a namespace: ``graph``, the output ``groups`` (``"eval"``: the :data:`FIELDS`
+    flattened, ``"qrate"``), their ``guard_groups``, the fields' ``shapes``, the parameter
+    ``layout`` and ``signature``, the ``drives`` in input order, the ``baked`` parameter names
+    and ``qrate_identity`` (``dq/dt = u``). Raises :class:`CodegenError` naming the component
+    whose code cannot be traced."""
+    layout, sig = param_layout(system)
+    t0, q0, u0 = trace_point(system)
+    g = Graph(max_nodes)
+    order = []
+
+    def drive_inputs(path, comp, p):  # (s, v, a) are inputs, evaluated numerically at every call
+        k = len(order)
+        order.append(path)
+        s, v, a = comp.motion(t0, p)
+        return g.input("d", 3 * k, s), g.input("d", 3 * k + 1, v), g.input("d", 3 * k + 2, a)
+
+    with g:
+        try:
+            ts = traced_system(system, _param_inputs(g, system, layout), drive_inputs)
+            q = np.array([g.input("q", k, v) for k, v in enumerate(q0)] + [None], dtype=object)[:-1]
+            u = np.array([g.input("u", k, v) for k, v in enumerate(u0)] + [None], dtype=object)[:-1]
+            t = g.input("t", 0, t0)
+            ev = ts.evaluate_numeric(t, q, u, masked=False)
+            n_guards_eval = len(g.guards)
+            qd = q_rates(ts, q, u)
+        except CodegenError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - re-raised naming the component
+            raise _untraceable(exc) from exc
+    shapes, outs = {}, []
+    for name in FIELDS:
+        arr = np.asarray(getattr(ev, name))
+        shapes[name] = arr.shape
+        outs.extend(arr.ravel().tolist())
+    return SimpleNamespace(graph=g, groups={"eval": outs, "qrate": qd}, shapes=shapes, layout=layout,
+                           guard_groups={"eval": g.guards[:n_guards_eval], "qrate": g.guards[n_guards_eval:]},
+                           signature=sig, drives=order, baked=_baked_names(g, layout),
+                           qrate_identity=_is_identity(g, qd, system))
+
+
+def _is_identity(g, qd, system):
+    if system.nq != system.nu:
+        return False
+    for k, o in enumerate(qd):
+        if type(o) is not Sym or g.keys[o.i] != ("in", "u", k):
+            return False
+    return True
+
+
+def _baked_names(g, layout):
+    """Names of the runtime parameters whose values a component converted to numbers."""
+    keys, names = g.keys, set()
+    stack, seen = list(g.baked), set()
+    while stack:
+        i = stack.pop()
+        if i in seen:
+            continue
+        seen.add(i)
+        k = keys[i]
+        if k[0] == "in":
+            if k[1] == "p":
+                path, name, idx = layout[k[2]]
+                names.add(f"{path}.{name}")
+        elif k[0] != "c":
+            stack.extend(k[1:])
+    return sorted(names)
