@@ -37,8 +37,7 @@ OLD_PATHS = {
     "initialization": "assembly.initialization",
     "report": "assembly.summary",
     "daeforms": "formulations.dae",
-    "symbolic": "codegen.symbolic",
-    "codegen.program": "codegen.evaluator",  # the one-file codegen, split one file per step
+    "symbolic": "codegen.symbolic",  # the one-file codegen, split one file per step
     "result": "simulation.result",
     "stability": "analysis.stability",
     "workprecision": "analysis.workprecision",

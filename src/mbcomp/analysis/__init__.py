@@ -1,7 +1,9 @@
-"""Analysis on top of simulation: steady states, linearization and stability, sweeps,
-work-precision studies."""
-from .stability import *  # noqa: F401,F403
-from .stability import __all__ as _stability_all
-from .stability import __doc__ as __doc__  # noqa: F401  (mbcomp.stability's documentation)
+"""Analysis on top of the assembled system: steady states, linearization and stability
+classification, parameter sweeps (:mod:`mbcomp.analysis.stability` is their facade, also
+importable as ``mbcomp.stability``), and work-precision studies
+(:mod:`mbcomp.analysis.workprecision`)."""
+from .stability import (Linearization, SteadyState, Sweep, classify, linearize, parse_steady, steady_states, sweep,
+                        system_for, to_json)
 
-__all__ = list(_stability_all)
+__all__ = ["SteadyState", "Linearization", "Sweep", "steady_states", "linearize", "classify", "sweep",
+           "parse_steady", "system_for", "to_json"]

@@ -51,22 +51,12 @@ def system_for(model_or_system, params=None, backend="python"):
         system = model_or_system.with_params(params) if params else model_or_system
     else:
         system = assemble(model_or_system, params)
-    if backend == "numeric" or _compiled(system):
+    if backend == "numeric" or system.backend != "numeric":
         return system
-    from ..codegen.program import CodegenError, compile_system
+    from ..codegen import CodegenError, compile_system
 
     try:
         return compile_system(system, backend)
     except CodegenError as exc:
         warnings.warn(f"stability: the numeric path evaluates this model (slower): {exc}", stacklevel=3)
         return system
-
-
-def _compiled(system):
-    """Whether a generated program already evaluates ``system`` (``system.backend != "numeric"``)."""
-    backend = getattr(system, "backend", None)
-    if backend is None:  # TODO(issue 14): until every MultibodySystem carries ``backend``
-        from ..codegen import program
-
-        return isinstance(system, getattr(program, "CompiledSystem", ()))
-    return backend != "numeric"

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .system import MultibodySystem
 
 __all__ = ["summary", "dof_report", "observer"]
 
@@ -44,7 +43,7 @@ def observer(system):
     >>> copy is not s and copy.topology is s.topology
     True
     """
-    return MultibodySystem.with_params(system, {})
+    return system.with_params({}).with_evaluator()
 
 
 def dof_report(system, init=None):

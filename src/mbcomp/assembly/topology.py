@@ -225,7 +225,7 @@ class Topology:
         for name in self.cut:
             e = by_name[name]
             if e.drive:
-                probs.append(Problem(e.name, f"driven joint closes a kinematic loop and cannot be a tree joint",
+                probs.append(Problem(e.name, "driven joint closes a kinematic loop and cannot be a tree joint",
                                      "drive a different joint of the loop"))
         if probs:
             raise ModelError(probs)

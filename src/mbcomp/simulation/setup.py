@@ -67,12 +67,6 @@ def check_request(method, formulation, index, h, t_start, t_end, backend):
     return stepper, index
 
 
-def _backend_of(system):
-    # until every MultibodySystem carries ``backend`` (the composition replacing CompiledSystem),
-    # a compiled system says so in its build statistics
-    return getattr(system, "backend", None) or getattr(system, "stats", {}).get("backend", "numeric")
-
-
 def system_of(model, params, backend):
     """The system to run: ``model`` assembled (or an assembled system, with ``params``
     applied), traced into a generated program unless ``backend`` is ``"numeric"`` or it
@@ -81,8 +75,8 @@ def system_of(model, params, backend):
         system = model.with_params(params) if params else model
     else:
         system = assemble(model, params)
-    if backend != "numeric" and _backend_of(system) == "numeric":
-        from ..codegen.program import compile_system
+    if backend != "numeric" and system.backend == "numeric":
+        from ..codegen import compile_system
 
         system = compile_system(system, backend)
     return system
