@@ -130,3 +130,39 @@ def test_old_module_paths_are_the_new_modules():
 
     for old, new in OLD_PATHS.items():
         assert importlib.import_module(f"mbcomp.{old}") is importlib.import_module(f"mbcomp.{new}"), old
+
+
+def test_no_import_cycles():
+    """Module-level imports between mbcomp modules form no cycle (imports inside functions
+    are allowed to break one, and are listed by the layer test above)."""
+    import networkx as nx
+
+    names = {parts: ".".join(parts).removesuffix(".__init__") for _, parts in _modules()}
+    g = nx.DiGraph()
+    for path, parts in _modules():
+        me = names[parts]
+        pkg = parts[:-1]
+        for node in ast.parse(path.read_text()).body:  # top level only
+            targets = []
+            if isinstance(node, ast.ImportFrom) and node.level:
+                base = list(pkg[: len(pkg) - node.level + 1])
+                mod = base + (node.module.split(".") if node.module else [])
+                targets = [mod + [a.name] for a in node.names] if node.module is None else [mod]
+            elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("mbcomp."):
+                targets = [node.module.split(".")[1:]]
+            for t in targets:
+                dotted = ".".join(t)
+                if (SRC.joinpath(*t).with_suffix(".py").exists()) or (SRC.joinpath(*t) / "__init__.py").exists():
+                    g.add_edge(me, dotted)
+    cycles = list(nx.simple_cycles(g))
+    assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles[:5])
+
+
+def test_every_path_in_the_architecture_exists():
+    import re
+
+    text = (ROOT / "docs" / "architecture.md").read_text()
+    paths = set(re.findall(r"(?<![\w./-])((?:[A-Za-z_][\w]*/)+(?:[\w-]+\.(?:py|json|md))?)(?![\w/])", text))
+    missing = [p for p in sorted(paths)
+               if not any((base / p).exists() for base in (ROOT, SRC, ROOT / "src"))]
+    assert paths and not missing, f"docs/architecture.md names paths that do not exist: {missing}"
