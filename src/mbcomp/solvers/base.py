@@ -163,9 +163,12 @@ class Stepper:
         except StepFailure as exc:
             self.status = "failed"
             return str(exc)
-        if self.t >= self.t_bound - 1e-14 * max(1.0, abs(self.t_bound)):
-            self.status = "finished"
+        self.status = self._status_after_step()
         return None
+
+    def _status_after_step(self):
+        """``"finished"`` once ``t_bound`` is reached (to rounding), else ``"running"``."""
+        return "finished" if self.t >= self.t_bound - 1e-14 * max(1.0, abs(self.t_bound)) else "running"
 
     def reset_state(self, y):
         """Continue from a modified state ``y`` at the current time (the driver's projection).

@@ -87,18 +87,9 @@ class ScipyStepper(Stepper):
         for key, done in self._done.items():
             self.stats[key] = done + int(getattr(self.solver, key, 0))
 
-    def step(self):
-        """Advance one step; ``None`` or, on failure, the message (status ``"failed"``).
-        The status is scipy's: ``"finished"`` exactly when ``t_bound`` is reached."""
-        if self.status != "running":
-            raise RuntimeError("step() on a solver that is not running")
-        try:
-            self._step()
-        except StepFailure as exc:
-            self.status = "failed"
-            return str(exc)
-        self.status = self.solver.status
-        return None
+    def _status_after_step(self):
+        """scipy's own status: ``"finished"`` exactly when ``t_bound`` is reached."""
+        return self.solver.status
 
     def _step(self):
         s = self.solver
