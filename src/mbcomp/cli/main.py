@@ -35,6 +35,7 @@ import argparse
 import os
 import sys
 
+from ..errors import SimulationError
 from . import bench, info, simulate, stability
 from .loader import load_model_file, parse_value
 from .stability import parse_sweep
@@ -43,6 +44,8 @@ __all__ = ["main", "make_parser", "load_model_file", "parse_value", "parse_sweep
 
 #: exit status of bad input (argparse's)
 EXIT_USAGE = 2
+#: exit status of a run that failed or could not start
+EXIT_FAILED = 1
 
 
 def _common(p):
@@ -69,6 +72,9 @@ def main(argv=None):
     except ValueError as exc:  # ModelError is a ValueError; every input error names its fix
         print(f"mbcomp: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except SimulationError as exc:  # a run that could not start (e.g. a law raising at t_start)
+        print(f"mbcomp: {exc}", file=sys.stderr)
+        return EXIT_FAILED
     except KeyboardInterrupt:  # outside a simulation (which returns its partial results itself)
         print("mbcomp: interrupted", file=sys.stderr)
         return simulate.EXIT_INTERRUPTED

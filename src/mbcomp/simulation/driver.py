@@ -44,7 +44,7 @@ from .postprocess import postprocess
 from .result import Result
 from .setup import ALL_METHODS, check_request, output_times, system_of
 from .stepping import Run, hooks_for
-from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts
+from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
 
 __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
 
@@ -110,11 +110,17 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="RK45", rtol=
     """
     stepper, index = check_request(method, formulation, index, h, t_start, t_end, backend)
     system = system_of(model, params, backend)
-    init = initialize(system, t_start)
-    form = build(formulation, stepper.problem, system, index=index, stabilization=stabilization, alpha=alpha,
-                 beta=beta, independent=independent, method=method, max_index=stepper.max_index)
-    run = Run(form, stepper, output_times(t_start, t_end, n_out, dt_out), form.initial_state(t_start, init.q, init.u),
-              rtol=rtol, atol=atol, max_step=max_step, h=h)
+    try:
+        init = initialize(system, t_start)
+        form = build(formulation, stepper.problem, system, index=index, stabilization=stabilization, alpha=alpha,
+                     beta=beta, independent=independent, method=method, max_index=stepper.max_index)
+        y0 = form.initial_state(t_start, init.q, init.u)
+    except Exception as exc:  # a law raising before the first step: say whose, there is nothing to keep
+        if not raised_in_a_law(exc):
+            raise
+        raise SimulationError(start_failure(exc, t_start)) from exc
+    run = Run(form, stepper, output_times(t_start, t_end, n_out, dt_out), y0, rtol=rtol, atol=atol,
+              max_step=max_step, h=h)
     monitors = monitors_for(system, atol)
     wall0 = _time.perf_counter()
     status, message = integrate(run, monitors, progress)

@@ -26,7 +26,8 @@ from numbers import Real
 
 from ..modeling.blame import blame
 
-__all__ = ["Terminated", "sigterm_interrupts", "law_failure", "raised_in_a_law", "interruption", "time_of"]
+__all__ = ["Terminated", "sigterm_interrupts", "law_failure", "start_failure", "raised_in_a_law", "interruption",
+           "time_of"]
 
 
 class Terminated(BaseException):
@@ -78,12 +79,23 @@ def law_failure(exc, t_reached, t_kept):
     t_kept : float
         Last output time kept (s).
     """
+    return _raised(exc, t_reached) + f"; the results up to t={t_kept:g} s are kept"
+
+
+def start_failure(exc, t_start):
+    """The message for a law that raises before the first step (consistent start, first
+    evaluation): there are no results to keep, so :func:`~mbcomp.simulate` raises it as a
+    :class:`~mbcomp.errors.SimulationError` from the law's exception."""
+    return _raised(exc, t_start) + " (while finding the consistent start; nothing was integrated)"
+
+
+def _raised(exc, t_reached):
     b = blame(exc)
     who = b.who if b.component is not None else "the model"
     t = time_of(exc)
     when = f"at t={t:g}" if t is not None else f"in the step from t={t_reached:g}"
     return (f"{who}: {b.law} raised {type(exc).__name__} {when}: {exc} ({b.where}) -> fix the law or the "
-            f"model's parameters; the results up to t={t_kept:g} s are kept")
+            "model's parameters")
 
 
 def raised_in_a_law(exc):
