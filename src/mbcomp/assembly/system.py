@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..modeling.component import PortRef
-from ..errors import ModelError, Problem, SimulationError
+from ..errors import ModelError, Problem
 from ..assembly.jets import FrameJet, as_array, is_traced, rigid_constraints
 from ..geometry.kinematics import cross, skew
 from ..modeling.roles import FrameState
@@ -560,11 +560,6 @@ class MultibodySystem:
 
     def summary(self):
         """Human-readable description: bodies, DOF, coordinates, constraints, eliminations."""
-        from ..assembly.summary import summary
+        from .summary import summary
 
         return summary(self)
-
-
-def check_finite(name, arr, t):
-    if not np.all(np.isfinite(arr)):
-        raise SimulationError(f"non-finite {name} at t={t:g}: the model produced NaN or inf")
