@@ -96,8 +96,9 @@ class Formulation:
         return False
 
     def repartition(self, t, y):
-        """The state ``y`` written in newly chosen coordinates (here: unchanged)."""
-        return y
+        """The state ``y`` written in newly chosen coordinates, or ``None`` when the choice
+        did not change (then the stepper goes on: nothing to restart). Here: ``None``."""
+        return None
 
     def solve(self, ev, stabilize=True):
         """Accelerations ``du/dt`` and multipliers at an evaluation ``ev`` (for reactions)."""

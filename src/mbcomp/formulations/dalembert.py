@@ -209,12 +209,17 @@ class DAlembert(Formulation):
         return self.dep.size > 0 and self._ill
 
     def repartition(self, t, y):
-        """Choose the partition again at ``y``; returns the state in the new partition."""
+        """Choose the partition again at ``y``; the state in the new partition, or ``None``
+        when pivoting chooses the same dependent speeds again (the best available choice is
+        ill-conditioned too: the stepper goes on instead of restarting)."""
         q, v = y[: self.nq], y[self.nq:]
         u, _ = self.speeds(t, q, v)
         ev = self.system.evaluate(t, q, u)
-        self.dep, self.ind = self.partition(ev.A)
+        dep, ind = self.partition(ev.A)
         self._ill = False
+        if np.array_equal(dep, self.dep):
+            return None
+        self.dep, self.ind = dep, ind
         self.repartitions += 1
         return np.concatenate((q, u[self.ind]))
 

@@ -203,8 +203,10 @@ class Repartition(StepHook):
     def __call__(self, run):
         s = run.stepper
         if run.form.needs_repartition(s.t, s.y):
-            run.start(s.t, run.form.repartition(s.t, s.y))
-            run.stats["restarts"] += 1
+            y = run.form.repartition(s.t, s.y)
+            if y is not None:  # new coordinates: the stepper's history is in the old ones
+                run.start(s.t, y)
+                run.stats["restarts"] += 1
 
 
 class Progress(StepHook):

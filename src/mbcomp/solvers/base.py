@@ -40,6 +40,17 @@ import numpy as np
 __all__ = ["Stepper", "SemiExplicitDAE", "MechanicalDAE", "StepFailure"]
 
 
+#: A multistep stepper (BDF, LSODA, IDA) keeps integrating its own state after a projection
+#: until the projected state is more than this many tolerance units (``atol + rtol |y|``)
+#: away; then it restarts from the projected state. Outputs are projected either way. A
+#: restart drops the method to order 1 with a tiny step, whose error exceeds the drift it
+#: removes: at 1 (the old rule) BDF + D'Alembert on the slider-crank restarted after 23 % of
+#: its 11,454 steps, took 43 s for 0.5 s simulated and ended 8e-6 rad off; at 100 it takes
+#: 272 steps, 1 restart, 0.95 s, 9e-8 rad. Between 100 and 1000 nothing changes but the
+#: bound on the drift, so 100 keeps the integrated state within 100 tolerance units.
+RESTART_DRIFT = 100.0
+
+
 class StepFailure(RuntimeError):
     """A solver could not continue; the message names the cause (Newton failure, step-size
     collapse, singular iteration matrix) and where (``t``)."""
@@ -179,11 +190,12 @@ class Stepper:
         self.y = np.array(y, dtype=float)
 
     def moved_beyond_tolerance(self, y):
-        """Whether ``y`` differs from the current state by more than ``atol + rtol |y|`` in
-        some component (when a multistep solver must restart after a projection)."""
+        """Whether ``y`` differs from the current state by more than ``RESTART_DRIFT`` times
+        ``atol + rtol |y|`` in some component (when a multistep solver must restart after a
+        projection; below it, it keeps its own state)."""
         y = np.asarray(y, float)
         scale = self.atol + self.rtol * np.abs(y)
-        return bool(np.max(np.abs(y - self.y) / scale, initial=0.0) > 1.0)
+        return bool(np.max(np.abs(y - self.y) / scale, initial=0.0) > RESTART_DRIFT)
 
     def _step(self):  # pragma: no cover - abstract
         raise NotImplementedError
