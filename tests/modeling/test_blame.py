@@ -35,3 +35,16 @@ def test_the_run_names_component_and_law_not_numpy():
     assert res.status == "failed"
     assert "motor" in res.message and "singular_gain" in res.message and "LinAlgError" in res.message
     assert 0.2 < res.time[-1] < 0.3  # results up to the last accepted step before the law failed
+
+
+def test_the_frameworks_own_numpy_failure_is_no_law():
+    """A LinAlgError raised by numpy inside mbcomp's own code (no user or component code in
+    between) names no law, so the driver reports it as the linear-algebra failure it is."""
+    from mbcomp.assembly.manifold import solve_speeds
+    from mbcomp.simulation.stops import raised_in_a_law
+
+    try:
+        solve_speeds(np.array([[np.nan, 1.0]]), np.array([1.0]), np.zeros(2))
+    except np.linalg.LinAlgError as exc:
+        inner = exc.with_traceback(exc.__traceback__.tb_next)  # drop this test's own frame
+    assert blame(inner).law == "?" and not raised_in_a_law(inner)

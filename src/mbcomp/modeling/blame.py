@@ -62,22 +62,26 @@ class Blame:
         return f"{type(c).__name__} {c.path!r}" if c is not None else "a component"
 
 
+#: where ``mbcomp.library`` sits when mbcomp is installed as a package (not editable)
+_LIBRARY_INSTALLED = FRAMEWORK / "library"
+
 #: the interpreter's own library and installed packages: numpy or scipy raising inside a law
 #: is the law's failure, not theirs
 _NOT_LAWS = tuple({pathlib.Path(p).resolve() for p in (sysconfig.get_paths()["stdlib"], sysconfig.get_paths()["purelib"],
                                                      sysconfig.get_paths()["platlib"])})
 
 
-def _in(filename, roots):
+def _in_framework(filename):
+    """Framework code, the standard library or an installed package -- not a law. The
+    component library counts as laws wherever it is installed (beside ``src/`` in a checkout,
+    or inside the installed ``mbcomp`` package among site-packages)."""
     try:
         path = pathlib.Path(filename).resolve()
     except (OSError, ValueError):
         return True  # <frozen ...>: not a user's source file
-    return any(path.is_relative_to(r) for r in roots)
-
-
-def _in_framework(filename):
-    return _in(filename, (FRAMEWORK,) + _NOT_LAWS)
+    if path.is_relative_to(_LIBRARY_INSTALLED):
+        return False
+    return any(path.is_relative_to(r) for r in (FRAMEWORK,) + _NOT_LAWS)
 
 
 def blame(exc, component_types=None) -> Blame:
@@ -94,18 +98,14 @@ def blame(exc, component_types=None) -> Blame:
     from .component import Component
 
     kinds = component_types or (Component,)
-    tb, found, last, last_outside = exc.__traceback__, None, None, None
+    tb, found, last = exc.__traceback__, None, None
     while tb is not None:
         obj = tb.tb_frame.f_locals.get("self")
         if isinstance(obj, kinds):
             found = obj
-        filename = tb.tb_frame.f_code.co_filename
-        if not _in_framework(filename):
+        if not _in_framework(tb.tb_frame.f_code.co_filename):
             last = tb
-        if not _in(filename, (FRAMEWORK,)):
-            last_outside = tb  # fallback: the library installed among site-packages
         tb = tb.tb_next
-    last = last or last_outside
     if last is None:
         return Blame(found, "?", "?")
     co = last.tb_frame.f_code
