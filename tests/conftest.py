@@ -22,3 +22,21 @@ def load_module(relpath):
 @pytest.fixture
 def models_dir():
     return ROOT / "models"
+
+
+def torque_pendulum(law):
+    """A 1 m, 1 kg pendulum released at 0.5 rad from rest, driven by a hinge torque
+    ``law(t, phi, w)`` (component ``"motor"``): the tests' model of a misbehaving user law."""
+    from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
+
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("hinge", Revolute(phi0=0.5))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    motor = m.add("motor", Torque(tau=law))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    m.connect(j.axis, motor.flange_b)
+    return m

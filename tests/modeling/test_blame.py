@@ -2,7 +2,7 @@
 import numpy as np
 
 import mbcomp
-from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
+from conftest import torque_pendulum
 from mbcomp.modeling.blame import blame
 
 
@@ -21,16 +21,7 @@ def test_numpy_raising_inside_a_law_blames_the_law():
 
 
 def test_the_run_names_component_and_law_not_numpy():
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j = m.add("hinge", Revolute(phi0=0.5))
-    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", PointMass(m=1.0))
-    motor = m.add("motor", Torque(tau=singular_gain))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    m.connect(j.axis, motor.flange_b)
+    m = torque_pendulum(singular_gain)
     res = mbcomp.simulate(m, t_end=1.0, n_out=101)
     assert res.status == "failed"
     assert "motor" in res.message and "singular_gain" in res.message and "LinAlgError" in res.message

@@ -14,30 +14,16 @@ import numpy as np
 import pytest
 
 import mbcomp
-from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World, WorldForce
+from conftest import torque_pendulum
+from mbcomp.library import WorldForce
 
 T_BAD = 0.3
 METHODS = ["RK45", "LSODA", "radau5", "ida", "genalpha"]
 
 
-def pendulum(law):
-    """A 1 m, 1 kg pendulum released at 0.5 rad, with a hinge torque ``law(t, phi, w)``."""
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j = m.add("hinge", Revolute(phi0=0.5))
-    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", PointMass(m=1.0))
-    motor = m.add("motor", Torque(tau=law))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    m.connect(j.axis, motor.flange_b)
-    return m
-
-
 def run(law, method):
     extra = dict(h=1e-3) if method == "genalpha" else {}
-    return mbcomp.simulate(pendulum(law), t_end=1.0, method=method, n_out=101, rtol=1e-8, atol=1e-10, **extra)
+    return mbcomp.simulate(torque_pendulum(law), t_end=1.0, method=method, n_out=101, rtol=1e-8, atol=1e-10, **extra)
 
 
 def quiet(t, phi, w):
@@ -83,7 +69,7 @@ def test_a_force_law_that_raises_is_named_too(undisturbed):
             raise RuntimeError("sensor lost")
         return (0.0, 0.0, 0.0)
 
-    m = pendulum(quiet)
+    m = torque_pendulum(quiet)
     f = m.add("push", WorldForce(f=push))
     m.connect(m["bob"].frame_a, f.frame_b)
     res = mbcomp.simulate(m, t_end=1.0, method="RK45", n_out=101, rtol=1e-8, atol=1e-10)
@@ -149,7 +135,7 @@ def test_sigterm_from_a_timer_interrupts_a_long_run():
 
     previous = signal.signal(signal.SIGTERM, lambda signum, frame: None)
     try:
-        res = mbcomp.simulate(pendulum(law), t_end=2000.0, method="RK45", dt_out=0.01, rtol=1e-10, atol=1e-12)
+        res = mbcomp.simulate(torque_pendulum(law), t_end=2000.0, method="RK45", dt_out=0.01, rtol=1e-10, atol=1e-12)
     finally:
         timers[0].cancel()
         signal.signal(signal.SIGTERM, previous)

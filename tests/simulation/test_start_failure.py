@@ -4,21 +4,7 @@ assembler -- and a law that only fails later still integrates up to where it fai
 import pytest
 
 import mbcomp
-from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
-
-
-def pendulum(law):
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j = m.add("hinge", Revolute(phi0=0.5))
-    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", PointMass(m=1.0))
-    motor = m.add("motor", Torque(tau=law))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    m.connect(j.axis, motor.flange_b)
-    return m
+from conftest import torque_pendulum
 
 
 def table_from_one_second(t, phi, w):
@@ -31,7 +17,7 @@ def table_from_one_second(t, phi, w):
 @pytest.mark.parametrize("method", ["RK45", "radau5"])
 def test_a_law_failing_at_the_start_names_component_law_and_time(method):
     with pytest.raises(mbcomp.SimulationError) as info:
-        mbcomp.simulate(pendulum(table_from_one_second), t_end=2.0, method=method)
+        mbcomp.simulate(torque_pendulum(table_from_one_second), t_end=2.0, method=method)
     msg = str(info.value)
     assert msg.startswith("Torque 'motor': table_from_one_second raised ValueError at t=0:")
     assert "test_start_failure.py" in msg and "nothing was integrated" in msg
@@ -44,6 +30,6 @@ def test_a_law_failing_later_keeps_the_run_up_to_there():
             raise ValueError(f"no torque tabulated at t={t:g} s")
         return 0.0
 
-    res = mbcomp.simulate(pendulum(table_to_one_second), t_end=2.0, n_out=201)
+    res = mbcomp.simulate(torque_pendulum(table_to_one_second), t_end=2.0, n_out=201)
     assert res.status == "failed" and "table_to_one_second raised ValueError" in res.message
     assert 0.9 < res.time[-1] <= 1.0
