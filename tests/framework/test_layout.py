@@ -31,11 +31,12 @@ def _layer(parts):
     return parts[0] if parts[0] in LAYERS else None
 
 
-def _imports(path, parts):
-    """Every ``mbcomp`` module a file imports (top level and inside functions), as part tuples."""
+def _imports(path, parts, top_level_only=False):
+    """Every ``mbcomp`` module a file imports (top level and inside functions, or top level
+    only), as ``(part tuple, line)``."""
     tree = ast.parse(path.read_text())
-    pkg = parts[:-1] if parts[-1] != "__init__" else parts[:-1]
-    for node in ast.walk(tree):
+    pkg = parts[:-1]
+    for node in (tree.body if top_level_only else ast.walk(tree)):
         if isinstance(node, ast.ImportFrom):
             if node.level:
                 base = list(pkg[: len(pkg) - node.level + 1])
@@ -137,23 +138,12 @@ def test_no_import_cycles():
     are allowed to break one, and are listed by the layer test above)."""
     import networkx as nx
 
-    names = {parts: ".".join(parts).removesuffix(".__init__") for _, parts in _modules()}
     g = nx.DiGraph()
     for path, parts in _modules():
-        me = names[parts]
-        pkg = parts[:-1]
-        for node in ast.parse(path.read_text()).body:  # top level only
-            targets = []
-            if isinstance(node, ast.ImportFrom) and node.level:
-                base = list(pkg[: len(pkg) - node.level + 1])
-                mod = base + (node.module.split(".") if node.module else [])
-                targets = [mod + [a.name] for a in node.names] if node.module is None else [mod]
-            elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("mbcomp."):
-                targets = [node.module.split(".")[1:]]
-            for t in targets:
-                dotted = ".".join(t)
-                if (SRC.joinpath(*t).with_suffix(".py").exists()) or (SRC.joinpath(*t) / "__init__.py").exists():
-                    g.add_edge(me, dotted)
+        me = ".".join(parts).removesuffix(".__init__")
+        for t, _ in _imports(path, parts, top_level_only=True):
+            if SRC.joinpath(*t).with_suffix(".py").exists() or (SRC.joinpath(*t) / "__init__.py").exists():
+                g.add_edge(me, ".".join(t))
     cycles = list(nx.simple_cycles(g))
     assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles[:5])
 

@@ -92,8 +92,12 @@ class Closure:
         ``||r||``.
     iterations : int
         Newton steps taken.
+    tol : float
+        The tolerance it was asked for.
     converged : bool
         ``norm <= tol``.
+    tol : float
+        The tolerance it was asked for (``acceptable`` allows ``ACCEPT_FACTOR`` times it).
     """
 
     q: np.ndarray
@@ -107,9 +111,9 @@ class Closure:
     @property
     def acceptable(self):
         """Converged, or within ``ACCEPT_FACTOR`` of the tolerance it was asked for."""
-        return self.converged or self.norm <= ACCEPT_FACTOR * self._tol
+        return self.converged or self.norm <= ACCEPT_FACTOR * self.tol
 
-    _tol: float = POSITION_TOL
+    tol: float = POSITION_TOL
 
 
 def close_positions(residual: Callable, increment: Callable, q, *, columns=None, tol=POSITION_TOL, max_iter=8,
