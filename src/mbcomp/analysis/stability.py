@@ -33,22 +33,15 @@ gathers the analysis done by :mod:`~mbcomp.analysis.steady` (steady states),
 
 Examples
 --------
-The bead on a ring spinning at omega (seed Example 7.1): at the bottom the roots are
-``+-sqrt(omega^2 - g/r)`` (7.34).
+The facade holds no code of its own; a worked linearization (the bead on a spinning ring,
+seed Example 7.1) is in :mod:`mbcomp.analysis.linearization`.
 
->>> import mbcomp
->>> from mbcomp.library import World, Revolute, PrescribedMotion, FixedTranslation, PointMass
->>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
->>> spin = m.add("spin", Revolute(n=(0, 1, 0))); drive = m.add("drive", PrescribedMotion(s=lambda t: 6.0 * t))
->>> hinge = m.add("hinge", Revolute(n=(0, 0, 1), phi0=0.0, w0=0.0))
->>> rod = m.add("rod", FixedTranslation(r=(0, -0.5, 0))); bead = m.add("bead", PointMass(m=0.1))
->>> m.connect(w.frame_b, spin.frame_a); m.connect(drive.flange_b, spin.axis)
->>> m.connect(spin.frame_b, hinge.frame_a); m.connect(hinge.frame_b, rod.frame_a); m.connect(rod.frame_b, bead.frame_a)
->>> lin = mbcomp.linearize(m)
->>> lin.state_names, lin.classification
-(['hinge.phi', 'hinge.w'], 'unstable')
->>> round(float(max(lin.eigenvalues.real)), 6)  # sqrt(36 - 9.81/0.5)
-4.047221
+>>> import mbcomp, mbcomp.stability as st
+>>> from mbcomp.analysis import linearization
+>>> st.linearize is linearization.linearize is mbcomp.linearize
+True
+>>> st.classify([-1.0 + 2.0j, -1.0 - 2.0j]), st.classify([2.0j, -2.0j]), st.classify([0.5, -0.5])
+('asymptotically stable', 'marginally stable', 'unstable')
 """
 
 from __future__ import annotations
