@@ -1,0 +1,51 @@
+"""Portable C runtime embedded in exported FMUs and mbcomp's compiled engine.
+
+The files in this package are plain C99 sources (libc and libm only) that
+generated model code is compiled together with:
+
+``mbrt.h``
+    The public API.
+``mbrt_linalg.c``
+    Dense LU (partial pivoting) and Cholesky factorisations and solves on
+    row-major ``double`` arrays, in place.
+``mbrt_rk.c``, ``mbrt_rk_internal.h``
+    The adaptive explicit Runge--Kutta driver: Hairer's step-size control
+    with PI ("Lund") stabilisation and starting-step guess, dense output at
+    a caller-given time grid, per-step callback (for projections), argument
+    checks and failure reporting.
+``mbrt_dopri5.c``, ``mbrt_dop853.c``
+    The Dormand--Prince 5(4) pair with 4th-order dense output and the
+    8(5,3) pair with 7th-order dense output.
+
+The runtime must stay free of Python: an exported FMU carries these sources
+(or the object code built from them) and runs where no interpreter exists.
+It therefore has no global state and never allocates; the integrators take
+a caller-supplied work buffer of ``mbrt_dopri5_work_size(n)`` /
+``mbrt_dop853_work_size(n)`` doubles.  Times are in the model's time unit
+(seconds for mbcomp models); tolerances are in the units of the state.
+
+Attributes
+----------
+RUNTIME_DIR : pathlib.Path
+    Directory holding the C sources and headers (pass it as ``-I``).
+HEADERS : tuple of pathlib.Path
+    Header files.
+SOURCES : tuple of pathlib.Path
+    The ``.c`` files to compile and link together with generated code.
+
+Examples
+--------
+>>> from mbcomp.codegen.runtime import SOURCES, RUNTIME_DIR
+>>> sorted(p.name for p in SOURCES)
+['mbrt_dop853.c', 'mbrt_dopri5.c', 'mbrt_linalg.c', 'mbrt_rk.c']
+>>> (RUNTIME_DIR / "mbrt.h").is_file()
+True
+"""
+
+from pathlib import Path
+
+__all__ = ["RUNTIME_DIR", "HEADERS", "SOURCES"]
+
+RUNTIME_DIR = Path(__file__).resolve().parent
+HEADERS = tuple(sorted(RUNTIME_DIR.glob("*.h")))
+SOURCES = tuple(sorted(RUNTIME_DIR.glob("*.c")))

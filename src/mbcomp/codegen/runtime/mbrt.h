@@ -1,0 +1,143 @@
+/*
+ * mbrt.h -- mbcomp's small C runtime (C99, libc + libm only).
+ *
+ * This is the numerical kernel that an exported FMU and mbcomp's compiled
+ * engine embed.  It must stay free of Python and of any other dependency:
+ *
+ *   - no global or static mutable state (every routine is reentrant),
+ *   - no dynamic allocation: the caller passes all scratch memory; the
+ *     integrators tell how much they need with mbrt_*_work_size(),
+ *   - row-major double arrays throughout.
+ *
+ * Contents
+ *   1. Dense linear algebra (mbrt_linalg.c): LU with partial pivoting and
+ *      Cholesky, both in place.
+ *   2. Explicit adaptive Runge-Kutta integrators with dense output
+ *      (mbrt_rk.c driver, mbrt_dopri5.c and mbrt_dop853.c tableaux):
+ *      DOPRI5 (Dormand-Prince 5(4), 4th-order continuous extension) and
+ *      DOP853 (Dormand-Prince 8(5,3), 7th-order continuous extension),
+ *      with the step-size control of E. Hairer's codes dopri5.f/dop853.f.
+ *
+ * References
+ *   E. Hairer, S. P. Norsett, G. Wanner, "Solving Ordinary Differential
+ *   Equations I: Nonstiff Problems", 2nd ed., Springer 1993, Sec. II.4
+ *   (step-size control, starting step), II.5 (DOPRI5), II.6 (dense output),
+ *   II.10 (DOP853).  J. R. Dormand, P. J. Prince, "A family of embedded
+ *   Runge-Kutta formulae", J. Comput. Appl. Math. 6 (1980) 19-26.
+ */
+#ifndef MBRT_H
+#define MBRT_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------------ */
+/* Dense linear algebra (row-major, in place)                          */
+/* ------------------------------------------------------------------ */
+
+/* LU factorisation P A = L U with partial (row) pivoting.  On return A holds
+ * U in its upper triangle and the unit-lower L (without its diagonal) below;
+ * piv[k] is the row swapped with row k at step k.  Returns 0, or k+1 if the
+ * pivot of column k is exactly zero or not finite (the factorisation stops
+ * there).  Returns -1 if n < 0 or a pointer is NULL. */
+int mbrt_lu_factor(int n, double *A, int *piv);
+
+/* Solves A x = b with the output of mbrt_lu_factor; b is overwritten by x. */
+void mbrt_lu_solve(int n, const double *LU, const int *piv, double *b);
+
+/* Cholesky factorisation A = L L^T of a symmetric positive definite matrix.
+ * Only the lower triangle of A is read; on return it holds L and the strict
+ * upper triangle is set to zero.  Returns 0, or k+1 at the first pivot k
+ * that is not positive (or not finite); -1 if n < 0 or A is NULL. */
+int mbrt_chol_factor(int n, double *A);
+
+/* Solves L L^T x = b with the output of mbrt_chol_factor; b is overwritten. */
+void mbrt_chol_solve(int n, const double *L, double *b);
+
+/* ------------------------------------------------------------------ */
+/* Explicit adaptive Runge-Kutta integration with dense output         */
+/* ------------------------------------------------------------------ */
+
+/* Right-hand side y' = f(t, y): writes dydt[0..n-1].  Returns 0 if all went
+ * well; any nonzero value stops the integration with status 1 and that code
+ * quoted in stats->message. */
+typedef int (*mbrt_rhs_fn)(void *ctx, double t, const double *y, double *dydt);
+
+/* Called after every accepted step with the new state.  It may modify y in
+ * place (e.g. a projection onto a constraint manifold); the integrator then
+ * re-evaluates the right-hand side there.  0 = go on, nonzero = stop with
+ * status 5. */
+typedef int (*mbrt_step_fn)(void *ctx, double t, double *y);
+
+typedef struct {
+    long nfev;      /* right-hand side evaluations                        */
+    long nstep;     /* attempted steps (naccept + nreject)                */
+    long naccept;   /* accepted steps                                     */
+    long nreject;   /* rejected steps                                     */
+    int status;     /* MBRT_* status below (also the return value)        */
+    double t;       /* time reached (t_end on success)                    */
+    char message[200]; /* one sentence saying what happened              */
+} mbrt_stats;
+
+enum {
+    MBRT_OK = 0,              /* reached t_end                              */
+    MBRT_RHS_FAILED = 1,      /* rhs returned nonzero (code in message)     */
+    MBRT_STEP_TOO_SMALL = 2,  /* step size fell below the round-off limit   */
+    MBRT_MAX_STEPS = 3,       /* max_steps attempted steps were not enough  */
+    MBRT_NONFINITE = 4,       /* state or derivative became NaN/Inf         */
+    MBRT_STOPPED = 5,         /* step callback returned nonzero             */
+    MBRT_BAD_ARGUMENT = 6     /* invalid input                              */
+};
+
+/* Number of doubles the work buffer of mbrt_dopri5 must hold (0 if n <= 0). */
+size_t mbrt_dopri5_work_size(int n);
+
+/* Integrates y' = f(t, y), y(t0) = y0 from t0 to t_end (t_end >= t0).
+ *
+ *   rtol       relative tolerance (scalar, >= 100*DBL_EPSILON)
+ *   atol       n absolute tolerances (>= 0), same units as y
+ *   h0         initial step; 0 = automatic (Hairer's starting-step guess)
+ *   hmax       largest step; 0 = |t_end - t0|
+ *   max_steps  largest number of attempted steps; 0 = 100000
+ *   t_out      n_out strictly increasing times in [t0, t_end] at which y is
+ *              wanted (may be NULL if n_out == 0); values come from the
+ *              continuous extension of the step containing them, evaluated
+ *              before on_step may modify the state
+ *   y_out      n_out*n doubles, row-major: y_out[i*n + j] = y_j(t_out[i])
+ *   n_written  if not NULL, receives the number of rows of y_out written
+ *              (valid even on failure)
+ *   work       mbrt_dopri5_work_size(n) doubles of scratch
+ *   stats      if not NULL, receives counters, status, final t, message
+ *   on_step    may be NULL
+ *
+ * Returns the status (MBRT_OK ... MBRT_BAD_ARGUMENT).  The tolerance test is
+ * Hairer's: sqrt(mean_i (err_i / sc_i)^2) <= 1 with
+ * sc_i = atol_i + rtol * max(|y_i(t)|, |y_i(t+h)|). */
+int mbrt_dopri5(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
+                double t0, const double *y0, double t_end,
+                double rtol, const double *atol, double h0, double hmax,
+                long max_steps, const double *t_out, int n_out,
+                double *y_out, int *n_written,
+                double *work, mbrt_stats *stats);
+
+/* Number of doubles the work buffer of mbrt_dop853 must hold (0 if n <= 0). */
+size_t mbrt_dop853_work_size(int n);
+
+/* As mbrt_dopri5 with the 8th-order DOP853 pair (error estimate combining the
+ * 5th- and 3rd-order embedded solutions, 7th-order dense output costing three
+ * extra rhs evaluations in each step that contains output times). */
+int mbrt_dop853(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
+                double t0, const double *y0, double t_end,
+                double rtol, const double *atol, double h0, double hmax,
+                long max_steps, const double *t_out, int n_out,
+                double *y_out, int *n_written,
+                double *work, mbrt_stats *stats);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MBRT_H */
