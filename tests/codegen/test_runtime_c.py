@@ -1,0 +1,540 @@
+"""Tests of the C runtime ``mbcomp.codegen.runtime`` (linear algebra, DOPRI5, DOP853).
+
+The runtime sources are compiled together with a small C file of test
+right-hand sides into a shared library and called through ctypes; the same C
+file has a ``main()`` (under ``MBRT_SELFTEST_MAIN``) used for the
+AddressSanitizer/UBSan and valgrind runs at the end.
+"""
+
+import ctypes
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from mbcomp.codegen.compiler import c_compiler
+from mbcomp.codegen.runtime import RUNTIME_DIR, SOURCES
+
+CC = c_compiler()
+pytestmark = pytest.mark.skipif(CC is None, reason="no C compiler found")
+
+TEST_C = r"""
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "mbrt.h"
+
+/* ctx of every rhs: a double array of parameters (may be NULL) */
+int rhs_decay(void *ctx, double t, const double *y, double *dy)
+{ (void)ctx; (void)t; dy[0] = -y[0]; return 0; }
+
+/* y0' = y1, y1' = -w^2 y0  (w = p[0]) */
+int rhs_osc(void *ctx, double t, const double *y, double *dy)
+{ double w = ((const double *)ctx)[0]; (void)t; dy[0] = y[1]; dy[1] = -w * w * y[0]; return 0; }
+
+/* Van der Pol, mu = p[0] */
+int rhs_vdp(void *ctx, double t, const double *y, double *dy)
+{ double mu = ((const double *)ctx)[0]; (void)t;
+  dy[0] = y[1]; dy[1] = mu * (1.0 - y[0] * y[0]) * y[1] - y[0]; return 0; }
+
+/* Arenstorf orbit (Hairer et al., Sec. II.0) */
+int rhs_arenstorf(void *ctx, double t, const double *y, double *dy)
+{ const double mu = 0.012277471, mp = 1.0 - mu; (void)ctx; (void)t;
+  double d1 = pow((y[0] + mu) * (y[0] + mu) + y[1] * y[1], 1.5);
+  double d2 = pow((y[0] - mp) * (y[0] - mp) + y[1] * y[1], 1.5);
+  dy[0] = y[2]; dy[1] = y[3];
+  dy[2] = y[0] + 2.0 * y[3] - mp * (y[0] + mu) / d1 - mu * (y[0] - mp) / d2;
+  dy[3] = y[1] - 2.0 * y[2] - mp * y[1] / d1 - mu * y[1] / d2;
+  return 0; }
+
+/* y' = -y until t > p[0], then returns code p[1] (p[2] counts calls) */
+int rhs_fail(void *ctx, double t, const double *y, double *dy)
+{ double *p = (double *)ctx; p[2] += 1.0; dy[0] = -y[0];
+  return t > p[0] ? (int)p[1] : 0; }
+
+/* y' = -y until t > p[0], then NaN */
+int rhs_nan(void *ctx, double t, const double *y, double *dy)
+{ double *p = (double *)ctx; dy[0] = t > p[0] ? NAN : -y[0]; return 0; }
+
+/* outward spiral: rotation plus growth p[5] * y (ctx shared with step_project) */
+int rhs_spiral(void *ctx, double t, const double *y, double *dy)
+{ double g = ((const double *)ctx)[5]; (void)t;
+  dy[0] = -y[1] + g * y[0]; dy[1] = y[0] + g * y[1]; return 0; }
+
+/* step callback: p[0] counts calls, p[1] = 1 to project onto |y| = 1,
+ * stop with code p[3] once t >= p[2] > 0, p[4] = max ||y|-1| before projecting */
+int step_project(void *ctx, double t, double *y)
+{ double *p = (double *)ctx; p[0] += 1.0;
+  double r = sqrt(y[0] * y[0] + y[1] * y[1]);
+  if (fabs(r - 1.0) > p[4]) p[4] = fabs(r - 1.0);
+  if (p[1] != 0.0) { y[0] /= r; y[1] /= r; }
+  if (p[2] > 0.0 && t >= p[2]) return (int)p[3];
+  return 0; }
+
+#ifdef MBRT_SELFTEST_MAIN
+/* Standalone driver for sanitizer / valgrind runs: exercises every code path
+ * with work buffers of exactly the advertised size (heap, so overruns show). */
+typedef int (*integ_fn)(mbrt_rhs_fn, mbrt_step_fn, void *, int, double, const double *, double,
+                        double, const double *, double, double, long, const double *, int,
+                        double *, int *, double *, mbrt_stats *);
+static int failures = 0;
+#define CHECK(c) do { if (!(c)) { printf("FAILED: %s (line %d)\n", #c, __LINE__); failures++; } } while (0)
+
+static int run(integ_fn F, size_t (*ws)(int), mbrt_rhs_fn f, mbrt_step_fn s, void *ctx, int n,
+               const double *y0, double t1, double rtol, int nout, long max_steps, mbrt_stats *st,
+               double *last)
+{
+    double *work = malloc(ws(n) * sizeof(double));
+    double *tout = malloc((size_t)nout * sizeof(double));
+    double *yout = malloc((size_t)nout * (size_t)n * sizeof(double));
+    double *atol = malloc((size_t)n * sizeof(double));
+    for (int i = 0; i < n; ++i) atol[i] = rtol;
+    for (int i = 0; i < nout; ++i) tout[i] = t1 * i / (nout - 1);
+    int nw = -1;
+    int rc = F(f, s, ctx, n, 0.0, y0, t1, rtol, atol, 0.0, 0.0, max_steps, tout, nout, yout, &nw,
+               work, st);
+    CHECK(rc == st->status && nw >= 0 && nw <= nout);
+    if (last && nw > 0) memcpy(last, yout + (size_t)(nw - 1) * n, (size_t)n * sizeof(double));
+    free(work); free(tout); free(yout); free(atol);
+    return rc;
+}
+
+int main(void)
+{
+    /* linear algebra on a pseudo-random diagonally dominant matrix */
+    enum { N = 7 };
+    double A[N * N], LU[N * N], b[N], x[N], S[N * N];
+    int piv[N];
+    unsigned long seed = 12345;
+    for (int i = 0; i < N * N; ++i) { seed = seed * 6364136223846793005UL + 1442695040888963407UL;
+        A[i] = (double)(seed >> 11) / 9007199254740992.0 - 0.5; }
+    for (int i = 0; i < N; ++i) { A[i * N + i] += 4.0; x[i] = i + 1.0; }
+    for (int i = 0; i < N; ++i) { b[i] = 0; for (int j = 0; j < N; ++j) b[i] += A[i * N + j] * x[j]; }
+    memcpy(LU, A, sizeof A);
+    CHECK(mbrt_lu_factor(N, LU, piv) == 0);
+    mbrt_lu_solve(N, LU, piv, b);
+    for (int i = 0; i < N; ++i) CHECK(fabs(b[i] - x[i]) < 1e-12);
+    for (int i = 0; i < N; ++i) for (int j = 0; j < N; ++j) { double s = 0;
+        for (int k = 0; k < N; ++k) s += A[i * N + k] * A[j * N + k]; S[i * N + j] = s; }
+    for (int i = 0; i < N; ++i) { b[i] = 0; for (int j = 0; j < N; ++j) b[i] += S[i * N + j] * x[j]; }
+    CHECK(mbrt_chol_factor(N, S) == 0);
+    mbrt_chol_solve(N, S, b);
+    for (int i = 0; i < N; ++i) CHECK(fabs(b[i] - x[i]) < 1e-10);
+    double Z[4] = {1, 2, 2, 4}; int pz[2];
+    CHECK(mbrt_lu_factor(2, Z, pz) == 2);
+    double Zc[4] = {1, 2, 2, 4};
+    CHECK(mbrt_chol_factor(2, Zc) == 2);
+
+    integ_fn meth[2] = {mbrt_dopri5, mbrt_dop853};
+    size_t (*wsz[2])(int) = {mbrt_dopri5_work_size, mbrt_dop853_work_size};
+    for (int m = 0; m < 2; ++m) {
+        mbrt_stats st;
+        double last[4];
+        double w = 2.0, y2[2] = {1.0, 0.0};
+        CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 2, y2, 10.0, 1e-8, 101, 0, &st, last) == 0);
+        CHECK(fabs(last[0] - cos(20.0)) < 1e-6);
+        double mu = 1.0, yv[2] = {2.0, 0.0};
+        CHECK(run(meth[m], wsz[m], rhs_vdp, NULL, &mu, 2, yv, 20.0, 1e-9, 57, 0, &st, last) == 0);
+        double ya[4] = {0.994, 0.0, 0.0, -2.00158510637908252240537862224};
+        CHECK(run(meth[m], wsz[m], rhs_arenstorf, NULL, NULL, 4, ya, 17.0652165601579625588917206249,
+                  1e-10, 33, 0, &st, last) == 0);
+        CHECK(fabs(last[0] - 0.994) < 1e-5 && fabs(last[1]) < 1e-5);
+        double y1[1] = {1.0}, pf[3] = {0.5, 7, 0};
+        CHECK(run(meth[m], wsz[m], rhs_fail, NULL, pf, 1, y1, 1.0, 1e-8, 11, 0, &st, last) == 1);
+        double pn[1] = {0.5};
+        CHECK(run(meth[m], wsz[m], rhs_nan, NULL, pn, 1, y1, 1.0, 1e-8, 11, 0, &st, last) == 2);
+        double ps[6] = {0, 1, 0, 0, 0, 0.1};
+        CHECK(run(meth[m], wsz[m], rhs_spiral, step_project, ps, 2, y2, 10.0, 1e-6, 11, 0, &st, last) == 0);
+        CHECK(fabs(hypot(last[0], last[1]) - 1.0) < 1e-2 && ps[0] == st.naccept);
+        double ps2[6] = {0, 1, 3.0, 9, 0, 0.1};
+        CHECK(run(meth[m], wsz[m], rhs_spiral, step_project, ps2, 2, y2, 10.0, 1e-6, 11, 0, &st, last) == 5);
+        CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 2, y2, 10.0, 1e-8, 11, 5, &st, last) == 3);
+        CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 0, y2, 10.0, 1e-8, 11, 0, &st, last) == 6);
+        CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 2, y2, 10.0, -1.0, 11, 0, &st, last) == 6);
+        printf("%s ok (last message: %s)\n", m ? "DOP853" : "DOPRI5", st.message);
+    }
+    printf("%d failures\n", failures);
+    return failures != 0;
+}
+#endif
+"""
+
+
+class Stats(ctypes.Structure):
+    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
+                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
+                ("message", ctypes.c_char * 200)]
+
+
+def _build(outdir, extra=(), exe=False):
+    src = outdir / "mbrt_selftest.c"
+    src.write_text(TEST_C)
+    out = outdir / ("selftest" if exe else "libmbrt_test.so")
+    cmd = [CC, "-std=c99", "-O2", "-g", "-Wall", "-Wextra", "-pedantic", "-I", str(RUNTIME_DIR),
+           *(["-DMBRT_SELFTEST_MAIN"] if exe else ["-shared", "-fPIC"]), *extra,
+           *map(str, SOURCES), str(src), "-o", str(out), "-lm"]
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    return out, res
+
+
+@pytest.fixture(scope="module")
+def lib(tmp_path_factory):
+    out, res = _build(tmp_path_factory.mktemp("mbrt"))
+    assert res.returncode == 0, res.stderr
+    assert "warning" not in res.stderr, res.stderr  # the runtime compiles cleanly with -Wall -Wextra -pedantic
+    L = ctypes.CDLL(str(out))
+    vp, i, d, lng = ctypes.c_void_p, ctypes.c_int, ctypes.c_double, ctypes.c_long
+    L.mbrt_lu_factor.argtypes = [i, vp, vp]
+    L.mbrt_lu_solve.argtypes = [i, vp, vp, vp]
+    L.mbrt_chol_factor.argtypes = [i, vp]
+    L.mbrt_chol_solve.argtypes = [i, vp, vp]
+    L.mbrt_lu_solve.restype = L.mbrt_chol_solve.restype = None
+    for m in ("dopri5", "dop853"):
+        fn = getattr(L, f"mbrt_{m}")
+        fn.argtypes = [vp, vp, vp, i, d, vp, d, d, vp, d, d, lng, vp, i, vp, vp, vp, ctypes.POINTER(Stats)]
+        fn.restype = i
+        getattr(L, f"mbrt_{m}_work_size").argtypes = [i]
+        getattr(L, f"mbrt_{m}_work_size").restype = ctypes.c_size_t
+    return L
+
+
+def _ptr(a):
+    return None if a is None else a.ctypes.data
+
+
+def integrate(lib, method, rhs, y0, t_end, t_out, rtol=1e-6, atol=None, ctx=None, on_step=None,
+              t0=0.0, h0=0.0, hmax=0.0, max_steps=0, n=None):
+    """Call ``mbrt_<method>``; returns (status, y_out[:n_written], stats)."""
+    y0 = np.ascontiguousarray(y0, dtype=float)
+    n = len(y0) if n is None else n
+    atol = np.full(max(len(y0), 1), rtol) if atol is None else np.ascontiguousarray(atol, dtype=float)
+    t_out = np.ascontiguousarray(t_out, dtype=float)
+    y_out = np.full((max(len(t_out), 1), max(len(y0), 1)), np.nan)
+    work = np.zeros(max(getattr(lib, f"mbrt_{method}_work_size")(max(n, 1)), 1))
+    nw, st = ctypes.c_int(-1), Stats()
+    f = ctypes.cast(getattr(lib, rhs), ctypes.c_void_p)
+    cb = ctypes.cast(getattr(lib, on_step), ctypes.c_void_p) if on_step else None
+    status = getattr(lib, f"mbrt_{method}")(
+        f, cb, _ptr(ctx), n, t0, _ptr(y0), t_end, rtol, _ptr(atol), h0, hmax, max_steps,
+        _ptr(t_out), len(t_out), _ptr(y_out), ctypes.addressof(nw), work.ctypes.data, ctypes.byref(st))
+    assert status == st.status
+    return status, y_out[: nw.value], st
+
+
+METHODS = ["dopri5", "dop853"]
+ORDER = {"dopri5": 5, "dop853": 8}
+
+
+# --------------------------------------------------------------------------- linear algebra
+@pytest.mark.parametrize("n", [1, 2, 5, 17, 40])
+def test_lu_solve_matches_numpy(lib, n):
+    rng = np.random.default_rng(n)
+    A = rng.standard_normal((n, n)) + n * np.eye(n) * 0.5
+    b = rng.standard_normal(n)
+    LU, piv, x = A.copy(), np.zeros(n, dtype=np.intc), b.copy()
+    assert lib.mbrt_lu_factor(n, _ptr(LU), _ptr(piv)) == 0
+    lib.mbrt_lu_solve(n, _ptr(LU), _ptr(piv), _ptr(x))
+    np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-10, atol=1e-12)
+
+
+def test_lu_pivots_on_zero_leading_entry(lib):
+    A = np.array([[0.0, 1.0], [1.0, 0.0]])
+    LU, piv, x = A.copy(), np.zeros(2, dtype=np.intc), np.array([3.0, 5.0])
+    assert lib.mbrt_lu_factor(2, _ptr(LU), _ptr(piv)) == 0
+    lib.mbrt_lu_solve(2, _ptr(LU), _ptr(piv), _ptr(x))
+    np.testing.assert_allclose(x, [5.0, 3.0])
+
+
+@pytest.mark.parametrize("A, code", [
+    (np.array([[1.0, 2.0], [2.0, 4.0]]), 2),
+    (np.zeros((3, 3)), 1),
+    (np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, np.nan]]), 3),
+    (np.array([[2.0, 1, 1], [4.0, 2, 2], [1.0, 5, 3]]), 3),
+])
+def test_lu_singular_codes(lib, A, code):
+    n = A.shape[0]
+    assert lib.mbrt_lu_factor(n, _ptr(A.copy()), _ptr(np.zeros(n, dtype=np.intc))) == code
+
+
+@pytest.mark.parametrize("n", [1, 3, 10, 33])
+def test_cholesky_matches_numpy(lib, n):
+    rng = np.random.default_rng(100 + n)
+    M = rng.standard_normal((n, n))
+    A = M @ M.T + n * np.eye(n)
+    b = rng.standard_normal(n)
+    L = A.copy()
+    L[np.triu_indices(n, 1)] = 7.0  # the upper triangle must not be read
+    assert lib.mbrt_chol_factor(n, _ptr(L)) == 0
+    np.testing.assert_allclose(L, np.linalg.cholesky(A), rtol=1e-12, atol=1e-12)
+    x = b.copy()
+    lib.mbrt_chol_solve(n, _ptr(L), _ptr(x))
+    np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("A, code", [
+    (np.array([[1.0, 2.0], [2.0, 4.0]]), 2),          # singular, pivot exactly 0
+    (np.array([[-1.0, 0.0], [0.0, 1.0]]), 1),         # negative
+    (np.array([[4.0, 2, 0], [2, 2, 3], [0, 3, 1.0]]), 3),  # indefinite
+    (np.array([[1.0, 0.0], [0.0, np.nan]]), 2),
+])
+def test_cholesky_not_positive_codes(lib, A, code):
+    assert lib.mbrt_chol_factor(A.shape[0], _ptr(A.copy())) == code
+
+
+# --------------------------------------------------------------------------- integrators: accuracy
+@pytest.mark.parametrize("method", METHODS)
+def test_exponential_decay(lib, method):
+    t = np.linspace(0.0, 5.0, 51)
+    for rtol in (1e-6, 1e-10):
+        status, Y, st = integrate(lib, method, "rhs_decay", [1.0], 5.0, t, rtol=rtol, atol=[rtol])
+        assert status == 0 and st.t == 5.0 and len(Y) == len(t)
+        assert Y[0, 0] == 1.0  # t_out[0] == t0 is y0 itself
+        err = np.abs(Y[:, 0] - np.exp(-t)).max()
+        assert err < 5 * rtol, (rtol, err)
+        assert st.nstep == st.naccept + st.nreject
+        assert b"reached t_end" in st.message
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_oscillator_dense_output_within_tolerance(lib, method):
+    """y'' = -4 y on [0, 10] sampled on 1001 points (many per step): the dense
+    output error stays a small multiple of the tolerance, and the global error
+    follows the tolerance (Hairer's control is tolerance proportional)."""
+    w = np.array([2.0])
+    t = np.linspace(0.0, 10.0, 1001)
+    errs = []
+    for rtol in (1e-5, 1e-7, 1e-9):
+        status, Y, st = integrate(lib, method, "rhs_osc", [1.0, 0.0], 10.0, t, rtol=rtol, ctx=w)
+        assert status == 0 and len(Y) == len(t)
+        exact = np.column_stack([np.cos(2 * t), -2 * np.sin(2 * t)])
+        err = np.abs(Y - exact).max()
+        assert err < 20 * rtol, (rtol, err)  # measured: ~5x (DOPRI5), ~3.5x (DOP853)
+        assert st.naccept < len(t) / 2  # so most samples really come from the interpolant
+        errs.append(err)
+    slope = np.polyfit(np.log10([1e-5, 1e-7, 1e-9]), np.log10(errs), 1)[0]
+    assert 0.85 < slope < 1.15, slope
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_convergence_order_fixed_steps(lib, method):
+    """With h0 = hmax = T/N and a loose tolerance every step is accepted with the
+    same h, so halving h must divide both the step-end and the dense-output
+    (interior sample) errors by 2^p, p = 5 (DOPRI5) or 8 (DOP853)."""
+    w = np.array([2.0])
+    t = np.linspace(0.0, 10.0, 1001)
+    exact = np.cos(2 * t)
+    errs, errs_end = [], []
+    for N in (20, 40, 80):
+        h = 10.0 / N
+        status, Y, st = integrate(lib, method, "rhs_osc", [1.0, 0.0], 10.0, t, rtol=1e-1,
+                                  atol=[1e3, 1e3], ctx=w, h0=h, hmax=h)
+        assert status == 0 and st.naccept == N and st.nreject == 0
+        errs.append(np.abs(Y[:, 0] - exact).max())
+        errs_end.append(np.abs(Y[::50, 0] - exact[::50]).max())  # t = 0, 0.5, ...: step ends
+    p = ORDER[method]
+    for e in (errs, errs_end):
+        rates = np.log2(np.array(e[:-1]) / np.array(e[1:]))
+        assert np.all(np.abs(rates - p) < 0.4), rates  # measured 5.10-5.20 / 7.93-8.08
+
+
+def _vdp(t, y):
+    return [y[1], (1 - y[0] ** 2) * y[1] - y[0]]
+
+
+_MU = 0.012277471
+
+
+def _arenstorf(t, y):
+    mp = 1 - _MU
+    d1 = ((y[0] + _MU) ** 2 + y[1] ** 2) ** 1.5
+    d2 = ((y[0] - mp) ** 2 + y[1] ** 2) ** 1.5
+    return [y[2], y[3], y[0] + 2 * y[3] - mp * (y[0] + _MU) / d1 - _MU * (y[0] - mp) / d2,
+            y[1] - 2 * y[2] - mp * y[1] / d1 - _MU * y[1] / d2]
+
+
+PROBLEMS = {
+    "vdp": ("rhs_vdp", _vdp, [2.0, 0.0], 20.0, np.array([1.0])),
+    "arenstorf": ("rhs_arenstorf", _arenstorf, [0.994, 0.0, 0.0, -2.00158510637908252240537862224],
+                  17.0652165601579625588917206249, None),
+}
+
+
+@pytest.mark.parametrize("problem", sorted(PROBLEMS))
+@pytest.mark.parametrize("method, scipy_method", [("dopri5", "RK45"), ("dop853", "DOP853")])
+@pytest.mark.parametrize("rtol", [1e-6, 1e-9])
+def test_against_scipy(lib, problem, method, scipy_method, rtol):
+    """Accuracy against a tight scipy DOP853 reference and accepted-step counts
+    within 20% of scipy's own RK45/DOP853 at the same tolerances."""
+    rhs, pyrhs, y0, t1, ctx = PROBLEMS[problem]
+    t = np.linspace(0.0, t1, 201)
+    ref = solve_ivp(pyrhs, (0, t1), y0, method="DOP853", rtol=1e-13, atol=1e-13, t_eval=t)
+    ours_status, Y, st = integrate(lib, method, rhs, y0, t1, t, rtol=rtol, ctx=ctx)
+    assert ours_status == 0, st.message
+    theirs = solve_ivp(pyrhs, (0, t1), y0, method=scipy_method, rtol=rtol, atol=rtol, t_eval=t)
+    err, err_scipy = np.abs(Y - ref.y.T).max(), np.abs(theirs.y.T - ref.y.T).max()
+    # the Arenstorf orbit amplifies errors ~1e4-fold; compare with scipy's result
+    assert err < max(3 * err_scipy, 100 * rtol), (err, err_scipy)
+    steps_scipy = len(solve_ivp(pyrhs, (0, t1), y0, method=scipy_method, rtol=rtol, atol=rtol).t) - 1
+    assert abs(st.naccept / steps_scipy - 1) < 0.2, (st.naccept, steps_scipy)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_nfev_counts_every_rhs_call(lib, method):
+    p = np.array([1e9, 3.0, 0.0])  # rhs_fail never fails, counts calls in p[2]
+    t = np.linspace(0, 3, 7)
+    status, Y, st = integrate(lib, method, "rhs_fail", [1.0], 3.0, t, rtol=1e-8, ctx=p)
+    assert status == 0 and st.nfev == p[2]
+    per_step = {"dopri5": 6, "dop853": 12}[method]
+    assert st.nfev >= 2 + per_step * st.naccept
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_user_initial_step_and_hmax(lib, method):
+    t = np.linspace(0, 2, 5)
+    status, Y, st = integrate(lib, method, "rhs_decay", [1.0], 2.0, t, rtol=1e-8, h0=1e-3, hmax=0.05)
+    assert status == 0 and st.naccept >= 40
+    np.testing.assert_allclose(Y[:, 0], np.exp(-t), rtol=1e-7)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_zero_length_interval(lib, method):
+    status, Y, st = integrate(lib, method, "rhs_decay", [3.0], 1.5, [1.5], t0=1.5)
+    assert status == 0 and Y.tolist() == [[3.0]] and st.nfev == 0
+
+
+# --------------------------------------------------------------------------- integrators: failures
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("code", [1, 7, -3])
+def test_rhs_failure_stops_and_keeps_outputs(lib, method, code):
+    p = np.array([0.5, float(code), 0.0])
+    t = np.linspace(0, 1, 11)
+    status, Y, st = integrate(lib, method, "rhs_fail", [1.0], 1.0, t, rtol=1e-8, ctx=p)
+    assert status == 1
+    assert f"returned {code} at t=".encode() in st.message
+    assert 0.5 < float(st.message.split(b"t=")[1].rstrip(b".")) <= 1.0
+    assert 1 <= len(Y) <= 6  # samples up to t = 0.5 at most
+    np.testing.assert_allclose(Y[:, 0], np.exp(-t[: len(Y)]), rtol=1e-7)
+    assert 0.5 < st.t <= 1.0  # st.t is where the failing call was made
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_rhs_failure_at_start(lib, method):
+    p = np.array([-1.0, 4.0, 0.0])
+    status, Y, st = integrate(lib, method, "rhs_fail", [1.0], 1.0, [0.0, 1.0], ctx=p)
+    assert status == 1 and b"returned 4" in st.message and len(Y) == 1 and st.nfev == 1
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_nan_rhs_ends_with_step_too_small(lib, method):
+    p = np.array([0.5])
+    t = np.linspace(0, 1, 11)
+    status, Y, st = integrate(lib, method, "rhs_nan", [1.0], 1.0, t, rtol=1e-8, ctx=p)
+    assert status == 2, st.message
+    assert b"too small" in st.message and b"non-finite" in st.message
+    assert abs(st.t - 0.5) < 1e-10 and len(Y) in (5, 6)  # stuck just before t = 0.5
+    np.testing.assert_allclose(Y[:, 0], np.exp(-t[: len(Y)]), rtol=1e-7)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_max_steps(lib, method):
+    w = np.array([2.0])
+    t = np.linspace(0, 10, 101)
+    status, Y, st = integrate(lib, method, "rhs_osc", [1.0, 0.0], 10.0, t, rtol=1e-10, ctx=w,
+                              max_steps=7)
+    assert status == 3 and st.nstep == 7 and b"max_steps=7" in st.message
+    assert 0 < len(Y) < len(t) and st.t < 10.0
+    np.testing.assert_allclose(Y[:, 0], np.cos(2 * t[: len(Y)]), atol=1e-8)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_projection_callback_keeps_unit_circle(lib, method):
+    """y' = R y + 0.1 y spirals outwards (|y| = e^{0.1 t}); projecting after each
+    step keeps |y| = 1 up to one step's growth (outputs are interpolated before
+    the projection), without it |y(10)| = e."""
+    t = np.linspace(0, 10, 201)
+    ctx = np.array([0.0, 1.0, 0.0, 0.0, 0.0, 0.1])  # calls, project, stop t, stop code, max dev, g
+    status, Y, st = integrate(lib, method, "rhs_spiral", [1.0, 0.0], 10.0, t, rtol=1e-8, ctx=ctx,
+                              on_step="step_project", hmax=0.05)
+    assert status == 0 and ctx[0] == st.naccept  # called once per accepted step
+    r = np.hypot(Y[:, 0], Y[:, 1])
+    assert np.abs(r - 1).max() < np.expm1(0.1 * 0.05) * 1.01  # growth within one step only
+    assert ctx[4] < np.expm1(0.1 * 0.05) * 1.01  # deviation seen by the callback before projecting
+    # the rhs was re-evaluated after each projection (6/12 calls per step + 1 per projection)
+    per_step = {"dopri5": 6, "dop853": 12}[method]
+    assert st.nfev >= per_step * st.naccept + (st.naccept - 1)
+
+    ctx = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.1])  # same, without projecting
+    status, Y, st = integrate(lib, method, "rhs_spiral", [1.0, 0.0], 10.0, t, rtol=1e-8, ctx=ctx,
+                              on_step="step_project", hmax=0.05)
+    assert status == 0 and abs(np.hypot(*Y[-1]) - np.e) < 1e-6
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("code", [1, 9, -2])
+def test_step_callback_stops(lib, method, code):
+    t = np.linspace(0, 10, 101)
+    ctx = np.array([0.0, 1.0, 3.0, float(code), 0.0, 0.1])
+    status, Y, st = integrate(lib, method, "rhs_spiral", [1.0, 0.0], 10.0, t, rtol=1e-8, ctx=ctx,
+                              on_step="step_project")
+    assert status == 5 and f"callback returned {code}".encode() in st.message
+    assert st.t >= 3.0 and ctx[0] == st.naccept
+    assert t[len(Y) - 1] <= st.t < t[min(len(Y), len(t) - 1)]  # every sample up to st.t written
+
+
+BAD = {
+    "n=0": dict(n=0),
+    "rtol=0": dict(rtol=0.0),
+    "rtol tiny": dict(rtol=1e-17),
+    "rtol nan": dict(rtol=np.nan),
+    "atol<0": dict(atol=[-1.0]),
+    "atol nan": dict(atol=[np.nan]),
+    "y0 nan": dict(y0=[np.nan]),
+    "y0 inf": dict(y0=[np.inf]),
+    "t_end<t0": dict(t_end=-1.0),
+    "t_end nan": dict(t_end=np.nan),
+    "t0 inf": dict(t0=-np.inf),
+    "h0<0": dict(h0=-0.1),
+    "hmax nan": dict(hmax=np.nan),
+    "max_steps<0": dict(max_steps=-1),
+    "t_out decreasing": dict(t_out=[0.5, 0.2]),
+    "t_out repeated": dict(t_out=[0.5, 0.5]),
+    "t_out before t0": dict(t_out=[-0.1, 0.5]),
+    "t_out after t_end": dict(t_out=[0.5, 1.5]),
+    "t_out nan": dict(t_out=[np.nan]),
+}
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_arguments(lib, method, case):
+    kw = dict(y0=[1.0], t_end=1.0, t_out=[0.0, 1.0], rtol=1e-6)
+    kw.update(BAD[case])
+    y0, t_end, t_out = kw.pop("y0"), kw.pop("t_end"), kw.pop("t_out")
+    status, Y, st = integrate(lib, method, "rhs_decay", y0, t_end, t_out, **kw)
+    assert status == 6 and len(Y) == 0 and st.nfev == 0
+    assert len(st.message) > 20 and st.message.endswith(b".")
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_null_pointers_are_bad_arguments(lib, method):
+    fn = getattr(lib, f"mbrt_{method}")
+    st, y0, atol = Stats(), np.ones(1), np.ones(1)
+    work = np.zeros(getattr(lib, f"mbrt_{method}_work_size")(1))
+    f = ctypes.cast(lib.rhs_decay, ctypes.c_void_p)
+    assert fn(None, None, None, 1, 0.0, y0.ctypes.data, 1.0, 1e-6, atol.ctypes.data, 0.0, 0.0, 0,
+              None, 0, None, None, work.ctypes.data, ctypes.byref(st)) == 6
+    assert fn(f, None, None, 1, 0.0, y0.ctypes.data, 1.0, 1e-6, atol.ctypes.data, 0.0, 0.0, 0,
+              None, 0, None, None, None, ctypes.byref(st)) == 6
+    assert fn(f, None, None, 1, 0.0, y0.ctypes.data, 1.0, 1e-6, atol.ctypes.data, 0.0, 0.0, 0,
+              None, 3, None, None, work.ctypes.data, ctypes.byref(st)) == 6
+    # no outputs, no n_written, no stats: still integrates
+    assert fn(f, None, None, 1, 0.0, y0.ctypes.data, 1.0, 1e-6, atol.ctypes.data, 0.0, 0.0, 0,
+              None, 0, None, None, work.ctypes.data, None) == 0
+    assert getattr(lib, f"mbrt_{method}_work_size")(0) == 0
+
+
+def test_work_sizes(lib):
+    assert lib.mbrt_dopri5_work_size(3) == 16 * 3 and lib.mbrt_dop853_work_size(3) == 28 * 3
