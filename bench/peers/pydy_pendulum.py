@@ -117,7 +117,9 @@ class Peer:
         self.build_seconds = cpu() - c0
 
     def rhs(self, t, y):
-        return self._f(y, t, self._p)
+        # a copy: pydy's generated function returns the same output array at every call, and
+        # scipy's Runge-Kutta steppers keep earlier stages (DOP853 silently went wrong)
+        return np.array(self._f(y, t, self._p))
 
 
 def build(N, L=0.5, m=1.0, g=9.81, timeout=60.0, generator="cython"):

@@ -1,0 +1,625 @@
+"""mbcomp against Pinocchio, MuJoCo and sympy/pydy on the N-link planar pendulum, as ratios.
+
+The mechanism is ``models/n_link_pendulum.py`` (N uniform rods of mass ``m``, length ``L``
+on hinges about z, relative joint angles, gravity along -y) with its default parameters; each
+peer builds the same mechanism in ``bench/peers/`` (``pinocchio_pendulum``, ``mujoco_pendulum``,
+``pydy_pendulum``) and exposes ``rhs(t, y)`` with ``y = [q, u]`` in mbcomp's convention. In
+one process, BLAS on one thread, CPU time (``time.process_time``; builds also count the
+compiler's child processes):
+
+1. **cross-check**: at a generic state every peer's and engine's ``du/dt`` against mbcomp's
+   numeric ``LagrangeIndex1(system).fun``, relative (max abs difference / max abs du/dt);
+   one that differs by more than 1e-8 is not timed;
+2. **one call**: microseconds per ``rhs`` (median of repeated batches) for each peer, for
+   Pinocchio's ABA in its own C++ loop, and for mbcomp's engines (:func:`mbcomp_engines`),
+   and the ratios to Pinocchio's ABA called from Python;
+3. **build**: seconds to build each peer (pydy: derivation + generation + Cython) and each
+   engine (assemble + initialize, + trace + compile);
+4. **end to end**: 10 s of motion from the model's start state to 1e-8 maximum state error on
+   a 101-point grid, against a DOP853 reference at rtol = atol = 1e-13 on Pinocchio's rhs:
+   scipy LSODA and DOP853 on each peer's rhs, ``mbcomp.simulate`` with each method on each
+   engine; tolerances are swept (half decades) and the cheapest run within 1e-8 is
+   reported, with its ratio to Pinocchio + LSODA.
+
+Writes bench/peers.csv (long format: table, N, who, method, quantity, value, note) and
+bench/peers.png (one call vs N, log-log); both are git-ignored like every bench output.
+
+Run: python bench/peers.py [--quick] [--Ns 2,5,10,20,40,100,1000] [--skip pydy,mujoco]
+     [--e2e-Ns 2,5,10,20] [--budget 30]    (needs the extra: pip install -e ".[bench]")
+"""
+import os
+
+# one BLAS thread, as bench/scaling.py: the matrices are small, and a threaded BLAS on a shared
+# 2-core machine slows the same Cholesky 5x (oversubscription), swamping what is measured
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import atexit  # noqa: E402
+import csv  # noqa: E402
+import inspect  # noqa: E402
+import math  # noqa: E402
+import pathlib  # noqa: E402
+import shutil  # noqa: E402
+import signal  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from dataclasses import dataclass, field  # noqa: E402
+
+import numpy as np  # noqa: E402
+from scipy.integrate import solve_ivp  # noqa: E402
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))  # bench/peers (the package wins over this script's name)
+
+import mbcomp  # noqa: E402
+from mbcomp.formulations import LagrangeIndex1  # noqa: E402
+from mbcomp.initialization import initialize  # noqa: E402
+from peers import mujoco_pendulum, pinocchio_pendulum, pydy_pendulum  # noqa: E402
+from peers.cpu_clock import cpu  # noqa: E402
+
+MODEL_FILE = ROOT / "models" / "n_link_pendulum.py"
+PEERS = {"pinocchio": pinocchio_pendulum, "mujoco": mujoco_pendulum, "pydy": pydy_pendulum}
+AGREE = 1e-8          # cross-check: relative du/dt difference a peer must stay within
+TARGET = 1e-8         # end to end: max state error over the output grid
+T_END, N_OUT = 10.0, 101
+DERIVE_LIMIT = 60.0   # s of sympy derivation beyond which pydy is skipped
+T0 = 0.0
+
+
+def model_params():
+    """The model file's own defaults: L, m, g, start angles and rates (one source of truth)."""
+    mod = mbcomp.load_model_file(MODEL_FILE)
+    d = {k: v.default for k, v in inspect.signature(mod.build).parameters.items()}
+    return mod, dict(L=d["L"], m=d["m"], g=d["g"]), d["phi0"], d["w0"]
+
+
+MOD, PHYS, PHI0, W0 = model_params()
+
+
+def generic_state(N):
+    """A state with no symmetry (every angle and rate different) for the cross-check."""
+    k = np.arange(1, N + 1)
+    return np.concatenate((0.3 + 0.4 * np.sin(1.7 * k), 0.5 * np.cos(2.3 * k)))
+
+
+# ------------------------------------------------------------------------------------------
+# mbcomp's engines: the one place that says which mbcomp right-hand sides are compared
+# ------------------------------------------------------------------------------------------
+@dataclass
+class Engine:
+    """One way mbcomp evaluates the pendulum's ``du/dt``.
+
+    Calling it is ``rhs(t, y)`` (``y = [q, u]``); ``system`` is what :meth:`simulate` hands to
+    ``mbcomp.simulate``; ``build_seconds`` is the CPU time to make it from the model
+    (compiler processes included); ``note`` says anything unusual about it.
+    """
+    rhs: object
+    system: object
+    build_seconds: float
+    note: str = ""
+    simulate_kwargs: dict = field(default_factory=dict)
+
+    def __call__(self, t, y):
+        return self.rhs(t, y)
+
+    def simulate(self, **kwargs):
+        return mbcomp.simulate(self.system, **{**self.simulate_kwargs, **kwargs})
+
+
+_CACHE = tempfile.mkdtemp(prefix="mbcomp-peers-")  # a fresh C cache: the compiler really runs
+atexit.register(shutil.rmtree, _CACHE, True)
+
+
+def mbcomp_engines(model_or_system, *, codegen=True, c=True, max_nodes=3_000_000, c_max_ops=300_000, notes=None):
+    """mbcomp's right-hand sides of one model: ``{name: Engine}`` (an Engine is ``rhs(t, y)``).
+
+    Today:
+
+    * ``"numeric"``: :class:`mbcomp.formulations.LagrangeIndex1` on the assembled and
+      initialized system (build = assemble + initialize);
+    * ``"python"``, ``"c"``: the same on ``mbcomp.codegen.compile_system(system, backend)``
+      (build adds tracing and compiling; C in a fresh cache directory so the compiler runs).
+
+    ``codegen=False`` (the caller predicts generation too slow) or ``c=False`` leave engines
+    out; so do a refused generation (``max_nodes``), a program over ``c_max_ops`` operations
+    for the C compiler, or no C compiler. Each reason is put in ``notes[name]``.
+
+    To compare another engine, add it here (an :class:`Engine` whose ``system`` can be
+    simulated, or whose ``simulate_kwargs`` select it, e.g. ``backend=...``): every table of
+    this benchmark -- cross-check, one call, build, end to end -- loops over this dict.
+    """
+    from mbcomp.codegen import CodegenError, c_compiler, compile_system
+
+    notes = {} if notes is None else notes
+    c0 = cpu()
+    system = model_or_system
+    if isinstance(model_or_system, mbcomp.Model):
+        system = mbcomp.assemble(model_or_system)
+    initialize(system, T0)
+    out = {"numeric": Engine(LagrangeIndex1(system).fun, system, cpu() - c0)}
+    base = out["numeric"].build_seconds
+    if not codegen:
+        notes["python"] = notes["c"] = notes.get("codegen", "code generation skipped")
+        return out
+    try:
+        c0 = cpu()
+        py = compile_system(system, "python", max_nodes=max_nodes, verify=False)
+        out["python"] = Engine(LagrangeIndex1(py).fun, py, base + cpu() - c0)
+    except CodegenError as exc:
+        notes["python"] = notes["c"] = f"generation refused: {str(exc)[:70]}"
+        return out
+    n_ops = py.stats["n_ops"]
+    if not c:
+        notes["c"] = "C skipped (--skip c)"
+    elif c_compiler() is None:
+        notes["c"] = "no C compiler"
+    elif n_ops > c_max_ops:
+        notes["c"] = f"C skipped: {n_ops} operations > {c_max_ops} (compiler time)"
+    else:
+        c0 = cpu()
+        cs = compile_system(system, "c", cache_dir=_CACHE, max_nodes=max_nodes, verify=False)
+        out["c"] = Engine(LagrangeIndex1(cs).fun, cs, base + cpu() - c0)
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+# timing
+# ------------------------------------------------------------------------------------------
+def per_call(f, batch_time=0.05, repeats=5):
+    """CPU seconds per call of ``f()``: median over ``repeats`` batches of about ``batch_time``."""
+    c0 = cpu()
+    f()
+    first = cpu() - c0
+    if first > 0.2:  # a slow call: a few single calls are enough
+        times = [first]
+        for _ in range(2):
+            c0 = time.process_time()
+            f()
+            times.append(time.process_time() - c0)
+        return float(np.median(times))
+    n = 1
+    while True:
+        c0 = time.process_time()
+        for _ in range(n):
+            f()
+        dt = time.process_time() - c0
+        if dt >= batch_time or n >= 1 << 18:
+            break
+        n *= 2
+    times = [dt / n]
+    for _ in range(repeats - 1):
+        c0 = time.process_time()
+        for _ in range(n):
+            f()
+        times.append((time.process_time() - c0) / n)
+    return float(np.median(times))
+
+
+class OverBudget(BaseException):
+    """A run used more CPU than allowed (a BaseException: no ``except Exception`` keeps it)."""
+
+
+class cpu_budget:
+    """Context: raise :class:`OverBudget` after ``seconds`` of CPU time (SIGPROF timer)."""
+
+    def __init__(self, seconds):
+        self.seconds = seconds
+
+    def __enter__(self):
+        def handler(signum, frame):
+            raise OverBudget()
+
+        self.old = signal.signal(signal.SIGPROF, handler)
+        signal.setitimer(signal.ITIMER_PROF, self.seconds)
+
+    def __exit__(self, *exc):
+        signal.setitimer(signal.ITIMER_PROF, 0)
+        signal.signal(signal.SIGPROF, self.old)
+        return False
+
+
+# ------------------------------------------------------------------------------------------
+# building everything for one N
+# ------------------------------------------------------------------------------------------
+class Bench:
+    """Everything built for one N: ``peers`` and ``engines`` by name, ``notes`` by name."""
+
+    def __init__(self, N, args, state):
+        self.N, self.notes, self.peers = N, {}, {}
+        for name, mod in PEERS.items():
+            if name in args.skip:
+                self.notes[name] = "skipped (--skip)"
+                continue
+            why = mod.available()
+            if why:
+                self.notes[name] = why
+                continue
+            if name == "pydy":
+                self._pydy(N, args, state)
+                continue
+            self.peers[name] = mod.build(N, **PHYS)
+            if self.peers[name].note:
+                self.notes[name] = self.peers[name].note
+        self.engines = self._engines(N, args, state)
+
+    def _pydy(self, N, args, state):
+        pred = state.get("pydy_pred")
+        if state.get("pydy_dead") or (pred is not None and pred(N) > DERIVE_LIMIT):
+            self.notes["pydy"] = f"skipped (derivation > {DERIVE_LIMIT:.0f} s)"
+            state["pydy_dead"] = True
+            return
+        gen = "lambdify" if "cython" in args.skip else "cython"
+        try:
+            p = pydy_pendulum.build(N, **PHYS, timeout=DERIVE_LIMIT, generator=gen)
+        except pydy_pendulum.DerivationTimeout:
+            self.notes["pydy"] = f"skipped (derivation > {DERIVE_LIMIT:.0f} s)"
+            state["pydy_dead"] = True
+            return
+        self.peers["pydy"] = p
+        self.notes["pydy"] = "; ".join(x for x in (p.note, f"derivation {p.derive_seconds:.1f} s") if x)
+        pts = state.setdefault("pydy_pts", []) + [(N, p.derive_seconds)]
+        state["pydy_pts"] = pts
+        if len(pts) >= 2 and pts[-1][1] > 0.5:  # derivation grows like N^k (k ~ 3-4 measured)
+            (n1, t1), (n2, t2) = pts[-2], pts[-1]
+            k = max(2.5, math.log(t2 / max(t1, 1e-3)) / math.log(n2 / n1))
+            state["pydy_pred"] = lambda n, n2=n2, t2=t2, k=k: t2 * (n / n2) ** k
+
+    def _engines(self, N, args, state):
+        notes = {}
+        codegen = "python" not in args.skip
+        prev = state.get("codegen_pts")
+        if codegen and prev:  # the program grows like N^3 (bench/scaling.py): predict its trace time
+            n1, t1 = prev
+            guess = t1 * (N / n1) ** 3
+            if guess > args.codegen_limit:
+                codegen = False
+                notes["codegen"] = f"code generation skipped (about {guess:.0f} s predicted > {args.codegen_limit:g} s)"
+        model = MOD.build(N=N, **PHYS, phi0=PHI0, w0=W0)
+        engines = mbcomp_engines(model, codegen=codegen, c="c" not in args.skip, notes=notes)
+        if "python" in engines:
+            state["codegen_pts"] = (N, engines["python"].build_seconds - engines["numeric"].build_seconds)
+        for name in ("python", "c"):
+            if name in notes and name not in engines:
+                self.notes[f"mbcomp {name}"] = notes[name]
+        return engines
+
+    def everyone(self):
+        """(label, kind, rhs) for every peer and engine, peers first."""
+        return ([(n, "peer", p.rhs) for n, p in self.peers.items()]
+                + [(f"mbcomp {n}", "mbcomp", e) for n, e in self.engines.items()])
+
+    def build_seconds(self):
+        return {**{n: p.build_seconds for n, p in self.peers.items()},
+                **{f"mbcomp {n}": e.build_seconds for n, e in self.engines.items()}}
+
+
+# ------------------------------------------------------------------------------------------
+# 1. cross-check and 2. one call
+# ------------------------------------------------------------------------------------------
+def cross_check(b, rows):
+    """Relative du/dt difference of every peer and engine to mbcomp's numeric one; the set
+    of labels that agree within :data:`AGREE`."""
+    N, y = b.N, generic_state(b.N)
+    ref = np.asarray(b.engines["numeric"](T0, y))[N:]
+    scale = np.max(np.abs(ref))
+    agreed = set()
+    for label, kind, rhs in b.everyone():
+        diff = float(np.max(np.abs(np.asarray(rhs(T0, y))[N:] - ref)) / scale)
+        ok = diff <= AGREE
+        rows.append(dict(table="cross_check", N=N, who=label, quantity="rel_diff", value=diff,
+                         note="" if ok else f"disagrees with mbcomp numeric by {diff:.1e} > {AGREE:g}: not timed"))
+        if ok:
+            agreed.add(label)
+        else:
+            print(f"  {label}: du/dt differs from mbcomp numeric by {diff:.1e} (relative) > {AGREE:g}: not timed")
+    return agreed
+
+
+def one_call(b, agreed, rows, batch_time):
+    """Microseconds per rhs call of every agreeing peer and engine (+ Pinocchio's C loop)."""
+    N, y = b.N, generic_state(b.N)
+    out = {}
+    for label, kind, rhs in b.everyone():
+        if label in agreed:
+            out[label] = 1e6 * per_call(lambda: rhs(T0, y), batch_time)
+    if "pinocchio" in agreed:
+        s, acc = b.peers["pinocchio"].aba_c_loop(y)
+        ref = np.asarray(b.engines["numeric"](T0, y))[N:]
+        if np.max(np.abs(acc - ref)) <= AGREE * np.max(np.abs(ref)):
+            out["pinocchio ABA C loop"] = 1e6 * s
+    base = out.get("pinocchio")
+    for label, us in out.items():
+        rows.append(dict(table="one_call", N=N, who=label, quantity="us_per_call", value=us))
+        if base:
+            rows.append(dict(table="one_call", N=N, who=label, quantity="ratio_to_pinocchio_aba_python", value=us / base))
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+# 4. end to end
+# ------------------------------------------------------------------------------------------
+@dataclass
+class Try:
+    setting: float
+    cpu_s: float = math.nan
+    err: float = math.nan
+    nfev: float = math.nan
+    fail: str = ""
+
+
+def run_peer(rhs, method, tol, y0, grid, ref):
+    count = [0]
+
+    def f(t, y):
+        count[0] += 1
+        return rhs(t, y)
+
+    c0 = time.process_time()
+    sol = solve_ivp(f, (0.0, T_END), y0, method=method, rtol=tol, atol=tol, t_eval=grid)
+    cpu_s = time.process_time() - c0
+    if not sol.success or sol.y.shape[1] != len(grid):
+        return Try(tol, cpu_s, fail=f"solve_ivp: {sol.message}")
+    return Try(tol, cpu_s, float(np.max(np.abs(sol.y.T - ref))), count[0])
+
+
+def run_mbcomp(engine, method, setting, grid, ref):
+    kw = dict(h=setting, rtol=1e-10, atol=1e-10) if method == "genalpha" else dict(rtol=setting, atol=setting)
+    system = engine.system
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        c0 = time.process_time()
+        res = engine.simulate(t_end=T_END, method=method, n_out=N_OUT, **kw)
+        cpu_s = time.process_time() - c0
+    if res.status != "success" or len(res.time) != len(grid):
+        return Try(setting, cpu_s, fail=f"{res.status}: {res.message[:80]}")
+    Y = np.column_stack([res[n] for n in list(system.q_names) + list(system.u_names)])
+    assert np.allclose(res.time, grid)
+    return Try(setting, cpu_s, float(np.max(np.abs(Y - ref))), res.stats.get("nfev", math.nan))
+
+
+def sweep(run, start, budget, stop=26):
+    """Tighten the setting 10^(-k/2), k = start.. until the error is within TARGET.
+
+    Returns ``(passing Try or None, note, k)``. Gives up when a run exceeds ``budget`` CPU s,
+    fails, or when the last two runs extrapolate (cost ~ error^-p) to more than 3 budgets."""
+    tries = []
+    for k in range(start, stop + 1):
+        s = 10 ** (-k / 2)
+        try:
+            with cpu_budget(budget):
+                t = run(s)
+        except OverBudget:
+            return None, f"over the {budget:g} s budget at setting {s:.0e}", k
+        if t.fail:
+            return None, f"failed at setting {s:.0e}: {t.fail}", k
+        tries.append(t)
+        if t.err <= TARGET:
+            return t, "", k
+        if len(tries) >= 2:
+            a, z = tries[-2], tries[-1]
+            if z.err < a.err and z.cpu_s > a.cpu_s > 0:
+                p = math.log(z.cpu_s / a.cpu_s) / math.log(a.err / z.err)
+                need = z.cpu_s * (z.err / TARGET) ** p
+                if need > 3 * budget:
+                    return None, f"error {z.err:.0e} at setting {s:.0e}; 1e-8 extrapolates to ~{need:.2g} s", k
+    return None, f"error {tries[-1].err:.0e} at the tightest setting", stop
+
+
+MBCOMP_METHODS = ("RK45", "DOP853", "LSODA", "Radau", "BDF", "radau5", "ida", "RK23", "genalpha")
+
+
+def end_to_end(b, agreed, speed, args, rows):
+    """Cheapest run of each peer x {LSODA, DOP853} and engine x method within TARGET."""
+    N = b.N
+    y0 = np.concatenate((np.broadcast_to(PHI0, (N,)), np.broadcast_to(W0, (N,)))).astype(float)
+    grid = np.linspace(0.0, T_END, N_OUT)
+    ref_who = "pinocchio" if "pinocchio" in agreed else "mbcomp numeric"
+    ref_rhs = b.peers["pinocchio"].rhs if ref_who == "pinocchio" else b.engines["numeric"]
+    c0 = time.process_time()
+    ref = solve_ivp(ref_rhs, (0.0, T_END), y0, method="DOP853", rtol=1e-13, atol=1e-13, t_eval=grid).y.T
+    ref12 = solve_ivp(ref_rhs, (0.0, T_END), y0, method="DOP853", rtol=1e-12, atol=1e-12, t_eval=grid).y.T
+    qual = float(np.max(np.abs(ref - ref12)))
+    print(f"  reference: DOP853 1e-13 on {ref_who} ({time.process_time() - c0:.1f} s); vs 1e-12: {qual:.1e}")
+    rows.append(dict(table="e2e", N=N, who=ref_who, method="DOP853 reference", quantity="diff_to_1e-12_run",
+                     value=qual))
+    out, hints = [], {}
+
+    def record(who, method, t, note, kind):
+        out.append(dict(N=N, who=who, method=method, kind=kind, t=t, note=note))
+        print(f"  {who:<16} {method:<9} " + (f"tol {t.setting:.0e}  err {t.err:.1e}  {t.cpu_s:7.3f} s" if t else note),
+              flush=True)
+
+    for name, p in b.peers.items():
+        if name not in agreed:
+            continue
+        for method in ("LSODA", "DOP853"):
+            start = hints.get(method, 12)
+            t, note, k = sweep(lambda s: run_peer(p.rhs, method, s, y0, grid, ref), start, args.budget)
+            if t is not None:
+                hints[method] = min(hints.get(method, k), k)
+            record(name, method, t, note, "peer")
+    engines = sorted((n for n in b.engines if f"mbcomp {n}" in agreed), key=lambda n: speed.get(f"mbcomp {n}", 0))
+    unreachable, passed = {}, {}
+    for method in MBCOMP_METHODS:
+        for i, n in enumerate(engines):
+            if method in unreachable:
+                record(f"mbcomp {n}", method, None, f"not tried: {unreachable[method]} on the faster engine", "mbcomp")
+                continue
+            start = hints.get(f"mbcomp {method}", 4 if method == "genalpha" else hints.get(method, 12))
+            done = passed.get(method)
+            if done is not None:  # same steps as on the faster engine: predict before spending the budget
+                extra = done.nfev * 1e-6 * (speed.get(f"mbcomp {n}", 0) - speed.get(f"mbcomp {engines[0]}", 0))
+                if done.cpu_s + extra > args.budget:
+                    record(f"mbcomp {n}", method, None, f"not run: ~{done.cpu_s + extra:.0f} s predicted "
+                           f"({done.nfev:.0f} calls) > the {args.budget:g} s budget", "mbcomp")
+                    continue
+            t, note, k = sweep(lambda s: run_mbcomp(b.engines[n], method, s, grid, ref), start, args.budget,
+                               stop=14 if method == "genalpha" else 26)
+            if t is not None:
+                hints[f"mbcomp {method}"] = min(hints.get(f"mbcomp {method}", k), k)
+                passed.setdefault(method, t)
+            elif i == 0:
+                unreachable[method] = note
+            record(f"mbcomp {n}", method, t, note, "mbcomp")
+    base = next((r["t"].cpu_s for r in out if r["who"] == "pinocchio" and r["method"] == "LSODA" and r["t"]), None)
+    for r in out:
+        t = r["t"]
+        common = dict(table="e2e", N=N, who=r["who"], method=r["method"], note=r["note"])
+        if t is None:
+            rows.append(dict(common, quantity="cpu_s", value=math.nan))
+            continue
+        for q, v in (("setting", t.setting), ("max_err", t.err), ("nfev", t.nfev), ("cpu_s", t.cpu_s)):
+            rows.append(dict(common, quantity=q, value=v))
+        if base:
+            rows.append(dict(common, quantity="ratio_to_pinocchio_lsoda", value=t.cpu_s / base))
+    return out, base
+
+
+# ------------------------------------------------------------------------------------------
+# report
+# ------------------------------------------------------------------------------------------
+def _num(v, fmt):
+    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
+
+
+def md_table(header, body):
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---:" if i else "---" for i in range(len(header))) + "|"]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in body]
+    return "\n".join(lines)
+
+
+def pivot(rows, table, quantity):
+    """{N: {who: value}} and the who's in first-seen order."""
+    out, whos = {}, []
+    for r in rows:
+        if r["table"] == table and r["quantity"] == quantity:
+            out.setdefault(r["N"], {})[r["who"]] = r["value"]
+            if r["who"] not in whos:
+                whos.append(r["who"])
+    return out, whos
+
+
+def print_tables(rows, notes, e2e):
+    order = ["pinocchio ABA C loop", "pinocchio", "mujoco", "pydy", "mbcomp numeric", "mbcomp python", "mbcomp c"]
+
+    def cols(whos):
+        return [w for w in order if w in whos] + [w for w in whos if w not in order]
+
+    for title, table, q, fmt in (
+            ("Cross-check: max |du/dt - mbcomp numeric| / max |du/dt| at a generic state", "cross_check", "rel_diff", ".1e"),
+            ("One call: microseconds per rhs(t, y) (CPU, median of batches)", "one_call", "us_per_call", ".3g"),
+            ("One call relative to Pinocchio ABA called from Python (lower is faster)", "one_call",
+             "ratio_to_pinocchio_aba_python", ".3g"),
+            ("Build: CPU seconds (peers: model/derivation + generation + compiler; mbcomp: assemble + initialize "
+             "[+ trace + compile])", "build", "seconds", ".3g")):
+        data, whos = pivot(rows, table, q)
+        if not data:
+            continue
+        c = cols(whos)
+        print(f"\n### {title}\n")
+        print(md_table(["N"] + c, [[N] + [_num(data[N].get(w), fmt) for w in c] for N in sorted(data)]))
+    for N, (runs, base) in sorted(e2e.items()):
+        print(f"\n### End to end, N = {N}: {T_END:g} s to max state error <= {TARGET:g} on {N_OUT} points "
+              f"(CPU s of the integration; ratio to Pinocchio + LSODA{'' if base else ': n/a'})\n")
+        body = []
+        for r in runs:
+            t = r["t"]
+            if t is None:
+                body.append([r["who"], r["method"], "-", "-", "-", "-", "-", r["note"]])
+                continue
+            setting = f"h={t.setting:.0e}" if r["method"] == "genalpha" else f"{t.setting:.0e}"
+            body.append([r["who"], r["method"], setting, f"{t.err:.1e}", _num(float(t.nfev), ".0f"), f"{t.cpu_s:.3f}",
+                         _num(t.cpu_s / base if base else None, ".3g"), r["note"]])
+        print(md_table(["who", "method", "rtol=atol", "max err", "nfev", "CPU s", "ratio", "note"], body))
+    if notes:
+        print("\n### Notes\n")
+        for (N, who), note in sorted(notes.items(), key=lambda kv: (kv[0][0], kv[0][1])):
+            print(f"- N = {N}, {who}: {note}")
+
+
+def write_csv(rows, path):
+    keys = ["table", "N", "who", "method", "quantity", "value", "note"]
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=keys, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: r.get(k, "") for k in keys})
+
+
+def plot(rows, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    data, whos = pivot(rows, "one_call", "us_per_call")
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    for w in whos:
+        pts = sorted((N, d[w]) for N, d in data.items() if w in d)
+        style = "--" if w.startswith("mbcomp") else "-"
+        ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, marker="o", label=w)
+    ax.set(xlabel="N (links)", ylabel="CPU time per rhs call [us]",
+           title="N-link pendulum: one right-hand side, mbcomp vs peers")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+# ------------------------------------------------------------------------------------------
+def parse(argv):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--Ns", default="2,5,10,20,40,100,1000", help="link counts of the one-call and build tables")
+    ap.add_argument("--quick", action="store_true", help="N = 2,5,10,20, end to end at N = 5, budgets 10 s")
+    ap.add_argument("--skip", default="", help="comma-separated: pinocchio, mujoco, pydy, cython (pydy with "
+                    "lambdify), python (mbcomp code generation), c (mbcomp's C backend), e2e")
+    ap.add_argument("--e2e-Ns", default=None, help="end-to-end sizes (default 5 and the --Ns up to 20; --quick: 5)")
+    ap.add_argument("--budget", type=float, default=None, help="CPU s allowed per end-to-end run (default 30, quick 10)")
+    ap.add_argument("--codegen-limit", type=float, default=60.0, help="skip mbcomp code generation predicted over this (s)")
+    args = ap.parse_args(argv)
+    args.skip = {s.strip() for s in args.skip.split(",") if s.strip()}
+    if args.quick and args.Ns == ap.get_default("Ns"):
+        args.Ns = "2,5,10,20"
+    args.Ns = [int(x) for x in args.Ns.split(",")]
+    if args.e2e_Ns is None:
+        args.e2e_Ns = [5] if args.quick else sorted({5, *(N for N in args.Ns if N <= 20)})
+    else:
+        args.e2e_Ns = [int(x) for x in args.e2e_Ns.split(",") if x]
+    if "e2e" in args.skip:
+        args.e2e_Ns = []
+    args.budget = args.budget or (10.0 if args.quick else 30.0)
+    return args
+
+
+def main(argv=None):
+    args = parse(argv)
+    wall0 = time.perf_counter()
+    print(f"N-link pendulum {PHYS}, start angles {PHI0}, rates {W0}; Ns {args.Ns}, end to end at {args.e2e_Ns}")
+    rows, notes, e2e, state = [], {}, {}, {}
+    for N in sorted(set(args.Ns) | set(args.e2e_Ns)):
+        print(f"N = {N}: building ...", flush=True)
+        b = Bench(N, args, state)
+        notes.update({(N, k): v for k, v in b.notes.items()})
+        for who, s in b.build_seconds().items():
+            rows.append(dict(table="build", N=N, who=who, quantity="seconds", value=s))
+        agreed = cross_check(b, rows)
+        speed = one_call(b, agreed, rows, 0.02 if args.quick else 0.05) if N in args.Ns else {}
+        if N not in args.Ns:  # end-to-end only: still rank the engines by speed
+            speed = {f"mbcomp {n}": per_call(lambda e=e: e(T0, generic_state(N)), 0.01) for n, e in b.engines.items()}
+        if N in args.e2e_Ns:
+            print(f"N = {N}: end to end ...", flush=True)
+            e2e[N] = end_to_end(b, agreed, speed, args, rows)
+        del b
+    print_tables(rows, notes, e2e)
+    write_csv(rows, HERE / "peers.csv")
+    plot(rows, HERE / "peers.png")
+    print(f"\nwrote {HERE / 'peers.csv'} and {HERE / 'peers.png'} ({time.perf_counter() - wall0:.0f} s wall)")
+
+
+if __name__ == "__main__":
+    main()
