@@ -50,10 +50,11 @@ int rhs_arenstorf(void *ctx, double t, const double *y, double *dy)
   dy[3] = y[1] - 2.0 * y[2] - mp * y[1] / d1 - mu * y[1] / d2;
   return 0; }
 
-/* y' = -y until t > p[0], then returns code p[1] (p[2] counts calls) */
+/* y' = -y until t > p[0] or call number p[3] > 0, then returns code p[1]
+ * (p[2] counts calls) */
 int rhs_fail(void *ctx, double t, const double *y, double *dy)
 { double *p = (double *)ctx; p[2] += 1.0; dy[0] = -y[0];
-  return t > p[0] ? (int)p[1] : 0; }
+  return (t > p[0] || (p[3] > 0.0 && p[2] >= p[3])) ? (int)p[1] : 0; }
 
 /* y' = -y until t > p[0], then NaN */
 int rhs_nan(void *ctx, double t, const double *y, double *dy)
@@ -73,6 +74,10 @@ int step_project(void *ctx, double t, double *y)
   if (p[1] != 0.0) { y[0] /= r; y[1] /= r; }
   if (p[2] > 0.0 && t >= p[2]) return (int)p[3];
   return 0; }
+
+/* step callback that breaks the state */
+int step_nan(void *ctx, double t, double *y)
+{ (void)ctx; (void)t; y[0] = NAN; return 0; }
 
 #ifdef MBRT_SELFTEST_MAIN
 /* Standalone driver for sanitizer / valgrind runs: exercises every code path
@@ -117,8 +122,13 @@ int main(void)
     CHECK(mbrt_lu_factor(N, LU, piv) == 0);
     mbrt_lu_solve(N, LU, piv, b);
     for (int i = 0; i < N; ++i) CHECK(fabs(b[i] - x[i]) < 1e-12);
-    for (int i = 0; i < N; ++i) for (int j = 0; j < N; ++j) { double s = 0;
-        for (int k = 0; k < N; ++k) s += A[i * N + k] * A[j * N + k]; S[i * N + j] = s; }
+    for (int i = 0; i < N; ++i)
+        for (int j = 0; j < N; ++j) {
+            double s = 0;
+            for (int k = 0; k < N; ++k)
+                s += A[i * N + k] * A[j * N + k];
+            S[i * N + j] = s;
+        }
     for (int i = 0; i < N; ++i) { b[i] = 0; for (int j = 0; j < N; ++j) b[i] += S[i * N + j] * x[j]; }
     CHECK(mbrt_chol_factor(N, S) == 0);
     mbrt_chol_solve(N, S, b);
@@ -142,16 +152,37 @@ int main(void)
         CHECK(run(meth[m], wsz[m], rhs_arenstorf, NULL, NULL, 4, ya, 17.0652165601579625588917206249,
                   1e-10, 33, 0, &st, last) == 0);
         CHECK(fabs(last[0] - 0.994) < 1e-5 && fabs(last[1]) < 1e-5);
-        double y1[1] = {1.0}, pf[3] = {0.5, 7, 0};
+        double y1[1] = {1.0}, pf[4] = {0.5, 7, 0, 0};
         CHECK(run(meth[m], wsz[m], rhs_fail, NULL, pf, 1, y1, 1.0, 1e-8, 11, 0, &st, last) == 1);
+        double pf2[4] = {9.0, 5, 0, 20};  /* fails at the 20th call */
+        CHECK(run(meth[m], wsz[m], rhs_fail, NULL, pf2, 1, y1, 1.0, 1e-8, 3, 0, &st, last) == 1);
         double pn[1] = {0.5};
         CHECK(run(meth[m], wsz[m], rhs_nan, NULL, pn, 1, y1, 1.0, 1e-8, 11, 0, &st, last) == 2);
         double ps[6] = {0, 1, 0, 0, 0, 0.1};
         CHECK(run(meth[m], wsz[m], rhs_spiral, step_project, ps, 2, y2, 10.0, 1e-6, 11, 0, &st, last) == 0);
-        CHECK(fabs(hypot(last[0], last[1]) - 1.0) < 1e-2 && ps[0] == st.naccept);
+        /* the sample at t_end is taken before the last projection: one step's growth */
+        CHECK(fabs(hypot(last[0], last[1]) - 1.0) < 0.2 && ps[0] == st.naccept && ps[4] < 0.2);
         double ps2[6] = {0, 1, 3.0, 9, 0, 0.1};
         CHECK(run(meth[m], wsz[m], rhs_spiral, step_project, ps2, 2, y2, 10.0, 1e-6, 11, 0, &st, last) == 5);
         CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 2, y2, 10.0, 1e-8, 11, 5, &st, last) == 3);
+        CHECK(run(meth[m], wsz[m], rhs_osc, step_nan, &w, 2, y2, 10.0, 1e-8, 11, 0, &st, last) == 4);
+        double pn0[1] = {-1.0};
+        CHECK(run(meth[m], wsz[m], rhs_nan, NULL, pn0, 1, y1, 1.0, 1e-8, 11, 0, &st, last) == 4);
+        /* every output exactly at a step end, tiny fixed steps, no outputs at all */
+        mbrt_stats st2;
+        double *wk = malloc(wsz[m](1) * sizeof(double)), at[1] = {1e-3}, yo[3], to[3] = {0.0, 0.5, 1.0};
+        int nw = -1;
+        CHECK(meth[m](rhs_decay, NULL, NULL, 1, 0.0, y1, 1.0, 1e-6, at, 0.25, 0.25, 0, to, 3, yo, &nw,
+                      wk, &st2) == 0 && nw == 3 && st2.naccept == 4);
+        CHECK(meth[m](rhs_decay, NULL, NULL, 1, 0.0, y1, 1.0, 1e-6, at, 0.0, 0.0, 0, NULL, 0, NULL,
+                      NULL, wk, NULL) == 0);
+        double pf3[4] = {9.0, 5, 0, 50}, big[1] = {1e3}, to2[2] = {0.0, 0.9};
+        /* fixed steps of 0.25: for DOP853 call 50 is a dense-output stage */
+        CHECK(meth[m](rhs_fail, NULL, pf3, 1, 0.0, y1, 1.0, 0.1, big, 0.25, 0.25, 0, to2, 2, yo, &nw,
+                      wk, &st2) == (m ? 1 : 0));
+        CHECK(meth[m](NULL, NULL, NULL, 1, 0.0, y1, 1.0, 1e-6, at, 0.0, 0.0, 0, NULL, 0, NULL,
+                      NULL, wk, &st2) == 6);
+        free(wk);
         CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 0, y2, 10.0, 1e-8, 11, 0, &st, last) == 6);
         CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 2, y2, 10.0, -1.0, 11, 0, &st, last) == 6);
         printf("%s ok (last message: %s)\n", m ? "DOP853" : "DOPRI5", st.message);
@@ -383,7 +414,7 @@ def test_against_scipy(lib, problem, method, scipy_method, rtol):
 
 @pytest.mark.parametrize("method", METHODS)
 def test_nfev_counts_every_rhs_call(lib, method):
-    p = np.array([1e9, 3.0, 0.0])  # rhs_fail never fails, counts calls in p[2]
+    p = np.array([1e9, 3.0, 0.0, 0.0])  # rhs_fail never fails, counts calls in p[2]
     t = np.linspace(0, 3, 7)
     status, Y, st = integrate(lib, method, "rhs_fail", [1.0], 3.0, t, rtol=1e-8, ctx=p)
     assert status == 0 and st.nfev == p[2]
@@ -409,20 +440,30 @@ def test_zero_length_interval(lib, method):
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("code", [1, 7, -3])
 def test_rhs_failure_stops_and_keeps_outputs(lib, method, code):
-    p = np.array([0.5, float(code), 0.0])
+    p = np.array([0.5, float(code), 0.0, 0.0])
     t = np.linspace(0, 1, 11)
     status, Y, st = integrate(lib, method, "rhs_fail", [1.0], 1.0, t, rtol=1e-8, ctx=p)
     assert status == 1
     assert f"returned {code} at t=".encode() in st.message
-    assert 0.5 < float(st.message.split(b"t=")[1].rstrip(b".")) <= 1.0
-    assert 1 <= len(Y) <= 6  # samples up to t = 0.5 at most
+    assert 0.5 < float(st.message.split(b"t=")[1].split(b" ")[0]) <= 1.0  # the failing call
+    assert st.t <= 0.5  # last accepted state: all its stages were at t <= 0.5
+    assert 1 <= len(Y) <= 6 and t[len(Y) - 1] <= st.t < t[len(Y)]  # every sample up to st.t
     np.testing.assert_allclose(Y[:, 0], np.exp(-t[: len(Y)]), rtol=1e-7)
-    assert 0.5 < st.t <= 1.0  # st.t is where the failing call was made
+
+
+def test_rhs_failure_in_dop853_dense_output_stage(lib):
+    """Fixed steps of 0.25: 1 call at t0 + 12 per accepted step, so calls 50-52 are
+    the extra dense-output stages of the 4th step (the only one with a sample)."""
+    p = np.array([9.0, 5.0, 0.0, 50.0])
+    status, Y, st = integrate(lib, "dop853", "rhs_fail", [1.0], 1.0, [0.0, 0.9], rtol=1e-1,
+                              atol=[1e3], ctx=p, h0=0.25, hmax=0.25)
+    assert status == 1 and b"dense output of the step from t=0.75" in st.message
+    assert st.t == 0.75 and len(Y) == 1 and st.nfev == 50 == p[2]
 
 
 @pytest.mark.parametrize("method", METHODS)
 def test_rhs_failure_at_start(lib, method):
-    p = np.array([-1.0, 4.0, 0.0])
+    p = np.array([-1.0, 4.0, 0.0, 0.0])
     status, Y, st = integrate(lib, method, "rhs_fail", [1.0], 1.0, [0.0, 1.0], ctx=p)
     assert status == 1 and b"returned 4" in st.message and len(Y) == 1 and st.nfev == 1
 
@@ -484,6 +525,16 @@ def test_step_callback_stops(lib, method, code):
     assert t[len(Y) - 1] <= st.t < t[min(len(Y), len(t) - 1)]  # every sample up to st.t written
 
 
+@pytest.mark.parametrize("method", METHODS)
+def test_nonfinite_state_or_derivative(lib, method):
+    w = np.array([2.0])
+    status, Y, st = integrate(lib, method, "rhs_osc", [1.0, 0.0], 10.0, [0.0, 5.0], ctx=w,
+                              on_step="step_nan")
+    assert status == 4 and b"callback made the state non-finite" in st.message and st.naccept == 1
+    status, Y, st = integrate(lib, method, "rhs_nan", [1.0], 1.0, [0.0, 1.0], ctx=np.array([-1.0]))
+    assert status == 4 and b"non-finite value at t=0" in st.message and len(Y) == 1
+
+
 BAD = {
     "n=0": dict(n=0),
     "rtol=0": dict(rtol=0.0),
@@ -538,3 +589,36 @@ def test_null_pointers_are_bad_arguments(lib, method):
 
 def test_work_sizes(lib):
     assert lib.mbrt_dopri5_work_size(3) == 16 * 3 and lib.mbrt_dop853_work_size(3) == 28 * 3
+
+
+# --------------------------------------------------------------------------- memory checkers
+SAN_FLAGS = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-O1"]
+
+
+def _runs_clean(cmd, **kw):
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=120, **kw)
+    return res
+
+
+def test_selftest_under_asan_ubsan(tmp_path):
+    """The C self-test driver (every status, exact-size heap work buffers) under
+    AddressSanitizer + UndefinedBehaviorSanitizer."""
+    probe = tmp_path / "probe.c"
+    probe.write_text("int main(void) { return 0; }\n")
+    res = subprocess.run([CC, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True)
+    if res.returncode != 0 or _runs_clean([str(tmp_path / "probe")]).returncode != 0:
+        pytest.skip("AddressSanitizer/UBSan not usable here")
+    exe, res = _build(tmp_path, extra=SAN_FLAGS, exe=True)
+    assert res.returncode == 0, res.stderr
+    run = _runs_clean([str(exe)], env={"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "0 failures" in run.stdout and "runtime error" not in run.stderr
+
+
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind not installed")
+def test_selftest_under_valgrind(tmp_path):
+    exe, res = _build(tmp_path, exe=True)
+    assert res.returncode == 0, res.stderr
+    run = _runs_clean(["valgrind", "--error-exitcode=99", "--leak-check=full", "-q", str(exe)])
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "0 failures" in run.stdout

@@ -78,7 +78,8 @@ typedef struct {
     long naccept;   /* accepted steps                                     */
     long nreject;   /* rejected steps                                     */
     int status;     /* MBRT_* status below (also the return value)        */
-    double t;       /* time reached (t_end on success)                    */
+    double t;       /* time of the last accepted state (t_end on success);
+                       every t_out <= t has been written                  */
     char message[200]; /* one sentence saying what happened              */
 } mbrt_stats;
 

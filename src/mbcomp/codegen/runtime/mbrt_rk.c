@@ -229,7 +229,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
     } else {
         rc = initial_step(M, &S, hmax, &h);
         if (rc != 0) {
-            finish(st, MBRT_RHS_FAILED, S.t_fail, "%s: rhs returned %d at t=%.17g.",
+            finish(st, MBRT_RHS_FAILED, t0, "%s: rhs returned %d at t=%.17g.",
                    M->name, rc, S.t_fail);
             goto done;
         }
@@ -264,8 +264,8 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
         double err;
         rc = M->trial(&S, &err);
         if (rc != 0) {
-            finish(st, MBRT_RHS_FAILED, S.t_fail, "%s: rhs returned %d at t=%.17g.",
-                   M->name, rc, S.t_fail);
+            finish(st, MBRT_RHS_FAILED, t, "%s: rhs returned %d at t=%.17g (in a step from t=%.17g).",
+                   M->name, rc, S.t_fail, t);
             goto done;
         }
         last_nonfinite = 0;
@@ -306,8 +306,9 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
                 if (!prepared) {
                     rc = M->dense_prepare(&S);
                     if (rc != 0) {
-                        finish(st, MBRT_RHS_FAILED, S.t_fail, "%s: rhs returned %d at t=%.17g.",
-                               M->name, rc, S.t_fail);
+                        finish(st, MBRT_RHS_FAILED, told,
+                               "%s: rhs returned %d at t=%.17g (dense output of the step from t=%.17g).",
+                               M->name, rc, S.t_fail, told);
                         goto done;
                     }
                     prepared = 1;
