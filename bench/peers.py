@@ -445,7 +445,7 @@ def end_to_end(b, agreed, speed, args, rows):
             record(name, method, t, note, "peer")
     engines = sorted((n for n in b.engines if f"mbcomp {n}" in agreed), key=lambda n: speed.get(f"mbcomp {n}", 0))
     unreachable, passed = {}, {}
-    for method in MBCOMP_METHODS:
+    for method in args.methods:
         for i, n in enumerate(engines):
             if method in unreachable:
                 record(f"mbcomp {n}", method, None, f"not tried: {unreachable[method]} on the faster engine", "mbcomp")
@@ -575,11 +575,14 @@ def plot(rows, path):
 def parse(argv):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--Ns", default="2,5,10,20,40,100,1000", help="link counts of the one-call and build tables")
-    ap.add_argument("--quick", action="store_true", help="N = 2,5,10,20, end to end at N = 5, budgets 10 s")
+    ap.add_argument("--quick", action="store_true", help="N = 2,5,10,20; end to end at N = 5 with RK45, DOP853, "
+                    "LSODA; budget 5 s")
     ap.add_argument("--skip", default="", help="comma-separated: pinocchio, mujoco, pydy, cython (pydy with "
                     "lambdify), python (mbcomp code generation), c (mbcomp's C backend), e2e")
     ap.add_argument("--e2e-Ns", default=None, help="end-to-end sizes (default 5 and the --Ns up to 20; --quick: 5)")
-    ap.add_argument("--budget", type=float, default=None, help="CPU s allowed per end-to-end run (default 30, quick 10)")
+    ap.add_argument("--budget", type=float, default=None, help="CPU s allowed per end-to-end run (default 30, quick 5)")
+    ap.add_argument("--methods", default=None, help="mbcomp.simulate methods end to end (default all of "
+                    f"{','.join(MBCOMP_METHODS)}; --quick: RK45,DOP853,LSODA)")
     ap.add_argument("--codegen-limit", type=float, default=60.0, help="skip mbcomp code generation predicted over this (s)")
     args = ap.parse_args(argv)
     args.skip = {s.strip() for s in args.skip.split(",") if s.strip()}
@@ -592,7 +595,9 @@ def parse(argv):
         args.e2e_Ns = [int(x) for x in args.e2e_Ns.split(",") if x]
     if "e2e" in args.skip:
         args.e2e_Ns = []
-    args.budget = args.budget or (10.0 if args.quick else 30.0)
+    args.budget = args.budget or (5.0 if args.quick else 30.0)
+    quick_methods = "RK45,DOP853,LSODA"  # the default and the two the peers run
+    args.methods = (args.methods or (quick_methods if args.quick else ",".join(MBCOMP_METHODS))).split(",")
     return args
 
 
