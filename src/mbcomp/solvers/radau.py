@@ -24,10 +24,16 @@ Error estimate
 Step size
     ``h_new = h * clip(fac * err**(-1/4), 1/5, 8)`` with a safety factor that shrinks with the
     number of Newton iterations used, combined with Gustafsson's predictive controller after
-    accepted steps. Diverging or too slow Newton iterations shrink ``h`` and retry, with a
-    fresh Jacobian first when the current one is stale. The Jacobian is reused from step to
-    step while Newton converges fast (contraction rate below ``1e-3``), and the LU factors
-    are kept when the new step would only grow by less than 20 %.
+    accepted steps.
+Jacobian and LU reuse (RADAU5's rule, Hairer & Wanner IV.8)
+    After an accepted step the Jacobian is kept when Newton contracted faster than
+    ``THETA_JAC`` (rate ``theta``; one iteration counts as converged at once), else a new one
+    is formed at the new point. With the Jacobian kept and ``h_new / h`` in ``QUOT_KEEP``
+    (``[1, 1.2]``) ``h`` is kept too, and so are the LU factors of both iteration matrices;
+    otherwise they are factored again at ``h_new``. After a failed attempt (error test,
+    Newton divergence or slow convergence, singular matrix) ``h`` shrinks and the matrices
+    are factored again -- with a new Jacobian first when the current one is stale (formed at
+    an earlier point), with the same one when it is up to date.
 Dense output
     The collocation polynomial (degree 3) through ``y0`` and the three stage values.
 
@@ -114,7 +120,15 @@ D_ERR = _COEF["d"]
 P_DENSE = _COEF["P"]
 
 NEWTON_MAXITER = 7  # RADAU5's NIT
-THETA_JAC = 1e-3  # reuse the Jacobian when Newton contracts faster than this (THET)
+#: Reuse the Jacobian when Newton contracts faster than this (RADAU5's THET; it suggests 1e-3
+#: for cheap Jacobians, 0.1 for costly ones). A Jacobian here costs nq + nu evaluations (finite
+#: differences), a Newton iteration 3, and a stale Jacobian slows Newton, costs rejections and
+#: shrinks steps. bench/radau_reuse.py, rtol 1e-8, fun evaluations at 1e-3 / 0.01 / 0.03 / 0.1:
+#: 4-link chain (index 1) 30.3k / 22.7k / 23.9k / 29.4k with 1634 / 391 / 148 / 54 Jacobians;
+#: four-bar near its flat position (index 3) 12.4k / 12.0k / 10.8k / 11.2k; slider-crank
+#: (index 3, 3 s) 25.0k / 23.3k / 21.9k / 23.8k, (index 1) 40.5k / 37.4k / 35.2k / 41.9k. At 0.1
+#: rejections double or triple; the errors stay as they were.
+THETA_JAC = 0.03
 SAFETY = 0.9
 FAC_MAX = 8.0  # largest step increase
 FAC_MIN = 0.2  # largest step decrease after an error-test rejection
@@ -372,6 +386,7 @@ class Radau5(Stepper):
                 delta = yp[j] - y[j]  # exactly representable increment
                 J[:, j] = (self._fun_checked(t, yp, "finite-difference Jacobian") - f0) / delta
         self.J, self.J_current = J, True
+        self.LU_real = self.LU_complex = self.h_lu = None  # factors of the old J are void
 
     def _factorize(self, h):
         M = self.mass
@@ -527,7 +542,7 @@ class Radau5(Stepper):
                             f"(the DAE is not of index <= 3 or a constraint lost rank): {exc}{history}") from None
                     kind, reason = "singular", str(exc)
                     n_fail += 1
-                    h *= 0.5
+                    h = self._retry(h, 0.5)
                     continue
             ok, Z, n_iter, info = self._newton(t, y, h, self._predict(t, y, h), self._scale(h, y))
             if not ok:
@@ -536,10 +551,7 @@ class Radau5(Stepper):
                 self.stats["nfail_newton"] += 1
                 self.stats["nreject"] += 1
                 n_fail += 1
-                h *= fac
-                if not self.J_current:
-                    self._jacobian()
-                    self.LU_real = None
+                h = self._retry(h, fac)
                 continue
             theta = info
             y_new = y + Z[2]
@@ -551,13 +563,19 @@ class Radau5(Stepper):
                 self.stats["nreject"] += 1
                 kind, reason = "error", f"scaled error {err:.3g}"
                 n_fail += 1
-                h = 0.1 * h if self.first else h_new
-                if not self.J_current:
-                    self._jacobian()
-                    self.LU_real = None
+                h = self._retry(h, 0.1 if self.first else h_new / h)
                 continue
             break
         self._accept(t, y, h, Z, y_new, err, quot, h_new, n_fail, theta, last)
+
+    def _retry(self, h, fac):
+        """The step size ``h * fac`` of the next attempt after a failed one (error test,
+        Newton iteration or singular matrix). A stale Jacobian (from an earlier point) is
+        recomputed first, as the failure may be its fault; a current one is kept, and only the
+        iteration matrices are factored again at the new step size (RADAU5's ``CALJAC``)."""
+        if not self.J_current:
+            self._jacobian()
+        return h * fac
 
     def _predict(self, t, y, h):
         """Starting values of the stage increments (3, n): the last step's collocation
