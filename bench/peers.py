@@ -563,6 +563,9 @@ def plot(rows, path):
         pts = sorted((N, d[w]) for N, d in data.items() if w in d)
         style = "--" if w.startswith("mbcomp") else "-"
         ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, marker="o", label=w)
+    Ns = sorted(data)
+    ax.set_xticks(Ns, [str(N) for N in Ns])
+    ax.minorticks_off()
     ax.set(xlabel="N (links)", ylabel="CPU time per rhs call [us]",
            title="N-link pendulum: one right-hand side, mbcomp vs peers")
     ax.grid(True, which="both", alpha=0.3)
