@@ -86,7 +86,12 @@ def test_disk_sweep_finds_the_critical_spin(tmp_path, capsys):
     data = json.load(open(out))
     Wc = np.sqrt(G / (3 * r))
     (ch,) = data["changes"]
-    assert abs(ch["value"] / Wc - 1) < 1e-12, (ch["value"], Wc)
+    # At Wc the state matrix has a triple zero root (a Jordan block: heading rate, lean, lean
+    # rate), whose eigenvalues LAPACK resolves only to ~eps^(1/3) |A| = 1.5e-5; the located value
+    # is therefore fixed to ~1e-9 relative by the rounding of A's entries. Two evaluations of A
+    # that differ by one ulp in one entry (the jets' Kane sum and the recursive algorithms;
+    # both within 3e-15 of the exact 15.696) land 4e-15 and 1.2e-9 from Wc.
+    assert abs(ch["value"] / Wc - 1) < 1e-8, (ch["value"], Wc)
     assert (ch["from"], ch["to"]) == ("unstable", "marginally stable")
     # ch["kind"] is not checked: stability.sweep judges it at the located value, where the real
     # pair has just met at zero and may already be a tiny imaginary pair (here "oscillatory";

@@ -208,12 +208,18 @@ def test_a_decision_on_the_state_is_a_guard_with_numeric_fallback():
     law = lambda t, phi, w: -0.3 if w > 0 else 0.3  # noqa: E731
     s = mbcomp.assemble(mixed_model(law))
     c = compile_system(s)
-    assert c.stats["n_guards"][1] == 1
+    # the evaluation checks the law's branch; the Lagrange program also checks that the
+    # joint's articulated inertia is positive (its pivot)
+    assert c.stats["state_guards"]["eval"] == 1 and c.stats["state_guards"]["fun"] == 2
     q = s.default_q()
     for wj in (0.8, -0.8):
         u = np.array([wj])
         assert_same(s.evaluate(0.1, q, u), c.evaluate(0.1, q, u))
     assert c.stats["fallbacks"] == 1
+    for wj in (0.8, -0.8):  # the whole right-hand side takes the same branches
+        y = np.concatenate((q, [wj]))
+        np.testing.assert_allclose(LagrangeIndex1(c).fun(0.1, y), LagrangeIndex1(s).fun(0.1, y), rtol=1e-12)
+    assert c.stats["fallbacks"] == 3  # the program's call, then its evaluation, for w < 0
 
 
 def test_an_untraceable_law_names_the_component():

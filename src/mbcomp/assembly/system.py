@@ -120,6 +120,10 @@ class NumericEvaluator:
     def __init__(self, system):
         self.system = system
 
+    #: what this evaluator offers beyond ``evaluate``/``q_rate`` (see
+    #: :attr:`mbcomp.codegen.evaluator.ProgramEvaluator.capabilities`)
+    capabilities = frozenset()
+
     def evaluate(self, t, q, u, masked=True):
         return self.system.evaluate_numeric(t, q, u, masked)
 
@@ -302,17 +306,21 @@ class MultibodySystem:
         """Jets of every frame node (dict node -> :class:`~mbcomp.jets.FrameJet`)."""
         jets = {ROOT: FrameJet.ground(self.nu)}
         for e in self.topology.tree:
-            pj = jets[e.parent]
-            if e.dof == 0:  # rigid offsets and ground frames: constant transforms
-                R, r = e.comp.pose(self.P[e.name]) if e.kind == "ground" else e.comp.relative(None, self.P[e.name])
-                jets[e.child] = pj.offset(R, r) if e.forward else pj.offset(R.T, -(R.T @ r))
-                continue
-            R, r, Hw, Hv, wr, vr, bw, bv, _, _ = self._joint_motion(e, t, q, u)
-            if e.forward:
-                jets[e.child] = pj.through(R, r, Hw, Hv, e.u, wr, vr, bw, bv)
-            else:
-                jets[e.child] = pj.back_through(R, r, Hw, Hv, e.u, wr, vr, bw, bv)
+            jets[e.child] = self.child_jet(e, jets[e.parent], t, q, u, e.u)
         return jets
+
+    def child_jet(self, e, pj, t, q, u, cols):
+        """The jet of tree edge ``e``'s child frame from its parent's jet ``pj``; the edge's
+        speeds are the Jacobian columns ``cols`` of ``pj`` (``e.u`` in the global jets; the
+        recursive algorithms, :mod:`mbcomp.assembly.recursive`, pass jets of the edge's own
+        width)."""
+        if e.dof == 0:  # rigid offsets and ground frames: constant transforms
+            R, r = e.comp.pose(self.P[e.name]) if e.kind == "ground" else e.comp.relative(None, self.P[e.name])
+            return pj.offset(R, r) if e.forward else pj.offset(R.T, -(R.T @ r))
+        R, r, Hw, Hv, wr, vr, bw, bv, _, _ = self._joint_motion(e, t, q, u)
+        if e.forward:
+            return pj.through(R, r, Hw, Hv, cols, wr, vr, bw, bv)
+        return pj.back_through(R, r, Hw, Hv, cols, wr, vr, bw, bv)
 
     def _frame_state(self, J):
         return FrameState(J.r, J.R, J.v, J.w)

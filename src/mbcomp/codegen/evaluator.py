@@ -158,6 +158,8 @@ class ProgramEvaluator:
     ``stats`` holds the build statistics: ``backend``, ``n_ops`` (operations of the evaluation
     program), ``n_ops_qrate``, ``n_ops_params`` (the hoisted parameter program), ``n_hoisted``,
     ``n_nodes``, ``n_params`` (runtime parameter entries), ``n_guards`` (parameter, state),
+    ``state_guards`` (per program: the state decisions it checks), ``n_ops_fun`` (the
+    Lagrange right-hand side, when there is one),
     ``baked`` (parameters a component turned into numbers), ``trace_time``, ``compile_time``
     (s), ``cache`` (C: ``"hit"``/``"miss"``), ``traces`` and ``fallbacks``.
 
@@ -225,9 +227,9 @@ class ProgramEvaluator:
         return self.bound
 
     def _record(self, code):
-        self.stats.update(n_ops=code.n_ops, n_ops_qrate=code.n_ops_qrate, n_ops_params=code.n_ops_params,
+        self.stats.update(n_ops=code.n_ops, n_ops_qrate=code.n_ops_qrate, n_ops_fun=code.n_ops_fun, n_ops_params=code.n_ops_params,
                           n_hoisted=code.n_hoisted, n_nodes=code.n_nodes, n_params=len(code.layout),
-                          n_guards=code.n_guards, baked=list(code.baked), trace_time=code.trace_time,
+                          n_guards=code.n_guards, state_guards=dict(code.state_guards), baked=list(code.baked), trace_time=code.trace_time,
                           compile_time=code.compile_time, cache=code.cache, traces=code.traces)
 
     def _verify(self):
@@ -250,6 +252,44 @@ class ProgramEvaluator:
         qd = self.bound.run_qrate(q, u)
         if not np.allclose(qd, system.q_rate_numeric(q, u), rtol=1e-9, atol=1e-12):
             raise CodegenError("internal error: the generated coordinate rates differ from the numeric ones")
+        if code.has_fun:
+            self._verify_fun()
+
+    def _verify_fun(self):
+        """The Lagrange program against the numeric dense solve at the trace point."""
+        from ..formulations.lagrange import LagrangeIndex1
+
+        system = self.system
+        t, q, u = trace_point(system)
+        y = np.concatenate((q, u))
+        try:
+            dy = self.bound.run_fun(t, y, 10.0, 10.0)
+        except Fallback:
+            return
+        form = LagrangeIndex1(system.with_evaluator(None), alpha=10.0, beta=10.0)
+        ref = form.fun(t, y)
+        err = np.max(np.abs(dy - ref), initial=0.0)
+        if not err <= 1e-8 * (1.0 + np.max(np.abs(ref), initial=0.0)):
+            raise CodegenError(f"internal error: the generated right-hand side differs from the dense Lagrange solve "
+                               f"by {err:.3g}; please report this model (use the numeric path meanwhile)")
+
+    @property
+    def capabilities(self):
+        """What this evaluator offers beyond ``evaluate``/``q_rate``: ``{"lagrange_fun"}`` when
+        the program has the Lagrange index-1 right-hand side (:meth:`lagrange_fun`)."""
+        bound = self.bound or self._bound()
+        return frozenset(("lagrange_fun",)) if bound.code.has_fun else frozenset()
+
+    def lagrange_fun(self, t, y, alpha, beta):
+        """``dy/dt`` of the Lagrange index-1 form (Baumgarte gains ``alpha``, ``beta`` in 1/s,
+        zero for none) in one program call, or None when a guard fails (a singular matrix,
+        a law's branch): the caller then uses the dense solve."""
+        bound = self.bound or self._bound()
+        try:
+            return bound.run_fun(t, y, alpha, beta)
+        except (Fallback, ArithmeticError, ValueError):
+            self.stats["fallbacks"] += 1
+            return None
 
     def _bound(self):
         if self.bound is None:

@@ -33,6 +33,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from ..assembly.recursive import SingularTree, lagrange_accelerations, tree_evaluation
 from ..modeling.blame import blame
 from .graph import CodegenError, Graph, Sym
 from .tracing import parameter_entries, q_rates, traced_params, traced_system
@@ -157,9 +158,11 @@ def trace(system, max_nodes):
             q = np.array([g.input("q", k, v) for k, v in enumerate(q0)] + [None], dtype=object)[:-1]
             u = np.array([g.input("u", k, v) for k, v in enumerate(u0)] + [None], dtype=object)[:-1]
             t = g.input("t", 0, t0)
-            ev = ts.evaluate_numeric(t, q, u, masked=False)
-            n_guards_eval = len(g.guards)
+            ev = tree_evaluation(ts, t, q, u, masked=False)
+            n1 = len(g.guards)
             qd = q_rates(ts, q, u)
+            n2 = len(g.guards)
+            ud = _lagrange(g, ts, t, q, u, len(order))
         except CodegenError:
             raise
         except Exception as exc:  # noqa: BLE001 - re-raised naming the component
@@ -169,10 +172,29 @@ def trace(system, max_nodes):
         arr = np.asarray(getattr(ev, name))
         shapes[name] = arr.shape
         outs.extend(arr.ravel().tolist())
-    return SimpleNamespace(graph=g, groups={"eval": outs, "qrate": qd}, shapes=shapes, layout=layout,
-                           guard_groups={"eval": g.guards[:n_guards_eval], "qrate": g.guards[n_guards_eval:]},
+    groups = {"eval": outs, "qrate": qd}
+    guard_groups = {"eval": g.guards[:n1], "qrate": g.guards[n1:n2]}
+    if ud is not None:
+        groups["fun"] = list(qd) + list(ud)
+        guard_groups["fun"] = list(g.guards)  # equal decisions are one guard: check every one
+    return SimpleNamespace(graph=g, groups=groups, shapes=shapes, layout=layout, guard_groups=guard_groups,
                            signature=sig, drives=order, baked=_baked_names(g, layout),
                            qrate_identity=_is_identity(g, qd, system))
+
+
+def _lagrange(g, ts, t, q, u, n_drives):
+    """The traced Lagrange index-1 accelerations (:func:`~mbcomp.assembly.recursive.lagrange_accelerations`)
+    with the Baumgarte gains ``alpha``, ``beta`` (1/s) as the per-call inputs after the drives'
+    ``(s, v, a)``; None if the trace point itself is singular (no such program then)."""
+    alpha, beta = g.input("d", 3 * n_drives, 10.0), g.input("d", 3 * n_drives + 1, 10.0)
+    n = len(g.guards)
+    try:
+        return lagrange_accelerations(ts, t, q, u, alpha, beta, baumgarte=True)
+    except SingularTree:
+        for gd in g.guards[n:]:
+            g._guard_keys.discard(gd)
+        del g.guards[n:]
+        return None
 
 
 def _is_identity(g, qd, system):

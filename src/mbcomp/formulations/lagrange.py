@@ -119,6 +119,13 @@ class LagrangeIndex1(Formulation):
     def fun(self, t, y):
         """``dy/dt`` for ``y = [q, u]``."""
         self._check_finite(t, y)
+        evaluator = self.system.evaluator
+        if "lagrange_fun" in evaluator.capabilities:  # the whole right-hand side in one program call
+            gains = (self.alpha, self.beta) if self.stabilization == "baumgarte" else (0.0, 0.0)
+            dy = evaluator.lagrange_fun(t, y, *gains)
+            if dy is not None:
+                self.nlu += 1
+                return dy
         q, u = y[: self.nq], y[self.nq:]
         ev = self.system.evaluate(t, q, u)
         ud, _ = self.solve(ev)
