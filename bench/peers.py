@@ -428,6 +428,10 @@ def end_to_end(b, agreed, speed, args, rows):
     rows.append(dict(table="e2e", N=N, who=ref_who, method="DOP853 reference", quantity="diff_to_1e-12_run",
                      value=qual))
     out, hints = [], {}
+    if qual > TARGET / 10:  # chaotic motion: the reference itself is not within 1e-8 of the truth
+        print(f"  skipped: the reference moves {qual:.0e} between rtol 1e-12 and 1e-13, so {TARGET:g} over "
+              f"{T_END:g} s is not measurable at N = {N} (chaotic motion); use a smaller N")
+        return out, None
 
     def record(who, method, t, note, kind):
         out.append(dict(N=N, who=who, method=method, kind=kind, t=t, note=note))
