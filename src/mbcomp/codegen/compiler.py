@@ -33,6 +33,7 @@ import time
 
 import numpy as np
 
+from .engine import integrate_signature, runtime_objects
 from .graph import CodegenError, Fallback, Retrace
 from .printers import PY_ENV, ParamProgram, Program
 from .tracer import FIELDS, param_vector
@@ -108,6 +109,8 @@ class Code:
             self.source = self.c_source
         self.compile_time = time.perf_counter() - t0
 
+    has_engine = False
+
     def _build_c(self, prog, cache_dir):
         cc = c_compiler()
         if cc is None:
@@ -126,11 +129,17 @@ class Code:
                              .encode()).hexdigest()[:32]
         d = _cache_dir(cache_dir)
         lib = os.path.join(d, f"mbcomp_{key}.so")
+        # the C engine (the runtime's integrators over mbcomp_fun) when no drive needs Python per call
+        self.has_engine = self.has_fun and not self.drives
+        extra = runtime_objects(cc, d) if self.has_engine else []
+        if self.has_engine:
+            key = hashlib.sha256((key + "".join(extra)).encode()).hexdigest()[:32]
+            lib = os.path.join(d, f"mbcomp_{key}.so")
         if os.path.exists(lib):
             self.cache = "hit"
         else:
             self.cache = "miss"
-            _compile_units(cc, [(name, src, fl) for name, (src, fl) in units], lib, d)
+            _compile_units(cc, [(name, src, fl) for name, (src, fl) in units], lib, d, extra)
         self.lib_path = lib
         self.dll = ctypes.CDLL(lib)
         argt = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p,
@@ -139,6 +148,8 @@ class Code:
             fn.argtypes = argt
             fn.restype = ctypes.c_int
         self.n_work = max(self._n_work, 1)
+        if self.has_engine:
+            integrate_signature(self.dll)
 
     def _c_unit(self, prog, groups, n_ops):
         """C source of the programs ``groups`` (one translation unit) and its flags."""
@@ -157,7 +168,7 @@ OPT_O2, OPT_O1 = 8000, 30000
 CHUNK = 1000
 
 
-def _compile_units(cc, units, lib, cache_dir):
+def _compile_units(cc, units, lib, cache_dir, extra=()):
     """Compile ``(name, source, flags)`` translation units in parallel and link them into the
     shared library ``lib`` (replaced atomically; the cache may be shared by processes)."""
     with tempfile.TemporaryDirectory(dir=cache_dir) as tmp:
@@ -174,7 +185,7 @@ def _compile_units(cc, units, lib, cache_dir):
             if p.returncode != 0:
                 raise CodegenError(f"the C compiler failed ({cc}): {err[-2000:]} -> fix: use backend='python'")
         out = os.path.join(tmp, "prog.so")
-        res = subprocess.run([cc, "-shared", "-o", out, *objs, "-lm"], capture_output=True, text=True)
+        res = subprocess.run([cc, "-shared", "-o", out, *objs, *extra, "-lm"], capture_output=True, text=True)
         if res.returncode != 0:
             raise CodegenError(f"the C linker failed ({cc}): {res.stderr[-2000:]} -> fix: use backend='python'")
         os.replace(out, lib)
@@ -187,7 +198,7 @@ class Bound:
         self.code = code
         pv = param_vector(system, code.layout)
         self.pv = pv
-        self.nq = system.nq
+        self.nq, self.nu = system.nq, system.nu
         # the traced values themselves: the trace-time values; new ones: the parameter program
         # (which raises Retrace when a parameter guard fails)
         self.h = list(code.pre.shadow) if first else code.pre.run(pv)

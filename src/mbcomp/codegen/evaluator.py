@@ -158,8 +158,9 @@ class ProgramEvaluator:
     ``stats`` holds the build statistics: ``backend``, ``n_ops`` (operations of the evaluation
     program), ``n_ops_qrate``, ``n_ops_params`` (the hoisted parameter program), ``n_hoisted``,
     ``n_nodes``, ``n_params`` (runtime parameter entries), ``n_guards`` (parameter, state),
-    ``state_guards`` (per program: the state decisions it checks), ``n_ops_fun`` (the
-    Lagrange right-hand side, when there is one),
+    ``state_guards`` (per program: the state decisions it checks); once the Lagrange
+    right-hand side program is made (at its first use): ``n_ops_fun``, ``fun_compile_time``,
+    ``fun_state_guards``;
     ``baked`` (parameters a component turned into numbers), ``trace_time``, ``compile_time``
     (s), ``cache`` (C: ``"hit"``/``"miss"``), ``traces`` and ``fallbacks``.
 
@@ -184,7 +185,8 @@ class ProgramEvaluator:
     'success'
     """
 
-    def __init__(self, system, backend="python", *, cache_dir=None, verify=True, max_nodes=3_000_000, code=None):
+    def __init__(self, system, backend="python", *, cache_dir=None, verify=True, max_nodes=3_000_000, code=None,
+                 fun_codes=None):
         if backend == "auto":
             backend = "c" if c_compiler() else "python"
         if backend not in ("python", "c"):
@@ -192,6 +194,8 @@ class ProgramEvaluator:
         self.system, self.backend = system, backend
         self.options = dict(cache_dir=cache_dir, verify=verify, max_nodes=max_nodes)
         self.bound = None
+        self.funs = dict(fun_codes or {})  # row mask -> Code of the Lagrange program (or None)
+        self._fun = None  # (row mask, Bound or None)
         self.stats = dict(backend=backend, traces=0, fallbacks=0)
         if code is not None:
             self.stats["traces"] = code.traces
@@ -209,7 +213,7 @@ class ProgramEvaluator:
         change alters what is baked into it (a zero pattern, a law, a guarded decision); then
         it is traced again at the first evaluation."""
         code = self.bound.code if self.bound is not None else None
-        return ProgramEvaluator(system, self.backend, code=code, **self.options)
+        return ProgramEvaluator(system, self.backend, code=code, fun_codes=self.funs, **self.options)
 
     # --- building ----------------------------------------------------------------------------
     def _build(self):
@@ -227,7 +231,7 @@ class ProgramEvaluator:
         return self.bound
 
     def _record(self, code):
-        self.stats.update(n_ops=code.n_ops, n_ops_qrate=code.n_ops_qrate, n_ops_fun=code.n_ops_fun, n_ops_params=code.n_ops_params,
+        self.stats.update(n_ops=code.n_ops, n_ops_qrate=code.n_ops_qrate, n_ops_params=code.n_ops_params,
                           n_hoisted=code.n_hoisted, n_nodes=code.n_nodes, n_params=len(code.layout),
                           n_guards=code.n_guards, state_guards=dict(code.state_guards), baked=list(code.baked), trace_time=code.trace_time,
                           compile_time=code.compile_time, cache=code.cache, traces=code.traces)
@@ -252,10 +256,9 @@ class ProgramEvaluator:
         qd = self.bound.run_qrate(q, u)
         if not np.allclose(qd, system.q_rate_numeric(q, u), rtol=1e-9, atol=1e-12):
             raise CodegenError("internal error: the generated coordinate rates differ from the numeric ones")
-        if code.has_fun:
-            self._verify_fun()
 
-    def _verify_fun(self):
+
+    def _verify_fun(self, bound):
         """The Lagrange program against the numeric dense solve at the trace point."""
         from ..formulations.lagrange import LagrangeIndex1
 
@@ -263,7 +266,7 @@ class ProgramEvaluator:
         t, q, u = trace_point(system)
         y = np.concatenate((q, u))
         try:
-            dy = self.bound.run_fun(t, y, 10.0, 10.0)
+            dy = bound.run_fun(t, y, 10.0, 10.0)
         except Fallback:
             return
         form = LagrangeIndex1(system.with_evaluator(None), alpha=10.0, beta=10.0)
@@ -275,16 +278,58 @@ class ProgramEvaluator:
 
     @property
     def capabilities(self):
-        """What this evaluator offers beyond ``evaluate``/``q_rate``: ``{"lagrange_fun"}`` when
-        the program has the Lagrange index-1 right-hand side (:meth:`lagrange_fun`)."""
-        bound = self.bound or self._bound()
-        return frozenset(("lagrange_fun",)) if bound.code.has_fun else frozenset()
+        """What this evaluator offers beyond ``evaluate``/``q_rate``: ``"lagrange_fun"`` when
+        the program has the Lagrange index-1 right-hand side (:meth:`lagrange_fun`),
+        ``"c_integrate"`` when the C engine can step it (:meth:`integrator`)."""
+        bound = self._fun_bound()
+        if bound is None:
+            return frozenset()
+        return frozenset(("lagrange_fun", "c_integrate")) if bound.code.has_engine else frozenset(("lagrange_fun",))
+
+    def _fun_bound(self):
+        """The Lagrange program for the system's current row mask: traced at first need (the
+        mask is set by consistent initialization), reused by ``with_params``."""
+        rm = self.system.row_mask
+        key = None if rm is None else rm.tobytes()
+        if self._fun is not None and self._fun[0] == key:
+            return self._fun[1]
+        system, o = self.system, self.options
+        code = self.funs.get(key)
+        bound = None
+        if code is not None and param_layout(system)[1] == code.signature:
+            try:
+                bound = Bound(code, system)
+            except Retrace:
+                code = None
+        if bound is None:
+            tr = trace(system, o["max_nodes"], program="fun")
+            code = Code(tr, self.backend, o["cache_dir"]) if "fun" in tr.groups else None
+            self.funs[key] = code
+            if code is not None:
+                bound = Bound(code, system, first=True)
+                self.stats.update(n_ops_fun=code.n_ops_fun, fun_compile_time=code.compile_time,
+                                  fun_state_guards=code.state_guards["fun"])
+                if o["verify"]:
+                    self._verify_fun(bound)
+        self._fun = (key, bound)
+        return bound
+
+    def integrator(self, alpha, beta):
+        """The compiled engine (:class:`mbcomp.codegen.engine.Integrator`) stepping the Lagrange
+        right-hand side with Baumgarte gains ``alpha``, ``beta`` (1/s) in C; None when this
+        program has none (Python backend, drives, no Lagrange program)."""
+        from .engine import Integrator
+
+        bound = self._fun_bound()
+        return Integrator(bound, alpha, beta) if bound is not None and bound.code.has_engine else None
 
     def lagrange_fun(self, t, y, alpha, beta):
         """``dy/dt`` of the Lagrange index-1 form (Baumgarte gains ``alpha``, ``beta`` in 1/s,
         zero for none) in one program call, or None when a guard fails (a singular matrix,
         a law's branch): the caller then uses the dense solve."""
-        bound = self.bound or self._bound()
+        bound = self._fun_bound()
+        if bound is None:
+            return None
         try:
             return bound.run_fun(t, y, alpha, beta)
         except (Fallback, ArithmeticError, ValueError):

@@ -133,8 +133,10 @@ def _untraceable(exc):
     return CodegenError(f"cannot trace the model's evaluation ({type(exc).__name__}: {exc} {at}) -> fix: {_FIX}")
 
 
-def trace(system, max_nodes):
-    """Trace the evaluation and the coordinate rates of ``system``.
+def trace(system, max_nodes, program="eval"):
+    """Trace the evaluation and the coordinate rates of ``system`` (``program="eval"``), or
+    the coordinate rates and the Lagrange right-hand side with the system's row mask
+    (``program="fun"``: output group ``"fun"``, absent when the trace point is singular).
 
     Returns a namespace: ``graph``, the output ``groups`` (``"eval"``: the :data:`FIELDS`
     flattened, ``"qrate"``), their ``guard_groups``, the fields' ``shapes``, the parameter
@@ -158,18 +160,18 @@ def trace(system, max_nodes):
             q = np.array([g.input("q", k, v) for k, v in enumerate(q0)] + [None], dtype=object)[:-1]
             u = np.array([g.input("u", k, v) for k, v in enumerate(u0)] + [None], dtype=object)[:-1]
             t = g.input("t", 0, t0)
-            ev = tree_evaluation(ts, t, q, u, masked=False)
+            ev = tree_evaluation(ts, t, q, u, masked=False) if program == "eval" else None
             n1 = len(g.guards)
             qd = q_rates(ts, q, u)
             n2 = len(g.guards)
-            ud = _lagrange(g, ts, t, q, u, len(order))
+            ud = _lagrange(g, ts, t, q, u, len(order)) if program == "fun" else None
         except CodegenError:
             raise
         except Exception as exc:  # noqa: BLE001 - re-raised naming the component
             raise _untraceable(exc) from exc
     shapes, outs = {}, []
     for name in FIELDS:
-        arr = np.asarray(getattr(ev, name))
+        arr = np.asarray(getattr(ev, name)) if ev is not None else np.zeros(0)
         shapes[name] = arr.shape
         outs.extend(arr.ravel().tolist())
     groups = {"eval": outs, "qrate": qd}

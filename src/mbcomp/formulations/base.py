@@ -104,6 +104,11 @@ class Formulation:
         """Accelerations ``du/dt`` and multipliers at an evaluation ``ev`` (for reactions)."""
         raise NotImplementedError
 
+    def compiled_integrator(self):
+        """The compiled engine stepping this formulation's ``fun`` in C
+        (:class:`mbcomp.codegen.engine.Integrator`), or None (the default: ``fun`` in Python)."""
+        return None
+
     def run_stats(self):
         """Statistics of the run this formulation adds to the result's ``stats``."""
         return {}

@@ -131,6 +131,14 @@ class LagrangeIndex1(Formulation):
         ud, _ = self.solve(ev)
         return np.concatenate((self.system.q_rate(q, u), ud))
 
+    def compiled_integrator(self):
+        """The C engine over the system's Lagrange program (Baumgarte gains as stabilized), or
+        None when the evaluator has none (numeric or Python program, drives)."""
+        evaluator = self.system.evaluator
+        if "c_integrate" not in evaluator.capabilities:
+            return None
+        return evaluator.integrator(*((self.alpha, self.beta) if self.stabilization == "baumgarte" else (0.0, 0.0)))
+
     def project(self, t, y):
         """``y = [q, u]`` moved onto ``Phi = 0`` and ``[dPhi/dt, Psi] = 0`` by minimum-norm
         corrections (Newton on the positions, then least squares on the speeds), quaternions

@@ -91,7 +91,8 @@ class Run:
         """Make a new stepper at ``(t, y)`` (default: the run's start)."""
         t = self.t_out[0] if t is None else t
         y = self._y_start if y is None else y
-        self.stepper = self.stepper_class(self.form, t, y, self.t_out[-1], **self.options)
+        opts = dict(self.options, t_eval=self.t_out) if self.stepper_class.needs_outputs else self.options
+        self.stepper = self.stepper_class(self.form, t, y, self.t_out[-1], **opts)
         self.steppers.append(self.stepper)
         return self.stepper
 

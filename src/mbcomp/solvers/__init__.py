@@ -3,7 +3,8 @@
 ``STEPPERS`` maps every method name :func:`mbcomp.simulate` accepts to its stepper class:
 scipy's ODE integrators (``RK23, RK45, DOP853, Radau, BDF, LSODA``, wrapped by
 :mod:`mbcomp.solvers.scipy_adapter`) and mbcomp's DAE solvers (``SOLVERS``: ``radau5``,
-``ida``, ``genalpha``). Every class declares what it can do (``implicit``, ``adaptive``,
+``ida``, ``genalpha``) and the explicit methods run in C over the compiled engine
+(``COMPILED_STEPPERS``: ``dop853``, ``dopri5``). Every class declares what it can do (``implicit``, ``adaptive``,
 ``one_step``, ``max_index``, the ``problem`` kind it steps), so the driver checks a request
 against the declaration and steps every solver alike, instead of special-casing names.
 
@@ -21,13 +22,14 @@ from .base import MechanicalDAE, SemiExplicitDAE, StepFailure, Stepper
 from .genalpha import GeneralizedAlpha
 from .ida import IDA
 from .radau import Radau5
+from .compiled_rk import COMPILED_STEPPERS, CompiledRK
 from .scipy_adapter import SCIPY_STEPPERS, ScipyStepper
 
 #: mbcomp's own DAE solvers
 SOLVERS = {"radau5": Radau5, "ida": IDA, "genalpha": GeneralizedAlpha}
 
-#: every method name -> its stepper class (scipy's ODE methods first)
-STEPPERS = {**SCIPY_STEPPERS, **SOLVERS}
+#: every method name -> its stepper class (scipy's ODE methods first, then the C ones)
+STEPPERS = {**SCIPY_STEPPERS, **COMPILED_STEPPERS, **SOLVERS}
 
 __all__ = ["Stepper", "SemiExplicitDAE", "MechanicalDAE", "StepFailure", "Radau5", "IDA", "GeneralizedAlpha",
-           "ScipyStepper", "SOLVERS", "SCIPY_STEPPERS", "STEPPERS"]
+           "ScipyStepper", "CompiledRK", "SOLVERS", "SCIPY_STEPPERS", "COMPILED_STEPPERS", "STEPPERS"]

@@ -140,9 +140,13 @@ class Stepper:
         Highest DAE index it steps (0: ODEs only).
     problem : {"ode", "dae", "mechanical"}
         The problem kind it steps.
+    needs_outputs : bool
+        Takes the run's output times (``t_eval``) and steps from one to another (the C
+        integrators, which write the outputs themselves).
     """
 
     implicit = False
+    needs_outputs = False
     adaptive = False
     one_step = True
     max_index = 0

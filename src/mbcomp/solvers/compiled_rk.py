@@ -1,0 +1,171 @@
+"""Explicit Runge-Kutta methods stepped in C: ``dopri5`` (Dormand-Prince 5(4)) and ``dop853``
+(Dormand-Prince 8(5,3)), over the compiled engine when the problem has one.
+
+The C runtime (:mod:`mbcomp.codegen.runtime`) integrates a whole stretch of the run -- up to
+:attr:`CompiledRK.chunk` output times -- in one call, writing the states at the output times
+from its dense output. To the driver each stretch is one "step" of the
+:class:`~mbcomp.solvers.base.Stepper` interface: monitors check the stretch's end, the
+outputs inside it are the C integrator's own, and a projection (if the formulation projects)
+moves the state at the stretch's end. The stepper therefore declares ``needs_outputs``: the
+run hands it its output times.
+
+A problem offers the engine through ``compiled_integrator()`` (the Lagrange formulation on a
+C program without drives, see :meth:`mbcomp.codegen.evaluator.ProgramEvaluator.integrator`).
+Without one, or from the point where a guard of the program fails (a law's other branch, a
+singular matrix), the stretch is integrated by scipy's method of the same order (``RK45``,
+``DOP853``) over the problem's Python ``fun``, which gives the numeric path's result.
+
+Examples
+--------
+>>> import numpy as np
+>>> from types import SimpleNamespace
+>>> from mbcomp.solvers.compiled_rk import CompiledRK
+>>> decay = SimpleNamespace(fun=lambda t, y: -2.0 * y)        # no compiled engine: scipy's DOP853
+>>> s = CompiledRK.make("dop853")(decay, 0.0, [1.0], 1.0, rtol=1e-10, atol=1e-12, t_eval=np.linspace(0, 1, 5))
+>>> while s.status == "running":
+...     _ = s.step()
+>>> bool(abs(s.y[0] - np.exp(-2.0)) < 1e-9), s.stats["python_stretches"]
+(True, 1)
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.integrate as si
+
+from .base import StepFailure, Stepper
+
+__all__ = ["CompiledRK", "COMPILED_STEPPERS"]
+
+
+class CompiledRK(Stepper):
+    """An explicit embedded Runge-Kutta method run by the C runtime (see the module notes).
+
+    Parameters
+    ----------
+    problem : object with ``fun(t, y)`` and optionally ``compiled_integrator()``
+    t0, y0, t_bound, rtol, atol, first_step, max_step
+        As for :class:`~mbcomp.solvers.base.Stepper`.
+    t_eval : ndarray
+        The run's output times (s); each stretch ends at one of them.
+
+    Attributes
+    ----------
+    stats : dict
+        ``nsteps`` (accepted steps inside the stretches), ``nreject``, ``nfev``, ``stretches``
+        (C calls), ``python_stretches`` (stretches or their rests integrated by scipy).
+    """
+
+    adaptive = True
+    one_step = True
+    needs_outputs = True
+    #: the order of the method (5: DOPRI5, 8: DOP853) and scipy's class of the same order
+    order = 8
+    scipy_method = "DOP853"
+    #: output times per C call (the stretch the driver sees as one step)
+    chunk = 16
+
+    @classmethod
+    def make(cls, name):
+        return COMPILED_STEPPERS[name]
+
+    def __init__(self, problem, t0, y0, t_bound, rtol=1e-6, atol=1e-8, first_step=None, max_step=np.inf,
+                 t_eval=None):
+        super().__init__(problem, t0, y0, t_bound, rtol, atol, first_step, max_step)
+        make = getattr(problem, "compiled_integrator", None)
+        self.engine = make() if make is not None else None
+        t_eval = np.asarray(t_eval if t_eval is not None else [t_bound], float)
+        self.t_eval = t_eval[(t_eval > self.t) & (t_eval <= self.t_bound)]
+        if not self.t_eval.size or self.t_eval[-1] < self.t_bound:
+            self.t_eval = np.append(self.t_eval, self.t_bound)
+        self.h = float(first_step or 0.0)
+        self.stats.update(stretches=0, python_stretches=0)
+        del self.stats["njev"], self.stats["nlu"]
+        self._outs = (np.zeros(0), np.zeros((0, self.y.size)))
+        self._y_old = self.y
+
+    def _stretch(self):
+        k = int(np.searchsorted(self.t_eval, self.t, side="right"))
+        return self.t_eval[k: k + self.chunk]
+
+    def _step(self):
+        outs = self._stretch()
+        t0, y0 = self.t, self.y
+        ts, Ys = [], []
+        if self.engine is not None:
+            r = self.engine.integrate(self.order, t0, y0, outs[-1], outs, self.rtol, self.atol, h0=self.h,
+                                      hmax=self.max_step if np.isfinite(self.max_step) else 0.0)
+            self.stats["stretches"] += 1
+            self.stats["nfev"] += r.nfev
+            if hasattr(self.prob, "nfev"):  # the engine's calls are the formulation's evaluations
+                self.prob.nfev += r.nfev
+            self.stats["nsteps"] += r.naccept
+            self.stats["nreject"] += r.nreject
+            self.h = r.h_last or self.h
+            ts.extend(outs[: len(r.Y)])
+            Ys.extend(r.Y)
+            if r.status not in (0, 1):
+                raise StepFailure(f"the integrator {self.scipy_method.lower() if self.order == 8 else 'dopri5'} "
+                                  f"failed at t={r.t_last:g}: {r.message}")
+            if r.status == 1:  # a guard failed: the rest of the stretch on the Python path
+                t0, y0 = r.t_last, r.y_last
+                rest = outs[len(r.Y):]
+                ts_p, Y_p = self._python(t0, y0, rest)
+                ts.extend(ts_p)
+                Ys.extend(Y_p)
+        else:
+            ts_p, Y_p = self._python(t0, y0, outs)
+            ts.extend(ts_p)
+            Ys.extend(Y_p)
+        self._y_old, self.t_old = self.y, self.t
+        self._outs = (np.array(ts), np.array(Ys))
+        self.t, self.y = float(ts[-1]), np.array(Ys[-1])
+
+    def _python(self, t0, y0, outs):
+        """The stretch ``t0 -> outs[-1]`` by scipy's method of the same order."""
+        self.stats["python_stretches"] += 1
+        if not outs.size:
+            return [], []
+        if outs[-1] <= t0:
+            return list(outs), [np.array(y0)] * len(outs)
+        sol = si.solve_ivp(self.prob.fun, (t0, outs[-1]), y0, method=self.scipy_method, t_eval=outs, rtol=self.rtol,
+                           atol=self.atol, max_step=self.max_step)
+        self.stats["nfev"] += sol.nfev
+        if sol.status != 0:
+            raise StepFailure(f"the integrator {self.scipy_method} failed at t={sol.t[-1] if sol.t.size else t0:g}: "
+                              f"{sol.message} (step size collapsed: stiff or singular dynamics)")
+        return list(sol.t), list(sol.y.T)
+
+    def reset_state(self, y):
+        self.y = np.array(y, dtype=float)
+
+    def dense_output(self):
+        """``y(t)`` in the last stretch: the integrator's own output at the output times, a
+        cubic Hermite interpolant between the stretch's ends elsewhere (for the monitors)."""
+        ts, Ys = self._outs
+        t0, t1, y0, y1 = self.t_old, self.t, self._y_old, self.y
+        f0, f1 = None, None
+
+        def at(tt):
+            nonlocal f0, f1
+            k = np.searchsorted(ts, tt)
+            for j in (k - 1, k):
+                if 0 <= j < len(ts) and abs(ts[j] - tt) <= 1e-12 * max(1.0, abs(tt)):
+                    return Ys[j].copy()
+            if f0 is None:
+                f0, f1 = self.prob.fun(t0, y0), self.prob.fun(t1, y1)
+            h = t1 - t0
+            s = (tt - t0) / h
+            h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
+            return h00 * y0 + h10 * h * f0 + h01 * y1 + h11 * h * f1
+
+        return at
+
+
+def _declare(name, order, scipy_method):
+    doc = (f"``{name}``: {'DOP853' if order == 8 else 'DOPRI5'} in C over the compiled engine (scipy's "
+           f"``{scipy_method}`` without one); see :class:`CompiledRK`.")
+    return type(name, (CompiledRK,), dict(order=order, scipy_method=scipy_method, __doc__=doc, __module__=__name__))
+
+
+#: name -> stepper class
+COMPILED_STEPPERS = {"dop853": _declare("dop853", 8, "DOP853"), "dopri5": _declare("dopri5", 5, "RK45")}
