@@ -242,7 +242,11 @@ class Bench:
             if name == "pydy":
                 self._pydy(N, args, state)
                 continue
-            self.peers[name] = mod.build(N, **PHYS)
+            try:
+                self.peers[name] = mod.build(N, **PHYS)
+            except MemoryError as exc:
+                self.notes[name] = str(exc)
+                continue
             if self.peers[name].note:
                 self.notes[name] = self.peers[name].note
         self.engines = self._engines(N, args, state)
