@@ -254,7 +254,10 @@ class Bound:
         nd = 3 * len(self.drive_comps)
         if code.backend == "python":
             d = (self.drive_values(t) if self.drive_comps else []) + [alpha, beta]
-            return np.array(code.fun(y[: self.nq].tolist(), y[self.nq:].tolist(), float(t), d, self.h), float)
+            out = np.array(code.fun(y[: self.nq].tolist(), y[self.nq:].tolist(), float(t), d, self.h), float)
+            if not np.isfinite(out).all():  # a domain error: the numeric path raises or agrees
+                raise Fallback
+            return out
         if nd:
             self.dbuf[:nd] = self.drive_values(t)
         self.dbuf[nd] = alpha
@@ -265,4 +268,7 @@ class Bound:
         pq, pu, pd, ph, pp, pw, _, _, py = self.ptrs
         if code.dll.mbcomp_fun(pq, pu, float(t), pd, ph, pp, pw, py):
             raise Fallback
-        return self.ybuf[: y.size].copy()
+        out = self.ybuf[: y.size].copy()
+        if not np.isfinite(out).all():  # a domain error (0/0 in a law): the numeric path raises or agrees
+            raise Fallback
+        return out

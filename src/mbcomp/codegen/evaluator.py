@@ -353,6 +353,8 @@ class ProgramEvaluator:
             return system.evaluate_numeric(t, q, u, masked)
         try:
             flat = bound.run(t, q, u)
+            if not np.isfinite(flat).all():  # a domain error (0/0 in a law): the numeric path raises or agrees
+                raise Fallback
         except (Fallback, ArithmeticError, ValueError):
             self.stats["fallbacks"] += 1
             return system.evaluate_numeric(t, q, u, masked)

@@ -52,10 +52,10 @@ __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
 METHODS = {name: cls.method for name, cls in SCIPY_STEPPERS.items()}
 
 
-def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="RK45", rtol=1e-6, atol=1e-8,
+def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rtol=1e-6, atol=1e-8,
              formulation="lagrange", stabilization="baumgarte", alpha=10.0, beta=10.0, n_out=None, dt_out=None,
              max_step=np.inf, progress=False, independent=None, index=None, h=None,
-             backend="numeric") -> Result:
+             backend="auto") -> Result:
     """Simulate a model: Lagrange multipliers at index 1, or D'Alembert projection to an ODE.
 
     Parameters
@@ -66,8 +66,11 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="RK45", rtol=
     params : dict, optional
         Runtime parameter values ``{"component.param": value}`` (nothing is re-derived).
     method : str
-        A ``scipy.integrate.solve_ivp`` method name (ODE forms: Lagrange at index 1 and
-        D'Alembert), or a DAE solver of :mod:`mbcomp.solvers`: ``"radau5"`` (Radau IIA order
+        ``"dop853"`` (default) or ``"dopri5"``: Dormand-Prince 8(5,3) / 5(4) run in C over
+        the compiled right-hand side (the whole stretch between outputs is one C call;
+        scipy's ``DOP853``/``RK45`` over the Python right-hand side when there is no C
+        program), a ``scipy.integrate.solve_ivp`` method name (ODE forms: Lagrange at index
+        1 and D'Alembert), or a DAE solver of :mod:`mbcomp.solvers`: ``"radau5"`` (Radau IIA order
         5, index 1-3, index-aware error control), ``"ida"`` (SUNDIALS IDA, index 1 and 2) or
         ``"genalpha"`` (generalized-alpha, index 3, fixed step ``h``).
     rtol, atol : float
@@ -79,12 +82,14 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="RK45", rtol=
     h : float, optional
         Step size (s) of fixed-step methods (``genalpha``, required there); the first step
         of adaptive ones.
-    backend : {"numeric", "python", "c", "auto"}
-        ``"numeric"`` evaluates the jets directly (no set-up cost). The others trace the
-        model once into a generated straight-line program (:mod:`mbcomp.codegen`): Python
-        (no compiler), C (system compiler, cached on disk) or C when a compiler exists. The
-        program is ~10-20x faster per evaluation for small and mid-size models and costs a
-        generation time growing like N^3 (see ``bench/scaling.py``).
+    backend : {"auto", "numeric", "python", "c"}
+        ``"auto"`` (default): a generated program (:mod:`mbcomp.codegen`) in C when a
+        compiler exists (cached on disk by structure), else in Python; a model whose laws
+        cannot be traced runs on the numeric path with a warning naming the component.
+        ``"numeric"`` evaluates the jets directly (no set-up cost); ``"python"``, ``"c"``
+        force a program. Programs are printed from the recursive algorithms
+        (:mod:`mbcomp.assembly.recursive`): the right-hand side grows linearly with the
+        number of bodies of a chain (see ``bench/scaling.py``, ``bench/peers.py``).
     formulation : {"lagrange", "dalembert"}
         ``"lagrange"``: multipliers, index 1 (:class:`~mbcomp.formulations.LagrangeIndex1`);
         ``"dalembert"``: projection onto independent speeds, a minimal ODE whose positions are

@@ -78,7 +78,16 @@ def system_of(model, params, backend):
     if backend != "numeric" and system.backend == "numeric":
         from ..codegen import compile_system
 
-        system = compile_system(system, backend)
+        if backend != "auto":
+            return compile_system(system, backend)
+        from ..codegen import CodegenError
+
+        try:
+            return compile_system(system, backend)
+        except CodegenError as exc:  # a law that cannot be traced: the numeric path, said once
+            import warnings
+
+            warnings.warn(f"mbcomp: running on the numeric evaluation (slower): {exc}", RuntimeWarning, stacklevel=3)
     return system
 
 

@@ -12,8 +12,9 @@ run hands it its output times.
 A problem offers the engine through ``compiled_integrator()`` (the Lagrange formulation on a
 C program without drives, see :meth:`mbcomp.codegen.evaluator.ProgramEvaluator.integrator`).
 Without one, or from the point where a guard of the program fails (a law's other branch, a
-singular matrix), the stretch is integrated by scipy's method of the same order (``RK45``,
-``DOP853``) over the problem's Python ``fun``, which gives the numeric path's result.
+singular matrix) to the end of that stretch, scipy's method of the same order (``RK45``,
+``DOP853``) steps the problem's Python ``fun`` one step at a time (a law raising there keeps
+every output before it).
 
 Examples
 --------
@@ -24,8 +25,8 @@ Examples
 >>> s = CompiledRK.make("dop853")(decay, 0.0, [1.0], 1.0, rtol=1e-10, atol=1e-12, t_eval=np.linspace(0, 1, 5))
 >>> while s.status == "running":
 ...     _ = s.step()
->>> bool(abs(s.y[0] - np.exp(-2.0)) < 1e-9), s.stats["python_stretches"]
-(True, 1)
+>>> bool(abs(s.y[0] - np.exp(-2.0)) < 1e-9), s.stats["python_steps"] == s.stats["nsteps"]
+(True, True)
 """
 from __future__ import annotations
 
@@ -51,8 +52,8 @@ class CompiledRK(Stepper):
     Attributes
     ----------
     stats : dict
-        ``nsteps`` (accepted steps inside the stretches), ``nreject``, ``nfev``, ``stretches``
-        (C calls), ``python_stretches`` (stretches or their rests integrated by scipy).
+        ``nsteps`` (accepted steps, in C and in Python), ``nreject`` (in C), ``nfev``,
+        ``stretches`` (C calls), ``python_steps`` (steps by scipy's method).
     """
 
     adaptive = True
@@ -78,7 +79,8 @@ class CompiledRK(Stepper):
         if not self.t_eval.size or self.t_eval[-1] < self.t_bound:
             self.t_eval = np.append(self.t_eval, self.t_bound)
         self.h = float(first_step or 0.0)
-        self.stats.update(stretches=0, python_stretches=0)
+        self.stats.update(stretches=0, python_steps=0)
+        self._solver, self._python_until, self._dense = None, -np.inf, None
         del self.stats["njev"], self.stats["nlu"]
         self._outs = (np.zeros(0), np.zeros((0, self.y.size)))
         self._y_old = self.y
@@ -88,59 +90,70 @@ class CompiledRK(Stepper):
         return self.t_eval[k: k + self.chunk]
 
     def _step(self):
+        if self.engine is None or self.t < self._python_until:
+            return self._python_step()
+        self._solver = None
         outs = self._stretch()
-        t0, y0 = self.t, self.y
-        ts, Ys = [], []
-        if self.engine is not None:
-            r = self.engine.integrate(self.order, t0, y0, outs[-1], outs, self.rtol, self.atol, h0=self.h,
-                                      hmax=self.max_step if np.isfinite(self.max_step) else 0.0)
-            self.stats["stretches"] += 1
-            self.stats["nfev"] += r.nfev
-            if hasattr(self.prob, "nfev"):  # the engine's calls are the formulation's evaluations
-                self.prob.nfev += r.nfev
-            self.stats["nsteps"] += r.naccept
-            self.stats["nreject"] += r.nreject
-            self.h = r.h_last or self.h
-            ts.extend(outs[: len(r.Y)])
-            Ys.extend(r.Y)
-            if r.status not in (0, 1):
-                raise StepFailure(f"the integrator {self.scipy_method.lower() if self.order == 8 else 'dopri5'} "
-                                  f"failed at t={r.t_last:g}: {r.message}")
-            if r.status == 1:  # a guard failed: the rest of the stretch on the Python path
-                t0, y0 = r.t_last, r.y_last
-                rest = outs[len(r.Y):]
-                ts_p, Y_p = self._python(t0, y0, rest)
-                ts.extend(ts_p)
-                Ys.extend(Y_p)
-        else:
-            ts_p, Y_p = self._python(t0, y0, outs)
-            ts.extend(ts_p)
-            Ys.extend(Y_p)
+        r = self.engine.integrate(self.order, self.t, self.y, outs[-1], outs, self.rtol, self.atol, h0=self.h,
+                                  hmax=self.max_step if np.isfinite(self.max_step) else 0.0)
+        self.stats["stretches"] += 1
+        self.stats["nfev"] += r.nfev
+        if hasattr(self.prob, "nfev"):  # the engine's calls are the formulation's evaluations
+            self.prob.nfev += r.nfev
+        self.stats["nsteps"] += r.naccept
+        self.stats["nreject"] += r.nreject
+        self.h = r.h_last or self.h
+        if r.status not in (0, 1):
+            raise StepFailure(f"the integrator {type(self).__name__} failed at t={r.t_last:g}: {r.message}")
+        ts, Ys = list(outs[: len(r.Y)]), list(r.Y)
+        if r.status == 1:
+            # a guard failed (a law's other branch, a singular matrix): the stretch ends at the
+            # last accepted step and the rest of it is stepped on the Python path
+            self._python_until = outs[-1]
+            if r.t_last <= self.t:
+                return self._python_step()
+            ts.append(r.t_last)
+            Ys.append(r.y_last)
         self._y_old, self.t_old = self.y, self.t
         self._outs = (np.array(ts), np.array(Ys))
         self.t, self.y = float(ts[-1]), np.array(Ys[-1])
+        self._dense = None
 
-    def _python(self, t0, y0, outs):
-        """The stretch ``t0 -> outs[-1]`` by scipy's method of the same order."""
-        self.stats["python_stretches"] += 1
-        if not outs.size:
-            return [], []
-        if outs[-1] <= t0:
-            return list(outs), [np.array(y0)] * len(outs)
-        sol = si.solve_ivp(self.prob.fun, (t0, outs[-1]), y0, method=self.scipy_method, t_eval=outs, rtol=self.rtol,
-                           atol=self.atol, max_step=self.max_step)
-        self.stats["nfev"] += sol.nfev
-        if sol.status != 0:
-            raise StepFailure(f"the integrator {self.scipy_method} failed at t={sol.t[-1] if sol.t.size else t0:g}: "
-                              f"{sol.message} (step size collapsed: stiff or singular dynamics)")
-        return list(sol.t), list(sol.y.T)
+    def _python_step(self):
+        """One step of scipy's method of the same order over the problem's Python ``fun``
+        (each step is the driver's: a law raising keeps every output before it)."""
+        if self._solver is None:
+            opts = dict(rtol=self.rtol, atol=self.atol, max_step=self.max_step)
+            if self.h:
+                opts["first_step"] = min(self.h, self.t_bound - self.t)
+            self._solver = getattr(si, self.scipy_method)(self.prob.fun, self.t, self.y, self.t_bound, **opts)
+        sv = self._solver
+        nfev = sv.nfev
+        msg = sv.step()
+        self.stats["nfev"] += sv.nfev - nfev
+        self.stats["python_steps"] += 1
+        if sv.status == "failed":
+            raise StepFailure(f"the integrator {self.scipy_method} failed at t={sv.t:g}: {msg} "
+                              "(step size collapsed: stiff or singular dynamics, or tolerances too tight)")
+        self._y_old, self.t_old = self.y, self.t
+        self.t, self.y = sv.t, sv.y
+        self.h = getattr(sv, "h_abs", self.h)
+        self._outs = (np.zeros(0), np.zeros((0, self.y.size)))
+        self._dense = sv.dense_output()
+        self.stats["nsteps"] += 1
 
     def reset_state(self, y):
+        """Continue from the moved state ``y`` (a projection)."""
         self.y = np.array(y, dtype=float)
+        if self._solver is not None:
+            self._solver.y = self.y
+            self._solver.f = self.prob.fun(self.t, self.y)
 
     def dense_output(self):
         """``y(t)`` in the last stretch: the integrator's own output at the output times, a
         cubic Hermite interpolant between the stretch's ends elsewhere (for the monitors)."""
+        if self._dense is not None:  # a step on the Python path: scipy's own dense output
+            return self._dense
         ts, Ys = self._outs
         t0, t1, y0, y1 = self.t_old, self.t, self._y_old, self.y
         f0, f1 = None, None
