@@ -277,26 +277,13 @@ def constraint_rows(system, tp, masked=True):
     """The constraint rows at a :class:`TreePass`: ``(holonomic, nonholonomic)``, each a list
     of ``(entries, val, dot, bias)`` per row, ``entries`` as in :func:`_row_entries`
     (holonomic rows masked by ``system.row_mask`` when ``masked``)."""
-    from .jets import rigid_constraints
-
     links, jets = tp.links, tp.jets
-    hol = []
-    for name in system.topology.cut:
-        e = system._edge[name]
-        p = system.P[name]
-        a, b = jets[e.node_a], jets[e.node_b]
-        if e.kind == "ground":
-            R0, r0 = e.comp.pose(p)
-            cons = rigid_constraints(a, b, R0, r0)
-        else:
-            cons = e.comp.constraints(a, b, p)
-        hol += [(_row_entries(links, jets, e, c.jac), c.val, c.dot, c.bias) for _, c in cons]
+    hol = [(_row_entries(links, jets, e, c.jac), c.val, c.dot, c.bias)
+           for e, cons in system.cut_constraints(jets) for _, c in cons]
     if masked and system.row_mask is not None:
         hol = [r for r, keep in zip(hol, system.row_mask) if keep]
-    nh = []
-    for e in system._nonholonomic:
-        cons = e.comp.velocity_constraints(jets[e.node_a], jets[e.node_b], system.P[e.name])
-        nh += [(_row_entries(links, jets, e, c.jac), c.val, c.dot, c.bias) for _, c in cons]
+    nh = [(_row_entries(links, jets, e, c.jac), c.val, c.dot, c.bias)
+          for e, cons in system.velocity_constraints(jets) for _, c in cons]
     return hol, nh
 
 

@@ -426,17 +426,10 @@ class MultibodySystem:
             J = jets[node]
             f += J.Jv.T @ F + J.Jw.T @ T
         Phi, Phid, Crows, cb, local = [], [], [], [], []
-        for name in self.topology.cut:
-            e = self._edge[name]
-            p = self.P[name]
-            a, b = jets[e.node_a], jets[e.node_b]
-            if e.kind == "ground":
-                R0, r0 = e.comp.pose(p)
-                cons = rigid_constraints(a, b, R0, r0)
-            else:
-                cons = e.comp.constraints(a, b, p)
+        for e, cons in self.cut_constraints(jets):
             if not cons:
                 continue
+            a, b = jets[e.node_a], jets[e.node_b]
             jac = np.array([c.jac for _, c in cons])
             Jab = np.vstack((a.Jv, a.Jw, b.Jv, b.Jw))
             Crows.append(jac @ Jab)
@@ -449,8 +442,7 @@ class MultibodySystem:
         if masked and self.row_mask is not None:
             C, Phi, Phid, cb = C[self.row_mask], Phi[self.row_mask], Phid[self.row_mask], cb[self.row_mask]
         Brows, gval, Bb, local_nh = [], [], [], []
-        for e in self._nonholonomic:
-            cons = e.comp.velocity_constraints(jets[e.node_a], jets[e.node_b], self.P[e.name])
+        for e, cons in self.velocity_constraints(jets):
             if not cons:
                 continue
             jac = np.array([c.jac for _, c in cons])
@@ -463,6 +455,24 @@ class MultibodySystem:
         gval = np.array(gval, dt)
         return Evaluation(t, q, u, jets, M, f, Phi, Phid, C, cb, B, B @ u - gval, np.array(Bb, dt), gval,
                           local, local_nh)
+
+    def cut_constraints(self, jets):
+        """``(edge, [(row name, ScalarJet)])`` of every cut joint at the frames' ``jets`` (a
+        cut ground frame: its six rigid rows), unmasked, in the order of ``topology.cut``."""
+        for name in self.topology.cut:
+            e = self._edge[name]
+            p = self.P[name]
+            a, b = jets[e.node_a], jets[e.node_b]
+            if e.kind == "ground":
+                R0, r0 = e.comp.pose(p)
+                yield e, rigid_constraints(a, b, R0, r0)
+            else:
+                yield e, e.comp.constraints(a, b, p)
+
+    def velocity_constraints(self, jets):
+        """``(edge, [(row name, ScalarJet)])`` of every joint with nonholonomic rows."""
+        for e in self._nonholonomic:
+            yield e, e.comp.velocity_constraints(jets[e.node_a], jets[e.node_b], self.P[e.name])
 
     def q_rate_numeric(self, q, u):
         """``dq/dt`` from the speeds ``u`` by the joints' own kinematics."""
