@@ -414,7 +414,7 @@ def sweep(run, start, budget, stop=26):
     return None, f"error {tries[-1].err:.0e} at the tightest setting", stop
 
 
-MBCOMP_METHODS = ("RK45", "DOP853", "LSODA", "Radau", "BDF", "radau5", "ida", "RK23", "genalpha")
+MBCOMP_METHODS = ("dop853", "dopri5", "RK45", "DOP853", "LSODA", "Radau", "BDF", "radau5", "ida", "RK23", "genalpha")
 
 
 def end_to_end(b, agreed, speed, args, rows):
@@ -586,14 +586,14 @@ def plot(rows, path):
 def parse(argv):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--Ns", default="2,5,10,20,40,100,1000", help="link counts of the one-call and build tables")
-    ap.add_argument("--quick", action="store_true", help="N = 2,5,10,20; end to end at N = 5 with RK45, DOP853, "
+    ap.add_argument("--quick", action="store_true", help="N = 2,5,10,20; end to end at N = 5 with dop853, DOP853, "
                     "LSODA; budget 5 s")
     ap.add_argument("--skip", default="", help="comma-separated: pinocchio, mujoco, pydy, cython (pydy with "
                     "lambdify), python (mbcomp code generation), c (mbcomp's C backend), e2e")
     ap.add_argument("--e2e-Ns", default=None, help="end-to-end sizes (default 5 and the --Ns up to 20; --quick: 5)")
     ap.add_argument("--budget", type=float, default=None, help="CPU s allowed per end-to-end run (default 30, quick 5)")
     ap.add_argument("--methods", default=None, help="mbcomp.simulate methods end to end (default all of "
-                    f"{','.join(MBCOMP_METHODS)}; --quick: RK45,DOP853,LSODA)")
+                    f"{','.join(MBCOMP_METHODS)}; --quick: dop853,DOP853,LSODA)")
     ap.add_argument("--codegen-limit", type=float, default=60.0, help="skip mbcomp code generation predicted over this (s)")
     args = ap.parse_args(argv)
     args.skip = {s.strip() for s in args.skip.split(",") if s.strip()}
@@ -607,7 +607,7 @@ def parse(argv):
     if "e2e" in args.skip:
         args.e2e_Ns = []
     args.budget = args.budget or (5.0 if args.quick else 30.0)
-    quick_methods = "RK45,DOP853,LSODA"  # the default and the two the peers run
+    quick_methods = "dop853,DOP853,LSODA"  # the default (the C engine) and the two the peers run
     args.methods = (args.methods or (quick_methods if args.quick else ",".join(MBCOMP_METHODS))).split(",")
     return args
 
