@@ -68,7 +68,7 @@ from .topology import ROOT
 from ..geometry.kinematics import cross, skew
 
 __all__ = ["TreeLinks", "SingularTree", "tree_links", "tree_pass", "tree_evaluation", "articulated",
-           "tree_solve", "constraint_rows", "lagrange_accelerations", "PIVOT_TOL"]
+           "tree_solve", "constraint_rows", "lagrange_accelerations", "lagrange_solution", "PIVOT_TOL"]
 
 #: a Cholesky pivot at or below ``PIVOT_TOL`` times the matrix's trace counts as singular
 PIVOT_TOL = 1e-13
@@ -424,34 +424,45 @@ def lagrange_accelerations(system, t, q, u, alpha=0.0, beta=0.0, baumgarte=False
 
     Raises :class:`SingularTree` when ``M`` or ``A M^-1 A^T`` is singular (the caller's dense
     solve then decides). Links are ordered as the tree; the result is in ``u``'s order."""
+    return lagrange_solution(system, t, q, u, alpha, beta, baumgarte).ud
+
+
+def lagrange_solution(system, t, q, u, alpha=0.0, beta=0.0, baumgarte=False):
+    """The Lagrange index-1 solve of :func:`lagrange_accelerations` with what it computes on
+    the way: a namespace with ``ud`` (``du/dt``, ``u``'s order), ``lam`` (the multipliers of
+    the masked holonomic rows, then of the nonholonomic rows, with the sign of
+    ``M du/dt + A^T lam = f``), ``tp`` (the :class:`TreePass`) and ``acc`` (every link's twist
+    rate ``(dw/dt, dv_O/dt)`` caused by ``du/dt``, world, about the origin)."""
+    from types import SimpleNamespace
+
     links = tree_links(system)
     tp = tree_pass(system, t, q, u)
     factor = articulated(tp)
-    x0, acc0 = tree_solve(tp, factor, tp.W)
+    x, acc = tree_solve(tp, factor, tp.W)
     hol, nh = constraint_rows(system, tp)
     rows = hol + nh
-    if not rows:
-        return _in_u_order(links, x0, system.nu, tp.dt)
-    rhs = []
-    for k, (entries, val, dot, bias) in enumerate(rows):
-        if k < len(hol):
-            rhs.append(-bias - (2.0 * alpha * dot + beta * beta * val if baumgarte else 0.0))
-        else:
-            rhs.append(-bias - (alpha * val if baumgarte else 0.0))
-    m = len(rows)
-    G = np.zeros((m, m), tp.dt)
-    for r, (entries, *_) in enumerate(rows):
-        _, acc = tree_solve(tp, factor, _placed(links, entries))
-        for s in range(r, m):
-            G[s, r] = G[r, s] = _row_rate(rows[s][0], acc)
-    b = np.array([_row_rate(rows[s][0], acc0) - rhs[s] for s in range(m)], dtype=tp.dt)
-    lam = _chol_solve(_cholesky(G, "constraint rows"), b)
-    W = list(tp.W)
-    for r, (entries, *_) in enumerate(rows):
-        for i, cov in entries:
-            W[i] = W[i] - cov * lam[r]
-    x, _ = tree_solve(tp, factor, W)
-    return _in_u_order(links, x, system.nu, tp.dt)
+    lam = np.zeros(0, tp.dt)
+    if rows:
+        rhs = []
+        for k, (entries, val, dot, bias) in enumerate(rows):
+            if k < len(hol):
+                rhs.append(-bias - (2.0 * alpha * dot + beta * beta * val if baumgarte else 0.0))
+            else:
+                rhs.append(-bias - (alpha * val if baumgarte else 0.0))
+        m = len(rows)
+        G = np.zeros((m, m), tp.dt)
+        for r, (entries, *_) in enumerate(rows):
+            _, acc_r = tree_solve(tp, factor, _placed(links, entries))
+            for s in range(r, m):
+                G[s, r] = G[r, s] = _row_rate(rows[s][0], acc_r)
+        b = np.array([_row_rate(rows[s][0], acc) - rhs[s] for s in range(m)], dtype=tp.dt)
+        lam = _chol_solve(_cholesky(G, "constraint rows"), b)
+        W = list(tp.W)
+        for r, (entries, *_) in enumerate(rows):
+            for i, cov in entries:
+                W[i] = W[i] - cov * lam[r]
+        x, acc = tree_solve(tp, factor, W)
+    return SimpleNamespace(ud=_in_u_order(links, x, system.nu, tp.dt), lam=lam, tp=tp, acc=acc)
 
 
 def _in_u_order(links, x, nu, dt):

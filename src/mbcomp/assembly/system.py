@@ -517,15 +517,30 @@ class MultibodySystem:
     def reactions(self, ev: Evaluation, ud, lam):
         """Reaction wrench of every edge: dict name -> (f, tau), the force and torque exerted on
         frame_b through the joint (flange-element forces excluded; a drive's force is included),
-        resolved in frame_b, torque about frame_b's origin."""
+        resolved in frame_b, torque about frame_b's origin.
+
+        ``ud`` are the speeds' rates (the jets carry Jacobians), or a function ``(node, r) ->
+        (a_lin, a_ang)`` giving the part of the accelerations of the point at ``r`` (world, m)
+        moving with frame ``node`` that the speeds' rates cause (jets without Jacobian
+        columns, :mod:`mbcomp.assembly.outputs`)."""
         jets = ev.jets
+        if not callable(ud):
+            ud_ = ud
+
+            def rates(node, r):
+                J = jets[node]
+                dw = J.Jw @ ud_
+                return J.Jv @ ud_ + cross(dw, r - J.r), dw
+        else:
+            rates = ud
         D = {n: [np.zeros(3), np.zeros(3)] for n in jets}
         for path, comp, node in self.topology.bodies:
             J = jets[node]
             m, rho, Iw = self._body(comp, path, J)
             wxr = cross(J.w, rho)
-            acc = (J.Jv - skew(rho) @ J.Jw) @ ud + J.a + cross(J.alpha, rho) + cross(J.w, wxr)
-            al = J.Jw @ ud + J.alpha
+            a_lin, a_ang = rates(node, J.r + rho)
+            acc = a_lin + J.a + cross(J.alpha, rho) + cross(J.w, wxr)
+            al = a_ang + J.alpha
             F = m * (acc - self.g)
             D[node][0] += F
             D[node][1] += Iw @ al + cross(J.w, Iw @ J.w) + cross(rho, F)

@@ -104,6 +104,11 @@ class Formulation:
         """Accelerations ``du/dt`` and multipliers at an evaluation ``ev`` (for reactions)."""
         raise NotImplementedError
 
+    def output_gains(self):
+        """The Baumgarte gains ``(alpha, beta)`` (1/s) that :meth:`solve` uses at
+        ``stabilize=True`` (the post-processing's multipliers use the same), or None: none."""
+        return None
+
     def compiled_integrator(self):
         """The compiled engine stepping this formulation's ``fun`` in C
         (:class:`mbcomp.codegen.engine.Integrator`), or None (the default: ``fun`` in Python)."""

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from ..assembly.manifold import close_positions, solve_speeds
+from ..assembly.manifold import ACCEPT_FACTOR, POSITION_TOL, close_positions, solve_speeds
 from ..errors import SimulationError
 from .base import Formulation, projection_needed
 
@@ -131,13 +131,30 @@ class LagrangeIndex1(Formulation):
         ud, _ = self.solve(ev)
         return np.concatenate((self.system.q_rate(q, u), ud))
 
+    def output_gains(self):
+        """``(alpha, beta)`` with Baumgarte stabilization, else None."""
+        return (self.alpha, self.beta) if self.stabilization == "baumgarte" else None
+
     def compiled_integrator(self):
         """The C engine over the system's Lagrange program (Baumgarte gains as stabilized), or
-        None when the evaluator has none (numeric or Python program, drives)."""
+        None when the evaluator has none (numeric or Python program, drives).
+
+        With ``"projection"`` the engine projects after every accepted step in C (as
+        :meth:`project`, with the same tolerances), so a stretch of outputs is still one C
+        call; coordinates that do not move additively (quaternions) have no C projection, and
+        then there is no engine: scipy's method steps :meth:`fun` and the driver projects
+        after every step."""
         evaluator = self.system.evaluator
         if "c_integrate" not in evaluator.capabilities:
             return None
-        return evaluator.integrator(*((self.alpha, self.beta) if self.stabilization == "baumgarte" else (0.0, 0.0)))
+        if not self.projects:
+            return evaluator.integrator(*((self.alpha, self.beta) if self.stabilization == "baumgarte"
+                                          else (0.0, 0.0)))
+        from ..codegen.engine import additive_coordinates
+
+        if not additive_coordinates(self.system):
+            return None
+        return evaluator.integrator(0.0, 0.0, project=(POSITION_TOL, ACCEPT_FACTOR * POSITION_TOL))
 
     def project(self, t, y):
         """``y = [q, u]`` moved onto ``Phi = 0`` and ``[dPhi/dt, Psi] = 0`` by minimum-norm

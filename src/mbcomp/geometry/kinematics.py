@@ -105,26 +105,33 @@ def quat_to_matrix(Q):
 
 
 def matrix_to_quat(R):
-    """Unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of rotation matrix ``R`` (Shepperd)."""
+    """Unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of rotation matrix ``R`` (Shepperd);
+    for a stack of matrices ``(..., 3, 3)`` the quaternions ``(..., 4)``, one numpy pass.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.kinematics import matrix_to_quat, rot_axis
+    >>> matrix_to_quat(rot_axis((0, 0, 1), np.pi / 2)).round(6).tolist()
+    [0.707107, 0.0, 0.0, 0.707107]
+    >>> matrix_to_quat(np.stack([np.eye(3), rot_axis((1, 0, 0), np.pi)])).round(6).tolist()
+    [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]]
+    """
     R = np.asarray(R, dtype=float)
-    tr = np.trace(R)
-    cands = np.array([tr, R[0, 0], R[1, 1], R[2, 2]])
-    k = int(np.argmax(cands))
-    if k == 0:
-        w = 0.5 * np.sqrt(1.0 + tr)
-        Q = [w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)]
-    elif k == 1:
-        x = 0.5 * np.sqrt(1.0 + 2 * R[0, 0] - tr)
-        Q = [(R[2, 1] - R[1, 2]) / (4 * x), x, (R[0, 1] + R[1, 0]) / (4 * x), (R[0, 2] + R[2, 0]) / (4 * x)]
-    elif k == 2:
-        y = 0.5 * np.sqrt(1.0 + 2 * R[1, 1] - tr)
-        Q = [(R[0, 2] - R[2, 0]) / (4 * y), (R[0, 1] + R[1, 0]) / (4 * y), y, (R[1, 2] + R[2, 1]) / (4 * y)]
-    else:
-        z = 0.5 * np.sqrt(1.0 + 2 * R[2, 2] - tr)
-        Q = [(R[1, 0] - R[0, 1]) / (4 * z), (R[0, 2] + R[2, 0]) / (4 * z), (R[1, 2] + R[2, 1]) / (4 * z), z]
-    Q = np.array(Q)
-    Q /= np.linalg.norm(Q)
-    return Q if Q[0] >= 0 else -Q
+    tr = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
+    # Shepperd: divide by the largest of 4w^2, 4x^2, 4y^2, 4z^2 (1 + tr, 1 + 2 R_kk - tr)
+    k = np.argmax(np.stack([tr, R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]], axis=-1), axis=-1)
+    big = 0.5 * np.sqrt(np.maximum(np.choose(k, [1.0 + tr, 1.0 + 2 * R[..., 0, 0] - tr, 1.0 + 2 * R[..., 1, 1] - tr,
+                                                 1.0 + 2 * R[..., 2, 2] - tr]), 0.0))
+    d = 4.0 * big
+    s21, s02, s10 = R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]
+    p01, p02, p12 = R[..., 0, 1] + R[..., 1, 0], R[..., 0, 2] + R[..., 2, 0], R[..., 1, 2] + R[..., 2, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):  # d > 0 on the chosen branch
+        cands = [np.stack([big, s21 / d, s02 / d, s10 / d], -1), np.stack([s21 / d, big, p01 / d, p02 / d], -1),
+                 np.stack([s02 / d, p01 / d, big, p12 / d], -1), np.stack([s10 / d, p02 / d, p12 / d, big], -1)]
+    Q = np.choose(k[..., None], cands)
+    Q = Q / np.linalg.norm(Q, axis=-1, keepdims=True)
+    return np.where(Q[..., :1] >= 0, Q, -Q)
 
 
 def quat_multiply(p, q):

@@ -22,23 +22,25 @@ Examples
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
+from ..assembly.outputs import output_values, result_columns
+from ..assembly.recursive import SingularTree
 from ..assembly.summary import summary
 from ..geometry.kinematics import matrix_to_quat
-from ..modeling.roles import Joint
 from .result import Result
 
 __all__ = ["postprocess"]
 
-_XYZ = ("x", "y", "z")
-
 
 class _Columns:
-    """Result columns of ``n`` output times, created full of NaN when first written."""
+    """Result columns of ``n`` output times, created full of NaN when first written, and the
+    bodies' rotation matrices (turned into quaternion columns at the end, all at once)."""
 
     def __init__(self, n):
-        self.n, self.series = n, {}
+        self.n, self.series, self.rot = n, {}, {}
 
     def put(self, name, k, val):
         arr = self.series.get(name)
@@ -46,20 +48,41 @@ class _Columns:
             arr = self.series[name] = np.full(self.n, np.nan)
         arr[k] = val
 
-    def vector(self, prefix, k, vec, axes=_XYZ):
-        for j, ax in enumerate(axes):
-            self.put(f"{prefix}.{ax}", k, vec[j])
+    def rotation(self, path, k, R):
+        arr = self.rot.get(path)
+        if arr is None:
+            arr = self.rot[path] = np.full((self.n, 3, 3), np.nan)
+        arr[k] = R
+
+    def finished(self):
+        """The series with every body's quaternion ``<body>.Q.w/x/y/z`` after its position."""
+        Q = {f"{path}.r.z": (path, matrix_to_quat(R)) for path, R in self.rot.items()}
+        out = {}
+        for name, arr in self.series.items():
+            out[name] = arr
+            if name in Q:
+                path, quat = Q[name]
+                for j, ax in enumerate("wxyz"):
+                    out[f"{path}.Q.{ax}"] = quat[:, j]
+        return out
 
 
 def postprocess(system, form, t, Y, status, message, stats, init):
     """The :class:`Result` of a run: every column at the output times ``t`` from the kept
     states ``Y`` (rows ``[q, u]``), the joints' notes, aliases and output functions.
 
+    The columns come from the recursive algorithms (:func:`~mbcomp.assembly.outputs.output_values`):
+    for a whole grid in one compiled call when the system's evaluator offers it (capability
+    ``"outputs"``), else point by point in numpy; a point where the recursive solve is singular
+    or a compiled guard fails is computed by the dense route (evaluation, the formulation's
+    own ``solve``, reactions on the full jets).
+
     Parameters
     ----------
     system : MultibodySystem
     form : Formulation
-        Gives accelerations and multipliers at each output time (``solve``).
+        Gives the multipliers' Baumgarte gains (``output_gains``) and, on the dense route,
+        accelerations and multipliers (``solve``).
     t : ndarray (n,)
         Output times (s).
     Y : ndarray (n, nq + nu)
@@ -69,93 +92,54 @@ def postprocess(system, form, t, Y, status, message, stats, init):
     init : Initialization
         For the model summary.
     """
+    nq = system.nq
     cols = _Columns(len(t))
-    for k in range(len(t)):
-        _sample(system, form, cols, k, t[k], Y[k, : system.nq], Y[k, system.nq:])
-    notes = _joint_notes(system, t, cols.series) + _derived(system, t, cols.series)
+    gains = form.output_gains()
+    todo = range(len(t))
+    evaluator = system.evaluator
+    if len(t) and "outputs" in evaluator.capabilities:
+        grid = evaluator.output_grid(t, Y, gains)
+        if grid is not None:
+            names, values, rotations, ok = grid
+            for j, name in enumerate(names):
+                cols.series[name] = np.where(ok, values[:, j], np.nan)
+            for path, R in rotations.items():
+                cols.rot[path] = np.where(ok[:, None, None], R, np.nan)
+            todo = np.flatnonzero(~ok)
+    for k in todo:
+        q, u = Y[k, :nq], Y[k, nq:]
+        try:
+            values, rotations = output_values(system, t[k], q, u, *(gains or (0.0, 0.0)), baumgarte=gains is not None)
+        except (SingularTree, ArithmeticError, np.linalg.LinAlgError):
+            _sample(system, form, cols, k, t[k], q, u)
+            continue
+        for name, val in values.items():
+            cols.put(name, k, val)
+        for path, R in rotations.items():
+            cols.rotation(path, k, R)
+    series = cols.finished()
+    notes = _joint_notes(system, t, series) + _derived(system, t, series)
     message = "; ".join([message] + notes)
     stats = dict(stats)
     stats["coordinates"] = list(system.q_names)
-    return Result(t, cols.series, status, message, stats, summary(system, init))
+    return Result(t, series, status, message, stats, summary(system, init))
 
 
 def _sample(system, form, cols, k, t, q, u):
-    """Every column at output ``k`` (time ``t``, state ``q, u``)."""
+    """Every column at output ``k`` (time ``t``, state ``q, u``) by the dense route."""
     ev = system.evaluate(t, q, u)
     try:
         ud, lam = form.solve(ev, stabilize=True)
     except Exception:  # noqa: BLE001 - a singular solve leaves these columns NaN, the others stand
         ud, lam = np.full(system.nu, np.nan), np.full(ev.A.shape[0], np.nan)
-    _joint_columns(system, cols, k, t, q, u, ev, ud)
-    reac = system.reactions(ev, ud, lam)
-    _reaction_columns(system, cols, k, ev, lam, reac)
-    _body_columns(system, cols, k, ev)
-    T, V = system.energies(ev)
-    cols.put("energy.kinetic", k, T)
-    cols.put("energy.potential", k, V)
-    cols.put("energy.total", k, T + V)
     evf = system.evaluate(t, q, u, masked=False) if ev.local else ev
-    cols.put("residual.position", k, np.linalg.norm(evf.Phi) if evf.Phi.size else 0.0)
-    cols.put("residual.velocity", k, np.linalg.norm(evf.Phid) if evf.Phid.size else 0.0)
-    cols.put("residual.nonholonomic", k, np.linalg.norm(ev.Psi) if ev.Psi.size else 0.0)
-    rows = system.constraint_names() + [f"{e.name}.{rr}" for e, names, _ in ev.local_nh for rr in names]
-    for i, name in enumerate(rows):
-        cols.put(f"lambda.{name}", k, lam[i] if i < lam.size else np.nan)
-
-
-def _joint_columns(system, cols, k, t, q, u, ev, ud):
-    """Coordinates, speeds and their rates; the measured coordinate of 1-DOF joints without
-    coordinates of their own (cut or driven)."""
-    topo = system.topology
-    for i, name in enumerate(system.q_names):
-        cols.put(name, k, q[i])
-    for i, name in enumerate(system.u_names):
-        cols.put(name, k, u[i])
-    for e in topo.edges:
-        if e.kind != "joint" or e.dof != 1 or e.q.stop > e.q.start:
-            continue
-        if e.drive:
-            s, v, _ = topo.flat.components[e.drive].motion(t, system.P[e.drive])
-        else:
-            s, v = e.comp.measure(ev.jets[e.node_a], ev.jets[e.node_b], system.P[e.name])
-        cols.put(f"{e.name}.{e.comp.coordinates[0][0]}", k, s)
-        cols.put(f"{e.name}.{e.comp.speeds[0][0]}", k, v)
-    for i, name in enumerate(system.u_names):
-        cols.put(f"{name}.der", k, ud[i])
-
-
-def _reaction_columns(system, cols, k, ev, lam, reac):
-    """Joint reactions, joints' own outputs (from their rows' multipliers), drive efforts."""
-    topo = system.topology
-    for ename, (fb, tb) in reac.items():
-        cols.vector(f"{ename}.f", k, fb)
-        cols.vector(f"{ename}.tau", k, tb)
-    own = [e for e in topo.edges if e.kind == "joint" and type(e.comp).outputs is not Joint.outputs]
-    if own:
-        lam_rows = system.row_multipliers(ev, lam)
-        for e in own:
-            extra = e.comp.outputs(ev.jets[e.node_a], ev.jets[e.node_b], system.P[e.name], lam_rows.get(e.name, {}))
-            for key, val in extra.items():
-                cols.put(f"{e.name}.{key}", k, val)
-    for e in topo.edges:
-        if not e.drive:
-            continue
-        fb, tb = reac[e.name]
-        axis_b = ev.jets[e.node_b].R.T @ e.comp.axis_world(ev.jets[e.node_a].R, system.P[e.name])
-        if e.comp.axis_kind == "rotational":
-            cols.put(f"{e.drive}.tau", k, tb @ axis_b)
-        else:
-            cols.put(f"{e.drive}.f", k, fb @ axis_b)
-
-
-def _body_columns(system, cols, k, ev):
-    """Position, orientation quaternion, velocity and angular velocity of every body (world)."""
-    for path, _comp, node in system.topology.bodies:
-        J = ev.jets[node]
-        cols.vector(f"{path}.r", k, J.r)
-        cols.vector(f"{path}.Q", k, matrix_to_quat(J.R), "wxyz")
-        cols.vector(f"{path}.v", k, J.v)
-        cols.vector(f"{path}.w", k, J.w)
+    rows = SimpleNamespace(t=t, q=q, u=u, jets=ev.jets, local_nh=ev.local_nh, B=ev.B, Phi_all=evf.Phi,
+                           Phid_all=evf.Phid, Psi=ev.Psi)
+    values, rotations = result_columns(system, rows, ud, lam, system.reactions(ev, ud, lam))
+    for name, val in values.items():
+        cols.put(name, k, val)
+    for path, R in rotations.items():
+        cols.rotation(path, k, R)
 
 
 def _joint_notes(system, t, series):
