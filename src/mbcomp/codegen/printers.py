@@ -285,7 +285,8 @@ class Program:
         slot = {}
         for c, ch in enumerate(chunks):
             for i in ch:
-                for j in keys[i][1:]:
+                # operands of the node and of the guards checked right after it
+                for j in list(keys[i][1:]) + [x for gd in guards.get(i, ()) for x in gd[1:3]]:
                     if j in chunk_of and chunk_of[j] != c and j not in slot:
                         slot[j] = len(slot)
         sig = ("const double *restrict q, const double *restrict u, double t, const double *restrict d, "
