@@ -542,13 +542,13 @@ class MultibodySystem:
             acc = a_lin + J.a + cross(J.alpha, rho) + cross(J.w, wxr)
             al = a_ang + J.alpha
             F = m * (acc - self.g)
-            D[node][0] += F
-            D[node][1] += Iw @ al + cross(J.w, Iw @ J.w) + cross(rho, F)
+            D[node][0] = D[node][0] + F
+            D[node][1] = D[node][1] + Iw @ al + cross(J.w, Iw @ J.w) + cross(rho, F)
         for node, (F, T) in self.applied(ev.t, ev.q, ev.u, jets).items():
-            D[node][0] -= F
-            D[node][1] -= T
+            D[node][0] = D[node][0] - F
+            D[node][1] = D[node][1] - T
         out = {}
-        full_lam = np.zeros(len(self.constraint_names(all_rows=True)))
+        full_lam = np.zeros(len(self.constraint_names(all_rows=True)), np.asarray(lam).dtype)
         lam_h = lam[: lam.size - ev.B.shape[0]]
         if self.row_mask is not None:
             full_lam[self.row_mask] = lam_h
@@ -559,10 +559,10 @@ class MultibodySystem:
             lr = full_lam[k:k + len(rows)]
             k += len(rows)
             wa, wb = -(jac[:, :6].T @ lr), -(jac[:, 6:].T @ lr)  # constraint wrenches on a and b
-            D[e.node_a][0] -= wa[:3]
-            D[e.node_a][1] -= wa[3:]
-            D[e.node_b][0] -= wb[:3]
-            D[e.node_b][1] -= wb[3:]
+            D[e.node_a][0] = D[e.node_a][0] - wa[:3]
+            D[e.node_a][1] = D[e.node_a][1] - wa[3:]
+            D[e.node_b][0] = D[e.node_b][0] - wb[:3]
+            D[e.node_b][1] = D[e.node_b][1] - wb[3:]
             Rb = jets[e.node_b].R
             out[e.name] = (Rb.T @ wb[:3], Rb.T @ wb[3:])
         lam_nh = lam[lam.size - ev.B.shape[0]:] if ev.B.shape[0] else np.zeros(0)
@@ -572,16 +572,16 @@ class MultibodySystem:
             lr = lam_nh[k:k + len(rows)]
             k += len(rows)
             wa, wb = -(jac[:, :6].T @ lr), -(jac[:, 6:].T @ lr)
-            D[e.node_a][0] -= wa[:3]
-            D[e.node_a][1] -= wa[3:]
-            D[e.node_b][0] -= wb[:3]
-            D[e.node_b][1] -= wb[3:]
+            D[e.node_a][0] = D[e.node_a][0] - wa[:3]
+            D[e.node_a][1] = D[e.node_a][1] - wa[3:]
+            D[e.node_b][0] = D[e.node_b][0] - wb[:3]
+            D[e.node_b][1] = D[e.node_b][1] - wb[3:]
             nh_on_b[e.name] = wb
         for e in reversed(self.topology.tree):
             F, Mc = D[e.child]
             rc, rp = jets[e.child].r, jets[e.parent].r
-            D[e.parent][0] += F
-            D[e.parent][1] += Mc + cross(rc - rp, F)
+            D[e.parent][0] = D[e.parent][0] + F
+            D[e.parent][1] = D[e.parent][1] + Mc + cross(rc - rp, F)
             if e.forward:
                 fb, tb, Rb = F, Mc, jets[e.child].R
             else:

@@ -147,6 +147,11 @@ class CompiledEvaluation:
         return self.numeric().local_nh
 
 
+#: fewer output points than this are post-processed by the numeric route (compiling the
+#: output program costs about as much as ~100 numeric points of a small model)
+OUTPUT_GRID_MIN = 100
+
+
 class ProgramEvaluator:
     """The evaluator of a compiled system: ``evaluate`` and ``q_rate`` run the generated program.
 
@@ -280,11 +285,12 @@ class ProgramEvaluator:
     def capabilities(self):
         """What this evaluator offers beyond ``evaluate``/``q_rate``: ``"lagrange_fun"`` when
         the program has the Lagrange index-1 right-hand side (:meth:`lagrange_fun`),
-        ``"c_integrate"`` when the C engine can step it (:meth:`integrator`)."""
+        ``"c_integrate"`` when the C engine can step it (:meth:`integrator`), ``"outputs"``:
+        result columns of whole output grids (:meth:`output_grid`)."""
         bound = self._fun_bound()
         if bound is None:
-            return frozenset()
-        return frozenset(("lagrange_fun", "c_integrate")) if bound.code.has_engine else frozenset(("lagrange_fun",))
+            return frozenset(("outputs",))
+        return frozenset(("outputs", "lagrange_fun", "c_integrate") if bound.code.has_engine else ("outputs", "lagrange_fun"))
 
     def _fun_bound(self):
         """The Lagrange program for the system's current row mask: traced at first need (the
@@ -335,6 +341,40 @@ class ProgramEvaluator:
         except (Fallback, ArithmeticError, ValueError):
             self.stats["fallbacks"] += 1
             return None
+
+    def output_grid(self, t, Y, gains):
+        """The result columns at every output time in one program call
+        (:meth:`mbcomp.codegen.outputs.OutputProgram.grid`: ``(names, values, rotations, ok)``),
+        or None when there is no such program (fewer than :data:`OUTPUT_GRID_MIN` points, where
+        compiling costs more than the numeric route; a law that cannot be traced; a singular
+        trace point). ``gains``: the multipliers' Baumgarte gains (1/s) or None. The program is
+        made at first need per row mask and kind of gains, and reused by ``with_params``."""
+        if len(t) < OUTPUT_GRID_MIN:
+            return None
+        from .outputs import OutputProgram
+
+        rm = self.system.row_mask
+        key = ("outputs", None if rm is None else rm.tobytes(), gains is not None)
+        prog = self.funs.get(key, False)
+        if prog is not False and prog is not None and param_layout(self.system)[1] != prog.signature:
+            prog = False
+        for _ in range(2):
+            if prog is False:
+                try:
+                    prog = OutputProgram.build(self.system, self.backend, baumgarte=gains is not None,
+                                               cache_dir=self.options["cache_dir"], max_nodes=self.options["max_nodes"])
+                except CodegenError:
+                    prog = None
+                self.funs[key] = prog
+                if prog is not None:
+                    self.stats.update(n_ops_outputs=prog.n_ops, outputs_compile_time=prog.compile_time)
+            if prog is None:
+                return None
+            try:
+                return prog.grid(self.system, t, Y, gains)
+            except Retrace:  # these parameter values change a decision baked into the program
+                prog = False
+        return None
 
     def _bound(self):
         if self.bound is None:

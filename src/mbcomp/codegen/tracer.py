@@ -33,6 +33,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from ..assembly.outputs import output_values
 from ..assembly.recursive import SingularTree, lagrange_accelerations, tree_evaluation
 from ..modeling.blame import blame
 from .graph import CodegenError, Graph, Sym
@@ -133,10 +134,14 @@ def _untraceable(exc):
     return CodegenError(f"cannot trace the model's evaluation ({type(exc).__name__}: {exc} {at}) -> fix: {_FIX}")
 
 
-def trace(system, max_nodes, program="eval"):
+def trace(system, max_nodes, program="eval", baumgarte=True):
     """Trace the evaluation and the coordinate rates of ``system`` (``program="eval"``), or
     the coordinate rates and the Lagrange right-hand side with the system's row mask
-    (``program="fun"``: output group ``"fun"``, absent when the trace point is singular).
+    (``program="fun"``: output group ``"fun"``, absent when the trace point is singular), or
+    the result columns (``program="outputs"``: group ``"outputs"``, the columns of
+    :func:`~mbcomp.assembly.outputs.output_values` then each body's rotation matrix row by
+    row, named by ``output_names`` and ``rotation_paths``; the multipliers' Baumgarte gains
+    are inputs as in ``"fun"`` when ``baumgarte``; absent when the trace point is singular).
 
     Returns a namespace: ``graph``, the output ``groups`` (``"eval"``: the :data:`FIELDS`
     flattened, ``"qrate"``), their ``guard_groups``, the fields' ``shapes``, the parameter
@@ -145,6 +150,8 @@ def trace(system, max_nodes, program="eval"):
     whose code cannot be traced."""
     layout, sig = param_layout(system)
     t0, q0, u0 = trace_point(system)
+    if program == "outputs":
+        system.constraint_names()  # the rows' names (structure only), computed numerically once
     g = Graph(max_nodes)
     order = []
 
@@ -165,6 +172,7 @@ def trace(system, max_nodes, program="eval"):
             qd = q_rates(ts, q, u)
             n2 = len(g.guards)
             ud = _lagrange(g, ts, t, q, u, len(order)) if program == "fun" else None
+            cols = _outputs(g, ts, t, q, u, len(order), baumgarte) if program == "outputs" else None
         except CodegenError:
             raise
         except Exception as exc:  # noqa: BLE001 - re-raised naming the component
@@ -179,9 +187,15 @@ def trace(system, max_nodes, program="eval"):
     if ud is not None:
         groups["fun"] = list(qd) + list(ud)
         guard_groups["fun"] = list(g.guards)  # equal decisions are one guard: check every one
+    names, paths = [], []
+    if cols is not None:
+        values, rotations = cols
+        names, paths = list(values), list(rotations)
+        groups["outputs"] = list(values.values()) + [x for R in rotations.values() for x in np.asarray(R).ravel()]
+        guard_groups["outputs"] = list(g.guards)
     return SimpleNamespace(graph=g, groups=groups, shapes=shapes, layout=layout, guard_groups=guard_groups,
                            signature=sig, drives=order, baked=_baked_names(g, layout),
-                           qrate_identity=_is_identity(g, qd, system))
+                           qrate_identity=_is_identity(g, qd, system), output_names=names, rotation_paths=paths)
 
 
 def _lagrange(g, ts, t, q, u, n_drives):
@@ -189,9 +203,22 @@ def _lagrange(g, ts, t, q, u, n_drives):
     with the Baumgarte gains ``alpha``, ``beta`` (1/s) as the per-call inputs after the drives'
     ``(s, v, a)``; None if the trace point itself is singular (no such program then)."""
     alpha, beta = g.input("d", 3 * n_drives, 10.0), g.input("d", 3 * n_drives + 1, 10.0)
+    return _unless_singular(g, lambda: lagrange_accelerations(ts, t, q, u, alpha, beta, baumgarte=True))
+
+
+def _outputs(g, ts, t, q, u, n_drives, baumgarte):
+    """The traced result columns (:func:`~mbcomp.assembly.outputs.output_values`), the gains
+    inputs as in :func:`_lagrange`; None if the trace point itself is singular."""
+    alpha, beta = g.input("d", 3 * n_drives, 10.0), g.input("d", 3 * n_drives + 1, 10.0)
+    return _unless_singular(g, lambda: output_values(ts, t, q, u, alpha, beta, baumgarte=baumgarte))
+
+
+def _unless_singular(g, make):
+    """``make()``, or None when the recursion meets a singular matrix at the trace point
+    (the guards it recorded on the way are dropped with it)."""
     n = len(g.guards)
     try:
-        return lagrange_accelerations(ts, t, q, u, alpha, beta, baumgarte=True)
+        return make()
     except SingularTree:
         for gd in g.guards[n:]:
             g._guard_keys.discard(gd)
