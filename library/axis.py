@@ -5,7 +5,6 @@ two-flange elements, its ``support`` flange (the joint's zero, fixed to frame_a)
 put on ``axis`` acts on frame_b along/about the joint axis, with the reaction on frame_a.
 """
 import numpy as np
-import sympy as sp
 
 from mbcomp import Drive, Flange, FlangeElement, Param
 from mbcomp.errors import Problem, SimulationError
@@ -191,6 +190,8 @@ class PrescribedMotion(Drive):
     def _derive(p):
         if p.v is not None and p.a is not None and callable(p.s):
             return (p.s, p.v, p.a), None
+        import sympy as sp  # here, not at the top: only a law to differentiate needs sympy (0.35 s to import)
+
         t = sp.Symbol("t", real=True)
         try:
             if callable(p.s):

@@ -30,7 +30,6 @@ import itertools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from ..assembly.initialization import initialize
 from ..assembly.manifold import close_positions, solve_speeds
@@ -228,6 +227,8 @@ def steady_states(model, unknown, fixed=None, params=None, t=0.0, starts=9, tol=
 def _search(residual, lo, hi, per, tol):
     """Least squares from ``per`` starts per unknown over ``[lo, hi]``: the distinct solutions
     ``[(z, largest |residual|), ...]`` sorted by ``z``, and how many starts converged."""
+    from scipy.optimize import least_squares  # here: scipy.optimize costs ~0.5 s to import
+
     grids = [np.linspace(a, b, per) for a, b in zip(lo, hi)]
     found, n_conv = [], 0
     for z0 in itertools.product(*grids):

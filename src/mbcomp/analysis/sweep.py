@@ -32,7 +32,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..errors import ModelError, SimulationError
 from .linearization import _tol, linearize
@@ -216,6 +215,8 @@ def _locate(at, la, lb, a, b, cls_a, unstable_count, top_root):
     """The parameter in ``[a, b]`` where the classification changes: Brent on the largest
     real part if it changes sign clearly, Brent on the colliding pair's signed square between
     unstable and marginally stable, else bisection on the classification."""
+    from scipy.optimize import brentq  # here: scipy.optimize costs ~0.5 s to import
+
     fa, fb = top_root(la).real, top_root(lb).real
     if fa * fb < 0 and abs(fa) > _tol(la.eigenvalues) and abs(fb) > _tol(lb.eigenvalues):
         x = brentq(lambda v: top_root(at(v)).real, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps)

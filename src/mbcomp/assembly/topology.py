@@ -5,9 +5,12 @@ Built once from a validated :class:`~mbcomp.model.FlatModel`; immutable afterwar
 * Connected frame ports are merged into *frame nodes* (union-find); the world is node
   ``ROOT``. Every two-frame component that is a :class:`~mbcomp.roles.Joint` (rigid offsets are
   0-DOF joints) is an edge; every :class:`~mbcomp.roles.Ground` is an edge from ``ROOT``.
-* A minimum spanning tree (networkx, Kruskal) keeps rigid offsets, driven joints and joints
+* A minimum spanning tree (Kruskal) keeps rigid offsets, driven joints and joints
   with fixed start values in the tree and cuts the joints with most freedom: a cut joint with
-  ``k`` DOF adds ``6 - k`` constraints, so this gives the fewest constraint equations.
+  ``k`` DOF adds ``6 - k`` constraints, so this gives the fewest constraint equations. Ties
+  are broken as networkx breaks them (:func:`spanning_tree` gives the tree of
+  ``networkx.minimum_spanning_tree(topo.graph, algorithm="kruskal")``), without importing
+  networkx (~0.15 s) on the way to every simulation.
 * A *constraint-only joint* (``tree_edge = False``: constraint rows, no coordinates; the
   library's rolling contacts) is never a tree edge; it is always cut.
 * A group of frames carrying mass but joined to nothing gets an implicit
@@ -29,13 +32,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import networkx as nx
-
 from ..errors import ModelError, Problem
 from ..modeling.component import PortRef
 from ..modeling.free_joint import FreeMotion
 
-__all__ = ["Topology", "Edge", "ROOT"]
+__all__ = ["Topology", "Edge", "ROOT", "spanning_tree"]
 
 ROOT = -1
 
@@ -72,6 +73,66 @@ class _UnionFind:
 
     def union(self, a, b):
         self.parent[self.find(a)] = self.find(b)
+
+
+def spanning_tree(nodes, edges):
+    """Kruskal's minimum spanning forest of a multigraph, with networkx's tie-breaking.
+
+    Equal weights are ordered as ``networkx.MultiGraph(...).edges(keys=True)`` lists the
+    edges (nodes in the order given, each node's neighbours in the order they were first
+    joined to it, parallel edges in the order added), then stably sorted by weight: the tree
+    is the one ``networkx.minimum_spanning_tree(G, algorithm="kruskal")`` gives for the graph
+    built by adding ``nodes`` and then ``edges`` in order.
+
+    Parameters
+    ----------
+    nodes : iterable of hashable
+        Every node, in insertion order.
+    edges : iterable of (u, v, key, weight)
+        The edges in insertion order; keys unique.
+
+    Returns
+    -------
+    list of (u, v, key)
+        The tree edges in the order Kruskal's algorithm accepted them.
+
+    Examples
+    --------
+    >>> spanning_tree([0, 1, 2], [(0, 1, "a", 1.0), (1, 2, "b", 1.0), (0, 2, "c", 1.0), (2, 2, "d", 0.0)])
+    [(0, 1, 'a'), (0, 2, 'c')]
+    """
+    adj = {n: {} for n in nodes}
+    for u, v, key, w in edges:
+        kd = adj[u].get(v)
+        if kd is None:
+            kd = adj[u][v] = adj[v][u] = {}
+        kd[key] = w
+    ordered, seen = [], set()
+    for n, nbrs in adj.items():
+        for m, kd in nbrs.items():
+            if m not in seen:
+                ordered += [(w, n, m, key) for key, w in kd.items()]
+        seen.add(n)
+    ordered.sort(key=lambda e: e[0])  # stable: ties keep the listing order
+    trees, tree = _UnionFind(), []
+    for _, n, m, key in ordered:
+        if trees.find(n) != trees.find(m):
+            trees.union(n, m)
+            tree.append((n, m, key))
+    return tree
+
+
+def _components(nodes, edges):
+    """The node sets joined by ``edges`` (``(u, v, key, weight)``), one per connected group."""
+    groups = _UnionFind()
+    for n in nodes:
+        groups.find(n)
+    for u, v, _, _ in edges:
+        groups.union(u, v)
+    members = {}
+    for n in nodes:
+        members.setdefault(groups.find(n), set()).add(n)
+    return list(members.values())
 
 
 def _frame_nodes(frames):
@@ -185,17 +246,15 @@ class Topology:
         return w
 
     def _spanning_tree(self):
-        G = nx.MultiGraph()
-        G.add_node(ROOT)
-        G.add_nodes_from(range(self.n_nodes))
-        for e in self.edges:
-            if e.kind == "joint" and not e.comp.tree_edge:
-                continue  # constraint-only joints (the library's contacts) are always cut
-            G.add_edge(e.node_a, e.node_b, key=e.name, weight=self._weight(e))
+        nodes = [ROOT, *range(self.n_nodes)]
+        # the multigraph: (node_a, node_b, name, weight) of every edge that may be a tree edge
+        self._graph_edges = graph = [(e.node_a, e.node_b, e.name, self._weight(e)) for e in self.edges
+                                     # constraint-only joints (the library's contacts) are always cut
+                                     if e.kind != "joint" or e.comp.tree_edge]
         # groups of frames joined to nothing that carry mass float freely
         mass_nodes = {n for _, _, n in self.bodies}
         self.floating = []
-        for comp_nodes in sorted(nx.connected_components(G), key=min):
+        for comp_nodes in sorted(_components(nodes, graph), key=min):
             if ROOT in comp_nodes:
                 continue
             carriers = sorted(n for n in comp_nodes if n in mass_nodes)
@@ -207,9 +266,12 @@ class Topology:
             e = Edge(name, fm, ROOT, carriers[0], "joint", dof=6, implicit=True)
             self.edges.append(e)
             self.floating.append(name)
-            G.add_edge(ROOT, carriers[0], key=name, weight=6.0)
-        tree = nx.minimum_spanning_tree(G, algorithm="kruskal")
-        tree_keys = {k for _, _, k in tree.edges(keys=True)}
+            graph.append((ROOT, carriers[0], name, 6.0))
+        tree_edges = {n: [] for n in nodes}  # node -> [(neighbour, name)] along the tree
+        for a, b, k in spanning_tree(nodes, graph):
+            tree_edges[a].append((b, k))
+            tree_edges[b].append((a, k))
+        tree_keys = {k for pairs in tree_edges.values() for _, k in pairs}
         by_name = {e.name: e for e in self.edges}
         self.tree, self.cut = [], []
         # breadth-first from the root gives parents before children
@@ -218,7 +280,7 @@ class Topology:
         while frontier:
             nxt = []
             for n in frontier:
-                for _, m, k in sorted(tree.edges(n, keys=True), key=lambda x: x[2]):
+                for m, k in sorted(tree_edges[n], key=lambda x: x[1]):
                     if m in visited:
                         continue
                     e = by_name[k]
@@ -230,7 +292,6 @@ class Topology:
             frontier = nxt
         self.cut = [e.name for e in self.edges if e.name not in tree_keys]
         self.unreached = sorted(set(range(self.n_nodes)) - visited)
-        self.graph = G
         probs = []
         for name in self.cut:
             e = by_name[name]
@@ -239,6 +300,19 @@ class Topology:
                                      "drive a different joint of the loop"))
         if probs:
             raise ModelError(probs)
+
+    @property
+    def graph(self):
+        """The multigraph the tree was chosen from, as a ``networkx.MultiGraph``: frame nodes
+        (``ROOT`` the world), one edge per possible tree edge keyed by its name, with its
+        ``weight``. Built on each access (networkx is imported only here)."""
+        import networkx as nx
+
+        G = nx.MultiGraph()
+        G.add_nodes_from([ROOT, *range(self.n_nodes)])
+        for a, b, name, w in self._graph_edges:
+            G.add_edge(a, b, key=name, weight=w)
+        return G
 
     def _coordinates(self):
         nq = nu = 0

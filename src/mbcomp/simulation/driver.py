@@ -48,8 +48,14 @@ from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigte
 
 __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
 
-#: scipy's ODE methods: name -> ``scipy.integrate`` class (every method: ``mbcomp.solvers.STEPPERS``)
-METHODS = {name: cls.method for name, cls in SCIPY_STEPPERS.items()}
+
+def __getattr__(name):
+    """``METHODS``: scipy's ODE methods, name -> ``scipy.integrate`` class (every method:
+    ``mbcomp.solvers.STEPPERS``); built once on first use, as it imports ``scipy.integrate``."""
+    if name == "METHODS":
+        methods = globals()["METHODS"] = {key: cls.method for key, cls in SCIPY_STEPPERS.items()}
+        return methods
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rtol=1e-6, atol=1e-8,

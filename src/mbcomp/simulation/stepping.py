@@ -38,6 +38,8 @@ Examples
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ..errors import SimulationError
@@ -211,19 +213,35 @@ class Repartition(StepHook):
 
 
 class Progress(StepHook):
-    """A progress bar (tqdm) in simulated seconds, shown when the run lasts over two seconds."""
+    """A progress bar (tqdm) in simulated seconds, shown when the run lasts over two seconds.
+
+    The bar (and tqdm, ~0.1 s to import) is made at the first step after those two seconds
+    of wall time, starting at the simulated time reached by then: a short run never imports
+    tqdm.
+    """
+
+    #: wall time (s) before the bar appears
+    delay = 2.0
 
     def __init__(self, t0, t1):
-        from tqdm.auto import tqdm
-
-        self.bar = tqdm(total=float(t1 - t0), unit="s sim", delay=2.0, leave=False, disable=None,
-                        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")
+        self.t0, self.total = float(t0), float(t1 - t0)
+        self.started = time.time()
+        self.bar = None
 
     def __call__(self, run):
-        self.bar.update(float(run.stepper.t - run.t_prev))
+        if self.bar is not None:
+            self.bar.update(float(run.stepper.t - run.t_prev))
+        elif time.time() - self.started >= self.delay:
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(total=self.total, initial=float(run.stepper.t) - self.t0, unit="s sim", leave=False,
+                            disable=None, bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")
+            self.bar.start_t = self.started  # elapsed and remaining time count from the run's start
+            self.bar.refresh()
 
     def close(self):
-        self.bar.close()
+        if self.bar is not None:
+            self.bar.close()
 
 
 def hooks_for(run, monitors, progress):

@@ -31,7 +31,6 @@ Examples
 from __future__ import annotations
 
 import numpy as np
-import scipy.integrate as si
 
 from .base import StepFailure, Stepper
 
@@ -126,6 +125,8 @@ class CompiledRK(Stepper):
             opts = dict(rtol=self.rtol, atol=self.atol, max_step=self.max_step)
             if self.h:
                 opts["first_step"] = min(self.h, self.t_bound - self.t)
+            import scipy.integrate as si  # only on the Python path (importing it costs ~0.5 s)
+
             self._solver = getattr(si, self.scipy_method)(self.prob.fun, self.t, self.y, self.t_bound, **opts)
         sv = self._solver
         nfev = sv.nfev

@@ -32,11 +32,25 @@ Examples
 from __future__ import annotations
 
 import numpy as np
-import scipy.integrate as si
 
 from .base import StepFailure, Stepper
 
 __all__ = ["ScipyStepper", "SCIPY_STEPPERS"]
+
+
+class _ScipyMethod:
+    """Class attribute ``method``: the ``scipy.integrate`` class named by the stepper's ``name``.
+
+    Resolved on each access, so ``scipy.integrate`` (~0.5 s to import) is imported when a
+    scipy method is used or looked at, not when :mod:`mbcomp.solvers` is imported.
+    """
+
+    def __get__(self, obj, cls):
+        if not cls.name:
+            return None
+        import scipy.integrate
+
+        return getattr(scipy.integrate, cls.name)
 
 
 class ScipyStepper(Stepper):
@@ -65,8 +79,8 @@ class ScipyStepper(Stepper):
     {'implicit': True, 'adaptive': True, 'one_step': False, 'max_index': 0, 'problem': 'ode'}
     """
 
-    #: the wrapped ``scipy.integrate`` class and its name (set by each subclass)
-    method = None
+    #: the wrapped ``scipy.integrate`` class (from ``name``, imported on first use) and its name
+    method = _ScipyMethod()
     name = ""
     adaptive = True
     problem = "ode"
@@ -122,8 +136,8 @@ class ScipyStepper(Stepper):
 def _declare(name, one_step, implicit):
     doc = (f"scipy's ``{name}`` as a stepper ({'one-step' if one_step else 'multistep'}, "
            f"{'implicit' if implicit else 'explicit'}); see :class:`ScipyStepper`.")
-    return type(name, (ScipyStepper,), dict(method=getattr(si, name), name=name, one_step=one_step,
-                                            implicit=implicit, __doc__=doc, __module__=__name__))
+    return type(name, (ScipyStepper,), dict(name=name, one_step=one_step, implicit=implicit, __doc__=doc,
+                                            __module__=__name__))
 
 
 #: name -> stepper class, with each method's declared memory and implicitness
