@@ -22,7 +22,7 @@ Examples
 >>> prog = OutputProgram.build(s, "python", baumgarte=False)
 >>> names, V, R, ok = prog.grid(s, np.array([0.0, 1.0]), np.array([[0.0, 2.0], [0.0, 0.0]]), None)
 >>> V[:, names.index("j.f.y")].round(9).tolist(), ok.tolist()   # m (g + w^2 l); m g at rest
-[[27.62, 19.62], [True, True]]
+([27.62, 19.62], [True, True])
 """
 from __future__ import annotations
 
@@ -34,6 +34,7 @@ import time
 
 import numpy as np
 
+from ..geometry.kinematics import matrix_to_quat
 from .compiler import CHUNK, _cache_dir, _compile_units, c_compiler
 from .graph import CodegenError, Fallback, Retrace
 from .printers import PY_ENV, ParamProgram, Program
@@ -42,18 +43,49 @@ from .tracer import param_vector, trace
 __all__ = ["OutputProgram"]
 
 _GRID_C = r"""
+/* unit quaternion (w, x, y, z), w >= 0, of the rotation matrix R (row major), by Shepperd's
+   choice of the largest of 4w^2, 4x^2, 4y^2, 4z^2 (as mbcomp.kinematics.matrix_to_quat) */
+static void mbcomp_quat(const double *restrict R, double *restrict Q)
+{
+    const double tr = R[0] + R[4] + R[8];
+    double c[4] = {tr, R[0], R[4], R[8]};
+    int k = 0;
+    for (int j = 1; j < 4; ++j)
+        if (c[j] > c[k]) k = j;
+    const double s = k == 0 ? 1.0 + tr : 1.0 + 2.0 * c[k] - tr;
+    const double big = 0.5 * sqrt(s > 0.0 ? s : 0.0), d = 1.0 / (4.0 * big);
+    const double s21 = (R[7] - R[5]) * d, s02 = (R[2] - R[6]) * d, s10 = (R[3] - R[1]) * d;
+    const double p01 = (R[1] + R[3]) * d, p02 = (R[2] + R[6]) * d, p12 = (R[5] + R[7]) * d;
+    double q[4];
+    switch (k) {
+    case 0: q[0] = big; q[1] = s21; q[2] = s02; q[3] = s10; break;
+    case 1: q[0] = s21; q[1] = big; q[2] = p01; q[3] = p02; break;
+    case 2: q[0] = s02; q[1] = p01; q[2] = big; q[3] = p12; break;
+    default: q[0] = s10; q[1] = p02; q[2] = p12; q[3] = big; break;
+    }
+    const double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    const double sg = q[0] >= 0.0 ? 1.0 / n : -1.0 / n;
+    for (int j = 0; j < 4; ++j) Q[j] = q[j] * sg;
+}
+
 int mbcomp_outputs_grid(long n, const double *restrict T, const double *restrict Y, long nq, long nu,
                         const double *restrict D, long nd, const double *restrict h, const double *restrict p,
-                        double *restrict w, double *restrict out, long nout, signed char *restrict ok)
+                        double *restrict w, double *restrict out, long nout, long nrot, double *restrict quat,
+                        signed char *restrict ok)
 {
     /* the output program at every grid point k: state row Y[k] = [q, u], time T[k], per-call
-       inputs D[k] (drives' (s, v, a), then the Baumgarte gains); ok[k] = 0 where a guard failed */
+       inputs D[k] (drives' (s, v, a), then the Baumgarte gains); the last 9 nrot outputs of a
+       row are rotation matrices, turned into nrot quaternions in quat[k]; ok[k] = 0 where a
+       guard failed */
     long failed = 0;
     for (long k = 0; k < n; ++k) {
         const double *y = Y + k * (nq + nu);
-        int bad = mbcomp_outputs(y, y + nq, T[k], D + k * nd, h, p, w, out + k * nout);
+        double *o = out + k * nout;
+        int bad = mbcomp_outputs(y, y + nq, T[k], D + k * nd, h, p, w, o);
         ok[k] = (signed char)!bad;
         failed += bad;
+        for (long b = 0; b < nrot && !bad; ++b)
+            mbcomp_quat(o + nout - 9 * (nrot - b), quat + 4 * (k * nrot + b));
     }
     return (int)(failed > 0);
 }
@@ -122,7 +154,7 @@ class OutputProgram:
         self.dll = ctypes.CDLL(lib)
         fn = self.dll.mbcomp_outputs_grid
         L, P = ctypes.c_long, ctypes.c_void_p
-        fn.argtypes = [L, P, P, L, L, P, L, P, P, P, P, L, P]
+        fn.argtypes = [L, P, P, L, L, P, L, P, P, P, P, L, L, P, P]
         fn.restype = ctypes.c_int
         self.n_work = max(n_work, 1)
         self.source = src
@@ -146,8 +178,9 @@ class OutputProgram:
         -------
         names : list of str
         values : ndarray (n, len(names))
-        rotations : dict
-            Body path -> ndarray (n, 3, 3).
+        quaternions : dict
+            Body path -> ndarray (n, 4): the unit quaternion ``(w, x, y, z)``, ``w >= 0``, of
+            the body's rotation (:func:`mbcomp.kinematics.matrix_to_quat`).
         ok : ndarray of bool (n,)
             False where a guard failed or a value is not finite (those rows are to be
             computed by the numeric route).
@@ -169,22 +202,24 @@ class OutputProgram:
         D[:, -2:] = gains if gains is not None else (0.0, 0.0)
         out = np.zeros((n, self.n_out))
         ok = np.ones(n, bool)
+        nb = len(self.rotation_paths)
         if self.backend == "python":
             for k in range(n):
                 try:
                     out[k] = self.fun(Y[k, :nq].tolist(), Y[k, nq:].tolist(), float(t[k]), D[k].tolist(), h)
                 except (Fallback, ArithmeticError, ValueError):
                     ok[k] = False
+            quat = matrix_to_quat(out[:, out.shape[1] - 9 * nb:].reshape(n, nb, 3, 3))
         else:
             hb = np.array(list(h) + [0.0], float)
             pb = np.array(list(pv) + [0.0], float)
             w = np.zeros(self.n_work)
             okc = np.ones(n, np.int8)
+            quat = np.zeros((n, nb, 4))
             self.dll.mbcomp_outputs_grid(n, t.ctypes.data, Y.ctypes.data, nq, Y.shape[1] - nq, D.ctypes.data,
                                          D.shape[1], hb.ctypes.data, pb.ctypes.data, w.ctypes.data,
-                                         out.ctypes.data, self.n_out, okc.ctypes.data)
+                                         out.ctypes.data, self.n_out, nb, quat.ctypes.data, okc.ctypes.data)
             ok = okc.astype(bool)
         ok &= np.isfinite(out).all(axis=1)
         k = len(self.names)
-        rot = {path: out[:, k + 9 * b: k + 9 * b + 9].reshape(n, 3, 3) for b, path in enumerate(self.rotation_paths)}
-        return self.names, out[:, :k], rot, ok
+        return self.names, out[:, :k], {path: quat[:, b] for b, path in enumerate(self.rotation_paths)}, ok

@@ -118,18 +118,18 @@ def matrix_to_quat(R):
     [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]]
     """
     R = np.asarray(R, dtype=float)
-    tr = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = np.moveaxis(R, (-2, -1), (0, 1)).copy()  # contiguous
+    tr = r00 + r11 + r22
     # Shepperd: divide by the largest of 4w^2, 4x^2, 4y^2, 4z^2 (1 + tr, 1 + 2 R_kk - tr)
-    k = np.argmax(np.stack([tr, R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]], axis=-1), axis=-1)
-    big = 0.5 * np.sqrt(np.maximum(np.choose(k, [1.0 + tr, 1.0 + 2 * R[..., 0, 0] - tr, 1.0 + 2 * R[..., 1, 1] - tr,
-                                                 1.0 + 2 * R[..., 2, 2] - tr]), 0.0))
-    d = 4.0 * big
-    s21, s02, s10 = R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]
-    p01, p02, p12 = R[..., 0, 1] + R[..., 1, 0], R[..., 0, 2] + R[..., 2, 0], R[..., 1, 2] + R[..., 2, 1]
+    k = np.argmax(np.stack([tr, r00, r11, r22]), axis=0)
+    big = 0.5 * np.sqrt(np.maximum(np.choose(k, [1.0 + tr, 1.0 + 2 * r00 - tr, 1.0 + 2 * r11 - tr, 1.0 + 2 * r22 - tr]),
+                                   0.0))
     with np.errstate(divide="ignore", invalid="ignore"):  # d > 0 on the chosen branch
-        cands = [np.stack([big, s21 / d, s02 / d, s10 / d], -1), np.stack([s21 / d, big, p01 / d, p02 / d], -1),
-                 np.stack([s02 / d, p01 / d, big, p12 / d], -1), np.stack([s10 / d, p02 / d, p12 / d, big], -1)]
-    Q = np.choose(k[..., None], cands)
+        d = 1.0 / (4.0 * big)
+        s21, s02, s10 = (r21 - r12) * d, (r02 - r20) * d, (r10 - r01) * d
+        p01, p02, p12 = (r01 + r10) * d, (r02 + r20) * d, (r12 + r21) * d
+    Q = np.stack([np.choose(k, [big, s21, s02, s10]), np.choose(k, [s21, big, p01, p02]),
+                  np.choose(k, [s02, p01, big, p12]), np.choose(k, [s10, p02, p12, big])], axis=-1)
     Q = Q / np.linalg.norm(Q, axis=-1, keepdims=True)
     return np.where(Q[..., :1] >= 0, Q, -Q)
 

@@ -37,10 +37,10 @@ __all__ = ["postprocess"]
 
 class _Columns:
     """Result columns of ``n`` output times, created full of NaN when first written, and the
-    bodies' rotation matrices (turned into quaternion columns at the end, all at once)."""
+    bodies' orientation quaternions (``(n, 4)`` per body)."""
 
     def __init__(self, n):
-        self.n, self.series, self.rot = n, {}, {}
+        self.n, self.series, self.quat = n, {}, {}
 
     def put(self, name, k, val):
         arr = self.series.get(name)
@@ -49,21 +49,21 @@ class _Columns:
         arr[k] = val
 
     def rotation(self, path, k, R):
-        arr = self.rot.get(path)
+        arr = self.quat.get(path)
         if arr is None:
-            arr = self.rot[path] = np.full((self.n, 3, 3), np.nan)
-        arr[k] = R
+            arr = self.quat[path] = np.full((self.n, 4), np.nan)
+        arr[k] = matrix_to_quat(R)
 
     def finished(self):
         """The series with every body's quaternion ``<body>.Q.w/x/y/z`` after its position."""
-        Q = {f"{path}.r.z": (path, matrix_to_quat(R)) for path, R in self.rot.items()}
+        after = {f"{path}.r.z": path for path in self.quat}
         out = {}
         for name, arr in self.series.items():
             out[name] = arr
-            if name in Q:
-                path, quat = Q[name]
+            if name in after:
+                quat = self.quat[after[name]]
                 for j, ax in enumerate("wxyz"):
-                    out[f"{path}.Q.{ax}"] = quat[:, j]
+                    out[f"{after[name]}.Q.{ax}"] = quat[:, j].copy()
         return out
 
 
@@ -100,11 +100,13 @@ def postprocess(system, form, t, Y, status, message, stats, init):
     if len(t) and "outputs" in evaluator.capabilities:
         grid = evaluator.output_grid(t, Y, gains)
         if grid is not None:
-            names, values, rotations, ok = grid
-            for j, name in enumerate(names):
-                cols.series[name] = np.where(ok, values[:, j], np.nan)
-            for path, R in rotations.items():
-                cols.rot[path] = np.where(ok[:, None, None], R, np.nan)
+            names, values, quaternions, ok = grid
+            table = values.T.copy()  # one block: every column a contiguous row of it
+            table[:, ~ok] = np.nan
+            cols.series.update(zip(names, table))
+            for path, quat in quaternions.items():
+                quat[~ok] = np.nan
+                cols.quat[path] = quat
             todo = np.flatnonzero(~ok)
     for k in todo:
         q, u = Y[k, :nq], Y[k, nq:]
