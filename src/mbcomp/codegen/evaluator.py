@@ -344,7 +344,7 @@ class ProgramEvaluator:
 
     def output_grid(self, t, Y, gains):
         """The result columns at every output time in one program call
-        (:meth:`mbcomp.codegen.outputs.OutputProgram.grid`: ``(names, values, rotations, ok)``),
+        (:meth:`mbcomp.codegen.outputs.OutputProgram.grid`: ``(names, values, quaternions, ok)``),
         or None when there is no such program (fewer than :data:`OUTPUT_GRID_MIN` points, where
         compiling costs more than the numeric route; a law that cannot be traced; a singular
         trace point). ``gains``: the multipliers' Baumgarte gains (1/s) or None. The program is
