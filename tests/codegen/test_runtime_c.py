@@ -79,6 +79,37 @@ int step_project(void *ctx, double t, double *y)
 int step_nan(void *ctx, double t, double *y)
 { (void)ctx; (void)t; y[0] = NAN; return 0; }
 
+/* An evaluation program for the mechanics kernels: a point mass p[0] (kg) in the
+ * vertical plane, coordinates q = (x, y) (m), speeds u = dq/dt, gravity p[1] (m/s^2)
+ * along -y, on a rod of length p[2] (m) from the origin: Phi = (x^2 + y^2 - L^2) / 2,
+ * C = [x, y], dPhi/dt = C u, c_b = |u|^2 (d/dt C times u).  Output layout:
+ * M 0..3, f 4..5, Phi 6, dPhi/dt 7, C 8..9, c_b 10 (no nonholonomic rows); n_out 11.
+ * A guard: x > 5 m fails (returns 1). */
+int prog_pendulum(const double *q, const double *u, double t, const double *d, const double *h,
+                  const double *p, double *w, double *out)
+{ (void)t; (void)d; (void)h; (void)w;
+  if (q[0] > 5.0) return 1;
+  out[0] = p[0]; out[1] = 0.0; out[2] = 0.0; out[3] = p[0];
+  out[4] = 0.0; out[5] = -p[0] * p[1];
+  out[6] = 0.5 * (q[0] * q[0] + q[1] * q[1] - p[2] * p[2]);
+  out[7] = q[0] * u[0] + q[1] * u[1];
+  out[8] = q[0]; out[9] = q[1];
+  out[10] = u[0] * u[0] + u[1] * u[1];
+  return 0; }
+
+/* dq/dt = u, as a program (the kernels' qrate) */
+int prog_qrate(const double *q, const double *u, double t, const double *d, const double *h,
+               const double *p, double *w, double *out)
+{ (void)q; (void)t; (void)d; (void)h; (void)p; (void)w; out[0] = u[0]; out[1] = u[1]; return 0; }
+
+/* The pendulum's layout in an mbrt_mech (p: m, g, L; rows: the one holonomic row). */
+void mech_pendulum(mbrt_mech *P, const double *p, const int *rows, int qrate)
+{ memset(P, 0, sizeof *P);
+  P->eval = prog_pendulum; P->qrate = qrate ? prog_qrate : NULL; P->p = p;
+  P->nq = 2; P->nu = 2; P->n_out = 11; P->mh = 1; P->mn = 0; P->nrows = 1; P->rows = rows;
+  P->off_M = 0; P->off_f = 4; P->off_Phi = 6; P->off_Phid = 7; P->off_C = 8; P->off_cb = 10;
+  P->off_B = 11; P->off_Bb = 11; P->off_Psi = 11; }
+
 #ifdef MBRT_SELFTEST_MAIN
 /* Standalone driver for sanitizer / valgrind runs: exercises every code path
  * with work buffers of exactly the advertised size (heap, so overruns show). */
@@ -186,6 +217,48 @@ int main(void)
         CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 0, y2, 10.0, 1e-8, 11, 0, &st, last) == 6);
         CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 2, y2, 10.0, -1.0, 11, 0, &st, last) == 6);
         printf("%s ok (last message: %s)\n", m ? "DOP853" : "DOPRI5", st.message);
+    }
+
+    /* the mechanics kernels on the Cartesian pendulum, exact-size heap scratch */
+    {
+        double par[3] = {2.0, 9.81, 1.5}, th = 0.4, wd = 1.3, L = 1.5;
+        int rows[1] = {0}, dep[1] = {1}, ind[1] = {0};
+        for (int qr = 0; qr < 2; ++qr) {
+            mbrt_mech P;
+            mech_pendulum(&P, par, rows, qr);
+            size_t nw = mbrt_mech_work_size(&P);
+            double *wk = malloc(nw * sizeof(double));
+            int *iw = malloc(4 * sizeof(int));
+            double y[3] = {L * sin(th), -L * cos(th), L * cos(th) * wd}, dy[3], g = -1, c = -1;
+            CHECK(mbrt_dalembert_rhs(&P, 0.0, y, dep, ind, 1, dy, &g, &c, wk, iw) == MBRT_MECH_OK);
+            double thdd = -9.81 / L * sin(th);
+            CHECK(fabs(dy[2] - (L * cos(th) * thdd - L * sin(th) * wd * wd)) < 1e-12);
+            CHECK(fabs(dy[1] - L * sin(th) * wd) < 1e-12 && fabs(g - tan(th)) < 1e-12 && c == 1.0);
+            double yb[3] = {6.0, -1.0, 0.0};
+            CHECK(mbrt_dalembert_rhs(&P, 0.0, yb, dep, ind, 1, dy, &g, &c, wk, iw) == MBRT_MECH_FALLBACK);
+            double yz[3] = {1.0, 0.0, 0.0};  /* y = 0: the dependent block A_d = [y] is zero */
+            CHECK(mbrt_dalembert_rhs(&P, 0.0, yz, dep, ind, 1, dy, &g, &c, wk, iw) == MBRT_MECH_SINGULAR);
+            CHECK(mbrt_dalembert_rhs(&P, 0.0, y, dep, ind, 0, dy, &g, &c, wk, iw) == MBRT_MECH_BAD_ARGUMENT);
+            int bad[1] = {0};
+            CHECK(mbrt_dalembert_rhs(&P, 0.0, y, bad, ind, 1, dy, &g, &c, wk, iw) == MBRT_MECH_BAD_ARGUMENT);
+            double zero[3] = {0.0, 9.81, 1.5};
+            P.p = zero;
+            CHECK(mbrt_dalembert_rhs(&P, 0.0, y, dep, ind, 1, dy, &g, &c, wk, iw) == MBRT_MECH_MASS_SINGULAR);
+            P.p = par;
+            double yp[4] = {1.01 * L * sin(th), -0.98 * L * cos(th), 0.3, 0.2}, nrm = -1;
+            CHECK(mbrt_project(&P, 0.0, yp, 1e-12, 8, 1e-9, &nrm, wk) == MBRT_MECH_OK);
+            CHECK(fabs(hypot(yp[0], yp[1]) - L) < 1e-12 && fabs(yp[0] * yp[2] + yp[1] * yp[3]) < 1e-12);
+            double y0[4] = {0.0, 0.0, 0.3, 0.2};
+            CHECK(mbrt_project(&P, 0.0, y0, 1e-12, 8, 1e-9, &nrm, wk) == MBRT_MECH_SINGULAR);
+            double yf[4] = {2.0 * L, 0.0, 0.0, 0.0};
+            CHECK(mbrt_project(&P, 0.0, yf, 1e-12, 0, 1e-9, &nrm, wk) == MBRT_MECH_NO_CONVERGENCE);
+            CHECK(mbrt_project(&P, 0.0, yf, 1e-12, -1, 1e-9, &nrm, wk) == MBRT_MECH_BAD_ARGUMENT);
+            free(wk);
+            free(iw);
+        }
+        double R[9] = {1, 2, 3, 4, 5, 6, 7, 8, 10}, S[9], Z[4] = {1, 2, 2, 4}, S2[4];
+        CHECK(fabs(mbrt_cond2(3, R, S) / 88.44 - 1.0) < 1e-3);  /* numpy: 88.4482799 */
+        CHECK(isinf(mbrt_cond2(2, Z, S2)));
     }
     printf("%d failures\n", failures);
     return failures != 0;
@@ -589,6 +662,93 @@ def test_null_pointers_are_bad_arguments(lib, method):
 
 def test_work_sizes(lib):
     assert lib.mbrt_dopri5_work_size(3) == 16 * 3 and lib.mbrt_dop853_work_size(3) == 28 * 3
+
+
+# --------------------------------------------------------------------------- mechanics kernels
+def _pendulum(lib, par, qrate=True):
+    """The C test program ``prog_pendulum`` (a point mass on a rod, Cartesian coordinates) as
+    an ``mbrt_mech`` (the engine's ctypes layout, so the layout itself is checked too)."""
+    from mbcomp.codegen.engine import _Mech
+
+    P, rows = _Mech(), np.zeros(1, dtype=np.intc)
+    lib.mech_pendulum.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int]
+    lib.mech_pendulum(ctypes.addressof(P), par.ctypes.data, rows.ctypes.data, int(qrate))
+    lib.mbrt_mech_work_size.argtypes = [ctypes.c_void_p]
+    lib.mbrt_mech_work_size.restype = ctypes.c_size_t
+    work = np.zeros(lib.mbrt_mech_work_size(ctypes.addressof(P)))
+    return P, (rows, work, par)  # P points into rows and par: keep them alive
+
+
+def _dalembert(lib, P, keep, t, y, dep, ind):
+    dep, ind = np.asarray(dep, np.intc), np.asarray(ind, np.intc)
+    dy, fig, iw = np.zeros(3), np.zeros(2), np.zeros(8, np.intc)
+    lib.mbrt_dalembert_rhs.argtypes = [ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 3 + [ctypes.c_int] + \
+        [ctypes.c_void_p] * 5
+    rc = lib.mbrt_dalembert_rhs(ctypes.addressof(P), t, np.asarray(y, float).ctypes.data, dep.ctypes.data,
+                                ind.ctypes.data, len(dep), dy.ctypes.data, fig.ctypes.data, fig[1:].ctypes.data,
+                                keep[1].ctypes.data, iw.ctypes.data)
+    return rc, dy, fig
+
+
+@pytest.mark.parametrize("qrate", [True, False])
+@pytest.mark.parametrize("th, wd", [(0.4, 1.3), (-1.1, -0.2), (2.5, 3.0)])
+def test_dalembert_rhs_is_the_pendulum_equation(lib, th, wd, qrate):
+    """A 1.5 m pendulum written in Cartesian coordinates with one loop row: D'Alembert's
+    reduction onto either speed gives theta'' = -g/L sin(theta) back, whichever speed is
+    independent; the growth figure is |A_d^-1 A_i| = |x/y| or |y/x|."""
+    m, g, L = 2.0, 9.81, 1.5
+    P, keep = _pendulum(lib, np.array([m, g, L]), qrate)
+    x, y = L * np.sin(th), -L * np.cos(th)
+    vx, vy = L * np.cos(th) * wd, L * np.sin(th) * wd
+    thdd = -g / L * np.sin(th)
+    ax = L * np.cos(th) * thdd - L * np.sin(th) * wd ** 2
+    ay = L * np.sin(th) * thdd + L * np.cos(th) * wd ** 2
+    for dep, ind, v, a, growth in (([1], [0], vx, ax, abs(x / y)), ([0], [1], vy, ay, abs(y / x))):
+        rc, dy, fig = _dalembert(lib, P, keep, 0.0, [x, y, v], dep, ind)
+        assert rc == 0
+        np.testing.assert_allclose(dy, [vx, vy, a], rtol=1e-12, atol=1e-12)
+        assert fig[0] == pytest.approx(growth, rel=1e-12) and fig[1] == 1.0
+
+
+def test_project_equals_the_python_closure(lib):
+    """``mbrt_project`` against :func:`close_positions` + :func:`solve_speeds` (the Python
+    projection's own functions) on the Cartesian pendulum from perturbed states: the same
+    point to rounding, on the circle, with no radial speed."""
+    from mbcomp.assembly.manifold import close_positions, solve_speeds
+
+    L = 1.5
+    P, keep = _pendulum(lib, np.array([2.0, 9.81, L]))
+    lib.mbrt_project.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p, ctypes.c_double, ctypes.c_int,
+                                 ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p]
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        th = rng.uniform(-3, 3)
+        y = np.array([L * np.sin(th), -L * np.cos(th), *rng.normal(size=2)]) + np.r_[rng.normal(scale=1e-3, size=2), 0, 0]
+        yc, norm = y.copy(), ctypes.c_double()
+        assert lib.mbrt_project(ctypes.addressof(P), 0.0, yc.ctypes.data, 1e-12, 8, 1e-9, ctypes.addressof(norm),
+                                keep[1].ctypes.data) == 0
+        q, u = y[:2], y[2:]
+        c = close_positions(lambda qq: (np.array([0.5 * (qq @ qq - L * L)]), qq[None, :], None), lambda a, b: a + b, q)
+        ref = np.concatenate((c.q, solve_speeds(c.q[None, :], np.array([c.q @ u]), u)))
+        np.testing.assert_allclose(yc, ref, rtol=0, atol=1e-14)
+        assert abs(np.hypot(*yc[:2]) - L) < 1e-12 and abs(yc[:2] @ yc[2:]) < 1e-12 and norm.value == c.norm
+
+
+def test_cond2_matches_numpy(lib):
+    """The one-sided Jacobi condition number against numpy's SVD (relative error ~1e-16 cond)."""
+    lib.mbrt_cond2.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
+    lib.mbrt_cond2.restype = ctypes.c_double
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 3, 6, 12):
+        for c in (1.0, 1e3, 1e8, 1e10):
+            U, _ = np.linalg.qr(rng.normal(size=(n, n)))
+            V, _ = np.linalg.qr(rng.normal(size=(n, n)))
+            A = np.ascontiguousarray(U @ np.diag(np.geomspace(1.0, 1.0 / c, n)) @ V.T)
+            S = np.zeros(n * n)
+            got = lib.mbrt_cond2(n, A.ctypes.data, S.ctypes.data)
+            assert got == pytest.approx(np.linalg.cond(A), rel=1e-14 * c + 1e-12)
+    S = np.zeros(4)
+    assert np.isinf(lib.mbrt_cond2(2, np.array([1.0, 2.0, 2.0, 4.0]).ctypes.data, S.ctypes.data))
 
 
 # --------------------------------------------------------------------------- memory checkers

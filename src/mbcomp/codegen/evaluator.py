@@ -285,12 +285,50 @@ class ProgramEvaluator:
     def capabilities(self):
         """What this evaluator offers beyond ``evaluate``/``q_rate``: ``"lagrange_fun"`` when
         the program has the Lagrange index-1 right-hand side (:meth:`lagrange_fun`),
-        ``"c_integrate"`` when the C engine can step it (:meth:`integrator`), ``"outputs"``:
-        result columns of whole output grids (:meth:`output_grid`)."""
+        ``"c_integrate"`` when the C engine can step it (:meth:`integrator`),
+        ``"dalembert_fun"`` when the D'Alembert right-hand side runs in one C call
+        (:meth:`dalembert_fun`), ``"outputs"``: result columns of whole output grids
+        (:meth:`output_grid`). Asking makes the Lagrange program; :meth:`offers` asks for
+        one capability and makes only what that one needs."""
+        caps = {"outputs"} | ({"dalembert_fun"} if self.offers("dalembert_fun") else set())
         bound = self._fun_bound()
-        if bound is None:
-            return frozenset(("outputs",))
-        return frozenset(("outputs", "lagrange_fun", "c_integrate") if bound.code.has_engine else ("outputs", "lagrange_fun"))
+        if bound is not None:
+            caps.update(("lagrange_fun", "c_integrate") if bound.code.has_engine else ("lagrange_fun",))
+        return frozenset(caps)
+
+    def offers(self, name):
+        """Whether this evaluator offers the capability ``name`` (see :attr:`capabilities`);
+        ``"dalembert_fun"`` is decided without making the Lagrange program."""
+        if name == "dalembert_fun":
+            return self._dalembert() is not None
+        return name in self.capabilities
+
+    def _dalembert(self):
+        """The D'Alembert C call (:class:`mbcomp.codegen.engine.DAlembertProgram`) over the
+        evaluation program and the current row mask, or None (Python backend, no compiler)."""
+        if self.backend != "c":
+            return None
+        bound = self.bound or self._bound()
+        rm = self.system.row_mask
+        cached = getattr(self, "_dal", None)
+        if cached is not None and cached[0] is bound and cached[1] is rm:
+            return cached[2]
+        from .engine import dalembert_program
+
+        prog = dalembert_program(bound, self.system)
+        self._dal = (bound, rm, prog)
+        return prog
+
+    def dalembert_fun(self, t, y, dep, ind):
+        """The D'Alembert right-hand side at ``y = [q, v]`` for the partition ``dep``/``ind``
+        in one C call (:meth:`mbcomp.codegen.engine.DAlembertProgram.fun`): ``(status, dy,
+        growth, cond)``, status 0 on success (see :data:`mbcomp.codegen.engine.MECH_STATUS`;
+        1, a failed guard or a non-finite value, and 2, an exactly singular dependent block,
+        are counted as fallbacks: the caller takes its Python path)."""
+        r = self._dalembert().fun(t, y, dep, ind)
+        if r[0] in (1, 2):
+            self.stats["fallbacks"] += 1
+        return r
 
     def _fun_bound(self):
         """The Lagrange program for the system's current row mask: traced at first need (the
@@ -320,14 +358,22 @@ class ProgramEvaluator:
         self._fun = (key, bound)
         return bound
 
-    def integrator(self, alpha, beta):
+    def integrator(self, alpha, beta, project=None):
         """The compiled engine (:class:`mbcomp.codegen.engine.Integrator`) stepping the Lagrange
         right-hand side with Baumgarte gains ``alpha``, ``beta`` (1/s) in C; None when this
-        program has none (Python backend, drives, no Lagrange program)."""
-        from .engine import Integrator
+        program has none (Python backend, drives, no Lagrange program). ``project``:
+        ``(tol, accept)`` on ``|Phi|`` to project after every accepted step in C with the
+        evaluation program (additively moved coordinates only, see
+        :func:`mbcomp.codegen.engine.additive_coordinates`)."""
+        from .engine import Integrator, mech_of
 
         bound = self._fun_bound()
-        return Integrator(bound, alpha, beta) if bound is not None and bound.code.has_engine else None
+        if bound is None or not bound.code.has_engine:
+            return None
+        if project is None:
+            return Integrator(bound, alpha, beta)
+        mech = mech_of(self.bound or self._bound(), self.system)
+        return Integrator(bound, alpha, beta, mech=mech, tol=project[0], accept=project[1])
 
     def lagrange_fun(self, t, y, alpha, beta):
         """``dy/dt`` of the Lagrange index-1 form (Baumgarte gains ``alpha``, ``beta`` in 1/s,

@@ -73,6 +73,7 @@ class DAlembert(Formulation):
         self.dep = np.zeros(0, int)
         self.ind = np.arange(self.nu)
         self._ill = False
+        self._c = None  # whether the evaluator runs the right-hand side in one C call (asked at the first call)
 
     # --- partition ---------------------------------------------------------------------------
     def partition(self, A):
@@ -150,11 +151,14 @@ class DAlembert(Formulation):
         try:
             c = sla.cho_factor(Mr, check_finite=False)
         except np.linalg.LinAlgError:
-            raise SimulationError(f"the projected mass matrix is singular at t={ev.t:g}: some independent "
-                                  "coordinate carries no inertia; give the bodies mass or prescribe that "
-                                  "motion") from None
+            raise SimulationError(self._singular_mass(ev.t)) from None
         vd = sla.cho_solve(c, fr, check_finite=False)
         return vd if N is None else N @ vd + w
+
+    @staticmethod
+    def _singular_mass(t):
+        return (f"the projected mass matrix is singular at t={t:g}: some independent coordinate carries no "
+                "inertia; give the bodies mass or prescribe that motion")
 
     def solve(self, ev, stabilize=True):
         """Accelerations and multipliers (least squares on ``A^T [lam; mu] = f - M du/dt``), with
@@ -167,8 +171,27 @@ class DAlembert(Formulation):
         return ud, lam
 
     def fun(self, t, y):
-        """``dy/dt`` for ``y = [q, v]``."""
+        """``dy/dt`` for ``y = [q, v]``.
+
+        On a C program (capability ``"dalembert_fun"``) the whole right-hand side is one C call
+        (:meth:`mbcomp.codegen.evaluator.ProgramEvaluator.dalembert_fun`): the same steps as
+        below, with the same figures for the partition's conditioning (``max |A_d^-1 A_i|``
+        and the 2-norm condition number of ``A_d``, by a Jacobi SVD). A failed guard, a
+        non-finite value or an exactly singular dependent block take the Python path."""
         self._check_finite(t, y)
+        evaluator = self.system.evaluator
+        if self._c is None:  # decided once: asking for it makes no Lagrange program
+            offers = getattr(evaluator, "offers", None)
+            self._c = offers("dalembert_fun") if offers is not None else "dalembert_fun" in evaluator.capabilities
+        if self._c:
+            status, dy, growth, cond = evaluator.dalembert_fun(t, y, self.dep, self.ind)
+            if status == 0:
+                self.nlu += 1
+                if self.dep.size:
+                    self._ill = growth > self.growth_max or (self.dep.size > 1 and cond > self.cond_max)
+                return dy
+            if status == 3:
+                raise SimulationError(self._singular_mass(t))
         q, v = y[: self.nq], y[self.nq:]
         u, ev = self.speeds(t, q, v)
         if ev is None or self.dep.size:

@@ -7,7 +7,14 @@ from its dense output. To the driver each stretch is one "step" of the
 :class:`~mbcomp.solvers.base.Stepper` interface: monitors check the stretch's end, the
 outputs inside it are the C integrator's own, and a projection (if the formulation projects)
 moves the state at the stretch's end. The stepper therefore declares ``needs_outputs``: the
-run hands it its output times.
+run hands it its output times. A formulation that projects gives an engine that projects
+after every accepted step in C (:meth:`mbcomp.formulations.LagrangeIndex1.compiled_integrator`),
+continuing from the projected state with its derivative evaluated again, as scipy's one-step
+methods do after the driver's projection; the outputs are the unprojected steps' dense
+output, which the driver projects when it keeps them, as it does for scipy's methods. A
+projection C cannot make (rows losing rank, Newton not converging) ends the stretch at that
+step, unprojected: the driver's projection decides there and the rest of the stretch is
+stepped in Python.
 
 A problem offers the engine through ``compiled_integrator()`` (the Lagrange formulation on a
 C program without drives, see :meth:`mbcomp.codegen.evaluator.ProgramEvaluator.integrator`).
@@ -52,7 +59,8 @@ class CompiledRK(Stepper):
     ----------
     stats : dict
         ``nsteps`` (accepted steps, in C and in Python), ``nreject`` (in C), ``nfev``,
-        ``stretches`` (C calls), ``python_steps`` (steps by scipy's method).
+        ``stretches`` (C calls), ``python_steps`` (steps by scipy's method),
+        ``c_projections`` (projections made in C, after accepted steps).
     """
 
     adaptive = True
@@ -78,7 +86,7 @@ class CompiledRK(Stepper):
         if not self.t_eval.size or self.t_eval[-1] < self.t_bound:
             self.t_eval = np.append(self.t_eval, self.t_bound)
         self.h = float(first_step or 0.0)
-        self.stats.update(stretches=0, python_steps=0)
+        self.stats.update(stretches=0, python_steps=0, c_projections=0)
         self._solver, self._python_until, self._dense = None, -np.inf, None
         del self.stats["njev"], self.stats["nlu"]
         self._outs = (np.zeros(0), np.zeros((0, self.y.size)))
@@ -102,17 +110,24 @@ class CompiledRK(Stepper):
         self.stats["nsteps"] += r.naccept
         self.stats["nreject"] += r.nreject
         self.h = r.h_last or self.h
-        if r.status not in (0, 1):
+        self.stats["c_projections"] += r.projections
+        declined = r.status == 5 and r.declined != 0
+        if r.status not in (0, 1) and not declined:
             raise StepFailure(f"the integrator {type(self).__name__} failed at t={r.t_last:g}: {r.message}")
         ts, Ys = list(outs[: len(r.Y)]), list(r.Y)
-        if r.status == 1:
-            # a guard failed (a law's other branch, a singular matrix): the stretch ends at the
-            # last accepted step and the rest of it is stepped on the Python path
+        if r.status == 1 or declined:
+            # a guard failed (a law's other branch, a singular matrix), or the C projection
+            # could not be made (rows losing rank, Newton not converging: the driver's
+            # projection decides at y_last, unprojected then): the stretch ends at the last
+            # accepted step and the rest of it is stepped on the Python path
             self._python_until = outs[-1]
             if r.t_last <= self.t:
                 return self._python_step()
-            ts.append(r.t_last)
-            Ys.append(r.y_last)
+            if ts and ts[-1] >= r.t_last:  # that step ended on an output time
+                Ys[-1] = r.y_last
+            else:
+                ts.append(r.t_last)
+                Ys.append(r.y_last)
         self._y_old, self.t_old = self.y, self.t
         self._outs = (np.array(ts), np.array(Ys))
         self.t, self.y = float(ts[-1]), np.array(Ys[-1])

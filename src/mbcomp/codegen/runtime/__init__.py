@@ -16,6 +16,13 @@ generated model code is compiled together with:
 ``mbrt_dopri5.c``, ``mbrt_dop853.c``
     The Dormand--Prince 5(4) pair with 4th-order dense output and the
     8(5,3) pair with 7th-order dense output.
+``mbrt_mech.c``
+    Constrained mechanics over a model's evaluation program (reached through
+    a function pointer, ``mbrt_mech``): the D'Alembert right-hand side
+    (dependent speeds, ``N^T M N`` by Cholesky, the partition's growth and
+    2-norm condition figures) and the projection of ``[q, u]`` onto the
+    constraint manifold (Gauss--Newton with minimum-norm steps, then the
+    minimum-norm speed correction).
 
 The runtime must stay free of Python: an exported FMU carries these sources
 (or the object code built from them) and runs where no interpreter exists.
@@ -37,7 +44,7 @@ Examples
 --------
 >>> from mbcomp.codegen.runtime import SOURCES, RUNTIME_DIR
 >>> sorted(p.name for p in SOURCES)
-['mbrt_dop853.c', 'mbrt_dopri5.c', 'mbrt_linalg.c', 'mbrt_rk.c']
+['mbrt_dop853.c', 'mbrt_dopri5.c', 'mbrt_linalg.c', 'mbrt_mech.c', 'mbrt_rk.c']
 >>> (RUNTIME_DIR / "mbrt.h").is_file()
 True
 """

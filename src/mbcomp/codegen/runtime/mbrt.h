@@ -17,6 +17,9 @@
  *      DOPRI5 (Dormand-Prince 5(4), 4th-order continuous extension) and
  *      DOP853 (Dormand-Prince 8(5,3), 7th-order continuous extension),
  *      with the step-size control of E. Hairer's codes dopri5.f/dop853.f.
+ *   3. Constrained mechanics over a model's evaluation program (mbrt_mech.c):
+ *      the D'Alembert right-hand side (coordinate partitioning, N^T M N) and
+ *      the projection of [q, u] onto the constraint manifold.
  *
  * References
  *   E. Hairer, S. P. Norsett, G. Wanner, "Solving Ordinary Differential
@@ -136,6 +139,82 @@ int mbrt_dop853(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
                 long max_steps, const double *t_out, int n_out,
                 double *y_out, int *n_written,
                 double *work, mbrt_stats *stats);
+
+/* ------------------------------------------------------------------ */
+/* Constrained mechanics over an evaluation program (mbrt_mech.c)      */
+/* ------------------------------------------------------------------ */
+
+/* A generated program: reads q, u, t and its inputs d (drive values), h
+ * (hoisted parameter values), p (parameters), uses w as work and writes out.
+ * Returns 0, or nonzero when a guard of the program failed (a branch other
+ * than the traced one, a pivot that must be positive). */
+typedef int (*mbrt_prog_fn)(const double *q, const double *u, double t, const double *d,
+                            const double *h, const double *p, double *w, double *out);
+
+/* A model's evaluation program and the layout of its flat output: the mass
+ * matrix M (nu x nu), forces f (nu), then for the mh holonomic (cut-joint)
+ * rows Phi, dPhi/dt (mh each), their Jacobian C (mh x nu) and bias c_b (mh),
+ * then for the mn nonholonomic rows B (mn x nu), B_b and Psi = B u - b (mn
+ * each), all row-major at the given offsets (in doubles).  Only the holonomic
+ * rows rows[0..nrows-1] are used (the independent ones); the velocity rows
+ * are A = [C[rows]; B] (m = nrows + mn of them). */
+typedef struct {
+    mbrt_prog_fn eval;   /* the evaluation (n_out doubles)                       */
+    mbrt_prog_fn qrate;  /* dq/dt (nq doubles); NULL: dq/dt = u (then nq == nu)  */
+    const double *d, *h, *p; /* the programs' inputs                            */
+    double *w;           /* their work array                                     */
+    int nq, nu;          /* coordinates, speeds                                  */
+    int n_out;           /* doubles of eval's output                             */
+    int mh, mn;          /* holonomic rows in the output, nonholonomic rows      */
+    int nrows;           /* holonomic rows used (<= mh)                          */
+    const int *rows;     /* their indices in 0..mh-1                             */
+    int off_M, off_f, off_Phi, off_Phid, off_C, off_cb, off_B, off_Bb, off_Psi;
+} mbrt_mech;
+
+enum {
+    MBRT_MECH_OK = 0,
+    MBRT_MECH_FALLBACK = 1,        /* a guard failed or a value was not finite:
+                                      evaluate on the reference path instead  */
+    MBRT_MECH_SINGULAR = 2,        /* a dependent block or the rows lost rank  */
+    MBRT_MECH_MASS_SINGULAR = 3,   /* the projected mass matrix is not
+                                      positive definite                        */
+    MBRT_MECH_NO_CONVERGENCE = 4,  /* the position Newton did not converge     */
+    MBRT_MECH_BAD_ARGUMENT = -1
+};
+
+/* Doubles of scratch mbrt_dalembert_rhs and mbrt_project need (0 if P is
+ * NULL); mbrt_dalembert_rhs also needs nu + nd ints (iwork). */
+size_t mbrt_mech_work_size(const mbrt_mech *P);
+
+/* The right-hand side of the D'Alembert form dy/dt for y = [q, v], v the
+ * independent speeds u[ind] (ni = nu - nd of them), partition dep/ind (nd and
+ * ni indices forming a permutation of 0..nu-1, nd = m):
+ *   1. u[ind] = v, u[dep] = 0; evaluate; u[dep] -= A_d^-1 [dPhi/dt; Psi]
+ *      (A_d = A[:, dep], LU with partial pivoting): A u = 0 exactly;
+ *   2. evaluate at (q, u); N_d = -A_d^-1 A[:, ind], w_d = -A_d^-1 [c_b; B_b];
+ *   3. Mr = N^T M N, fr = N^T (f - M w) (N[ind] = I), Cholesky: dv/dt.
+ * Writes dy = [dq/dt(q, u), dv/dt] (nq + ni), *growth = max |N_d| (0 when
+ * ni = 0) and *cond = the 2-norm condition number of A_d (one-sided Jacobi
+ * SVD; 1 when nd <= 1): the figures the caller judges the partition by.
+ * Open trees (nd = 0) evaluate once and solve M du/dt = f.  Returns
+ * MBRT_MECH_OK, _FALLBACK, _SINGULAR (A_d has an exactly zero pivot),
+ * _MASS_SINGULAR or _BAD_ARGUMENT. */
+int mbrt_dalembert_rhs(const mbrt_mech *P, double t, const double *y, const int *dep, const int *ind,
+                       int nd, double *dy, double *growth, double *cond, double *work, int *iwork);
+
+/* Moves y = [q, u] (nq == nu: coordinates moved additively) onto the
+ * constraint manifold in place: Gauss-Newton q -= C^T (C C^T)^-1 Phi on the
+ * rows used until |Phi| <= tol or max_iter steps, accepted if |Phi| <= accept
+ * at the end (*norm receives |Phi|); then u -= A^T (A A^T)^-1 [dPhi/dt; Psi]
+ * at the final q.  y is written only on MBRT_MECH_OK; otherwise
+ * _FALLBACK, _SINGULAR (rows dependent: C C^T or A A^T has a relative pivot
+ * below 1e-14), _NO_CONVERGENCE or _BAD_ARGUMENT. */
+int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_iter, double accept,
+                 double *norm, double *work);
+
+/* 2-norm condition number of the n x n row-major A by one-sided Jacobi (S:
+ * n*n scratch); INFINITY when A is singular. */
+double mbrt_cond2(int n, const double *A, double *S);
 
 #ifdef __cplusplus
 }
