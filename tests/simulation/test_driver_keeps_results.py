@@ -148,6 +148,31 @@ def test_sigterm_from_a_timer_interrupts_a_long_run():
     assert np.ptp(res["energy.total"]) < 1e-6
 
 
+def test_sigterm_stops_the_compiled_engine_with_what_it_reached():
+    """The C engine integrates stretches of outputs without Python: a SIGTERM 0.5 s into a
+    run that would take minutes ends it at a stretch's end, interrupted, and what was
+    reached is the pendulum (energy conserved to the tolerance)."""
+    main_thread_only()
+    from mbcomp.codegen import c_compiler
+
+    if c_compiler() is None:
+        pytest.skip("no C compiler: no compiled engine")
+    fast = mbcomp.codegen.compile_system(mbcomp.assemble(torque_pendulum(quiet)), "c")
+    mbcomp.simulate(fast, t_end=0.1, method="dop853")  # programs made and loaded before the clock starts
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: None)
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGTERM))
+    try:
+        timer.start()
+        res = mbcomp.simulate(fast, t_end=1e6, method="dop853", dt_out=10.0, rtol=1e-10, atol=1e-12)
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGTERM, previous)
+    assert res.status == "interrupted" and "SIGTERM" in res.message
+    assert "c_integrate" in fast.evaluator.capabilities and res.stats["nfev"] > 0
+    assert 10.0 < res.time[-1] < 1e6
+    assert np.ptp(res["energy.total"]) < 1e-7
+
+
 def test_a_run_in_a_worker_thread_installs_no_handler():
     """Signals can only be handled in the main thread: there the driver leaves them alone."""
     out = {}
