@@ -34,7 +34,7 @@ def test_the_grid_is_the_numeric_columns(name, backend, tmp_path):
     for k in (0, 17, n - 1):
         cols, rot = output_values(s, T[k], Y[k, : s.nq], Y[k, s.nq:], 10.0, 12.0, baumgarte=True)
         ref = np.array([cols[c] for c in names])
-        np.testing.assert_allclose(V[k], ref, rtol=1e-10, atol=1e-10 * (1 + np.abs(ref).max()), err_msg=name)
+        np.testing.assert_allclose(V[:, k], ref, rtol=1e-10, atol=1e-10 * (1 + np.abs(ref).max()), err_msg=name)
         for path, Rk in rot.items():
             np.testing.assert_allclose(R[path][k], matrix_to_quat(Rk), atol=1e-13)
 

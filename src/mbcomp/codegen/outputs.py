@@ -21,7 +21,7 @@ Examples
 >>> s = mbcomp.assemble(m)
 >>> prog = OutputProgram.build(s, "python", baumgarte=False)
 >>> names, V, R, ok = prog.grid(s, np.array([0.0, 1.0]), np.array([[0.0, 2.0], [0.0, 0.0]]), None)
->>> V[:, names.index("j.f.y")].round(9).tolist(), ok.tolist()   # m (g + w^2 l); m g at rest
+>>> V[names.index("j.f.y")].round(9).tolist(), ok.tolist()   # m (g + w^2 l); m g at rest
 ([27.62, 19.62], [True, True])
 """
 from __future__ import annotations
@@ -70,22 +70,24 @@ static void mbcomp_quat(const double *restrict R, double *restrict Q)
 
 int mbcomp_outputs_grid(long n, const double *restrict T, const double *restrict Y, long nq, long nu,
                         const double *restrict D, long nd, const double *restrict h, const double *restrict p,
-                        double *restrict w, double *restrict out, long nout, long nrot, double *restrict quat,
-                        signed char *restrict ok)
+                        double *restrict w, double *restrict row, long nout, long nrot,
+                        double *restrict cols, double *restrict quat, signed char *restrict ok)
 {
     /* the output program at every grid point k: state row Y[k] = [q, u], time T[k], per-call
-       inputs D[k] (drives' (s, v, a), then the Baumgarte gains); the last 9 nrot outputs of a
-       row are rotation matrices, turned into nrot quaternions in quat[k]; ok[k] = 0 where a
-       guard failed */
+       inputs D[k] (drives' (s, v, a), then the Baumgarte gains), into row[nout]; its first
+       nout - 9 nrot values are the columns, stored column by column: cols[j n + k]; the last
+       9 nrot are rotation matrices, stored as nrot quaternions quat[(b n + k) 4 ...];
+       ok[k] = 0 where a guard failed (that point's values are left as they were) */
+    const long ncol = nout - 9 * nrot;
     long failed = 0;
     for (long k = 0; k < n; ++k) {
         const double *y = Y + k * (nq + nu);
-        double *o = out + k * nout;
-        int bad = mbcomp_outputs(y, y + nq, T[k], D + k * nd, h, p, w, o);
+        int bad = mbcomp_outputs(y, y + nq, T[k], D + k * nd, h, p, w, row);
         ok[k] = (signed char)!bad;
         failed += bad;
-        for (long b = 0; b < nrot && !bad; ++b)
-            mbcomp_quat(o + nout - 9 * (nrot - b), quat + 4 * (k * nrot + b));
+        if (bad) continue;
+        for (long j = 0; j < ncol; ++j) cols[j * n + k] = row[j];
+        for (long b = 0; b < nrot; ++b) mbcomp_quat(row + ncol + 9 * b, quat + 4 * (b * n + k));
     }
     return (int)(failed > 0);
 }
@@ -154,7 +156,7 @@ class OutputProgram:
         self.dll = ctypes.CDLL(lib)
         fn = self.dll.mbcomp_outputs_grid
         L, P = ctypes.c_long, ctypes.c_void_p
-        fn.argtypes = [L, P, P, L, L, P, L, P, P, P, P, L, L, P, P]
+        fn.argtypes = [L, P, P, L, L, P, L, P, P, P, P, L, L, P, P, P]
         fn.restype = ctypes.c_int
         self.n_work = max(n_work, 1)
         self.source = src
@@ -177,10 +179,11 @@ class OutputProgram:
         Returns
         -------
         names : list of str
-        values : ndarray (n, len(names))
+        values : ndarray (len(names), n)
+            Column by column (NaN where not ``ok``).
         quaternions : dict
             Body path -> ndarray (n, 4): the unit quaternion ``(w, x, y, z)``, ``w >= 0``, of
-            the body's rotation (:func:`mbcomp.kinematics.matrix_to_quat`).
+            the body's rotation (:func:`mbcomp.kinematics.matrix_to_quat`; NaN where not ``ok``).
         ok : ndarray of bool (n,)
             False where a guard failed or a value is not finite (those rows are to be
             computed by the numeric route).
@@ -200,26 +203,29 @@ class OutputProgram:
         for k in range(n) if comps else ():
             D[k, : 3 * len(comps)] = [x for comp, p in comps for x in comp.motion(t[k], p)]
         D[:, -2:] = gains if gains is not None else (0.0, 0.0)
-        out = np.zeros((n, self.n_out))
+        nb, ncol = len(self.rotation_paths), len(self.names)
+        table = np.full((ncol, n), np.nan)  # column by column: every result column one contiguous row
+        quat = np.full((nb, n, 4), np.nan)
         ok = np.ones(n, bool)
-        nb = len(self.rotation_paths)
         if self.backend == "python":
             for k in range(n):
                 try:
-                    out[k] = self.fun(Y[k, :nq].tolist(), Y[k, nq:].tolist(), float(t[k]), D[k].tolist(), h)
+                    row = self.fun(Y[k, :nq].tolist(), Y[k, nq:].tolist(), float(t[k]), D[k].tolist(), h)
                 except (Fallback, ArithmeticError, ValueError):
                     ok[k] = False
-            quat = matrix_to_quat(out[:, out.shape[1] - 9 * nb:].reshape(n, nb, 3, 3))
+                    continue
+                table[:, k] = row[:ncol]
+                quat[:, k] = matrix_to_quat(np.reshape(row[ncol:], (nb, 3, 3)))
         else:
             hb = np.array(list(h) + [0.0], float)
             pb = np.array(list(pv) + [0.0], float)
-            w = np.zeros(self.n_work)
+            w, row = np.zeros(self.n_work), np.zeros(self.n_out)
             okc = np.ones(n, np.int8)
-            quat = np.zeros((n, nb, 4))
             self.dll.mbcomp_outputs_grid(n, t.ctypes.data, Y.ctypes.data, nq, Y.shape[1] - nq, D.ctypes.data,
-                                         D.shape[1], hb.ctypes.data, pb.ctypes.data, w.ctypes.data,
-                                         out.ctypes.data, self.n_out, nb, quat.ctypes.data, okc.ctypes.data)
+                                         D.shape[1], hb.ctypes.data, pb.ctypes.data, w.ctypes.data, row.ctypes.data,
+                                         self.n_out, nb, table.ctypes.data, quat.ctypes.data, okc.ctypes.data)
             ok = okc.astype(bool)
-        ok &= np.isfinite(out).all(axis=1)
-        k = len(self.names)
-        return self.names, out[:, :k], {path: quat[:, b] for b, path in enumerate(self.rotation_paths)}, ok
+        ok &= np.isfinite(table).all(axis=0) & np.isfinite(quat).all(axis=(0, 2))
+        table[:, ~ok] = np.nan
+        quat[:, ~ok] = np.nan
+        return self.names, table, dict(zip(self.rotation_paths, quat)), ok

@@ -101,12 +101,8 @@ def postprocess(system, form, t, Y, status, message, stats, init):
         grid = evaluator.output_grid(t, Y, gains)
         if grid is not None:
             names, values, quaternions, ok = grid
-            table = values.T.copy()  # one block: every column a contiguous row of it
-            table[:, ~ok] = np.nan
-            cols.series.update(zip(names, table))
-            for path, quat in quaternions.items():
-                quat[~ok] = np.nan
-                cols.quat[path] = quat
+            cols.series.update(zip(names, values))  # rows of one block (NaN where not ok)
+            cols.quat.update(quaternions)
             todo = np.flatnonzero(~ok)
     for k in todo:
         q, u = Y[k, :nq], Y[k, nq:]
