@@ -204,8 +204,8 @@ class OutputProgram:
             D[k, : 3 * len(comps)] = [x for comp, p in comps for x in comp.motion(t[k], p)]
         D[:, -2:] = gains if gains is not None else (0.0, 0.0)
         nb, ncol = len(self.rotation_paths), len(self.names)
-        table = np.full((ncol, n), np.nan)  # column by column: every result column one contiguous row
-        quat = np.full((nb, n, 4), np.nan)
+        # column by column: every result column one contiguous row (rows not ok are NaN below)
+        table, quat = np.empty((ncol, n)), np.empty((nb, n, 4))
         ok = np.ones(n, bool)
         if self.backend == "python":
             for k in range(n):

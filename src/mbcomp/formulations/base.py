@@ -82,6 +82,10 @@ class Formulation:
         """``[q, u]`` (coordinates then speeds) of the state ``y``, for output and post-processing."""
         return np.asarray(y[: self.nq + self.nu])
 
+    def full_many(self, t, Y):
+        """:meth:`full` of the states ``Y`` (rows) at the times ``t``: ``(n, nq + nu)``."""
+        return np.asarray(Y)[:, : self.nq + self.nu]
+
     def project(self, t, y):
         """``y`` moved back onto the constraint manifold (here: unchanged)."""
         return y

@@ -123,6 +123,10 @@ class DAlembert(Formulation):
         u, _ = self.speeds(t, q, v)
         return np.concatenate((q, u))
 
+    def full_many(self, t, Y):
+        """:meth:`full` of every row of ``Y`` (the dependent speeds solved per row)."""
+        return np.array([self.full(tk, y) for tk, y in zip(t, Y)]).reshape(len(Y), self.nq + self.nu)
+
     # --- dynamics ----------------------------------------------------------------------------
     def _reduce(self, ev):
         """``(N, w)`` with admissible accelerations ``du/dt = N dv/dt + w``."""

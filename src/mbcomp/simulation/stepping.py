@@ -151,6 +151,9 @@ class Run:
             for key, val in s.stats.items():
                 total[key] = total.get(key, 0) + int(val)
         out["restarts"] += total.get("restarts", 0)
+        if "stretches" in total:  # a compiled stepper: one driver step is a stretch of its own steps
+            out["steps"] += total["nsteps"] - total["stretches"] - total.get("python_steps", 0)
+            out["stretches"] = total["stretches"]
         out["njev"] = total.get("njev", 0)
         out["nlu_integrator"] = total.get("nlu", 0)
         out.update({key: total[key] for key in ("nreject", "nnewton") if key in total})
@@ -185,6 +188,13 @@ class KeepOutputs(StepHook):
 
     def __call__(self, run):
         form, t_out, ys, t = run.form, run.t_out, run.ys, run.stepper.t
+        given = run.stepper.step_outputs() if not run.projects else None
+        if given is not None:  # the integrator's own states at the output times: kept at once
+            ts, Ys = given
+            k0, k1 = len(ys), int(np.searchsorted(t_out, t, side="right"))
+            idx = np.searchsorted(ts, t_out[k0:k1])
+            if idx.size and idx[-1] < len(ts) and np.array_equal(ts[idx], t_out[k0:k1]):
+                ys.extend(form.full_many(t_out[k0:k1], Ys[idx]).astype(float))
         while len(ys) < len(t_out) and t_out[len(ys)] <= t:
             tk = t_out[len(ys)]
             yk = run.step_dense()(tk)

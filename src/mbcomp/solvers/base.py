@@ -169,6 +169,12 @@ class Stepper:
         self.status = "running" if self.t < self.t_bound else "finished"
         self.stats = dict(nsteps=0, nreject=0, nfev=0, njev=0, nlu=0, restarts=0)
 
+    def step_outputs(self):
+        """The states at output times inside the last step as the integrator computed them,
+        ``(ts, Ys)`` (steppers with ``needs_outputs``), or None: the driver interpolates the
+        dense output."""
+        return None
+
     def step(self):
         """Advance one step; returns ``None`` or, on failure, the message (status ``"failed"``)."""
         if self.status != "running":

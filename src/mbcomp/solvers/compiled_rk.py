@@ -165,6 +165,11 @@ class CompiledRK(Stepper):
             self._solver.y = self.y
             self._solver.f = self.prob.fun(self.t, self.y)
 
+    def step_outputs(self):
+        """The engine's own states at the output times of the last stretch (None after a
+        step on the Python path)."""
+        return self._outs if self._dense is None else None
+
     def dense_output(self):
         """``y(t)`` in the last stretch: the integrator's own output at the output times, a
         cubic Hermite interpolant between the stretch's ends elsewhere (for the monitors)."""
