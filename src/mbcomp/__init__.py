@@ -54,6 +54,14 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name in ("linearize", "steady_states", "sweep"):  # stability analysis (seed Chapter 7)
         from . import analysis
         return getattr(analysis, name)
+    if name in _SUBPACKAGES:  # mbcomp.codegen.compile_system(...) after a plain "import mbcomp"
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module 'mbcomp' has no attribute {name!r}")
+
+
+_SUBPACKAGES = ("analysis", "assembly", "cli", "codegen", "formulations", "geometry", "library", "modeling",
+                "simulation", "solvers")
 
 __version__ = "0.1.0"

@@ -74,3 +74,18 @@ def test_the_features_that_need_them_still_import_them():
     assert out[1] == "False scipy.integrate._ivp.rk True"
     assert out[2].startswith("False MultiGraph ['crank_joint', 'crank_tip', ")
     assert {"sympy", "scipy.integrate", "networkx"} <= loaded
+
+
+def test_subpackages_are_attributes_after_a_plain_import():
+    """``import mbcomp`` then ``mbcomp.codegen.compile_system`` works although nothing on the
+    light default path imported mbcomp.codegen; an unknown name is still an AttributeError."""
+    out = subprocess.run([sys.executable, "-c", textwrap.dedent("""
+        import mbcomp
+        print(callable(mbcomp.codegen.compile_system), callable(mbcomp.solvers.STEPPERS.get))
+        try:
+            mbcomp.no_such_thing
+        except AttributeError as exc:
+            print("AttributeError", exc)
+        """)], cwd=ROOT, capture_output=True, text=True, check=True).stdout.splitlines()
+    assert out[0] == "True True"
+    assert out[1].startswith("AttributeError") and "no_such_thing" in out[1]
