@@ -102,6 +102,39 @@ int prog_qrate(const double *q, const double *u, double t, const double *d, cons
                const double *p, double *w, double *out)
 { (void)q; (void)t; (void)d; (void)h; (void)p; (void)w; out[0] = u[0]; out[1] = u[1]; return 0; }
 
+/* A rigid body on a ball joint, q = unit quaternion (w, x, y, z), u = body angular velocity
+ * (rad/s), whose x axis must stay horizontal: Phi = R20 = 2 (x z - w y), C = [0, -R22, R21]
+ * (dPhi/dt = (R (u x e_x))_z), unit inertia and no forces; layout as prog_pendulum's with
+ * nq = 4, nu = 3: M 0..8, f 9..11, Phi 12, dPhi/dt 13, C 14..16, c_b 17; n_out 18. */
+int prog_ball(const double *q, const double *u, double t, const double *d, const double *h,
+              const double *p, double *w, double *out)
+{ (void)t; (void)d; (void)h; (void)p; (void)w;
+  double R21 = 2.0 * (q[2] * q[3] + q[0] * q[1]), R22 = 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2]);
+  for (int i = 0; i < 9; ++i) out[i] = (i % 4 == 0) ? 1.0 : 0.0;
+  out[9] = out[10] = out[11] = 0.0;
+  out[12] = 2.0 * (q[1] * q[3] - q[0] * q[2]);
+  out[14] = 0.0; out[15] = -R22; out[16] = R21;
+  out[13] = out[15] * u[1] + out[16] * u[2];
+  out[17] = 0.0;
+  return 0; }
+
+/* dQ/dt = Q (0, u) / 2 */
+int prog_ball_qrate(const double *q, const double *u, double t, const double *d, const double *h,
+                    const double *p, double *w, double *out)
+{ (void)t; (void)d; (void)h; (void)p; (void)w;
+  out[0] = 0.5 * (-q[1] * u[0] - q[2] * u[1] - q[3] * u[2]);
+  out[1] = 0.5 * (q[0] * u[0] + q[2] * u[2] - q[3] * u[1]);
+  out[2] = 0.5 * (q[0] * u[1] - q[1] * u[2] + q[3] * u[0]);
+  out[3] = 0.5 * (q[0] * u[2] + q[1] * u[1] - q[2] * u[0]);
+  return 0; }
+
+void mech_ball(mbrt_mech *P, const int *rows, const int *seg)
+{ memset(P, 0, sizeof *P);
+  P->eval = prog_ball; P->qrate = prog_ball_qrate;
+  P->nq = 4; P->nu = 3; P->n_out = 18; P->mh = 1; P->mn = 0; P->nrows = 1; P->rows = rows;
+  P->off_M = 0; P->off_f = 9; P->off_Phi = 12; P->off_Phid = 13; P->off_C = 14; P->off_cb = 17;
+  P->off_B = 18; P->off_Bb = 18; P->off_Psi = 18; P->nseg = 1; P->seg = seg; }
+
 /* The pendulum's layout in an mbrt_mech (p: m, g, L; rows: the one holonomic row). */
 void mech_pendulum(mbrt_mech *P, const double *p, const int *rows, int qrate)
 { memset(P, 0, sizeof *P);
@@ -255,6 +288,23 @@ int main(void)
             CHECK(mbrt_project(&P, 0.0, yf, 1e-12, -1, 1e-9, &nrm, wk) == MBRT_MECH_BAD_ARGUMENT);
             free(wk);
             free(iw);
+        }
+        {   /* the quaternion segment: a tilted ball joint brought back to a horizontal x axis */
+            mbrt_mech B;
+            int seg[4] = {MBRT_SEG_QUAT, 0, 0, 1}, bad[4] = {MBRT_SEG_QUAT, 1, 0, 1};
+            mech_ball(&B, rows, seg);
+            double *wk = malloc(mbrt_mech_work_size(&B) * sizeof(double)), nrm = -1;
+            double yq[7] = {0.9, 0.1, 0.3, 0.2, 0.4, -0.3, 0.8};
+            CHECK(mbrt_project(&B, 0.0, yq, 1e-12, 8, 1e-9, &nrm, wk) == MBRT_MECH_OK);
+            double nq = sqrt(yq[0] * yq[0] + yq[1] * yq[1] + yq[2] * yq[2] + yq[3] * yq[3]);
+            double R21 = 2.0 * (yq[2] * yq[3] + yq[0] * yq[1]), R22 = 1.0 - 2.0 * (yq[1] * yq[1] + yq[2] * yq[2]);
+            CHECK(fabs(nq - 1.0) < 1e-15 && nrm <= 1e-12 && fabs(2.0 * (yq[1] * yq[3] - yq[0] * yq[2])) < 1e-12);
+            CHECK(fabs(-R22 * yq[5] + R21 * yq[6]) < 1e-12);
+            B.seg = bad;  /* a segment reaching past q */
+            CHECK(mbrt_project(&B, 0.0, yq, 1e-12, 8, 1e-9, &nrm, wk) == MBRT_MECH_BAD_ARGUMENT);
+            B.nseg = 0;   /* no map with nq != nu */
+            CHECK(mbrt_project(&B, 0.0, yq, 1e-12, 8, 1e-9, &nrm, wk) == MBRT_MECH_BAD_ARGUMENT);
+            free(wk);
         }
         double R[9] = {1, 2, 3, 4, 5, 6, 7, 8, 10}, S[9], Z[4] = {1, 2, 2, 4}, S2[4];
         CHECK(fabs(mbrt_cond2(3, R, S) / 88.44 - 1.0) < 1e-3);  /* numpy: 88.4482799 */
@@ -732,6 +782,42 @@ def test_project_equals_the_python_closure(lib):
         ref = np.concatenate((c.q, solve_speeds(c.q[None, :], np.array([c.q @ u]), u)))
         np.testing.assert_allclose(yc, ref, rtol=0, atol=1e-14)
         assert abs(np.hypot(*yc[:2]) - L) < 1e-12 and abs(yc[:2] @ yc[2:]) < 1e-12 and norm.value == c.norm
+
+
+def test_project_turns_quaternions_as_the_python_closure(lib):
+    """A ball joint whose body x axis must stay horizontal, from tilted, non-unit quaternions:
+    ``mbrt_project`` normalizes, steps in the body's rotation vector with
+    :func:`quat_increment` and corrects the speeds -- :func:`close_positions` with the same
+    increment gives the same state to 1e-14; the quaternion is unit."""
+    from mbcomp.assembly.manifold import close_positions, solve_speeds
+    from mbcomp.codegen.engine import _Mech
+    from mbcomp.modeling.free_joint import quat_increment
+
+    P, rows, seg = _Mech(), np.zeros(1, dtype=np.intc), np.array([1, 0, 0, 1], dtype=np.intc)
+    lib.mech_ball.argtypes = [ctypes.c_void_p] * 3
+    lib.mech_ball(ctypes.addressof(P), rows.ctypes.data, seg.ctypes.data)
+    lib.mbrt_mech_work_size.argtypes = [ctypes.c_void_p]
+    lib.mbrt_mech_work_size.restype = ctypes.c_size_t
+    work = np.zeros(lib.mbrt_mech_work_size(ctypes.addressof(P)))
+    lib.mbrt_project.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p, ctypes.c_double, ctypes.c_int,
+                                 ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p]
+
+    def residual(Q):
+        R21, R22 = 2 * (Q[2] * Q[3] + Q[0] * Q[1]), 1 - 2 * (Q[1] ** 2 + Q[2] ** 2)
+        return np.array([2 * (Q[1] * Q[3] - Q[0] * Q[2])]), np.array([[0.0, -R22, R21]]), None
+
+    rng = np.random.default_rng(9)
+    for _ in range(20):
+        y = np.concatenate((rng.normal(size=4) * [1, 0.2, 0.2, 1] + [1.5, 0, 0, 0], rng.normal(size=3)))
+        yc = y.copy()
+        assert lib.mbrt_project(ctypes.addressof(P), 0.0, yc.ctypes.data, 1e-12, 8, 1e-9, None,
+                                work.ctypes.data) == 0
+        q0 = quat_increment(y[:4], np.zeros(3))
+        c = close_positions(residual, quat_increment, q0)
+        r, C, _ = residual(c.q)
+        ref = np.concatenate((c.q, solve_speeds(C, C @ y[4:], y[4:])))
+        np.testing.assert_allclose(yc, ref, rtol=0, atol=1e-14)
+        assert abs(np.linalg.norm(yc[:4]) - 1) < 1e-15 and abs(residual(yc[:4])[0][0]) < 1e-12
 
 
 def test_cond2_matches_numpy(lib):

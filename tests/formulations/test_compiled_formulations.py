@@ -18,7 +18,7 @@ import mbcomp
 from conftest import load_model, load_module
 from mbcomp.assembly.initialization import initialize
 from mbcomp.codegen import c_compiler
-from mbcomp.codegen.engine import additive_coordinates, mech_of
+from mbcomp.codegen.engine import coordinate_map, mech_of
 from mbcomp.errors import SimulationError
 from mbcomp.formulations import build
 from mbcomp.library import FixedTranslation, PointMass, PrescribedMotion, Revolute, World
@@ -38,6 +38,7 @@ def _driven_crank():
 
 MODELS = {
     "four_bar": lambda: load_model("models/four_bar.py").build(),
+    "bicycle": lambda: load_model("models/bicycle.py").build(),
     "slider_crank": lambda: load_model("models/slider_crank.py").build(),
     "andrews": lambda: load_model("models/andrews.py").build(),
     "n_link_pendulum": lambda: load_model("models/n_link_pendulum.py").build(),
@@ -164,15 +165,17 @@ def test_a_failed_guard_takes_the_python_path():
     assert s.evaluator.stats["fallbacks"] >= 1
 
 
-@pytest.mark.parametrize("name", ["four_bar", "slider_crank", "andrews", "sleigh", "n_link_pendulum"])
+@pytest.mark.parametrize("name", ["four_bar", "slider_crank", "andrews", "sleigh", "n_link_pendulum", "chain_3d",
+                                  "bicycle"])
 def test_c_projection_lands_where_the_python_projection_lands(name):
-    """``mbrt_project`` (Newton with minimum-norm steps by Cholesky of ``C C^T``, then the
-    speed correction) against :meth:`LagrangeIndex1.project` (least squares by SVD) from
-    states 1e-3 off the manifold: the same state to 1e-12, on the manifold."""
+    """``mbrt_project`` (quaternions normalized, Newton with minimum-norm steps by Cholesky of
+    ``C C^T`` moving the coordinates as the joints do, then the speed correction) against
+    :meth:`LagrangeIndex1.project` (least squares by SVD) from states 1e-3 off the manifold
+    (quaternions off unit length too): the same state to 1e-12, on the manifold."""
     s = system_of(MODELS[name](), None, "c")
     init = initialize(s, 0.0)
     form = build("lagrange", "ode", s, stabilization="projection")
-    assert additive_coordinates(s)
+    assert coordinate_map(s) is not None
     mech = mech_of(s.evaluator.bound, s)
     y0 = form.initial_state(0.0, init.q, init.u)
     rng = np.random.default_rng(5)
@@ -186,8 +189,18 @@ def test_c_projection_lands_where_the_python_projection_lands(name):
         assert np.linalg.norm(ev.Phi) <= 1e-9 and np.abs(np.concatenate((ev.Phid, ev.Psi))).max(initial=0) <= 1e-12
 
 
-def test_quaternion_coordinates_are_not_moved_additively():
-    """The chain with spherical joints and the rolling disk's free joint keep their
-    projection in Python (quaternion increments)."""
-    assert not additive_coordinates(mbcomp.assemble(MODELS["chain_3d"]()))
-    assert additive_coordinates(mbcomp.assemble(MODELS["four_bar"]()))
+def test_the_coordinate_map_follows_the_joints_own_increments():
+    """Additive joints give the empty map (q + du), ball joints a quaternion segment, free
+    joints a position and a quaternion segment; a joint moving its coordinate any other way
+    (here q + 2 du) gives None: its projection stays in Python."""
+    from types import SimpleNamespace
+
+    assert coordinate_map(mbcomp.assemble(MODELS["four_bar"]())).shape == (0, 4)
+    chain = coordinate_map(mbcomp.assemble(MODELS["chain_3d"]()))
+    assert chain.tolist() == [[1, 0, 0, 1], [1, 4, 3, 1], [1, 8, 6, 1], [1, 12, 9, 1]]
+    sphere = coordinate_map(mbcomp.assemble(load_model("models/textbook/ex4_3_rolling_sphere.py").build()))
+    assert sphere.tolist() == [[0, 0, 0, 3], [1, 3, 3, 1]]
+    odd = SimpleNamespace(increment=lambda q, du, p: q + 2.0 * du)
+    edge = SimpleNamespace(q=slice(0, 1), u=slice(0, 1), comp=odd, name="odd")
+    fake = SimpleNamespace(topology=SimpleNamespace(tree=[edge]), P={"odd": None}, nq=1, nu=1)
+    assert coordinate_map(fake) is None

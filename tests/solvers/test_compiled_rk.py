@@ -152,11 +152,16 @@ def test_a_projection_declined_in_c_goes_on_in_python(monkeypatch):
     np.testing.assert_allclose(np.array(fast.ys), np.array(ref.ys), rtol=0, atol=1e-6)
 
 
-def test_quaternion_systems_project_in_python():
-    """A 3-D chain (spherical joints, quaternions) with projection: no engine (the C
-    projection moves coordinates additively only); scipy's DOP853 steps the compiled
-    right-hand side and the driver projects after every step."""
-    s, form, run = _run("models/chain_3d.py", "dop853", t_end=0.2, n_out=5, rtol=1e-8, atol=1e-10)
-    assert form.projects and form.compiled_integrator() is None
-    assert run.stepper.stats["python_steps"] == run.stepper.stats["nsteps"] > 0
-    assert run.stats["projections"] == run.stepper.stats["nsteps"]
+def test_quaternion_systems_project_in_c_too():
+    """A 3-D chain of ball joints (quaternion coordinates) with projection: the engine
+    normalizes and turns the quaternions as the joints do, after every step, and the run is
+    the Python-driven one to the tolerance with unit quaternions at every output."""
+    kw = dict(t_end=0.3, n_out=16, rtol=1e-9, atol=1e-11)
+    s, form, fast = _run("models/chain_3d.py", "dop853", **kw)
+    _, _, ref = _run("models/chain_3d.py", "DOP853", **kw)
+    st = fast.stepper.stats
+    assert form.projects and st["python_steps"] == 0 and st["c_projections"] == st["nsteps"] > 0
+    Y, R = np.array(fast.ys), np.array(ref.ys)
+    np.testing.assert_allclose(Y, R, rtol=0, atol=1e-6 * (1 + np.abs(R).max()))
+    for k in range(0, 16, 4):
+        np.testing.assert_allclose(np.linalg.norm(Y[:, k:k + 4], axis=1), 1.0, atol=1e-14)

@@ -363,8 +363,8 @@ class ProgramEvaluator:
         right-hand side with Baumgarte gains ``alpha``, ``beta`` (1/s) in C; None when this
         program has none (Python backend, drives, no Lagrange program). ``project``:
         ``(tol, accept)`` on ``|Phi|`` to project after every accepted step in C with the
-        evaluation program (additively moved coordinates only, see
-        :func:`mbcomp.codegen.engine.additive_coordinates`)."""
+        evaluation program (when :func:`mbcomp.codegen.engine.coordinate_map` knows how the
+        coordinates move)."""
         from .engine import Integrator, mech_of
 
         bound = self._fun_bound()

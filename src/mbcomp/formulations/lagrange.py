@@ -119,10 +119,9 @@ class LagrangeIndex1(Formulation):
     def fun(self, t, y):
         """``dy/dt`` for ``y = [q, u]``."""
         self._check_finite(t, y)
-        evaluator = self.system.evaluator
-        if "lagrange_fun" in evaluator.capabilities:  # the whole right-hand side in one program call
-            gains = (self.alpha, self.beta) if self.stabilization == "baumgarte" else (0.0, 0.0)
-            dy = evaluator.lagrange_fun(t, y, *gains)
+        fast = self._one_call()
+        if fast is not None:  # the whole right-hand side in one program call
+            dy = fast(t, y, *self._gains)
             if dy is not None:
                 self.nlu += 1
                 return dy
@@ -130,6 +129,18 @@ class LagrangeIndex1(Formulation):
         ev = self.system.evaluate(t, q, u)
         ud, _ = self.solve(ev)
         return np.concatenate((self.system.q_rate(q, u), ud))
+
+    def _one_call(self):
+        """The evaluator's one-call right-hand side (``lagrange_fun``) or None, looked up once
+        per row mask: asking for the capabilities costs as much as the call itself."""
+        mask = self.system.row_mask
+        cached = self.__dict__.get("_one_call_for")
+        if cached is None or cached[0] is not mask:
+            evaluator = self.system.evaluator
+            fast = evaluator.lagrange_fun if "lagrange_fun" in evaluator.capabilities else None
+            self._gains = (self.alpha, self.beta) if self.stabilization == "baumgarte" else (0.0, 0.0)
+            cached = self._one_call_for = (mask, fast)
+        return cached[1]
 
     def output_gains(self):
         """``(alpha, beta)`` with Baumgarte stabilization, else None."""
@@ -141,8 +152,9 @@ class LagrangeIndex1(Formulation):
 
         With ``"projection"`` the engine projects after every accepted step in C (as
         :meth:`project`, with the same tolerances), so a stretch of outputs is still one C
-        call; coordinates that do not move additively (quaternions) have no C projection, and
-        then there is no engine: scipy's method steps :meth:`fun` and the driver projects
+        call; a joint whose coordinates move in a way the C projection does not know (see
+        :func:`mbcomp.codegen.engine.coordinate_map`: additive, ball and free joints it
+        knows) leaves no engine: scipy's method steps :meth:`fun` and the driver projects
         after every step."""
         evaluator = self.system.evaluator
         if "c_integrate" not in evaluator.capabilities:
@@ -150,9 +162,9 @@ class LagrangeIndex1(Formulation):
         if not self.projects:
             return evaluator.integrator(*((self.alpha, self.beta) if self.stabilization == "baumgarte"
                                           else (0.0, 0.0)))
-        from ..codegen.engine import additive_coordinates
+        from ..codegen.engine import coordinate_map
 
-        if not additive_coordinates(self.system):
+        if coordinate_map(self.system) is None:
             return None
         return evaluator.integrator(0.0, 0.0, project=(POSITION_TOL, ACCEPT_FACTOR * POSITION_TOL))
 

@@ -169,7 +169,15 @@ typedef struct {
     int nrows;           /* holonomic rows used (<= mh)                          */
     const int *rows;     /* their indices in 0..mh-1                             */
     int off_M, off_f, off_Phi, off_Phid, off_C, off_cb, off_B, off_Bb, off_Psi;
+    /* How coordinates move along the speeds (for mbrt_project): nseg segments of 4
+     * ints (kind, q0, u0, n): MBRT_SEG_ADD moves q[q0..q0+n) by du[u0..u0+n),
+     * MBRT_SEG_QUAT (n = 1) turns the unit quaternion q[q0..q0+4) (w, x, y, z) by the
+     * rotation vector du[u0..u0+3) about its own axes.  nseg = 0: q += du (nq == nu). */
+    int nseg;
+    const int *seg;
 } mbrt_mech;
+
+enum { MBRT_SEG_ADD = 0, MBRT_SEG_QUAT = 1 };
 
 enum {
     MBRT_MECH_OK = 0,
@@ -202,11 +210,12 @@ size_t mbrt_mech_work_size(const mbrt_mech *P);
 int mbrt_dalembert_rhs(const mbrt_mech *P, double t, const double *y, const int *dep, const int *ind,
                        int nd, double *dy, double *growth, double *cond, double *work, int *iwork);
 
-/* Moves y = [q, u] (nq == nu: coordinates moved additively) onto the
- * constraint manifold in place: Gauss-Newton q -= C^T (C C^T)^-1 Phi on the
- * rows used until |Phi| <= tol or max_iter steps, accepted if |Phi| <= accept
- * at the end (*norm receives |Phi|); then u -= A^T (A A^T)^-1 [dPhi/dt; Psi]
- * at the final q.  y is written only on MBRT_MECH_OK; otherwise
+/* Moves y = [q, u] onto the constraint manifold in place: quaternions
+ * normalized, then Gauss-Newton with the speed-space steps
+ * du = -C^T (C C^T)^-1 Phi on the rows used (q moved by du through the
+ * coordinate map) until |Phi| <= tol or max_iter steps, accepted if
+ * |Phi| <= accept at the end (*norm receives |Phi|); then
+ * u -= A^T (A A^T)^-1 [dPhi/dt; Psi] at the final q.  y is written only on MBRT_MECH_OK; otherwise
  * _FALLBACK, _SINGULAR (rows dependent: C C^T or A A^T has a relative pivot
  * below 1e-14), _NO_CONVERGENCE or _BAD_ARGUMENT. */
 int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_iter, double accept,

@@ -16,9 +16,10 @@
  *
  *   mbrt_dalembert_rhs   formulations/dalembert.py DAlembert.fun: speeds(),
  *                        a second evaluation, _reduce(), N^T M N, Cholesky;
- *   mbrt_project         formulations/lagrange.py LagrangeIndex1.project for
- *                        coordinates moved additively (q += du): Gauss-Newton
- *                        with minimum-norm steps on Phi(q) = 0
+ *   mbrt_project         formulations/lagrange.py LagrangeIndex1.project:
+ *                        quaternions normalized, Gauss-Newton with minimum-norm
+ *                        steps on Phi(q) = 0 along the speeds (coordinates moved
+ *                        additively or, for quaternions, by a finite rotation)
  *                        (assembly/manifold.py close_positions), then the
  *                        minimum-norm speed correction onto A u = 0.
  *
@@ -325,17 +326,88 @@ int mbrt_dalembert_rhs(const mbrt_mech *P, double t, const double *y, const int 
 
 /* ------------------------------------------------------------------ projection */
 
+/* Checks the coordinate map: segments inside q and u, every coordinate and speed covered
+ * once at most, additive segments of equal width.  Without a map nq == nu is required. */
+static int map_ok(const mbrt_mech *P)
+{
+    if (P->nseg == 0)
+        return P->nq == P->nu;
+    if (P->nseg < 0 || P->seg == NULL)
+        return 0;
+    int nq = 0, nu = 0;
+    for (int k = 0; k < P->nseg; ++k) {
+        const int *s = P->seg + 4 * (size_t)k;
+        int kind = s[0], q0 = s[1], u0 = s[2], n = s[3];
+        int wq = kind == MBRT_SEG_QUAT ? 4 : n, wu = kind == MBRT_SEG_QUAT ? 3 : n;
+        if ((kind != MBRT_SEG_ADD && kind != MBRT_SEG_QUAT) || (kind == MBRT_SEG_QUAT && n != 1) || n < 0 ||
+            q0 < 0 || u0 < 0 || q0 > P->nq - wq || u0 > P->nu - wu)
+            return 0;
+        nq += wq;
+        nu += wu;
+    }
+    return nq == P->nq && nu == P->nu;  /* the segments cover q and u (the caller makes them disjoint) */
+}
+
+/* q moved by du along the speeds (MultibodySystem.increment): additive segments add, a
+ * quaternion segment is turned by the rotation vector about its own axes and normalized
+ * (quat_increment: Q * exp(d/2) / |...|).  du = NULL normalizes the quaternions only. */
+static void increment(const mbrt_mech *P, double *q, const double *du, double sign)
+{
+    if (P->nseg == 0) {
+        if (du != NULL)
+            for (int i = 0; i < P->nu; ++i)
+                q[i] += sign * du[i];
+        return;
+    }
+    for (int k = 0; k < P->nseg; ++k) {
+        const int *s = P->seg + 4 * (size_t)k;
+        double *qs = q + s[1];
+        const double *d = du != NULL ? du + s[2] : NULL;
+        if (s[0] == MBRT_SEG_ADD) {
+            if (d != NULL)
+                for (int i = 0; i < s[3]; ++i)
+                    qs[i] += sign * d[i];
+            continue;
+        }
+        double r[4] = {1.0, 0.0, 0.0, 0.0};
+        if (d != NULL) {
+            double dx = sign * d[0], dy = sign * d[1], dz = sign * d[2];
+            double ang = sqrt(dx * dx + dy * dy + dz * dz);
+            if (!(ang < 1e-300)) {
+                double sa = sin(0.5 * ang) / ang;
+                r[0] = cos(0.5 * ang);
+                r[1] = sa * dx;
+                r[2] = sa * dy;
+                r[3] = sa * dz;
+            }
+        }
+        double pw = qs[0], px = qs[1], py = qs[2], pz = qs[3];
+        double n0 = pw * r[0] - px * r[1] - py * r[2] - pz * r[3];
+        double n1 = pw * r[1] + px * r[0] + py * r[3] - pz * r[2];
+        double n2 = pw * r[2] - px * r[3] + py * r[0] + pz * r[1];
+        double n3 = pw * r[3] + px * r[2] - py * r[1] + pz * r[0];
+        double nn = sqrt(n0 * n0 + n1 * n1 + n2 * n2 + n3 * n3);
+        qs[0] = n0 / nn;
+        qs[1] = n1 / nn;
+        qs[2] = n2 / nn;
+        qs[3] = n3 / nn;
+    }
+}
+
 int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_iter, double accept,
                  double *norm, double *work)
 {
-    if (!mech_ok(P) || y == NULL || work == NULL || P->nq != P->nu || max_iter < 0 || !(tol >= 0.0))
+    if (!mech_ok(P) || y == NULL || work == NULL || !map_ok(P) || max_iter < 0 || !(tol >= 0.0))
         return MBRT_MECH_BAD_ARGUMENT;
-    const int nu = P->nu, m = nvel(P), mh = P->nrows;
-    double *out = work, *q = out + P->n_out, *u = q + nu, *step = u + nu, *G = step + nu, *z = G + (size_t)m * m;
+    const int nq = P->nq, nu = P->nu, m = nvel(P), mh = P->nrows;
+    double *out = work, *q = out + P->n_out, *u = q + nq, *step = u + nu, *G = step + nu, *z = G + (size_t)m * m;
     double *r = z + m;
     int rc;
-    memcpy(q, y, sizeof(double) * (size_t)nu);
-    memcpy(u, y + nu, sizeof(double) * (size_t)nu);
+    memcpy(q, y, sizeof(double) * (size_t)nq);
+    memcpy(u, y + nq, sizeof(double) * (size_t)nu);
+    increment(P, q, NULL, 1.0);  /* unit quaternions */
+    if (!finite_all(nq, q))
+        return MBRT_MECH_FALLBACK;
     if ((rc = evaluate(P, t, q, u, out)) != MBRT_MECH_OK)
         return rc;
     double nrm = 0.0;
@@ -348,11 +420,12 @@ int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_it
     for (int it = 0; mh > 0 && it < max_iter && nrm > tol; ++it) {
         for (int k = 0; k < mh; ++k)
             r[k] = out[P->off_Phi + P->rows[k]];
-        /* only the holonomic rows: the accessor's first mh rows (nrows == mh here) */
+        /* only the holonomic rows: the accessor's first mh rows */
         if ((rc = min_norm(P, out, mh, nu, r, step, G, z)) != MBRT_MECH_OK)
             return rc;
-        for (int i = 0; i < nu; ++i)
-            q[i] -= step[i];
+        increment(P, q, step, -1.0);
+        if (!finite_all(nq, q))
+            return MBRT_MECH_SINGULAR;
         if ((rc = evaluate(P, t, q, u, out)) != MBRT_MECH_OK)
             return rc;
         nrm = 0.0;
@@ -375,7 +448,7 @@ int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_it
         for (int i = 0; i < nu; ++i)
             u[i] -= step[i];
     }
-    memcpy(y, q, sizeof(double) * (size_t)nu);
-    memcpy(y + nu, u, sizeof(double) * (size_t)nu);
+    memcpy(y, q, sizeof(double) * (size_t)nq);
+    memcpy(y + nq, u, sizeof(double) * (size_t)nu);
     return MBRT_MECH_OK;
 }
