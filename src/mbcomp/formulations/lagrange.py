@@ -119,10 +119,9 @@ class LagrangeIndex1(Formulation):
     def fun(self, t, y):
         """``dy/dt`` for ``y = [q, u]``."""
         self._check_finite(t, y)
-        evaluator = self.system.evaluator
-        if "lagrange_fun" in evaluator.capabilities:  # the whole right-hand side in one program call
-            gains = (self.alpha, self.beta) if self.stabilization == "baumgarte" else (0.0, 0.0)
-            dy = evaluator.lagrange_fun(t, y, *gains)
+        fast = self._one_call()
+        if fast is not None:  # the whole right-hand side in one program call
+            dy = fast(t, y, *self._gains)
             if dy is not None:
                 self.nlu += 1
                 return dy
@@ -130,6 +129,18 @@ class LagrangeIndex1(Formulation):
         ev = self.system.evaluate(t, q, u)
         ud, _ = self.solve(ev)
         return np.concatenate((self.system.q_rate(q, u), ud))
+
+    def _one_call(self):
+        """The evaluator's one-call right-hand side (``lagrange_fun``) or None, looked up once
+        per row mask: asking for the capabilities costs as much as the call itself."""
+        mask = self.system.row_mask
+        cached = self.__dict__.get("_one_call_for")
+        if cached is None or cached[0] is not mask:
+            evaluator = self.system.evaluator
+            fast = evaluator.lagrange_fun if "lagrange_fun" in evaluator.capabilities else None
+            self._gains = (self.alpha, self.beta) if self.stabilization == "baumgarte" else (0.0, 0.0)
+            cached = self._one_call_for = (mask, fast)
+        return cached[1]
 
     def output_gains(self):
         """``(alpha, beta)`` with Baumgarte stabilization, else None."""
