@@ -268,3 +268,34 @@ def test_simulate_backend_option_gives_the_numeric_trajectory():
     np.testing.assert_allclose(r_gen["slider_joint.s"], r_num["slider_joint.s"], rtol=0, atol=1e-8)
     with pytest.raises(ValueError, match="backend 'fortran' is unknown"):
         mbcomp.simulate(sc.build(), backend="fortran", **kw)
+
+
+@pytest.mark.skipif(c_compiler() is None, reason="no C compiler")
+def test_a_drive_law_is_traced_into_the_right_hand_side_so_the_engine_steps_driven_models(systems, tmp_path):
+    """The mixed model's PrescribedMotion law is part of the Lagrange program (no per-call
+    drive inputs): the C engine steps it, and the motion equals the numeric path's."""
+    s = systems["mixed"]
+    c = compile_system(s, "c", cache_dir=str(tmp_path))
+    assert "c_integrate" in c.evaluator.capabilities
+    fast = mbcomp.simulate(c, t_end=3.0, method="dop853", rtol=1e-11, atol=1e-12)
+    ref = mbcomp.simulate(s, t_end=3.0, method="DOP853", rtol=1e-11, atol=1e-12, backend="numeric")
+    assert fast.stats["stretches"] > 0
+    np.testing.assert_allclose(fast["j.phi"], ref["j.phi"], atol=1e-9)
+    np.testing.assert_allclose(fast["spin.phi"], 0.5 * np.sin(2 * fast.time), atol=1e-12)  # the law itself
+
+
+@pytest.mark.skipif(c_compiler() is None, reason="no C compiler")
+def test_a_drive_law_a_program_cannot_hold_stays_a_per_call_input(tmp_path):
+    """A drive law that converts its time to a float cannot be traced: the program takes its
+    (s, v, a) at every call instead (no engine), and the run is still right."""
+    import math
+
+    s = mbcomp.assemble(mixed_model(), params={"drive.s": lambda t: 0.5 * math.sin(2 * float(t)),
+                                   "drive.v": lambda t: math.cos(2 * float(t)),
+                                   "drive.a": lambda t: -2.0 * math.sin(2 * float(t))})
+    initialize(s)
+    c = compile_system(s, "c", cache_dir=str(tmp_path))
+    assert "lagrange_fun" in c.evaluator.capabilities and "c_integrate" not in c.evaluator.capabilities
+    fast = mbcomp.simulate(c, t_end=1.0, method="dop853", rtol=1e-10, atol=1e-12)
+    ref = mbcomp.simulate(s, t_end=1.0, method="DOP853", rtol=1e-10, atol=1e-12, backend="numeric")
+    np.testing.assert_allclose(fast["j.phi"], ref["j.phi"], atol=1e-8)

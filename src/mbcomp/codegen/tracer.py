@@ -37,7 +37,7 @@ from ..assembly.outputs import output_values
 from ..assembly.recursive import SingularTree, lagrange_accelerations, tree_evaluation
 from ..modeling.blame import blame
 from .graph import CodegenError, Graph, Sym
-from .tracing import parameter_entries, q_rates, traced_params, traced_system
+from .tracing import drives, parameter_entries, q_rates, traced_params, traced_system
 
 __all__ = ["FIELDS", "param_layout", "param_vector", "trace_point", "trace"]
 
@@ -135,6 +135,18 @@ def _untraceable(exc):
 
 
 def trace(system, max_nodes, program="eval", baumgarte=True):
+    """See :func:`_trace`; the right-hand side (``program="fun"``) first tries the drives'
+    motion laws traced into the program (no per-call inputs: the C engine can step it), and
+    falls back to their ``(s, v, a)`` as inputs when a law cannot be traced."""
+    if program == "fun" and drives(system):
+        try:
+            return _trace(system, max_nodes, program, baumgarte, inline_drives=True)
+        except CodegenError:
+            pass  # a drive law a program cannot hold: evaluated in Python at every call
+    return _trace(system, max_nodes, program, baumgarte)
+
+
+def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=False):
     """Trace the evaluation and the coordinate rates of ``system`` (``program="eval"``), or
     the coordinate rates and the Lagrange right-hand side with the system's row mask
     (``program="fun"``: output group ``"fun"``, absent when the trace point is singular), or
@@ -163,7 +175,7 @@ def trace(system, max_nodes, program="eval", baumgarte=True):
 
     with g:
         try:
-            ts = traced_system(system, _param_inputs(g, system, layout), drive_inputs)
+            ts = traced_system(system, _param_inputs(g, system, layout), None if inline_drives else drive_inputs)
             q = np.array([g.input("q", k, v) for k, v in enumerate(q0)] + [None], dtype=object)[:-1]
             u = np.array([g.input("u", k, v) for k, v in enumerate(u0)] + [None], dtype=object)[:-1]
             t = g.input("t", 0, t0)
