@@ -168,7 +168,7 @@ def test_sigterm_stops_the_compiled_engine_with_what_it_reached():
         timer.cancel()
         signal.signal(signal.SIGTERM, previous)
     assert res.status == "interrupted" and "SIGTERM" in res.message
-    assert "c_integrate" in fast.evaluator.capabilities and res.stats["nfev"] > 0
+    assert res.stats["backend"] == "c" and res.stats["stretches"] > 0 and res.stats["nfev"] > 0
     assert 10.0 < res.time[-1] < 1e6
     assert np.ptp(res["energy.total"]) < 1e-7
 

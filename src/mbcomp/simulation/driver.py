@@ -137,7 +137,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     status, message = integrate(run, monitors, progress)
     stats = run.counters()
     stats.update(nfev=form.nfev, nlu=form.nlu + stats["nlu_integrator"], cpu_time=_time.perf_counter() - wall0,
-                 method=method, formulation=formulation, index=index, backend=backend,
+                 method=method, formulation=formulation, index=index, backend=system.backend,
                  stabilization=form.stabilization, projected_rows_dropped=list(init.dropped),
                  init_iterations=init.iterations)
     stats.update(form.run_stats())
