@@ -224,6 +224,31 @@ def derive(verbose=False):
                    t_derive, t_lambdify, n_ops, kane)
 
 
+def pydy_full(generator="cython"):
+    """Kane's equations of :func:`build_kane` through pydy's code generator (Cython by
+    default): ``(rhs(t, y), y0, build_seconds)`` for ``y = (q[7], u[7])`` with
+    ``kane.mass_matrix_full`` / ``kane.forcing_full`` (the route of pydy's documentation,
+    compiled; the 6 dependent speeds are integrated as states, so they drift like the
+    coordinates). ``build_seconds``: derivation + generation + compilation, CPU incl. the
+    compiler."""
+    from pydy.codegen.ode_function_generators import generate_ode_function
+
+    from .cpu_clock import cpu
+
+    params, q0, _, _ = load_reference()
+    pv = np.array([params[n] for n in PARAM_NAMES])
+    c0 = cpu()
+    kane, q, u, p, _, _ = build_kane()
+    f = generate_ode_function(kane.forcing_full, q, u, p, mass_matrix=kane.mass_matrix_full, generator=generator,
+                              constants_arg_type="array")
+    build = cpu() - c0
+
+    def rhs(t, y):  # a copy: pydy's generated function reuses its output array
+        return np.array(f(y, t, pv))
+
+    return rhs, np.concatenate([q0, np.zeros(7)]), build
+
+
 # --------------------------------------------------------------------------------------
 # integration
 # --------------------------------------------------------------------------------------
