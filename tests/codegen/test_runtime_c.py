@@ -306,6 +306,32 @@ int main(void)
             CHECK(mbrt_project(&B, 0.0, yq, 1e-12, 8, 1e-9, &nrm, wk) == MBRT_MECH_BAD_ARGUMENT);
             free(wk);
         }
+        {   /* the DAE forms' residual and Jacobian at the pendulum's consistent state */
+            mbrt_mech P;
+            mech_pendulum(&P, par, rows, 1);
+            double x = L * sin(th), y = -L * cos(th), vx = L * cos(th) * wd, vy = L * sin(th) * wd;
+            double thdd = -9.81 / L * sin(th);
+            double ax = L * cos(th) * thdd - L * sin(th) * wd * wd, ay = L * sin(th) * thdd + L * cos(th) * wd * wd;
+            double lam = -par[0] * ax / x;
+            double ys[8] = {x, y, vx, vy, ax, ay, lam, 0.0};
+            double g2[2] = {10.0, 10.0};
+            for (int form = 1; form <= 3; ++form) {
+                int n = mbrt_dae_size(&P, form), nf = -1;
+                CHECK(n == (form == 2 ? 8 : 7));
+                double *wk = malloc(mbrt_dae_work_size(&P, form) * sizeof(double));
+                double *F = malloc((size_t)n * sizeof(double)), *J = malloc((size_t)n * n * sizeof(double));
+                CHECK(mbrt_dae_fun(&P, form, 0.0, ys, form == 1 ? g2 : NULL, F, J, &nf, wk) == MBRT_MECH_OK);
+                CHECK(nf == 1 + 4 + (form == 2));
+                CHECK(fabs(F[0] - vx) < 1e-12 && fabs(F[3] - ay) < 1e-12);
+                for (int i = 4; i < n; ++i)
+                    CHECK(fabs(F[i]) < 1e-11);
+                CHECK(J[4 * n + 4] == -par[0] && J[4 * n + 6] == -x && J[2 * n + 4] == 1.0);
+                CHECK(mbrt_dae_fun(&P, 9, 0.0, ys, NULL, F, J, &nf, wk) == MBRT_MECH_BAD_ARGUMENT);
+                double yb[8] = {6.0, -1.0, 0, 0, 0, 0, 0, 0};
+                CHECK(mbrt_dae_fun(&P, form, 0.0, yb, NULL, F, NULL, &nf, wk) == MBRT_MECH_FALLBACK);
+                free(wk); free(F); free(J);
+            }
+        }
         double R[9] = {1, 2, 3, 4, 5, 6, 7, 8, 10}, S[9], Z[4] = {1, 2, 2, 4}, S2[4];
         CHECK(fabs(mbrt_cond2(3, R, S) / 88.44 - 1.0) < 1e-3);  /* numpy: 88.4482799 */
         CHECK(isinf(mbrt_cond2(2, Z, S2)));
@@ -818,6 +844,37 @@ def test_project_turns_quaternions_as_the_python_closure(lib):
         ref = np.concatenate((c.q, solve_speeds(C, C @ y[4:], y[4:])))
         np.testing.assert_allclose(yc, ref, rtol=0, atol=1e-14)
         assert abs(np.linalg.norm(yc[:4]) - 1) < 1e-15 and abs(residual(yc[:4])[0][0]) < 1e-12
+
+
+@pytest.mark.parametrize("form", [1, 2, 3])
+def test_dae_residual_vanishes_on_the_pendulum_motion(lib, form):
+    """The Cartesian pendulum at a point of its exact motion (theta, theta') with the exact
+    accelerations and multiplier: the residual of Index1 (with Baumgarte), GGL (eta = 0)
+    and Index3 is zero in its dynamic and constraint rows, and the Jacobian's exact blocks
+    are -M, -C^T (and -C in Index1's acceleration rows)."""
+    m, g, L = 2.0, 9.81, 1.5
+    P, keep = _pendulum(lib, np.array([m, g, L]))
+    for f in ("mbrt_dae_size", "mbrt_dae_work_size"):
+        getattr(lib, f).argtypes = [ctypes.c_void_p, ctypes.c_int]
+    lib.mbrt_dae_work_size.restype = ctypes.c_size_t
+    lib.mbrt_dae_fun.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_double] + [ctypes.c_void_p] * 6
+    n = lib.mbrt_dae_size(ctypes.addressof(P), form)
+    work = np.zeros(lib.mbrt_dae_work_size(ctypes.addressof(P), form))
+    for th, wd in ((0.4, 1.3), (-2.0, 0.5)):
+        x, y = L * np.sin(th), -L * np.cos(th)
+        thdd = -g / L * np.sin(th)
+        a = np.array([L * np.cos(th) * thdd - L * np.sin(th) * wd ** 2, L * np.sin(th) * thdd + L * np.cos(th) * wd ** 2])
+        lam = -m * a[0] / x
+        yv = np.r_[x, y, L * np.cos(th) * wd, L * np.sin(th) * wd, a, lam, [0.0] * (n - 7)]
+        F, J, nf, gains = np.zeros(n), np.zeros((n, n)), ctypes.c_int(), np.array([10.0, 10.0])
+        assert lib.mbrt_dae_fun(ctypes.addressof(P), form, 0.0, yv.ctypes.data, gains.ctypes.data if form == 1 else None,
+                                F.ctypes.data, J.ctypes.data, ctypes.addressof(nf), work.ctypes.data) == 0
+        np.testing.assert_allclose(F[:4], yv[2:6], rtol=1e-14)
+        np.testing.assert_allclose(F[4:], 0.0, atol=1e-11)
+        np.testing.assert_array_equal(J[4:6, 4:6], -m * np.eye(2))
+        np.testing.assert_array_equal(J[4:6, 6], [-x, -y])
+        if form == 1:
+            np.testing.assert_array_equal(J[6, 4:6], [-x, -y])
 
 
 def test_cond2_matches_numpy(lib):

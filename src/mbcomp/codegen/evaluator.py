@@ -287,10 +287,11 @@ class ProgramEvaluator:
         the program has the Lagrange index-1 right-hand side (:meth:`lagrange_fun`),
         ``"c_integrate"`` when the C engine can step it (:meth:`integrator`),
         ``"dalembert_fun"`` when the D'Alembert right-hand side runs in one C call
-        (:meth:`dalembert_fun`), ``"outputs"``: result columns of whole output grids
+        (:meth:`dalembert_fun`), ``"dae_fun"`` when the DAE forms' residual and Jacobian do
+        (:meth:`dae_program`), ``"outputs"``: result columns of whole output grids
         (:meth:`output_grid`). Asking makes the Lagrange program; :meth:`offers` asks for
         one capability and makes only what that one needs."""
-        caps = {"outputs"} | ({"dalembert_fun"} if self.offers("dalembert_fun") else set())
+        caps = {"outputs"} | {name for name in ("dalembert_fun", "dae_fun") if self.offers(name)}
         bound = self._fun_bound()
         if bound is not None:
             caps.update(("lagrange_fun", "c_integrate") if bound.code.has_engine else ("lagrange_fun",))
@@ -298,8 +299,8 @@ class ProgramEvaluator:
 
     def offers(self, name):
         """Whether this evaluator offers the capability ``name`` (see :attr:`capabilities`);
-        ``"dalembert_fun"`` is decided without making the Lagrange program."""
-        if name == "dalembert_fun":
+        ``"dalembert_fun"`` and ``"dae_fun"`` are decided without making the Lagrange program."""
+        if name in ("dalembert_fun", "dae_fun"):
             return self._dalembert() is not None
         return name in self.capabilities
 
@@ -318,6 +319,16 @@ class ProgramEvaluator:
         prog = dalembert_program(bound, self.system)
         self._dal = (bound, rm, prog)
         return prog
+
+    def dae_program(self, form, gains=None):
+        """The residual and Jacobian of a multiplier DAE form in one C call each
+        (:class:`mbcomp.codegen.engine.DAEProgram`; ``form`` 1, 2, 3: Index1, GGL, Index3),
+        or None (Python backend, no compiler); capability ``"dae_fun"``."""
+        if self._dalembert() is None:
+            return None
+        from .engine import dae_program
+
+        return dae_program(self.bound or self._bound(), self.system, form, gains)
 
     def dalembert_fun(self, t, y, dep, ind):
         """The D'Alembert right-hand side at ``y = [q, v]`` for the partition ``dep``/``ind``

@@ -118,10 +118,45 @@ class _SemiExplicit(_Multipliers):
         J[ia, il] = -ev.A.T
         return ia, il
 
+    # --- the residual and Jacobian in one C call (capability "dae_fun") -----------------------
+    #: the form's number in the C runtime (``MBRT_DAE_*``: 1 Index1, 2 GGL, 3 Index3)
+    _c_form = None
+
+    def _c_gains(self):
+        """The Baumgarte gains the C residual adds (Index1 with ``"baumgarte"``), else None."""
+        return None
+
+    def _c_call(self, t, y, jac=False):
+        """``(F, J)`` from one C call (:class:`mbcomp.codegen.engine.DAEProgram`: the same
+        residual, the same finite-difference columns and exact linear blocks), or None: no
+        such program (numeric or Python backend), or a failed guard / non-finite value at
+        this ``y`` (then the Python path answers)."""
+        mask = self.system.row_mask
+        cached = self.__dict__.get("_c_prog")
+        if cached is None or cached[0] is not mask:
+            ev = self.system.evaluator
+            offers = getattr(ev, "offers", None)
+            ok = offers("dae_fun") if offers is not None else "dae_fun" in ev.capabilities
+            cached = self._c_prog = (mask, ev.dae_program(self._c_form, self._c_gains()) if ok else None)
+        prog = cached[1]
+        if prog is None:
+            return None
+        status, F, J, nfev = prog(t, y, jac)
+        if status:
+            self.system.evaluator.stats["fallbacks"] += 1
+            return None
+        self.nfev += nfev - 1  # the caller counted one
+        return F, J
+
     def jac(self, t, y):
         """``d fun / d y`` (n, n): forward differences over ``q``, ``u`` (and GGL's ``eta``), the
         linear ``a`` and ``lam`` columns exactly from ``M`` and ``A``."""
         y = np.asarray(y, float)
+        self._check_finite(t, y)
+        r = self._c_call(t, y, jac=True)
+        if r is not None:
+            return r[1]
+        self.nfev -= 1  # counted again by fun below
         f0 = self.fun(t, y)
         J = np.empty((self.n, self.n))
         for i in self._fd_columns():
@@ -168,9 +203,14 @@ class Index3(_SemiExplicit):
         self.index = np.concatenate((np.ones(self.nq, int), np.full(self.nu, 2), np.full(self.nu, 3),
                                      np.full(self.mh, 3), np.full(self.mn, 2)))
 
+    _c_form = 3
+
     def fun(self, t, y):
         """``[dq/dt, du/dt, f - M a - A^T lam, -Phi, -Psi]``; ``E`` keeps the first two."""
         self._check_finite(t, y)
+        r = self._c_call(t, y)
+        if r is not None:
+            return r[0]
         q, u, a, lam = self._split(y)
         ev, dyn = self._dyn(t, q, u, a, lam)
         return np.concatenate((self.system.q_rate(q, u), a, dyn, -ev.Phi, -ev.Psi))
@@ -213,9 +253,14 @@ class GGL(_SemiExplicit):
     def _fd_columns(self):
         return list(range(self.nq + self.nu)) + list(range(self.n - self.mh, self.n))
 
+    _c_form = 2
+
     def fun(self, t, y):
         """``[H(q)(u - C^T eta), du/dt, f - M a - A^T lam, -dPhi/dt, -Psi, -Phi]``."""
         self._check_finite(t, y)
+        r = self._c_call(t, y)
+        if r is not None:
+            return r[0]
         q, u, a, rest = self._split(y)
         lam, eta = rest[: self.m], rest[self.m:]
         ev, dyn = self._dyn(t, q, u, a, lam)
@@ -267,9 +312,17 @@ class Index1(_SemiExplicit):
         J[il, ia] = -ev.A  # the acceleration-level rows  -(A a + bias)
         return ia, il
 
+    _c_form = 1
+
+    def _c_gains(self):
+        return (self.alpha, self.beta) if self.stabilization == "baumgarte" else None
+
     def fun(self, t, y):
         """``[dq/dt, du/dt, f - M a - A^T lam, -(A a + bias)]`` (bias with the Baumgarte terms)."""
         self._check_finite(t, y)
+        r = self._c_call(t, y)
+        if r is not None:
+            return r[0]
         q, u, a, lam = self._split(y)
         ev, dyn = self._dyn(t, q, u, a, lam)
         bias = np.concatenate((ev.cb, ev.Bb))

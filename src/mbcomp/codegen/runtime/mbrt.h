@@ -221,6 +221,30 @@ int mbrt_dalembert_rhs(const mbrt_mech *P, double t, const double *y, const int 
 int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_iter, double accept,
                  double *norm, double *work);
 
+/* The multiplier forms as semi-explicit DAEs E dy/dt = F(t, y) (mbcomp's
+ * formulations/dae.py), y = [q, u, a, lam] with lam the m = nrows + mn
+ * multipliers (GGL: and eta, nrows more):
+ *   INDEX3  F = [dq/dt(q, u), a, f - M a - A^T lam, -Phi[rows], -Psi]
+ *   GGL     F = [dq/dt(q, u - C^T eta), a, f - M a - A^T lam, -[dPhi/dt; Psi], -Phi]
+ *   INDEX1  F = [dq/dt(q, u), a, f - M a - A^T lam, -(A a + bias)],
+ *           bias = [c_b; B_b] (+ [2 alpha dPhi/dt + beta^2 Phi; alpha Psi] when
+ *           gains = {alpha, beta} is not NULL). */
+enum { MBRT_DAE_INDEX1 = 1, MBRT_DAE_GGL = 2, MBRT_DAE_INDEX3 = 3 };
+
+/* The size n of the form's y (-1 for an unknown form). */
+int mbrt_dae_size(const mbrt_mech *P, int form);
+
+/* Doubles of scratch mbrt_dae_fun needs. */
+size_t mbrt_dae_work_size(const mbrt_mech *P, int form);
+
+/* F(t, y) into F (n), and when J is not NULL also dF/dy (n x n, row-major):
+ * forward differences h = 1.5e-8 max(1, |y_i|) over the q and u columns (and
+ * eta's), the a and lam columns exactly from M and A at (q, u).  *nfev (may be
+ * NULL) receives the residual evaluations made.  Returns MBRT_MECH_OK,
+ * _FALLBACK (a guard failed or a value was not finite) or _BAD_ARGUMENT. */
+int mbrt_dae_fun(const mbrt_mech *P, int form, double t, const double *y, const double *gains, double *F,
+                 double *J, int *nfev, double *work);
+
 /* 2-norm condition number of the n x n row-major A by one-sided Jacobi (S:
  * n*n scratch); INFINITY when A is singular. */
 double mbrt_cond2(int n, const double *A, double *S);

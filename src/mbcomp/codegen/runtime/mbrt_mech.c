@@ -452,3 +452,144 @@ int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_it
     memcpy(y + nq, u, sizeof(double) * (size_t)nu);
     return MBRT_MECH_OK;
 }
+
+/* ------------------------------------------------------------------ DAE forms */
+
+/* Residual F of the semi-explicit multiplier forms (formulations/dae.py) at y = [q, u, a, lam
+ * (, eta)]; out is n_out scratch for the evaluation, w nu scratch (GGL). */
+static int dae_residual(const mbrt_mech *P, int form, double t, const double *y, const double *gains,
+                        double *F, double *out, double *w)
+{
+    const int nq = P->nq, nu = P->nu, m = nvel(P), mh = P->nrows;
+    const double *q = y, *u = y + nq, *a = u + nu, *lam = a + nu, *eta = lam + m;
+    int rc;
+    if ((rc = evaluate(P, t, q, u, out)) != MBRT_MECH_OK)
+        return rc;
+    const double *M = out + P->off_M, *f = out + P->off_f;
+    const double *vel = u;
+    if (form == MBRT_DAE_GGL && mh > 0) {  /* dq/dt = H(q) (u - C^T eta) */
+        for (int i = 0; i < nu; ++i)
+            w[i] = u[i];
+        for (int k = 0; k < mh; ++k) {
+            const double *ck = arow(P, out, k);
+            for (int i = 0; i < nu; ++i)
+                w[i] -= ck[i] * eta[k];
+        }
+        vel = w;
+    }
+    if (P->qrate != NULL) {
+        if (P->qrate(q, vel, t, P->d, P->h, P->p, P->w, F))
+            return MBRT_MECH_FALLBACK;
+    } else {
+        memcpy(F, vel, sizeof(double) * (size_t)nu);
+    }
+    double *Fa = F + nq, *Fd = Fa + nu, *Fc = Fd + nu;
+    memcpy(Fa, a, sizeof(double) * (size_t)nu);
+    for (int i = 0; i < nu; ++i) {  /* f - M a - A^T lam */
+        const double *Mi = M + (size_t)i * nu;
+        double s = f[i];
+        for (int j = 0; j < nu; ++j)
+            s -= Mi[j] * a[j];
+        Fd[i] = s;
+    }
+    for (int k = 0; k < m; ++k) {
+        const double *ak = arow(P, out, k);
+        for (int i = 0; i < nu; ++i)
+            Fd[i] -= ak[i] * lam[k];
+    }
+    if (form == MBRT_DAE_INDEX3) {         /* -Phi, -Psi */
+        for (int k = 0; k < m; ++k)
+            Fc[k] = k < mh ? -out[P->off_Phi + P->rows[k]] : -out[P->off_Psi + (k - mh)];
+    } else if (form == MBRT_DAE_GGL) {     /* -dPhi/dt, -Psi, -Phi */
+        for (int k = 0; k < m; ++k)
+            Fc[k] = -ares(P, out, k);
+        for (int k = 0; k < mh; ++k)
+            Fc[m + k] = -out[P->off_Phi + P->rows[k]];
+    } else {                               /* -(A a + bias), bias with the Baumgarte terms */
+        for (int k = 0; k < m; ++k) {
+            const double *ak = arow(P, out, k);
+            double b = abias(P, out, k);
+            if (gains != NULL)
+                b += k < mh ? 2.0 * gains[0] * out[P->off_Phid + P->rows[k]] +
+                                  gains[1] * gains[1] * out[P->off_Phi + P->rows[k]]
+                            : gains[0] * out[P->off_Psi + (k - mh)];
+            double s = 0.0;
+            for (int i = 0; i < nu; ++i)
+                s += ak[i] * a[i];
+            Fc[k] = -(s + b);
+        }
+    }
+    return finite_all(nq + 2 * nu + m + (form == MBRT_DAE_GGL ? mh : 0), F) ? MBRT_MECH_OK : MBRT_MECH_FALLBACK;
+}
+
+int mbrt_dae_size(const mbrt_mech *P, int form)
+{
+    if (P == NULL || (form != MBRT_DAE_INDEX1 && form != MBRT_DAE_GGL && form != MBRT_DAE_INDEX3))
+        return -1;
+    return P->nq + 2 * P->nu + nvel(P) + (form == MBRT_DAE_GGL ? P->nrows : 0);
+}
+
+size_t mbrt_dae_work_size(const mbrt_mech *P, int form)
+{
+    int n = mbrt_dae_size(P, form);
+    if (n < 0 || P->n_out < 0)
+        return 0;
+    /* out (n_out), w (nu), yy, F1 (n each) */
+    return (size_t)P->n_out + (size_t)P->nu + 2 * (size_t)n + 1;
+}
+
+int mbrt_dae_fun(const mbrt_mech *P, int form, double t, const double *y, const double *gains, double *F,
+                 double *J, int *nfev, double *work)
+{
+    int n = mbrt_dae_size(P, form);
+    if (!mech_ok(P) || n < 0 || y == NULL || F == NULL || work == NULL)
+        return MBRT_MECH_BAD_ARGUMENT;
+    if (nfev != NULL)
+        *nfev = 0;
+    const int nq = P->nq, nu = P->nu, m = nvel(P);
+    double *out = work, *w = out + P->n_out, *yy = w + nu, *F1 = yy + n;
+    int rc = dae_residual(P, form, t, y, gains, F, out, w);
+    if (nfev != NULL)
+        *nfev += 1;
+    if (rc != MBRT_MECH_OK || J == NULL)
+        return rc;
+    /* forward differences over q, u (and eta), h = 1.5e-8 max(1, |y_i|), as dae.py's jac */
+    memcpy(yy, y, sizeof(double) * (size_t)n);
+    const int ia = nq + nu, il = nq + 2 * nu;
+    for (int i = 0; i < n; ++i) {
+        int fd = i < ia || (form == MBRT_DAE_GGL && i >= il + m);
+        if (!fd)
+            continue;
+        double h = 1.5e-8 * fmax(1.0, fabs(y[i]));
+        yy[i] = y[i] + h;
+        rc = dae_residual(P, form, t, yy, gains, F1, out, w);
+        if (nfev != NULL)
+            *nfev += 1;
+        yy[i] = y[i];
+        if (rc != MBRT_MECH_OK)
+            return rc;
+        for (int r = 0; r < n; ++r)
+            J[(size_t)r * n + i] = (F1[r] - F[r]) / h;
+    }
+    /* the columns of a and lam exactly: the residual is linear in them (M, A at (q, u)) */
+    if ((rc = evaluate(P, t, y, y + nq, out)) != MBRT_MECH_OK)
+        return rc;
+    const double *M = out + P->off_M;
+    for (int r = 0; r < n; ++r)
+        for (int c = ia; c < il + m; ++c)
+            J[(size_t)r * n + c] = 0.0;
+    for (int i = 0; i < nu; ++i) {
+        J[(size_t)(nq + i) * n + ia + i] = 1.0;
+        for (int j = 0; j < nu; ++j)
+            J[(size_t)(ia + i) * n + ia + j] = -M[(size_t)i * nu + j];
+    }
+    for (int k = 0; k < m; ++k) {
+        const double *ak = arow(P, out, k);
+        for (int i = 0; i < nu; ++i) {
+            J[(size_t)(ia + i) * n + il + k] = -ak[i];
+            if (form == MBRT_DAE_INDEX1)
+                J[(size_t)(il + k) * n + ia + i] = -ak[i];
+        }
+    }
+    return MBRT_MECH_OK;
+}
