@@ -22,6 +22,8 @@ Examples
 """
 from __future__ import annotations
 
+import contextlib
+import gc
 import math
 
 import numpy as np
@@ -49,6 +51,19 @@ class Fallback(Exception):
 
 class Retrace(Exception):
     """A parameter guard failed: the program must be traced again."""
+
+
+@contextlib.contextmanager
+def no_gc():
+    """The cyclic garbage collector paused (restored on exit): building and printing a graph of
+    millions of nodes allocates many objects and makes no cycles that matter meanwhile."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
 
 
 # ----------------------------------------------------------------------------------------------
@@ -87,7 +102,7 @@ class Graph:
         return [x2]
     """
 
-    __slots__ = ("keys", "nodes", "memo", "guards", "_guard_keys", "max_nodes", "baked", "_prev")
+    __slots__ = ("keys", "nodes", "memo", "guards", "_guard_keys", "max_nodes", "baked", "_prev", "_gc")
 
     def __init__(self, max_nodes=3_000_000):
         self.keys, self.nodes, self.memo = [], [], {}
@@ -101,11 +116,17 @@ class Graph:
     def __enter__(self):
         global _G
         self._prev, _G = _G, self
+        # the collector would walk the growing graph again and again (a quarter of the
+        # tracing time); nothing traced makes reference cycles that must go before the end
+        self._gc = gc.isenabled()
+        gc.disable()
         return self
 
     def __exit__(self, *exc):
         global _G
         _G = self._prev
+        if self._gc:
+            gc.enable()
 
     def new(self, key, v, s):
         i = len(self.keys)

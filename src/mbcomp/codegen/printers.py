@@ -26,9 +26,14 @@ True
 """
 from __future__ import annotations
 
+import itertools
 import math
+import operator
+
+import numpy as np
 
 from .graph import _CMP, _INF, Retrace, Sym, _div, _pow, _safe
+from .rolling import ROLL_MIN, rolled as _rolled
 
 __all__ = ["PY_ENV", "Program", "ParamProgram"]
 
@@ -82,6 +87,11 @@ def _expr(key, a, lang):
     return f"{table[op]}({a[0]})"
 
 
+def _c_expr(op, a):
+    """C expression of operation ``op`` on operand names ``a`` (a constant: ``("c", value)``)."""
+    return _c_num(op[1]) if type(op) is tuple else _expr((op,), a, "c")
+
+
 class Program:
     """Nodes needed for named output groups, split into hoisted parameter nodes and state nodes."""
 
@@ -89,32 +99,25 @@ class Program:
         self.g, self.groups = g, groups
         keys, nodes = g.keys, g.nodes
         n = len(keys)
-        need = bytearray(n)
-        stack = []
-        for outs in groups.values():
-            stack.extend(o.i for o in outs if type(o) is Sym)
-        for op, ai, bi, _ in g.guards:
-            stack += [ai, bi]
-        while stack:
-            i = stack.pop()
-            if need[i]:
-                continue
-            need[i] = 1
-            k = keys[i]
-            if k[0] not in ("c", "in"):
-                stack.extend(k[1:])
+        self._arrays = None
+        opc, code, A, B = self.arrays()
+        is_c, is_in = opc == code.get("c", -1), opc == code.get("in", -1)
+        starts = [o.i for outs in groups.values() for o in outs if type(o) is Sym]
+        starts += [j for gd in g.guards for j in gd[1:3]]
+        need = _reach(starts, A, B, np.ones(n, bool), ~(is_c | is_in))
         self.need = need
         # without hoisting every non-constant node belongs to the state programs
-        state = [nd.s for nd in nodes] if hoist else [k[0] != "c" for k in keys]
+        state = list(map(_STATE, nodes)) if hoist else [k[0] != "c" for k in keys]
         self.state = state
+        S = np.array(state, dtype=bool)
+        self._S = S
         # hoisted: parameter-only, non-constant nodes used by state nodes, state guards or outputs
         hoisted = set()
         if hoist:
-            for i in range(n):
-                if need[i] and state[i] and keys[i][0] != "in":
-                    for j in keys[i][1:]:
-                        if not state[j] and keys[j][0] != "c":
-                            hoisted.add(j)
+            users = need & S & ~is_in
+            cand = np.concatenate((A[users], B[users]))
+            cand = cand[cand >= 0]
+            hoisted.update(np.unique(cand[~S[cand] & ~is_c[cand]]).tolist())
             for outs in groups.values():
                 hoisted.update(o.i for o in outs if type(o) is Sym and not o.s)
             for op, ai, bi, _ in g.guards:
@@ -129,29 +132,58 @@ class Program:
         gg = guard_groups or {name: g.guards for name in groups}
         self.guards_of = {name: [gd for gd in gg.get(name, ()) if state[gd[1]] or state[gd[2]]] for name in groups}
         # parameter inputs in the order of their input index
-        self.params = sorted((keys[i][2], i) for i in range(n) if keys[i][0] == "in" and keys[i][1] == "p")
+        ins = np.flatnonzero(is_in).tolist()
+        self.params = sorted((keys[i][2], i) for i in ins if keys[i][1] == "p")
+        self._group_nodes = {}
+
+    def arrays(self):
+        """The graph as arrays (computed once): ``(opc, code, A, B)``, each node's operation
+        code (``code`` maps the operation names to them; constants ``"c"``, inputs ``"in"``)
+        and operand indices (-1: none)."""
+        if self._arrays is None:
+            keys = self.g.keys
+            n = len(keys)
+            ops = list(map(_OP, keys))
+            code = {o: c for c, o in enumerate(sorted(set(ops)))}
+            opc = np.array(list(map(code.__getitem__, ops)), dtype=np.int64)
+            del ops
+            op_idx = np.flatnonzero((opc != code.get("c", -1)) & (opc != code.get("in", -1)))
+            A = np.full(n, -1, dtype=np.int64)
+            B = np.full(n, -1, dtype=np.int64)
+            if len(op_idx):  # the operations' keys transposed: (names, first operands, second or -1)
+                cols = list(itertools.zip_longest(*map(keys.__getitem__, op_idx.tolist()), fillvalue=-1))
+                A[op_idx] = np.array(cols[1], dtype=np.int64)
+                if len(cols) > 2:
+                    B[op_idx] = np.array(cols[2], dtype=np.int64)
+                del cols
+            self._arrays = (opc, code, A, B)
+        return self._arrays
 
     # --- per-group state nodes ---------------------------------------------------------------
     def group_nodes(self, name):
-        """State nodes (indices, topological order) needed by output group ``name`` and guards."""
-        keys, state, hname = self.g.keys, self.state, self.hname
-        seen = set()
-        stack = [o.i for o in self.groups[name] if type(o) is Sym]
-        for op, ai, bi, _ in self.guards_of[name]:
-            stack += [ai, bi]
-        while stack:
-            i = stack.pop()
-            if i in seen or not state[i] or i in hname:
-                continue
-            seen.add(i)
-            k = keys[i]
-            if k[0] != "in":
-                stack.extend(k[1:])
-        return sorted(seen)
+        """State nodes (indices, topological order) needed by output group ``name`` and guards
+        (computed once; do not modify the list)."""
+        got = self._group_nodes.get(name)
+        if got is None:
+            got = self._group_nodes[name] = self._find_group_nodes(name)
+        return got
+
+    def _find_group_nodes(self, name):
+        opc, code, A, B = self.arrays()
+        allowed = self._S.copy()
+        allowed[self.hoisted] = False
+        starts = [o.i for o in self.groups[name] if type(o) is Sym]
+        starts += [j for gd in self.guards_of[name] for j in gd[1:3]]
+        return np.flatnonzero(_reach(starts, A, B, allowed, opc != code.get("in", -1))).tolist()
+
+    def op_nodes(self, name):
+        """The operations among :meth:`group_nodes` (inputs left out), as an array."""
+        opc, code, _, _ = self.arrays()
+        gn = np.array(self.group_nodes(name), dtype=np.int64)
+        return gn[opc[gn] != code.get("in", -1)]
 
     def n_ops(self, name):
-        keys = self.g.keys
-        return sum(1 for i in self.group_nodes(name) if keys[i][0] != "in")
+        return len(self.op_nodes(name))
 
     def pre_nodes(self):
         keys, state = self.g.keys, self.state
@@ -262,19 +294,41 @@ class Program:
         return f"if ({'!' if res else ''}({cond})) return 1;"
 
     # --- C -----------------------------------------------------------------------------------
-    def c_function(self, group, fname, chunk=2000):
-        """C source of ``int fname(q, u, t, d, h, w, out)``: 0 on success, 1 if a guard failed.
-        Values crossing chunk boundaries live in the work array ``w``."""
+    def c_function(self, group, fname, chunk=2000, roll=None):
+        """C source of ``int fname(q, u, t, d, h, p, w, out)``: 0 on success, 1 if a guard failed.
+        Values crossing chunk boundaries live in the work array ``w``; returns ``(source,
+        work size)``. ``roll``: see :meth:`c_parts` (one translation unit here)."""
+        parts, n_work = self.c_parts(group, fname, chunk, 1, roll)
+        return "\n".join(parts), n_work
+
+    def c_parts(self, group, fname, chunk=2000, n_parts=1, roll=None):
+        """The C program of ``group`` as ``n_parts`` translation units (without ``#include
+        <math.h>``; the last one defines ``int fname(...)``, the others its chunks, with hidden
+        visibility) and the size of the work array it needs. ``n_parts`` may be a function of
+        the program's size (its straight-line statements and loops) giving the number.
+
+        The straight-line code is split into functions of ``chunk`` statements (gcc's optimizer
+        is superlinear in a function's size); values crossing a function boundary live in the
+        work array ``w``. Output expressions of one shape (a tree of single-use operations under
+        an output nothing else uses, e.g. ``M[i, j] = S_i . F_j`` for every pair of links) that
+        occur at least ``roll`` times (default :data:`~mbcomp.codegen.rolling.ROLL_MIN`; 0: never)
+        are computed by one loop over a table of their operands' places instead
+        (:mod:`mbcomp.codegen.rolling`): the program's
+        text then grows like its distinct values (O(N) for a chain) instead of its outputs."""
         keys = self.g.keys
-        nodes = [i for i in self.group_nodes(group) if keys[i][0] != "in"]
+        roll = ROLL_MIN if roll is None else roll
+        nodes = self.op_nodes(group).tolist()
         outs = self.groups[group]
+        loops, slot, rolled = _rolled(self, group, nodes, roll) if roll and len(nodes) >= roll else ([], {}, None)
+        if rolled is not None:
+            nodes = [i for i in nodes if not rolled[i]]
         where_out = {}
         tail = []
         node_set = set(nodes)
         for k, o in enumerate(outs):
             if type(o) is Sym and o.i in node_set:
                 where_out.setdefault(o.i, []).append(k)
-            else:
+            elif type(o) is not Sym or rolled is None or not rolled[o.i]:
                 tail.append((k, o))
         chunks = [nodes[s: s + chunk] for s in range(0, len(nodes), chunk)] or [[]]
         chunk_of = {}
@@ -282,16 +336,23 @@ class Program:
             for i in ch:
                 chunk_of[i] = c
         guards = self._guards_by_node(self.guards_of[group])
-        slot = {}
         for c, ch in enumerate(chunks):
             for i in ch:
-                # operands of the node and of the guards checked right after it
-                for j in list(keys[i][1:]) + [x for gd in guards.get(i, ()) for x in gd[1:3]]:
+                for j in keys[i][1:]:
                     if j in chunk_of and chunk_of[j] != c and j not in slot:
                         slot[j] = len(slot)
+                for gd in guards.get(i, ()):  # a guard's other operand may be from an earlier chunk
+                    for j in gd[1:3]:
+                        if j in chunk_of and chunk_of[j] != c and j not in slot:
+                            slot[j] = len(slot)
+        args = "q, u, t, d, h, p, w, out"
         sig = ("const double *restrict q, const double *restrict u, double t, const double *restrict d, "
                "const double *restrict h, const double *restrict p, double *restrict w, double *restrict out")
-        src = []
+        if callable(n_parts):
+            n_parts = n_parts(len(nodes) + sum(lp.weight for lp in loops))
+        split = n_parts > 1
+        linkage = "MBCOMP_LOCAL int" if split else "static int"
+        funcs = []  # (weight, name, source)
 
         def name(j, c):
             if j in chunk_of:
@@ -311,15 +372,54 @@ class Program:
                     op, ai, bi, res = gd
                     cond = f"{name(ai, c)} {op} {name(bi, c)}"
                     body.append(f"    if ({'!' if res else ''}({cond})) return 1;")
-            src.append(f"static int {fname}_{c}({sig})\n{{\n" + "\n".join(body) + "\n    return 0;\n}\n")
+            funcs.append((len(ch), f"{fname}_{c}",
+                          f"{linkage} {fname}_{c}({sig})\n{{\n" + "\n".join(body) + "\n    return 0;\n}\n"))
+        for r, lp in enumerate(loops):
+            funcs.append((lp.weight, f"{fname}_r{r}", lp.source(f"{fname}_r{r}", linkage, sig, _c_expr)))
         tail_lines = [f"    out[{k}] = {self._out_name(o, 'c')};" for k, o in tail]
         for gd in guards.get(-1, ()):
             op, ai, bi, res = gd
             cond = f"{self._name(ai, 'c', True)} {op} {self._name(bi, 'c', True)}"
             tail_lines.append(f"    if ({'!' if res else ''}({cond})) return 1;")
-        calls = "\n".join(f"    if ({fname}_{c}(q, u, t, d, h, p, w, out)) return 1;" for c in range(len(chunks)))
-        src.append(f"int {fname}({sig})\n{{\n{calls}\n" + "\n".join(tail_lines) + "\n    return 0;\n}\n")
-        return "\n".join(src), len(slot)
+        calls = "\n".join(f"    if ({fn}({args})) return 1;" for _, fn, _ in funcs)
+        entry = f"int {fname}({sig})\n{{\n{calls}\n" + "\n".join(tail_lines) + "\n    return 0;\n}\n"
+        if not split:
+            return ["\n".join(src for _, _, src in funcs) + "\n" + entry], len(slot)
+        # contiguous runs of functions of about equal weight per part; the entry in the last
+        bins = [[] for _ in range(n_parts)]
+        total = sum(wt for wt, _, _ in funcs) or 1
+        acc = 0
+        for wt, fn, src in funcs:
+            bins[min(n_parts - 1, acc * n_parts // total)].append(src)
+            acc += wt
+        decl = "\n".join(f"{linkage} {fn}({sig});" for _, fn, _ in funcs)
+        parts = [_LOCAL + "\n".join(b) for b in bins[:-1]]
+        parts.append(_LOCAL + decl + "\n\n" + "\n".join(bins[-1]) + "\n" + entry)
+        return parts, len(slot)
+
+
+_OP = operator.itemgetter(0)
+_STATE = operator.attrgetter("s")
+
+
+def _reach(starts, A, B, allowed, expand):
+    """The nodes reachable from ``starts`` through operands (a boolean array): only
+    ``allowed`` nodes are reached, and only the operands of ``expand`` nodes are followed
+    (breadth first, one array operation per level)."""
+    mark = np.zeros(len(A), bool)
+    front = np.asarray(starts, dtype=np.int64)
+    front = front[allowed[front]]
+    while len(front):
+        mark[front] = True  # (a node twice in a front is expanded twice: cheaper than sorting)
+        e = front[expand[front]]
+        nxt = np.concatenate((A[e], B[e]))
+        nxt = nxt[nxt >= 0]
+        front = nxt[allowed[nxt] & ~mark[nxt]]
+    return mark
+
+
+_LOCAL = ("#ifndef MBCOMP_LOCAL\n#if defined(__GNUC__)\n#define MBCOMP_LOCAL __attribute__((visibility(\"hidden\")))\n"
+          "#else\n#define MBCOMP_LOCAL\n#endif\n#endif\n")
 
 
 class ParamProgram:
