@@ -374,8 +374,8 @@ class ProgramEvaluator:
         right-hand side with Baumgarte gains ``alpha``, ``beta`` (1/s) in C; None when this
         program has none (Python backend, drives, no Lagrange program). ``project``:
         ``(tol, accept)`` on ``|Phi|`` to project after every accepted step in C with the
-        evaluation program (when :func:`mbcomp.codegen.engine.coordinate_map` knows how the
-        coordinates move)."""
+        evaluation program; None when :func:`mbcomp.codegen.engine.coordinate_map` does not
+        know how the coordinates move."""
         from .engine import Integrator, mech_of
 
         bound = self._fun_bound()
@@ -384,6 +384,8 @@ class ProgramEvaluator:
         if project is None:
             return Integrator(bound, alpha, beta)
         mech = mech_of(self.bound or self._bound(), self.system)
+        if mech is None or not mech.moves:  # coordinates the C projection cannot move
+            return None
         return Integrator(bound, alpha, beta, mech=mech, tol=project[0], accept=project[1])
 
     def lagrange_fun(self, t, y, alpha, beta):

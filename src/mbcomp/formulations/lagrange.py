@@ -162,10 +162,6 @@ class LagrangeIndex1(Formulation):
         if not self.projects:
             return evaluator.integrator(*((self.alpha, self.beta) if self.stabilization == "baumgarte"
                                           else (0.0, 0.0)))
-        from ..codegen.engine import coordinate_map
-
-        if coordinate_map(self.system) is None:
-            return None
         return evaluator.integrator(0.0, 0.0, project=(POSITION_TOL, ACCEPT_FACTOR * POSITION_TOL))
 
     def project(self, t, y):
