@@ -20,9 +20,10 @@ generated model code is compiled together with:
     Constrained mechanics over a model's evaluation program (reached through
     a function pointer, ``mbrt_mech``): the D'Alembert right-hand side
     (dependent speeds, ``N^T M N`` by Cholesky, the partition's growth and
-    2-norm condition figures) and the projection of ``[q, u]`` onto the
+    2-norm condition figures), the projection of ``[q, u]`` onto the
     constraint manifold (Gauss--Newton with minimum-norm steps, then the
-    minimum-norm speed correction).
+    minimum-norm speed correction), and the residual and Jacobian of the
+    multiplier forms as DAEs (index 1, GGL, index 3).
 
 The runtime must stay free of Python: an exported FMU carries these sources
 (or the object code built from them) and runs where no interpreter exists.
