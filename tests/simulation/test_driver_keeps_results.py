@@ -169,8 +169,10 @@ def test_sigterm_stops_the_compiled_engine_with_what_it_reached():
         signal.signal(signal.SIGTERM, previous)
     assert res.status == "interrupted" and "SIGTERM" in res.message
     assert res.stats["backend"] == "c" and res.stats["stretches"] > 0 and res.stats["nfev"] > 0
-    assert 10.0 < res.time[-1] < 1e6
-    assert np.ptp(res["energy.total"]) < 1e-7
+    assert 1000.0 < res.time[-1] < 1e6
+    # DOP853 is not symplectic: its energy error grows linearly with time (~4e-9 J per 1000 s
+    # here), so the check covers the first 1000 s, however far a fast machine got
+    assert np.ptp(res["energy.total"][res.time <= 1000.0]) < 1e-7
 
 
 def test_a_run_in_a_worker_thread_installs_no_handler():

@@ -125,7 +125,7 @@ class Formulation:
     def _check_finite(self, t, y):
         """Count an evaluation; a non-finite state means the integration diverged."""
         self.nfev += 1
-        if not np.all(np.isfinite(y)):
+        if not np.isfinite(y).all():  # the method, not np.all(): ~1 us of a ~10 us call
             raise SimulationError(f"the state became non-finite at t={t:g} (the integration diverged)")
 
 

@@ -154,6 +154,7 @@ class Run:
         if "stretches" in total:  # a compiled stepper: one driver step is a stretch of its own steps
             out["steps"] += total["nsteps"] - total["stretches"] - total.get("python_steps", 0)
             out["stretches"] = total["stretches"]
+            out["projections"] += total.get("c_projections", 0)  # made in the C loop
         out["njev"] = total.get("njev", 0)
         out["nlu_integrator"] = total.get("nlu", 0)
         out.update({key: total[key] for key in ("nreject", "nnewton") if key in total})
