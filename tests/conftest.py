@@ -40,3 +40,11 @@ def torque_pendulum(law):
     m.connect(rod.frame_b, bob.frame_a)
     m.connect(j.axis, motor.flange_b)
     return m
+
+
+def compiled(model, backend="c"):
+    """``model`` assembled and compiled with both programs made now (``simulate``'s own
+    systems make the evaluation program lazily), for tests that use the programs directly."""
+    from mbcomp.codegen import compile_system
+
+    return compile_system(mbcomp.assemble(model), backend)

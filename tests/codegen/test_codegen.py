@@ -299,3 +299,22 @@ def test_a_drive_law_a_program_cannot_hold_stays_a_per_call_input(tmp_path):
     fast = mbcomp.simulate(c, t_end=1.0, method="dop853", rtol=1e-10, atol=1e-12)
     ref = mbcomp.simulate(s, t_end=1.0, method="DOP853", rtol=1e-10, atol=1e-12, backend="numeric")
     np.testing.assert_allclose(fast["j.phi"], ref["j.phi"], atol=1e-8)
+
+
+def test_simulate_makes_the_evaluation_program_only_when_evaluations_are_asked_for_often():
+    """The default path (Lagrange, the engine, the output program) evaluates a handful of
+    times: a lazy evaluator answers those numerically and never makes the O(N^2) evaluation
+    program; D'Alembert in Python evaluates at every step and gets it after LAZY_EVALUATIONS."""
+    from mbcomp.codegen.evaluator import LAZY_EVALUATIONS
+    from mbcomp.simulation.setup import system_of
+
+    chain = load_model("models/n_link_pendulum.py")
+    s = system_of(chain.build(N=4), None, "python")
+    res = mbcomp.simulate(s, t_end=0.5, method="RK45")
+    assert res.success and s.evaluator.bound is None and 0 < s.evaluator.numeric_calls < LAZY_EVALUATIONS
+    assert "n_ops_fun" in s.evaluator.stats  # the right-hand side program was made (and used)
+    ref = mbcomp.simulate(chain.build(N=4), t_end=0.5, method="RK45", backend="numeric")
+    np.testing.assert_allclose(res[s.q_names[-1]], ref[s.q_names[-1]], atol=1e-9)
+    d = system_of(chain.build(N=4), None, "python")
+    mbcomp.simulate(d, t_end=0.5, method="RK45", formulation="dalembert")
+    assert d.evaluator.bound is not None and d.evaluator.numeric_calls == LAZY_EVALUATIONS

@@ -15,14 +15,13 @@ import numpy as np
 import pytest
 
 import mbcomp
-from conftest import load_model, load_module
+from conftest import compiled, load_model, load_module
 from mbcomp.assembly.initialization import initialize
 from mbcomp.codegen import c_compiler
 from mbcomp.codegen.engine import coordinate_map, mech_of
 from mbcomp.errors import SimulationError
 from mbcomp.formulations import build
 from mbcomp.library import FixedTranslation, PointMass, PrescribedMotion, Revolute, World
-from mbcomp.simulation.setup import system_of
 
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="no C compiler")
 
@@ -52,7 +51,7 @@ MODELS = {
 
 def _pair(make):
     """Two D'Alembert formulations of one C-compiled, initialized system: C call and Python."""
-    s = system_of(make(), None, "c")
+    s = compiled(make())
     init = initialize(s, 0.0)
     a, b = build("dalembert", "ode", s), build("dalembert", "ode", s)
     y0 = a.initial_state(0.0, init.q, init.u)
@@ -139,7 +138,7 @@ def _massless_end():
 def test_a_singular_projected_mass_matrix_is_reported_in_the_same_words():
     """(Consistent initialization refuses this model; a formulation built without it meets
     the singular matrix in its right-hand side.)"""
-    s = system_of(_massless_end(), None, "c")
+    s = compiled(_massless_end())
     q, u = s.default_q(), np.zeros(s.nu)
     a, b = build("dalembert", "ode", s), build("dalembert", "ode", s)
     y0 = a.initial_state(0.0, q, u)
@@ -172,7 +171,7 @@ def test_c_projection_lands_where_the_python_projection_lands(name):
     ``C C^T`` moving the coordinates as the joints do, then the speed correction) against
     :meth:`LagrangeIndex1.project` (least squares by SVD) from states 1e-3 off the manifold
     (quaternions off unit length too): the same state to 1e-12, on the manifold."""
-    s = system_of(MODELS[name](), None, "c")
+    s = compiled(MODELS[name]())
     init = initialize(s, 0.0)
     form = build("lagrange", "ode", s, stabilization="projection")
     assert coordinate_map(s) is not None
@@ -211,7 +210,7 @@ DAE_CASES = [(1, "baumgarte"), (1, "none"), (2, None), (3, None)]
 
 
 def _dae_pair(make, index, stab):
-    s = system_of(make(), None, "c")
+    s = compiled(make())
     init = initialize(s, 0.0)
     kw = dict(index=index) | (dict(stabilization=stab) if stab else {})
     a, b = build("lagrange", "dae", s, **kw), build("lagrange", "dae", s, **kw)

@@ -6,7 +6,7 @@ import pytest
 import mbcomp
 from mbcomp.codegen import c_compiler
 
-from conftest import load_model, torque_pendulum
+from conftest import compiled, load_model, torque_pendulum
 
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="no C compiler")
 
@@ -43,9 +43,8 @@ def test_a_failed_guard_goes_on_in_python_with_the_same_motion():
 def _projection_form(path):
     from mbcomp.assembly.initialization import initialize
     from mbcomp.formulations import build
-    from mbcomp.simulation.setup import system_of
 
-    s = system_of(load_model(path).build(), None, "c")
+    s = compiled(load_model(path).build())
     init = initialize(s, 0.0)
     form = build("lagrange", "ode", s, stabilization="projection")
     return s, form, form.project(0.0, form.initial_state(0.0, init.q, init.u))
@@ -105,11 +104,11 @@ def _run(path, method, **kw):
     from mbcomp.assembly.initialization import initialize
     from mbcomp.formulations import build
     from mbcomp.simulation.driver import integrate
-    from mbcomp.simulation.setup import output_times, system_of
+    from mbcomp.simulation.setup import output_times
     from mbcomp.simulation.stepping import Run
     from mbcomp.solvers import STEPPERS
 
-    s = system_of(load_model(path).build(), None, "c")
+    s = compiled(load_model(path).build())
     init = initialize(s, 0.0)
     form = build("lagrange", "ode", s, stabilization="projection")
     run = Run(form, STEPPERS[method], output_times(0.0, kw.pop("t_end"), kw.pop("n_out"), None),

@@ -79,11 +79,11 @@ def system_of(model, params, backend):
         from ..codegen import compile_system
 
         if backend != "auto":
-            return compile_system(system, backend)
+            return compile_system(system, backend, lazy=True)
         from ..codegen import CodegenError
 
         try:
-            return compile_system(system, backend)
+            return compile_system(system, backend, lazy=True)
         except CodegenError as exc:  # a law that cannot be traced: the numeric path, said once
             import warnings
 
