@@ -309,7 +309,9 @@ class ProgramEvaluator:
         (:meth:`dae_program`), ``"outputs"``: result columns of whole output grids
         (:meth:`output_grid`). Asking makes the Lagrange program; :meth:`offers` asks for
         one capability and makes only what that one needs."""
-        caps = {"outputs"} | {name for name in ("dalembert_fun", "dae_fun") if self.offers(name)}
+        # the D'Alembert and DAE calls need a compiler only: say so without making the
+        # evaluation program (O(N^2)), which the Lagrange path never needs
+        caps = {"outputs"} | ({"dalembert_fun", "dae_fun"} if self.backend == "c" and c_compiler() else set())
         bound = self._fun_bound()
         if bound is not None:
             caps.update(("lagrange_fun", "c_integrate") if bound.code.has_engine else ("lagrange_fun",))
