@@ -131,13 +131,17 @@ class Graph:
     def new(self, key, v, s):
         i = len(self.keys)
         if i >= self.max_nodes:
-            raise CodegenError(f"the generated program exceeds max_nodes={self.max_nodes} operations; the "
-                               "model is too large for code generation (use the numeric path, or raise max_nodes)")
-        n = Sym(i, v, s)
+            self._too_big()
+        n = _new_sym(Sym)
+        n.i, n.v, n.s = i, v, s
         self.keys.append(key)
         self.nodes.append(n)
         self.memo[key] = n
         return n
+
+    def _too_big(self):
+        raise CodegenError(f"the generated program exceeds max_nodes={self.max_nodes} operations; the "
+                           "model is too large for code generation (use the numeric path, or raise max_nodes)")
 
     def input(self, kind, k, value, state=True):
         """A new input ``(kind, k)`` with trace-time value ``value``; ``state=False`` marks a
@@ -164,8 +168,19 @@ class Graph:
 
 
 def _mk(key, v, s):
-    n = _G.memo.get(key)
-    return n if n is not None else _G.new(key, v, s)
+    g = _G
+    n = g.memo.get(key)
+    if n is None:  # Graph.new, inlined: the hot path of tracing
+        keys = g.keys
+        i = len(keys)
+        if i >= g.max_nodes:
+            g._too_big()
+        n = _new_sym(Sym)
+        n.i, n.v, n.s = i, v, s
+        keys.append(key)
+        g.nodes.append(n)
+        g.memo[key] = n
+    return n
 
 
 def _div(x, y):
@@ -524,5 +539,6 @@ class Sym:
         raise TypeError("a traced value cannot be converted to complex")
 
 
+_new_sym = object.__new__
 _CMP = {"<": float.__lt__, "<=": float.__le__, ">": float.__gt__, ">=": float.__ge__,
         "==": float.__eq__, "!=": float.__ne__}

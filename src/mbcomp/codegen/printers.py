@@ -308,8 +308,9 @@ class Program:
         the program's size (its straight-line statements and loops) giving the number.
 
         The straight-line code is split into functions of ``chunk`` statements (gcc's optimizer
-        is superlinear in a function's size); values crossing a function boundary live in the
-        work array ``w``. Output expressions of one shape (a tree of single-use operations under
+        is superlinear in a function's size; ``chunk`` may be a function of the number of
+        straight-line statements and of the values the loops read giving it); values crossing
+        a function boundary live in the work array ``w``. Output expressions of one shape (a tree of single-use operations under
         an output nothing else uses, e.g. ``M[i, j] = S_i . F_j`` for every pair of links) that
         occur at least ``roll`` times (default :data:`~mbcomp.codegen.rolling.ROLL_MIN`; 0: never)
         are computed by one loop over a table of their operands' places instead
@@ -330,6 +331,8 @@ class Program:
                 where_out.setdefault(o.i, []).append(k)
             elif type(o) is not Sym or rolled is None or not rolled[o.i]:
                 tail.append((k, o))
+        if callable(chunk):
+            chunk = chunk(len(nodes), len(slot))
         chunks = [nodes[s: s + chunk] for s in range(0, len(nodes), chunk)] or [[]]
         chunk_of = {}
         for c, ch in enumerate(chunks):

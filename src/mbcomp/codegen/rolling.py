@@ -308,7 +308,20 @@ class Loop:
                  f"    for (int r = 0; r < {n_runs}; r++) {{",
                  f"        const int *c = {fname}_tab[r];",
                  "        for (int k = 0; k < c[0]; k++) {"]
-        leaf = []
+        # a step that is the same in every run is printed as a number (0: the value is read
+        # once per run), so that gcc sees the loop's strides
+        multi = self.rows[:, 0] > 1
+        step = []
+        for v in range(W):
+            st = np.unique(self.rows[multi, 1 + W + v]) if multi.any() else np.zeros(1, np.int64)
+            step.append(int(st[0]) if len(st) == 1 else None)
+
+        def place(v):
+            if step[v] is None:
+                return f"c[{1 + v}] + k * c[{1 + W + v}]"
+            return f"c[{1 + v}]" if step[v] == 0 else f"c[{1 + v}] + k * {step[v]}"
+
+        leaf, hoisted = [], []
         col_of = {c: self.n_out + n for n, c in enumerate(self.cols)}
         for c, kd in enumerate(self.kinds):
             if type(kd) is tuple:
@@ -317,13 +330,15 @@ class Loop:
                 leaf.append("t")
             else:
                 v = col_of[c]
-                lines.append(f"            const double a{c} = {kd}[c[{1 + v}] + k * c[{1 + W + v}]];")
+                line = f"const double a{c} = {kd}[{place(v)}];"
+                (hoisted if step[v] == 0 else lines).append(("        " if step[v] == 0 else "            ") + line)
                 leaf.append(f"a{c}")
+        lines[4:4] = hoisted  # before the inner loop
         for n, (op, args) in enumerate(self.ops):
             names = [leaf[a] if a >= 0 else f"y{-a - 1}" for a in args]
             lines.append(f"            const double y{n} = {expr(op, names)};")
         for o in range(self.n_out):
-            lines.append(f"            out[c[{1 + o}] + k * c[{1 + W + o}]] = y{len(self.ops) - 1};")
+            lines.append(f"            out[{place(o)}] = y{len(self.ops) - 1};")
         lines += ["        }", "    }", "    return 0;", "}", ""]
         return "\n".join(lines)
 
