@@ -322,6 +322,11 @@ class Bound:
             self.qdbuf = np.zeros(max(system.nq, 1))
             self.ptrs = [a.ctypes.data for a in (self.qbuf, self.ubuf, self.dbuf, self.hbuf, self.pbuf, self.wbuf,
                                                  self.obuf, self.qdbuf, self.ybuf)]
+            # run_fun's input: y = [q, u] copied once into one buffer, q and u pointers into it
+            self.yin = np.zeros(system.nq + system.nu + 1)
+            base = self.yin.ctypes.data
+            self.fun_args = (base, base + 8 * system.nq)
+            self.gains = None
 
     def drive_values(self, t):
         d = []
@@ -367,12 +372,14 @@ class Bound:
             return out
         if nd:
             self.dbuf[:nd] = self.drive_values(t)
-        self.dbuf[nd] = alpha
-        self.dbuf[nd + 1] = beta
-        nq = self.nq
-        self.qbuf[:nq] = y[:nq]
-        self.ubuf[: y.size - nq] = y[nq:]
-        pq, pu, pd, ph, pp, pw, _, _, py = self.ptrs
+        if self.gains != (alpha, beta):  # the gains change once per run, not per call
+            self.dbuf[nd] = alpha
+            self.dbuf[nd + 1] = beta
+            self.gains = (alpha, beta)
+        n = y.size
+        self.yin[:n] = y
+        _, _, pd, ph, pp, pw, _, _, py = self.ptrs
+        pq, pu = self.fun_args
         if code.dll.mbcomp_fun(pq, pu, float(t), pd, ph, pp, pw, py):
             raise Fallback
         out = self.ybuf[: y.size].copy()

@@ -209,7 +209,7 @@ class ProgramEvaluator:
         self.bound = None
         self.numeric_calls = 0  # evaluations answered numerically while the program is not made (lazy)
         self.funs = dict(fun_codes or {})  # row mask -> Code of the Lagrange program (or None)
-        self._fun = None  # (row mask, Bound or None)
+        self._fun = None  # (row mask key, Bound or None, the mask object)
         self.stats = dict(backend=backend, traces=0, fallbacks=0)
         if code is not None:
             self.stats["traces"] = code.traces
@@ -365,8 +365,11 @@ class ProgramEvaluator:
         """The Lagrange program for the system's current row mask: traced at first need (the
         mask is set by consistent initialization), reused by ``with_params``."""
         rm = self.system.row_mask
+        if self._fun is not None and self._fun[2] is rm:  # the same mask object: no key to make
+            return self._fun[1]
         key = None if rm is None or rm.all() else rm.tobytes()
         if self._fun is not None and self._fun[0] == key:
+            self._fun = (key, self._fun[1], rm)
             return self._fun[1]
         system, o = self.system, self.options
         code = self.funs.get(key)
@@ -386,7 +389,7 @@ class ProgramEvaluator:
                                   fun_state_guards=code.state_guards["fun"])
                 if o["verify"]:
                     self._verify_fun(bound)
-        self._fun = (key, bound)
+        self._fun = (key, bound, rm)
         return bound
 
     def integrator(self, alpha, beta, project=None):
