@@ -54,8 +54,8 @@ Limits
   2,000 operations at N = 10, 930,000 at N = 100; 3-D chain: 45,000 at N = 10, 290,000 at
   N = 20). The Python program costs about 20 ns per operation, so it beats the vectorized
   numeric path up to roughly 10^5 operations; the C program (a few ns per operation) beyond.
-  gcc needs about 1 s per 15,000 operations at ``-O0`` (used above 4,000 operations; ``-O1``
-  below), once: the library is cached.
+  gcc -O2 needs ~0.15-0.2 ms per straight-line statement, in parallel units, once: the
+  objects and the library are cached (see the compile policy in docs/architecture.md).
 * The result is a :class:`~mbcomp.assembly.system.MultibodySystem` whose evaluator is a
   :class:`ProgramEvaluator` (``system.backend`` is ``"python"`` or ``"c"``); its kinematics,
   reactions and energies are the numeric code, and ``evaluate_numeric`` stays available.

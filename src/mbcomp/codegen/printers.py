@@ -100,10 +100,12 @@ class Program:
         keys, nodes = g.keys, g.nodes
         n = len(keys)
         self._arrays = None
+        self._outs = {}
         opc, code, A, B = self.arrays()
         is_c, is_in = opc == code.get("c", -1), opc == code.get("in", -1)
-        starts = [o.i for outs in groups.values() for o in outs if type(o) is Sym]
-        starts += [j for gd in g.guards for j in gd[1:3]]
+        outs = np.concatenate([self.out_nodes(name) for name in groups] + [np.zeros(0, np.int64)])
+        outs = outs[outs >= 0]
+        starts = np.concatenate((outs, np.array([j for gd in g.guards for j in gd[1:3]], dtype=np.int64)))
         need = _reach(starts, A, B, np.ones(n, bool), ~(is_c | is_in))
         self.need = need
         # without hoisting every non-constant node belongs to the state programs
@@ -118,8 +120,7 @@ class Program:
             cand = np.concatenate((A[users], B[users]))
             cand = cand[cand >= 0]
             hoisted.update(np.unique(cand[~S[cand] & ~is_c[cand]]).tolist())
-            for outs in groups.values():
-                hoisted.update(o.i for o in outs if type(o) is Sym and not o.s)
+            hoisted.update(np.unique(outs[~S[outs]]).tolist())
             for op, ai, bi, _ in g.guards:
                 if state[ai] or state[bi]:
                     hoisted.update(j for j in (ai, bi) if not state[j] and keys[j][0] != "c")
@@ -172,9 +173,18 @@ class Program:
         opc, code, A, B = self.arrays()
         allowed = self._S.copy()
         allowed[self.hoisted] = False
-        starts = [o.i for o in self.groups[name] if type(o) is Sym]
-        starts += [j for gd in self.guards_of[name] for j in gd[1:3]]
+        outs = self.out_nodes(name)
+        starts = np.concatenate((outs[outs >= 0], np.array([j for gd in self.guards_of[name] for j in gd[1:3]],
+                                                             dtype=np.int64)))
         return np.flatnonzero(_reach(starts, A, B, allowed, opc != code.get("in", -1))).tolist()
+
+    def out_nodes(self, name):
+        """The node of each output of group ``name`` (-1: a number), as an array (computed once)."""
+        got = self._outs.get(name)
+        if got is None:
+            got = self._outs[name] = np.array([o.i if type(o) is Sym else -1 for o in self.groups[name]],
+                                              dtype=np.int64)
+        return got
 
     def op_nodes(self, name):
         """The operations among :meth:`group_nodes` (inputs left out), as an array."""
@@ -310,51 +320,27 @@ class Program:
         The straight-line code is split into functions of ``chunk`` statements (gcc's optimizer
         is superlinear in a function's size; ``chunk`` may be a function of the number of
         straight-line statements and of the values the loops read giving it); values crossing
-        a function boundary live in the work array ``w``. Output expressions of one shape (a tree of single-use operations under
-        an output nothing else uses, e.g. ``M[i, j] = S_i . F_j`` for every pair of links) that
-        occur at least ``roll`` times (default :data:`~mbcomp.codegen.rolling.ROLL_MIN`; 0: never)
-        are computed by one loop over a table of their operands' places instead
-        (:mod:`mbcomp.codegen.rolling`): the program's
+        a function boundary live in the work array ``w``. Output expressions of one shape (a
+        tree of single-use operations under an output nothing else uses, e.g. ``M[i, j] = S_i
+        . F_j`` for every pair of links) that occur at least ``roll`` times (default
+        :data:`~mbcomp.codegen.rolling.ROLL_MIN`; 0: never) are computed by one loop over a
+        table of their operands' places instead (:mod:`mbcomp.codegen.rolling`): the program's
         text then grows like its distinct values (O(N) for a chain) instead of its outputs."""
         keys = self.g.keys
         roll = ROLL_MIN if roll is None else roll
         nodes = self.op_nodes(group).tolist()
-        outs = self.groups[group]
         loops, slot, rolled = _rolled(self, group, nodes, roll) if roll and len(nodes) >= roll else ([], {}, None)
         if rolled is not None:
             nodes = [i for i in nodes if not rolled[i]]
-        where_out = {}
-        tail = []
-        node_set = set(nodes)
-        for k, o in enumerate(outs):
-            if type(o) is Sym and o.i in node_set:
-                where_out.setdefault(o.i, []).append(k)
-            elif type(o) is not Sym or rolled is None or not rolled[o.i]:
-                tail.append((k, o))
+        where_out, tail = self._out_places(group, nodes, rolled)
         if callable(chunk):
             chunk = chunk(len(nodes), len(slot))
         chunks = [nodes[s: s + chunk] for s in range(0, len(nodes), chunk)] or [[]]
-        chunk_of = {}
-        for c, ch in enumerate(chunks):
-            for i in ch:
-                chunk_of[i] = c
         guards = self._guards_by_node(self.guards_of[group])
-        for c, ch in enumerate(chunks):
-            for i in ch:
-                for j in keys[i][1:]:
-                    if j in chunk_of and chunk_of[j] != c and j not in slot:
-                        slot[j] = len(slot)
-                for gd in guards.get(i, ()):  # a guard's other operand may be from an earlier chunk
-                    for j in gd[1:3]:
-                        if j in chunk_of and chunk_of[j] != c and j not in slot:
-                            slot[j] = len(slot)
-        args = "q, u, t, d, h, p, w, out"
-        sig = ("const double *restrict q, const double *restrict u, double t, const double *restrict d, "
-               "const double *restrict h, const double *restrict p, double *restrict w, double *restrict out")
+        chunk_of = _crossing(keys, chunks, guards, slot)
         if callable(n_parts):
             n_parts = n_parts(len(nodes) + sum(lp.weight for lp in loops))
-        split = n_parts > 1
-        linkage = "MBCOMP_LOCAL int" if split else "static int"
+        linkage = "MBCOMP_LOCAL int" if n_parts > 1 else "static int"
         funcs = []  # (weight, name, source)
 
         def name(j, c):
@@ -376,29 +362,75 @@ class Program:
                     cond = f"{name(ai, c)} {op} {name(bi, c)}"
                     body.append(f"    if ({'!' if res else ''}({cond})) return 1;")
             funcs.append((len(ch), f"{fname}_{c}",
-                          f"{linkage} {fname}_{c}({sig})\n{{\n" + "\n".join(body) + "\n    return 0;\n}\n"))
+                          f"{linkage} {fname}_{c}({_SIG})\n{{\n" + "\n".join(body) + "\n    return 0;\n}\n"))
         for r, lp in enumerate(loops):
-            funcs.append((lp.weight, f"{fname}_r{r}", lp.source(f"{fname}_r{r}", linkage, sig, _c_expr)))
+            funcs.append((lp.weight, f"{fname}_r{r}", lp.source(f"{fname}_r{r}", linkage, _SIG, _c_expr)))
         tail_lines = [f"    out[{k}] = {self._out_name(o, 'c')};" for k, o in tail]
         for gd in guards.get(-1, ()):
             op, ai, bi, res = gd
             cond = f"{self._name(ai, 'c', True)} {op} {self._name(bi, 'c', True)}"
             tail_lines.append(f"    if ({'!' if res else ''}({cond})) return 1;")
-        calls = "\n".join(f"    if ({fn}({args})) return 1;" for _, fn, _ in funcs)
-        entry = f"int {fname}({sig})\n{{\n{calls}\n" + "\n".join(tail_lines) + "\n    return 0;\n}\n"
-        if not split:
-            return ["\n".join(src for _, _, src in funcs) + "\n" + entry], len(slot)
-        # contiguous runs of functions of about equal weight per part; the entry in the last
-        bins = [[] for _ in range(n_parts)]
-        total = sum(wt for wt, _, _ in funcs) or 1
-        acc = 0
-        for wt, fn, src in funcs:
-            bins[min(n_parts - 1, acc * n_parts // total)].append(src)
-            acc += wt
-        decl = "\n".join(f"{linkage} {fn}({sig});" for _, fn, _ in funcs)
-        parts = [_LOCAL + "\n".join(b) for b in bins[:-1]]
-        parts.append(_LOCAL + decl + "\n\n" + "\n".join(bins[-1]) + "\n" + entry)
-        return parts, len(slot)
+        calls = "\n".join(f"    if ({fn}(q, u, t, d, h, p, w, out)) return 1;" for _, fn, _ in funcs)
+        entry = f"int {fname}({_SIG})\n{{\n{calls}\n" + "\n".join(tail_lines) + "\n    return 0;\n}\n"
+        return _units(funcs, entry, n_parts, linkage), len(slot)
+
+    def _out_places(self, group, nodes, rolled):
+        """Where the outputs of ``group`` are written: ``{node: [places]}`` for the
+        straight-line ``nodes``, and ``[(place, output)]`` for those written at the end
+        (numbers, inputs, hoisted values); those the loops compute (``rolled``) are neither."""
+        outs, onodes = self.groups[group], self.out_nodes(group)
+        straight = np.zeros(len(self.g.keys), bool)
+        straight[nodes] = True
+        done = straight.copy()
+        if rolled is not None:
+            done |= np.frombuffer(rolled, dtype=np.uint8).astype(bool)
+        known = onodes >= 0
+        where_out = {}
+        for k in np.flatnonzero(known & straight[np.maximum(onodes, 0)]).tolist():
+            where_out.setdefault(int(onodes[k]), []).append(k)
+        tail = [(k, outs[k]) for k in np.flatnonzero(~known | ~done[np.maximum(onodes, 0)]).tolist()]
+        return where_out, tail
+
+
+_SIG = ("const double *restrict q, const double *restrict u, double t, const double *restrict d, "
+        "const double *restrict h, const double *restrict p, double *restrict w, double *restrict out")
+
+
+def _crossing(keys, chunks, guards, slot):
+    """Each straight-line node's chunk; the values used (by an operation or a guard) in a
+    later chunk than theirs get work-array slots (added to ``slot``)."""
+    chunk_of = {}
+    for c, ch in enumerate(chunks):
+        for i in ch:
+            chunk_of[i] = c
+    for c, ch in enumerate(chunks):
+        for i in ch:
+            for j in keys[i][1:]:
+                if j in chunk_of and chunk_of[j] != c and j not in slot:
+                    slot[j] = len(slot)
+            for gd in guards.get(i, ()):  # a guard's other operand may be from an earlier chunk
+                for j in gd[1:3]:
+                    if j in chunk_of and chunk_of[j] != c and j not in slot:
+                        slot[j] = len(slot)
+    return chunk_of
+
+
+def _units(funcs, entry, n_parts, linkage):
+    """The functions ``(weight, name, source)`` and the entry as ``n_parts`` sources:
+    contiguous runs of functions of about equal weight, the entry (with the declarations) in
+    the last."""
+    if n_parts <= 1:
+        return ["\n".join(src for _, _, src in funcs) + "\n" + entry]
+    bins = [[] for _ in range(n_parts)]
+    total = sum(wt for wt, _, _ in funcs) or 1
+    acc = 0
+    for wt, fn, src in funcs:
+        bins[min(n_parts - 1, acc * n_parts // total)].append(src)
+        acc += wt
+    decl = "\n".join(f"{linkage} {fn}({_SIG});" for _, fn, _ in funcs)
+    parts = [_LOCAL + "\n".join(b) for b in bins[:-1]]
+    parts.append(_LOCAL + decl + "\n\n" + "\n".join(bins[-1]) + "\n" + entry)
+    return parts
 
 
 _OP = operator.itemgetter(0)

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .graph import Sym
 
 __all__ = ["Loop", "rolled", "ROLL_MIN", "ROLL_MAX_OPS"]
 
@@ -104,9 +103,9 @@ def _expressions(prog, group, idx):
     inprog[idx] = True
     hasb = B >= 0
     uses = np.bincount(A, minlength=n) + np.bincount(B[hasb], minlength=n)
-    outs = [(o.i, pos) for pos, o in enumerate(prog.groups[group]) if type(o) is Sym and inprog[o.i]]
-    out_node = np.array([i for i, _ in outs], dtype=np.int64)
-    out_pos = np.array([k for _, k in outs], dtype=np.int64)
+    onodes = prog.out_nodes(group)
+    out_pos = np.flatnonzero((onodes >= 0) & inprog[np.maximum(onodes, 0)])
+    out_node = onodes[out_pos]
     n_outs = np.bincount(out_node, minlength=n)
     guarded = np.zeros(n, bool)
     for gd in prog.guards_of[group]:
