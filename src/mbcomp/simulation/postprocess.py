@@ -142,13 +142,15 @@ def _sample(system, form, cols, k, t, q, u):
 
 def _joint_notes(system, t, series):
     """What each joint says about its own results (:meth:`Joint.result_notes`)."""
+    joints = [e for e in system.topology.edges if e.kind == "joint"]
+    own = {e.name: {} for e in joints}
+    for name, arr in series.items():  # one pass: a column belongs to the joint named by a prefix of it
+        for i, ch in enumerate(name):
+            if ch == "." and name[:i] in own:
+                own[name[:i]][name[i + 1:]] = arr
     notes = []
-    for e in system.topology.edges:
-        if e.kind != "joint":
-            continue
-        prefix = f"{e.name}."
-        own = {n[len(prefix):]: v for n, v in series.items() if n.startswith(prefix)}
-        notes.extend(e.comp.result_notes(e.name, t, own))
+    for e in joints:
+        notes.extend(e.comp.result_notes(e.name, t, own[e.name]))
     return notes
 
 
