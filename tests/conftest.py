@@ -48,3 +48,17 @@ def compiled(model, backend="c"):
     from mbcomp.codegen import compile_system
 
     return compile_system(mbcomp.assemble(model), backend)
+
+
+def step_through(solver):
+    """Step ``solver`` (a :class:`mbcomp.solvers.Stepper`) to its end, every step succeeding:
+    the times (k,) and states (k, n), the start included."""
+    import numpy as np
+
+    ts, ys = [solver.t], [solver.y.copy()]
+    while solver.status == "running":
+        msg = solver.step()
+        assert msg is None, msg
+        ts.append(solver.t)
+        ys.append(solver.y.copy())
+    return np.array(ts), np.array(ys)

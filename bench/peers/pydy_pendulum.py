@@ -1,13 +1,11 @@
 """pydy peer for the planar N-link pendulum of ``models/n_link_pendulum.py``: sympy's
 ``KanesMethod`` and pydy's ``generate_ode_function`` (Cython, else lambdify).
 
-The derivation is the one of ``bench/peers/sympy_pendulum.py`` (frames rotated by relative
-angles about the parent's z, rods of mass ``m``, length ``L``, central inertia
-``diag(m L^2/12, 0, m L^2/12)``, gravity along -y, ``q' = u``). It is repeated here rather than
-imported because ``sympy_pendulum.derive`` returns only lambdified functions, and pydy needs
-the symbolic mass matrix and forcing; the two are kept line for line alike, except that
-here ``L``, ``m``, ``g`` are symbols whose values pydy's function takes at run time (as pydy
-users write it; sympy also derives faster so: 4.4 s instead of 6.7 s at N = 8).
+The derivation is ``sympy_pendulum.kane`` (frames rotated by relative angles about the
+parent's z, rods of mass ``m``, length ``L``, central inertia ``diag(m L^2/12, 0, m L^2/12)``,
+gravity along -y, ``q' = u``), here with ``L``, ``m``, ``g`` as symbols whose values pydy's
+function takes at run time (as pydy users write it; sympy also derives faster so: 4.4 s
+instead of 6.7 s at N = 8).
 
 ``build(N, timeout=60) -> Peer`` with ``rhs(t, y)`` (``y = [q, u]``, mbcomp's convention),
 ``build_seconds`` (derivation + code generation + compilation, CPU incl. the compiler),
@@ -40,31 +38,10 @@ def available():
 
 
 def derive(N, L=0.5, m=1.0, g=9.81):
-    """``(KanesMethod, q, u)`` of the N-link pendulum (as ``sympy_pendulum.derive``)."""
-    import sympy.physics.mechanics as me
+    """``(KanesMethod, q, u)`` of the N-link pendulum: ``sympy_pendulum.kane``."""
+    from .sympy_pendulum import kane
 
-    q = me.dynamicsymbols(f"q:{N}")
-    u = me.dynamicsymbols(f"u:{N}")
-    frame_n = me.ReferenceFrame("N")
-    origin = me.Point("O")
-    origin.set_vel(frame_n, 0)
-    bodies, loads, kd = [], [], []
-    prev_f, prev_p = frame_n, origin
-    for i in range(N):
-        F = prev_f.orientnew(f"F{i}", "Axis", [q[i], prev_f.z])
-        F.set_ang_vel(prev_f, u[i] * prev_f.z)
-        cm = prev_p.locatenew(f"G{i}", -L / 2 * F.y)
-        cm.v2pt_theory(prev_p, frame_n, F)
-        tip = prev_p.locatenew(f"P{i}", -L * F.y)
-        tip.v2pt_theory(prev_p, frame_n, F)
-        It = m * L ** 2 / 12
-        bodies.append(me.RigidBody(f"B{i}", cm, F, m, (me.inertia(F, It, 0, It), cm)))
-        loads.append((cm, -m * g * frame_n.y))
-        kd.append(q[i].diff() - u[i])
-        prev_f, prev_p = F, tip
-    km = me.KanesMethod(frame_n, q_ind=q, u_ind=u, kd_eqs=kd)
-    km.kanes_equations(bodies, loads)
-    return km, q, u
+    return kane(N, L, m, g)
 
 
 def _cython_missing():

@@ -30,11 +30,11 @@ class Derived:
     t_lambdify: float
 
 
-def derive(N, L=0.5, m=1.0, g=9.81):
-    import sympy as sp
+def kane(N, L=0.5, m=1.0, g=9.81):
+    """``(KanesMethod, q, u)`` of the N-link pendulum after ``kanes_equations`` (``L``, ``m``,
+    ``g`` numbers or sympy symbols); the pydy peer uses the same derivation."""
     import sympy.physics.mechanics as me
 
-    t0 = time.perf_counter()
     q = me.dynamicsymbols(f"q:{N}")
     u = me.dynamicsymbols(f"u:{N}")
     frame_n = me.ReferenceFrame("N")
@@ -56,6 +56,14 @@ def derive(N, L=0.5, m=1.0, g=9.81):
         prev_f, prev_p = F, tip
     km = me.KanesMethod(frame_n, q_ind=q, u_ind=u, kd_eqs=kd)
     km.kanes_equations(bodies, loads)
+    return km, q, u
+
+
+def derive(N, L=0.5, m=1.0, g=9.81):
+    import sympy as sp
+
+    t0 = time.perf_counter()
+    km, q, u = kane(N, L, m, g)
     t_derive = time.perf_counter() - t0
     t0 = time.perf_counter()
     Mf = sp.lambdify([q, u], km.mass_matrix, cse=True)

@@ -19,6 +19,7 @@ import pytest
 from types import SimpleNamespace
 
 import mbcomp
+from conftest import step_through
 from mbcomp.solvers.radau import THETA_JAC, Radau5
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -26,13 +27,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 def run(problem, y0, t_end, **kw):
     s = Radau5(problem, 0.0, y0, t_end, **kw)
-    ts, ys = [s.t], [s.y.copy()]
-    while s.status == "running":
-        msg = s.step()
-        assert msg is None, msg
-        ts.append(s.t)
-        ys.append(s.y.copy())
-    return s, np.array(ts), np.array(ys)
+    return (s, *step_through(s))
 
 
 def test_threshold_is_in_hairers_range():

@@ -18,6 +18,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import mbcomp.solvers.genalpha as genalpha_module
+from conftest import step_through
 from mbcomp.solvers.base import StepFailure
 from mbcomp.solvers.genalpha import GeneralizedAlpha
 
@@ -144,13 +145,7 @@ def pendulum_start():
 def run(problem, y0, t_end, h, **kw):
     """Step to ``t_end``; returns times (k,), states (k, n) including the start, and the solver."""
     s = GeneralizedAlpha(problem, 0.0, y0, t_end, first_step=h, **kw)
-    ts, ys = [s.t], [s.y.copy()]
-    while s.status == "running":
-        msg = s.step()
-        assert msg is None, msg
-        ts.append(s.t)
-        ys.append(s.y.copy())
-    return np.array(ts), np.array(ys), s
+    return (*step_through(s), s)
 
 
 def pendulum_energy(Y):

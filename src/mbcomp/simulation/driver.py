@@ -93,9 +93,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         compiler exists (cached on disk by structure), else in Python; a model whose laws
         cannot be traced runs on the numeric path with a warning naming the component.
         ``"numeric"`` evaluates the jets directly (no set-up cost); ``"python"``, ``"c"``
-        force a program. Programs are printed from the recursive algorithms
-        (:mod:`mbcomp.assembly.recursive`): the right-hand side grows linearly with the
-        number of bodies of a chain (see ``bench/scaling.py``, ``bench/peers.py``).
+        force a program (:mod:`mbcomp.codegen`; linear in the bodies of a chain).
     formulation : {"lagrange", "dalembert"}
         ``"lagrange"``: multipliers, index 1 (:class:`~mbcomp.formulations.LagrangeIndex1`);
         ``"dalembert"``: projection onto independent speeds, a minimal ODE whose positions are
@@ -135,17 +133,26 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     monitors = monitors_for(system, atol)
     wall0 = _time.perf_counter()
     status, message = integrate(run, monitors, progress)
-    stats = run.counters()
-    stats.update(nfev=form.nfev, nlu=form.nlu + stats["nlu_integrator"], cpu_time=_time.perf_counter() - wall0,
-                 method=method, formulation=formulation, index=index, backend=system.backend,
-                 stabilization=form.stabilization, projected_rows_dropped=list(init.dropped),
-                 init_iterations=init.iterations)
-    stats.update(form.run_stats())
-    for m in monitors:
-        stats.update(m.stats())
+    stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
+                      index=index)
     t_done = run.t_out[: len(run.ys)]
     return postprocess(system, form, t_done, np.array(run.ys).reshape(len(run.ys), -1), status, message, stats,
                        init)
+
+
+def run_stats(run, monitors, init, seconds, **request):
+    """The result's ``stats``: the run's counters (:meth:`Run.counters`), the formulation's
+    evaluations and its own figures, the monitors', initialization's, the integration's
+    ``cpu_time`` (``seconds``) and what was asked (``request``: method, formulation, index)."""
+    form = run.form
+    stats = run.counters()
+    stats.update(nfev=form.nfev, nlu=form.nlu + stats["nlu_integrator"], cpu_time=seconds, **request,
+                 backend=form.system.backend, stabilization=form.stabilization,
+                 projected_rows_dropped=list(init.dropped), init_iterations=init.iterations)
+    stats.update(form.run_stats())
+    for m in monitors:
+        stats.update(m.stats())
+    return stats
 
 
 def integrate(run, monitors, progress=False):
