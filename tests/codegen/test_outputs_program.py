@@ -58,3 +58,30 @@ def test_rows_on_the_other_branch_of_a_law_come_from_the_numeric_route(backend):
     fast = compile_system(mbcomp.assemble(torque_pendulum(law)), backend)
     _, _, _, ok = fast.evaluator.output_grid(ref.time, np.column_stack((phi, ref["hinge.w"])), None)
     np.testing.assert_array_equal(ok, phi > 0)
+
+
+@pytest.mark.skipif(not c_compiler(), reason="needs a C compiler")
+def test_a_long_chains_constant_outputs_come_from_tables(tmp_path):
+    """A 40-link planar chain has hundreds of outputs that are numbers or inputs (the zero
+    and unit entries of its rotations about z, the joint angles): the C program copies them
+    from static tables (so gcc -O2 stays fast); every column still equals the numeric one."""
+    from mbcomp.codegen.printers import TAIL_TABLE
+
+    s = mbcomp.assemble(load_model("models/n_link_pendulum.py").build(N=40))
+    initialize(s)
+    prog = OutputProgram.build(s, "c", baumgarte=True, cache_dir=str(tmp_path))
+    assert "static const double value[" in prog.source and "= q[from[i]]" in prog.source
+    rng = np.random.default_rng(8)
+    Y = np.hstack((rng.uniform(-2, 2, (3, s.nq)), rng.standard_normal((3, s.nu))))
+    T = np.array([0.0, 0.5, 1.0])
+    names, V, R, ok = prog.grid(s, T, Y, (10.0, 12.0))
+    assert ok.all()
+    n_const = 0
+    for k in range(3):
+        cols, rot = output_values(s, T[k], Y[k, : s.nq], Y[k, s.nq:], 10.0, 12.0, baumgarte=True)
+        ref = np.array([cols[c] for c in names])
+        np.testing.assert_allclose(V[:, k], ref, rtol=1e-10, atol=1e-10 * (1 + np.abs(ref).max()))
+        for path, Rk in rot.items():
+            np.testing.assert_allclose(R[path][k], matrix_to_quat(Rk), atol=1e-13)
+            n_const += int(np.sum((Rk == 0.0) | (Rk == 1.0)))
+    assert n_const // 3 > TAIL_TABLE

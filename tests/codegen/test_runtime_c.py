@@ -807,7 +807,10 @@ def test_project_equals_the_python_closure(lib):
         c = close_positions(lambda qq: (np.array([0.5 * (qq @ qq - L * L)]), qq[None, :], None), lambda a, b: a + b, q)
         ref = np.concatenate((c.q, solve_speeds(c.q[None, :], np.array([c.q @ u]), u)))
         np.testing.assert_allclose(yc, ref, rtol=0, atol=1e-14)
-        assert abs(np.hypot(*yc[:2]) - L) < 1e-12 and abs(yc[:2] @ yc[2:]) < 1e-12 and norm.value == c.norm
+        assert abs(np.hypot(*yc[:2]) - L) < 1e-12 and abs(yc[:2] @ yc[2:]) < 1e-12
+        # the converged residual is rounding noise (0 or a few ulp of L^2/2): numpy's dot and
+        # the C loop may round it differently (numpy 2.4 with FMA: 2.2e-16 against 0.0)
+        assert abs(norm.value - c.norm) <= 4 * np.finfo(float).eps * L * L
 
 
 def test_project_turns_quaternions_as_the_python_closure(lib):

@@ -29,6 +29,7 @@ from __future__ import annotations
 import itertools
 import math
 import operator
+import re
 
 import numpy as np
 
@@ -365,7 +366,7 @@ class Program:
                           f"{linkage} {fname}_{c}({_SIG})\n{{\n" + "\n".join(body) + "\n    return 0;\n}\n"))
         for r, lp in enumerate(loops):
             funcs.append((lp.weight, f"{fname}_r{r}", lp.source(f"{fname}_r{r}", linkage, _SIG, _c_expr)))
-        tail_lines = [f"    out[{k}] = {self._out_name(o, 'c')};" for k, o in tail]
+        tail_lines = _tail_c([(k, self._out_name(o, 'c')) for k, o in tail])
         for gd in guards.get(-1, ()):
             op, ai, bi, res = gd
             cond = f"{self._name(ai, 'c', True)} {op} {self._name(bi, 'c', True)}"
@@ -390,6 +391,48 @@ class Program:
             where_out.setdefault(int(onodes[k]), []).append(k)
         tail = [(k, outs[k]) for k in np.flatnonzero(~known | ~done[np.maximum(onodes, 0)]).tolist()]
         return where_out, tail
+
+
+#: outputs written at the end (numbers, inputs, hoisted values) above which they are copied
+#: from static tables by loops: 5,000 straight-line stores in one function cost gcc -O2 ~5 s
+#: (the output program of a 300-link chain), the loops nothing
+TAIL_TABLE = 64
+_REF = re.compile(r"^([quhdpw])\[(\d+)\]$")
+
+
+def _tail_c(pairs):
+    """C statements writing ``out[k] = value`` for ``(k, value text)`` pairs: numbers and
+    array elements copied by loops over static tables when there are more than
+    :data:`TAIL_TABLE` of them, the rest (``t``, non-finite numbers) one by one."""
+    if len(pairs) <= TAIL_TABLE:
+        return [f"    out[{k}] = {v};" for k, v in pairs]
+    nums, refs, lines = [], {}, []
+    for k, v in pairs:
+        m = _REF.match(v)
+        if m:
+            refs.setdefault(m.group(1), []).append((k, int(m.group(2))))
+            continue
+        try:
+            x = float(v.strip("()"))
+        except ValueError:
+            x = math.nan
+        if math.isfinite(x):
+            nums.append((k, repr(x)))
+        else:
+            lines.append(f"    out[{k}] = {v};")
+    if nums:
+        lines += ["    {",
+                  f"        static const long at[{len(nums)}] = {{{', '.join(str(k) for k, _ in nums)}}};",
+                  f"        static const double value[{len(nums)}] = {{{', '.join(v for _, v in nums)}}};",
+                  f"        for (long i = 0; i < {len(nums)}; ++i) out[at[i]] = value[i];",
+                  "    }"]
+    for arr, kj in refs.items():
+        lines += ["    {",
+                  f"        static const long at[{len(kj)}] = {{{', '.join(str(k) for k, _ in kj)}}};",
+                  f"        static const long from[{len(kj)}] = {{{', '.join(str(j) for _, j in kj)}}};",
+                  f"        for (long i = 0; i < {len(kj)}; ++i) out[at[i]] = {arr}[from[i]];",
+                  "    }"]
+    return lines
 
 
 _SIG = ("const double *restrict q, const double *restrict u, double t, const double *restrict d, "
