@@ -32,7 +32,7 @@ Examples
 import numpy as np
 
 from mbcomp import Model
-from mbcomp.library import Fixed, FixedTranslation, Revolute, RigidBody, World
+from mbcomp.library import Cylindrical, Fixed, FixedTranslation, Revolute, RigidBody, World
 
 SIMULATION = dict(t_end=10.0, rtol=1e-8, atol=1e-10)
 
@@ -49,14 +49,21 @@ def rod_inertia(m, d):
     return m * L ** 2 / 12.0 * (np.eye(3) - np.outer(e, e)) + 1e-9 * np.outer(e, e)
 
 
-def build(m=1.0, g=9.81):
-    """Bricard's linkage with links of mass ``m`` (kg) under gravity ``g`` (m/s^2, along -y)."""
+def build(m=1.0, g=9.81, cylindrical=0):
+    """Bricard's linkage with links of mass ``m`` (kg) under gravity ``g`` (m/s^2, along -y).
+
+    ``cylindrical`` (1-6): that joint is a cylindrical one instead (it may also slide along its
+    axis). The sliding stays zero -- the linkage moves as before -- but no closure row is
+    redundant any more: the same motion without a choice of rows (a cross-check)."""
+    if cylindrical not in range(7):
+        raise ValueError(f"cylindrical={cylindrical!r}: give the number of a joint (1-6), or 0 for none")
     model = Model()
     world = model.add("world", World(g=(0.0, -float(g), 0.0)))
     ground6 = model.add("ground6", Fixed(r=tuple(POINTS[5])))
     prev = world.frame_b
     for k in range(6):
-        joint = model.add(f"joint{k + 1}", Revolute(n=tuple(AXES[k])))
+        kind = Cylindrical if cylindrical == k + 1 else Revolute
+        joint = model.add(f"joint{k + 1}", kind(n=tuple(AXES[k])))
         model.connect(prev, joint.frame_a)
         if k == 5:
             model.connect(joint.frame_b, ground6.frame_b)

@@ -72,6 +72,14 @@ __all__ = ["TreeLinks", "SingularTree", "tree_links", "tree_pass", "tree_evaluat
 
 #: a Cholesky pivot at or below ``PIVOT_TOL`` times the matrix's trace counts as singular
 PIVOT_TOL = 1e-13
+#: ... and for the constraint rows' ``A M^-1 A^T``, at or below ``ROWS_PIVOT_TOL``: the rows
+#: are losing rank (pivot ~ sigma^2 of the mass-weighted rows: a smallest relative singular
+#: value of about 1e-2). The recursive solve then declines -- a guard when traced, so the
+#: compiled engine ends its stretch there and the driver steps the dense solve, watching every
+#: step: kept rows that degrade while others would not are chosen again
+#: (:class:`mbcomp.simulation.rows.RowChoice`), a position where no choice keeps the rank is
+#: located and reported (:class:`mbcomp.simulation.monitors.ConstraintRank`)
+ROWS_PIVOT_TOL = 1e-4
 
 
 class SingularTree(ArithmeticError):
@@ -330,11 +338,11 @@ def _chol_inverse(D, what):
     return np.array([_chol_solve(L, eye[:, c]) for c in range(k)], dtype=D.dtype).T
 
 
-def _cholesky(G, what):
+def _cholesky(G, what, rel=PIVOT_TOL):
     """Lower Cholesky factor of ``G`` (numeric or traced), raising :class:`SingularTree` at a
-    pivot at or below ``PIVOT_TOL`` times the trace."""
+    pivot at or below ``rel`` times the trace."""
     n = G.shape[0]
-    tol = PIVOT_TOL * sum(G[k, k] for k in range(n))
+    tol = rel * sum(G[k, k] for k in range(n))
     L = np.zeros((n, n), G.dtype)
     for j in range(n):
         d = G[j, j] - sum(L[j, k] * L[j, k] for k in range(j))
@@ -456,7 +464,7 @@ def lagrange_solution(system, t, q, u, alpha=0.0, beta=0.0, baumgarte=False):
             for s in range(r, m):
                 G[s, r] = G[r, s] = _row_rate(rows[s][0], acc_r)
         b = np.array([_row_rate(rows[s][0], acc) - rhs[s] for s in range(m)], dtype=tp.dt)
-        lam = _chol_solve(_cholesky(G, "constraint rows"), b)
+        lam = _chol_solve(_cholesky(G, "constraint rows", ROWS_PIVOT_TOL), b)
         W = list(tp.W)
         for r, (entries, *_) in enumerate(rows):
             for i, cov in entries:

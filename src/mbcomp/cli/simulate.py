@@ -27,7 +27,8 @@ from .loader import check_output, load
 __all__ = ["cmd_simulate", "add_parser", "OPTIONS", "EXIT_INTERRUPTED"]
 
 #: command-line options passed on to :func:`mbcomp.simulate` (overriding the file's SIMULATION)
-OPTIONS = ("t_end", "rtol", "atol", "method", "stabilization", "formulation", "n_out", "index", "h", "backend")
+OPTIONS = ("t_end", "rtol", "atol", "method", "stabilization", "formulation", "n_out", "index", "h", "backend",
+           "singular")
 #: exit status of an interrupted run (128 + SIGINT, the shell's convention)
 EXIT_INTERRUPTED = 130
 
@@ -65,6 +66,13 @@ def _report(res):
         return
     print(f"t = {res.time[0]:g} .. {res.time[-1]:g} s, {res.stats['steps']} steps, {res.stats['nfev']} f-evals, "
           f"{res.stats['cpu_time']:.2f} s")
+    for p in res.stats.get("singular_passages", ()):
+        print(f"passed a singular position at t = {p['t']:.6g} s (rank drop {p['rank_drop']}, relative sigma "
+              f"{p['sigma']:.2g}; joints {', '.join(p['joints'])})")
+    for c in res.stats.get("row_changes", ()):
+        print(f"constraint rows chosen again at t = {c['t']:.6g} s (the kept rows' relative sigma_min "
+              f"{c['sigma_before']:.2g} -> {c['sigma_after']:.2g}): dropped {', '.join(c['dropped'])} "
+              f"instead of {', '.join(c['was'])}")
     E = res["energy.total"]
     if len(E):
         print(f"energy drift max|E - E0| = {np.nanmax(np.abs(E - E[0])):.3e} J; "
@@ -89,6 +97,9 @@ def add_parser(sub, common):
     s.add_argument("--stabilization", choices=["baumgarte", "projection", "none"])
     s.add_argument("--formulation", choices=["lagrange", "dalembert"],
                    help="lagrange: multipliers at index 1 (default); dalembert: ODE in independent speeds")
+    s.add_argument("--singular", choices=["stop", "pass"],
+                   help="at a singular position (the constraint Jacobian losing rank): stop there (default) or "
+                        "pass through it and report each passage")
     s.add_argument("--n-out", dest="n_out", type=int, help="number of output points")
     s.add_argument("--out", help="write results to this CSV file (also the partial results of a run that stops early)")
     s.add_argument("--plot", help="write a plot to this PNG file")

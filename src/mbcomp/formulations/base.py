@@ -26,6 +26,9 @@ from ..errors import SimulationError
 
 __all__ = ["Formulation"]
 
+#: relative step of the finite-difference Jacobian (:meth:`Formulation.jac`)
+_FD_STEP = float(np.sqrt(np.finfo(float).eps))
+
 
 class Formulation:
     """Base class: the interface the driver uses, with the defaults of a plain ODE in ``[q, u]``.
@@ -78,6 +81,23 @@ class Formulation:
         """``dy/dt`` (problem ``"ode"``) or the right side of ``E dy/dt = fun(t, y)`` (``"dae"``)."""
         raise NotImplementedError
 
+    def jac(self, t, y):
+        """``d fun / dy`` (``"ode"`` problems) by forward differences, column ``j`` with the step
+        ``sqrt(eps) max(|y_j|, 1)``: never a step that grows without bound, whatever the
+        dependence on ``y_j`` (scipy's own differences let it grow for a coordinate nothing
+        depends on, such as a freely spinning shaft's angle, until it overflows)."""
+        y = np.asarray(y, dtype=float)
+        f0 = np.asarray(self.fun(t, y))
+        J = np.empty((f0.size, y.size))
+        yj = y.copy()
+        for j in range(y.size):
+            h = _FD_STEP * max(abs(y[j]), 1.0)
+            yj[j] = y[j] + h
+            h = yj[j] - y[j]  # the step actually taken in floating point
+            J[:, j] = (np.asarray(self.fun(t, yj)) - f0) / h
+            yj[j] = y[j]
+        return J
+
     def full(self, t, y):
         """``[q, u]`` (coordinates then speeds) of the state ``y``, for output and post-processing."""
         return np.asarray(y[: self.nq + self.nu])
@@ -98,6 +118,12 @@ class Formulation:
     def needs_repartition(self, t, y):
         """Whether the coordinates the state is written in must be chosen again at ``y``."""
         return False
+
+    def rows_changed(self, t, q, u):
+        """The state to go on from at ``(t, q, u)`` (``full`` of the last state) after the kept
+        constraint rows (``system.row_mask``) were chosen again: the start state there
+        (multipliers and everything else written in the rows made afresh)."""
+        return self.initial_state(t, q, u)
 
     def repartition(self, t, y):
         """The state ``y`` written in newly chosen coordinates, or ``None`` when the choice

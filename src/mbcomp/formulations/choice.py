@@ -92,7 +92,7 @@ def check(formulation, problem, *, index=None, method=None, max_index=None):
 
 
 def build(formulation, problem, system, *, index=None, stabilization="baumgarte", alpha=10.0, beta=10.0,
-          independent=None, method=None, max_index=None):
+          independent=None, method=None, max_index=None, singular="stop"):
     """The formulation that reduces ``system`` to a problem of kind ``problem`` (see the table above).
 
     Parameters
@@ -107,6 +107,9 @@ def build(formulation, problem, system, *, index=None, stabilization="baumgarte"
         Baumgarte parameters (1/s).
     independent : list of str, optional
         D'Alembert only: speed names to start with as independent.
+    singular : {"stop", "pass"}
+        Lagrange at index 1 as an ODE: how the multipliers are solved near a singular
+        position (see :class:`LagrangeIndex1`).
 
     Returns
     -------
@@ -128,7 +131,7 @@ def build(formulation, problem, system, *, index=None, stabilization="baumgarte"
     if formulation == "dalembert":
         return DAlembert(system, independent=independent)
     if problem == "ode":
-        return LagrangeIndex1(system, stabilization, alpha, beta)
+        return LagrangeIndex1(system, stabilization, alpha, beta, singular=singular)
     if problem == "mechanical":
         return Mechanical(system)
     if index == 1:

@@ -266,6 +266,13 @@ class DAlembert(Formulation):
         self.repartitions += 1
         return np.concatenate((q, u[self.ind]))
 
+    def rows_changed(self, t, q, u):
+        """After the kept rows changed: the partition chosen again by pivoting over the new
+        rows (a requested set of independent speeds is not forced again); the state in it."""
+        self.dep, self.ind = self.partition(self.system.evaluate(t, q, u).A)
+        self._ill, self._limit = False, self.growth_max
+        return np.concatenate((q, u[self.ind]))
+
     def run_stats(self):
         """``repartitions`` (how often the independent speeds were re-chosen) and the
         ``independent_speeds`` at the end (names)."""

@@ -44,6 +44,11 @@ class LagrangeIndex1(Formulation):
     stabilization : {"baumgarte", "projection", "none"}
     alpha, beta : float
         Baumgarte parameters in 1/s (used with ``"baumgarte"``).
+    singular : {"stop", "pass"}
+        ``"pass"``: near a singular position (the rows' ``A M^-1 A^T`` with eigenvalues below
+        :attr:`PASS_RANK` of its largest) the multipliers leave out the directions of those
+        eigenvalues, so the accelerations stay bounded while the motion passes through (see
+        :meth:`solve`).
 
     Examples
     --------
@@ -61,13 +66,17 @@ class LagrangeIndex1(Formulation):
     """
 
     stabilizations = ("baumgarte", "projection", "none")
+    #: with ``singular="pass"``: eigenvalues of ``A M^-1 A^T`` below this times its largest
+    #: (a relative singular value of the rows of about 1e-4) are left out of the multipliers
+    PASS_RANK = 1e-8
 
-    def __init__(self, system, stabilization="baumgarte", alpha=10.0, beta=10.0):
+    def __init__(self, system, stabilization="baumgarte", alpha=10.0, beta=10.0, singular="stop"):
         if stabilization not in self.stabilizations:
             raise ValueError(f"stabilization {stabilization!r} is unknown; use one of {self.stabilizations}")
         super().__init__(system)
         self.stabilization = stabilization
         self.alpha, self.beta = float(alpha), float(beta)
+        self.singular = singular
 
     @property
     def projects(self):
@@ -95,6 +104,8 @@ class LagrangeIndex1(Formulation):
         if stabilize and self.stabilization == "baumgarte":
             rhs = rhs - 2.0 * self.alpha * ev.Phid - self.beta ** 2 * ev.Phi
             rhs_nh = rhs_nh - self.alpha * ev.Psi
+        if self.singular == "pass":
+            return self._solve_passing(M, f, A, np.concatenate((rhs, rhs_nh)), ev.t)
         n = self.nu
         K = np.zeros((n + m, n + m))
         K[:n, :n] = M
@@ -115,6 +126,26 @@ class LagrangeIndex1(Formulation):
         else:
             x = sla.lu_solve(lu, b, check_finite=False)
         return x[:n], x[n:]
+
+    def _solve_passing(self, M, f, A, rhs, t):
+        """The solve of :meth:`solve` by the range space, ``G = A M^-1 A^T``, with the
+        eigen-directions of ``G`` below :attr:`PASS_RANK` of its largest left out: at and near a
+        singular position the rows that lost rank are not enforced for that instant (their
+        multipliers, and the Baumgarte terms that would divide by the vanishing eigenvalue,
+        are zero), and the motion goes on continuously; the stabilization pulls it back onto
+        every row once the rank is back."""
+        try:
+            c = sla.cho_factor(M)
+        except np.linalg.LinAlgError:
+            raise SimulationError(f"the mass matrix is singular at t={t:g}: some coordinate carries no "
+                                  "inertia; give the bodies mass or prescribe that motion") from None
+        x0 = sla.cho_solve(c, f)
+        Y = sla.cho_solve(c, A.T)
+        g, V = np.linalg.eigh(A @ Y)
+        keep = g > self.PASS_RANK * max(g[-1], 0.0)
+        r = V[:, keep].T @ (A @ x0 - rhs)
+        lam = V[:, keep] @ (r / g[keep])
+        return x0 - Y @ lam, lam
 
     def fun(self, t, y):
         """``dy/dt`` for ``y = [q, u]``."""
@@ -157,8 +188,8 @@ class LagrangeIndex1(Formulation):
         knows) leaves no engine: scipy's method steps :meth:`fun` and the driver projects
         after every step."""
         evaluator = self.system.evaluator
-        if "c_integrate" not in evaluator.capabilities:
-            return None
+        if "c_integrate" not in evaluator.capabilities or self.singular == "pass":
+            return None  # passing singular positions: the driver watches every step (not stretches)
         if not self.projects:
             return evaluator.integrator(*((self.alpha, self.beta) if self.stabilization == "baumgarte"
                                           else (0.0, 0.0)))

@@ -42,7 +42,7 @@ from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
 from .postprocess import postprocess
 from .result import Result
-from .setup import ALL_METHODS, check_request, output_times, system_of
+from .setup import ALL_METHODS, check_request, check_singular, output_times, system_of
 from .stepping import Run, hooks_for
 from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
 
@@ -59,9 +59,9 @@ def __getattr__(name):
 
 
 def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rtol=1e-6, atol=1e-8,
-             formulation="lagrange", stabilization="baumgarte", alpha=10.0, beta=10.0, n_out=None, dt_out=None,
+             formulation="lagrange", stabilization=None, alpha=10.0, beta=10.0, n_out=None, dt_out=None,
              max_step=np.inf, progress=False, independent=None, index=None, h=None,
-             backend="auto") -> Result:
+             backend="auto", singular="stop") -> Result:
     """Simulate a model: Lagrange multipliers at index 1, or D'Alembert projection to an ODE.
 
     Parameters
@@ -99,8 +99,9 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         ``"dalembert"``: projection onto independent speeds, a minimal ODE whose positions are
         corrected onto the constraint manifold after every step
         (:class:`~mbcomp.formulations.DAlembert`; ``stabilization`` does not apply).
-    stabilization : {"baumgarte", "projection", "none"}
-        Constraint stabilization of the Lagrange formulation (see :mod:`mbcomp.formulations`).
+    stabilization : {"baumgarte", "projection", "none"}, optional
+        Constraint stabilization of the Lagrange formulation (see :mod:`mbcomp.formulations`);
+        default ``"baumgarte"``, and ``"projection"`` with ``singular="pass"``.
     alpha, beta : float
         Baumgarte parameters (1/s).
     n_out, dt_out : int, float, optional
@@ -110,6 +111,15 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         when they become ill-conditioned).
     progress : bool
         Show a progress bar (tqdm) when the run lasts more than two seconds.
+    singular : {"stop", "pass"}
+        At a singular position -- an instant where the constraint Jacobian loses rank (a flat
+        four-bar, a dead centre) -- ``"stop"`` (default) ends the run there with status
+        ``"failed"`` and a message naming the time; ``"pass"`` goes on, on the branch that
+        keeps positions and velocities continuous, and records every passage in
+        ``stats["singular_passages"]`` (time, smallest relative singular value, rank drop,
+        joints involved). The default stops because beyond a rank drop the motion need not
+        be unique (at a four-bar's change point two branches meet): going on is a choice the
+        user makes for a mechanism known to pass (a parallelogram chain).
 
     Returns
     -------
@@ -118,11 +128,13 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         last accepted step in every case.
     """
     stepper, index = check_request(method, formulation, index, h, t_start, t_end, backend)
+    stabilization = check_singular(singular, method, stepper, formulation, stabilization)
     system = system_of(model, params, backend)
     try:
         init = initialize(system, t_start)
         form = build(formulation, stepper.problem, system, index=index, stabilization=stabilization, alpha=alpha,
-                     beta=beta, independent=independent, method=method, max_index=stepper.max_index)
+                     beta=beta, independent=independent, method=method, max_index=stepper.max_index,
+                     singular=singular)
         y0 = form.initial_state(t_start, init.q, init.u)
     except Exception as exc:  # a law raising before the first step: say whose, there is nothing to keep
         if not raised_in_a_law(exc):
@@ -130,7 +142,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         raise SimulationError(start_failure(exc, t_start)) from exc
     run = Run(form, stepper, output_times(t_start, t_end, n_out, dt_out), y0, rtol=rtol, atol=atol,
               max_step=max_step, h=h)
-    monitors = monitors_for(system, atol)
+    monitors = monitors_for(system, atol, singular)
     wall0 = _time.perf_counter()
     status, message = integrate(run, monitors, progress)
     stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
@@ -152,13 +164,15 @@ def run_stats(run, monitors, init, seconds, **request):
     stats.update(form.run_stats())
     for m in monitors:
         stats.update(m.stats())
+    for hook in run.hooks:
+        stats.update(hook.stats())
     return stats
 
 
 def integrate(run, monitors, progress=False):
     """Step ``run`` to its end; ``(status, message)``. Every way a run can stop early keeps
     the outputs of the accepted steps (see the module notes)."""
-    hooks = hooks_for(run, monitors, progress)
+    hooks = run.hooks = hooks_for(run, monitors, progress)
     status, message = "success", "reached t_end"
     with sigterm_interrupts():
         try:

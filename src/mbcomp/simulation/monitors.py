@@ -48,8 +48,27 @@ import numpy as np
 from ..assembly.system import MultibodySystem
 from ..errors import SimulationError
 
-__all__ = ["SingularPosition", "StepEnd", "StepWindow", "RedundantRows", "ConstraintRank", "JointSingularities",
+__all__ = ["relative_sigma", "SingularPosition", "StepEnd", "StepWindow", "RedundantRows", "ConstraintRank", "JointSingularities",
            "monitors_for"]
+
+
+def relative_sigma(C, r=None):
+    """``sigma_r / sigma_1`` of ``C`` (``r``: its number of rows by default): 1 for no rows,
+    0 when its rank is below ``r``.
+
+    Examples
+    --------
+    >>> C = np.array([[1.0, 0.0], [1.0, 1e-4], [0.0, 1.0]])   # rank 2; rows 0, 1 nearly dependent
+    >>> round(relative_sigma(C[[0, 1]]), 6), round(relative_sigma(C[[0, 2]]), 6), relative_sigma(C, 3)
+    (5e-05, 1.0, 0.0)
+    """
+    r = C.shape[0] if r is None else r
+    if not r:
+        return 1.0
+    sv = np.linalg.svd(C, compute_uv=False)
+    if not (sv.size and sv[0] > 0):
+        return 0.0
+    return float(sv[r - 1] / sv[0]) if sv.size >= r else 0.0
 
 
 class SingularPosition(SimulationError):
@@ -113,6 +132,11 @@ class StepWindow:
         r = minimize_scalar(at, bounds=(a0, b1), method="bounded", options=dict(xatol=1e-12 * max(1.0, abs(b1))))
         return float(r.x), float(r.fun)
 
+    def state_at(self, t, nq, nu):
+        """``[q, u]`` at ``t`` (s) inside the last two steps, from their dense output."""
+        (_, a1, _, da), (_, _, _, db) = self._steps[-2:]
+        return np.asarray((da if t <= a1 else db)(t))[: nq + nu]
+
 
 class RedundantRows:
     """Rows dropped as redundant at the start stay satisfied (else: a singular start).
@@ -127,16 +151,19 @@ class RedundantRows:
 
     def __init__(self, system, atol):
         self.system = system
-        self.dropped = ~system.row_mask
         self.tol = 1e-6 + 1e3 * float(np.max(atol))
 
     def check(self, end, t_prev, dense):
         ev = end.ev
         if not ev.Phi.size:
             return
-        bad = np.abs(ev.Phi[self.dropped])
-        if bad.size and bad.max() > self.tol:
-            names = [n for n, d in zip(self.system.constraint_names(all_rows=True), self.dropped) if d]
+        dropped = ~self.system.row_mask  # the rows dropped now (RowChoice may have changed them)
+        bad = np.abs(ev.Phi[dropped])
+        # a dependent row is violated about as much as the kept ones (drift of an unstabilized
+        # form: IDA at index 1); a row that was dependent only at the start, far more
+        drift = float(np.max(np.abs(ev.Phi[~dropped]), initial=0.0))
+        if bad.size and bad.max() > max(self.tol, 100.0 * drift):
+            names = [n for n, d in zip(self.system.constraint_names(all_rows=True), dropped) if d]
             worst = names[int(np.argmax(bad))]
             raise SingularPosition(
                 f"the constraint row {worst} was dropped at the start as redundant (dependent on the "
@@ -157,25 +184,23 @@ class ConstraintRank:
         With loops (cut joints).
     """
 
-    BRACKET = 1e-2
+    BRACKET = 0.2  # a local minimum below this is located (steps of explicit methods cross a flat
+    # position with step-end values ~0.1: a smaller bracket let passages go unseen)
     SIGMA_MIN = 1e-6  # a four-bar 1e-8 m from flat: 4e-5; passing exactly through flat: <= 1.6e-7
 
-    def __init__(self, system):
-        self.system = system
+    def __init__(self, system, singular="stop"):
+        self.system, self.singular = system, singular
         mask = system.row_mask
-        self.dropped = None if mask is None or mask.all() else ~mask
+        self.rank = int(mask.sum()) if mask is not None else None  # None: every row
         self.sigma_min = 1.0
         self.window = StepWindow(self.BRACKET)
+        self.passages = []
 
     def sigma(self, ev):
-        """Smallest relative singular value of the kept rows of ``ev.C`` (0: rank lost)."""
-        C = ev.C if self.dropped is None else ev.C[~self.dropped]
-        if not C.shape[0]:
-            return 1.0
-        sv = np.linalg.svd(C, compute_uv=False)
-        if not (sv.size and sv[0] > 0):
-            return 1.0
-        return float(sv[-1] / sv[0]) if sv.size == C.shape[0] else 0.0
+        """``sigma_r / sigma_1`` of the full ``ev.C``, ``r`` the number of kept rows (0: the
+        rank is lost): which rows are kept is :class:`~mbcomp.simulation.rows.RowChoice`'s
+        matter, a singular position is where no choice keeps the rank."""
+        return relative_sigma(ev.C, self.rank)
 
     def _singular(self, t, rel):
         return SingularPosition(
@@ -186,7 +211,7 @@ class ConstraintRank:
     def check(self, end, t_prev, dense):
         rel = self.sigma(end.ev)
         self.sigma_min = min(self.sigma_min, rel)
-        if rel < self.SIGMA_MIN:
+        if rel < self.SIGMA_MIN and self.singular == "stop":
             raise self._singular(end.t, rel)
         self.window.push(t_prev, end.t, {"sigma": rel}, dense)
         if self.window.dips():
@@ -195,10 +220,29 @@ class ConstraintRank:
                                           sysm.nq, sysm.nu, sysm.normalize)
             self.sigma_min = min(self.sigma_min, smin)
             if smin < self.SIGMA_MIN:
-                raise self._singular(ts, smin)
+                if self.singular == "stop":
+                    raise self._singular(ts, smin)
+                self.passages.append(self._passage(ts, smin, self.window.state_at(ts, sysm.nq, sysm.nu)))
+
+    def _passage(self, t, sigma, qu):
+        """The record of a passage at ``t``: the rank drop and the joints of the rows in the
+        left null space of the full Jacobian there (the rows that became dependent)."""
+        sysm = self.system
+        ev = sysm.evaluate(t, sysm.normalize(qu[: sysm.nq]), qu[sysm.nq:], masked=False)
+        U, sv, _ = np.linalg.svd(ev.C)
+        r = self.rank if self.rank is not None else ev.C.shape[0]
+        small = sv[:r] < self.SIGMA_MIN * 10 * sv[0] if sv.size else np.zeros(0, bool)
+        drop = max(1, int(small.sum()) + max(0, r - sv.size))
+        weight = np.abs(U[:, r - drop: r]).max(axis=1) if sv.size else np.zeros(0)
+        names = sysm.constraint_names(all_rows=True)
+        joints = list(dict.fromkeys(n.rsplit(".", 1)[0] for n, w in zip(names, weight) if w > 0.1 * weight.max()))
+        return dict(t=float(t), sigma=float(sigma), rank_drop=drop, joints=joints)
 
     def stats(self):
-        return {"min_constraint_sigma": self.sigma_min}
+        out = {"min_constraint_sigma": self.sigma_min}
+        if self.singular == "pass":
+            out["singular_passages"] = list(self.passages)
+        return out
 
 
 class JointSingularities:
@@ -251,9 +295,10 @@ class JointSingularities:
         return {}
 
 
-def monitors_for(system, atol):
+def monitors_for(system, atol, singular="stop"):
     """The monitors ``system`` needs, in the order they check a step: joint singularities,
-    dropped rows, the constraint Jacobian's rank (the last two only for loops)."""
+    dropped rows, the constraint Jacobian's rank (the last two only for loops; ``singular``:
+    what the rank monitor does at a singular position, ``"stop"`` or ``"pass"``)."""
     out = []
     joints = [e for e in system.topology.edges if e.kind == "joint" and e.comp.has_singularity]
     if joints:
@@ -262,5 +307,5 @@ def monitors_for(system, atol):
         mask = system.row_mask
         if mask is not None and not mask.all():
             out.append(RedundantRows(system, atol))
-        out.append(ConstraintRank(system))
+        out.append(ConstraintRank(system, singular))
     return out

@@ -11,9 +11,11 @@ hooks in order, each a :class:`StepHook`:
    when the formulation projects);
 3. :class:`Projection` -- move the state back onto the constraint manifold; the stepper
    continues from it or restarts (:meth:`mbcomp.solvers.base.Stepper.reset_state`);
-4. :class:`Repartition` -- when the formulation must choose its coordinates again, restart
+4. :class:`~mbcomp.simulation.rows.RowChoice` -- when the kept constraint rows lose rank
+   and others do not, keep those and restart the stepper;
+5. :class:`Repartition` -- when the formulation must choose its coordinates again, restart
    the stepper from the state written in the new ones;
-5. :class:`Progress` -- the progress bar.
+6. :class:`Progress` -- the progress bar.
 
 Examples
 --------
@@ -88,6 +90,7 @@ class Run:
         self.stepper = None
         self._y_start = y
         self._dense = None
+        self.hooks = []  # what is done after every accepted step (set by the driver: hooks_for)
 
     def start(self, t=None, y=None):
         """Make a new stepper at ``(t, y)`` (default: the run's start)."""
@@ -169,6 +172,10 @@ class StepHook:
 
     def close(self):
         """Release what the hook holds (the progress bar)."""
+
+    def stats(self):
+        """What the hook reports in the result's ``stats`` (none by default)."""
+        return {}
 
 
 class Monitoring(StepHook):
@@ -257,11 +264,17 @@ class Progress(StepHook):
 
 def hooks_for(run, monitors, progress):
     """The hooks of a run, in order: monitors (if any), outputs, projection (if the
-    formulation projects), repartition, progress bar (if asked)."""
+    formulation projects), the choice of kept constraint rows (if rows were dropped:
+    :class:`mbcomp.simulation.rows.RowChoice`), repartition, progress bar (if asked)."""
     hooks = [Monitoring(monitors)] if monitors else []
     hooks.append(KeepOutputs())
     if run.projects:
         hooks.append(Projection())
+    mask = run.form.system.row_mask
+    if mask is not None and not mask.all():
+        from .rows import RowChoice
+
+        hooks.append(RowChoice(run.form.system))
     hooks.append(Repartition())
     if progress:
         hooks.append(Progress(run.t_out[0], run.t_out[-1]))

@@ -15,7 +15,10 @@ depends on the method's memory, which each class declares in ``one_step``:
   (``stats["restarts"]``), and otherwise keep their own state.
 
 When scipy's step fails (the step size collapsed), :meth:`~mbcomp.solvers.base.Stepper.step`
-returns a message naming the method, the time and the likely causes.
+returns a message naming the method, the time, the likely causes and scipy's last warning;
+scipy's warnings are kept (``stats["solver_warnings"]``), not shown. The implicit methods
+(``Radau, BDF, LSODA``) get the problem's Jacobian ``jac(t, y)`` when it has one (every
+formulation does: :meth:`mbcomp.formulations.Formulation.jac`).
 
 Examples
 --------
@@ -30,6 +33,8 @@ Examples
 (True, True)
 """
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
@@ -85,6 +90,9 @@ class ScipyStepper(Stepper):
     adaptive = True
     problem = "ode"
 
+    #: the text of scipy's last warning (None: none so far)
+    last_warning = None
+
     def __init__(self, problem, t0, y0, t_bound, rtol=1e-6, atol=1e-8, first_step=None, max_step=np.inf):
         super().__init__(problem, t0, y0, t_bound, rtol, atol, first_step, max_step)
         del self.stats["nreject"]
@@ -95,7 +103,23 @@ class ScipyStepper(Stepper):
         opts = dict(rtol=self.rtol, atol=self.atol, max_step=self.max_step)
         if self.first_step:
             opts["first_step"] = self.first_step
-        return self.method(self.prob.fun, t, y, self.t_bound, **opts)
+        if self.implicit and hasattr(self.prob, "jac"):
+            # the problem's Jacobian: scipy's own finite differences adapt each column's step
+            # from the last Jacobian and let it grow without bound for a coordinate nothing
+            # depends on (a freely spinning shaft angle) until it overflows
+            opts["jac"] = self.prob.jac
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            solver = self.method(self.prob.fun, t, y, self.t_bound, **opts)
+        self._note(caught)
+        return solver
+
+    def _note(self, caught):
+        """Keep scipy's warnings (counted in ``stats["solver_warnings"]``, the last text in
+        :attr:`last_warning` for a failure's message) instead of letting them reach the user."""
+        for w in caught:
+            self.stats["solver_warnings"] = self.stats.get("solver_warnings", 0) + 1
+            self.last_warning = f"{w.category.__name__}: {w.message}"
 
     def _count(self):
         for key, done in self._done.items():
@@ -107,10 +131,14 @@ class ScipyStepper(Stepper):
 
     def _step(self):
         s = self.solver
-        msg = s.step()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            msg = s.step()
+        self._note(caught)
         self._count()
         if s.status == "failed":
-            raise StepFailure(f"the integrator {self.name} failed at t={s.t:g}: {msg} "
+            cause = f"; scipy warned: {self.last_warning}" if caught else ""
+            raise StepFailure(f"the integrator {self.name} failed at t={s.t:g}: {msg}{cause} "
                               "(step size collapsed: stiff or singular dynamics, or tolerances too tight)")
         self.t_old, self.t, self.y = s.t_old, s.t, s.y
         self.stats["nsteps"] += 1
