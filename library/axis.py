@@ -33,6 +33,7 @@ class RotationalSpring(_TwoFlange):
 
     c = Param(1.0, unit="N m/rad", doc="spring rate", check="nonnegative")
     phi_rel0 = Param(0.0, unit="rad", doc="unstretched relative angle")
+    conservative = True
 
     def law(self, s, v, p):
         return p.c * (s - p.phi_rel0)
@@ -53,6 +54,9 @@ class RotationalDamper(_TwoFlange):
 
     d = Param(0.0, unit="N m s/rad", doc="damping coefficient", check="nonnegative")
 
+    def conserves_energy(self, p):
+        return p.d == 0.0
+
     def law(self, s, v, p):
         return p.d * v
 
@@ -68,6 +72,9 @@ class RotationalSpringDamper(RotationalSpring):
     """
 
     d = Param(0.0, unit="N m s/rad", doc="damping coefficient", check="nonnegative")
+
+    def conserves_energy(self, p):
+        return p.d == 0.0
 
     def law(self, s, v, p):
         return p.c * (s - p.phi_rel0) + p.d * v
@@ -86,6 +93,9 @@ class TranslationalSpringDamper(_TwoFlange):
     c = Param(0.0, unit="N/m", doc="spring rate", check="nonnegative")
     d = Param(0.0, unit="N s/m", doc="damping coefficient", check="nonnegative")
     s_rel0 = Param(0.0, unit="m", doc="unstretched relative position")
+
+    def conserves_energy(self, p):
+        return p.d == 0.0
 
     def law(self, s, v, p):
         return p.c * (s - p.s_rel0) + p.d * v

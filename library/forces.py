@@ -46,6 +46,7 @@ class Spring(_LineForce):
 
     c = Param(1.0, unit="N/m", doc="spring rate", check="nonnegative")
     s_unstretched = Param(0.0, unit="m", doc="rest length", check="nonnegative")
+    conservative = True
 
     def tension(self, L, Ldot, p):
         return p.c * (L - p.s_unstretched)
@@ -67,6 +68,9 @@ class Damper(_LineForce):
 
     d = Param(0.0, unit="N s/m", doc="damping coefficient", check="nonnegative")
 
+    def conserves_energy(self, p):
+        return p.d == 0.0
+
     def tension(self, L, Ldot, p):
         return p.d * Ldot
 
@@ -82,6 +86,9 @@ class SpringDamper(Spring):
     """
 
     d = Param(0.0, unit="N s/m", doc="damping coefficient", check="nonnegative")
+
+    def conserves_energy(self, p):
+        return p.d == 0.0
 
     def tension(self, L, Ldot, p):
         return p.c * (L - p.s_unstretched) + p.d * Ldot

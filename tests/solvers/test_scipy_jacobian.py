@@ -26,11 +26,13 @@ def reference():
     return mbcomp.simulate(disk.build(**STIFF), t_end=T_END, method="DOP853", rtol=1e-12, atol=1e-12, n_out=41)
 
 
-@pytest.mark.parametrize("method, agree", [("Radau", 1e-6), ("BDF", 1e-2), ("LSODA", 1e-3)])
-def test_implicit_scipy_methods_run_a_freely_spinning_shaft(method, agree, reference):
+# BDF at rtol 1e-9: at 1e-8 it runs too, but drifts 1.7e-5 of the energy the motion exchanges
+# and the accuracy alarm says so (status "inaccurate": 6e-4 rad off after 2 s)
+@pytest.mark.parametrize("method, rtol, agree", [("Radau", 1e-8, 1e-6), ("BDF", 1e-9, 1e-3), ("LSODA", 1e-8, 1e-3)])
+def test_implicit_scipy_methods_run_a_freely_spinning_shaft(method, rtol, agree, reference):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        r = mbcomp.simulate(disk.build(**STIFF), t_end=T_END, method=method, rtol=1e-8, atol=1e-10, n_out=41)
+        r = mbcomp.simulate(disk.build(**STIFF), t_end=T_END, method=method, rtol=rtol, atol=rtol / 100, n_out=41)
     assert r.success, r.message
     assert not [w for w in caught if "scipy" in w.filename or "overflow" in str(w.message)]
     assert r.stats["njev"] > 0  # the Jacobian was asked for, and given

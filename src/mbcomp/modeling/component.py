@@ -200,6 +200,16 @@ class Component:
     """
 
     role = None
+    #: whether the component's forces do no work but through its :meth:`potential` (or none at
+    #: all): declared by each class, read by :meth:`conserves_energy`
+    conservative = True
+
+    def conserves_energy(self, p):
+        """Whether the component, with parameter values ``p``, keeps the total energy of a
+        mechanism built from such components constant (its forces derive from its potential
+        or do no work). The class's :attr:`conservative`; a class whose answer depends on a
+        parameter (a damper's rate) overrides this."""
+        return self.conservative
 
     def __init__(self, **values):
         self.name = None

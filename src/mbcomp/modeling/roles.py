@@ -259,6 +259,7 @@ class ForceElement(Component):
     :meth:`wrenches` (and :meth:`potential` if conservative)."""
 
     role = "force"
+    conservative = False  # a law of time and state does work; springs declare True
 
     def wrenches(self, t, frames, p):
         """Return ``{port_name: (f, tau)}``: force (N) at the frame origin and torque (N m),
@@ -274,6 +275,7 @@ class FlangeElement(Component):
     """Forces along 1-D flanges. Subclasses declare ``Flange`` ports."""
 
     role = "flange_force"
+    conservative = False  # a law of time and state does work; springs declare True
 
     def flange_forces(self, t, states, p):
         """Return ``{port_name: flow}``: force (N) or torque (N m) the element applies to each
@@ -289,6 +291,7 @@ class Drive(Component):
     constraint that removes the joint's degree of freedom (not a servo)."""
 
     role = "drive"
+    conservative = False  # a prescribed motion feeds or takes energy
     flange_b = Flange("connect to a 1-DOF joint's axis flange")
 
     def motion(self, t, p):

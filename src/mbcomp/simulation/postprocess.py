@@ -30,6 +30,7 @@ from ..assembly.outputs import output_values, result_columns
 from ..assembly.recursive import SingularTree
 from ..assembly.summary import summary
 from ..geometry.kinematics import matrix_to_quat
+from .accuracy import energy_alarm
 from .result import Result
 
 __all__ = ["postprocess"]
@@ -87,7 +88,9 @@ def postprocess(system, form, t, Y, status, message, stats, init):
         Output times (s).
     Y : ndarray (n, nq + nu)
     status, message : str
-        Of the run; notes are appended to ``message``.
+        Of the run; notes are appended to ``message``. A conservative system whose energy
+        drifted more than ``stats["rtol"]`` promises turns ``"success"`` into
+        ``"inaccurate"`` (:func:`mbcomp.simulation.accuracy.energy_alarm`).
     stats : dict
     init : Initialization
         For the model summary.
@@ -117,6 +120,10 @@ def postprocess(system, form, t, Y, status, message, stats, init):
             cols.rotation(path, k, R)
     series = cols.finished()
     notes = _joint_notes(system, t, series) + _derived(system, t, series)
+    if status == "success" and "rtol" in stats and not system.nonconservative() and "energy.kinetic" in series:
+        alarm, text = energy_alarm(series["energy.kinetic"], series["energy.potential"], stats["rtol"])
+        if alarm:
+            status, notes = alarm, [text] + notes
     message = "; ".join([message] + notes)
     stats = dict(stats)
     stats["coordinates"] = list(system.q_names)

@@ -43,10 +43,13 @@ class Result:
     ----------
     time : ndarray (n,)
         Output times (s) up to the last accepted step.
-    status : {"success", "failed", "interrupted"}
-        ``"failed"``: the run could not go on (a solver failure, a singular position, a
-        component's law that raised); ``"interrupted"``: Ctrl-C or SIGTERM. Either way the
-        results up to the last accepted step are kept.
+    status : {"success", "inaccurate", "failed", "interrupted"}
+        ``"inaccurate"``: the run reached ``t_end`` but a conserved quantity drifted more
+        than the tolerances promise (the message gives the drift and a tolerance that fixes
+        it; :mod:`mbcomp.simulation.accuracy`); ``"failed"``: the run could not go on (a
+        solver failure, a singular position, a component's law that raised);
+        ``"interrupted"``: Ctrl-C or SIGTERM. Either way the results up to the last accepted
+        step are kept.
     message : str
         Why the run ended, and notes (e.g. a contact that pulls); ``"reached t_end"`` and
         notes on success.
