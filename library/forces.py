@@ -118,6 +118,7 @@ class WorldForce(ForceElement):
     True
     """
 
+    external = True
     frame_b = Frame("frame the force acts on (at its origin)")
     f = Param((0.0, 0.0, 0.0), unit="N", shape=(3,), kind="law", doc="force, world coordinates, or f(t, frame)")
 
@@ -135,6 +136,7 @@ class WorldTorque(ForceElement):
     array([0., 0., 1.])
     """
 
+    external = True
     frame_b = Frame("frame the torque acts on")
     tau = Param((0.0, 0.0, 0.0), unit="N m", shape=(3,), kind="law", doc="torque, world coordinates, or tau(t, frame)")
 

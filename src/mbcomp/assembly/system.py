@@ -495,13 +495,6 @@ class MultibodySystem:
         return self.increment(q, np.zeros(self.nu))
 
     # --- post-processing ------------------------------------------------------------------
-    def nonconservative(self):
-        """The components whose forces change the total energy at the current parameter
-        values (each declares it: :meth:`~mbcomp.modeling.component.Component.conserves_energy`);
-        empty: the energy of :meth:`energies` is a constant of the motion."""
-        comps = self.topology.flat.components
-        return [name for name, comp in comps.items() if not comp.conserves_energy(self.P.get(name, comp.p))]
-
     def energies(self, ev: Evaluation):
         """``(kinetic, potential)`` in J; potential of gravity (zero at the world origin) and
         of every conservative element."""

@@ -111,6 +111,7 @@ class FreeMotion(Joint):
     (7, 6)
     """
 
+    transmits_load = False
     coordinates = (("r.x", "m"), ("r.y", "m"), ("r.z", "m"),
                    ("Q.w", "1"), ("Q.x", "1"), ("Q.y", "1"), ("Q.z", "1"))
     speeds = (("v.x", "m/s"), ("v.y", "m/s"), ("v.z", "m/s"),

@@ -98,6 +98,9 @@ class Joint(Component):
     speeds: tuple = ()
     axis_kind = None
     tree_edge = True  # False: a constraint-only joint (no coordinates), always a cut joint
+    #: False for a joint that passes no force or torque between its frames (a free joint):
+    #: bodies joined to the ground only through such joints feel no external load from it
+    transmits_load = True
 
     @property
     def nq(self):
@@ -260,6 +263,9 @@ class ForceElement(Component):
 
     role = "force"
     conservative = False  # a law of time and state does work; springs declare True
+    #: True for a load from outside the mechanism (a force or torque given in the world,
+    #: with no reaction on another of its frames): it changes the mechanism's momentum
+    external = False
 
     def wrenches(self, t, frames, p):
         """Return ``{port_name: (f, tau)}``: force (N) at the frame origin and torque (N m),

@@ -4,7 +4,7 @@ A run that reached ``t_end`` is not necessarily right: a 2,000 s pendulum at rto
 0.165 m from the exact position, a cart-pole at scipy's default tolerances gained 6.2 J in a
 conservative system, and both reported "success" although mbcomp computes the energy that
 shows the error. When every component declares that it conserves energy
-(:meth:`mbcomp.assembly.system.MultibodySystem.nonconservative` is empty: no damper, drive
+(:func:`mbcomp.assembly.conservation.nonconservative` is empty: no damper, drive
 or applied law) the total energy is a constant of the motion, and its drift measures the
 integration error. :func:`energy_alarm` compares the drift (the deviation from the start
 value exceeded over a tenth of the output grid: a drift, not one bad point) with the energy the
@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-__all__ = ["energy_alarm", "ALARM_RTOL", "ALARM_FLOOR", "DRIFT_SHARE"]
+__all__ = ["energy_alarm", "momentum_alarm", "ALARM_RTOL", "ALARM_FLOOR", "DRIFT_SHARE"]
 
 #: a relative energy drift above this many times ``rtol`` is more than the tolerance promises
 #: (global errors grow over a run: the bar leaves room for 100 tolerances' worth)
@@ -40,6 +40,55 @@ ALARM_RTOL = 100.0
 ALARM_FLOOR = 1e-5
 #: the drift is the deviation from the start exceeded over this share of the output grid
 DRIFT_SHARE = 0.1
+
+
+def _drift(x):
+    """The deviation of the rows of ``x`` (n, k) from the first exceeded over
+    :data:`DRIFT_SHARE` of them (a drift, not one bad point)."""
+    d = np.abs(x - x[0]) if x.ndim == 1 else np.linalg.norm(x - x[0], axis=1)
+    return float(np.quantile(d, 1.0 - DRIFT_SHARE))
+
+
+def _fix(rtol, rel):
+    """The tolerance that brings a drift of ``rel`` at ``rtol`` under the floor (the drift
+    scales about linearly with rtol and already exceeds 100 rtol, so only the floor can be
+    met: rel r'/r <= floor), as the message's advice."""
+    suggest = float(np.max(rtol)) * ALARM_FLOOR / rel
+    suggest = 10.0 ** math.floor(math.log10(suggest)) if suggest > 0 else 0.0
+    return (f"rerun with rtol={suggest:.0e} (and atol 100 times smaller)" if suggest >= 1e-13 else
+            "no tolerance reaches it in double precision: shorten the run")
+
+
+def momentum_alarm(P, L, P_scale, L_scale, rtol):
+    """``(status, message)`` of the alarm on the linear and angular momenta ``P``, ``L``
+    ((n, 3): kg m/s, kg m^2/s about the world origin) of a mechanism nothing outside loads
+    (:func:`mbcomp.assembly.conservation.momentum_conserved`), relative to the
+    sums of the bodies' contributions' magnitudes ``P_scale``, ``L_scale`` (their largest
+    over the run), at ``rtol``: ``("inaccurate", text)`` or ``(None, "")``.
+
+    Examples
+    --------
+    >>> P = np.tile([1.0, 0.0, 0.0], (11, 1)); L = np.tile([0.0, 0.0, 2.0], (11, 1))
+    >>> momentum_alarm(P, L, 1.0, 2.0, 1e-8)
+    (None, '')
+    >>> L[:, 2] += np.linspace(0.0, 1e-3, 11)                 # a growing error in L
+    >>> momentum_alarm(P, L, 1.0, 2.0, 1e-8)[1].split(";")[0]
+    'accuracy alarm: the angular momentum drifted by 0.0009 kg m^2/s (4.5e-04 of its scale 2) although nothing outside the mechanism loads it'
+    """
+    bar = max(ALARM_RTOL * float(np.max(rtol)), ALARM_FLOOR)
+    for name, x, scale, unit in (("linear momentum", P, P_scale, "kg m/s"), ("angular momentum", L, L_scale,
+                                                                              "kg m^2/s")):
+        x = np.asarray(x, float)
+        x = x[np.isfinite(x).all(axis=1)]
+        if len(x) < 2 or not scale > 0.0:
+            continue
+        drift = _drift(x)
+        rel = drift / scale
+        if rel > bar:
+            return "inaccurate", (f"accuracy alarm: the {name} drifted by {drift:.2g} {unit} ({rel:.1e} of its "
+                                  f"scale {scale:.3g}) although nothing outside the mechanism loads it; "
+                                  f"rtol={float(np.max(rtol)):g} promises about {bar:.0e} -> {_fix(rtol, rel)}")
+    return None, ""
 
 
 def energy_alarm(T, V, rtol):
@@ -56,18 +105,12 @@ def energy_alarm(T, V, rtol):
         return None, ""
     # a drift, not a spike: exceeded over a tenth of the run (BDF's interpolated outputs next
     # to a near-flat four-bar were off by 2e-4 at one point of 251, and right before and after)
-    drift = float(np.quantile(np.abs(E[ok] - E[ok][0]), 1.0 - DRIFT_SHARE))
+    drift = _drift(E[ok])
     rel = drift / scale
     bar = max(ALARM_RTOL * float(np.max(rtol)), ALARM_FLOOR)
     if rel <= bar:
         return None, ""
-    # the drift scales about linearly with rtol (RK45 and DOP853 on the pendulum: 9-10x per
-    # decade) and already exceeds 100 rtol, so only the floor can be met: rel r'/r <= floor
-    suggest = float(np.max(rtol)) * ALARM_FLOOR / rel
-    suggest = 10.0 ** math.floor(math.log10(suggest)) if suggest > 0 else 0.0
-    fix = (f"rerun with rtol={suggest:.0e} (and atol 100 times smaller)" if suggest >= 1e-13 else
-           "no tolerance reaches it in double precision: shorten the run")
     return "inaccurate", (f"accuracy alarm: the total energy drifted by {drift:.2g} J ({rel:.1e} of the "
                           f"{scale:.3g} J the motion exchanges, over a tenth of the run) in a conservative system; "
                           f"rtol={float(np.max(rtol)):g} "
-                          f"promises about {bar:.0e} -> {fix}")
+                          f"promises about {bar:.0e} -> {_fix(rtol, rel)}")

@@ -26,11 +26,12 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from ..assembly.conservation import momenta, momentum_conserved, nonconservative
 from ..assembly.outputs import output_values, result_columns
 from ..assembly.recursive import SingularTree
 from ..assembly.summary import summary
 from ..geometry.kinematics import matrix_to_quat
-from .accuracy import energy_alarm
+from .accuracy import energy_alarm, momentum_alarm
 from .result import Result
 
 __all__ = ["postprocess"]
@@ -120,14 +121,35 @@ def postprocess(system, form, t, Y, status, message, stats, init):
             cols.rotation(path, k, R)
     series = cols.finished()
     notes = _joint_notes(system, t, series) + _derived(system, t, series)
-    if status == "success" and "rtol" in stats and not system.nonconservative() and "energy.kinetic" in series:
-        alarm, text = energy_alarm(series["energy.kinetic"], series["energy.potential"], stats["rtol"])
+    if status == "success" and "rtol" in stats:
+        alarm, text = _alarms(system, t, Y, series, stats["rtol"])
         if alarm:
             status, notes = alarm, [text] + notes
     message = "; ".join([message] + notes)
     stats = dict(stats)
     stats["coordinates"] = list(system.q_names)
     return Result(t, series, status, message, stats, summary(system, init))
+
+
+#: output points at most on which the momenta are computed for their alarm (evenly spaced)
+MOMENTUM_POINTS = 1000
+
+
+def _alarms(system, t, Y, series, rtol):
+    """The first accuracy alarm (:mod:`mbcomp.simulation.accuracy`) a successful run raises,
+    ``(status, message)``: the energy of a conservative system, the momenta of one that
+    nothing outside loads; ``(None, "")`` for none."""
+    if not nonconservative(system) and "energy.kinetic" in series:
+        alarm = energy_alarm(series["energy.kinetic"], series["energy.potential"], rtol)
+        if alarm[0]:
+            return alarm
+    if len(t) > 1 and momentum_conserved(system):
+        nq = system.nq
+        ks = np.unique(np.linspace(0, len(t) - 1, min(len(t), MOMENTUM_POINTS)).astype(int))
+        m = [momenta(system, t[k], Y[k, :nq], Y[k, nq:]) for k in ks]
+        return momentum_alarm(np.array([x[0] for x in m]), np.array([x[1] for x in m]), max(x[2] for x in m),
+                              max(x[3] for x in m), rtol)
+    return None, ""
 
 
 def _sample(system, form, cols, k, t, q, u):

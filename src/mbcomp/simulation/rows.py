@@ -41,6 +41,22 @@ class RowChoice(StepHook):
         Every change: ``t`` (s), ``dropped`` (the row names dropped from then on), ``was``
         (those dropped before), ``sigma_before`` and ``sigma_after`` (the kept rows'
         smallest relative singular value before and after).
+
+    Examples
+    --------
+    The driver adds one to every run of a model that dropped rows
+    (:func:`mbcomp.simulation.stepping.hooks_for`); its
+    changes are the result's ``stats["row_changes"]``:
+
+    >>> import pathlib, mbcomp
+    >>> from mbcomp.simulation.rows import RowChoice
+    >>> root = pathlib.Path(mbcomp.__file__).resolve().parents[2]
+    >>> bricard = mbcomp.load_model_file(root / "models" / "bricard.py")
+    >>> r = mbcomp.simulate(bricard.build(), t_end=1.5, n_out=16)
+    >>> [(c["was"], c["dropped"]) for c in r.stats["row_changes"]], r.success
+    ([(['joint5.tilt_2'], ['joint5.y'])], True)
+    >>> RowChoice.KEPT_MIN, RowChoice.GAIN
+    (0.1, 4.0)
     """
 
     #: look for better rows when the kept rows' sigma_min / sigma_max falls below this
