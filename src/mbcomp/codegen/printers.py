@@ -305,6 +305,38 @@ class Program:
         return f"if ({'!' if res else ''}({cond})) return 1;"
 
     # --- C -----------------------------------------------------------------------------------
+    def c_params(self, fname="mbcomp_params"):
+        """C source of ``int fname(const double *pv, double *h)``: the hoisted values ``h`` of
+        the parameter vector ``pv`` (what :class:`ParamProgram` computes in Python; the same
+        IEEE operations, so the same values), 0 on success, 1 when a parameter guard fails
+        (the values change a decision taken while tracing: the program does not hold for
+        them), 2 when a hoisted value is not finite. What a program needs to run without
+        Python (an exported FMU's tunable parameters)."""
+        keys = self.g.keys
+        pidx = {i: j for j, i in self.params}
+
+        def name(i):
+            k = keys[i]
+            if k[0] == "c":
+                return _c_num(k[1])
+            if i in pidx:
+                return f"pv[{pidx[i]}]"
+            return f"x{i}"
+
+        body = []
+        for i in self.pre_nodes():
+            k = keys[i]
+            if k[0] == "in":
+                continue
+            body.append(f"    const double x{i} = {_expr(k, [name(j) for j in k[1:]], 'c')};")
+        for op, ai, bi, res in self.param_guards:
+            body.append(f"    if ({'!' if res else ''}({name(ai)} {op} {name(bi)})) return 1;")
+        for k, i in enumerate(self.hoisted):
+            body.append(f"    h[{k}] = {name(i)};")
+            body.append(f"    if (!isfinite(h[{k}])) return 2;")
+        return (f"int {fname}(const double *restrict pv, double *restrict h)\n{{\n" + "\n".join(body)
+                + "\n    (void)pv; (void)h;\n    return 0;\n}\n")
+
     def c_function(self, group, fname, chunk=2000, roll=None):
         """C source of ``int fname(q, u, t, d, h, p, w, out)``: 0 on success, 1 if a guard failed.
         Values crossing chunk boundaries live in the work array ``w``; returns ``(source,
