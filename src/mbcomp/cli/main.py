@@ -36,7 +36,7 @@ import os
 import sys
 
 from ..errors import SimulationError
-from . import bench, info, simulate, stability
+from . import bench, export, info, simulate, stability
 from .loader import load_model_file, parse_value
 from .stability import parse_sweep
 
@@ -59,7 +59,7 @@ def make_parser():
     """The ``mbcomp`` argument parser: one sub-command per command module."""
     ap = argparse.ArgumentParser(prog="mbcomp", description="Modelica-style multibody modelling and simulation")
     sub = ap.add_subparsers(dest="command", required=True)
-    for command in (simulate, bench, info, stability):
+    for command in (simulate, bench, info, stability, export):
         command.add_parser(sub, _common)
     return ap
 

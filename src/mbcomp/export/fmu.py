@@ -1,0 +1,203 @@
+"""FMI export (first stage, issue 17): FMI 2.0 Model Exchange of the Lagrange index-1 ODE.
+
+What the FMU holds (see docs/architecture.md, "FMU export"):
+
+* ``sources/<id>.c``: the model's generated Lagrange program ``mbcomp_fun`` (accelerations
+  by the recursive algorithms, loops closed by the multipliers with Baumgarte stabilization,
+  the gains fixed at export), its parameter program in C (``mbcomp_params``: every nonzero
+  numeric component parameter is an FMU parameter, checked against the decisions baked into
+  the program), and the FMI 2.0 wrapper ``fmi2.c`` (every function of the standard; those
+  this FMU does not support log and return ``fmi2Error``);
+* ``binaries/linux64/<id>.so`` built with the system C compiler (libgcc linked statically,
+  no dependency but libm and libc);
+* ``modelDescription.xml``: the parameters (units, descriptions), the continuous states
+  ``[q, u]`` with mbcomp's names and their derivatives; the guid is a hash of the
+  description.
+
+Not yet (the rest of issue 17): FMI 3.0, Co-Simulation, D'Alembert state selection with
+events, inputs, outputs beyond the states (reactions, energies), unit definitions, the CLI.
+
+Examples
+--------
+>>> import pathlib, tempfile, mbcomp
+>>> from mbcomp.export import export_fmu
+>>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World())
+>>> j = m.add("j", Revolute(phi0=0.5)); rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+>>> bob = m.add("bob", PointMass(m=2.0))
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+>>> info = export_fmu(m, pathlib.Path(tempfile.mkdtemp()) / "pendulum.fmu", name="pendulum")  # doctest: +SKIP
+>>> info["states"]                                                                             # doctest: +SKIP
+['j.phi', 'j.w']
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import pathlib
+import re
+import shutil
+import subprocess
+import tempfile
+import zipfile
+from xml.sax.saxutils import escape
+
+import numpy as np
+
+from ..assembly.initialization import initialize
+from ..codegen.compiler import _HEADER, _chunk, c_compiler
+from ..codegen.graph import CodegenError
+from ..codegen.printers import Program
+from ..codegen.tracer import param_layout, param_vector, trace
+from ..errors import ModelError, Problem
+from ..modeling.model import Model
+
+__all__ = ["export_fmu"]
+
+WRAPPER = pathlib.Path(__file__).with_name("fmi2.c")
+#: Baumgarte gains (1/s) compiled into an FMU of a model with loops (as ``simulate``'s defaults)
+ALPHA = BETA = 10.0
+
+
+def _identifier(name):
+    ident = re.sub(r"\W", "_", name)
+    return ident if ident and not ident[0].isdigit() else f"m_{ident}"
+
+
+def _c_array(name, values):
+    vals = ", ".join(repr(float(v)) for v in values) if len(values) else "0.0"
+    return f"static const double {name}[] = {{{vals}}};\n"
+
+
+def export_fmu(model, path, *, fmi="2.0", kind="me", params=None, name=None, max_nodes=3_000_000):
+    """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
+
+    Parameters
+    ----------
+    model : Model
+    path : str or path-like
+        The ``.fmu`` file to write.
+    fmi : {"2.0"}
+        FMI version (3.0 is not exported yet).
+    kind : {"me"}
+        Model Exchange (Co-Simulation is not exported yet).
+    params : dict, optional
+        Parameter values ``{"component.param": value}`` at export (tunable in the FMU too).
+    name : str, optional
+        Model name (default: the file name); the model identifier is made from it.
+
+    Returns
+    -------
+    dict
+        ``states``, ``parameters`` (names), ``guid``, ``size`` (bytes), ``operations`` (of
+        the program), ``compiler``.
+
+    Raises
+    ------
+    ValueError
+        An FMI version or kind not exported yet, or no C compiler.
+    ModelError
+        A model the FMU cannot hold yet (a drive law evaluated in Python at every call).
+    """
+    if fmi != "2.0" or kind != "me":
+        raise ValueError(f"fmi={fmi!r}, kind={kind!r}: this version exports FMI 2.0 Model Exchange only "
+                         "(fmi='2.0', kind='me'); FMI 3.0 and Co-Simulation are not written yet")
+    if not isinstance(model, Model):
+        raise TypeError(f"export_fmu needs an mbcomp.Model, not {type(model).__name__}")
+    cc = c_compiler()
+    if cc is None:
+        raise ValueError("export_fmu needs a C compiler (gcc or cc on PATH, or $CC) to build the FMU's binary")
+    path = pathlib.Path(path)
+    name = name or path.stem
+    ident = _identifier(name)
+    from .. import assemble
+
+    system = assemble(model, params)
+    init = initialize(system)
+    tr = trace(system, max_nodes, program="fun")
+    if "fun" not in tr.groups:
+        raise ModelError([Problem("(start)", "the start position is singular: no program can be generated there",
+                                  "start the model away from the singular position")])
+    if tr.drives:
+        raise ModelError([Problem(", ".join(tr.drives), "the motion law cannot be traced into C, so an FMU cannot "
+                                  "hold it", "write the law with numpy functions and plain arithmetic")])
+    prog = Program(tr.graph, {"fun": tr.groups["fun"]}, guard_groups={"fun": tr.guard_groups["fun"]})
+    parts, n_work = prog.c_parts("fun", "mbcomp_fun", _chunk, n_parts=lambda n: 1)
+    layout = tr.layout
+    pv = param_vector(system, layout)
+    y0 = np.concatenate((init.q, init.u))
+    loops = bool(system.topology.cut)
+    pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
+    states = list(system.q_names) + list(system.u_names)
+    xml = _model_description(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@")
+    guid = "{" + str(_uuid_of(xml)) + "}"
+    xml = xml.replace("@GUID@", guid)
+    model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
+               f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
+               f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
+               + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", np.maximum(np.abs(y0), 1.0))
+               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + f'\n#include "fmi2.c"\n')
+    with tempfile.TemporaryDirectory(prefix="mbcomp-fmu-") as tmp:
+        root = pathlib.Path(tmp)
+        (root / "sources").mkdir()
+        (root / "binaries" / "linux64").mkdir(parents=True)
+        (root / "sources" / f"{ident}.c").write_text(model_c)
+        shutil.copy(WRAPPER, root / "sources" / "fmi2.c")
+        (root / "modelDescription.xml").write_text(xml)
+        lib = root / "binaries" / "linux64" / f"{ident}.so"
+        cmd = [cc, "-O2", "-fno-math-errno", "-fPIC", "-shared", "-static-libgcc", "-fvisibility=hidden",
+               str(root / "sources" / f"{ident}.c"), "-o", str(lib), "-lm"]
+        res = subprocess.run(cmd, capture_output=True, text=True, cwd=root / "sources")
+        if res.returncode != 0:
+            raise CodegenError(f"building the FMU's binary failed ({' '.join(cmd[:3])} ...):\n{res.stderr[-2000:]}")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+            for f in sorted(root.rglob("*")):
+                if f.is_file():
+                    z.write(f, f.relative_to(root).as_posix())
+    return dict(states=states, parameters=pnames, guid=guid, size=os.path.getsize(path),
+                operations=prog.n_ops("fun"), compiler=cc, model_identifier=ident)
+
+
+def _uuid_of(text):
+    import uuid
+
+    return uuid.UUID(hashlib.sha256(text.encode()).hexdigest()[:32])
+
+
+def _param_doc(system, path, name):
+    comp = system.topology.flat.components[path]
+    par = comp.params()[name]
+    return par.unit, par.doc
+
+
+def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid):
+    from .. import __version__
+
+    nx, npar = len(states), len(pv)
+    rows = []
+    for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
+        unit, doc = _param_doc(system, path, pname)
+        rows.append(f'    <ScalarVariable name="{escape(full)}" valueReference="{k}" causality="parameter" '
+                    f'variability="fixed" initial="exact" description="{escape(doc or "")} [{escape(unit or "")}]">'
+                    f'<Real start="{pv[k]!r}"/></ScalarVariable>')
+    for k, s in enumerate(states):
+        rows.append(f'    <ScalarVariable name="{escape(s)}" valueReference="{npar + k}" causality="local" '
+                    f'variability="continuous" initial="exact"><Real start="{float(y0[k])!r}"/></ScalarVariable>')
+    first_state = npar + 1  # 1-based index of the first state among the variables
+    for k, s in enumerate(states):
+        rows.append(f'    <ScalarVariable name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
+                    f'variability="continuous" initial="calculated"><Real derivative="{first_state + k}"/>'
+                    f'</ScalarVariable>')
+    der = [npar + nx + k + 1 for k in range(nx)]
+    unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in der)
+    return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
+            f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
+            f'generationTool="mbcomp {__version__}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
+            f'  <ModelExchange modelIdentifier="{ident}" canNotUseMemoryManagementFunctions="true">\n'
+            f'    <SourceFiles>\n      <File name="{ident}.c"/>\n    </SourceFiles>\n  </ModelExchange>\n'
+            f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
+            f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
+            f'  <ModelStructure>\n    <Derivatives>\n{unknowns}\n    </Derivatives>\n'
+            f'    <InitialUnknowns>\n{unknowns}\n    </InitialUnknowns>\n  </ModelStructure>\n'
+            f'</fmiModelDescription>\n')

@@ -1,0 +1,134 @@
+"""FMU export, first stage (issue 17): FMI 2.0 Model Exchange of the Lagrange index-1 ODE.
+
+Each exported FMU is validated by FMPy (``validate_fmu(path) == []``) and run by FMPy's own
+Model Exchange driver (CVODE); its motion must be mbcomp's own (a tight DOP853 run of the
+same equations). Also: a tuned parameter changes the motion as in mbcomp, a wrong guid is
+refused, a parameter value that breaks a decision baked into the program is refused, and the
+binary exports every function of the FMI 2.0 header.
+"""
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import mbcomp
+from mbcomp.codegen import c_compiler
+from mbcomp.library import FixedTranslation, PointMass, Revolute, World
+
+from conftest import load_model
+
+fmpy = pytest.importorskip("fmpy")
+pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
+from fmpy.validation import validate_fmu  # noqa: E402
+
+from mbcomp.export import export_fmu  # noqa: E402
+
+#: the functions of the FMI 2.0 header (fmi2Functions.h): common, Model Exchange, Co-Simulation
+FMI2_FUNCTIONS = """GetTypesPlatform GetVersion SetDebugLogging Instantiate FreeInstance SetupExperiment
+EnterInitializationMode ExitInitializationMode Terminate Reset GetReal GetInteger GetBoolean GetString SetReal
+SetInteger SetBoolean SetString GetFMUstate SetFMUstate FreeFMUstate SerializedFMUstateSize SerializeFMUstate
+DeSerializeFMUstate GetDirectionalDerivative EnterEventMode NewDiscreteStates EnterContinuousTimeMode
+CompletedIntegratorStep SetTime SetContinuousStates GetDerivatives GetEventIndicators GetContinuousStates
+GetNominalsOfContinuousStates SetRealInputDerivatives GetRealOutputDerivatives DoStep CancelStep GetStatus
+GetRealStatus GetIntegerStatus GetBooleanStatus GetStringStatus""".split()
+
+
+def pendulum():
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("j", Revolute(phi0=0.5))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=2.0))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    return m
+
+
+def run_me(path, t_end, outputs, **kw):
+    return fmpy.simulate_fmu(str(path), fmi_type="ModelExchange", stop_time=t_end, output=outputs,
+                             relative_tolerance=1e-10, output_interval=t_end / 100, **kw)
+
+
+def max_diff(fmu_result, ref, var):
+    return float(np.max(np.abs(np.interp(ref.time, fmu_result["time"], fmu_result[var]) - ref[var])))
+
+
+CASES = [  # model file, simulated time (s), compared variable, agreement (rad or m)
+    ("slider_crank", 10.0, "crank_joint.phi", 1e-5),  # through its dead centres
+    ("four_bar", 1.0, "crank_joint.phi", 1e-5),
+    ("andrews", 0.03, "hinge_A_AG.phi", 1e-6),
+    ("rolling_disk", 2.0, "x.s", 1e-8),
+    ("chain_3d", 2.0, "joint1.Q.w", 1e-8),
+]
+
+
+@pytest.mark.parametrize("name, t_end, var, agree", CASES, ids=[c[0] for c in CASES])
+def test_the_fmu_is_valid_and_moves_as_mbcomp(name, t_end, var, agree, tmp_path):
+    model = load_model(f"models/{name}.py").build()
+    path = tmp_path / f"{name}.fmu"
+    info = export_fmu(model, path)
+    assert validate_fmu(str(path)) == []
+    assert var in info["states"] and info["size"] == path.stat().st_size
+    r = run_me(path, t_end, [var])
+    ref = mbcomp.simulate(model, t_end=t_end, n_out=101, rtol=1e-11, atol=1e-13)
+    assert max_diff(r, ref, var) < agree
+
+
+def test_a_tuned_parameter_changes_the_motion_as_in_mbcomp(tmp_path):
+    path = tmp_path / "pendulum.fmu"
+    export_fmu(pendulum(), path)
+    r = run_me(path, 3.0, ["j.phi"], start_values={"rod.r[2]": -2.0})  # a 2 m rod instead of 1 m
+    ref = mbcomp.simulate(pendulum(), t_end=3.0, n_out=101, rtol=1e-11, atol=1e-13, params={"rod.r": (0, -2.0, 0)})
+    assert max_diff(r, ref, "j.phi") < 1e-7
+    short = mbcomp.simulate(pendulum(), t_end=3.0, n_out=101, rtol=1e-11, atol=1e-13)
+    assert max_diff(r, short, "j.phi") > 0.1  # it is not the 1 m pendulum
+
+
+def test_a_parameter_that_breaks_a_baked_decision_is_refused(tmp_path):
+    """The hinge axis (0, 0, 1) was generated with its zero components baked in; a component
+    made nonzero would need another program: the FMU says so instead of computing nonsense."""
+    path = tmp_path / "pendulum.fmu"
+    export_fmu(pendulum(), path)
+    with pytest.raises(Exception, match="fmi2ExitInitializationMode|fmi2Error|failed"):
+        run_me(path, 1.0, ["j.phi"], start_values={"j.n[3]": -1.0})
+
+
+def test_a_wrong_guid_is_refused_and_every_function_is_exported(tmp_path):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Model
+
+    path = tmp_path / "pendulum.fmu"
+    info = export_fmu(pendulum(), path)
+    md = read_model_description(str(path))
+    assert md.guid == info["guid"] and md.guid != "{00000000-0000-0000-0000-000000000000}"
+    unzipped = extract(str(path))
+    fmu = FMU2Model(guid="{11111111-2222-3333-4444-555555555555}", unzipDirectory=unzipped,
+                    modelIdentifier=md.modelExchange.modelIdentifier)
+    with pytest.raises(Exception):
+        fmu.instantiate()
+    lib = f"{unzipped}/binaries/linux64/{md.modelExchange.modelIdentifier}.so"
+    if shutil.which("nm"):
+        out = subprocess.run(["nm", "-D", "--defined-only", lib], capture_output=True, text=True, check=True).stdout
+        exported = {line.split()[-1] for line in out.splitlines() if line.strip()}
+        assert {f"fmi2{f}" for f in FMI2_FUNCTIONS} <= exported
+        assert not [s for s in exported if s.startswith("mbcomp_")]  # the program's own symbols stay inside
+
+
+def test_what_is_not_exported_yet_says_so(tmp_path):
+    with pytest.raises(ValueError, match="FMI 2.0 Model Exchange only"):
+        export_fmu(pendulum(), tmp_path / "x.fmu", fmi="3.0")
+    with pytest.raises(ValueError, match="FMI 2.0 Model Exchange only"):
+        export_fmu(pendulum(), tmp_path / "x.fmu", kind="cs")
+
+
+def test_the_command_line_exports_and_reports(tmp_path, capsys):
+    from mbcomp.cli.main import main
+
+    path, model_file = tmp_path / "crank.fmu", load_model("models/slider_crank.py").__file__
+    assert main(["export", model_file, "-o", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "FMI 2.0 Model Exchange" in out and "states (6): crank_joint.phi" in out and "crank.m" in out
+    assert validate_fmu(str(path)) == []
+    assert main(["export", model_file, "-o", str(tmp_path / "x.fmu"), "--fmi", "3.0"]) == 2
