@@ -1,15 +1,15 @@
 """``mbcomp export MODEL.py -o crank.fmu``: the model as an FMU (see :mod:`mbcomp.export`).
 
 Prints what went in: states, parameters, the program's size, the guid and how the binary was
-built. Today FMI 2.0 Model Exchange (``--fmi 2.0 --kind me``, the defaults); the other
-choices are refused with the reason.
+built. Today FMI 2.0 (``--fmi 2.0``, the default; 3.0 is refused with the reason), Model
+Exchange and/or Co-Simulation (``--kind both``, the default).
 
 Examples
 --------
 >>> from mbcomp.cli.main import make_parser
 >>> args = make_parser().parse_args(["export", "models/slider_crank.py", "-o", "crank.fmu"])
 >>> args.func.__name__, args.fmi, args.kind
-('cmd_export', '2.0', 'me')
+('cmd_export', '2.0', 'both')
 """
 from __future__ import annotations
 
@@ -28,7 +28,8 @@ def cmd_export(args):
     _, model, runtime = load(args)
     info = export_fmu(model, args.out, fmi=args.fmi, kind=args.kind, params=runtime,
                       name=pathlib.Path(args.out).stem)
-    print(f"wrote {args.out}: FMI {args.fmi} {'Model Exchange' if args.kind == 'me' else args.kind}, "
+    kinds = {"me": "Model Exchange", "cs": "Co-Simulation", "both": "Model Exchange + Co-Simulation"}
+    print(f"wrote {args.out}: FMI {args.fmi} {kinds[args.kind]}, "
           f"{info['size']} bytes, guid {info['guid']}")
     print(f"states ({len(info['states'])}): {', '.join(info['states'])}")
     print(f"parameters ({len(info['parameters'])}): {', '.join(info['parameters'])}")
@@ -39,11 +40,11 @@ def cmd_export(args):
 
 def add_parser(sub, common):
     """The ``export`` sub-command on the argparse ``sub``-parsers."""
-    e = sub.add_parser("export", help="export the model as an FMU (FMI 2.0 Model Exchange)")
+    e = sub.add_parser("export", help="export the model as an FMU (FMI 2.0 Model Exchange and Co-Simulation)")
     common(e)
     e.add_argument("-o", "--out", required=True, help="the .fmu file to write")
     e.add_argument("--fmi", default="2.0", choices=["2.0", "3.0"], help="FMI version (3.0: not yet)")
-    e.add_argument("--kind", default="me", choices=["me", "cs", "both"],
-                   help="Model Exchange (cs, both: not yet)")
+    e.add_argument("--kind", default="both", choices=["me", "cs", "both"],
+                   help="Model Exchange, Co-Simulation or both (default)")
     e.set_defaults(func=cmd_export)
     return e

@@ -1,4 +1,4 @@
-/* mbcomp FMI 2.0 Model Exchange wrapper around a generated Lagrange program.
+/* mbcomp FMI 2.0 wrapper (Model Exchange and Co-Simulation) around a generated Lagrange program.
  *
  * Written by mbcomp from the FMI 2.0.x standard's function list (the types below are the
  * standard's ABI, declared here so the FMU carries no header of anyone else). The
@@ -7,12 +7,15 @@
  *   int mbcomp_fun(q, u, t, d, h, p, w, out) (the Lagrange index-1 right-hand side with
  *   Baumgarte gains d[0], d[1]) and int mbcomp_params(pv, h) (the hoisted parameter values).
  * Value references: 0..NP-1 parameters, NP..NP+NX-1 states [q, u], NP+NX..NP+2NX-1 their
- * derivatives. */
+ * derivatives. Co-Simulation steps the same right-hand side with the runtime's DOP853
+ * (mbrt.h: error control at the experiment's tolerance, 1e-8 if none is given). */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "mbrt.h"
 
 #define NX (NQ + NU)
 #define VR_X NP
@@ -64,9 +67,10 @@ typedef struct {
     char *name;
     fmi2CallbackLogger logger;
     fmi2ComponentEnvironment env;
-    int logging, mode, dirty;
-    double t, alpha, beta;
-    double p[NP + 1], h[NH + 1], y[NX + 1], dy[NX + 1], w[NW + 1], d[2];
+    int logging, mode, dirty, cs;
+    double t, alpha, beta, rtol;
+    double p[NP + 1], h[NH + 1], y[NX + 1], dy[NX + 1], w[NW + 1], d[2], atol[NX + 1], y_end[NX + 1];
+    double *work; /* Co-Simulation: the integrator's scratch (mbrt_dop853_work_size) */
 } Inst;
 
 static void say(Inst *c, fmi2Status s, const char *fmt, ...)
@@ -143,15 +147,16 @@ FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
                    guid ? guid : "(null)", GUID);
         return NULL;
     }
-    if (type != fmi2ModelExchange) {
-        cb->logger(cb->componentEnvironment, name, fmi2Error, "logStatusError",
-                   "this FMU is exported for Model Exchange only");
-        return NULL;
-    }
     c = (Inst *)calloc(1, sizeof(Inst));
     if (!c) return NULL;
     c->name = (char *)malloc(strlen(name) + 1);
     if (!c->name) { free(c); return NULL; }
+    c->cs = type == fmi2CoSimulation;
+    if (c->cs) {
+        c->work = (double *)calloc(mbrt_dop853_work_size(NX) + 1, sizeof(double));
+        if (!c->work) { free(c->name); free(c); return NULL; }
+    }
+    c->rtol = 1e-8;
     strcpy(c->name, name);
     c->logger = cb->logger;
     c->env = cb->componentEnvironment;
@@ -169,15 +174,23 @@ FMI2_EXPORT void fmi2FreeInstance(fmi2Component c)
 {
     if (!c) return;
     free(((Inst *)c)->name);
+    free(((Inst *)c)->work);
     free(c);
 }
 
 FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, fmi2Real tol, fmi2Real t0,
                                            fmi2Boolean stopDef, fmi2Real tStop)
 {
-    (void)tolDef; (void)tol; (void)stopDef; (void)tStop;
+    (void)stopDef; (void)tStop;
     NEED(c);
     ((Inst *)c)->t = t0;
+    if (tolDef) {
+        if (!(tol >= 1e-14 && tol < 1.0)) {
+            say((Inst *)c, fmi2Error, "fmi2SetupExperiment: tolerance %g is out of range (1e-14 .. 1)", tol);
+            return fmi2Error;
+        }
+        ((Inst *)c)->rtol = tol;
+    }
     return fmi2OK;
 }
 
@@ -372,23 +385,71 @@ FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Re
     return fmi2OK;
 }
 
-/* --- Co-Simulation: not in this FMU (declared Model Exchange only) ------------------------- */
+/* --- Co-Simulation --------------------------------------------------------------------- */
+static int cs_rhs(void *ctx, double t, const double *y, double *dydt)
+{
+    Inst *c = (Inst *)ctx;
+    return mbcomp_fun(y, y + NQ, t, c->d, c->h, c->p, c->w, dydt);
+}
+
+FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior)
+{
+    Inst *s = (Inst *)c;
+    mbrt_stats st;
+    double t_end;
+    int i, rc, written = 0;
+    (void)noSetPrior;
+    NEED(c);
+    if (!s->cs) return unsupported(c, "fmi2DoStep in a Model Exchange instance");
+    if (!(h >= 0.0) || fabs(t - s->t) > 1e-9 * (1.0 + fabs(t))) {
+        say(s, fmi2Error, "fmi2DoStep: step from t=%g by %g, but the FMU is at t=%g", t, h, s->t);
+        return fmi2Error;
+    }
+    if (h == 0.0) return fmi2OK;
+    if (refresh(s) != fmi2OK) return fmi2Error;
+    s->d[0] = s->alpha;
+    s->d[1] = s->beta;
+    for (i = 0; i < NX; i++) s->atol[i] = s->rtol * 1e-2 * NOMINAL[i];
+    memset(&st, 0, sizeof st);
+    t_end = s->t + h;
+    rc = mbrt_dop853(cs_rhs, NULL, s, NX, s->t, s->y, t_end, s->rtol, s->atol, 0.0, 0.0, 0, &t_end, 1,
+                     s->y_end, &written, s->work, &st);
+    if (rc != MBRT_OK || written != 1) {
+        say(s, fmi2Error, "fmi2DoStep from t=%g: %s", s->t, st.message);
+        s->mode = M_ERROR;
+        return fmi2Error;
+    }
+    memcpy(s->y, s->y_end, sizeof(double) * NX);
+    s->t = t_end;
+    return fmi2OK;
+}
+
 FMI2_EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                                                    const fmi2Integer order[], const fmi2Real v[])
-{ (void)vr; (void)n; (void)order; (void)v; return unsupported(c, "fmi2SetRealInputDerivatives (Co-Simulation)"); }
+{ (void)vr; (void)order; (void)v; return n ? unsupported(c, "fmi2SetRealInputDerivatives (no inputs)") : fmi2OK; }
 FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                                                     const fmi2Integer order[], fmi2Real v[])
-{ (void)vr; (void)n; (void)order; (void)v; return unsupported(c, "fmi2GetRealOutputDerivatives (Co-Simulation)"); }
-FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior)
-{ (void)t; (void)h; (void)noSetPrior; return unsupported(c, "fmi2DoStep (Co-Simulation)"); }
-FMI2_EXPORT fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep (Co-Simulation)"); }
+{ (void)vr; (void)order; (void)v; return n ? unsupported(c, "fmi2GetRealOutputDerivatives") : fmi2OK; }
+FMI2_EXPORT fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep (steps are not asynchronous)"); }
 FMI2_EXPORT fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind k, fmi2Status *v)
-{ (void)k; (void)v; return unsupported(c, "fmi2GetStatus (Co-Simulation)"); }
+{
+    NEED(c);
+    if (k == fmi2DoStepStatus && v) { *v = fmi2OK; return fmi2OK; }
+    return unsupported(c, "fmi2GetStatus of this kind");
+}
 FMI2_EXPORT fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind k, fmi2Real *v)
-{ (void)k; (void)v; return unsupported(c, "fmi2GetRealStatus (Co-Simulation)"); }
+{
+    NEED(c);
+    if (k == fmi2LastSuccessfulTime && v) { *v = ((Inst *)c)->t; return fmi2OK; }
+    return unsupported(c, "fmi2GetRealStatus of this kind");
+}
 FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind k, fmi2Integer *v)
-{ (void)k; (void)v; return unsupported(c, "fmi2GetIntegerStatus (Co-Simulation)"); }
+{ (void)k; (void)v; return unsupported(c, "fmi2GetIntegerStatus"); }
 FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind k, fmi2Boolean *v)
-{ (void)k; (void)v; return unsupported(c, "fmi2GetBooleanStatus (Co-Simulation)"); }
+{
+    NEED(c);
+    if (k == fmi2Terminated && v) { *v = 0; return fmi2OK; }
+    return unsupported(c, "fmi2GetBooleanStatus of this kind");
+}
 FMI2_EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind k, fmi2String *v)
-{ (void)k; (void)v; return unsupported(c, "fmi2GetStringStatus (Co-Simulation)"); }
+{ (void)k; (void)v; return unsupported(c, "fmi2GetStringStatus"); }

@@ -1,4 +1,5 @@
-"""FMI export (first stage, issue 17): FMI 2.0 Model Exchange of the Lagrange index-1 ODE.
+"""FMI export (first stage, issue 17): FMI 2.0 Model Exchange and Co-Simulation of the
+Lagrange index-1 ODE.
 
 What the FMU holds (see docs/architecture.md, "FMU export"):
 
@@ -6,16 +7,20 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
   by the recursive algorithms, loops closed by the multipliers with Baumgarte stabilization,
   the gains fixed at export), its parameter program in C (``mbcomp_params``: every nonzero
   numeric component parameter is an FMU parameter, checked against the decisions baked into
-  the program), and the FMI 2.0 wrapper ``fmi2.c`` (every function of the standard; those
-  this FMU does not support log and return ``fmi2Error``);
+  the program), the FMI 2.0 wrapper ``fmi2.c`` (every function of the standard; those
+  this FMU does not support log and return ``fmi2Error``) and, for Co-Simulation, the C
+  runtime's DOP853 (``mbrt.h``, ``mbrt_rk.c``, ``mbrt_dop853.c``: error control at the
+  experiment's tolerance, 1e-8 by default);
 * ``binaries/linux64/<id>.so`` built with the system C compiler (libgcc linked statically,
   no dependency but libm and libc);
 * ``modelDescription.xml``: the parameters (units, descriptions), the continuous states
   ``[q, u]`` with mbcomp's names and their derivatives; the guid is a hash of the
   description.
 
-Not yet (the rest of issue 17): FMI 3.0, Co-Simulation, D'Alembert state selection with
-events, inputs, outputs beyond the states (reactions, energies), unit definitions, the CLI.
+Not yet (the rest of issue 17): FMI 3.0, D'Alembert state selection with events (the
+states are all of ``[q, u]``, loops held by Baumgarte stabilization), projection after
+Co-Simulation steps, inputs, outputs beyond the states (reactions, energies), unit
+definitions.
 
 Examples
 --------
@@ -26,9 +31,9 @@ Examples
 >>> j = m.add("j", Revolute(phi0=0.5)); rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
 >>> bob = m.add("bob", PointMass(m=2.0))
 >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
->>> info = export_fmu(m, pathlib.Path(tempfile.mkdtemp()) / "pendulum.fmu", name="pendulum")  # doctest: +SKIP
->>> info["states"]                                                                             # doctest: +SKIP
-['j.phi', 'j.w']
+>>> info = export_fmu(m, pathlib.Path(tempfile.mkdtemp()) / "pendulum.fmu")
+>>> info["states"], info["parameters"]          # the hinge axis's and rod's zeros are baked in
+(['j.phi', 'j.w'], ['bob.m', 'j.n[3]', 'rod.r[2]', 'world.g[2]'])
 """
 from __future__ import annotations
 
@@ -55,6 +60,9 @@ from ..modeling.model import Model
 __all__ = ["export_fmu"]
 
 WRAPPER = pathlib.Path(__file__).with_name("fmi2.c")
+#: the C runtime's files the FMU carries: Co-Simulation steps with its DOP853
+RUNTIME_DIR = pathlib.Path(__file__).resolve().parent.parent / "codegen" / "runtime"
+RUNTIME = ("mbrt.h", "mbrt_rk_internal.h", "mbrt_rk.c", "mbrt_dop853.c")
 #: Baumgarte gains (1/s) compiled into an FMU of a model with loops (as ``simulate``'s defaults)
 ALPHA = BETA = 10.0
 
@@ -69,7 +77,7 @@ def _c_array(name, values):
     return f"static const double {name}[] = {{{vals}}};\n"
 
 
-def export_fmu(model, path, *, fmi="2.0", kind="me", params=None, name=None, max_nodes=3_000_000):
+def export_fmu(model, path, *, fmi="2.0", kind="both", params=None, name=None, max_nodes=3_000_000):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
 
     Parameters
@@ -79,8 +87,9 @@ def export_fmu(model, path, *, fmi="2.0", kind="me", params=None, name=None, max
         The ``.fmu`` file to write.
     fmi : {"2.0"}
         FMI version (3.0 is not exported yet).
-    kind : {"me"}
-        Model Exchange (Co-Simulation is not exported yet).
+    kind : {"both", "me", "cs"}
+        Model Exchange, Co-Simulation (the runtime's DOP853 at the experiment's tolerance),
+        or both in one FMU (default).
     params : dict, optional
         Parameter values ``{"component.param": value}`` at export (tunable in the FMU too).
     name : str, optional
@@ -99,9 +108,10 @@ def export_fmu(model, path, *, fmi="2.0", kind="me", params=None, name=None, max
     ModelError
         A model the FMU cannot hold yet (a drive law evaluated in Python at every call).
     """
-    if fmi != "2.0" or kind != "me":
-        raise ValueError(f"fmi={fmi!r}, kind={kind!r}: this version exports FMI 2.0 Model Exchange only "
-                         "(fmi='2.0', kind='me'); FMI 3.0 and Co-Simulation are not written yet")
+    if fmi != "2.0":
+        raise ValueError(f"fmi={fmi!r}: this version exports FMI 2.0 only (fmi='2.0'); FMI 3.0 is not written yet")
+    if kind not in ("me", "cs", "both"):
+        raise ValueError(f"kind={kind!r}: use 'me' (Model Exchange), 'cs' (Co-Simulation) or 'both'")
     if not isinstance(model, Model):
         raise TypeError(f"export_fmu needs an mbcomp.Model, not {type(model).__name__}")
     cc = c_compiler()
@@ -129,7 +139,7 @@ def export_fmu(model, path, *, fmi="2.0", kind="me", params=None, name=None, max
     loops = bool(system.topology.cut)
     pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
     states = list(system.q_names) + list(system.u_names)
-    xml = _model_description(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@")
+    xml = _model_description(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@", kind=kind)
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
@@ -143,10 +153,13 @@ def export_fmu(model, path, *, fmi="2.0", kind="me", params=None, name=None, max
         (root / "binaries" / "linux64").mkdir(parents=True)
         (root / "sources" / f"{ident}.c").write_text(model_c)
         shutil.copy(WRAPPER, root / "sources" / "fmi2.c")
+        for f in RUNTIME:
+            shutil.copy(RUNTIME_DIR / f, root / "sources" / f)
         (root / "modelDescription.xml").write_text(xml)
         lib = root / "binaries" / "linux64" / f"{ident}.so"
         cmd = [cc, "-O2", "-fno-math-errno", "-fPIC", "-shared", "-static-libgcc", "-fvisibility=hidden",
-               str(root / "sources" / f"{ident}.c"), "-o", str(lib), "-lm"]
+               str(root / "sources" / f"{ident}.c"), *(str(root / "sources" / f) for f in RUNTIME if f.endswith(".c")),
+               "-o", str(lib), "-lm"]
         res = subprocess.run(cmd, capture_output=True, text=True, cwd=root / "sources")
         if res.returncode != 0:
             raise CodegenError(f"building the FMU's binary failed ({' '.join(cmd[:3])} ...):\n{res.stderr[-2000:]}")
@@ -171,7 +184,14 @@ def _param_doc(system, path, name):
     return par.unit, par.doc
 
 
-def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid):
+def _interface(tag, ident):
+    files = "".join(f'      <File name="{f}"/>\n' for f in (f"{ident}.c",) + tuple(f for f in RUNTIME if f.endswith(".c")))
+    extra = ' canHandleVariableCommunicationStepSize="true"' if tag == "CoSimulation" else ""
+    return (f'  <{tag} modelIdentifier="{ident}" canNotUseMemoryManagementFunctions="true"{extra}>\n'
+            f'    <SourceFiles>\n{files}    </SourceFiles>\n  </{tag}>\n')
+
+
+def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind):
     from .. import __version__
 
     nx, npar = len(states), len(pv)
@@ -194,8 +214,8 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
             f'generationTool="mbcomp {__version__}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
-            f'  <ModelExchange modelIdentifier="{ident}" canNotUseMemoryManagementFunctions="true">\n'
-            f'    <SourceFiles>\n      <File name="{ident}.c"/>\n    </SourceFiles>\n  </ModelExchange>\n'
+            + "".join(_interface(tag, ident) for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
+                      if kind in (k, "both")) +
             f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
             f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
             f'  <ModelStructure>\n    <Derivatives>\n{unknowns}\n    </Derivatives>\n'
