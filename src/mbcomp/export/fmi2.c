@@ -1,26 +1,8 @@
-/* mbcomp FMI 2.0 wrapper (Model Exchange and Co-Simulation) around a generated Lagrange program.
- *
- * Written by mbcomp from the FMI 2.0.x standard's function list (the types below are the
- * standard's ABI, declared here so the FMU carries no header of anyone else). The
- * including file defines, before this one:
- *   MBCOMP_ID, NQ, NU, NP, NH, NW, GUID, and the arrays P0[NP], Y0[NQ+NU], NOMINAL[NQ+NU];
- *   int mbcomp_fun(q, u, t, d, h, p, w, out) (the Lagrange index-1 right-hand side with
- *   Baumgarte gains d[0], d[1]) and int mbcomp_params(pv, h) (the hoisted parameter values).
- * Value references: 0..NP-1 parameters, NP..NP+NX-1 states [q, u], NP+NX..NP+2NX-1 their
- * derivatives. Co-Simulation steps the same right-hand side with the runtime's DOP853
- * (mbrt.h: error control at the experiment's tolerance, 1e-8 if none is given). */
-#include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "mbrt.h"
-
-#define NX (NQ + NU)
-#define VR_X NP
-#define VR_DX (NP + NX)
-#define NVR (NP + 2 * NX)
+/* mbcomp FMI 2.0 wrapper (Model Exchange and Co-Simulation) over the FMU core (fmu_core.c,
+ * included before this file): the standard's functions, translated into the core's calls.
+ * The types below are the standard's ABI, declared here from the FMI 2.0.x specification so
+ * the FMU carries no header of anyone else. */
+#include "fmu_core.c"
 
 typedef void *fmi2Component;
 typedef void *fmi2ComponentEnvironment;
@@ -61,68 +43,20 @@ typedef struct {
 #define FMI2_EXPORT
 #endif
 
-enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_TERMINATED, M_ERROR };
-
-typedef struct {
-    char *name;
-    fmi2CallbackLogger logger;
-    fmi2ComponentEnvironment env;
-    int logging, mode, dirty, cs;
-    double t, alpha, beta, rtol;
-    double p[NP + 1], h[NH + 1], y[NX + 1], dy[NX + 1], w[NW + 1], d[2], atol[NX + 1], y_end[NX + 1];
-    double *work; /* Co-Simulation: the integrator's scratch (mbrt_dop853_work_size) */
-} Inst;
-
-static void say(Inst *c, fmi2Status s, const char *fmt, ...)
+static void fmi2_log(Inst *c, int error, const char *msg)
 {
-    char msg[512];
-    va_list ap;
-    if (!c || !c->logger || (s == fmi2OK && !c->logging)) return;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    c->logger(c->env, c->name, s, s == fmi2OK ? "logAll" : "logStatusError", "%s", msg);
-}
-
-/* the hoisted values of the current parameters; a parameter guard failing is an error: the
-   program was generated for a decision these values change */
-static fmi2Status refresh(Inst *c)
-{
-    int rc;
-    if (!c->dirty) return fmi2OK;
-    rc = mbcomp_params(c->p, c->h);
-    if (rc) {
-        say(c, fmi2Error, "the parameter values %s -> export the model again with these values",
-            rc == 1 ? "change a decision taken when the program was generated (a parameter guard)"
-                    : "give a non-finite value");
-        c->mode = M_ERROR;
-        return fmi2Error;
-    }
-    c->dirty = 0;
-    return fmi2OK;
-}
-
-static fmi2Status derivatives(Inst *c)
-{
-    int i;
-    if (refresh(c) != fmi2OK) return fmi2Error;
-    c->d[0] = c->alpha;
-    c->d[1] = c->beta;
-    if (mbcomp_fun(c->y, c->y + NQ, c->t, c->d, c->h, c->p, c->w, c->dy)) {
-        say(c, fmi2Error, "the right-hand side failed a guard at t=%g (a singular position, or a law's other "
-            "branch): mbcomp's numeric path is not in the FMU", c->t);
-        return fmi2Error;
-    }
-    for (i = 0; i < NX; i++) {
-        if (!isfinite(c->dy[i])) {
-            say(c, fmi2Error, "the derivative of state %d is not finite at t=%g", i, c->t);
-            return fmi2Error;
-        }
-    }
-    return fmi2OK;
+    fmi2CallbackLogger logger = (fmi2CallbackLogger)c->logger;
+    if (logger) logger(c->env, c->name, error ? fmi2Error : fmi2OK, error ? "logStatusError" : "logAll", "%s", msg);
 }
 
 #define NEED(c) do { if (!(c)) return fmi2Error; if (((Inst *)(c))->mode == M_ERROR) return fmi2Error; } while (0)
+#define OK(x) ((x) == 0 ? fmi2OK : fmi2Error)
+
+static fmi2Status unsupported(fmi2Component c, const char *what)
+{
+    say((Inst *)c, 1, "%s is not supported by this FMU", what);
+    return fmi2Error;
+}
 
 FMI2_EXPORT const char *fmi2GetTypesPlatform(void) { return "default"; }
 FMI2_EXPORT const char *fmi2GetVersion(void) { return "2.0"; }
@@ -147,36 +81,17 @@ FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
                    guid ? guid : "(null)", GUID);
         return NULL;
     }
-    c = (Inst *)calloc(1, sizeof(Inst));
+    if (type != fmi2ModelExchange && type != fmi2CoSimulation) return NULL;
+    c = mb_new(name, type == fmi2CoSimulation);
     if (!c) return NULL;
-    c->name = (char *)malloc(strlen(name) + 1);
-    if (!c->name) { free(c); return NULL; }
-    c->cs = type == fmi2CoSimulation;
-    if (c->cs) {
-        c->work = (double *)calloc(mbrt_dop853_work_size(NX) + 1, sizeof(double));
-        if (!c->work) { free(c->name); free(c); return NULL; }
-    }
-    c->rtol = 1e-8;
-    strcpy(c->name, name);
-    c->logger = cb->logger;
+    c->logger = (void (*)(void))cb->logger;
     c->env = cb->componentEnvironment;
+    c->log = fmi2_log;
     c->logging = logging;
-    memcpy(c->p, P0, sizeof(double) * NP);
-    memcpy(c->y, Y0, sizeof(double) * NX);
-    c->alpha = ALPHA;
-    c->beta = BETA;
-    c->dirty = 1;
-    c->mode = M_INSTANTIATED;
     return c;
 }
 
-FMI2_EXPORT void fmi2FreeInstance(fmi2Component c)
-{
-    if (!c) return;
-    free(((Inst *)c)->name);
-    free(((Inst *)c)->work);
-    free(c);
-}
+FMI2_EXPORT void fmi2FreeInstance(fmi2Component c) { mb_free((Inst *)c); }
 
 FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, fmi2Real tol, fmi2Real t0,
                                            fmi2Boolean stopDef, fmi2Real tStop)
@@ -186,7 +101,7 @@ FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, 
     ((Inst *)c)->t = t0;
     if (tolDef) {
         if (!(tol >= 1e-14 && tol < 1.0)) {
-            say((Inst *)c, fmi2Error, "fmi2SetupExperiment: tolerance %g is out of range (1e-14 .. 1)", tol);
+            say((Inst *)c, 1, "fmi2SetupExperiment: tolerance %g is out of range (1e-14 .. 1)", tol);
             return fmi2Error;
         }
         ((Inst *)c)->rtol = tol;
@@ -204,8 +119,8 @@ FMI2_EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     NEED(c);
-    if (refresh((Inst *)c) != fmi2OK) return fmi2Error;
-    ((Inst *)c)->mode = M_EVENT;
+    if (mb_refresh((Inst *)c)) return fmi2Error;
+    ((Inst *)c)->mode = ((Inst *)c)->cs ? M_STEP : M_EVENT;
     return fmi2OK;
 }
 
@@ -218,60 +133,28 @@ FMI2_EXPORT fmi2Status fmi2Terminate(fmi2Component c)
 
 FMI2_EXPORT fmi2Status fmi2Reset(fmi2Component c)
 {
-    Inst *s = (Inst *)c;
     if (!c) return fmi2Error;
-    memcpy(s->p, P0, sizeof(double) * NP);
-    memcpy(s->y, Y0, sizeof(double) * NX);
-    s->t = 0.0;
-    s->dirty = 1;
-    s->mode = M_INSTANTIATED;
+    mb_reset((Inst *)c);
     return fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real value[])
 {
-    Inst *s = (Inst *)c;
     size_t i;
-    int need_dx = 0;
+    int have_dy = 0;
     NEED(c);
-    for (i = 0; i < n; i++) if (vr[i] >= VR_DX && vr[i] < NVR) need_dx = 1;
-    if (need_dx && derivatives(s) != fmi2OK) return fmi2Error;
-    for (i = 0; i < n; i++) {
-        if (vr[i] < VR_X) value[i] = s->p[vr[i]];
-        else if (vr[i] < VR_DX) value[i] = s->y[vr[i] - VR_X];
-        else if (vr[i] < NVR) value[i] = s->dy[vr[i] - VR_DX];
-        else { say(s, fmi2Error, "fmi2GetReal: no variable with value reference %u", vr[i]); return fmi2Error; }
-    }
+    for (i = 0; i < n; i++)
+        if (mb_get((Inst *)c, vr[i], &value[i], &have_dy)) return fmi2Error;
     return fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real value[])
 {
-    Inst *s = (Inst *)c;
     size_t i;
     NEED(c);
-    for (i = 0; i < n; i++) {
-        if (vr[i] < VR_X) {
-            if (s->mode != M_INSTANTIATED && s->mode != M_INIT) {
-                say(s, fmi2Error, "fmi2SetReal: parameter %u is fixed after initialization", vr[i]);
-                return fmi2Error;
-            }
-            s->p[vr[i]] = value[i];
-            s->dirty = 1;
-        } else if (vr[i] < VR_DX) {
-            s->y[vr[i] - VR_X] = value[i];
-        } else {
-            say(s, fmi2Error, "fmi2SetReal: value reference %u cannot be set", vr[i]);
-            return fmi2Error;
-        }
-    }
+    for (i = 0; i < n; i++)
+        if (mb_set((Inst *)c, vr[i], value[i])) return fmi2Error;
     return fmi2OK;
-}
-
-static fmi2Status unsupported(fmi2Component c, const char *what)
-{
-    say((Inst *)c, fmi2Error, "%s is not supported by this FMU", what);
-    return fmi2Error;
 }
 
 FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer v[])
@@ -347,18 +230,17 @@ FMI2_EXPORT fmi2Status fmi2SetTime(fmi2Component c, fmi2Real t)
 FMI2_EXPORT fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !x) { say((Inst *)c, fmi2Error, "fmi2SetContinuousStates: %zu states given, %d expected", nx, NX); return fmi2Error; }
+    if (nx != NX || !x) { say((Inst *)c, 1, "fmi2SetContinuousStates: %zu states given, %d expected", nx, NX); return fmi2Error; }
     memcpy(((Inst *)c)->y, x, sizeof(double) * NX);
     return fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
 {
-    Inst *s = (Inst *)c;
     NEED(c);
-    if (nx != NX || !dx) { say(s, fmi2Error, "fmi2GetDerivatives: %zu asked, %d states", nx, NX); return fmi2Error; }
-    if (derivatives(s) != fmi2OK) return fmi2Error;
-    memcpy(dx, s->dy, sizeof(double) * NX);
+    if (nx != NX || !dx) { say((Inst *)c, 1, "fmi2GetDerivatives: %zu asked, %d states", nx, NX); return fmi2Error; }
+    if (mb_derivatives((Inst *)c)) return fmi2Error;
+    memcpy(dx, ((Inst *)c)->dy, sizeof(double) * NX);
     return fmi2OK;
 }
 
@@ -372,7 +254,7 @@ FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], siz
 FMI2_EXPORT fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !x) { say((Inst *)c, fmi2Error, "fmi2GetContinuousStates: %zu asked, %d states", nx, NX); return fmi2Error; }
+    if (nx != NX || !x) { say((Inst *)c, 1, "fmi2GetContinuousStates: %zu asked, %d states", nx, NX); return fmi2Error; }
     memcpy(x, ((Inst *)c)->y, sizeof(double) * NX);
     return fmi2OK;
 }
@@ -385,43 +267,18 @@ FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Re
     return fmi2OK;
 }
 
-/* --- Co-Simulation --------------------------------------------------------------------- */
-static int cs_rhs(void *ctx, double t, const double *y, double *dydt)
-{
-    Inst *c = (Inst *)ctx;
-    return mbcomp_fun(y, y + NQ, t, c->d, c->h, c->p, c->w, dydt);
-}
-
+/* --- Co-Simulation ----------------------------------------------------------------------- */
 FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior)
 {
     Inst *s = (Inst *)c;
-    mbrt_stats st;
-    double t_end;
-    int i, rc, written = 0;
     (void)noSetPrior;
     NEED(c);
     if (!s->cs) return unsupported(c, "fmi2DoStep in a Model Exchange instance");
-    if (!(h >= 0.0) || fabs(t - s->t) > 1e-9 * (1.0 + fabs(t))) {
-        say(s, fmi2Error, "fmi2DoStep: step from t=%g by %g, but the FMU is at t=%g", t, h, s->t);
+    if (fabs(t - s->t) > 1e-9 * (1.0 + fabs(t))) {
+        say(s, 1, "fmi2DoStep: a step from t=%g, but the FMU is at t=%g", t, s->t);
         return fmi2Error;
     }
-    if (h == 0.0) return fmi2OK;
-    if (refresh(s) != fmi2OK) return fmi2Error;
-    s->d[0] = s->alpha;
-    s->d[1] = s->beta;
-    for (i = 0; i < NX; i++) s->atol[i] = s->rtol * 1e-2 * NOMINAL[i];
-    memset(&st, 0, sizeof st);
-    t_end = s->t + h;
-    rc = mbrt_dop853(cs_rhs, NULL, s, NX, s->t, s->y, t_end, s->rtol, s->atol, 0.0, 0.0, 0, &t_end, 1,
-                     s->y_end, &written, s->work, &st);
-    if (rc != MBRT_OK || written != 1) {
-        say(s, fmi2Error, "fmi2DoStep from t=%g: %s", s->t, st.message);
-        s->mode = M_ERROR;
-        return fmi2Error;
-    }
-    memcpy(s->y, s->y_end, sizeof(double) * NX);
-    s->t = t_end;
-    return fmi2OK;
+    return OK(mb_step(s, h));
 }
 
 FMI2_EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,

@@ -59,7 +59,7 @@ from ..modeling.model import Model
 
 __all__ = ["export_fmu"]
 
-WRAPPER = pathlib.Path(__file__).with_name("fmi2.c")
+HERE = pathlib.Path(__file__).resolve().parent
 #: the C runtime's files the FMU carries: Co-Simulation steps with its DOP853
 RUNTIME_DIR = pathlib.Path(__file__).resolve().parent.parent / "codegen" / "runtime"
 RUNTIME = ("mbrt.h", "mbrt_rk_internal.h", "mbrt_rk.c", "mbrt_dop853.c")
@@ -146,13 +146,14 @@ def export_fmu(model, path, *, fmi="2.0", kind="both", params=None, name=None, m
                f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
                f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
                + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", np.maximum(np.abs(y0), 1.0))
-               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + f'\n#include "fmi2.c"\n')
+               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + f'\n#include "fmi{fmi[0]}.c"\n')
     with tempfile.TemporaryDirectory(prefix="mbcomp-fmu-") as tmp:
         root = pathlib.Path(tmp)
         (root / "sources").mkdir()
         (root / "binaries" / "linux64").mkdir(parents=True)
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        shutil.copy(WRAPPER, root / "sources" / "fmi2.c")
+        for f in ("fmu_core.c", f"fmi{fmi[0]}.c"):
+            shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)
         (root / "modelDescription.xml").write_text(xml)

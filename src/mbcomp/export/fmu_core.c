@@ -1,0 +1,192 @@
+/* mbcomp FMU core: one instance of a generated Lagrange program, shared by the FMI 2.0 and
+ * FMI 3.0 wrappers (fmi2.c, fmi3.c), which translate their standard's calls into these.
+ *
+ * The including file defines, before this one: NQ, NU (coordinates, speeds), NP (tunable
+ * parameters), NH (hoisted values), NW (work), GUID (the instantiation token), ALPHA, BETA
+ * (Baumgarte gains, 1/s) and the arrays P0[NP] (parameter values), Y0[NQ+NU] (consistent
+ * start state), NOMINAL[NQ+NU]; and the generated functions
+ *   int mbcomp_fun(q, u, t, d, h, p, w, out)   dy/dt of the Lagrange index-1 form, d = gains
+ *   int mbcomp_params(pv, h)                   the hoisted values of the parameters pv
+ * Value references: 0..NP-1 parameters, NP..NP+NX-1 the states [q, u], NP+NX..NP+2NX-1
+ * their derivatives. Co-Simulation steps with the runtime's DOP853 (mbrt.h). */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mbrt.h"
+
+#define NX (NQ + NU)
+#define VR_X NP
+#define VR_DX (NP + NX)
+#define NVR (NP + 2 * NX)
+
+enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_STEP, M_TERMINATED, M_ERROR };
+
+typedef struct Inst Inst;
+/* how a wrapper hands a message to its importer: error != 0 for an error */
+typedef void (*mb_log_fn)(Inst *c, int error, const char *msg);
+
+struct Inst {
+    char *name;
+    void *env;            /* the importer's environment */
+    void (*logger)(void); /* the importer's logging callback, cast back by the wrapper */
+    mb_log_fn log;
+    int logging, mode, dirty, cs;
+    double t, alpha, beta, rtol;
+    double p[NP + 1], h[NH + 1], y[NX + 1], dy[NX + 1], w[NW + 1], d[2], atol[NX + 1], y_end[NX + 1];
+    double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
+};
+
+static void say(Inst *c, int error, const char *fmt, ...)
+{
+    char msg[512];
+    va_list ap;
+    if (!c || !c->log || (!error && !c->logging)) return;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    c->log(c, error, msg);
+}
+
+static void mb_reset(Inst *c)
+{
+    memcpy(c->p, P0, sizeof(double) * (NP > 0 ? NP : 0));
+    memcpy(c->y, Y0, sizeof(double) * NX);
+    c->t = 0.0;
+    c->alpha = ALPHA;
+    c->beta = BETA;
+    c->rtol = 1e-8;
+    c->dirty = 1;
+    c->mode = M_INSTANTIATED;
+}
+
+/* a new instance (NULL when out of memory); the wrapper then sets log, logger, env */
+static Inst *mb_new(const char *name, int cs)
+{
+    Inst *c = (Inst *)calloc(1, sizeof(Inst));
+    if (!c) return NULL;
+    c->name = (char *)malloc(strlen(name) + 1);
+    if (!c->name) { free(c); return NULL; }
+    strcpy(c->name, name);
+    c->cs = cs;
+    if (cs) {
+        c->work = (double *)calloc(mbrt_dop853_work_size(NX) + 1, sizeof(double));
+        if (!c->work) { free(c->name); free(c); return NULL; }
+    }
+    mb_reset(c);
+    return c;
+}
+
+static void mb_free(Inst *c)
+{
+    if (!c) return;
+    free(c->name);
+    free(c->work);
+    free(c);
+}
+
+/* the hoisted values of the current parameters: 0, or -1 when a parameter guard fails (the
+   values change a decision taken when the program was generated) or a value is not finite */
+static int mb_refresh(Inst *c)
+{
+    int rc;
+    if (!c->dirty) return 0;
+    rc = mbcomp_params(c->p, c->h);
+    if (rc) {
+        say(c, 1, "the parameter values %s -> export the model again with these values",
+            rc == 1 ? "change a decision taken when the program was generated (a parameter guard)"
+                    : "give a non-finite value");
+        c->mode = M_ERROR;
+        return -1;
+    }
+    c->dirty = 0;
+    return 0;
+}
+
+/* dy/dt at the instance's (t, y) into c->dy: 0, or -1 after logging why */
+static int mb_derivatives(Inst *c)
+{
+    int i;
+    if (mb_refresh(c)) return -1;
+    c->d[0] = c->alpha;
+    c->d[1] = c->beta;
+    if (mbcomp_fun(c->y, c->y + NQ, c->t, c->d, c->h, c->p, c->w, c->dy)) {
+        say(c, 1, "the right-hand side failed a guard at t=%g (a singular position, or a law's other branch): "
+            "mbcomp's numeric path is not in the FMU", c->t);
+        return -1;
+    }
+    for (i = 0; i < NX; i++) {
+        if (!isfinite(c->dy[i])) {
+            say(c, 1, "the derivative of state %d is not finite at t=%g", i, c->t);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static int mb_rhs(void *ctx, double t, const double *y, double *dydt)
+{
+    Inst *c = (Inst *)ctx;
+    return mbcomp_fun(y, y + NQ, t, c->d, c->h, c->p, c->w, dydt);
+}
+
+/* Co-Simulation: integrate from c->t by h with DOP853 at c->rtol; 0, or -1 after logging */
+static int mb_step(Inst *c, double h)
+{
+    mbrt_stats st;
+    double t_end;
+    int i, rc, written = 0;
+    if (!(h >= 0.0) || !isfinite(h)) { say(c, 1, "a communication step of %g s", h); return -1; }
+    if (h == 0.0) return 0;
+    if (mb_refresh(c)) return -1;
+    c->d[0] = c->alpha;
+    c->d[1] = c->beta;
+    for (i = 0; i < NX; i++) c->atol[i] = c->rtol * 1e-2 * NOMINAL[i];
+    memset(&st, 0, sizeof st);
+    t_end = c->t + h;
+    rc = mbrt_dop853(mb_rhs, NULL, c, NX, c->t, c->y, t_end, c->rtol, c->atol, 0.0, 0.0, 0, &t_end, 1, c->y_end,
+                     &written, c->work, &st);
+    if (rc != MBRT_OK || written != 1) {
+        say(c, 1, "the step from t=%g by %g s failed: %s", c->t, h, st.message);
+        c->mode = M_ERROR;
+        return -1;
+    }
+    memcpy(c->y, c->y_end, sizeof(double) * NX);
+    c->t = t_end;
+    return 0;
+}
+
+/* one variable's value: 0, or -1 after logging (an unknown reference, a failed evaluation) */
+static int mb_get(Inst *c, unsigned vr, double *v, int *have_dy)
+{
+    if (vr < VR_X) { *v = c->p[vr]; return 0; }
+    if (vr < VR_DX) { *v = c->y[vr - VR_X]; return 0; }
+    if (vr < NVR) {
+        if (!*have_dy) {
+            if (mb_derivatives(c)) return -1;
+            *have_dy = 1;
+        }
+        *v = c->dy[vr - VR_DX];
+        return 0;
+    }
+    say(c, 1, "no variable has the value reference %u", vr);
+    return -1;
+}
+
+static int mb_set(Inst *c, unsigned vr, double v)
+{
+    if (vr < VR_X) {
+        if (c->mode != M_INSTANTIATED && c->mode != M_INIT) {
+            say(c, 1, "parameter %u is fixed after initialization", vr);
+            return -1;
+        }
+        c->p[vr] = v;
+        c->dirty = 1;
+        return 0;
+    }
+    if (vr < VR_DX) { c->y[vr - VR_X] = v; return 0; }
+    say(c, 1, "the variable with value reference %u cannot be set", vr);
+    return -1;
+}
