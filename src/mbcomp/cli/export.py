@@ -1,15 +1,15 @@
 """``mbcomp export MODEL.py -o crank.fmu``: the model as an FMU (see :mod:`mbcomp.export`).
 
 Prints what went in: states, parameters, the program's size, the guid and how the binary was
-built. Today FMI 2.0 (``--fmi 2.0``, the default; 3.0 is refused with the reason), Model
-Exchange and/or Co-Simulation (``--kind both``, the default).
+built: FMI 3.0 (the default) or 2.0, Model Exchange and/or Co-Simulation (``--kind both``,
+the default).
 
 Examples
 --------
 >>> from mbcomp.cli.main import make_parser
 >>> args = make_parser().parse_args(["export", "models/slider_crank.py", "-o", "crank.fmu"])
 >>> args.func.__name__, args.fmi, args.kind
-('cmd_export', '2.0', 'both')
+('cmd_export', '3.0', 'both')
 """
 from __future__ import annotations
 
@@ -40,10 +40,10 @@ def cmd_export(args):
 
 def add_parser(sub, common):
     """The ``export`` sub-command on the argparse ``sub``-parsers."""
-    e = sub.add_parser("export", help="export the model as an FMU (FMI 2.0 Model Exchange and Co-Simulation)")
+    e = sub.add_parser("export", help="export the model as an FMU (FMI 3.0 or 2.0, Model Exchange and Co-Simulation)")
     common(e)
     e.add_argument("-o", "--out", required=True, help="the .fmu file to write")
-    e.add_argument("--fmi", default="2.0", choices=["2.0", "3.0"], help="FMI version (3.0: not yet)")
+    e.add_argument("--fmi", default="3.0", choices=["3.0", "2.0"], help="FMI version (default 3.0)")
     e.add_argument("--kind", default="both", choices=["me", "cs", "both"],
                    help="Model Exchange, Co-Simulation or both (default)")
     e.set_defaults(func=cmd_export)

@@ -1,5 +1,5 @@
-"""FMI export (first stage, issue 17): FMI 2.0 Model Exchange and Co-Simulation of the
-Lagrange index-1 ODE.
+"""FMI export (first stage, issue 17): FMI 3.0 and 2.0 Model Exchange and Co-Simulation of
+the Lagrange index-1 ODE.
 
 What the FMU holds (see docs/architecture.md, "FMU export"):
 
@@ -7,17 +7,19 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
   by the recursive algorithms, loops closed by the multipliers with Baumgarte stabilization,
   the gains fixed at export), its parameter program in C (``mbcomp_params``: every nonzero
   numeric component parameter is an FMU parameter, checked against the decisions baked into
-  the program), the FMI 2.0 wrapper ``fmi2.c`` (every function of the standard; those
-  this FMU does not support log and return ``fmi2Error``) and, for Co-Simulation, the C
+  the program), the FMU core ``fmu_core.c`` (an instance: parameters, state, evaluation, a
+  Co-Simulation step) under the FMI 3.0 or 2.0 wrapper ``fmi3.c``/``fmi2.c`` (every function
+  of the standard's header; those this FMU does not support log and return an error), the
+  FMI 3.0 ``buildDescription.xml``, and, for Co-Simulation, the C
   runtime's DOP853 (``mbrt.h``, ``mbrt_rk.c``, ``mbrt_dop853.c``: error control at the
   experiment's tolerance, 1e-8 by default);
-* ``binaries/linux64/<id>.so`` built with the system C compiler (libgcc linked statically,
-  no dependency but libm and libc);
+* ``binaries/x86_64-linux/<id>.so`` (3.0) or ``binaries/linux64/<id>.so`` (2.0) built with
+  the system C compiler (libgcc linked statically, no dependency but libm and libc);
 * ``modelDescription.xml``: the parameters (units, descriptions), the continuous states
-  ``[q, u]`` with mbcomp's names and their derivatives; the guid is a hash of the
-  description.
+  ``[q, u]`` with mbcomp's names and their derivatives (3.0: and the time); the
+  instantiation token (2.0: guid) is a hash of the description.
 
-Not yet (the rest of issue 17): FMI 3.0, D'Alembert state selection with events (the
+Not yet (the rest of issue 17): D'Alembert state selection with events (the
 states are all of ``[q, u]``, loops held by Baumgarte stabilization), projection after
 Co-Simulation steps, inputs, outputs beyond the states (reactions, energies), unit
 definitions.
@@ -77,7 +79,7 @@ def _c_array(name, values):
     return f"static const double {name}[] = {{{vals}}};\n"
 
 
-def export_fmu(model, path, *, fmi="2.0", kind="both", params=None, name=None, max_nodes=3_000_000):
+def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, max_nodes=3_000_000):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
 
     Parameters
@@ -85,8 +87,8 @@ def export_fmu(model, path, *, fmi="2.0", kind="both", params=None, name=None, m
     model : Model
     path : str or path-like
         The ``.fmu`` file to write.
-    fmi : {"2.0"}
-        FMI version (3.0 is not exported yet).
+    fmi : {"3.0", "2.0"}
+        FMI version (default 3.0).
     kind : {"both", "me", "cs"}
         Model Exchange, Co-Simulation (the runtime's DOP853 at the experiment's tolerance),
         or both in one FMU (default).
@@ -108,8 +110,8 @@ def export_fmu(model, path, *, fmi="2.0", kind="both", params=None, name=None, m
     ModelError
         A model the FMU cannot hold yet (a drive law evaluated in Python at every call).
     """
-    if fmi != "2.0":
-        raise ValueError(f"fmi={fmi!r}: this version exports FMI 2.0 only (fmi='2.0'); FMI 3.0 is not written yet")
+    if fmi not in ("2.0", "3.0"):
+        raise ValueError(f"fmi={fmi!r}: use '3.0' or '2.0'")
     if kind not in ("me", "cs", "both"):
         raise ValueError(f"kind={kind!r}: use 'me' (Model Exchange), 'cs' (Co-Simulation) or 'both'")
     if not isinstance(model, Model):
@@ -139,7 +141,8 @@ def export_fmu(model, path, *, fmi="2.0", kind="both", params=None, name=None, m
     loops = bool(system.topology.cut)
     pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
     states = list(system.q_names) + list(system.u_names)
-    xml = _model_description(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@", kind=kind)
+    describe = _model_description if fmi == "2.0" else _model_description3
+    xml = describe(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@", kind=kind)
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
@@ -150,14 +153,17 @@ def export_fmu(model, path, *, fmi="2.0", kind="both", params=None, name=None, m
     with tempfile.TemporaryDirectory(prefix="mbcomp-fmu-") as tmp:
         root = pathlib.Path(tmp)
         (root / "sources").mkdir()
-        (root / "binaries" / "linux64").mkdir(parents=True)
+        platform = "linux64" if fmi == "2.0" else "x86_64-linux"
+        (root / "binaries" / platform).mkdir(parents=True)
+        if fmi == "3.0":
+            (root / "sources" / "buildDescription.xml").write_text(_build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
         for f in ("fmu_core.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)
         (root / "modelDescription.xml").write_text(xml)
-        lib = root / "binaries" / "linux64" / f"{ident}.so"
+        lib = root / "binaries" / platform / f"{ident}.so"
         cmd = [cc, "-O2", "-fno-math-errno", "-fPIC", "-shared", "-static-libgcc", "-fvisibility=hidden",
                str(root / "sources" / f"{ident}.c"), *(str(root / "sources" / f) for f in RUNTIME if f.endswith(".c")),
                "-o", str(lib), "-lm"]
@@ -183,6 +189,47 @@ def _param_doc(system, path, name):
     comp = system.topology.flat.components[path]
     par = comp.params()[name]
     return par.unit, par.doc
+
+
+def _build_description(ident):
+    files = "".join(f'      <SourceFile name="{f}"/>\n' for f in (f"{ident}.c",) + tuple(f for f in RUNTIME if f.endswith(".c")))
+    return (f'<?xml version="1.0" encoding="UTF-8"?>\n<fmiBuildDescription fmiVersion="3.0">\n'
+            f'  <BuildConfiguration modelIdentifier="{ident}">\n    <SourceFileSet language="C99">\n{files}'
+            f'    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n')
+
+
+def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind):
+    from .. import __version__
+
+    nx, npar = len(states), len(pv)
+    rows = [f'    <Float64 name="time" valueReference="{npar + 2 * nx}" causality="independent" '
+            f'variability="continuous" description="time [s]"/>']
+    for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
+        unit, doc = _param_doc(system, path, pname)
+        rows.append(f'    <Float64 name="{escape(full)}" valueReference="{k}" causality="parameter" variability="fixed" '
+                    f'start="{pv[k]!r}" description="{escape(doc or "")} [{escape(unit or "")}]"/>')
+    for k, s in enumerate(states):
+        rows.append(f'    <Float64 name="{escape(s)}" valueReference="{npar + k}" causality="local" '
+                    f'variability="continuous" initial="exact" start="{float(y0[k])!r}"/>')
+    for k, s in enumerate(states):
+        rows.append(f'    <Float64 name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
+                    f'variability="continuous" initial="calculated" derivative="{npar + k}"/>')
+    der = [npar + nx + k for k in range(nx)]
+    interfaces = ""
+    if kind in ("me", "both"):
+        interfaces += f'  <ModelExchange modelIdentifier="{ident}"/>\n'
+    if kind in ("cs", "both"):
+        interfaces += (f'  <CoSimulation modelIdentifier="{ident}" canHandleVariableCommunicationStepSize="true" '
+                       f'hasEventMode="false"/>\n')
+    return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
+            f'<fmiModelDescription fmiVersion="3.0" modelName="{escape(name)}" instantiationToken="{guid}" '
+            f'generationTool="mbcomp {__version__}" variableNamingConvention="structured">\n'
+            + interfaces +
+            f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
+            f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
+            + "".join(f'    <ContinuousStateDerivative valueReference="{v}"/>\n' for v in der)
+            + "".join(f'    <InitialUnknown valueReference="{v}"/>\n' for v in der)
+            + '  </ModelStructure>\n</fmiModelDescription>\n')
 
 
 def _interface(tag, ident):

@@ -8,7 +8,7 @@
  *   int mbcomp_fun(q, u, t, d, h, p, w, out)   dy/dt of the Lagrange index-1 form, d = gains
  *   int mbcomp_params(pv, h)                   the hoisted values of the parameters pv
  * Value references: 0..NP-1 parameters, NP..NP+NX-1 the states [q, u], NP+NX..NP+2NX-1
- * their derivatives. Co-Simulation steps with the runtime's DOP853 (mbrt.h). */
+ * their derivatives, NP+2NX the time (FMI 3.0's independent variable). Co-Simulation steps with the runtime's DOP853 (mbrt.h). */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -21,6 +21,7 @@
 #define VR_X NP
 #define VR_DX (NP + NX)
 #define NVR (NP + 2 * NX)
+#define VR_TIME NVR
 
 enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_STEP, M_TERMINATED, M_ERROR };
 
@@ -171,6 +172,7 @@ static int mb_get(Inst *c, unsigned vr, double *v, int *have_dy)
         *v = c->dy[vr - VR_DX];
         return 0;
     }
+    if (vr == VR_TIME) { *v = c->t; return 0; }
     say(c, 1, "no variable has the value reference %u", vr);
     return -1;
 }

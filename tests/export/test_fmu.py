@@ -1,11 +1,11 @@
-"""FMU export, first stage (issue 17): FMI 2.0 Model Exchange and Co-Simulation of the
-Lagrange index-1 ODE.
+"""FMU export, first stage (issue 17): FMI 3.0 and 2.0, Model Exchange and Co-Simulation of
+the Lagrange index-1 ODE.
 
 Each exported FMU is validated by FMPy (``validate_fmu(path) == []``) and run by FMPy as
 Model Exchange (FMPy's CVODE over the FMU's derivatives) and as Co-Simulation (the FMU's own
 DOP853); its motion must be mbcomp's own (a tight DOP853 run of the same equations). Also: a tuned parameter changes the motion as in mbcomp, a wrong guid is
 refused, a parameter value that breaks a decision baked into the program is refused, and the
-binary exports every function of the FMI 2.0 header.
+binary exports every function of the FMI header of its version.
 """
 import shutil
 import subprocess
@@ -33,6 +33,22 @@ DeSerializeFMUstate GetDirectionalDerivative EnterEventMode NewDiscreteStates En
 CompletedIntegratorStep SetTime SetContinuousStates GetDerivatives GetEventIndicators GetContinuousStates
 GetNominalsOfContinuousStates SetRealInputDerivatives GetRealOutputDerivatives DoStep CancelStep GetStatus
 GetRealStatus GetIntegerStatus GetBooleanStatus GetStringStatus""".split()
+#: the functions of the FMI 3.0 header (fmi3Functions.h)
+FMI3_FUNCTIONS = """GetVersion SetDebugLogging InstantiateModelExchange InstantiateCoSimulation
+InstantiateScheduledExecution FreeInstance EnterInitializationMode ExitInitializationMode EnterEventMode Terminate
+Reset GetFloat32 GetFloat64 GetInt8 GetUInt8 GetInt16 GetUInt16 GetInt32 GetUInt32 GetInt64 GetUInt64 GetBoolean
+GetString GetBinary GetClock SetFloat32 SetFloat64 SetInt8 SetUInt8 SetInt16 SetUInt16 SetInt32 SetUInt32 SetInt64
+SetUInt64 SetBoolean SetString SetBinary SetClock GetNumberOfVariableDependencies GetVariableDependencies
+GetFMUState SetFMUState FreeFMUState SerializedFMUStateSize SerializeFMUState DeserializeFMUState
+GetDirectionalDerivative GetAdjointDerivative EnterConfigurationMode ExitConfigurationMode GetIntervalDecimal
+GetIntervalFraction GetShiftDecimal GetShiftFraction SetIntervalDecimal SetIntervalFraction SetShiftDecimal
+SetShiftFraction EvaluateDiscreteStates UpdateDiscreteStates EnterContinuousTimeMode CompletedIntegratorStep SetTime
+SetContinuousStates GetContinuousStateDerivatives GetEventIndicators GetContinuousStates
+GetNominalsOfContinuousStates GetNumberOfEventIndicators GetNumberOfContinuousStates EnterStepMode
+GetOutputDerivatives DoStep ActivateModelPartition""".split()
+FUNCTIONS = {"2.0": ["fmi2" + f for f in FMI2_FUNCTIONS], "3.0": ["fmi3" + f for f in FMI3_FUNCTIONS]}
+PLATFORM = {"2.0": "linux64", "3.0": "x86_64-linux"}
+VERSIONS = ["3.0", "2.0"]
 
 
 def pendulum():
@@ -65,13 +81,14 @@ CASES = [  # model file, simulated time (s), compared variable, agreement as ME,
 ]
 
 
+@pytest.mark.parametrize("fmi", VERSIONS)
 @pytest.mark.parametrize("name, t_end, var, agree_me, agree_cs", CASES, ids=[c[0] for c in CASES])
-def test_the_fmu_is_valid_and_moves_as_mbcomp(name, t_end, var, agree_me, agree_cs, tmp_path):
+def test_the_fmu_is_valid_and_moves_as_mbcomp(name, t_end, var, agree_me, agree_cs, fmi, tmp_path):
     """ME: FMPy's CVODE at rtol 1e-10 (measured: slider-crank 1.1e-6 rad after 10 s); CS: the
     FMU's DOP853 at the same tolerance (7e-9)."""
     model = load_model(f"models/{name}.py").build()
     path = tmp_path / f"{name}.fmu"
-    info = export_fmu(model, path)
+    info = export_fmu(model, path, fmi=fmi)
     assert validate_fmu(str(path)) == []
     assert var in info["states"] and info["size"] == path.stat().st_size
     ref = mbcomp.simulate(model, t_end=t_end, n_out=101, rtol=1e-11, atol=1e-13)
@@ -79,18 +96,20 @@ def test_the_fmu_is_valid_and_moves_as_mbcomp(name, t_end, var, agree_me, agree_
     assert max_diff(run_me(path, t_end, [var], fmi_type="CoSimulation"), ref, var) < agree_cs
 
 
-def test_an_fmu_of_one_kind_has_only_that_interface(tmp_path):
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_an_fmu_of_one_kind_has_only_that_interface(fmi, tmp_path):
     from fmpy import read_model_description
 
-    export_fmu(pendulum(), tmp_path / "cs.fmu", kind="cs")
+    export_fmu(pendulum(), tmp_path / "cs.fmu", kind="cs", fmi=fmi)
     md = read_model_description(str(tmp_path / "cs.fmu"))
     assert md.coSimulation is not None and md.modelExchange is None
     assert validate_fmu(str(tmp_path / "cs.fmu")) == []
 
 
-def test_a_tuned_parameter_changes_the_motion_as_in_mbcomp(tmp_path):
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_a_tuned_parameter_changes_the_motion_as_in_mbcomp(fmi, tmp_path):
     path = tmp_path / "pendulum.fmu"
-    export_fmu(pendulum(), path)
+    export_fmu(pendulum(), path, fmi=fmi)
     r = run_me(path, 3.0, ["j.phi"], start_values={"rod.r[2]": -2.0})  # a 2 m rod instead of 1 m
     ref = mbcomp.simulate(pendulum(), t_end=3.0, n_out=101, rtol=1e-11, atol=1e-13, params={"rod.r": (0, -2.0, 0)})
     assert max_diff(r, ref, "j.phi") < 1e-7
@@ -98,39 +117,57 @@ def test_a_tuned_parameter_changes_the_motion_as_in_mbcomp(tmp_path):
     assert max_diff(r, short, "j.phi") > 0.1  # it is not the 1 m pendulum
 
 
-def test_a_parameter_that_breaks_a_baked_decision_is_refused(tmp_path):
-    """The hinge axis (0, 0, 1) was generated with its zero components baked in; a component
-    made nonzero would need another program: the FMU says so instead of computing nonsense."""
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_a_parameter_that_breaks_a_baked_decision_is_refused(fmi, tmp_path, capfd):
+    """The hinge axis (0, 0, 1) was generated with decisions baked in (its zero components, its
+    direction); reversing it would need another program: the FMU says so, with the fix, instead
+    of computing nonsense."""
     path = tmp_path / "pendulum.fmu"
-    export_fmu(pendulum(), path)
-    with pytest.raises(Exception, match="fmi2ExitInitializationMode|fmi2Error|failed"):
-        run_me(path, 1.0, ["j.phi"], start_values={"j.n[3]": -1.0})
+    export_fmu(pendulum(), path, fmi=fmi)
+    # FMPy's default logger prints (a logger of one's own is FMPy's "experimental" option:
+    # for FMI 2.0 it outlived its test and crashed a later instantiation)
+    with pytest.raises(Exception, match="ExitInitializationMode"):
+        run_me(path, 1.0, ["j.phi"], start_values={"j.n[3]": -1.0}, debug_logging=True)
+    out = capfd.readouterr()
+    assert "export the model again with these values" in out.out + out.err
 
 
-def test_a_wrong_guid_is_refused_and_every_function_is_exported(tmp_path):
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_a_wrong_token_is_refused_and_every_function_is_exported(fmi, tmp_path):
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Model
+    from fmpy.fmi3 import FMU3Model
 
     path = tmp_path / "pendulum.fmu"
-    info = export_fmu(pendulum(), path)
+    info = export_fmu(pendulum(), path, fmi=fmi)
     md = read_model_description(str(path))
     assert md.guid == info["guid"] and md.guid != "{00000000-0000-0000-0000-000000000000}"
+    # the token is a hash of the model description: another pendulum, another token
+    other = export_fmu(pendulum(), tmp_path / "other.fmu", fmi=fmi, params={"bob.m": 3.0})
+    assert other["guid"] != info["guid"]
     unzipped = extract(str(path))
-    fmu = FMU2Model(guid="{11111111-2222-3333-4444-555555555555}", unzipDirectory=unzipped,
-                    modelIdentifier=md.modelExchange.modelIdentifier)
-    with pytest.raises(Exception):
-        fmu.instantiate()
-    lib = f"{unzipped}/binaries/linux64/{md.modelExchange.modelIdentifier}.so"
+    ident = md.modelExchange.modelIdentifier
+    if fmi == "2.0":
+        fmu = FMU2Model(guid="{11111111-2222-3333-4444-555555555555}", unzipDirectory=unzipped, modelIdentifier=ident)
+        with pytest.raises(Exception):
+            fmu.instantiate()
+    else:
+        fmu = FMU3Model(guid="{11111111-2222-3333-4444-555555555555}", unzipDirectory=unzipped, modelIdentifier=ident)
+        with pytest.raises(Exception):
+            fmu.instantiate()
+    lib = f"{unzipped}/binaries/{PLATFORM[fmi]}/{ident}.so"
     if shutil.which("nm"):
         out = subprocess.run(["nm", "-D", "--defined-only", lib], capture_output=True, text=True, check=True).stdout
         exported = {line.split()[-1] for line in out.splitlines() if line.strip()}
-        assert {f"fmi2{f}" for f in FMI2_FUNCTIONS} <= exported
-        assert not [s for s in exported if s.startswith("mbcomp_")]  # the program's own symbols stay inside
+        assert set(FUNCTIONS[fmi]) <= exported
+        assert not [s for s in exported if s.startswith(("mbcomp_", "mbrt_", "mb_"))]  # the rest stays inside
+        ldd = subprocess.run(["ldd", lib], capture_output=True, text=True).stdout
+        assert "libgcc" not in ldd and "python" not in ldd.lower()
 
 
-def test_what_is_not_exported_yet_says_so(tmp_path):
-    with pytest.raises(ValueError, match="FMI 2.0 only"):
-        export_fmu(pendulum(), tmp_path / "x.fmu", fmi="3.0")
+def test_bad_choices_say_what_to_choose(tmp_path):
+    with pytest.raises(ValueError, match="'3.0' or '2.0'"):
+        export_fmu(pendulum(), tmp_path / "x.fmu", fmi="1.0")
     with pytest.raises(ValueError, match="'me'.*'cs'.*'both'"):
         export_fmu(pendulum(), tmp_path / "x.fmu", kind="all")
 
@@ -141,6 +178,7 @@ def test_the_command_line_exports_and_reports(tmp_path, capsys):
     path, model_file = tmp_path / "crank.fmu", load_model("models/slider_crank.py").__file__
     assert main(["export", model_file, "-o", str(path)]) == 0
     out = capsys.readouterr().out
-    assert "FMI 2.0 Model Exchange + Co-Simulation" in out and "states (6): crank_joint.phi" in out and "crank.m" in out
+    assert "FMI 3.0 Model Exchange + Co-Simulation" in out and "states (6): crank_joint.phi" in out and "crank.m" in out
     assert validate_fmu(str(path)) == []
-    assert main(["export", model_file, "-o", str(tmp_path / "x.fmu"), "--fmi", "3.0"]) == 2
+    assert main(["export", model_file, "-o", str(tmp_path / "x2.fmu"), "--fmi", "2.0", "--kind", "cs"]) == 0
+    assert "FMI 2.0 Co-Simulation" in capsys.readouterr().out
