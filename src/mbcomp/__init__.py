@@ -31,7 +31,7 @@ __all__ = [
     "Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState",
     "ModelError", "InitializationError", "SimulationError",
     "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",
-    "load_model_file", "load_model",
+    "load_model_file", "load_model", "export_fmu",
 ]
 
 
@@ -51,6 +51,9 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name in ("load_model_file", "load_model"):  # model files: build(**params) -> Model
         from .modeling import loader
         return getattr(loader, name)
+    if name == "export_fmu":  # the model as an FMI FMU (needs a C compiler)
+        from .export import export_fmu
+        return export_fmu
     if name in ("linearize", "steady_states", "sweep"):  # stability analysis (seed Chapter 7)
         from . import analysis
         return getattr(analysis, name)
@@ -61,7 +64,7 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     raise AttributeError(f"module 'mbcomp' has no attribute {name!r}")
 
 
-_SUBPACKAGES = ("analysis", "assembly", "cli", "codegen", "formulations", "geometry", "library", "modeling",
-                "simulation", "solvers")
+_SUBPACKAGES = ("analysis", "assembly", "cli", "codegen", "export", "formulations", "geometry", "library",
+                "modeling", "simulation", "solvers")
 
 __version__ = "0.1.0"

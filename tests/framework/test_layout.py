@@ -16,7 +16,7 @@ SRC = ROOT / "src" / "mbcomp"
 
 #: the pipeline, in import order; a module may import its own layer and the layers before it
 LAYERS = ["errors", "geometry", "modeling", "assembly", "formulations", "solvers", "codegen", "simulation",
-          "analysis", "cli"]
+          "analysis", "export", "cli"]
 MAX_FILE_LINES = 650
 MAX_FUNCTION_LINES = 80
 WHY_LONG = "# long:"  # a function over the limit must say why it cannot be split, on a line starting so

@@ -52,6 +52,7 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from ..assembly.initialization import initialize
+from ..assembly.system import assemble
 from ..codegen.compiler import _HEADER, _chunk, c_compiler
 from ..codegen.graph import CodegenError
 from ..codegen.printers import Program
@@ -122,8 +123,6 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
     path = pathlib.Path(path)
     name = name or path.stem
     ident = _identifier(name)
-    from .. import assemble
-
     system = assemble(model, params)
     init = initialize(system)
     tr = trace(system, max_nodes, program="fun")
@@ -179,6 +178,16 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
                 operations=prog.n_ops("fun"), compiler=cc, model_identifier=ident)
 
 
+def _version():
+    """mbcomp's installed version (the ``generationTool`` of the model description)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("mbcomp")
+    except PackageNotFoundError:
+        return "(not installed)"
+
+
 def _uuid_of(text):
     import uuid
 
@@ -199,8 +208,6 @@ def _build_description(ident):
 
 
 def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind):
-    from .. import __version__
-
     nx, npar = len(states), len(pv)
     rows = [f'    <Float64 name="time" valueReference="{npar + 2 * nx}" causality="independent" '
             f'variability="continuous" description="time [s]"/>']
@@ -223,7 +230,7 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
                        f'hasEventMode="false"/>\n')
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="3.0" modelName="{escape(name)}" instantiationToken="{guid}" '
-            f'generationTool="mbcomp {__version__}" variableNamingConvention="structured">\n'
+            f'generationTool="mbcomp {_version()}" variableNamingConvention="structured">\n'
             + interfaces +
             f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
             f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
@@ -240,8 +247,6 @@ def _interface(tag, ident):
 
 
 def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind):
-    from .. import __version__
-
     nx, npar = len(states), len(pv)
     rows = []
     for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
@@ -261,7 +266,7 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in der)
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
-            f'generationTool="mbcomp {__version__}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
+            f'generationTool="mbcomp {_version()}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
             + "".join(_interface(tag, ident) for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
                       if kind in (k, "both")) +
             f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
