@@ -33,6 +33,8 @@ def cmd_export(args):
           f"{info['size']} bytes, guid {info['guid']}")
     print(f"states ({len(info['states'])}): {', '.join(info['states'])}")
     print(f"parameters ({len(info['parameters'])}): {', '.join(info['parameters'])}")
+    shown = ", ".join(info["outputs"][:12]) + (", ..." if len(info["outputs"]) > 12 else "")
+    print(f"outputs ({len(info['outputs'])}): {shown or 'none'}")
     print(f"program: {info['operations']} operations, built with {info['compiler']} "
           f"(binaries/linux64/{info['model_identifier']}.so)")
     return 0

@@ -48,7 +48,8 @@ int mbcomp_outputs(const double *restrict q, const double *restrict u, double t,
                    const double *restrict h, const double *restrict p, double *restrict w, double *restrict out);
 """
 
-_GRID_C = r"""
+#: C of ``mbcomp_quat``: the unit quaternion of a rotation matrix (also in exported FMUs)
+QUAT_C = r"""
 /* unit quaternion (w, x, y, z), w >= 0, of the rotation matrix R (row major), by Shepperd's
    choice of the largest of 4w^2, 4x^2, 4y^2, 4z^2 (as mbcomp.kinematics.matrix_to_quat) */
 static void mbcomp_quat(const double *restrict R, double *restrict Q)
@@ -73,7 +74,9 @@ static void mbcomp_quat(const double *restrict R, double *restrict Q)
     const double sg = q[0] >= 0.0 ? 1.0 / n : -1.0 / n;
     for (int j = 0; j < 4; ++j) Q[j] = q[j] * sg;
 }
+"""
 
+_GRID_C = QUAT_C + r"""
 int mbcomp_outputs_grid(long n, const double *restrict T, const double *restrict Y, long nq, long nu,
                         const double *restrict D, long nd, const double *restrict h, const double *restrict p,
                         double *restrict w, double *restrict row, long nout, long nrot,

@@ -141,10 +141,10 @@ FMI2_EXPORT fmi2Status fmi2Reset(fmi2Component c)
 FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real value[])
 {
     size_t i;
-    int have_dy = 0;
+    int have = 0;
     NEED(c);
     for (i = 0; i < n; i++)
-        if (mb_get((Inst *)c, vr[i], &value[i], &have_dy)) return fmi2Error;
+        if (mb_get((Inst *)c, vr[i], &value[i], &have)) return fmi2Error;
     return fmi2OK;
 }
 

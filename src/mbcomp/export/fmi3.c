@@ -182,11 +182,11 @@ FMI3_EXPORT fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference v
                                       size_t nv)
 {
     size_t i;
-    int have_dy = 0;
+    int have = 0;
     NEED(c);
     if (nv < nvr) { say((Inst *)c, 1, "fmi3GetFloat64: %zu values for %zu variables", nv, nvr); return fmi3Error; }
     for (i = 0; i < nvr; i++)
-        if (mb_get((Inst *)c, vr[i], &v[i], &have_dy)) return fmi3Error;
+        if (mb_get((Inst *)c, vr[i], &v[i], &have)) return fmi3Error;
     return fmi3OK;
 }
 

@@ -19,10 +19,12 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
   ``[q, u]`` with mbcomp's names and their derivatives (3.0: and the time); the
   instantiation token (2.0: guid) is a hash of the description.
 
-Not yet (the rest of issue 17): D'Alembert state selection with events (the
-states are all of ``[q, u]``, loops held by Baumgarte stabilization), projection after
-Co-Simulation steps, inputs, outputs beyond the states (reactions, energies), unit
-definitions.
+* the output program: every result column that is not a state (reactions, multipliers, body
+  positions, velocities and orientation quaternions, energies, residuals) as an output.
+
+Not yet (the rest of issue 17): D'Alembert state selection with events (the states are all of
+``[q, u]``, loops held by Baumgarte stabilization), projection after Co-Simulation steps,
+inputs, choosing the outputs, unit definitions.
 
 Examples
 --------
@@ -47,6 +49,7 @@ import shutil
 import subprocess
 import tempfile
 import zipfile
+from types import SimpleNamespace
 from xml.sax.saxutils import escape
 
 import numpy as np
@@ -55,6 +58,7 @@ from ..assembly.initialization import initialize
 from ..assembly.system import assemble
 from ..codegen.compiler import _HEADER, _chunk, c_compiler
 from ..codegen.graph import CodegenError
+from ..codegen.outputs import QUAT_C
 from ..codegen.printers import Program
 from ..codegen.tracer import param_layout, param_vector, trace
 from ..errors import ModelError, Problem
@@ -134,6 +138,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
                                   "hold it", "write the law with numpy functions and plain arithmetic")])
     prog = Program(tr.graph, {"fun": tr.groups["fun"]}, guard_groups={"fun": tr.guard_groups["fun"]})
     parts, n_work = prog.c_parts("fun", "mbcomp_fun", _chunk, n_parts=lambda n: 1)
+    outputs = _output_program(system, tr, max_nodes)
     layout = tr.layout
     pv = param_vector(system, layout)
     y0 = np.concatenate((init.q, init.u))
@@ -141,14 +146,16 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
     pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
     states = list(system.q_names) + list(system.u_names)
     describe = _model_description if fmi == "2.0" else _model_description3
-    xml = describe(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@", kind=kind)
+    xml = describe(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@", kind=kind,
+                   outputs=outputs.variables)
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
                f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
                f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
                + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", np.maximum(np.abs(y0), 1.0))
-               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + f'\n#include "fmi{fmi[0]}.c"\n')
+               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + outputs.c
+               + f'\n#include "fmi{fmi[0]}.c"\n')
     with tempfile.TemporaryDirectory(prefix="mbcomp-fmu-") as tmp:
         root = pathlib.Path(tmp)
         (root / "sources").mkdir()
@@ -174,8 +181,44 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
             for f in sorted(root.rglob("*")):
                 if f.is_file():
                     z.write(f, f.relative_to(root).as_posix())
-    return dict(states=states, parameters=pnames, guid=guid, size=os.path.getsize(path),
-                operations=prog.n_ops("fun"), compiler=cc, model_identifier=ident)
+    return dict(states=states, parameters=pnames, outputs=[n for n, _ in outputs.variables], guid=guid,
+                size=os.path.getsize(path), operations=prog.n_ops("fun") + outputs.n_ops, compiler=cc,
+                model_identifier=ident)
+
+
+def _output_program(system, tr_fun, max_nodes):
+    """The result columns the FMU computes as outputs (mbcomp's post-processing program: joint
+    reactions, multipliers, body positions, velocities and orientations, energies, residuals):
+    its C (with its parameter program and the quaternion of a rotation), the defines the core
+    reads, and ``variables``: ``(name, index in the outputs)`` of the columns that are not
+    states already, then every body's quaternion."""
+    tr = trace(system, max_nodes, program="outputs", baumgarte=True)
+    ok = "outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
+    if not ok:  # a drive the program does not hold, or a singular trace point: no outputs
+        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0)
+    prog = Program(tr.graph, {"outputs": tr.groups["outputs"]}, guard_groups={"outputs": tr.guard_groups["outputs"]})
+    parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", _chunk, n_parts=lambda n: 1)
+    cols, rots = list(tr.output_names), list(tr.rotation_paths)
+    taken = set(system.q_names) | set(system.u_names)
+    variables = [(n, k) for k, n in enumerate(cols) if n not in taken]
+    variables += [(f"{b}.Q.{c}", len(cols) + 4 * i + j) for i, b in enumerate(rots) for j, c in enumerate("wxyz")]
+    defines = (f"#define NCOL {len(cols)}\n#define NROT {len(rots)}\n#define NH2 {max(len(prog.hoisted), 1)}\n"
+               f"#define NW2 {max(n_work, 1)}\n")
+    return SimpleNamespace(c=defines + "\n".join(parts) + "\n" + prog.c_params("mbcomp_outputs_params") + QUAT_C,
+                           variables=variables, n_ops=prog.n_ops("outputs"))
+
+
+#: the output program of a model whose outputs cannot be traced: none
+_NO_OUTPUTS = """#define NCOL 0
+#define NROT 0
+#define NH2 1
+#define NW2 1
+static int mbcomp_outputs(const double *q, const double *u, double t, const double *d, const double *h,
+                          const double *p, double *w, double *out)
+{ (void)q; (void)u; (void)t; (void)d; (void)h; (void)p; (void)w; (void)out; return 0; }
+static int mbcomp_outputs_params(const double *pv, double *h) { (void)pv; (void)h; return 0; }
+static void mbcomp_quat(const double *R, double *Q) { (void)R; (void)Q; }
+"""
 
 
 def _version():
@@ -207,7 +250,7 @@ def _build_description(ident):
             f'    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n')
 
 
-def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind):
+def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=()):
     nx, npar = len(states), len(pv)
     rows = [f'    <Float64 name="time" valueReference="{npar + 2 * nx}" causality="independent" '
             f'variability="continuous" description="time [s]"/>']
@@ -221,7 +264,12 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
     for k, s in enumerate(states):
         rows.append(f'    <Float64 name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
                     f'variability="continuous" initial="calculated" derivative="{npar + k}"/>')
+    vr_out = npar + 2 * nx + 1
+    for oname, k in outputs:
+        rows.append(f'    <Float64 name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
+                    f'variability="continuous" initial="calculated"/>')
     der = [npar + nx + k for k in range(nx)]
+    outs = [vr_out + k for _, k in outputs]
     interfaces = ""
     if kind in ("me", "both"):
         interfaces += f'  <ModelExchange modelIdentifier="{ident}"/>\n'
@@ -234,8 +282,9 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
             + interfaces +
             f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
             f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
+            + "".join(f'    <Output valueReference="{v}"/>\n' for v in outs)
             + "".join(f'    <ContinuousStateDerivative valueReference="{v}"/>\n' for v in der)
-            + "".join(f'    <InitialUnknown valueReference="{v}"/>\n' for v in der)
+            + "".join(f'    <InitialUnknown valueReference="{v}"/>\n' for v in outs + der)
             + '  </ModelStructure>\n</fmiModelDescription>\n')
 
 
@@ -246,7 +295,7 @@ def _interface(tag, ident):
             f'    <SourceFiles>\n{files}    </SourceFiles>\n  </{tag}>\n')
 
 
-def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind):
+def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=()):
     nx, npar = len(states), len(pv)
     rows = []
     for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
@@ -262,8 +311,14 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
         rows.append(f'    <ScalarVariable name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
                     f'variability="continuous" initial="calculated"><Real derivative="{first_state + k}"/>'
                     f'</ScalarVariable>')
+    vr_out = npar + 2 * nx + 1  # the time's reference (NP + 2 NX) is not a variable in 2.0
+    for oname, k in outputs:
+        rows.append(f'    <ScalarVariable name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
+                    f'variability="continuous" initial="calculated"><Real/></ScalarVariable>')
     der = [npar + nx + k + 1 for k in range(nx)]
-    unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in der)
+    outs = [npar + 2 * nx + j + 1 for j in range(len(outputs))]  # 1-based indices among the variables
+    unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in sorted(outs + der))
+    out_list = "".join(f'      <Unknown index="{i}"/>\n' for i in outs)
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
             f'generationTool="mbcomp {_version()}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
@@ -271,6 +326,7 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
                       if kind in (k, "both")) +
             f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
             f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
-            f'  <ModelStructure>\n    <Derivatives>\n{unknowns}\n    </Derivatives>\n'
+            f'  <ModelStructure>\n' + (f'    <Outputs>\n{out_list}    </Outputs>\n' if outs else '')
+            + f'    <Derivatives>\n' + "\n".join(f'      <Unknown index="{i}"/>' for i in der) + '\n    </Derivatives>\n'
             f'    <InitialUnknowns>\n{unknowns}\n    </InitialUnknowns>\n  </ModelStructure>\n'
             f'</fmiModelDescription>\n')

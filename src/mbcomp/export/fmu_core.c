@@ -3,12 +3,17 @@
  *
  * The including file defines, before this one: NQ, NU (coordinates, speeds), NP (tunable
  * parameters), NH (hoisted values), NW (work), GUID (the instantiation token), ALPHA, BETA
- * (Baumgarte gains, 1/s) and the arrays P0[NP] (parameter values), Y0[NQ+NU] (consistent
+ * (Baumgarte gains, 1/s), NCOL, NROT, NH2, NW2 (the output program's columns, rotations,
+ * hoisted values and work) and the arrays P0[NP] (parameter values), Y0[NQ+NU] (consistent
  * start state), NOMINAL[NQ+NU]; and the generated functions
- *   int mbcomp_fun(q, u, t, d, h, p, w, out)   dy/dt of the Lagrange index-1 form, d = gains
- *   int mbcomp_params(pv, h)                   the hoisted values of the parameters pv
+ *   int mbcomp_fun(q, u, t, d, h, p, w, out)      dy/dt of the Lagrange index-1 form, d = gains
+ *   int mbcomp_params(pv, h)                      the hoisted values of the parameters pv
+ *   int mbcomp_outputs(q, u, t, d, h, p, w, out)  the result columns, then NROT rotation matrices
+ *   int mbcomp_outputs_params(pv, h)              its hoisted values
+ *   void mbcomp_quat(R, Q)                        a rotation matrix's unit quaternion
  * Value references: 0..NP-1 parameters, NP..NP+NX-1 the states [q, u], NP+NX..NP+2NX-1
- * their derivatives, NP+2NX the time (FMI 3.0's independent variable). Co-Simulation steps with the runtime's DOP853 (mbrt.h). */
+ * their derivatives, NP+2NX the time (FMI 3.0's independent variable), then the NCOL columns
+ * and the 4 NROT quaternion entries (outputs). Co-Simulation steps with the runtime's DOP853 (mbrt.h). */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -22,6 +27,9 @@
 #define VR_DX (NP + NX)
 #define NVR (NP + 2 * NX)
 #define VR_TIME NVR
+#define VR_OUT (NVR + 1)
+#define NOV (NCOL + 4 * NROT)
+#define NROW (NCOL + 9 * NROT)
 
 enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_STEP, M_TERMINATED, M_ERROR };
 
@@ -37,6 +45,7 @@ struct Inst {
     int logging, mode, dirty, cs;
     double t, alpha, beta, rtol;
     double p[NP + 1], h[NH + 1], y[NX + 1], dy[NX + 1], w[NW + 1], d[2], atol[NX + 1], y_end[NX + 1];
+    double h2[NH2 + 1], w2[NW2 + 1], row[NROW + 1], ov[NOV + 1]; /* the output program's */
     double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
 };
 
@@ -95,6 +104,7 @@ static int mb_refresh(Inst *c)
     int rc;
     if (!c->dirty) return 0;
     rc = mbcomp_params(c->p, c->h);
+    if (!rc) rc = mbcomp_outputs_params(c->p, c->h2);
     if (rc) {
         say(c, 1, "the parameter values %s -> export the model again with these values",
             rc == 1 ? "change a decision taken when the program was generated (a parameter guard)"
@@ -159,15 +169,40 @@ static int mb_step(Inst *c, double h)
     return 0;
 }
 
-/* one variable's value: 0, or -1 after logging (an unknown reference, a failed evaluation) */
-static int mb_get(Inst *c, unsigned vr, double *v, int *have_dy)
+/* the outputs at the instance's (t, y) into c->ov: 0, or -1 after logging why */
+static int mb_outputs(Inst *c)
 {
+    int i;
+    if (mb_refresh(c)) return -1;
+    c->d[0] = c->alpha;
+    c->d[1] = c->beta;
+    if (mbcomp_outputs(c->y, c->y + NQ, c->t, c->d, c->h2, c->p, c->w2, c->row)) {
+        say(c, 1, "the outputs failed a guard at t=%g (a singular position, or a law's other branch)", c->t);
+        return -1;
+    }
+    for (i = 0; i < NCOL; i++) c->ov[i] = c->row[i];
+    for (i = 0; i < NROT; i++) mbcomp_quat(c->row + NCOL + 9 * i, c->ov + NCOL + 4 * i);
+    return 0;
+}
+
+/* one variable's value: 0, or -1 after logging (an unknown reference, a failed evaluation);
+   have is a per-call cache: bit 1 the derivatives, bit 2 the outputs are computed */
+static int mb_get(Inst *c, unsigned vr, double *v, int *have)
+{
+    if (vr >= VR_OUT && vr < VR_OUT + NOV) {
+        if (!(*have & 2)) {
+            if (mb_outputs(c)) return -1;
+            *have |= 2;
+        }
+        *v = c->ov[vr - VR_OUT];
+        return 0;
+    }
     if (vr < VR_X) { *v = c->p[vr]; return 0; }
     if (vr < VR_DX) { *v = c->y[vr - VR_X]; return 0; }
     if (vr < NVR) {
-        if (!*have_dy) {
+        if (!(*have & 1)) {
             if (mb_derivatives(c)) return -1;
-            *have_dy = 1;
+            *have |= 1;
         }
         *v = c->dy[vr - VR_DX];
         return 0;
