@@ -204,3 +204,17 @@ def test_outputs_are_mbcomps_result_columns(name, t_end, outputs, fmi, tmp_path)
             scale = 1.0 + float(np.max(np.abs(ref[var])))
             # ME: FMPy's CVODE carries the state error (1e-6 rad on the slider-crank) into them
             assert max_diff(r, ref, var) < (agree if fmi_type == "CoSimulation" else 100 * agree) * scale, var
+
+
+def test_chosen_outputs_only(tmp_path):
+    from fmpy import read_model_description
+
+    model = load_model("models/slider_crank.py").build()
+    info = export_fmu(model, tmp_path / "c.fmu", outputs=["*.f.*", "energy.total"])
+    assert info["outputs"] and all(n.split(".")[-2] == "f" or n == "energy.total" for n in info["outputs"])
+    assert "energy.total" in info["outputs"] and "rod_joint.f.x" in info["outputs"]
+    md = read_model_description(str(tmp_path / "c.fmu"))
+    assert sorted(v.name for v in md.modelVariables if v.causality == "output") == sorted(info["outputs"])
+    assert validate_fmu(str(tmp_path / "c.fmu")) == []
+    with pytest.raises(ValueError, match="'nothing.here' matches no result column"):
+        export_fmu(model, tmp_path / "d.fmu", outputs=["nothing.here"])

@@ -26,7 +26,7 @@ def cmd_export(args):
 
     check_output(args.out, "-o")
     _, model, runtime = load(args)
-    info = export_fmu(model, args.out, fmi=args.fmi, kind=args.kind, params=runtime,
+    info = export_fmu(model, args.out, fmi=args.fmi, kind=args.kind, params=runtime, outputs=args.outputs,
                       name=pathlib.Path(args.out).stem)
     kinds = {"me": "Model Exchange", "cs": "Co-Simulation", "both": "Model Exchange + Co-Simulation"}
     print(f"wrote {args.out}: FMI {args.fmi} {kinds[args.kind]}, "
@@ -48,5 +48,7 @@ def add_parser(sub, common):
     e.add_argument("--fmi", default="3.0", choices=["3.0", "2.0"], help="FMI version (default 3.0)")
     e.add_argument("--kind", default="both", choices=["me", "cs", "both"],
                    help="Model Exchange, Co-Simulation or both (default)")
+    e.add_argument("--outputs", action="append", metavar="PATTERN",
+                   help="outputs to include, shell-style (repeatable; default: every result column), e.g. '*.f.*'")
     e.set_defaults(func=cmd_export)
     return e

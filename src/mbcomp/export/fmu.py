@@ -24,7 +24,7 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
 
 Not yet (the rest of issue 17): D'Alembert state selection with events (the states are all of
 ``[q, u]``, loops held by Baumgarte stabilization), projection after Co-Simulation steps,
-inputs, choosing the outputs, unit definitions.
+inputs, unit definitions. ``outputs=[patterns]`` chooses the outputs.
 
 Examples
 --------
@@ -84,7 +84,7 @@ def _c_array(name, values):
     return f"static const double {name}[] = {{{vals}}};\n"
 
 
-def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, max_nodes=3_000_000):
+def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, max_nodes=3_000_000):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
 
     Parameters
@@ -99,6 +99,10 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
         or both in one FMU (default).
     params : dict, optional
         Parameter values ``{"component.param": value}`` at export (tunable in the FMU too).
+    outputs : list of str, optional
+        Shell-style patterns (``"*.f.*"``, ``"energy.*"``) choosing the outputs among the
+        result columns that are not states (default: all of them); a pattern that matches
+        nothing is an error naming the columns.
     name : str, optional
         Model name (default: the file name); the model identifier is made from it.
 
@@ -115,6 +119,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
     ModelError
         A model the FMU cannot hold yet (a drive law evaluated in Python at every call).
     """
+    patterns = None if outputs is None else ([outputs] if isinstance(outputs, str) else list(outputs))
     if fmi not in ("2.0", "3.0"):
         raise ValueError(f"fmi={fmi!r}: use '3.0' or '2.0'")
     if kind not in ("me", "cs", "both"):
@@ -138,7 +143,9 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
                                   "hold it", "write the law with numpy functions and plain arithmetic")])
     prog = Program(tr.graph, {"fun": tr.groups["fun"]}, guard_groups={"fun": tr.guard_groups["fun"]})
     parts, n_work = prog.c_parts("fun", "mbcomp_fun", _chunk, n_parts=lambda n: 1)
-    outputs = _output_program(system, tr, max_nodes)
+    out_prog = _output_program(system, tr, max_nodes)
+    if patterns is not None:
+        out_prog.variables = _chosen(out_prog.variables, patterns)
     layout = tr.layout
     pv = param_vector(system, layout)
     y0 = np.concatenate((init.q, init.u))
@@ -147,14 +154,14 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
     states = list(system.q_names) + list(system.u_names)
     describe = _model_description if fmi == "2.0" else _model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@", kind=kind,
-                   outputs=outputs.variables)
+                   outputs=out_prog.variables)
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
                f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
                f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
                + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", np.maximum(np.abs(y0), 1.0))
-               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + outputs.c
+               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c
                + f'\n#include "fmi{fmi[0]}.c"\n')
     with tempfile.TemporaryDirectory(prefix="mbcomp-fmu-") as tmp:
         root = pathlib.Path(tmp)
@@ -181,9 +188,22 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, name=None, m
             for f in sorted(root.rglob("*")):
                 if f.is_file():
                     z.write(f, f.relative_to(root).as_posix())
-    return dict(states=states, parameters=pnames, outputs=[n for n, _ in outputs.variables], guid=guid,
-                size=os.path.getsize(path), operations=prog.n_ops("fun") + outputs.n_ops, compiler=cc,
+    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], guid=guid,
+                size=os.path.getsize(path), operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc,
                 model_identifier=ident)
+
+
+def _chosen(variables, patterns):
+    """The ``(name, index)`` of ``variables`` whose name matches one of the shell-style
+    ``patterns``; ``ValueError`` for a pattern that matches none."""
+    from fnmatch import fnmatchcase
+
+    for pat in patterns:
+        if not any(fnmatchcase(n, pat) for n, _ in variables):
+            some = ", ".join(n for n, _ in variables[:8])
+            raise ValueError(f"outputs pattern {pat!r} matches no result column -> choose among: {some}, ... "
+                             f"({len(variables)} in all; e.g. '*.f.*' for joint forces, 'energy.*')")
+    return [(n, k) for n, k in variables if any(fnmatchcase(n, pat) for pat in patterns)]
 
 
 def _output_program(system, tr_fun, max_nodes):
