@@ -218,3 +218,21 @@ def test_chosen_outputs_only(tmp_path):
     assert validate_fmu(str(tmp_path / "c.fmu")) == []
     with pytest.raises(ValueError, match="'nothing.here' matches no result column"):
         export_fmu(model, tmp_path / "d.fmu", outputs=["nothing.here"])
+
+
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_units_with_si_base_exponents(fmi, tmp_path):
+    from fmpy import read_model_description
+
+    from mbcomp.export.fmu import unit_exponents
+
+    export_fmu(load_model("models/slider_crank.py").build(), tmp_path / "c.fmu", fmi=fmi)
+    md = read_model_description(str(tmp_path / "c.fmu"))
+    unit = {v.name: v.unit for v in md.modelVariables}
+    assert unit["crank.m"] == "kg" and unit["crank.I[2,2]"] == "kg.m2" and unit["world.g[2]"] == "m/s2"
+    assert unit["crank_joint.phi"] == "rad" and unit["der(crank_joint.w)"] == "rad/s2"
+    assert unit["slider_joint.s"] == "m" and unit["der(slider_joint.s)"] == "m/s"
+    defs = {u.name: u.baseUnit for u in md.unitDefinitions}
+    assert (defs["kg.m2"].kg, defs["kg.m2"].m) == (1, 2) and (defs["rad/s2"].rad, defs["rad/s2"].s) == (1, -2)
+    # a newton metre second per radian is kg m^2 / (s rad): derived symbols reduce to base units
+    assert unit_exponents("N m s/rad") == {"kg": 1, "m": 2, "s": -1, "rad": -1}

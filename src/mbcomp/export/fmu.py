@@ -24,7 +24,8 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
 
 Not yet (the rest of issue 17): D'Alembert state selection with events (the states are all of
 ``[q, u]``, loops held by Baumgarte stabilization), projection after Co-Simulation steps,
-inputs, unit definitions. ``outputs=[patterns]`` chooses the outputs.
+inputs, units of the outputs. ``outputs=[patterns]`` chooses the outputs; parameters, states and
+derivatives carry units (``UnitDefinitions`` with SI base-unit exponents).
 
 Examples
 --------
@@ -257,6 +258,82 @@ def _uuid_of(text):
     return uuid.UUID(hashlib.sha256(text.encode()).hexdigest()[:32])
 
 
+#: SI base-unit exponents (kg, m, s, A, K, mol, cd, rad) of the unit symbols mbcomp's
+#: parameters and coordinates use
+_BASE = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+_SYMBOLS = {"kg": {"kg": 1}, "m": {"m": 1}, "s": {"s": 1}, "rad": {"rad": 1}, "N": {"kg": 1, "m": 1, "s": -2},
+            "J": {"kg": 1, "m": 2, "s": -2}, "W": {"kg": 1, "m": 2, "s": -3}, "Pa": {"kg": 1, "m": -1, "s": -2},
+            "A": {"A": 1}, "K": {"K": 1}, "1": {}}
+
+
+def unit_exponents(text):
+    """The SI base-unit exponents of a unit as mbcomp writes it (``"N m s/rad"``,
+    ``"kg m^2"``, ``"m/s^2"``), or None when it is not one unit (``"m or rad"``) or a symbol
+    is unknown.
+
+    Examples
+    --------
+    >>> unit_exponents("N m s/rad")
+    {'kg': 1, 'm': 2, 's': -1, 'rad': -1}
+    >>> unit_exponents("m or rad") is None, unit_exponents("1")
+    (True, {})
+    """
+    if not text or " or " in text:
+        return None
+    num, _, den = text.partition("/")
+    exps = {}
+    for part, sign in ((num, 1), (den, -1)):
+        for tok in part.split():
+            sym, _, power = tok.partition("^")
+            if sym not in _SYMBOLS or (power and not power.lstrip("-").isdigit()):
+                return None
+            for base, e in _SYMBOLS[sym].items():
+                exps[base] = exps.get(base, 0) + sign * e * (int(power) if power else 1)
+    return {b: exps[b] for b in _BASE if exps.get(b)}
+
+
+def unit_name(exps):
+    """A unit name of the exponents in the FMI (Modelica) style: ``kg.m2/s2``; ``"1"`` for none."""
+    num = ".".join(b + (str(e) if e != 1 else "") for b, e in exps.items() if e > 0)
+    den = ".".join(b + (str(-e) if e != -1 else "") for b, e in exps.items() if e < 0)
+    return (num or "1") + (f"/{den}" if den else "")
+
+
+def _units(system, layout, states):
+    """``(parameter units, state units, derivative units, definitions)``: unit names (None
+    where unknown) and ``{name: exponents}`` of every unit used."""
+    defs = {}
+
+    def named(exps):
+        if exps is None:
+            return None
+        name = unit_name(exps)
+        defs[name] = exps
+        return name
+
+    par = [named(unit_exponents(_param_doc(system, path, pname)[0])) for path, pname, _ in layout]
+    texts = list(system.topology.q_units) + list(system.topology.u_units)
+    sta = [named(unit_exponents(u)) for u in texts]
+    der = []
+    for u in texts:
+        e = unit_exponents(u)
+        if e is not None:
+            e = dict(e)
+            e["s"] = e.get("s", 0) - 1
+            e = {b: e[b] for b in _BASE if e.get(b)}
+        der.append(named(e))
+    return par, sta, der, defs
+
+
+def _unit_definitions(defs):
+    rows = []
+    for name, exps in sorted(defs.items()):
+        attrs = " ".join(f'{b}="{e}"' for b, e in exps.items())
+        rows.append(f'    <Unit name="{escape(name)}"><BaseUnit {attrs}/></Unit>' if attrs else
+                    f'    <Unit name="{escape(name)}"/>')
+    return "  <UnitDefinitions>\n" + "\n".join(rows) + "\n  </UnitDefinitions>\n" if rows else ""
+
+
 def _param_doc(system, path, name):
     comp = system.topology.flat.components[path]
     par = comp.params()[name]
@@ -272,18 +349,24 @@ def _build_description(ident):
 
 def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=()):
     nx, npar = len(states), len(pv)
+    upar, usta, uder, defs = _units(system, layout, states)
+    defs["s"] = {"s": 1}
+
+    def unit(u):
+        return f' unit="{escape(u)}"' if u else ""
+
     rows = [f'    <Float64 name="time" valueReference="{npar + 2 * nx}" causality="independent" '
-            f'variability="continuous" description="time [s]"/>']
+            f'variability="continuous" description="time" unit="s"/>']
     for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
-        unit, doc = _param_doc(system, path, pname)
+        text, doc = _param_doc(system, path, pname)
         rows.append(f'    <Float64 name="{escape(full)}" valueReference="{k}" causality="parameter" variability="fixed" '
-                    f'start="{pv[k]!r}" description="{escape(doc or "")} [{escape(unit or "")}]"/>')
+                    f'start="{pv[k]!r}" description="{escape(doc or "")} [{escape(text or "")}]"{unit(upar[k])}/>')
     for k, s in enumerate(states):
         rows.append(f'    <Float64 name="{escape(s)}" valueReference="{npar + k}" causality="local" '
-                    f'variability="continuous" initial="exact" start="{float(y0[k])!r}"/>')
+                    f'variability="continuous" initial="exact" start="{float(y0[k])!r}"{unit(usta[k])}/>')
     for k, s in enumerate(states):
         rows.append(f'    <Float64 name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
-                    f'variability="continuous" initial="calculated" derivative="{npar + k}"/>')
+                    f'variability="continuous" initial="calculated" derivative="{npar + k}"{unit(uder[k])}/>')
     vr_out = npar + 2 * nx + 1
     for oname, k in outputs:
         rows.append(f'    <Float64 name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
@@ -299,7 +382,7 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="3.0" modelName="{escape(name)}" instantiationToken="{guid}" '
             f'generationTool="mbcomp {_version()}" variableNamingConvention="structured">\n'
-            + interfaces +
+            + interfaces + _unit_definitions(defs) +
             f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
             f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
             + "".join(f'    <Output valueReference="{v}"/>\n' for v in outs)
@@ -317,19 +400,25 @@ def _interface(tag, ident):
 
 def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=()):
     nx, npar = len(states), len(pv)
+    upar, usta, uder, defs = _units(system, layout, states)
+
+    def unit(u):
+        return f' unit="{escape(u)}"' if u else ""
+
     rows = []
     for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
-        unit, doc = _param_doc(system, path, pname)
+        text, doc = _param_doc(system, path, pname)
         rows.append(f'    <ScalarVariable name="{escape(full)}" valueReference="{k}" causality="parameter" '
-                    f'variability="fixed" initial="exact" description="{escape(doc or "")} [{escape(unit or "")}]">'
-                    f'<Real start="{pv[k]!r}"/></ScalarVariable>')
+                    f'variability="fixed" initial="exact" description="{escape(doc or "")} [{escape(text or "")}]">'
+                    f'<Real start="{pv[k]!r}"{unit(upar[k])}/></ScalarVariable>')
     for k, s in enumerate(states):
         rows.append(f'    <ScalarVariable name="{escape(s)}" valueReference="{npar + k}" causality="local" '
-                    f'variability="continuous" initial="exact"><Real start="{float(y0[k])!r}"/></ScalarVariable>')
+                    f'variability="continuous" initial="exact"><Real start="{float(y0[k])!r}"{unit(usta[k])}/>'
+                    f'</ScalarVariable>')
     first_state = npar + 1  # 1-based index of the first state among the variables
     for k, s in enumerate(states):
         rows.append(f'    <ScalarVariable name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
-                    f'variability="continuous" initial="calculated"><Real derivative="{first_state + k}"/>'
+                    f'variability="continuous" initial="calculated"><Real derivative="{first_state + k}"{unit(uder[k])}/>'
                     f'</ScalarVariable>')
     vr_out = npar + 2 * nx + 1  # the time's reference (NP + 2 NX) is not a variable in 2.0
     for oname, k in outputs:
@@ -343,7 +432,7 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
             f'generationTool="mbcomp {_version()}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
             + "".join(_interface(tag, ident) for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
-                      if kind in (k, "both")) +
+                      if kind in (k, "both")) + _unit_definitions(defs) +
             f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
             f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
             f'  <ModelStructure>\n' + (f'    <Outputs>\n{out_list}    </Outputs>\n' if outs else '')
