@@ -25,9 +25,10 @@ def cmd_export(args):
     from ..export import export_fmu
 
     check_output(args.out, "-o")
-    _, model, runtime = load(args)
+    mod, model, runtime = load(args)
+    stop = args.stop_time or dict(getattr(mod, "SIMULATION", {})).get("t_end", 1.0)
     info = export_fmu(model, args.out, fmi=args.fmi, kind=args.kind, params=runtime, outputs=args.outputs,
-                      name=pathlib.Path(args.out).stem)
+                      name=pathlib.Path(args.out).stem, stop_time=stop, tolerance=args.tolerance)
     kinds = {"me": "Model Exchange", "cs": "Co-Simulation", "both": "Model Exchange + Co-Simulation"}
     print(f"wrote {args.out}: FMI {args.fmi} {kinds[args.kind]}, "
           f"{info['size']} bytes, guid {info['guid']}")
@@ -35,8 +36,9 @@ def cmd_export(args):
     print(f"parameters ({len(info['parameters'])}): {', '.join(info['parameters'])}")
     shown = ", ".join(info["outputs"][:12]) + (", ..." if len(info["outputs"]) > 12 else "")
     print(f"outputs ({len(info['outputs'])}): {shown or 'none'}")
+    print(f"default experiment: 0 .. {stop:g} s at tolerance {args.tolerance:g}")
     print(f"program: {info['operations']} operations, built with {info['compiler']} "
-          f"(binaries/linux64/{info['model_identifier']}.so)")
+          f"(binaries/{'x86_64-linux' if args.fmi == '3.0' else 'linux64'}/{info['model_identifier']}.so)")
     return 0
 
 
@@ -50,5 +52,9 @@ def add_parser(sub, common):
                    help="Model Exchange, Co-Simulation or both (default)")
     e.add_argument("--outputs", action="append", metavar="PATTERN",
                    help="outputs to include, shell-style (repeatable; default: every result column), e.g. '*.f.*'")
+    e.add_argument("--stop-time", dest="stop_time", type=float,
+                   help="the FMU's default stop time (s; default: the model file's SIMULATION t_end, else 1)")
+    e.add_argument("--tolerance", type=float, default=1e-12,
+                   help="the FMU's default relative tolerance (default 1e-12: FMPy's CVODE needs it for 1e-7)")
     e.set_defaults(func=cmd_export)
     return e
