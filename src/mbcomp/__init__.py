@@ -31,7 +31,7 @@ __all__ = [
     "Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState",
     "ModelError", "InitializationError", "SimulationError",
     "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",
-    "load_model_file", "load_model", "export_fmu",
+    "load_model_file", "load_model", "export_fmu", "Input",
 ]
 
 
@@ -51,6 +51,9 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name in ("load_model_file", "load_model"):  # model files: build(**params) -> Model
         from .modeling import loader
         return getattr(loader, name)
+    if name == "Input":  # an external signal standing where a law is given
+        from .modeling.inputs import Input
+        return Input
     if name == "export_fmu":  # the model as an FMI FMU (needs a C compiler)
         from .export import export_fmu
         return export_fmu

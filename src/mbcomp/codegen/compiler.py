@@ -73,7 +73,7 @@ class Code:
 
     def _make(self, tr, backend, cache_dir):
         t0 = time.perf_counter()
-        self.layout, self.signature, self.drives = tr.layout, tr.signature, tr.drives
+        self.layout, self.signature, self.drives, self.inputs = tr.layout, tr.signature, tr.drives, tr.inputs
         self.shapes, self.baked, self.qrate_identity = tr.shapes, tr.baked, tr.qrate_identity
         off, self.slices, self.layout_out = 0, {}, []
         for name in FIELDS:
@@ -143,7 +143,7 @@ class Code:
         self.n_units = len(units)
         d = _cache_dir(cache_dir)
         # the C engine (the runtime's integrators over mbcomp_fun) when no drive needs Python per call
-        self.has_engine = self.has_fun and not self.drives
+        self.has_engine = self.has_fun and not self.drives and not self.inputs
         self.objects = {"compiled": [], "reused": []}
         if self.has_engine and not all(os.path.exists(_object(cc, d, src, fl)) for _, src, fl in units):
             # the runtime's objects (compiled once per machine) while this program's units compile
@@ -315,7 +315,8 @@ class Bound:
             self.pbuf = np.array(pv + [0.0], float)
             self.qbuf = np.zeros(max(system.nq, 1))
             self.ubuf = np.zeros(max(system.nu, 1))
-            self.dbuf = np.zeros(3 * len(code.drives) + 2)  # drives' (s, v, a), then Baumgarte alpha, beta
+            # drives' (s, v, a), then Baumgarte alpha, beta, then the external inputs' values
+            self.dbuf = np.zeros(3 * len(code.drives) + 2 + len(code.inputs))
             self.ybuf = np.zeros(system.nq + system.nu + 1)
             self.wbuf = np.zeros(code.n_work)
             self.obuf = np.zeros(max(code.n_out, 1))
@@ -334,15 +335,29 @@ class Bound:
             d.extend(comp.motion(t, p))
         return d
 
+    def input_values(self, t):
+        """The external inputs' values at ``t`` (s), in their slots' order."""
+        return [inp.value(t) for inp in self.code.inputs]
+
+    def per_call(self, t):
+        """Write the per-call inputs at ``t`` into the C buffer: the drives' ``(s, v, a)`` and,
+        after the two gains' slots, the external inputs' values."""
+        nd = 3 * len(self.drive_comps)
+        if nd:
+            self.dbuf[:nd] = self.drive_values(t)
+        if self.code.inputs:
+            self.dbuf[nd + 2:] = self.input_values(t)
+
     def run(self, t, q, u):
         code = self.code
         if code.backend == "python":
-            return np.array(code.main(q.tolist(), u.tolist(), float(t), self.drive_values(t) if self.drive_comps else (),
-                                      self.h), float)
+            d = (self.drive_values(t) + [0.0, 0.0] + self.input_values(t)) if code.inputs else (
+                self.drive_values(t) if self.drive_comps else ())
+            return np.array(code.main(q.tolist(), u.tolist(), float(t), d, self.h), float)
         self.qbuf[: q.size] = q
         self.ubuf[: u.size] = u
-        if self.drive_comps:
-            self.dbuf[: 3 * len(self.drive_comps)] = self.drive_values(t)
+        if self.drive_comps or code.inputs:
+            self.per_call(t)
         pq, pu, pd, ph, pp, pw, po, _, _ = self.ptrs
         if code.dll.mbcomp_eval(pq, pu, float(t), pd, ph, pp, pw, po):
             raise Fallback
@@ -365,13 +380,13 @@ class Bound:
         code = self.code
         nd = 3 * len(self.drive_comps)
         if code.backend == "python":
-            d = (self.drive_values(t) if self.drive_comps else []) + [alpha, beta]
+            d = (self.drive_values(t) if self.drive_comps else []) + [alpha, beta] + self.input_values(t)
             out = np.array(code.fun(y[: self.nq].tolist(), y[self.nq:].tolist(), float(t), d, self.h), float)
             if not np.isfinite(out).all():  # a domain error: the numeric path raises or agrees
                 raise Fallback
             return out
-        if nd:
-            self.dbuf[:nd] = self.drive_values(t)
+        if nd or code.inputs:
+            self.per_call(t)
         if self.gains != (alpha, beta):  # the gains change once per run, not per call
             self.dbuf[nd] = alpha
             self.dbuf[nd + 1] = beta

@@ -363,8 +363,8 @@ class DAlembertProgram:
         n = y.size
         self.y[:n] = y
         b = self.bound
-        if b.drive_comps:
-            b.dbuf[: 3 * len(b.drive_comps)] = b.drive_values(t)
+        if b.drive_comps or b.code.inputs:
+            b.per_call(t)
         py, pdy, pg, pc, pw, piw = self._ptrs
         rc = self.fn(self.mech.ptr, float(t), py, self._pdep, self._pind, self._nd, pdy, pg, pc, pw, piw)
         if rc:
@@ -410,8 +410,8 @@ class DAEProgram:
         residual evaluations made (1, plus one per finite-difference column)."""
         self.y[:] = y
         b = self.bound
-        if b.drive_comps:
-            b.dbuf[: 3 * len(b.drive_comps)] = b.drive_values(t)
+        if b.drive_comps or b.code.inputs:
+            b.per_call(t)
         J = np.empty((self.n, self.n)) if jac else None
         py, pg, pF, pn, pw = self._p
         rc = self.fn(self.mech.ptr, self.form, float(t), py, pg, pF, J.ctypes.data if jac else None, pn, pw)

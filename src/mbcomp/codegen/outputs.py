@@ -124,7 +124,7 @@ class OutputProgram:
     def __init__(self, tr, backend, cache_dir=None):
         t0 = time.perf_counter()
         self.names, self.rotation_paths = tr.output_names, tr.rotation_paths
-        self.layout, self.signature, self.drives = tr.layout, tr.signature, tr.drives
+        self.layout, self.signature, self.drives, self.inputs = tr.layout, tr.signature, tr.drives, tr.inputs
         self.n_out = len(tr.groups["outputs"])
         prog = Program(tr.graph, {"outputs": tr.groups["outputs"]}, guard_groups={"outputs": tr.guard_groups["outputs"]})
         self.n_ops = prog.n_ops("outputs")
@@ -213,10 +213,13 @@ class OutputProgram:
         pv = param_vector(system, self.layout)
         h = self.pre.run(pv)
         comps = [(system.topology.flat.components[d], system.P[d]) for d in self.drives]
-        D = np.zeros((n, 3 * len(comps) + 2))
+        nd = 3 * len(comps)  # per-call inputs: the drives' (s, v, a), the gains, the external inputs
+        D = np.zeros((n, nd + 2 + len(self.inputs)))
         for k in range(n) if comps else ():
-            D[k, : 3 * len(comps)] = [x for comp, p in comps for x in comp.motion(t[k], p)]
-        D[:, -2:] = gains if gains is not None else (0.0, 0.0)
+            D[k, :nd] = [x for comp, p in comps for x in comp.motion(t[k], p)]
+        D[:, nd: nd + 2] = gains if gains is not None else (0.0, 0.0)
+        for j, inp in enumerate(self.inputs):
+            D[:, nd + 2 + j] = [inp.value(tk) for tk in t]
         nb, ncol = len(self.rotation_paths), len(self.names)
         # column by column: every result column one contiguous row (rows not ok are NaN below)
         table, quat = np.empty((ncol, n)), np.empty((nb, n, 4))

@@ -36,6 +36,7 @@ import numpy as np
 from ..assembly.outputs import output_values
 from ..assembly.recursive import SingularTree, lagrange_accelerations, tree_evaluation
 from ..modeling.blame import blame
+from ..modeling.inputs import traced_inputs
 from .graph import CodegenError, Graph, Sym
 from .tracing import drives, parameter_entries, q_rates, traced_params, traced_system
 
@@ -157,7 +158,8 @@ def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=Fals
 
     Returns a namespace: ``graph``, the output ``groups`` (``"eval"``: the :data:`FIELDS`
     flattened, ``"qrate"``), their ``guard_groups``, the fields' ``shapes``, the parameter
-    ``layout`` and ``signature``, the ``drives`` in input order, the ``baked`` parameter names
+    ``layout`` and ``signature``, the ``drives`` in input order, the external ``inputs``
+    (:class:`~mbcomp.modeling.inputs.Input`, by slot: ``d[3 n_drives + 2 + k]``), the ``baked`` parameter names
     and ``qrate_identity`` (``dq/dt = u``). Raises :class:`CodegenError` naming the component
     whose code cannot be traced."""
     layout, sig = param_layout(system)
@@ -173,7 +175,14 @@ def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=Fals
         s, v, a = comp.motion(t0, p)
         return g.input("d", 3 * k, s), g.input("d", 3 * k + 1, v), g.input("d", 3 * k + 2, a)
 
-    with g:
+    inputs = {}  # name -> (Input, node): per-call inputs after the drives and the two gains
+
+    def input_node(inp):
+        if inp.name not in inputs:
+            inputs[inp.name] = (inp, g.input("d", 3 * len(order) + 2 + len(inputs), inp.value(t0)))
+        return inputs[inp.name][1]
+
+    with g, traced_inputs(input_node):
         try:
             ts = traced_system(system, _param_inputs(g, system, layout), None if inline_drives else drive_inputs)
             q = np.array([g.input("q", k, v) for k, v in enumerate(q0)] + [None], dtype=object)[:-1]
@@ -206,7 +215,8 @@ def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=Fals
         groups["outputs"] = list(values.values()) + [x for R in rotations.values() for x in np.asarray(R).ravel()]
         guard_groups["outputs"] = list(g.guards)
     return SimpleNamespace(graph=g, groups=groups, shapes=shapes, layout=layout, guard_groups=guard_groups,
-                           signature=sig, drives=order, baked=_baked_names(g, layout),
+                           signature=sig, drives=order, inputs=[i for i, _ in inputs.values()],
+                           baked=_baked_names(g, layout),
                            qrate_identity=_is_identity(g, qd, system), output_names=names, rotation_paths=paths)
 
 

@@ -38,6 +38,7 @@ import numpy as np
 from ..assembly.initialization import initialize
 from ..errors import SimulationError
 from ..formulations import FORMULATIONS, build
+from ..modeling.inputs import check_names, input_signals, signal_of
 from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
 from .postprocess import postprocess
@@ -61,7 +62,7 @@ def __getattr__(name):
 def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rtol=1e-8, atol=1e-10,
              formulation="lagrange", stabilization=None, alpha=10.0, beta=10.0, n_out=None, dt_out=None,
              max_step=np.inf, progress=False, independent=None, index=None, h=None,
-             backend="auto", singular="stop") -> Result:
+             backend="auto", singular="stop", inputs=None) -> Result:
     """Simulate a model: Lagrange multipliers at index 1, or D'Alembert projection to an ODE.
 
     Parameters
@@ -115,6 +116,10 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         when they become ill-conditioned).
     progress : bool
         Show a progress bar (tqdm) when the run lasts more than two seconds.
+    inputs : dict, optional
+        The model's external inputs (:class:`mbcomp.Input`) by name: a function of time
+        ``f(t)``, a number, or a table ``(times, values)`` (linear interpolation); an input
+        not given keeps its ``start`` value.
     singular : {"stop", "pass"}
         At a singular position -- an instant where the constraint Jacobian loses rank (a flat
         four-bar, a dead centre) -- ``"stop"`` (default) ends the run there with status
@@ -134,6 +139,15 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     """
     stepper, index = check_request(method, formulation, index, h, t_start, t_end, backend)
     stabilization = check_singular(singular, method, stepper, formulation, stabilization)
+    check_names(inputs or {})
+    with input_signals({name: signal_of(name, v) for name, v in (inputs or {}).items()}):
+        return _simulate(model, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha,
+                         beta, independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress)
+
+
+def _simulate(model, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha, beta,
+              independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress):
+    """:func:`simulate` once the request is checked and the inputs' signals are in place."""
     system = system_of(model, params, backend)
     try:
         init = initialize(system, t_start)
