@@ -22,9 +22,12 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
 * the output program: every result column that is not a state (reactions, multipliers, body
   positions, velocities and orientation quaternions, energies, residuals) as an output.
 
+* the model's external inputs (:class:`mbcomp.Input`) as FMU inputs, held through a
+  Co-Simulation step.
+
 Not yet (the rest of issue 17): D'Alembert state selection with events (the states are all of
 ``[q, u]``, loops held by Baumgarte stabilization), projection after Co-Simulation steps,
-inputs, units of the outputs. ``outputs=[patterns]`` chooses the outputs; parameters, states and
+units of the outputs. ``outputs=[patterns]`` chooses the outputs; parameters, states and
 derivatives carry units (``UnitDefinitions`` with SI base-unit exponents).
 
 Examples
@@ -141,7 +144,11 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     ident = _identifier(name)
     system = assemble(model, params)
     init = initialize(system)
-    tr = trace(system, max_nodes, program="fun")
+    try:
+        tr = trace(system, max_nodes, program="fun")
+    except CodegenError as exc:  # a law the program cannot hold: the FMU cannot either
+        raise ValueError(f"the model cannot be exported: {exc} -> or give that value from outside the FMU as an "
+                         "mbcomp.Input('name', ...)") from None
     if "fun" not in tr.groups:
         raise ModelError([Problem("(start)", "the start position is singular: no program can be generated there",
                                   "start the model away from the singular position")])
@@ -150,6 +157,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
                                   "hold it", "write the law with numpy functions and plain arithmetic")])
     prog = Program(tr.graph, {"fun": tr.groups["fun"]}, guard_groups={"fun": tr.guard_groups["fun"]})
     parts, n_work = prog.c_parts("fun", "mbcomp_fun", _chunk, n_parts=lambda n: 1)
+    names_in = [i.name for i in tr.inputs]
     out_prog = _output_program(system, tr, max_nodes)
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
@@ -163,7 +171,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     if not (stop_time > 0 and 0 < tolerance < 1):
         raise ValueError(f"stop_time={stop_time!r}, tolerance={tolerance!r}: need stop_time > 0 and 0 < tolerance < 1")
     xml = describe(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@", kind=kind,
-                   outputs=out_prog.variables).replace(
+                   outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots)).replace(
         '<DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>',
         f'<DefaultExperiment startTime="0.0" stopTime="{float(stop_time)!r}" tolerance="{float(tolerance)!r}"/>')
     guid = "{" + str(_uuid_of(xml)) + "}"
@@ -171,6 +179,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
                f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
                f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
+               + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
                + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", np.maximum(np.abs(y0), 1.0))
                + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c
                + f'\n#include "fmi{fmi[0]}.c"\n')
@@ -199,7 +208,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
             for f in sorted(root.rglob("*")):
                 if f.is_file():
                     z.write(f, f.relative_to(root).as_posix())
-    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], guid=guid,
+    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], inputs=names_in, guid=guid,
                 size=os.path.getsize(path), operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc,
                 model_identifier=ident)
 
@@ -224,9 +233,10 @@ def _output_program(system, tr_fun, max_nodes):
     reads, and ``variables``: ``(name, index in the outputs)`` of the columns that are not
     states already, then every body's quaternion."""
     tr = trace(system, max_nodes, program="outputs", baumgarte=True)
-    ok = "outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
+    ok = ("outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
+          and [i.name for i in tr.inputs] == [i.name for i in tr_fun.inputs])
     if not ok:  # a drive the program does not hold, or a singular trace point: no outputs
-        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0)
+        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0)
     prog = Program(tr.graph, {"outputs": tr.groups["outputs"]}, guard_groups={"outputs": tr.guard_groups["outputs"]})
     parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", _chunk, n_parts=lambda n: 1)
     cols, rots = list(tr.output_names), list(tr.rotation_paths)
@@ -236,7 +246,7 @@ def _output_program(system, tr_fun, max_nodes):
     defines = (f"#define NCOL {len(cols)}\n#define NROT {len(rots)}\n#define NH2 {max(len(prog.hoisted), 1)}\n"
                f"#define NW2 {max(n_work, 1)}\n")
     return SimpleNamespace(c=defines + "\n".join(parts) + "\n" + prog.c_params("mbcomp_outputs_params") + QUAT_C,
-                           variables=variables, n_ops=prog.n_ops("outputs"))
+                           variables=variables, n_ops=prog.n_ops("outputs"), n_slots=len(cols) + 4 * len(rots))
 
 
 #: the output program of a model whose outputs cannot be traced: none
@@ -357,7 +367,7 @@ def _build_description(ident):
             f'    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n')
 
 
-def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=()):
+def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0)):
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, states)
     defs["s"] = {"s": 1}
@@ -381,6 +391,14 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
     for oname, k in outputs:
         rows.append(f'    <Float64 name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
                     f'variability="continuous" initial="calculated"/>')
+    for k, inp in enumerate(inputs[0]):
+        u = unit_exponents(inp.unit)
+        uname = unit_name(u) if u is not None else None
+        if uname:
+            defs[uname] = u
+        rows.append(f'    <Float64 name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" causality="input" '
+                    f'variability="continuous" start="{inp.start!r}" description="{escape(inp.description)}"'
+                    f'{unit(uname)}/>')
     der = [npar + nx + k for k in range(nx)]
     outs = [vr_out + k for _, k in outputs]
     interfaces = ""
@@ -408,7 +426,7 @@ def _interface(tag, ident):
             f'    <SourceFiles>\n{files}    </SourceFiles>\n  </{tag}>\n')
 
 
-def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=()):
+def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0)):
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, states)
 
@@ -434,6 +452,14 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
     for oname, k in outputs:
         rows.append(f'    <ScalarVariable name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
                     f'variability="continuous" initial="calculated"><Real/></ScalarVariable>')
+    for k, inp in enumerate(inputs[0]):
+        u = unit_exponents(inp.unit)
+        uname = unit_name(u) if u is not None else None
+        if uname:
+            defs[uname] = u
+        rows.append(f'    <ScalarVariable name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" '
+                    f'causality="input" variability="continuous" description="{escape(inp.description)}">'
+                    f'<Real start="{inp.start!r}"{unit(uname)}/></ScalarVariable>')
     der = [npar + nx + k + 1 for k in range(nx)]
     outs = [npar + 2 * nx + j + 1 for j in range(len(outputs))]  # 1-based indices among the variables
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in sorted(outs + der))

@@ -4,8 +4,9 @@
  * The including file defines, before this one: NQ, NU (coordinates, speeds), NP (tunable
  * parameters), NH (hoisted values), NW (work), GUID (the instantiation token), ALPHA, BETA
  * (Baumgarte gains, 1/s), NCOL, NROT, NH2, NW2 (the output program's columns, rotations,
- * hoisted values and work) and the arrays P0[NP] (parameter values), Y0[NQ+NU] (consistent
- * start state), NOMINAL[NQ+NU]; and the generated functions
+ * hoisted values and work), NIN (external inputs) and the arrays P0[NP] (parameter values),
+ * Y0[NQ+NU] (consistent start state), NOMINAL[NQ+NU], IN0[NIN] (the inputs' start values);
+ * and the generated functions
  *   int mbcomp_fun(q, u, t, d, h, p, w, out)      dy/dt of the Lagrange index-1 form, d = gains
  *   int mbcomp_params(pv, h)                      the hoisted values of the parameters pv
  *   int mbcomp_outputs(q, u, t, d, h, p, w, out)  the result columns, then NROT rotation matrices
@@ -30,6 +31,7 @@
 #define VR_OUT (NVR + 1)
 #define NOV (NCOL + 4 * NROT)
 #define NROW (NCOL + 9 * NROT)
+#define VR_IN (VR_OUT + NOV)
 
 enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_STEP, M_TERMINATED, M_ERROR };
 
@@ -44,7 +46,7 @@ struct Inst {
     mb_log_fn log;
     int logging, mode, dirty, cs;
     double t, alpha, beta, rtol;
-    double p[NP + 1], h[NH + 1], y[NX + 1], dy[NX + 1], w[NW + 1], d[2], atol[NX + 1], y_end[NX + 1];
+    double p[NP + 1], h[NH + 1], y[NX + 1], dy[NX + 1], w[NW + 1], d[2 + NIN], atol[NX + 1], y_end[NX + 1];
     double h2[NH2 + 1], w2[NW2 + 1], row[NROW + 1], ov[NOV + 1]; /* the output program's */
     double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
 };
@@ -64,6 +66,7 @@ static void mb_reset(Inst *c)
 {
     memcpy(c->p, P0, sizeof(double) * (NP > 0 ? NP : 0));
     memcpy(c->y, Y0, sizeof(double) * NX);
+    memcpy(c->d + 2, IN0, sizeof(double) * (NIN > 0 ? NIN : 0));
     c->t = 0.0;
     c->alpha = ALPHA;
     c->beta = BETA;
@@ -208,6 +211,7 @@ static int mb_get(Inst *c, unsigned vr, double *v, int *have)
         return 0;
     }
     if (vr == VR_TIME) { *v = c->t; return 0; }
+    if (vr >= VR_IN && vr < VR_IN + NIN) { *v = c->d[2 + (vr - VR_IN)]; return 0; }
     say(c, 1, "no variable has the value reference %u", vr);
     return -1;
 }
@@ -224,6 +228,11 @@ static int mb_set(Inst *c, unsigned vr, double v)
         return 0;
     }
     if (vr < VR_DX) { c->y[vr - VR_X] = v; return 0; }
+    if (vr >= VR_IN && vr < VR_IN + NIN) {
+        if (!isfinite(v)) { say(c, 1, "input %u set to a non-finite value", vr - VR_IN); return -1; }
+        c->d[2 + (vr - VR_IN)] = v;
+        return 0;
+    }
     say(c, 1, "the variable with value reference %u cannot be set", vr);
     return -1;
 }
