@@ -183,6 +183,15 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
                + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", np.maximum(np.abs(y0), 1.0))
                + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c
                + f'\n#include "fmi{fmi[0]}.c"\n')
+    _build(path, ident, fmi, cc, model_c, xml)
+    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], inputs=names_in, guid=guid,
+                size=os.path.getsize(path), operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc,
+                model_identifier=ident)
+
+
+
+def _build(path, ident, fmi, cc, model_c, xml):
+    """Lay out the FMU's files in a temporary folder, compile its binary, zip it to ``path``."""
     with tempfile.TemporaryDirectory(prefix="mbcomp-fmu-") as tmp:
         root = pathlib.Path(tmp)
         (root / "sources").mkdir()
@@ -208,9 +217,6 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
             for f in sorted(root.rglob("*")):
                 if f.is_file():
                     z.write(f, f.relative_to(root).as_posix())
-    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], inputs=names_in, guid=guid,
-                size=os.path.getsize(path), operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc,
-                model_identifier=ident)
 
 
 def _chosen(variables, patterns):
