@@ -78,6 +78,8 @@ CASES = [  # model file, simulated time (s), compared variable, agreement as ME,
     ("andrews", 0.03, "hinge_A_AG.phi", 1e-6, 1e-9),
     ("bicycle", 2.0, "free.r.x", 1e-9, 1e-10),  # nonholonomic rolling contacts
     ("chain_3d", 2.0, "joint1.Q.w", 1e-8, 1e-10),  # quaternions
+    ("rolling_disk", 2.0, "x.s", 1e-7, 1e-9),  # a nonholonomic rolling contact: rolls 3.6 m
+    ("n_link_pendulum", 5.0, "joint3.phi", 1e-7, 1e-9),
 ]
 
 
