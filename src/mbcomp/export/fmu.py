@@ -351,6 +351,17 @@ def _units(system, layout, states):
     return par, sta, der, defs
 
 
+def _input_unit(inp, defs):
+    """The unit name of an :class:`~mbcomp.modeling.inputs.Input` (None if unknown), added to
+    the unit definitions ``defs``."""
+    exps = unit_exponents(inp.unit)
+    if exps is None:
+        return None
+    name = unit_name(exps)
+    defs[name] = exps
+    return name
+
+
 def _unit_definitions(defs):
     rows = []
     for name, exps in sorted(defs.items()):
@@ -398,10 +409,7 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
         rows.append(f'    <Float64 name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
                     f'variability="continuous" initial="calculated"/>')
     for k, inp in enumerate(inputs[0]):
-        u = unit_exponents(inp.unit)
-        uname = unit_name(u) if u is not None else None
-        if uname:
-            defs[uname] = u
+        uname = _input_unit(inp, defs)
         rows.append(f'    <Float64 name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" causality="input" '
                     f'variability="continuous" start="{inp.start!r}" description="{escape(inp.description)}"'
                     f'{unit(uname)}/>')
@@ -459,10 +467,7 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
         rows.append(f'    <ScalarVariable name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
                     f'variability="continuous" initial="calculated"><Real/></ScalarVariable>')
     for k, inp in enumerate(inputs[0]):
-        u = unit_exponents(inp.unit)
-        uname = unit_name(u) if u is not None else None
-        if uname:
-            defs[uname] = u
+        uname = _input_unit(inp, defs)
         rows.append(f'    <ScalarVariable name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" '
                     f'causality="input" variability="continuous" description="{escape(inp.description)}">'
                     f'<Real start="{inp.start!r}"{unit(uname)}/></ScalarVariable>')
