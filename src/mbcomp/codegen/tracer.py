@@ -136,10 +136,11 @@ def _untraceable(exc):
 
 
 def trace(system, max_nodes, program="eval", baumgarte=True):
-    """See :func:`_trace`; the right-hand side (``program="fun"``) first tries the drives'
-    motion laws traced into the program (no per-call inputs: the C engine can step it), and
-    falls back to their ``(s, v, a)`` as inputs when a law cannot be traced."""
-    if program == "fun" and drives(system):
+    """See :func:`_trace`; the right-hand side (``program="fun"``) and the result columns
+    (``"outputs"``) first try the drives' motion laws traced into the program (no per-call
+    inputs: the C engine can step it, an exported FMU can hold it), and fall back to their
+    ``(s, v, a)`` as inputs when a law cannot be traced."""
+    if program in ("fun", "outputs") and drives(system):
         try:
             return _trace(system, max_nodes, program, baumgarte, inline_drives=True)
         except CodegenError:
