@@ -68,7 +68,7 @@ def test_pass_goes_through_every_flat_position_on_the_exact_motion(case, name):
 
 
 def test_stop_reports_the_first_flat_position():
-    N, theta, flats = 2, *exact(2)[:1], exact(2)[1]
+    N, flats = 2, exact(2)[1]
     r = mbcomp.simulate(nfb.build(N=N), t_end=T_END, **TOL)
     assert r.status == "failed" and "singular position at t=" in r.message
     t_reported = float(r.message.split("singular position at t=")[1].split(":")[0])

@@ -64,7 +64,7 @@ from ..codegen.compiler import _HEADER, _chunk, c_compiler
 from ..codegen.graph import CodegenError
 from ..codegen.outputs import QUAT_C
 from ..codegen.printers import Program
-from ..codegen.tracer import param_layout, param_vector, trace
+from ..codegen.tracer import param_vector, trace
 from ..errors import ModelError, Problem
 from ..modeling.model import Model
 
@@ -119,21 +119,26 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     Returns
     -------
     dict
-        ``states``, ``parameters`` (names), ``guid``, ``size`` (bytes), ``operations`` (of
-        the program), ``compiler``.
+        ``states``, ``parameters``, ``outputs``, ``inputs`` (names), ``guid`` (the
+        instantiation token), ``size`` (bytes), ``operations`` (of the programs),
+        ``compiler``, ``model_identifier``.
 
     Raises
     ------
     ValueError
-        An FMI version or kind not exported yet, or no C compiler.
+        A bad choice (version, kind, experiment, an output pattern matching nothing), no C
+        compiler, or a law that cannot be traced into C (naming the component; the fix: a
+        traceable expression or an :class:`mbcomp.Input`).
     ModelError
-        A model the FMU cannot hold yet (a drive law evaluated in Python at every call).
+        A model the FMU cannot hold (a singular start, a drive law evaluated in Python).
     """
     patterns = None if outputs is None else ([outputs] if isinstance(outputs, str) else list(outputs))
     if fmi not in ("2.0", "3.0"):
         raise ValueError(f"fmi={fmi!r}: use '3.0' or '2.0'")
     if kind not in ("me", "cs", "both"):
         raise ValueError(f"kind={kind!r}: use 'me' (Model Exchange), 'cs' (Co-Simulation) or 'both'")
+    if not (stop_time > 0 and 0 < tolerance < 1):
+        raise ValueError(f"stop_time={stop_time!r}, tolerance={tolerance!r}: need stop_time > 0 and 0 < tolerance < 1")
     if not isinstance(model, Model):
         raise TypeError(f"export_fmu needs an mbcomp.Model, not {type(model).__name__}")
     cc = c_compiler()
@@ -168,12 +173,9 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
     states = list(system.q_names) + list(system.u_names)
     describe = _model_description if fmi == "2.0" else _model_description3
-    if not (stop_time > 0 and 0 < tolerance < 1):
-        raise ValueError(f"stop_time={stop_time!r}, tolerance={tolerance!r}: need stop_time > 0 and 0 < tolerance < 1")
     xml = describe(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@", kind=kind,
-                   outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots)).replace(
-        '<DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>',
-        f'<DefaultExperiment startTime="0.0" stopTime="{float(stop_time)!r}" tolerance="{float(tolerance)!r}"/>')
+                   outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
+                   experiment=(float(stop_time), float(tolerance)))
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
@@ -187,7 +189,6 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], inputs=names_in, guid=guid,
                 size=os.path.getsize(path), operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc,
                 model_identifier=ident)
-
 
 
 def _build(path, ident, fmi, cc, model_c, xml):
@@ -362,6 +363,11 @@ def _input_unit(inp, defs):
     return name
 
 
+def _experiment(experiment):
+    stop, tol = experiment
+    return f'  <DefaultExperiment startTime="0.0" stopTime="{stop!r}" tolerance="{tol!r}"/>\n'
+
+
 def _unit_definitions(defs):
     rows = []
     for name, exps in sorted(defs.items()):
@@ -384,7 +390,8 @@ def _build_description(ident):
             f'    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n')
 
 
-def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0)):
+def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
+                        experiment=(1.0, 1e-12)):
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, states)
     defs["s"] = {"s": 1}
@@ -424,9 +431,8 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="3.0" modelName="{escape(name)}" instantiationToken="{guid}" '
             f'generationTool="mbcomp {_version()}" variableNamingConvention="structured">\n'
-            + interfaces + _unit_definitions(defs) +
-            f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
-            f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
+            + interfaces + _unit_definitions(defs) + _experiment(experiment)
+            + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
             + "".join(f'    <Output valueReference="{v}"/>\n' for v in outs)
             + "".join(f'    <ContinuousStateDerivative valueReference="{v}"/>\n' for v in der)
             + "".join(f'    <InitialUnknown valueReference="{v}"/>\n' for v in outs + der)
@@ -440,7 +446,8 @@ def _interface(tag, ident):
             f'    <SourceFiles>\n{files}    </SourceFiles>\n  </{tag}>\n')
 
 
-def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0)):
+def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
+                       experiment=(1.0, 1e-12)):
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, states)
 
@@ -479,10 +486,9 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
             f'generationTool="mbcomp {_version()}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
             + "".join(_interface(tag, ident) for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
-                      if kind in (k, "both")) + _unit_definitions(defs) +
-            f'  <DefaultExperiment startTime="0.0" stopTime="1.0" tolerance="1e-08"/>\n'
-            f'  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
-            f'  <ModelStructure>\n' + (f'    <Outputs>\n{out_list}    </Outputs>\n' if outs else '')
-            + f'    <Derivatives>\n' + "\n".join(f'      <Unknown index="{i}"/>' for i in der) + '\n    </Derivatives>\n'
+                      if kind in (k, "both")) + _unit_definitions(defs) + _experiment(experiment)
+            + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
+            + '  <ModelStructure>\n' + (f'    <Outputs>\n{out_list}    </Outputs>\n' if outs else '')
+            + '    <Derivatives>\n' + "\n".join(f'      <Unknown index="{i}"/>' for i in der) + '\n    </Derivatives>\n'
             f'    <InitialUnknowns>\n{unknowns}\n    </InitialUnknowns>\n  </ModelStructure>\n'
             f'</fmiModelDescription>\n')
