@@ -23,11 +23,12 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
   positions, velocities and orientation quaternions, energies, residuals) as an output.
 
 * the model's external inputs (:class:`mbcomp.Input`) as FMU inputs, held through a
-  Co-Simulation step.
+  Co-Simulation step;
+* for a model with constraints, the evaluation program and the runtime's ``mbrt_mech.c``:
+  Co-Simulation projects ``[q, u]`` onto the constraint manifold after every accepted step.
 
 Not yet (the rest of issue 17): D'Alembert state selection with events (the states are all of
-``[q, u]``, loops held by Baumgarte stabilization), projection after Co-Simulation steps,
-units of the outputs. ``outputs=[patterns]`` chooses the outputs; parameters, states and
+``[q, u]``, loops held by Baumgarte stabilization in Model Exchange), units of the outputs. ``outputs=[patterns]`` chooses the outputs; parameters, states and
 derivatives carry units (``UnitDefinitions`` with SI base-unit exponents).
 
 Examples
@@ -73,7 +74,7 @@ __all__ = ["export_fmu"]
 HERE = pathlib.Path(__file__).resolve().parent
 #: the C runtime's files the FMU carries: Co-Simulation steps with its DOP853
 RUNTIME_DIR = pathlib.Path(__file__).resolve().parent.parent / "codegen" / "runtime"
-RUNTIME = ("mbrt.h", "mbrt_rk_internal.h", "mbrt_rk.c", "mbrt_dop853.c")
+RUNTIME = ("mbrt.h", "mbrt_rk_internal.h", "mbrt_rk.c", "mbrt_dop853.c", "mbrt_mech.c", "mbrt_linalg.c")
 #: Baumgarte gains (1/s) compiled into an FMU of a model with loops (as ``simulate``'s defaults)
 ALPHA = BETA = 10.0
 
@@ -164,6 +165,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     parts, n_work = prog.c_parts("fun", "mbcomp_fun", _chunk, n_parts=lambda n: 1)
     names_in = [i.name for i in tr.inputs]
     out_prog = _output_program(system, tr, max_nodes)
+    mech = _projection(system, tr, max_nodes) if kind != "me" else SimpleNamespace(c="#define MECH 0\n", enabled=False)
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
     layout = tr.layout
@@ -183,10 +185,11 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
                f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
                + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
                + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", np.maximum(np.abs(y0), 1.0))
-               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c
+               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c
                + f'\n#include "fmi{fmi[0]}.c"\n')
     _build(path, ident, fmi, cc, model_c, xml)
-    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], inputs=names_in, guid=guid,
+    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], inputs=names_in,
+                projects=mech.enabled, guid=guid,
                 size=os.path.getsize(path), operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc,
                 model_identifier=ident)
 
@@ -231,6 +234,49 @@ def _chosen(variables, patterns):
             raise ValueError(f"outputs pattern {pat!r} matches no result column -> choose among: {some}, ... "
                              f"({len(variables)} in all; e.g. '*.f.*' for joint forces, 'energy.*')")
     return [(n, k) for n, k in variables if any(fnmatchcase(n, pat) for pat in patterns)]
+
+
+def _projection(system, tr_fun, max_nodes):
+    """What a Co-Simulation step needs to project onto the constraint manifold after every
+    accepted step (the runtime's ``mbrt_project``, as the compiled engine does): the
+    evaluation program (constraints and their Jacobian) with its parameter program and
+    qrate, the ``mbrt_mech`` layout. ``c`` defines ``MECH`` 0 (nothing to project: an open
+    tree; or coordinates the C projection cannot move) or 1."""
+    from ..codegen.engine import PROJECT_MAX_ITER, coordinate_map
+    from ..codegen.tracer import FIELDS
+    from ..assembly.manifold import ACCEPT_FACTOR, POSITION_TOL
+
+    none = SimpleNamespace(c="#define MECH 0\n", enabled=False)
+    if not (system.topology.cut or any(e.kind == "joint" and not e.comp.tree_edge for e in system.topology.edges)):
+        return none
+    seg = coordinate_map(system)
+    tr = trace(system, max_nodes, program="eval")
+    if (seg is None or tr.drives or tr.layout != tr_fun.layout
+            or [i.name for i in tr.inputs] != [i.name for i in tr_fun.inputs]):
+        return none
+    groups = {"eval": tr.groups["eval"], "qrate": tr.groups["qrate"]}
+    prog = Program(tr.graph, groups, guard_groups={k: tr.guard_groups[k] for k in groups})
+    parts, n_work = prog.c_parts("eval", "mbcomp_eval", _chunk, n_parts=lambda n: 1)
+    if not tr.qrate_identity:
+        qparts, n_w = prog.c_parts("qrate", "mbcomp_qrate", _chunk, n_parts=lambda n: 1)
+        parts, n_work = parts + qparts, max(n_work, n_w)
+    off, offs = 0, {}
+    for name in FIELDS:
+        offs[name] = off
+        off += int(np.prod(tr.shapes[name], dtype=int))
+    mh, mn = tr.shapes["Phi"][0] if tr.shapes["Phi"] else 0, tr.shapes["Psi"][0] if tr.shapes["Psi"] else 0
+    rows = np.arange(mh) if system.row_mask is None else np.flatnonzero(system.row_mask)
+    seg = np.asarray(seg, int).reshape(-1, 4) if len(seg) else np.zeros((0, 4), int)
+    ints = lambda name, a: f"static const int {name}[] = {{{', '.join(str(int(x)) for x in a) or '0'}}};\n"  # noqa: E731
+    c = (f"#define MECH 1\n#define NH3 {max(len(prog.hoisted), 1)}\n#define NW3 {max(n_work, 1)}\n"
+         f"#define NOUT3 {off}\n#define MH {mh}\n#define MN {mn}\n#define NROWS {len(rows)}\n#define NSEG {len(seg)}\n"
+         f"#define QRATE {'NULL' if tr.qrate_identity else 'mbcomp_qrate'}\n"
+         f"#define PROJ_TOL {POSITION_TOL!r}\n#define PROJ_ACCEPT {ACCEPT_FACTOR * POSITION_TOL!r}\n"
+         f"#define PROJ_ITER {PROJECT_MAX_ITER}\n"
+         + "".join(f"#define OFF_{k.upper()} {offs[k]}\n" for k in ("M", "f", "Phi", "Phid", "C", "cb", "B", "Bb", "Psi"))
+         + ints("MECH_ROWS", rows) + ints("MECH_SEG", seg.ravel())
+         + "\n".join(parts) + "\n" + prog.c_params("mbcomp_eval_params"))
+    return SimpleNamespace(c=c, enabled=True)
 
 
 def _output_program(system, tr_fun, max_nodes):

@@ -12,6 +12,9 @@
  *   int mbcomp_outputs(q, u, t, d, h, p, w, out)  the result columns, then NROT rotation matrices
  *   int mbcomp_outputs_params(pv, h)              its hoisted values
  *   void mbcomp_quat(R, Q)                        a rotation matrix's unit quaternion
+ * and, with MECH 1 (a model with constraints to project onto after Co-Simulation steps), the
+ * evaluation program mbcomp_eval (and mbcomp_qrate), mbcomp_eval_params and the mbrt_mech
+ * layout (NH3, NW3, NOUT3, MH, MN, NROWS, NSEG, QRATE, OFF_*, MECH_ROWS, MECH_SEG, PROJ_*).
  * Value references: 0..NP-1 parameters, NP..NP+NX-1 the states [q, u], NP+NX..NP+2NX-1
  * their derivatives, NP+2NX the time (FMI 3.0's independent variable), then the NCOL columns
  * and the 4 NROT quaternion entries (outputs). Co-Simulation steps with the runtime's DOP853 (mbrt.h). */
@@ -48,6 +51,12 @@ struct Inst {
     double t, alpha, beta, rtol;
     double p[NP + 1], h[NH + 1], y[NX + 1], dy[NX + 1], w[NW + 1], d[2 + NIN], atol[NX + 1], y_end[NX + 1];
     double h2[NH2 + 1], w2[NW2 + 1], row[NROW + 1], ov[NOV + 1]; /* the output program's */
+#if MECH
+    double h3[NH3 + 1], w3[NW3 + 1]; /* the evaluation program's (the projection's) */
+    mbrt_mech mech;
+    double *mwork; /* mbrt_mech_work_size doubles */
+    int projections;
+#endif
     double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
 };
 
@@ -87,6 +96,15 @@ static Inst *mb_new(const char *name, int cs)
     if (cs) {
         c->work = (double *)calloc(mbrt_dop853_work_size(NX) + 1, sizeof(double));
         if (!c->work) { free(c->name); free(c); return NULL; }
+#if MECH
+        {
+            mbrt_mech m = {mbcomp_eval, QRATE, c->d, c->h3, c->p, c->w3, NQ, NU, NOUT3, MH, MN, NROWS, MECH_ROWS,
+                           OFF_M, OFF_F, OFF_PHI, OFF_PHID, OFF_C, OFF_CB, OFF_B, OFF_BB, OFF_PSI, NSEG, MECH_SEG};
+            c->mech = m;
+        }
+        c->mwork = (double *)calloc(mbrt_mech_work_size(&c->mech) + 1, sizeof(double));
+        if (!c->mwork) { free(c->work); free(c->name); free(c); return NULL; }
+#endif
     }
     mb_reset(c);
     return c;
@@ -97,6 +115,9 @@ static void mb_free(Inst *c)
     if (!c) return;
     free(c->name);
     free(c->work);
+#if MECH
+    free(c->mwork);
+#endif
     free(c);
 }
 
@@ -108,6 +129,9 @@ static int mb_refresh(Inst *c)
     if (!c->dirty) return 0;
     rc = mbcomp_params(c->p, c->h);
     if (!rc) rc = mbcomp_outputs_params(c->p, c->h2);
+#if MECH
+    if (!rc) rc = mbcomp_eval_params(c->p, c->h3);
+#endif
     if (rc) {
         say(c, 1, "the parameter values %s -> export the model again with these values",
             rc == 1 ? "change a decision taken when the program was generated (a parameter guard)"
@@ -146,6 +170,27 @@ static int mb_rhs(void *ctx, double t, const double *y, double *dydt)
     return mbcomp_fun(y, y + NQ, t, c->d, c->h, c->p, c->w, dydt);
 }
 
+#if MECH
+/* after every accepted Co-Simulation step: y = [q, u] back onto the constraint manifold (the
+   runtime's projection: positions by Gauss-Newton, then speeds); nonzero stops the step */
+static int mb_project(void *ctx, double t, double *y)
+{
+    Inst *c = (Inst *)ctx;
+    double norm = 0.0;
+    int rc = mbrt_project(&c->mech, t, y, PROJ_TOL, PROJ_ITER, PROJ_ACCEPT, &norm, c->mwork);
+    if (rc != MBRT_MECH_OK) {
+        say(c, 1, "the projection onto the constraints failed at t=%g (status %d, |Phi| = %g): a singular "
+            "position, or a step too long for Newton", t, rc, norm);
+        return 1;
+    }
+    c->projections++;
+    return 0;
+}
+#define ON_STEP mb_project
+#else
+#define ON_STEP NULL
+#endif
+
 /* Co-Simulation: integrate from c->t by h with DOP853 at c->rtol; 0, or -1 after logging */
 static int mb_step(Inst *c, double h)
 {
@@ -160,7 +205,7 @@ static int mb_step(Inst *c, double h)
     for (i = 0; i < NX; i++) c->atol[i] = c->rtol * 1e-2 * NOMINAL[i];
     memset(&st, 0, sizeof st);
     t_end = c->t + h;
-    rc = mbrt_dop853(mb_rhs, NULL, c, NX, c->t, c->y, t_end, c->rtol, c->atol, 0.0, 0.0, 0, &t_end, 1, c->y_end,
+    rc = mbrt_dop853(mb_rhs, ON_STEP, c, NX, c->t, c->y, t_end, c->rtol, c->atol, 0.0, 0.0, 0, &t_end, 1, c->y_end,
                      &written, c->work, &st);
     if (rc != MBRT_OK || written != 1) {
         say(c, 1, "the step from t=%g by %g s failed: %s", c->t, h, st.message);
