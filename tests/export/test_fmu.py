@@ -350,3 +350,28 @@ def test_co_simulation_projects_onto_the_constraints_after_every_step(fmi, tmp_p
     ref = mbcomp.simulate(model, t_end=1.0, n_out=101, rtol=1e-11, atol=1e-13, stabilization="projection")
     assert max_diff(r, ref, "crank_joint.phi") < 1e-8
     assert not export_fmu(pendulum(), tmp_path / "p.fmu")["projects"]  # an open tree: nothing to project
+
+
+def test_state_nominals_come_from_the_models_scales(tmp_path):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Model
+
+    path = tmp_path / "c.fmu"
+    export_fmu(load_model("models/slider_crank.py").build(), path)
+    md = read_model_description(str(path))
+    fmu = FMU3Model(guid=md.guid, unzipDirectory=extract(str(path)), modelIdentifier=md.modelExchange.modelIdentifier)
+    fmu.instantiate()
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    import ctypes
+
+    values = (ctypes.c_double * 6)()
+    fmu.getNominalsOfContinuousStates(values, 6)
+    nominal = dict(zip(["crank_joint.phi", "slider_joint.s", "pin.phi", "crank_joint.w", "slider_joint.v", "pin.w"],
+                       list(values)))
+    fmu.terminate()
+    fmu.freeInstance()
+    # angles 1 rad; the slider's position and speed the model's largest length (per second) or
+    # more (the start's magnitude); the crank's start rate 6 rad/s
+    assert nominal["crank_joint.phi"] == 1.0 and nominal["crank_joint.w"] == 6.0
+    assert 0.1 < nominal["slider_joint.s"] < 1.0 and nominal["slider_joint.v"] < 1.0

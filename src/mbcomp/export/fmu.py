@@ -184,7 +184,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
                f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
                f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
                + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
-               + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", np.maximum(np.abs(y0), 1.0))
+               + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, layout, pv, y0))
                + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c
                + f'\n#include "fmi{fmi[0]}.c"\n')
     _build(path, ident, fmi, cc, model_c, xml)
@@ -192,6 +192,18 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
                 projects=mech.enabled, guid=guid,
                 size=os.path.getsize(path), operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc,
                 model_identifier=ident)
+
+
+def _nominals(system, layout, pv, y0):
+    """The states' nominal values from the model's scales: a length coordinate the model's
+    length (the largest length parameter, m), its speed that length per second, an angle
+    1 rad and its rate 1 rad/s (the importer's absolute tolerances scale with them); never
+    below the start value's magnitude."""
+    lengths = [abs(v) for (path, name, _), v in zip(layout, pv) if _param_doc(system, path, name)[0] == "m"]
+    L = max(lengths, default=1.0) or 1.0
+    scale = {"m": L, "m/s": L, "rad": 1.0, "rad/s": 1.0, "1": 1.0}
+    units = list(system.topology.q_units) + list(system.topology.u_units)
+    return np.maximum(np.abs(y0), [scale.get(u, 1.0) for u in units])
 
 
 def _build(path, ident, fmi, cc, model_c, xml):
