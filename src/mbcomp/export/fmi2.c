@@ -119,7 +119,7 @@ FMI2_EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     NEED(c);
-    if (mb_refresh((Inst *)c)) return fmi2Error;
+    if (mb_refresh((Inst *)c) || mb_start_states((Inst *)c)) return fmi2Error;
     ((Inst *)c)->mode = ((Inst *)c)->cs ? M_STEP : M_EVENT;
     return fmi2OK;
 }
@@ -196,9 +196,13 @@ FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c)
 
 FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *e)
 {
+    int changed = 0;
     NEED(c);
     if (!e) return fmi2Error;
     memset(e, 0, sizeof *e);
+    if (mb_update((Inst *)c, &changed)) return fmi2Error;
+    e->valuesOfContinuousStatesChanged = changed;
+    e->nominalsOfContinuousStatesChanged = changed;
     return fmi2OK;
 }
 
@@ -212,10 +216,12 @@ FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
 FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePrior,
                                                    fmi2Boolean *enterEventMode, fmi2Boolean *terminate)
 {
+    int event = 0;
     (void)noSetFMUStatePrior;
     NEED(c);
     if (!enterEventMode || !terminate) return fmi2Error;
-    *enterEventMode = 0;
+    if (mb_completed((Inst *)c, &event)) return fmi2Error;
+    *enterEventMode = event;
     *terminate = 0;
     return fmi2OK;
 }
@@ -230,18 +236,13 @@ FMI2_EXPORT fmi2Status fmi2SetTime(fmi2Component c, fmi2Real t)
 FMI2_EXPORT fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !x) { say((Inst *)c, 1, "fmi2SetContinuousStates: %zu states given, %d expected", nx, NX); return fmi2Error; }
-    memcpy(((Inst *)c)->y, x, sizeof(double) * NX);
-    return fmi2OK;
+    return OK(mb_set_x((Inst *)c, x, nx));
 }
 
 FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !dx) { say((Inst *)c, 1, "fmi2GetDerivatives: %zu asked, %d states", nx, NX); return fmi2Error; }
-    if (mb_derivatives((Inst *)c)) return fmi2Error;
-    memcpy(dx, ((Inst *)c)->dy, sizeof(double) * NX);
-    return fmi2OK;
+    return OK(mb_get_dx((Inst *)c, dx, nx));
 }
 
 FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t nz)
@@ -254,17 +255,13 @@ FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], siz
 FMI2_EXPORT fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !x) { say((Inst *)c, 1, "fmi2GetContinuousStates: %zu asked, %d states", nx, NX); return fmi2Error; }
-    memcpy(x, ((Inst *)c)->y, sizeof(double) * NX);
-    return fmi2OK;
+    return OK(mb_get_x((Inst *)c, x, nx));
 }
 
 FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !x) return fmi2Error;
-    memcpy(x, NOMINAL, sizeof(double) * NX);
-    return fmi2OK;
+    return OK(mb_nominals((Inst *)c, x, nx));
 }
 
 /* --- Co-Simulation ----------------------------------------------------------------------- */

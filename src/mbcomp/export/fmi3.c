@@ -152,7 +152,7 @@ FMI3_EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean t
 FMI3_EXPORT fmi3Status fmi3ExitInitializationMode(fmi3Instance c)
 {
     NEED(c);
-    if (mb_refresh((Inst *)c)) return fmi3Error;
+    if (mb_refresh((Inst *)c) || mb_start_states((Inst *)c)) return fmi3Error;
     ((Inst *)c)->mode = ((Inst *)c)->cs ? M_STEP : M_EVENT;
     return fmi3OK;
 }
@@ -295,11 +295,13 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *upd
                                                 fmi3Boolean *nominalsChanged, fmi3Boolean *valuesChanged,
                                                 fmi3Boolean *nextDefined, fmi3Float64 *next)
 {
+    int changed = 0;
     NEED(c);
+    if (mb_update((Inst *)c, &changed)) return fmi3Error;
     if (update) *update = false;
     if (terminate) *terminate = false;
-    if (nominalsChanged) *nominalsChanged = false;
-    if (valuesChanged) *valuesChanged = false;
+    if (nominalsChanged) *nominalsChanged = changed;
+    if (valuesChanged) *valuesChanged = changed;
     if (nextDefined) *nextDefined = false;
     if (next) *next = 0.0;
     return fmi3OK;
@@ -316,10 +318,12 @@ FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c)
 FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean noSetPrior, fmi3Boolean *enterEventMode,
                                                    fmi3Boolean *terminate)
 {
+    int event = 0;
     (void)noSetPrior;
     NEED(c);
     if (!enterEventMode || !terminate) return fmi3Error;
-    *enterEventMode = false;
+    if (mb_completed((Inst *)c, &event)) return fmi3Error;
+    *enterEventMode = event;
     *terminate = false;
     return fmi3OK;
 }
@@ -334,18 +338,13 @@ FMI3_EXPORT fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64 t)
 FMI3_EXPORT fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !x) { say((Inst *)c, 1, "fmi3SetContinuousStates: %zu states given, %d expected", nx, NX); return fmi3Error; }
-    memcpy(((Inst *)c)->y, x, sizeof(double) * NX);
-    return fmi3OK;
+    return OK(mb_set_x((Inst *)c, x, nx));
 }
 
 FMI3_EXPORT fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 dx[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !dx) { say((Inst *)c, 1, "fmi3GetContinuousStateDerivatives: %zu asked, %d states", nx, NX); return fmi3Error; }
-    if (mb_derivatives((Inst *)c)) return fmi3Error;
-    memcpy(dx, ((Inst *)c)->dy, sizeof(double) * NX);
-    return fmi3OK;
+    return OK(mb_get_dx((Inst *)c, dx, nx));
 }
 
 FMI3_EXPORT fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 z[], size_t nz)
@@ -358,17 +357,13 @@ FMI3_EXPORT fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 z[], s
 FMI3_EXPORT fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !x) { say((Inst *)c, 1, "fmi3GetContinuousStates: %zu asked, %d states", nx, NX); return fmi3Error; }
-    memcpy(x, ((Inst *)c)->y, sizeof(double) * NX);
-    return fmi3OK;
+    return OK(mb_get_x((Inst *)c, x, nx));
 }
 
 FMI3_EXPORT fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t nx)
 {
     NEED(c);
-    if (nx != NX || !x) return fmi3Error;
-    memcpy(x, NOMINAL, sizeof(double) * NX);
-    return fmi3OK;
+    return OK(mb_nominals((Inst *)c, x, nx));
 }
 
 FMI3_EXPORT fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t *n)
@@ -383,7 +378,7 @@ FMI3_EXPORT fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance c, size_t *n
 {
     NEED(c);
     if (!n) return fmi3Error;
-    *n = NX;
+    *n = NXS;
     return fmi3OK;
 }
 

@@ -27,9 +27,11 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
 * for a model with constraints, the evaluation program and the runtime's ``mbrt_mech.c``:
   Co-Simulation projects ``[q, u]`` onto the constraint manifold after every accepted step.
 
-Not yet (the rest of issue 17): D'Alembert state selection with events (the states are all of
-``[q, u]``, loops held by Baumgarte stabilization in Model Exchange), units of the outputs. ``outputs=[patterns]`` chooses the outputs; parameters, states and
-derivatives carry units (``UnitDefinitions`` with SI base-unit exponents).
+* Model Exchange states of a model with constraints: D'Alembert's coordinates and independent
+  speeds, the partition chosen again (and [q, u] projected) in Event Mode when it degrades or
+  the positions drift (see docs/architecture.md, "FMU export").
+
+Not yet: units of the outputs; FMU states and directional derivatives.
 
 Examples
 --------
@@ -165,7 +167,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     parts, n_work = prog.c_parts("fun", "mbcomp_fun", _chunk, n_parts=lambda n: 1)
     names_in = [i.name for i in tr.inputs]
     out_prog = _output_program(system, tr, max_nodes)
-    mech = _projection(system, tr, max_nodes) if kind != "me" else SimpleNamespace(c="#define MECH 0\n", enabled=False)
+    mech = _projection(system, tr, max_nodes)
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
     layout = tr.layout
@@ -173,11 +175,24 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     y0 = np.concatenate((init.q, init.u))
     loops = bool(system.topology.cut)
     pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
-    states = list(system.q_names) + list(system.u_names)
+    select = _selection(system, init, mech, kind)
+    if select.enabled:  # Model Exchange states [q, v]: the coordinates and the independent speeds
+        states = list(system.q_names) + [f"v[{k + 1}]" for k in range(len(select.ind))]
+        x0 = np.concatenate((init.q, init.u[select.ind]))
+        state_units = list(system.topology.q_units) + [None] * len(select.ind)
+    else:
+        states = list(system.q_names) + list(system.u_names)
+        x0, state_units = y0, list(system.topology.q_units) + list(system.topology.u_units)
     describe = _model_description if fmi == "2.0" else _model_description3
-    xml = describe(ident, name, system, layout, pnames, pv, states, y0, guid="@GUID@", kind=kind,
+    taken = set(states)
+    out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in taken]
+    if select.enabled:  # the speeds are no states now: outputs (the output program computes them)
+        out_prog.variables = _speeds_as_outputs(out_prog, system) + out_prog.variables
+        if patterns is not None:
+            out_prog.variables = _chosen(out_prog.variables, patterns)
+    xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
-                   experiment=(float(stop_time), float(tolerance)))
+                   experiment=(float(stop_time), float(tolerance)), state_units=state_units)
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
@@ -185,11 +200,11 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
                f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
                + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
                + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, layout, pv, y0))
-               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c
+               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
                + f'\n#include "fmi{fmi[0]}.c"\n')
     _build(path, ident, fmi, cc, model_c, xml)
     return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], inputs=names_in,
-                projects=mech.enabled, guid=guid,
+                projects=mech.enabled and kind != "me", selects_states=select.enabled, guid=guid,
                 size=os.path.getsize(path), operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc,
                 model_identifier=ident)
 
@@ -248,6 +263,43 @@ def _chosen(variables, patterns):
     return [(n, k) for n, k in variables if any(fnmatchcase(n, pat) for pat in patterns)]
 
 
+#: D'Alembert's state selection in Model Exchange: a new partition when |A_d^-1 A_i| exceeds
+#: this (mbcomp.formulations.DAlembert's growth_max) ...
+GROWTH_MAX = 4.0
+#: ... or when the positions drift from the constraints by more than this (m or rad) and
+#: DRIFT_RTOL times the experiment's tolerance (every event restarts the importer's integrator)
+DRIFT, DRIFT_RTOL = 1e-9, 10.0
+
+
+def _selection(system, init, mech, kind):
+    """Model Exchange's states for a model with constraints: ``enabled``, the first partition
+    ``dep``/``ind`` (pivoted QR at the start, as the D'Alembert formulation chooses it) and
+    the core's defines (``SELECT``); disabled for open trees, Co-Simulation-only FMUs, or
+    when the FMU cannot carry the evaluation program (``mech``)."""
+    from ..assembly.manifold import SingularPartition, pivot_partition
+
+    off = SimpleNamespace(enabled=False, ind=np.zeros(0, int), c="#define SELECT 0\n")
+    if not mech.enabled or kind == "cs":
+        return off
+    ev = system.evaluate(0.0, init.q, init.u)
+    if not ev.A.shape[0]:
+        return off
+    try:
+        dep, ind = pivot_partition(ev.A)
+    except SingularPartition:
+        return off
+    ints = lambda name, a: f"static const int {name}[] = {{{', '.join(str(int(x)) for x in a) or '0'}}};\n"  # noqa: E731
+    c = (f"#define SELECT 1\n#define MM {len(dep)}\n#define NI {len(ind)}\n#define GROWTH_MAX {GROWTH_MAX!r}\n"
+         f"#define DRIFT {DRIFT!r}\n#define DRIFT_RTOL {DRIFT_RTOL!r}\n" + ints("DEP0", dep) + ints("IND0", ind))
+    return SimpleNamespace(enabled=True, ind=np.asarray(ind, int), c=c)
+
+
+def _speeds_as_outputs(out_prog, system):
+    """``(name, index)`` of the joint speeds among the output program's columns."""
+    names = set(system.u_names)
+    return [(n, k) for n, k in out_prog.all_columns if n in names]
+
+
 def _projection(system, tr_fun, max_nodes):
     """What a Co-Simulation step needs to project onto the constraint manifold after every
     accepted step (the runtime's ``mbrt_project``, as the compiled engine does): the
@@ -301,17 +353,19 @@ def _output_program(system, tr_fun, max_nodes):
     ok = ("outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
           and [i.name for i in tr.inputs] == [i.name for i in tr_fun.inputs])
     if not ok:  # a drive the program does not hold, or a singular trace point: no outputs
-        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0)
+        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0, all_columns=[])
     prog = Program(tr.graph, {"outputs": tr.groups["outputs"]}, guard_groups={"outputs": tr.guard_groups["outputs"]})
     parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", _chunk, n_parts=lambda n: 1)
     cols, rots = list(tr.output_names), list(tr.rotation_paths)
     taken = set(system.q_names) | set(system.u_names)
     variables = [(n, k) for k, n in enumerate(cols) if n not in taken]
+    all_columns = list(enumerate(cols))
     variables += [(f"{b}.Q.{c}", len(cols) + 4 * i + j) for i, b in enumerate(rots) for j, c in enumerate("wxyz")]
     defines = (f"#define NCOL {len(cols)}\n#define NROT {len(rots)}\n#define NH2 {max(len(prog.hoisted), 1)}\n"
                f"#define NW2 {max(n_work, 1)}\n")
     return SimpleNamespace(c=defines + "\n".join(parts) + "\n" + prog.c_params("mbcomp_outputs_params") + QUAT_C,
-                           variables=variables, n_ops=prog.n_ops("outputs"), n_slots=len(cols) + 4 * len(rots))
+                           variables=variables, n_ops=prog.n_ops("outputs"), n_slots=len(cols) + 4 * len(rots),
+                           all_columns=[(n, k) for k, n in all_columns])
 
 
 #: the output program of a model whose outputs cannot be traced: none
@@ -384,9 +438,10 @@ def unit_name(exps):
     return (num or "1") + (f"/{den}" if den else "")
 
 
-def _units(system, layout, states):
+def _units(system, layout, state_units):
     """``(parameter units, state units, derivative units, definitions)``: unit names (None
-    where unknown) and ``{name: exponents}`` of every unit used."""
+    where unknown) and ``{name: exponents}`` of every unit used; ``state_units``: the states'
+    unit texts (None: unknown)."""
     defs = {}
 
     def named(exps):
@@ -397,7 +452,7 @@ def _units(system, layout, states):
         return name
 
     par = [named(unit_exponents(_param_doc(system, path, pname)[0])) for path, pname, _ in layout]
-    texts = list(system.topology.q_units) + list(system.topology.u_units)
+    texts = list(state_units)
     sta = [named(unit_exponents(u)) for u in texts]
     der = []
     for u in texts:
@@ -449,9 +504,9 @@ def _build_description(ident):
 
 
 def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                        experiment=(1.0, 1e-12)):
+                        experiment=(1.0, 1e-12), state_units=()):
     nx, npar = len(states), len(pv)
-    upar, usta, uder, defs = _units(system, layout, states)
+    upar, usta, uder, defs = _units(system, layout, state_units)
     defs["s"] = {"s": 1}
 
     def unit(u):
@@ -482,7 +537,7 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
     outs = [vr_out + k for _, k in outputs]
     interfaces = ""
     if kind in ("me", "both"):
-        interfaces += f'  <ModelExchange modelIdentifier="{ident}"/>\n'
+        interfaces += f'  <ModelExchange modelIdentifier="{ident}" needsCompletedIntegratorStep="true"/>\n'
     if kind in ("cs", "both"):
         interfaces += (f'  <CoSimulation modelIdentifier="{ident}" canHandleVariableCommunicationStepSize="true" '
                        f'hasEventMode="false"/>\n')
@@ -505,9 +560,9 @@ def _interface(tag, ident):
 
 
 def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                       experiment=(1.0, 1e-12)):
+                       experiment=(1.0, 1e-12), state_units=()):
     nx, npar = len(states), len(pv)
-    upar, usta, uder, defs = _units(system, layout, states)
+    upar, usta, uder, defs = _units(system, layout, state_units)
 
     def unit(u):
         return f' unit="{escape(u)}"' if u else ""

@@ -27,9 +27,19 @@
 #include "mbrt.h"
 
 #define NX (NQ + NU)
+#ifndef SELECT
+#define SELECT 0
+#endif
+#if SELECT
+/* Model Exchange states x = [q, v]: the coordinates and NI = NU - MM independent speeds
+   v = u[ind] of a partition dep/ind chosen again in Event Mode when it degrades */
+#define NXS (NQ + NI)
+#else
+#define NXS NX
+#endif
 #define VR_X NP
-#define VR_DX (NP + NX)
-#define NVR (NP + 2 * NX)
+#define VR_DX (NP + NXS)
+#define NVR (NP + 2 * NXS)
 #define VR_TIME NVR
 #define VR_OUT (NVR + 1)
 #define NOV (NCOL + 4 * NROT)
@@ -58,7 +68,18 @@ struct Inst {
     int projections;
 #endif
     double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
+#if SELECT
+    double x[NXS + 1], dx[NXS + 1], growth;
+    int dep[MM + 1], ind[NI + 1], *iwork, x_dirty, event_due, repartitions;
+    double ad[MM * MM + 1], rhs_d[MM + 1], ev[NOUT3 + 1], a[MM * NU + 1]; int piv[MM + 1];
+#endif
 };
+
+#if SELECT
+static int mb_full_speeds(Inst *c);
+#endif
+static int mb_derivatives(Inst *c);
+static int mb_get_dx(Inst *c, double *dx, size_t n);
 
 static void say(Inst *c, int error, const char *fmt, ...)
 {
@@ -76,6 +97,17 @@ static void mb_reset(Inst *c)
     memcpy(c->p, P0, sizeof(double) * (NP > 0 ? NP : 0));
     memcpy(c->y, Y0, sizeof(double) * NX);
     memcpy(c->d + 2, IN0, sizeof(double) * (NIN > 0 ? NIN : 0));
+#if SELECT
+    {
+        int k;
+        memcpy(c->dep, DEP0, sizeof(int) * MM);
+        memcpy(c->ind, IND0, sizeof(int) * NI);
+        memcpy(c->x, Y0, sizeof(double) * NQ);
+        for (k = 0; k < NI; k++) c->x[NQ + k] = Y0[NQ + IND0[k]];
+        c->x_dirty = 1;
+        c->event_due = 0;
+    }
+#endif
     c->t = 0.0;
     c->alpha = ALPHA;
     c->beta = BETA;
@@ -96,16 +128,20 @@ static Inst *mb_new(const char *name, int cs)
     if (cs) {
         c->work = (double *)calloc(mbrt_dop853_work_size(NX) + 1, sizeof(double));
         if (!c->work) { free(c->name); free(c); return NULL; }
-#if MECH
-        {
-            mbrt_mech m = {mbcomp_eval, QRATE, c->d, c->h3, c->p, c->w3, NQ, NU, NOUT3, MH, MN, NROWS, MECH_ROWS,
-                           OFF_M, OFF_F, OFF_PHI, OFF_PHID, OFF_C, OFF_CB, OFF_B, OFF_BB, OFF_PSI, NSEG, MECH_SEG};
-            c->mech = m;
-        }
-        c->mwork = (double *)calloc(mbrt_mech_work_size(&c->mech) + 1, sizeof(double));
-        if (!c->mwork) { free(c->work); free(c->name); free(c); return NULL; }
-#endif
     }
+#if MECH
+    {
+        mbrt_mech m = {mbcomp_eval, QRATE, c->d, c->h3, c->p, c->w3, NQ, NU, NOUT3, MH, MN, NROWS, MECH_ROWS,
+                       OFF_M, OFF_F, OFF_PHI, OFF_PHID, OFF_C, OFF_CB, OFF_B, OFF_BB, OFF_PSI, NSEG, MECH_SEG};
+        c->mech = m;
+    }
+    c->mwork = (double *)calloc(mbrt_mech_work_size(&c->mech) + 1, sizeof(double));
+    if (!c->mwork) { free(c->work); free(c->name); free(c); return NULL; }
+#endif
+#if SELECT
+    c->iwork = (int *)calloc(NU + MM + 1, sizeof(int));
+    if (!c->iwork) { free(c->mwork); free(c->work); free(c->name); free(c); return NULL; }
+#endif
     mb_reset(c);
     return c;
 }
@@ -117,6 +153,9 @@ static void mb_free(Inst *c)
     free(c->work);
 #if MECH
     free(c->mwork);
+#endif
+#if SELECT
+    free(c->iwork);
 #endif
     free(c);
 }
@@ -222,6 +261,9 @@ static int mb_outputs(Inst *c)
 {
     int i;
     if (mb_refresh(c)) return -1;
+#if SELECT
+    if (!c->cs && c->x_dirty && mb_full_speeds(c)) return -1;
+#endif
     c->d[0] = c->alpha;
     c->d[1] = c->beta;
     if (mbcomp_outputs(c->y, c->y + NQ, c->t, c->d, c->h2, c->p, c->w2, c->row)) {
@@ -246,6 +288,29 @@ static int mb_get(Inst *c, unsigned vr, double *v, int *have)
         return 0;
     }
     if (vr < VR_X) { *v = c->p[vr]; return 0; }
+#if SELECT
+    if (!c->cs) {
+        if (vr < VR_DX) { *v = c->x[vr - VR_X]; return 0; }
+        if (vr < NVR) {
+            if (!(*have & 1)) {
+                double tmp[NXS + 1];
+                if (mb_get_dx(c, tmp, NXS)) return -1;
+                *have |= 1;
+            }
+            *v = c->dx[vr - VR_DX];
+            return 0;
+        }
+    } else if (vr < NVR) {  /* Co-Simulation integrates [q, u]: the states x read from it */
+        int k = (int)(vr < VR_DX ? vr - VR_X : vr - VR_DX);
+        if (vr >= VR_DX && !(*have & 1)) {
+            if (mb_derivatives(c)) return -1;
+            *have |= 1;
+        }
+        if (k < NQ) { *v = vr < VR_DX ? c->y[k] : c->dy[k]; return 0; }
+        *v = vr < VR_DX ? c->y[NQ + c->ind[k - NQ]] : c->dy[NQ + c->ind[k - NQ]];
+        return 0;
+    }
+#else
     if (vr < VR_DX) { *v = c->y[vr - VR_X]; return 0; }
     if (vr < NVR) {
         if (!(*have & 1)) {
@@ -255,6 +320,7 @@ static int mb_get(Inst *c, unsigned vr, double *v, int *have)
         *v = c->dy[vr - VR_DX];
         return 0;
     }
+#endif
     if (vr == VR_TIME) { *v = c->t; return 0; }
     if (vr >= VR_IN && vr < VR_IN + NIN) { *v = c->d[2 + (vr - VR_IN)]; return 0; }
     say(c, 1, "no variable has the value reference %u", vr);
@@ -272,7 +338,21 @@ static int mb_set(Inst *c, unsigned vr, double v)
         c->dirty = 1;
         return 0;
     }
+#if SELECT
+    if (vr < VR_DX) {
+        int k = (int)(vr - VR_X);
+        if (c->cs) {
+            if (k < NQ) c->y[k] = v;
+            else c->y[NQ + c->ind[k - NQ]] = v;
+        } else {
+            c->x[k] = v;
+            c->x_dirty = 1;
+        }
+        return 0;
+    }
+#else
     if (vr < VR_DX) { c->y[vr - VR_X] = v; return 0; }
+#endif
     if (vr >= VR_IN && vr < VR_IN + NIN) {
         if (!isfinite(v)) { say(c, 1, "input %u set to a non-finite value", vr - VR_IN); return -1; }
         c->d[2 + (vr - VR_IN)] = v;
@@ -280,4 +360,215 @@ static int mb_set(Inst *c, unsigned vr, double v)
     }
     say(c, 1, "the variable with value reference %u cannot be set", vr);
     return -1;
+}
+
+/* --- Model Exchange states ------------------------------------------------------------------
+ * Without SELECT the states are y = [q, u]. With SELECT (a model with constraints) they are
+ * x = [q, v], v = u[ind] the independent speeds of a partition (D'Alembert's projection of the
+ * dynamics, mbrt_dalembert_rhs); the dependent speeds follow from A u = 0; the partition is
+ * chosen again, and [q, u] projected onto the constraints, in Event Mode when the dependent
+ * block degrades (|A_d^-1 A_i| above GROWTH_MAX) or the positions drift (|Phi| above DRIFT). */
+#if SELECT
+/* A = [C[rows]; B] and [dPhi/dt[rows]; Psi] at (q, u) = c->y into c->a and c->rhs_d (evaluates) */
+static int mb_rows(Inst *c)
+{
+    int r, j;
+    if (mb_refresh(c)) return -1;
+    if (mbcomp_eval(c->y, c->y + NQ, c->t, c->d, c->h3, c->p, c->w3, c->ev)) {
+        say(c, 1, "the evaluation failed a guard at t=%g (a singular position, or a law's other branch)", c->t);
+        return -1;
+    }
+    for (r = 0; r < NROWS; r++) {
+        for (j = 0; j < NU; j++) c->a[r * NU + j] = c->ev[OFF_C + MECH_ROWS[r] * NU + j];
+        c->rhs_d[r] = c->ev[OFF_PHID + MECH_ROWS[r]];
+    }
+    for (r = 0; r < MN; r++) {
+        for (j = 0; j < NU; j++) c->a[(NROWS + r) * NU + j] = c->ev[OFF_B + r * NU + j];
+        c->rhs_d[NROWS + r] = c->ev[OFF_PSI + r];
+    }
+    return 0;
+}
+
+/* c->y = [q, u] from the states c->x: u[ind] = v, u[dep] solving A u = 0 */
+static int mb_full_speeds(Inst *c)
+{
+    double *u = c->y + NQ;
+    int i, j, k, rc;
+    memcpy(c->y, c->x, sizeof(double) * NQ);
+    for (i = 0; i < NU; i++) u[i] = 0.0;
+    for (k = 0; k < NI; k++) u[c->ind[k]] = c->x[NQ + k];
+    if (mb_rows(c)) return -1;
+    for (i = 0; i < MM; i++)
+        for (j = 0; j < MM; j++) c->ad[i * MM + j] = c->a[i * NU + c->dep[j]];
+    rc = mbrt_lu_factor(MM, c->ad, c->piv);
+    if (rc) {
+        say(c, 1, "the dependent speeds' block is singular at t=%g (a singular position)", c->t);
+        return -1;
+    }
+    mbrt_lu_solve(MM, c->ad, c->piv, c->rhs_d);
+    for (j = 0; j < MM; j++) u[c->dep[j]] = -c->rhs_d[j];
+    c->x_dirty = 0;
+    return 0;
+}
+
+/* the partition dep/ind at c->y: MM columns of A by Gaussian elimination with complete
+   pivoting (the best-conditioned choice it finds), the others independent, in order */
+static int mb_choose(Inst *c)
+{
+    int k, i, j, r, best_i, best_j, used[NU + 1];
+    double best, f;
+    if (mb_rows(c)) return -1;
+    memset(used, 0, sizeof used);
+    for (k = 0; k < MM; k++) {
+        best = 0.0; best_i = best_j = -1;
+        for (i = k; i < MM; i++)
+            for (j = 0; j < NU; j++)
+                if (!used[j] && fabs(c->a[i * NU + j]) > best) { best = fabs(c->a[i * NU + j]); best_i = i; best_j = j; }
+        if (best_i < 0 || !(best > 0.0)) {
+            say(c, 1, "the constraint rows have lost rank at t=%g: no set of dependent speeds exists", c->t);
+            return -1;
+        }
+        for (j = 0; j < NU; j++) { f = c->a[k * NU + j]; c->a[k * NU + j] = c->a[best_i * NU + j]; c->a[best_i * NU + j] = f; }
+        for (r = k + 1; r < MM; r++) {
+            f = c->a[r * NU + best_j] / c->a[k * NU + best_j];
+            for (j = 0; j < NU; j++) c->a[r * NU + j] -= f * c->a[k * NU + j];
+        }
+        used[best_j] = 1;
+        c->dep[k] = best_j;
+    }
+    for (j = 0, k = 0; j < NU; j++)
+        if (!used[j]) c->ind[k++] = j;
+    return 0;
+}
+
+/* c->x from c->y in the current partition */
+static void mb_x_of_y(Inst *c)
+{
+    int k;
+    memcpy(c->x, c->y, sizeof(double) * NQ);
+    for (k = 0; k < NI; k++) c->x[NQ + k] = c->y[NQ + c->ind[k]];
+}
+#endif
+
+/* entering the run after initialization: the states in their first partition */
+static int mb_start_states(Inst *c)
+{
+#if SELECT
+    if (!c->cs) {
+        if (mb_choose(c)) return -1;
+        mb_x_of_y(c);
+        c->event_due = 0;
+    }
+#else
+    (void)c;
+#endif
+    return 0;
+}
+
+static int mb_set_x(Inst *c, const double *x, size_t n)
+{
+    if (n != NXS || !x) { say(c, 1, "%zu continuous states given, %d expected", n, NXS); return -1; }
+#if SELECT
+    memcpy(c->x, x, sizeof(double) * NXS);
+    c->x_dirty = 1;
+#else
+    memcpy(c->y, x, sizeof(double) * NX);
+#endif
+    return 0;
+}
+
+static int mb_get_x(Inst *c, double *x, size_t n)
+{
+    if (n != NXS || !x) { say(c, 1, "%zu continuous states asked for, %d exist", n, NXS); return -1; }
+#if SELECT
+    memcpy(x, c->x, sizeof(double) * NXS);
+#else
+    memcpy(x, c->y, sizeof(double) * NX);
+#endif
+    return 0;
+}
+
+static int mb_get_dx(Inst *c, double *dx, size_t n)
+{
+    if (n != NXS || !dx) { say(c, 1, "%zu derivatives asked for, %d states exist", n, NXS); return -1; }
+#if SELECT
+    {
+        double cond = 1.0;
+        int rc;
+        if (mb_refresh(c)) return -1;
+        rc = mbrt_dalembert_rhs(&c->mech, c->t, c->x, c->dep, c->ind, MM, c->dx, &c->growth, &cond, c->mwork, c->iwork);
+        if (rc != MBRT_MECH_OK) {
+            say(c, 1, "the right-hand side failed at t=%g (status %d: a singular position or partition)", c->t, rc);
+            return -1;
+        }
+        memcpy(dx, c->dx, sizeof(double) * NXS);
+    }
+#else
+    if (mb_derivatives(c)) return -1;
+    memcpy(dx, c->dy, sizeof(double) * NX);
+#endif
+    return 0;
+}
+
+static int mb_nominals(Inst *c, double *x, size_t n)
+{
+    if (n != NXS || !x) return -1;
+#if SELECT
+    {
+        int k;
+        memcpy(x, NOMINAL, sizeof(double) * NQ);
+        for (k = 0; k < NI; k++) x[NQ + k] = NOMINAL[NQ + c->ind[k]];
+    }
+#else
+    (void)c;
+    memcpy(x, NOMINAL, sizeof(double) * NX);
+#endif
+    return 0;
+}
+
+/* after an accepted integrator step: whether Event Mode is needed (partition, drift) */
+static int mb_completed(Inst *c, int *event)
+{
+    *event = 0;
+#if SELECT
+    {
+        int r;
+        double drift = 0.0;
+        if (mb_full_speeds(c)) return -1;
+        for (r = 0; r < NROWS; r++) drift = fmax(drift, fabs(c->ev[OFF_PHI + MECH_ROWS[r]]));
+        c->event_due = c->growth > GROWTH_MAX || drift > fmax(DRIFT, DRIFT_RTOL * c->rtol);
+        *event = c->event_due;
+    }
+#else
+    (void)c;
+#endif
+    return 0;
+}
+
+/* in Event Mode: project and choose the partition again if due; *changed: the states moved */
+static int mb_update(Inst *c, int *changed)
+{
+    *changed = 0;
+#if SELECT
+    if (c->event_due) {
+        double norm = 0.0;
+        int old[MM + 1], k, same = 1, rc;
+        if (mb_full_speeds(c)) return -1;
+        rc = mbrt_project(&c->mech, c->t, c->y, PROJ_TOL, PROJ_ITER, PROJ_ACCEPT, &norm, c->mwork);
+        if (rc != MBRT_MECH_OK) {
+            say(c, 1, "the projection onto the constraints failed at t=%g (status %d, |Phi| = %g)", c->t, rc, norm);
+            return -1;
+        }
+        memcpy(old, c->dep, sizeof(int) * MM);
+        if (mb_choose(c)) return -1;
+        for (k = 0; k < MM; k++) same &= old[k] == c->dep[k];
+        c->repartitions += !same;
+        mb_x_of_y(c);
+        c->event_due = 0;
+        *changed = 1;
+    }
+#else
+    (void)c;
+#endif
+    return 0;
 }
