@@ -405,3 +405,27 @@ def test_model_exchange_states_are_dalemberts_with_events_that_project(fmi, tmp_
     tight = fmpy.simulate_fmu(str(path), fmi_type="ModelExchange", stop_time=1.0, relative_tolerance=1e-12,
                               output=["crank_joint.phi"], output_interval=0.005)
     assert max_diff(tight, ref, "crank_joint.phi") < 1e-7
+
+
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_start_values_are_parameters(fmi, tmp_path):
+    """``start.<coordinate>``/``start.<speed>`` parameters set the start state: an open tree
+    starts exactly there; a loop's start is projected onto its constraints at initialization."""
+    path = tmp_path / "p.fmu"
+    export_fmu(pendulum(), path, fmi=fmi)
+    r = run_me(path, 2.0, ["j.phi"], fmi_type="CoSimulation", start_values={"start.j.phi": 1.0, "start.j.w": -0.5})
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("j", Revolute(phi0=1.0, w0=-0.5))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=2.0))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    assert max_diff(r, mbcomp.simulate(m, t_end=2.0, n_out=101, rtol=1e-11, atol=1e-13), "j.phi") < 1e-7
+    crank = tmp_path / "crank.fmu"
+    export_fmu(load_model("models/slider_crank.py").build(), crank, fmi=fmi)
+    for fmi_type in ("CoSimulation", "ModelExchange"):
+        r = run_me(crank, 0.5, ["crank_joint.phi", "residual.position"], fmi_type=fmi_type,
+                   start_values={"start.crank_joint.phi": 1.0})
+        assert abs(r["residual.position"][0]) < 1e-10 and abs(r["crank_joint.phi"][0] - 1.0) < 0.3

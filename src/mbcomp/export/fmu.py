@@ -31,6 +31,9 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
   speeds, the partition chosen again (and [q, u] projected) in Event Mode when it degrades or
   the positions drift (see docs/architecture.md, "FMU export").
 
+* the start values of every coordinate and speed as parameters ``start.<name>``, projected
+  onto the constraints at initialization when changed.
+
 Not yet: units of the outputs; FMU states and directional derivatives.
 
 Examples
@@ -192,7 +195,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
             out_prog.variables = _chosen(out_prog.variables, patterns)
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
-                   experiment=(float(stop_time), float(tolerance)), state_units=state_units)
+                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0)
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
@@ -465,6 +468,37 @@ def _units(system, layout, state_units):
     return par, sta, der, defs
 
 
+def _start_names(system):
+    """The start-value parameters' names and unit texts: ``start.<coordinate or speed>``."""
+    names = list(system.q_names) + list(system.u_names)
+    units = list(system.topology.q_units) + list(system.topology.u_units)
+    return [f"start.{n}" for n in names], units
+
+
+def _start_unit(text, defs):
+    exps = unit_exponents(text)
+    if exps is None:
+        return None
+    name = unit_name(exps)
+    defs[name] = exps
+    return name
+
+
+def _start_rows3(system, starts, vr0, unit, defs):
+    names, units = _start_names(system)
+    return [f'    <Float64 name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" variability="fixed" '
+            f'start="{float(v)!r}" description="start value (projected onto the constraints at initialization)"'
+            f'{unit(_start_unit(u, defs))}/>' for k, (n, u, v) in enumerate(zip(names, units, starts))]
+
+
+def _start_rows2(system, starts, vr0, unit, defs):
+    names, units = _start_names(system)
+    return [f'    <ScalarVariable name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" '
+            f'variability="fixed" initial="exact" description="start value (projected onto the constraints at '
+            f'initialization)"><Real start="{float(v)!r}"{unit(_start_unit(u, defs))}/></ScalarVariable>'
+            for k, (n, u, v) in enumerate(zip(names, units, starts))]
+
+
 def _input_unit(inp, defs):
     """The unit name of an :class:`~mbcomp.modeling.inputs.Input` (None if unknown), added to
     the unit definitions ``defs``."""
@@ -504,7 +538,7 @@ def _build_description(ident):
 
 
 def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                        experiment=(1.0, 1e-12), state_units=()):
+                        experiment=(1.0, 1e-12), state_units=(), starts=()):
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, state_units)
     defs["s"] = {"s": 1}
@@ -533,6 +567,7 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
         rows.append(f'    <Float64 name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" causality="input" '
                     f'variability="continuous" start="{inp.start!r}" description="{escape(inp.description)}"'
                     f'{unit(uname)}/>')
+    rows += _start_rows3(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs)
     der = [npar + nx + k for k in range(nx)]
     outs = [vr_out + k for _, k in outputs]
     interfaces = ""
@@ -560,7 +595,7 @@ def _interface(tag, ident):
 
 
 def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                       experiment=(1.0, 1e-12), state_units=()):
+                       experiment=(1.0, 1e-12), state_units=(), starts=()):
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, state_units)
 
@@ -591,6 +626,7 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
         rows.append(f'    <ScalarVariable name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" '
                     f'causality="input" variability="continuous" description="{escape(inp.description)}">'
                     f'<Real start="{inp.start!r}"{unit(uname)}/></ScalarVariable>')
+    rows += _start_rows2(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs)
     der = [npar + nx + k + 1 for k in range(nx)]
     outs = [npar + 2 * nx + j + 1 for j in range(len(outputs))]  # 1-based indices among the variables
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in sorted(outs + der))

@@ -45,6 +45,7 @@
 #define NOV (NCOL + 4 * NROT)
 #define NROW (NCOL + 9 * NROT)
 #define VR_IN (VR_OUT + NOV)
+#define VR_START (VR_IN + NIN) /* the start values of [q, u]: parameters */
 
 enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_STEP, M_TERMINATED, M_ERROR };
 
@@ -67,6 +68,8 @@ struct Inst {
     double *mwork; /* mbrt_mech_work_size doubles */
     int projections;
 #endif
+    double y0[NX + 1]; /* the start values (parameters) */
+    int starts_changed;
     double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
 #if SELECT
     double x[NXS + 1], dx[NXS + 1], growth;
@@ -96,6 +99,8 @@ static void mb_reset(Inst *c)
 {
     memcpy(c->p, P0, sizeof(double) * (NP > 0 ? NP : 0));
     memcpy(c->y, Y0, sizeof(double) * NX);
+    memcpy(c->y0, Y0, sizeof(double) * NX);
+    c->starts_changed = 0;
     memcpy(c->d + 2, IN0, sizeof(double) * (NIN > 0 ? NIN : 0));
 #if SELECT
     {
@@ -322,6 +327,7 @@ static int mb_get(Inst *c, unsigned vr, double *v, int *have)
     }
 #endif
     if (vr == VR_TIME) { *v = c->t; return 0; }
+    if (vr >= VR_START && vr < VR_START + NX) { *v = c->y0[vr - VR_START]; return 0; }
     if (vr >= VR_IN && vr < VR_IN + NIN) { *v = c->d[2 + (vr - VR_IN)]; return 0; }
     say(c, 1, "no variable has the value reference %u", vr);
     return -1;
@@ -353,6 +359,16 @@ static int mb_set(Inst *c, unsigned vr, double v)
 #else
     if (vr < VR_DX) { c->y[vr - VR_X] = v; return 0; }
 #endif
+    if (vr >= VR_START && vr < VR_START + NX) {
+        if (c->mode != M_INSTANTIATED && c->mode != M_INIT) {
+            say(c, 1, "start values are fixed after initialization");
+            return -1;
+        }
+        if (!isfinite(v)) { say(c, 1, "start value %u set to a non-finite value", vr - VR_START); return -1; }
+        c->y0[vr - VR_START] = v;
+        c->starts_changed = 1;
+        return 0;
+    }
     if (vr >= VR_IN && vr < VR_IN + NIN) {
         if (!isfinite(v)) { say(c, 1, "input %u set to a non-finite value", vr - VR_IN); return -1; }
         c->d[2 + (vr - VR_IN)] = v;
@@ -453,6 +469,21 @@ static void mb_x_of_y(Inst *c)
 /* entering the run after initialization: the states in their first partition */
 static int mb_start_states(Inst *c)
 {
+    if (c->starts_changed) {  /* new start values: the state from them, onto the constraints */
+        memcpy(c->y, c->y0, sizeof(double) * NX);
+#if MECH
+        {
+            double norm = 0.0;
+            int rc = mbrt_project(&c->mech, c->t, c->y, PROJ_TOL, 60, PROJ_ACCEPT, &norm, c->mwork);
+            if (rc != MBRT_MECH_OK) {
+                say(c, 1, "the start values cannot be closed onto the constraints (status %d, |Phi| = %g): "
+                    "give start values near a position of the mechanism", rc, norm);
+                return -1;
+            }
+        }
+#endif
+        c->starts_changed = 0;
+    }
 #if SELECT
     if (!c->cs) {
         if (mb_choose(c)) return -1;
