@@ -227,7 +227,7 @@ def test_chosen_outputs_only(tmp_path):
 def test_units_with_si_base_exponents(fmi, tmp_path):
     from fmpy import read_model_description
 
-    from mbcomp.export.fmu import unit_exponents
+    from mbcomp.export.description import unit_exponents
 
     export_fmu(load_model("models/slider_crank.py").build(), tmp_path / "c.fmu", fmi=fmi)
     md = read_model_description(str(tmp_path / "c.fmu"))
@@ -429,3 +429,16 @@ def test_start_values_are_parameters(fmi, tmp_path):
         r = run_me(crank, 0.5, ["crank_joint.phi", "residual.position"], fmi_type=fmi_type,
                    start_values={"start.crank_joint.phi": 1.0})
         assert abs(r["residual.position"][0]) < 1e-10 and abs(r["crank_joint.phi"][0] - 1.0) < 0.3
+
+
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_outputs_carry_their_declared_units(fmi, tmp_path):
+    from fmpy import read_model_description
+
+    export_fmu(load_model("models/slider_crank.py").build(), tmp_path / "c.fmu", fmi=fmi)
+    md = read_model_description(str(tmp_path / "c.fmu"))
+    unit = {v.name: v.unit for v in md.modelVariables if v.causality == "output"}
+    assert unit["rod_joint.f.x"] == "kg.m/s2" and unit["rod_joint.tau.z"] == "kg.m2/s2"  # N, N m
+    assert unit["crank.r.x"] == "m" and unit["crank.w.z"] == "rad/s" and unit["energy.total"] == "kg.m2/s2"
+    assert unit["crank_joint.w"] == "rad/s" and unit["crank_joint.w.der"] == "rad/s2"
+    assert unit["residual.position"] is None  # mixed metres and radians: no unit

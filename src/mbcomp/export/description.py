@@ -1,0 +1,335 @@
+"""The FMU's model description: variables, units, model structure, build description.
+
+What :func:`mbcomp.export.fmu.export_fmu` writes into ``modelDescription.xml`` (FMI 3.0 and
+2.0) and FMI 3.0's ``buildDescription.xml``: parameters with mbcomp's names, units with SI
+base-unit exponents parsed from mbcomp's unit strings (:func:`unit_exponents`), the states
+and their derivatives, the outputs (units declared where the columns are made:
+:func:`_column_units`), the inputs and the start values.
+
+Examples
+--------
+>>> unit_exponents("N m"), unit_name(unit_exponents("N m"))
+({'kg': 1, 'm': 2, 's': -2}, 'kg.m2/s2')
+"""
+from __future__ import annotations
+
+from xml.sax.saxutils import escape
+
+__all__ = ["unit_exponents", "unit_name"]
+
+RUNTIME_C = ("mbrt_rk.c", "mbrt_dop853.c", "mbrt_mech.c", "mbrt_linalg.c")
+
+
+def _version():
+    """mbcomp's installed version (the ``generationTool`` of the model description)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("mbcomp")
+    except PackageNotFoundError:
+        return "(not installed)"
+
+
+#: SI base-unit exponents (kg, m, s, A, K, mol, cd, rad) of the unit symbols mbcomp's
+#: parameters and coordinates use
+_BASE = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+
+
+_SYMBOLS = {"kg": {"kg": 1}, "m": {"m": 1}, "s": {"s": 1}, "rad": {"rad": 1}, "N": {"kg": 1, "m": 1, "s": -2},
+            "J": {"kg": 1, "m": 2, "s": -2}, "W": {"kg": 1, "m": 2, "s": -3}, "Pa": {"kg": 1, "m": -1, "s": -2},
+            "A": {"A": 1}, "K": {"K": 1}, "1": {}}
+
+
+def unit_exponents(text):
+    """The SI base-unit exponents of a unit as mbcomp writes it (``"N m s/rad"``,
+    ``"kg m^2"``, ``"m/s^2"``), or None when it is not one unit (``"m or rad"``) or a symbol
+    is unknown.
+
+    Examples
+    --------
+    >>> unit_exponents("N m s/rad")
+    {'kg': 1, 'm': 2, 's': -1, 'rad': -1}
+    >>> unit_exponents("m or rad") is None, unit_exponents("1")
+    (True, {})
+    """
+    if not text or " or " in text:
+        return None
+    num, _, den = text.partition("/")
+    exps = {}
+    for part, sign in ((num, 1), (den, -1)):
+        for tok in part.split():
+            sym, _, power = tok.partition("^")
+            if sym not in _SYMBOLS or (power and not power.lstrip("-").isdigit()):
+                return None
+            for base, e in _SYMBOLS[sym].items():
+                exps[base] = exps.get(base, 0) + sign * e * (int(power) if power else 1)
+    return {b: exps[b] for b in _BASE if exps.get(b)}
+
+
+def unit_name(exps):
+    """A unit name of the exponents in the FMI (Modelica) style: ``kg.m2/s2``; ``"1"`` for none."""
+    num = ".".join(b + (str(e) if e != 1 else "") for b, e in exps.items() if e > 0)
+    den = ".".join(b + (str(-e) if e != -1 else "") for b, e in exps.items() if e < 0)
+    return (num or "1") + (f"/{den}" if den else "")
+
+
+def _units(system, layout, state_units):
+    """``(parameter units, state units, derivative units, definitions)``: unit names (None
+    where unknown) and ``{name: exponents}`` of every unit used; ``state_units``: the states'
+    unit texts (None: unknown)."""
+    defs = {}
+
+    def named(exps):
+        if exps is None:
+            return None
+        name = unit_name(exps)
+        defs[name] = exps
+        return name
+
+    par = [named(unit_exponents(_param_doc(system, path, pname)[0])) for path, pname, _ in layout]
+    texts = list(state_units)
+    sta = [named(unit_exponents(u)) for u in texts]
+    der = []
+    for u in texts:
+        e = unit_exponents(u)
+        if e is not None:
+            e = dict(e)
+            e["s"] = e.get("s", 0) - 1
+            e = {b: e[b] for b in _BASE if e.get(b)}
+        der.append(named(e))
+    return par, sta, der, defs
+
+
+def _column_units(system):
+    """``{column name: SI exponents}`` of the result columns whose unit is declared where they
+    are made: coordinates and speeds (the joints' declared units; a speed's rate per second),
+    reactions (N, N m), drive efforts (by the joint's declared axis kind), body positions,
+    velocities and angular velocities, energies. Mixed columns (residuals, multipliers,
+    joints' own outputs) have none."""
+    topo, out = system.topology, {}
+
+    def put(name, text, per_second=False):
+        e = unit_exponents(text)
+        if e is None:
+            return
+        if per_second:
+            e = dict(e)
+            e["s"] = e.get("s", 0) - 1
+            e = {b: e[b] for b in _BASE if e.get(b)}
+        out[name] = e
+
+    for name, u in zip(system.q_names, topo.q_units):
+        put(name, u)
+    for name, u in zip(system.u_names, topo.u_units):
+        put(name, u)
+        put(f"{name}.der", u, per_second=True)
+    for e in topo.edges:
+        if e.kind == "joint" and e.dof == 1 and e.q.stop == e.q.start and e.comp.coordinates:
+            (cn, cu), (sn, su) = e.comp.coordinates[0], e.comp.speeds[0]
+            put(f"{e.name}.{cn}", cu)
+            put(f"{e.name}.{sn}", su)
+        for ax in "xyz":
+            put(f"{e.name}.f.{ax}", "N")
+            put(f"{e.name}.tau.{ax}", "N m")
+        if e.drive:
+            put(f"{e.drive}.tau" if e.comp.axis_kind == "rotational" else f"{e.drive}.f",
+                "N m" if e.comp.axis_kind == "rotational" else "N")
+    for path, _comp, _node in topo.bodies:
+        for ax in "xyz":
+            put(f"{path}.r.{ax}", "m")
+            put(f"{path}.v.{ax}", "m/s")
+            put(f"{path}.w.{ax}", "rad/s")
+        for c in "wxyz":
+            put(f"{path}.Q.{c}", "1")
+    for k in ("kinetic", "potential", "total"):
+        put(f"energy.{k}", "J")
+    return out
+
+
+def _output_unit(units, name, defs):
+    """The unit name of the output ``name`` from ``units`` (:func:`_column_units`; None if it
+    has none), added to the unit definitions ``defs``."""
+    exps = units.get(name)
+    if exps is None:
+        return None
+    uname = unit_name(exps)
+    defs[uname] = exps
+    return uname
+
+
+def _start_names(system):
+    """The start-value parameters' names and unit texts: ``start.<coordinate or speed>``."""
+    names = list(system.q_names) + list(system.u_names)
+    units = list(system.topology.q_units) + list(system.topology.u_units)
+    return [f"start.{n}" for n in names], units
+
+
+def _start_unit(text, defs):
+    exps = unit_exponents(text)
+    if exps is None:
+        return None
+    name = unit_name(exps)
+    defs[name] = exps
+    return name
+
+
+def _start_rows3(system, starts, vr0, unit, defs):
+    names, units = _start_names(system)
+    return [f'    <Float64 name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" variability="fixed" '
+            f'start="{float(v)!r}" description="start value (projected onto the constraints at initialization)"'
+            f'{unit(_start_unit(u, defs))}/>' for k, (n, u, v) in enumerate(zip(names, units, starts))]
+
+
+def _start_rows2(system, starts, vr0, unit, defs):
+    names, units = _start_names(system)
+    return [f'    <ScalarVariable name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" '
+            f'variability="fixed" initial="exact" description="start value (projected onto the constraints at '
+            f'initialization)"><Real start="{float(v)!r}"{unit(_start_unit(u, defs))}/></ScalarVariable>'
+            for k, (n, u, v) in enumerate(zip(names, units, starts))]
+
+
+def _input_unit(inp, defs):
+    """The unit name of an :class:`~mbcomp.modeling.inputs.Input` (None if unknown), added to
+    the unit definitions ``defs``."""
+    exps = unit_exponents(inp.unit)
+    if exps is None:
+        return None
+    name = unit_name(exps)
+    defs[name] = exps
+    return name
+
+
+def _experiment(experiment):
+    stop, tol = experiment
+    return f'  <DefaultExperiment startTime="0.0" stopTime="{stop!r}" tolerance="{tol!r}"/>\n'
+
+
+def _unit_definitions(defs):
+    rows = []
+    for name, exps in sorted(defs.items()):
+        attrs = " ".join(f'{b}="{e}"' for b, e in exps.items())
+        rows.append(f'    <Unit name="{escape(name)}"><BaseUnit {attrs}/></Unit>' if attrs else
+                    f'    <Unit name="{escape(name)}"/>')
+    return "  <UnitDefinitions>\n" + "\n".join(rows) + "\n  </UnitDefinitions>\n" if rows else ""
+
+
+def _param_doc(system, path, name):
+    comp = system.topology.flat.components[path]
+    par = comp.params()[name]
+    return par.unit, par.doc
+
+
+def _build_description(ident):
+    files = "".join(f'      <SourceFile name="{f}"/>\n' for f in (f"{ident}.c",) + RUNTIME_C)
+    return (f'<?xml version="1.0" encoding="UTF-8"?>\n<fmiBuildDescription fmiVersion="3.0">\n'
+            f'  <BuildConfiguration modelIdentifier="{ident}">\n    <SourceFileSet language="C99">\n{files}'
+            f'    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n')
+
+
+def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
+                        experiment=(1.0, 1e-12), state_units=(), starts=()):
+    nx, npar = len(states), len(pv)
+    upar, usta, uder, defs = _units(system, layout, state_units)
+    defs["s"] = {"s": 1}
+
+    def unit(u):
+        return f' unit="{escape(u)}"' if u else ""
+
+    rows = [f'    <Float64 name="time" valueReference="{npar + 2 * nx}" causality="independent" '
+            f'variability="continuous" description="time" unit="s"/>']
+    for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
+        text, doc = _param_doc(system, path, pname)
+        rows.append(f'    <Float64 name="{escape(full)}" valueReference="{k}" causality="parameter" variability="fixed" '
+                    f'start="{pv[k]!r}" description="{escape(doc or "")} [{escape(text or "")}]"{unit(upar[k])}/>')
+    for k, s in enumerate(states):
+        rows.append(f'    <Float64 name="{escape(s)}" valueReference="{npar + k}" causality="local" '
+                    f'variability="continuous" initial="exact" start="{float(y0[k])!r}"{unit(usta[k])}/>')
+    for k, s in enumerate(states):
+        rows.append(f'    <Float64 name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
+                    f'variability="continuous" initial="calculated" derivative="{npar + k}"{unit(uder[k])}/>')
+    vr_out = npar + 2 * nx + 1
+    ounits = _column_units(system)
+    for oname, k in outputs:
+        rows.append(f'    <Float64 name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
+                    f'variability="continuous" initial="calculated"{unit(_output_unit(ounits, oname, defs))}/>')
+    for k, inp in enumerate(inputs[0]):
+        uname = _input_unit(inp, defs)
+        rows.append(f'    <Float64 name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" causality="input" '
+                    f'variability="continuous" start="{inp.start!r}" description="{escape(inp.description)}"'
+                    f'{unit(uname)}/>')
+    rows += _start_rows3(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs)
+    der = [npar + nx + k for k in range(nx)]
+    outs = [vr_out + k for _, k in outputs]
+    interfaces = ""
+    if kind in ("me", "both"):
+        interfaces += f'  <ModelExchange modelIdentifier="{ident}" needsCompletedIntegratorStep="true"/>\n'
+    if kind in ("cs", "both"):
+        interfaces += (f'  <CoSimulation modelIdentifier="{ident}" canHandleVariableCommunicationStepSize="true" '
+                       f'hasEventMode="false"/>\n')
+    return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
+            f'<fmiModelDescription fmiVersion="3.0" modelName="{escape(name)}" instantiationToken="{guid}" '
+            f'generationTool="mbcomp {_version()}" variableNamingConvention="structured">\n'
+            + interfaces + _unit_definitions(defs) + _experiment(experiment)
+            + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
+            + "".join(f'    <Output valueReference="{v}"/>\n' for v in outs)
+            + "".join(f'    <ContinuousStateDerivative valueReference="{v}"/>\n' for v in der)
+            + "".join(f'    <InitialUnknown valueReference="{v}"/>\n' for v in outs + der)
+            + '  </ModelStructure>\n</fmiModelDescription>\n')
+
+
+def _interface(tag, ident):
+    files = "".join(f'      <File name="{f}"/>\n' for f in (f"{ident}.c",) + RUNTIME_C)
+    extra = ' canHandleVariableCommunicationStepSize="true"' if tag == "CoSimulation" else ""
+    return (f'  <{tag} modelIdentifier="{ident}" canNotUseMemoryManagementFunctions="true"{extra}>\n'
+            f'    <SourceFiles>\n{files}    </SourceFiles>\n  </{tag}>\n')
+
+
+def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
+                       experiment=(1.0, 1e-12), state_units=(), starts=()):
+    nx, npar = len(states), len(pv)
+    upar, usta, uder, defs = _units(system, layout, state_units)
+
+    def unit(u):
+        return f' unit="{escape(u)}"' if u else ""
+
+    rows = []
+    for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
+        text, doc = _param_doc(system, path, pname)
+        rows.append(f'    <ScalarVariable name="{escape(full)}" valueReference="{k}" causality="parameter" '
+                    f'variability="fixed" initial="exact" description="{escape(doc or "")} [{escape(text or "")}]">'
+                    f'<Real start="{pv[k]!r}"{unit(upar[k])}/></ScalarVariable>')
+    for k, s in enumerate(states):
+        rows.append(f'    <ScalarVariable name="{escape(s)}" valueReference="{npar + k}" causality="local" '
+                    f'variability="continuous" initial="exact"><Real start="{float(y0[k])!r}"{unit(usta[k])}/>'
+                    f'</ScalarVariable>')
+    first_state = npar + 1  # 1-based index of the first state among the variables
+    for k, s in enumerate(states):
+        rows.append(f'    <ScalarVariable name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
+                    f'variability="continuous" initial="calculated"><Real derivative="{first_state + k}"{unit(uder[k])}/>'
+                    f'</ScalarVariable>')
+    vr_out = npar + 2 * nx + 1  # the time's reference (NP + 2 NX) is not a variable in 2.0
+    ounits = _column_units(system)
+    for oname, k in outputs:
+        rows.append(f'    <ScalarVariable name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
+                    f'variability="continuous" initial="calculated"><Real{unit(_output_unit(ounits, oname, defs))}/>'
+                    f'</ScalarVariable>')
+    for k, inp in enumerate(inputs[0]):
+        uname = _input_unit(inp, defs)
+        rows.append(f'    <ScalarVariable name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" '
+                    f'causality="input" variability="continuous" description="{escape(inp.description)}">'
+                    f'<Real start="{inp.start!r}"{unit(uname)}/></ScalarVariable>')
+    rows += _start_rows2(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs)
+    der = [npar + nx + k + 1 for k in range(nx)]
+    outs = [npar + 2 * nx + j + 1 for j in range(len(outputs))]  # 1-based indices among the variables
+    unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in sorted(outs + der))
+    out_list = "".join(f'      <Unknown index="{i}"/>\n' for i in outs)
+    return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
+            f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
+            f'generationTool="mbcomp {_version()}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
+            + "".join(_interface(tag, ident) for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
+                      if kind in (k, "both")) + _unit_definitions(defs) + _experiment(experiment)
+            + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
+            + '  <ModelStructure>\n' + (f'    <Outputs>\n{out_list}    </Outputs>\n' if outs else '')
+            + '    <Derivatives>\n' + "\n".join(f'      <Unknown index="{i}"/>' for i in der) + '\n    </Derivatives>\n'
+            f'    <InitialUnknowns>\n{unknowns}\n    </InitialUnknowns>\n  </ModelStructure>\n'
+            f'</fmiModelDescription>\n')
