@@ -442,3 +442,16 @@ def test_outputs_carry_their_declared_units(fmi, tmp_path):
     assert unit["crank.r.x"] == "m" and unit["crank.w.z"] == "rad/s" and unit["energy.total"] == "kg.m2/s2"
     assert unit["crank_joint.w"] == "rad/s" and unit["crank_joint.w.der"] == "rad/s2"
     assert unit["residual.position"] is None  # mixed metres and radians: no unit
+
+
+def test_the_co_simulation_tolerance_is_a_parameter(tmp_path):
+    """``solver.tolerance`` sets the FMU's DOP853 tolerance (and wins over the experiment's)."""
+    path = tmp_path / "c.fmu"
+    export_fmu(load_model("models/slider_crank.py").build(), path)
+    ref = mbcomp.simulate(load_model("models/slider_crank.py").build(), t_end=2.0, n_out=101, rtol=1e-12, atol=1e-14)
+    errs = []
+    for tol in (1e-4, 1e-10):
+        r = fmpy.simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=2.0, output=["crank_joint.phi"],
+                              output_interval=0.02, start_values={"solver.tolerance": tol})
+        errs.append(max_diff(r, ref, "crank_joint.phi"))
+    assert errs[0] > 100 * errs[1] and errs[1] < 1e-7

@@ -36,6 +36,7 @@ def cmd_export(args):
     print(f"parameters ({len(info['parameters'])}): {', '.join(info['parameters'])}")
     shown = ", ".join(info["outputs"][:12]) + (", ..." if len(info["outputs"]) > 12 else "")
     print(f"outputs ({len(info['outputs'])}): {shown or 'none'}")
+    print(f"inputs ({len(info['inputs'])}): {', '.join(info['inputs']) or 'none'}")
     print(f"default experiment: 0 .. {stop:g} s at tolerance {args.tolerance:g}")
     print(f"program: {info['operations']} operations, built with {info['compiler']} "
           f"(binaries/{'x86_64-linux' if args.fmi == '3.0' else 'linux64'}/{info['model_identifier']}.so)")

@@ -173,16 +173,23 @@ def _start_unit(text, defs):
     return name
 
 
+_TOL_DOC = "relative tolerance of the Co-Simulation integrator (DOP853; wins over the experiment's when set)"
+
+
 def _start_rows3(system, starts, vr0, unit, defs):
     names, units = _start_names(system)
-    return [f'    <Float64 name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" variability="fixed" '
+    tol = (f'    <Float64 name="solver.tolerance" valueReference="{vr0 + len(names)}" causality="parameter" '
+           f'variability="fixed" start="1e-08" description="{_TOL_DOC}"/>')
+    return [tol] + [f'    <Float64 name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" variability="fixed" '
             f'start="{float(v)!r}" description="start value (projected onto the constraints at initialization)"'
             f'{unit(_start_unit(u, defs))}/>' for k, (n, u, v) in enumerate(zip(names, units, starts))]
 
 
 def _start_rows2(system, starts, vr0, unit, defs):
     names, units = _start_names(system)
-    return [f'    <ScalarVariable name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" '
+    tol = (f'    <ScalarVariable name="solver.tolerance" valueReference="{vr0 + len(names)}" causality="parameter" '
+           f'variability="fixed" initial="exact" description="{_TOL_DOC}"><Real start="1e-08"/></ScalarVariable>')
+    return [tol] + [f'    <ScalarVariable name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" '
             f'variability="fixed" initial="exact" description="start value (projected onto the constraints at '
             f'initialization)"><Real start="{float(v)!r}"{unit(_start_unit(u, defs))}/></ScalarVariable>'
             for k, (n, u, v) in enumerate(zip(names, units, starts))]

@@ -104,7 +104,7 @@ FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, 
             say((Inst *)c, 1, "fmi2SetupExperiment: tolerance %g is out of range (1e-14 .. 1)", tol);
             return fmi2Error;
         }
-        ((Inst *)c)->rtol = tol;
+        if (!((Inst *)c)->tol_set) ((Inst *)c)->rtol = tol;
     }
     return fmi2OK;
 }

@@ -143,7 +143,7 @@ FMI3_EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean t
             say(s, 1, "fmi3EnterInitializationMode: tolerance %g is out of range (1e-14 .. 1)", tol);
             return fmi3Error;
         }
-        s->rtol = tol;
+        if (!s->tol_set) s->rtol = tol;
     }
     s->mode = M_INIT;
     return fmi3OK;

@@ -46,6 +46,7 @@
 #define NROW (NCOL + 9 * NROT)
 #define VR_IN (VR_OUT + NOV)
 #define VR_START (VR_IN + NIN) /* the start values of [q, u]: parameters */
+#define VR_TOL (VR_START + NX)  /* the Co-Simulation integrator's relative tolerance: a parameter */
 
 enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_STEP, M_TERMINATED, M_ERROR };
 
@@ -69,7 +70,7 @@ struct Inst {
     int projections;
 #endif
     double y0[NX + 1]; /* the start values (parameters) */
-    int starts_changed;
+    int starts_changed, tol_set; /* tol_set: the tolerance parameter was set (it wins over the experiment's) */
     double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
 #if SELECT
     double x[NXS + 1], dx[NXS + 1], growth;
@@ -101,6 +102,7 @@ static void mb_reset(Inst *c)
     memcpy(c->y, Y0, sizeof(double) * NX);
     memcpy(c->y0, Y0, sizeof(double) * NX);
     c->starts_changed = 0;
+    c->tol_set = 0;
     memcpy(c->d + 2, IN0, sizeof(double) * (NIN > 0 ? NIN : 0));
 #if SELECT
     {
@@ -328,6 +330,7 @@ static int mb_get(Inst *c, unsigned vr, double *v, int *have)
 #endif
     if (vr == VR_TIME) { *v = c->t; return 0; }
     if (vr >= VR_START && vr < VR_START + NX) { *v = c->y0[vr - VR_START]; return 0; }
+    if (vr == VR_TOL) { *v = c->rtol; return 0; }
     if (vr >= VR_IN && vr < VR_IN + NIN) { *v = c->d[2 + (vr - VR_IN)]; return 0; }
     say(c, 1, "no variable has the value reference %u", vr);
     return -1;
@@ -359,6 +362,12 @@ static int mb_set(Inst *c, unsigned vr, double v)
 #else
     if (vr < VR_DX) { c->y[vr - VR_X] = v; return 0; }
 #endif
+    if (vr == VR_TOL) {
+        if (!(v >= 1e-14 && v < 1.0)) { say(c, 1, "the tolerance %g is out of range (1e-14 .. 1)", v); return -1; }
+        c->rtol = v;
+        c->tol_set = 1;
+        return 0;
+    }
     if (vr >= VR_START && vr < VR_START + NX) {
         if (c->mode != M_INSTANTIATED && c->mode != M_INIT) {
             say(c, 1, "start values are fixed after initialization");
