@@ -73,30 +73,32 @@ def unit_name(exps):
     return (num or "1") + (f"/{den}" if den else "")
 
 
+def _define(exps, defs):
+    """The unit name of the exponents ``exps`` (None for None), added to the definitions ``defs``."""
+    if exps is None:
+        return None
+    name = unit_name(exps)
+    defs[name] = exps
+    return name
+
+
+def _per_second(exps):
+    """The exponents of a unit per second (None for None): a rate's unit."""
+    if exps is None:
+        return None
+    e = dict(exps)
+    e["s"] = e.get("s", 0) - 1
+    return {b: e[b] for b in _BASE if e.get(b)}
+
+
 def _units(system, layout, state_units):
     """``(parameter units, state units, derivative units, definitions)``: unit names (None
     where unknown) and ``{name: exponents}`` of every unit used; ``state_units``: the states'
     unit texts (None: unknown)."""
     defs = {}
-
-    def named(exps):
-        if exps is None:
-            return None
-        name = unit_name(exps)
-        defs[name] = exps
-        return name
-
-    par = [named(unit_exponents(_param_doc(system, path, pname)[0])) for path, pname, _ in layout]
-    texts = list(state_units)
-    sta = [named(unit_exponents(u)) for u in texts]
-    der = []
-    for u in texts:
-        e = unit_exponents(u)
-        if e is not None:
-            e = dict(e)
-            e["s"] = e.get("s", 0) - 1
-            e = {b: e[b] for b in _BASE if e.get(b)}
-        der.append(named(e))
+    par = [_define(unit_exponents(_param_doc(system, path, pname)[0]), defs) for path, pname, _ in layout]
+    sta = [_define(unit_exponents(u), defs) for u in state_units]
+    der = [_define(_per_second(unit_exponents(u)), defs) for u in state_units]
     return par, sta, der, defs
 
 
@@ -110,13 +112,9 @@ def _column_units(system):
 
     def put(name, text, per_second=False):
         e = unit_exponents(text)
-        if e is None:
-            return
-        if per_second:
-            e = dict(e)
-            e["s"] = e.get("s", 0) - 1
-            e = {b: e[b] for b in _BASE if e.get(b)}
-        out[name] = e
+        e = _per_second(e) if per_second else e
+        if e is not None:
+            out[name] = e
 
     for name, u in zip(system.q_names, topo.q_units):
         put(name, u)
@@ -146,31 +144,11 @@ def _column_units(system):
     return out
 
 
-def _output_unit(units, name, defs):
-    """The unit name of the output ``name`` from ``units`` (:func:`_column_units`; None if it
-    has none), added to the unit definitions ``defs``."""
-    exps = units.get(name)
-    if exps is None:
-        return None
-    uname = unit_name(exps)
-    defs[uname] = exps
-    return uname
-
-
 def _start_names(system):
     """The start-value parameters' names and unit texts: ``start.<coordinate or speed>``."""
     names = list(system.q_names) + list(system.u_names)
     units = list(system.topology.q_units) + list(system.topology.u_units)
     return [f"start.{n}" for n in names], units
-
-
-def _start_unit(text, defs):
-    exps = unit_exponents(text)
-    if exps is None:
-        return None
-    name = unit_name(exps)
-    defs[name] = exps
-    return name
 
 
 _TOL_DOC = "relative tolerance of the Co-Simulation integrator (DOP853; wins over the experiment's when set)"
@@ -182,7 +160,7 @@ def _start_rows3(system, starts, vr0, unit, defs):
            f'variability="fixed" start="1e-08" description="{_TOL_DOC}"/>')
     return [tol] + [f'    <Float64 name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" variability="fixed" '
             f'start="{float(v)!r}" description="start value (projected onto the constraints at initialization)"'
-            f'{unit(_start_unit(u, defs))}/>' for k, (n, u, v) in enumerate(zip(names, units, starts))]
+            f'{unit(_define(unit_exponents(u), defs))}/>' for k, (n, u, v) in enumerate(zip(names, units, starts))]
 
 
 def _start_rows2(system, starts, vr0, unit, defs):
@@ -191,19 +169,8 @@ def _start_rows2(system, starts, vr0, unit, defs):
            f'variability="fixed" initial="exact" description="{_TOL_DOC}"><Real start="1e-08"/></ScalarVariable>')
     return [tol] + [f'    <ScalarVariable name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" '
             f'variability="fixed" initial="exact" description="start value (projected onto the constraints at '
-            f'initialization)"><Real start="{float(v)!r}"{unit(_start_unit(u, defs))}/></ScalarVariable>'
+            f'initialization)"><Real start="{float(v)!r}"{unit(_define(unit_exponents(u), defs))}/></ScalarVariable>'
             for k, (n, u, v) in enumerate(zip(names, units, starts))]
-
-
-def _input_unit(inp, defs):
-    """The unit name of an :class:`~mbcomp.modeling.inputs.Input` (None if unknown), added to
-    the unit definitions ``defs``."""
-    exps = unit_exponents(inp.unit)
-    if exps is None:
-        return None
-    name = unit_name(exps)
-    defs[name] = exps
-    return name
 
 
 def _experiment(experiment):
@@ -258,9 +225,9 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
     ounits = _column_units(system)
     for oname, k in outputs:
         rows.append(f'    <Float64 name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
-                    f'variability="continuous" initial="calculated"{unit(_output_unit(ounits, oname, defs))}/>')
+                    f'variability="continuous" initial="calculated"{unit(_define(ounits.get(oname), defs))}/>')
     for k, inp in enumerate(inputs[0]):
-        uname = _input_unit(inp, defs)
+        uname = _define(unit_exponents(inp.unit), defs)
         rows.append(f'    <Float64 name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" causality="input" '
                     f'variability="continuous" start="{inp.start!r}" description="{escape(inp.description)}"'
                     f'{unit(uname)}/>')
@@ -318,10 +285,10 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
     ounits = _column_units(system)
     for oname, k in outputs:
         rows.append(f'    <ScalarVariable name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
-                    f'variability="continuous" initial="calculated"><Real{unit(_output_unit(ounits, oname, defs))}/>'
+                    f'variability="continuous" initial="calculated"><Real{unit(_define(ounits.get(oname), defs))}/>'
                     f'</ScalarVariable>')
     for k, inp in enumerate(inputs[0]):
-        uname = _input_unit(inp, defs)
+        uname = _define(unit_exponents(inp.unit), defs)
         rows.append(f'    <ScalarVariable name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" '
                     f'causality="input" variability="continuous" description="{escape(inp.description)}">'
                     f'<Real start="{inp.start!r}"{unit(uname)}/></ScalarVariable>')

@@ -94,6 +94,11 @@ def _c_array(name, values):
     return f"static const double {name}[] = {{{vals}}};\n"
 
 
+def _c_ints(name, values):
+    vals = ", ".join(str(int(v)) for v in values) or "0"
+    return f"static const int {name}[] = {{{vals}}};\n"
+
+
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,
                tolerance=1e-12, max_nodes=3_000_000):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
@@ -117,10 +122,9 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     name : str, optional
         Model name (default: the file name); the model identifier is made from it.
     stop_time, tolerance : float
-        The FMU's default experiment: end time (s) and relative tolerance. The tolerance is
-        what an importer's integrator is asked for: FMPy's CVODE over the slider-crank's
-        derivatives is 5e-5 rad off after 10 s at 1e-8, 1.1e-6 at 1e-10 and 3.8e-8 at 1e-12
-        (the FMU's own DOP853 in Co-Simulation: 1.9e-7 at 1e-8), hence the default 1e-12.
+        The FMU's default experiment: end time (s) and the relative tolerance an importer's
+        integrator is asked for (FMPy's CVODE on the slider-crank, 10 s: 3.7e-4 rad off at
+        1e-8, 1.4e-7 at 1e-12; hence the default).
 
     Returns
     -------
@@ -138,7 +142,47 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     ModelError
         A model the FMU cannot hold (a singular start, a drive law evaluated in Python).
     """
-    patterns = None if outputs is None else ([outputs] if isinstance(outputs, str) else list(outputs))
+    cc, patterns = _check_request(model, fmi, kind, stop_time, tolerance, outputs)
+    path = pathlib.Path(path)
+    name = name or path.stem
+    ident = _identifier(name)
+    system = assemble(model, params)
+    init = initialize(system)
+    tr, prog, parts, n_work = _fun_program(system, max_nodes)
+    out_prog = _output_program(system, tr, max_nodes)
+    mech = _projection(system, tr, max_nodes)
+    select = _selection(system, init, mech, kind)
+    layout = tr.layout
+    pv = param_vector(system, layout)
+    y0 = np.concatenate((init.q, init.u))
+    pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
+    states, x0, state_units = _states(system, init, select)
+    out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
+    if patterns is not None:
+        out_prog.variables = _chosen(out_prog.variables, patterns)
+    describe = _model_description if fmi == "2.0" else _model_description3
+    xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
+                   outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
+                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0)
+    guid = "{" + str(_uuid_of(xml)) + "}"
+    xml = xml.replace("@GUID@", guid)
+    loops = bool(system.topology.cut)
+    model_c = (_HEADER + f"#define NQ {system.nq}\n#define NU {system.nu}\n"
+               f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
+               f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
+               + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
+               + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, layout, pv, y0))
+               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
+               + f'\n#include "fmi{fmi[0]}.c"\n')
+    _build(path, ident, fmi, cc, model_c, xml)
+    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables],
+                inputs=[i.name for i in tr.inputs], projects=mech.enabled and kind != "me",
+                selects_states=select.enabled, guid=guid, size=os.path.getsize(path),
+                operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
+
+
+def _check_request(model, fmi, kind, stop_time, tolerance, outputs):
+    """``(C compiler, output patterns or None)`` for a request; a clear error otherwise."""
     if fmi not in ("2.0", "3.0"):
         raise ValueError(f"fmi={fmi!r}: use '3.0' or '2.0'")
     if kind not in ("me", "cs", "both"):
@@ -150,11 +194,12 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     cc = c_compiler()
     if cc is None:
         raise ValueError("export_fmu needs a C compiler (gcc or cc on PATH, or $CC) to build the FMU's binary")
-    path = pathlib.Path(path)
-    name = name or path.stem
-    ident = _identifier(name)
-    system = assemble(model, params)
-    init = initialize(system)
+    return cc, None if outputs is None else ([outputs] if isinstance(outputs, str) else list(outputs))
+
+
+def _fun_program(system, max_nodes):
+    """The Lagrange right-hand side the FMU carries: ``(trace, Program, C parts, work size)``;
+    a clear error for a law, a drive or a start position a program cannot hold."""
     try:
         tr = trace(system, max_nodes, program="fun")
     except CodegenError as exc:  # a law the program cannot hold: the FMU cannot either
@@ -168,48 +213,20 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
                                   "hold it", "write the law with numpy functions and plain arithmetic")])
     prog = Program(tr.graph, {"fun": tr.groups["fun"]}, guard_groups={"fun": tr.guard_groups["fun"]})
     parts, n_work = prog.c_parts("fun", "mbcomp_fun", _chunk, n_parts=lambda n: 1)
-    names_in = [i.name for i in tr.inputs]
-    out_prog = _output_program(system, tr, max_nodes)
-    mech = _projection(system, tr, max_nodes)
-    if patterns is not None:
-        out_prog.variables = _chosen(out_prog.variables, patterns)
-    layout = tr.layout
-    pv = param_vector(system, layout)
-    y0 = np.concatenate((init.q, init.u))
-    loops = bool(system.topology.cut)
-    pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
-    select = _selection(system, init, mech, kind)
-    if select.enabled:  # Model Exchange states [q, v]: the coordinates and the independent speeds
-        states = list(system.q_names) + [f"v[{k + 1}]" for k in range(len(select.ind))]
-        x0 = np.concatenate((init.q, init.u[select.ind]))
-        state_units = list(system.topology.q_units) + [None] * len(select.ind)
-    else:
-        states = list(system.q_names) + list(system.u_names)
-        x0, state_units = y0, list(system.topology.q_units) + list(system.topology.u_units)
-    describe = _model_description if fmi == "2.0" else _model_description3
-    taken = set(states)
-    out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in taken]
-    if select.enabled:  # the speeds are no states now: outputs (the output program computes them)
-        out_prog.variables = _speeds_as_outputs(out_prog, system) + out_prog.variables
-        if patterns is not None:
-            out_prog.variables = _chosen(out_prog.variables, patterns)
-    xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
-                   outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
-                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0)
-    guid = "{" + str(_uuid_of(xml)) + "}"
-    xml = xml.replace("@GUID@", guid)
-    model_c = (_HEADER + f"#define MBCOMP_ID {ident}\n#define NQ {system.nq}\n#define NU {system.nu}\n"
-               f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
-               f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
-               + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
-               + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, layout, pv, y0))
-               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
-               + f'\n#include "fmi{fmi[0]}.c"\n')
-    _build(path, ident, fmi, cc, model_c, xml)
-    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables], inputs=names_in,
-                projects=mech.enabled and kind != "me", selects_states=select.enabled, guid=guid,
-                size=os.path.getsize(path), operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc,
-                model_identifier=ident)
+    return tr, prog, parts, n_work
+
+
+def _states(system, init, select):
+    """``(names, start values, unit texts)`` of the Model Exchange states: ``[q, v]`` with
+    D'Alembert's state selection (``v[k]``: the independent speeds, whose meaning changes with
+    the partition: no unit), else ``[q, u]``."""
+    topo = system.topology
+    if select.enabled:
+        k = len(select.ind)
+        return (list(system.q_names) + [f"v[{j + 1}]" for j in range(k)],
+                np.concatenate((init.q, init.u[select.ind])), list(topo.q_units) + [None] * k)
+    return (list(system.q_names) + list(system.u_names), np.concatenate((init.q, init.u)),
+            list(topo.q_units) + list(topo.u_units))
 
 
 def _nominals(system, layout, pv, y0):
@@ -291,16 +308,9 @@ def _selection(system, init, mech, kind):
         dep, ind = pivot_partition(ev.A)
     except SingularPartition:
         return off
-    ints = lambda name, a: f"static const int {name}[] = {{{', '.join(str(int(x)) for x in a) or '0'}}};\n"  # noqa: E731
     c = (f"#define SELECT 1\n#define MM {len(dep)}\n#define NI {len(ind)}\n#define GROWTH_MAX {GROWTH_MAX!r}\n"
-         f"#define DRIFT {DRIFT!r}\n#define DRIFT_RTOL {DRIFT_RTOL!r}\n" + ints("DEP0", dep) + ints("IND0", ind))
+         f"#define DRIFT {DRIFT!r}\n#define DRIFT_RTOL {DRIFT_RTOL!r}\n" + _c_ints("DEP0", dep) + _c_ints("IND0", ind))
     return SimpleNamespace(enabled=True, ind=np.asarray(ind, int), c=c)
-
-
-def _speeds_as_outputs(out_prog, system):
-    """``(name, index)`` of the joint speeds among the output program's columns."""
-    names = set(system.u_names)
-    return [(n, k) for n, k in out_prog.all_columns if n in names]
 
 
 def _projection(system, tr_fun, max_nodes):
@@ -334,14 +344,13 @@ def _projection(system, tr_fun, max_nodes):
     mh, mn = tr.shapes["Phi"][0] if tr.shapes["Phi"] else 0, tr.shapes["Psi"][0] if tr.shapes["Psi"] else 0
     rows = np.arange(mh) if system.row_mask is None else np.flatnonzero(system.row_mask)
     seg = np.asarray(seg, int).reshape(-1, 4) if len(seg) else np.zeros((0, 4), int)
-    ints = lambda name, a: f"static const int {name}[] = {{{', '.join(str(int(x)) for x in a) or '0'}}};\n"  # noqa: E731
     c = (f"#define MECH 1\n#define NH3 {max(len(prog.hoisted), 1)}\n#define NW3 {max(n_work, 1)}\n"
          f"#define NOUT3 {off}\n#define MH {mh}\n#define MN {mn}\n#define NROWS {len(rows)}\n#define NSEG {len(seg)}\n"
          f"#define QRATE {'NULL' if tr.qrate_identity else 'mbcomp_qrate'}\n"
          f"#define PROJ_TOL {POSITION_TOL!r}\n#define PROJ_ACCEPT {ACCEPT_FACTOR * POSITION_TOL!r}\n"
          f"#define PROJ_ITER {PROJECT_MAX_ITER}\n"
          + "".join(f"#define OFF_{k.upper()} {offs[k]}\n" for k in ("M", "f", "Phi", "Phid", "C", "cb", "B", "Bb", "Psi"))
-         + ints("MECH_ROWS", rows) + ints("MECH_SEG", seg.ravel())
+         + _c_ints("MECH_ROWS", rows) + _c_ints("MECH_SEG", seg.ravel())
          + "\n".join(parts) + "\n" + prog.c_params("mbcomp_eval_params"))
     return SimpleNamespace(c=c, enabled=True)
 
@@ -350,25 +359,22 @@ def _output_program(system, tr_fun, max_nodes):
     """The result columns the FMU computes as outputs (mbcomp's post-processing program: joint
     reactions, multipliers, body positions, velocities and orientations, energies, residuals):
     its C (with its parameter program and the quaternion of a rotation), the defines the core
-    reads, and ``variables``: ``(name, index in the outputs)`` of the columns that are not
-    states already, then every body's quaternion."""
+    reads, and ``variables``: ``(name, index in the outputs)`` of every column, then every
+    body's quaternion (the caller leaves out the states)."""
     tr = trace(system, max_nodes, program="outputs", baumgarte=True)
     ok = ("outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
           and [i.name for i in tr.inputs] == [i.name for i in tr_fun.inputs])
     if not ok:  # a drive the program does not hold, or a singular trace point: no outputs
-        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0, all_columns=[])
+        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0)
     prog = Program(tr.graph, {"outputs": tr.groups["outputs"]}, guard_groups={"outputs": tr.guard_groups["outputs"]})
     parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", _chunk, n_parts=lambda n: 1)
     cols, rots = list(tr.output_names), list(tr.rotation_paths)
-    taken = set(system.q_names) | set(system.u_names)
-    variables = [(n, k) for k, n in enumerate(cols) if n not in taken]
-    all_columns = list(enumerate(cols))
+    variables = list(zip(cols, range(len(cols))))
     variables += [(f"{b}.Q.{c}", len(cols) + 4 * i + j) for i, b in enumerate(rots) for j, c in enumerate("wxyz")]
     defines = (f"#define NCOL {len(cols)}\n#define NROT {len(rots)}\n#define NH2 {max(len(prog.hoisted), 1)}\n"
                f"#define NW2 {max(n_work, 1)}\n")
     return SimpleNamespace(c=defines + "\n".join(parts) + "\n" + prog.c_params("mbcomp_outputs_params") + QUAT_C,
-                           variables=variables, n_ops=prog.n_ops("outputs"), n_slots=len(cols) + 4 * len(rots),
-                           all_columns=[(n, k) for k, n in all_columns])
+                           variables=variables, n_ops=prog.n_ops("outputs"), n_slots=len(cols) + 4 * len(rots))
 
 
 #: the output program of a model whose outputs cannot be traced: none

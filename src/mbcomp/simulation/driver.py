@@ -81,11 +81,9 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         5, index 1-3, index-aware error control), ``"ida"`` (SUNDIALS IDA, index 1 and 2) or
         ``"genalpha"`` (generalized-alpha, index 3, fixed step ``h``).
     rtol, atol : float
-        Integrator tolerances (the Newton tolerance of ``genalpha``). The defaults, 1e-8 and
-        1e-10, keep long runs right to plotting accuracy (a 1 m pendulum after 900 periods:
-        within 0.4 mm; at 1e-6 it was 0.17 m off) at little cost with DOP853 (about 1.8 times
-        the steps of 1e-6: its steps grow like tol^(-1/8)). A conservative run whose energy
-        drifts more than ``rtol`` promises ends ``"inaccurate"``.
+        Integrator tolerances (the Newton tolerance of ``genalpha``); the defaults keep long
+        runs right to plotting accuracy (a 1 m pendulum after 900 periods: within 0.4 mm). A
+        conservative run whose energy drifts more than ``rtol`` promises ends ``"inaccurate"``.
     index : {1, 2, 3}, optional
         Lagrange formulation with a DAE solver: the constraints at acceleration level (1),
         velocity level with position correction (2, GGL) or position level (3). Default 1
@@ -121,14 +119,10 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         ``f(t)``, a number, or a table ``(times, values)`` (linear interpolation); an input
         not given keeps its ``start`` value.
     singular : {"stop", "pass"}
-        At a singular position -- an instant where the constraint Jacobian loses rank (a flat
-        four-bar, a dead centre) -- ``"stop"`` (default) ends the run there with status
-        ``"failed"`` and a message naming the time; ``"pass"`` goes on, on the branch that
-        keeps positions and velocities continuous, and records every passage in
-        ``stats["singular_passages"]`` (time, smallest relative singular value, rank drop,
-        joints involved). The default stops because beyond a rank drop the motion need not
-        be unique (at a four-bar's change point two branches meet): going on is a choice the
-        user makes for a mechanism known to pass (a parallelogram chain).
+        Where the constraint Jacobian loses rank (a flat four-bar): ``"stop"`` (default: past
+        it the motion need not be unique) ends the run there, naming the time; ``"pass"`` goes
+        on, positions and velocities continuous, recording each passage in
+        ``stats["singular_passages"]`` (time, relative singular value, rank drop, joints).
 
     Returns
     -------
