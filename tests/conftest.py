@@ -42,6 +42,24 @@ def torque_pendulum(law):
     return m
 
 
+def turntable(tau):
+    """A 2 kg point mass on a 1 m rod turning about a vertical hinge ``j`` (no gravity: 2 kg m^2
+    about the axis), driven by a torque ``tau`` (component ``"motor"``): ``2 phi'' = tau``."""
+    from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
+
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, 0)))
+    j = m.add("j", Revolute(phi0=0.0, w0=0.0))
+    rod = m.add("rod", FixedTranslation(r=(1.0, 0, 0)))
+    bob = m.add("bob", PointMass(m=2.0))
+    motor = m.add("motor", Torque(tau=tau))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    m.connect(j.axis, motor.flange_b)
+    return m
+
+
 def compiled(model, backend="c"):
     """``model`` assembled and compiled with both programs made now (``simulate``'s own
     systems make the evaluation program lazily), for tests that use the programs directly."""

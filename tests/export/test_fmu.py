@@ -17,7 +17,7 @@ import mbcomp
 from mbcomp.codegen import c_compiler
 from mbcomp.library import FixedTranslation, PointMass, Revolute, World
 
-from conftest import load_model
+from conftest import load_model, turntable
 
 fmpy = pytest.importorskip("fmpy")
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
@@ -270,30 +270,18 @@ def test_an_input_drives_the_fmu_from_fmpy(fmi, tmp_path):
     FMU's input u = sin t. FMPy sets inputs at its communication points and the FMU holds them
     through a Co-Simulation step, so CS must equal mbcomp run with that zero-order hold; ME
     (CVODE with FMPy's input updates) stays near the exact w = (1 - cos t) / 2."""
-    from mbcomp.library import Torque
-
-    def turntable():
-        m = mbcomp.Model()
-        w = m.add("world", World(g=(0, 0, 0)))
-        j = m.add("j", Revolute(phi0=0.0, w0=0.0))
-        rod = m.add("rod", FixedTranslation(r=(1.0, 0, 0)))
-        bob = m.add("bob", PointMass(m=2.0))
-        motor = m.add("motor", Torque(tau=mbcomp.Input("u", unit="N m", description="motor torque")))
-        m.connect(w.frame_b, j.frame_a)
-        m.connect(j.frame_b, rod.frame_a)
-        m.connect(rod.frame_b, bob.frame_a)
-        m.connect(j.axis, motor.flange_b)
-        return m
+    def turntable_u():
+        return turntable(mbcomp.Input("u", unit="N m", description="motor torque"))
 
     path = tmp_path / "turntable.fmu"
-    info = export_fmu(turntable(), path, fmi=fmi)
+    info = export_fmu(turntable_u(), path, fmi=fmi)
     assert info["inputs"] == ["u"] and validate_fmu(str(path)) == []
     h = 0.01
     tt = np.linspace(0.0, 3.0, 301)
     signal = np.array(list(zip(tt, np.sin(tt))), dtype=[("time", np.float64), ("u", np.float64)])
     cs = fmpy.simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=3.0, input=signal, output=["j.w"],
                            output_interval=h)
-    held = mbcomp.simulate(turntable(), t_end=3.0, n_out=301, rtol=1e-10, atol=1e-12, max_step=h,
+    held = mbcomp.simulate(turntable_u(), t_end=3.0, n_out=301, rtol=1e-10, atol=1e-12, max_step=h,
                            inputs={"u": lambda t: np.sin(h * np.floor(t / h + 1e-9))})
     assert max_diff(cs, held, "j.w") < 1e-6
     me = fmpy.simulate_fmu(str(path), fmi_type="ModelExchange", stop_time=3.0, input=signal, output=["j.w"],

@@ -9,23 +9,9 @@ import pytest
 
 import mbcomp
 from mbcomp.codegen import c_compiler
-from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
+from conftest import turntable
 
 BACKENDS = ["numeric", "python"] + (["c"] if c_compiler() else [])
-
-
-def turntable(tau):
-    m = mbcomp.Model()
-    w = m.add("world", World(g=(0, 0, 0)))
-    j = m.add("j", Revolute(phi0=0.0, w0=0.0))
-    rod = m.add("rod", FixedTranslation(r=(1.0, 0, 0)))
-    bob = m.add("bob", PointMass(m=2.0))
-    motor = m.add("motor", Torque(tau=tau))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    m.connect(j.axis, motor.flange_b)
-    return m
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
