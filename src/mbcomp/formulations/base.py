@@ -87,10 +87,15 @@ class Formulation:
         dependence on ``y_j`` (scipy's own differences let it grow for a coordinate nothing
         depends on, such as a freely spinning shaft's angle, until it overflows)."""
         y = np.asarray(y, dtype=float)
+        return self.difference_columns(t, y, range(y.size))
+
+    def difference_columns(self, t, y, columns, J=None):
+        """``J`` (made (n, n) if None) with the ``columns`` of ``d fun / dy`` at ``(t, y)``
+        by forward differences (the step of :meth:`jac`); the other columns untouched."""
         f0 = np.asarray(self.fun(t, y))
-        J = np.empty((f0.size, y.size))
+        J = np.empty((f0.size, y.size)) if J is None else J
         yj = y.copy()
-        for j in range(y.size):
+        for j in columns:
             h = _FD_STEP * max(abs(y[j]), 1.0)
             yj[j] = y[j] + h
             h = yj[j] - y[j]  # the step actually taken in floating point

@@ -156,14 +156,8 @@ class _SemiExplicit(_Multipliers):
         r = self._c_call(t, y, jac=True)
         if r is not None:
             return r[1]
-        self.nfev -= 1  # counted again by fun below
-        f0 = self.fun(t, y)
-        J = np.empty((self.n, self.n))
-        for i in self._fd_columns():
-            h = 1.5e-8 * max(1.0, abs(y[i]))
-            yy = y.copy()
-            yy[i] += h
-            J[:, i] = (self.fun(t, yy) - f0) / h
+        self.nfev -= 1  # counted again by fun in difference_columns
+        J = self.difference_columns(t, y, self._fd_columns(), np.empty((self.n, self.n)))
         q, u = y[: self.nq], y[self.nq: self.nq + self.nu]
         self._linear_blocks(J, self.system.evaluate(t, q, u))
         return J
