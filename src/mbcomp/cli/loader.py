@@ -2,7 +2,9 @@
 
 ``-p name=value`` passes ``name`` to the file's ``build`` when it has no dot, and sets a
 component parameter at run time when it has one (``-p spring.c=200``: nothing is
-re-derived). Values are Python literals when they parse as one (:func:`parse_value`).
+re-derived). A build() value is parsed into the kind its default declares (a number, a
+boolean, a list of numbers, a string; :mod:`mbcomp.cli.params`), a component value into a
+number, boolean, list or the text itself (:func:`parse_value`); the component checks it.
 
 Errors are ``ValueError`` (a :class:`~mbcomp.errors.ModelError` is one) with the fix in the
 message; :func:`mbcomp.cli.main.main` prints them as ``mbcomp: ...`` and exits 2.
@@ -16,29 +18,14 @@ Examples
 """
 from __future__ import annotations
 
-import ast
 import inspect
 import os
 import pathlib
 
 from ..modeling.loader import build_model, load_model_file
+from .params import build_value, describe_parameters, parse_value
 
 __all__ = ["parse_value", "load_model_file", "split_params", "load", "call_build", "check_output"]
-
-
-def parse_value(text):
-    """A Python literal if ``text`` is one, else the string itself.
-
-    Examples
-    --------
-    >>> from mbcomp.cli import parse_value
-    >>> parse_value("1e-3"), parse_value("(0, 0, 1)"), parse_value("RK45")
-    (0.001, (0, 0, 1), 'RK45')
-    """
-    try:
-        return ast.literal_eval(text)
-    except (ValueError, SyntaxError):
-        return text
 
 
 def takes(build, name):
@@ -54,19 +41,21 @@ def split_params(pairs, build):
     Raises
     ------
     ValueError
-        A pair without ``=``, or a build() parameter that ``build`` does not take.
+        A pair without ``=``, a build() parameter that ``build`` does not take (the message
+        lists the ones it takes), or a value not of the kind the parameter's default declares.
     """
     build_kw, runtime = {}, {}
     for pair in pairs or []:
         if "=" not in pair:
             raise ValueError(f"-p expects name=value, got {pair!r}")
-        k, v = pair.split("=", 1)
-        (runtime if "." in k else build_kw)[k.strip()] = parse_value(v.strip())
-    unknown = [k for k in build_kw if not takes(build, k)]
-    if unknown:
-        names = ", ".join(inspect.signature(build).parameters) or "none"
-        raise ValueError(f"build() takes no parameter {', '.join(unknown)}; it takes: {names} "
-                         "(use component.param=value for component parameters)")
+        k, v = (x.strip() for x in pair.split("=", 1))
+        if "." in k:
+            runtime[k] = parse_value(v)
+        elif not takes(build, k):
+            raise ValueError(f"-p {k}={v}: build() takes no parameter {k}; it takes: {describe_parameters(build)} "
+                             "-> fix: use one of these names, or component.param=value for a component parameter")
+        else:
+            build_kw[k] = build_value(build, k, v)
     return build_kw, runtime
 
 

@@ -6,8 +6,16 @@ stabilization=..., formulation=...)`` as defaults; options given on the command 
 Results are never lost: ``--out`` and ``--plot`` are checked before the model is even
 loaded (:func:`~mbcomp.cli.loader.check_output`), so a mistyped directory fails at once, not
 after an hour of integration; a run that stops early (failed, or interrupted by Ctrl-C /
-SIGTERM: ``status == "interrupted"``) still writes what it computed. Exit status: 0 success,
-1 the run failed, 130 interrupted (the partial results written), 2 bad input.
+SIGTERM: ``status == "interrupted"``; or a budget, ``--max-time`` / ``--max-steps``, that ran
+out: ``status == "budget"``) still writes what it computed. Exit status: 0 success, 1 the run
+failed, 3 a budget ran out, 130 interrupted (the partial results written in each case), 2 bad
+input.
+
+``--plot-vars PATTERN...`` chooses the columns ``--plot`` draws (names or shell-style globs,
+``"crank_joint.*" "*.tau.z"``; :meth:`mbcomp.result.Result.plot`); by default it draws the
+coordinates, the energy and the constraint residuals. The summary prints the energy drift of a
+conservative system, and the energy balance error (``energy.balance``: the total energy less
+the work done on the system plus the energy dissipated) of a driven or damped one.
 
 Examples
 --------
@@ -19,18 +27,23 @@ Examples
 from __future__ import annotations
 
 import pathlib
+import sys
 
 import numpy as np
 
 from .loader import check_output, load
 
-__all__ = ["cmd_simulate", "add_parser", "OPTIONS", "EXIT_INTERRUPTED"]
+__all__ = ["cmd_simulate", "add_parser", "OPTIONS", "EXIT_INTERRUPTED", "EXIT_BUDGET"]
 
 #: command-line options passed on to :func:`mbcomp.simulate` (overriding the file's SIMULATION)
 OPTIONS = ("t_end", "rtol", "atol", "method", "stabilization", "formulation", "n_out", "index", "h", "backend",
-           "singular")
+           "singular", "max_wall_time", "max_steps")
 #: exit status of an interrupted run (128 + SIGINT, the shell's convention)
 EXIT_INTERRUPTED = 130
+#: exit status of a run whose wall-time or step budget ran out (the partial results written)
+EXIT_BUDGET = 3
+#: exit status of a bad --plot-vars pattern (bad input; the CSV is written first)
+EXIT_USAGE = 2
 
 
 def cmd_simulate(args):
@@ -39,24 +52,37 @@ def cmd_simulate(args):
 
     check_output(args.out, "--out")
     check_output(args.plot, "--plot")
+    if args.plot_vars and not args.plot:
+        raise ValueError("--plot-vars chooses the columns --plot draws, and no --plot was given -> fix: add "
+                         "--plot FILE.png")
     mod, model, runtime = load(args)
     opts = dict(getattr(mod, "SIMULATION", {}))
     opts.update({key: getattr(args, key) for key in OPTIONS if getattr(args, key) is not None})
     res = simulate(model, params=runtime, progress=not args.quiet, **opts)
     _report(res)
-    interrupted = res.status == "interrupted"
     if args.out:
         res.to_csv(args.out)
         print(f"wrote {args.out} ({len(res.names) + 1} columns, {len(res.time)} rows)")
     if args.plot:
-        res.plot(path=args.plot, title=pathlib.Path(args.model).name)
+        try:
+            res.plot(args.plot_vars, path=args.plot, title=pathlib.Path(args.model).name)
+        except ValueError as exc:  # a pattern matching nothing: the run's results are kept all the same
+            print(f"mbcomp: --plot-vars: {exc}" + (f" ({args.out} is written)" if args.out else ""), file=sys.stderr)
+            return EXIT_USAGE
         print(f"wrote {args.plot}")
-    if interrupted:
-        end = f"t = {res.time[-1]:g} s" if len(res.time) else "the start"
-        print(f"interrupted at {end}: " + (f"{args.out} holds the partial results up to then" if args.out else
-                                           "nothing written (give --out FILE.csv to keep the partial results)"))
-        return EXIT_INTERRUPTED
-    return 0 if res.success else 1
+    return _stopped_early(res, args)
+
+
+def _stopped_early(res, args):
+    """The exit status; for an interrupted run or a spent budget, says where the results are."""
+    why = {"interrupted": ("interrupted", EXIT_INTERRUPTED), "budget": ("budget spent", EXIT_BUDGET)}
+    if res.status not in why:
+        return 0 if res.success else 1
+    what, code = why[res.status]
+    end = f"t = {res.time[-1]:g} s" if len(res.time) else "the start"
+    print(f"{what} at {end}: " + (f"{args.out} holds the partial results up to then" if args.out else
+                                  "nothing written (give --out FILE.csv to keep the partial results)"))
+    return code
 
 
 def _report(res):
@@ -75,9 +101,22 @@ def _report(res):
               f"instead of {', '.join(c['was'])}")
     E = res["energy.total"]
     if len(E):
-        print(f"energy drift max|E - E0| = {np.nanmax(np.abs(E - E[0])):.3e} J; "
-              f"max position residual {np.nanmax(res['residual.position']):.3e}, "
+        print(f"{_energy_line(res)}; max position residual {np.nanmax(res['residual.position']):.3e}, "
               f"velocity residual {np.nanmax(res['residual.velocity']):.3e}")
+
+
+def _energy_line(res):
+    """The energy drift max|E - E0| of a conservative run; for a run with an ``energy.balance``
+    column (driven or damped), its largest magnitude relative to the energy the motion exchanges."""
+    if "energy.balance" not in res:
+        E = res["energy.total"]
+        return f"energy drift max|E - E0| = {np.nanmax(np.abs(E - E[0])):.3e} J"
+    err = float(np.nanmax(np.abs(res["energy.balance"])))
+    T, V = res["energy.kinetic"], res["energy.potential"]
+    scale = float(np.nanmax([np.nanmax(T) + np.nanmax(V) - np.nanmin(V)]
+                            + [np.nanmax(np.abs(res[n])) for n in ("energy.work", "energy.dissipated") if n in res]))
+    rel = f" ({err / scale:.1e} of the {scale:.3g} J exchanged)" if scale > 0 else ""
+    return f"energy balance error max|E - E0 - W + D| = {err:.3e} J{rel}"
 
 
 def add_parser(sub, common):
@@ -103,6 +142,13 @@ def add_parser(sub, common):
     s.add_argument("--n-out", dest="n_out", type=int, help="number of output points")
     s.add_argument("--out", help="write results to this CSV file (also the partial results of a run that stops early)")
     s.add_argument("--plot", help="write a plot to this PNG file")
+    s.add_argument("--plot-vars", dest="plot_vars", nargs="+", metavar="PATTERN",
+                   help="columns --plot draws: names or shell-style globs, e.g. 'crank_joint.*' '*.tau.z' (default: "
+                        "coordinates, energy, constraint residuals)")
+    s.add_argument("--max-time", dest="max_wall_time", type=float, metavar="SECONDS",
+                   help="wall-time budget: stop after this many seconds, keep and write the results so far (exit 3)")
+    s.add_argument("--max-steps", dest="max_steps", type=int, metavar="N",
+                   help="step budget: stop after N integrator steps, keep and write the results so far (exit 3)")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=cmd_simulate)
     return s

@@ -99,28 +99,40 @@ class Result:
                 w.writerow([f"{x:.12g}" for x in row])
         return path
 
-    def plot(self, names=None, path=None, title=None):
-        """Plot variables against time (default: joint coordinates and energy); save to ``path``."""
-        import matplotlib
+    def plot(self, patterns=None, path=None, title=None):
+        """Plot columns against time, one panel each; save to ``path`` (PNG) if given.
 
-        if path is not None:
-            matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt
+        Parameters
+        ----------
+        patterns : str or list of str, optional
+            Column names or shell-style globs (``"crank.*"``, ``"*.tau.z"``); default
+            :meth:`default_plot_names`. A pattern matching nothing is a ``ValueError``
+            listing similar names (:func:`mbcomp.simulation.plotting.select`).
+        path, title : str, optional
 
-        names = names or self.default_plot_names()
-        fig, axes = plt.subplots(len(names), 1, sharex=True, figsize=(7, 1.8 * len(names) + 0.6), squeeze=False)
-        for ax, n in zip(axes[:, 0], names):
-            ax.plot(self.time, self[n])
-            ax.set_ylabel(n, fontsize=8)
-            ax.grid(True, alpha=0.3)
-        axes[-1, 0].set_xlabel("time [s]")
-        fig.suptitle(title or f"mbcomp ({self.status})", fontsize=10)
-        fig.tight_layout()
-        if path is not None:
-            fig.savefig(path, dpi=110)
-            plt.close(fig)
-        return fig
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from mbcomp.result import Result
+        >>> r = Result([0.0, 1.0], {"a.phi": np.zeros(2), "a.tau.z": np.ones(2), "b.tau.z": np.ones(2)})
+        >>> fig = r.plot("*.tau.z")
+        >>> [ax.get_ylabel() for ax in fig.axes]
+        ['a.tau.z', 'b.tau.z']
+        >>> import matplotlib.pyplot as plt; plt.close(fig)
+        """
+        from .plotting import draw, select
+
+        names = select(self.names, patterns) if patterns else self.default_plot_names()
+        return draw(self, names, path, title)
 
     def default_plot_names(self):
-        coords = self.stats.get("coordinates", [])[:4]
-        return coords + ["energy.total", "residual.position"]
+        """The columns a user looks at first: coordinates (a joint's angular speeds instead of
+        its quaternion), ``energy.balance`` or ``energy.total``, and the constraint residuals
+        of a model with loops (:func:`mbcomp.simulation.plotting.default_names`)."""
+        from .plotting import default_names
+
+        return default_names(self)
