@@ -37,7 +37,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..geometry.kinematics import cross
-from ..modeling.roles import Joint
+from ..modeling.component import PortRef
+from ..modeling.roles import FlangeElement, ForceElement, Joint
 from .recursive import lagrange_solution, tree_links
 
 __all__ = ["output_values", "result_columns"]
@@ -86,6 +87,7 @@ def result_columns(system, ev, ud, lam, reac):
     cols, rotations = {}, {}
     _coordinates(system, cols, ev.t, ev.q, ev.u, ev.jets, ud)
     _reactions(system, cols, ev, lam, reac)
+    _elements(system, cols, ev)
     for path, _comp, node in system.topology.bodies:
         J = ev.jets[node]
         _vector(cols, f"{path}.r", J.r)
@@ -184,7 +186,38 @@ def _reactions(system, cols, ev, lam, reac):
             continue
         fb, tb = reac[e.name]
         axis_b = ev.jets[e.node_b].R.T @ e.comp.axis_world(ev.jets[e.node_a].R, system.P[e.name])
-        if e.comp.axis_kind == "rotational":
-            cols[f"{e.drive}.tau"] = tb @ axis_b
-        else:
-            cols[f"{e.drive}.f"] = fb @ axis_b
+        effort = tb @ axis_b if e.comp.axis_kind == "rotational" else fb @ axis_b
+        cols[f"{e.drive}.{'tau' if e.comp.axis_kind == 'rotational' else 'f'}"] = effort
+        cols[f"{e.drive}.power"] = effort * cols[f"{e.name}.{e.comp.speeds[0][0]}"]
+
+
+def _elements(system, cols, ev):
+    """Force and flange elements' own outputs (:meth:`ForceElement.outputs`), the power each
+    delivers to the mechanism (W: force times its point's velocity, torque times its frame's
+    angular velocity, a flange's flow times its rate) and, for those with a potential, that
+    potential (J)."""
+    topo, jets = system.topology, ev.jets
+    for path, comp, ports in topo.forces:
+        frames = {pn: system._frame_state(jets[n]) for pn, n in ports.items()}
+        p = system.P[path]
+        for key, val in comp.outputs(ev.t, frames, p).items():
+            cols[f"{path}.{key}"] = val
+        power = 0.0
+        for pn, (f, tau) in comp.wrenches(ev.t, frames, p).items():
+            power = power + np.asarray(f) @ frames[pn].v + np.asarray(tau) @ frames[pn].w
+        cols[f"{path}.power"] = power
+        if type(comp).potential is not ForceElement.potential:
+            cols[f"{path}.potential"] = comp.potential(frames, p)
+    for path, comp in topo.flange_elements:
+        roots = {pn: topo.flange_of[PortRef(comp, pn, "flange")] for pn, pt in comp.ports().items()
+                 if pt.kind == "flange"}
+        states = {pn: system.flange_state(r, jets, ev.t, ev.q, ev.u) for pn, r in roots.items()}
+        p = system.P[path]
+        for key, val in comp.outputs(ev.t, states, p).items():
+            cols[f"{path}.{key}"] = val
+        power = 0.0
+        for pn, flow in comp.flange_forces(ev.t, states, p).items():
+            power = power + flow * states[pn][1]
+        cols[f"{path}.power"] = power
+        if type(comp).potential is not FlangeElement.potential:
+            cols[f"{path}.potential"] = comp.potential(states, p)

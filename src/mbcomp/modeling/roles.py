@@ -33,9 +33,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..modeling.component import Component, Flange, Frame, Guess
+from ..modeling.component import Component, Flange, Frame, Guess, PortRef
 
-__all__ = ["Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState"]
+__all__ = ["Ground", "Body", "Joint", "MissingFlange", "ForceElement", "FlangeElement", "Drive", "FrameState"]
 
 
 class FrameState:
@@ -74,12 +74,31 @@ class Body(Component):
     """Mass properties attached to ``frame_a``."""
 
     role = "body"
-    frame_a = Frame("the body's reference frame (a body connected to nothing floats freely)", optional=True)
+    frame_a = Frame("the body's reference frame (left open only for a body added with free=True, which "
+                    "floats freely)", optional=True)
 
     def mass_properties(self, p):
         """Return ``(m, r_cm, I_cm)``: mass (kg), centre of mass (m, frame_a coordinates),
         inertia about the centre of mass (kg m^2, frame_a axes)."""
         raise NotImplementedError
+
+
+class MissingFlange(PortRef):
+    """``joint.axis`` or ``joint.support`` of a joint that has no such flange (a
+    :class:`Spherical`, a free joint): :meth:`Model.connect <mbcomp.Model.connect>` refuses it,
+    naming the element that was to act on it and the joint.
+
+    Examples
+    --------
+    >>> from mbcomp.library import Spherical
+    >>> Spherical().axis
+    <missing flange <unnamed Spherical>.axis>
+    """
+
+    __slots__ = ()
+
+    def __repr__(self):
+        return f"<missing flange {self.path}>"
 
 
 class Joint(Component):
@@ -101,6 +120,13 @@ class Joint(Component):
     #: False for a joint that passes no force or torque between its frames (a free joint):
     #: bodies joined to the ground only through such joints feel no external load from it
     transmits_load = True
+
+    def __getattr__(self, name):
+        # reached only when normal lookup fails: ``ball.axis`` of a joint without 1-D flanges
+        # is a MissingFlange, which Model.connect refuses naming both sides (not an AttributeError)
+        if name in ("axis", "support"):
+            return MissingFlange(self, name, "flange")
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     @property
     def nq(self):
@@ -263,6 +289,10 @@ class ForceElement(Component):
 
     role = "force"
     conservative = False  # a law of time and state does work; springs declare True
+    #: True for an element whose forces beyond its potential's only take energy out (dampers,
+    #: friction): the energy balance counts their work as ``energy.dissipated``, every other
+    #: element's as ``energy.work``
+    dissipative = False
     #: True for a load from outside the mechanism (a force or torque given in the world,
     #: with no reaction on another of its frames): it changes the mechanism's momentum
     external = False
@@ -276,12 +306,27 @@ class ForceElement(Component):
         """Potential energy in J (0 for non-conservative elements)."""
         return 0.0
 
+    def outputs(self, t, frames, p):
+        """Named result columns of this element at one output time (optional), reported as
+        ``<element>.<suffix>``: e.g. a spring's tension ``f`` (N) and ``length`` (m). Its
+        ``power`` (W, delivered to the mechanism) and, when it has a :meth:`potential`, its
+        ``potential`` (J) are added by the post-processing for every element.
+
+        Returns
+        -------
+        dict
+            ``{suffix: float}`` (default: none).
+        """
+        return {}
+
 
 class FlangeElement(Component):
     """Forces along 1-D flanges. Subclasses declare ``Flange`` ports."""
 
     role = "flange_force"
     conservative = False  # a law of time and state does work; springs declare True
+    #: as :attr:`ForceElement.dissipative`
+    dissipative = False
 
     def flange_forces(self, t, states, p):
         """Return ``{port_name: flow}``: force (N) or torque (N m) the element applies to each
@@ -289,7 +334,14 @@ class FlangeElement(Component):
         raise NotImplementedError
 
     def potential(self, states, p):
+        """Potential energy in J (0 for non-conservative elements)."""
         return 0.0
+
+    def outputs(self, t, states, p):
+        """Named result columns at one output time (optional, as :meth:`ForceElement.outputs`),
+        e.g. a motor's torque ``tau`` (N m); ``power`` and ``potential`` are added for every
+        element. ``states`` maps flange name -> ``(s, v)``."""
+        return {}
 
 
 class Drive(Component):

@@ -14,6 +14,7 @@ results up to the last accepted step:
 * ``status="failed"``: a stepper failed (its message names the cause), a run monitor found a
   singular position, or a component's law raised -- the message then names the component,
   the law, the time and the exception;
+* ``status="budget"``: ``max_wall_time`` or ``max_steps`` ran out (the message says which);
 * ``status="interrupted"``: Ctrl-C (``KeyboardInterrupt``) or ``SIGTERM`` during the
   integration (a SIGTERM handler is installed only while integrating, only in the main
   thread, and the previous one restored).
@@ -43,8 +44,9 @@ from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
 from .postprocess import postprocess
 from .result import Result
-from .setup import ALL_METHODS, check_request, check_singular, output_times, system_of
-from .stepping import Run, hooks_for
+from .setup import ALL_METHODS, check_numbers, check_request, check_singular, output_times, system_of
+from .stepping import Budget, BudgetSpent, Run, hooks_for
+from .stiffness import StiffnessWatch
 from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
 
 __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
@@ -62,7 +64,7 @@ def __getattr__(name):
 def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rtol=1e-8, atol=1e-10,
              formulation="lagrange", stabilization=None, alpha=10.0, beta=10.0, n_out=None, dt_out=None,
              max_step=np.inf, progress=False, independent=None, index=None, h=None,
-             backend="auto", singular="stop", inputs=None) -> Result:
+             backend="auto", singular="stop", inputs=None, max_wall_time=None, max_steps=None) -> Result:
     """Simulate a model: Lagrange multipliers at index 1, or D'Alembert projection to an ODE.
 
     Parameters
@@ -123,24 +125,55 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         it the motion need not be unique) ends the run there, naming the time; ``"pass"`` goes
         on, positions and velocities continuous, recording each passage in
         ``stats["singular_passages"]`` (time, relative singular value, rank drop, joints).
+    max_wall_time : float, optional
+        Wall-time budget of the call (s, assembly, compilation and integration); when it runs
+        out the run ends with status ``"budget"`` and the results computed so far.
+    max_steps : int, optional
+        Budget of integrator steps; the same.
 
     Returns
     -------
     Result
         ``status`` ``"success"``, ``"inaccurate"`` (an accuracy alarm: see
-        :mod:`mbcomp.simulation.accuracy`), ``"failed"`` or ``"interrupted"``; the results up to the
-        last accepted step in every case.
+        :mod:`mbcomp.simulation.accuracy`), ``"failed"``, ``"budget"`` (``max_wall_time`` or
+        ``max_steps`` ran out) or ``"interrupted"``; the results up to the last accepted step
+        in every case.
     """
+    check_model(model)
+    check_numbers(t_start=t_start, t_end=t_end, rtol=rtol, atol=atol, alpha=alpha, beta=beta, n_out=n_out,
+                  dt_out=dt_out, max_step=max_step, h=h, max_wall_time=max_wall_time, max_steps=max_steps)
     stepper, index = check_request(method, formulation, index, h, t_start, t_end, backend)
     stabilization = check_singular(singular, method, stepper, formulation, stabilization)
     check_names(inputs or {})
     with input_signals({name: signal_of(name, v) for name, v in (inputs or {}).items()}):
         return _simulate(model, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha,
-                         beta, independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress)
+                         beta, independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress,
+                         Budget(max_wall_time, max_steps) if max_wall_time or max_steps else None)
+
+
+def check_model(model):
+    """A ``TypeError`` naming what was given and the fix unless ``model`` is a
+    :class:`~mbcomp.Model` or an assembled system."""
+    from ..assembly.system import MultibodySystem
+    from ..modeling.model import Model
+
+    if isinstance(model, (Model, MultibodySystem)):
+        return
+    import os
+
+    if isinstance(model, (str, os.PathLike)):
+        raise TypeError(f"simulate() takes a Model, not the path {str(model)!r} -> load the file and build its "
+                        f"model first: mbcomp.simulate(mbcomp.load_model_file({str(model)!r}).build(), ...), or run "
+                        f"'mbcomp simulate {model}' from a shell")
+    if callable(getattr(model, "build", None)):
+        raise TypeError(f"simulate() takes a Model, not {type(model).__name__} {getattr(model, '__name__', '')!r} "
+                        "-> call its build() and pass the model it returns: mbcomp.simulate(mod.build(), ...)")
+    raise TypeError(f"simulate() takes an mbcomp.Model (or an assembled system), not {type(model).__name__} "
+                    f"{model!r:.60} -> build the model with mbcomp.Model() and pass it")
 
 
 def _simulate(model, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha, beta,
-              independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress):
+              independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress, budget):
     """:func:`simulate` once the request is checked and the inputs' signals are in place."""
     system = system_of(model, params, backend)
     try:
@@ -157,7 +190,13 @@ def _simulate(model, t_start, t_end, params, backend, formulation, stepper, inde
               max_step=max_step, h=h)
     monitors = monitors_for(system, atol, singular)
     wall0 = _time.perf_counter()
-    status, message = integrate(run, monitors, progress)
+    watch = None if stepper.implicit else StiffnessWatch()
+    status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None])
+    if watch is not None:
+        if status == "budget" and not watch.done:  # a run cut short: say why it was slow
+            watch(run, now=True)
+        if watch.note:
+            message = f"{message}; {watch.note}"
     stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
                       index=index, rtol=rtol, atol=atol)
     t_done = run.t_out[: len(run.ys)]
@@ -182,10 +221,12 @@ def run_stats(run, monitors, init, seconds, **request):
     return stats
 
 
-def integrate(run, monitors, progress=False):
+def integrate(run, monitors, progress=False, extra=()):
     """Step ``run`` to its end; ``(status, message)``. Every way a run can stop early keeps
-    the outputs of the accepted steps (see the module notes)."""
-    hooks = run.hooks = hooks_for(run, monitors, progress)
+    the outputs of the accepted steps (see the module notes). ``extra`` hooks run after the
+    usual ones: a :class:`~mbcomp.simulation.stepping.Budget` that runs out ends the run with
+    ``"budget"``."""
+    hooks = run.hooks = hooks_for(run, monitors, progress) + list(extra)
     status, message = "success", "reached t_end"
     with sigterm_interrupts():
         try:
@@ -194,6 +235,8 @@ def integrate(run, monitors, progress=False):
                 if run.advance():
                     for hook in hooks:
                         hook(run)
+        except BudgetSpent as exc:
+            status, message = "budget", f"{exc}; the results up to t={run.t_kept:g} s are kept"
         except SingularPosition as exc:  # results past the singular position are not valid
             run.trim(exc.t)
             status, message = "failed", str(exc)

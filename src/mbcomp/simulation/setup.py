@@ -20,6 +20,8 @@ Traceback (most recent call last):
 ValueError: method 'genalpha' uses a fixed step: give the step size h (s), e.g. h=1e-4
 >>> output_times(0.0, 1.0, None, 0.25).tolist()
 [0.0, 0.25, 0.5, 0.75, 1.0]
+>>> output_times(0.0, 1.0, None, 0.3).tolist(), output_times(0.0, 1.0, None, 5.0).tolist()
+([0.0, 0.3, 0.6, 0.8999999999999999, 1.0], [0.0, 1.0])
 """
 from __future__ import annotations
 
@@ -29,7 +31,7 @@ from ..assembly.system import MultibodySystem, assemble
 from ..formulations import check
 from ..solvers import STEPPERS
 
-__all__ = ["ALL_METHODS", "BACKENDS", "check_request", "system_of", "output_times"]
+__all__ = ["ALL_METHODS", "BACKENDS", "check_request", "check_numbers", "system_of", "output_times"]
 
 #: every method name, scipy's ODE methods first
 ALL_METHODS = tuple(STEPPERS)
@@ -121,11 +123,67 @@ def system_of(model, params, backend):
     return system
 
 
-def output_times(t_start, t_end, n_out, dt_out):
-    """Output grid (s): a step ``dt_out`` (not past ``t_end``), else ``n_out`` points
-    (default 501)."""
+def _positive(name, value, fix, allow_inf=False):
+    """A ``ValueError`` naming ``name`` and the fix unless ``value`` is a positive number."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}={value!r} is not a number -> {fix}") from None
+    if not v > 0 or (np.isinf(v) and not allow_inf) or np.isnan(v):
+        raise ValueError(f"{name}={value!r} must be a positive{'' if allow_inf else ', finite'} number -> {fix}")
+    return v
+
+
+def check_numbers(*, t_start, t_end, rtol, atol, alpha, beta, n_out, dt_out, max_step, h, max_wall_time, max_steps):
+    """A ``ValueError`` naming the argument and the fix for a number :func:`mbcomp.simulate`
+    cannot honour (before anything is assembled): non-finite times, tolerances that are not
+    positive (``rtol`` at least the rounding unit), negative Baumgarte gains, an output grid
+    of fewer than two points or a non-positive step, non-positive step bounds and budgets.
+
+    Examples
+    --------
+    >>> check_numbers(t_start=0.0, t_end=1.0, rtol=-1e-6, atol=1e-9, alpha=10.0, beta=10.0, n_out=None,
+    ...               dt_out=None, max_step=np.inf, h=None, max_wall_time=None, max_steps=None)
+    Traceback (most recent call last):
+    ...
+    ValueError: rtol=-1e-06 must be a positive, finite number -> give a relative tolerance such as rtol=1e-8
+    """
+    for name, v in (("t_start", t_start), ("t_end", t_end)):
+        if not np.isfinite(_positive(name, abs(float(v)) + 1.0, "give a finite time in s")):
+            raise ValueError(f"{name}={v!r} must be finite (s)")
+    _positive("rtol", rtol, "give a relative tolerance such as rtol=1e-8")
+    if rtol < 100 * np.finfo(float).eps:
+        raise ValueError(f"rtol={rtol!r} is below what double precision can deliver (about 2.2e-14) -> "
+                         "give rtol >= 1e-13")
+    for i, a in enumerate(np.atleast_1d(np.asarray(atol, dtype=object))):
+        _positive("atol" if np.ndim(atol) == 0 else f"atol[{i}]", a, "give an absolute tolerance such as atol=1e-10")
+    for name, v in (("alpha", alpha), ("beta", beta)):
+        if not (isinstance(v, (int, float, np.floating, np.integer)) and np.isfinite(v) and v >= 0):
+            raise ValueError(f"the Baumgarte gain {name}={v!r} must be a finite number >= 0 (1/s): a negative gain "
+                             f"drives the constraint error up instead of down -> give e.g. {name}=10.0, or "
+                             "stabilization='projection'")
+    if n_out is not None and (isinstance(n_out, bool) or not isinstance(n_out, (int, np.integer)) or n_out < 2):
+        raise ValueError(f"n_out={n_out!r} must be an integer >= 2 (the start and t_end are always output) -> "
+                         "give e.g. n_out=501, or dt_out= a step in s")
     if dt_out is not None:
-        t_out = np.arange(t_start, t_end + 0.5 * dt_out, dt_out)
-        t_out[-1] = min(t_out[-1], t_end)
-        return t_out
+        _positive("dt_out", dt_out, "give the output step in s, e.g. dt_out=0.01")
+    _positive("max_step", max_step, "give the largest step in s, or leave it out (no bound)", allow_inf=True)
+    if h is not None:
+        _positive("h", h, "give the (first) step size in s, e.g. h=1e-4")
+    if max_wall_time is not None:
+        _positive("max_wall_time", max_wall_time, "give the wall-time budget in s, e.g. max_wall_time=60")
+    if max_steps is not None and (isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer))
+                                  or max_steps < 1):
+        raise ValueError(f"max_steps={max_steps!r} must be a positive integer -> give e.g. max_steps=100000")
+
+
+def output_times(t_start, t_end, n_out, dt_out):
+    """Output grid (s): a step ``dt_out`` from ``t_start``, else ``n_out`` points (default
+    501); ``t_end`` is always the last point (after a shorter last interval when ``dt_out``
+    does not divide the span; alone with the start when ``dt_out`` is longer than the run)."""
+    if dt_out is not None:
+        n = int(np.floor((t_end - t_start) / dt_out * (1.0 + 1e-12)))
+        t_out = t_start + dt_out * np.arange(n + 1)
+        t_out = t_out[t_out < t_end - 1e-9 * dt_out]
+        return np.append(t_out, t_end)
     return np.linspace(t_start, t_end, n_out or 501)

@@ -47,7 +47,8 @@ import numpy as np
 from ..errors import SimulationError
 from .monitors import StepEnd
 
-__all__ = ["Run", "StepHook", "Monitoring", "KeepOutputs", "Projection", "Repartition", "Progress", "hooks_for"]
+__all__ = ["Run", "StepHook", "Monitoring", "KeepOutputs", "Projection", "Repartition", "Progress", "Budget",
+           "BudgetSpent", "hooks_for"]
 
 
 class Run:
@@ -260,6 +261,42 @@ class Progress(StepHook):
     def close(self):
         if self.bar is not None:
             self.bar.close()
+
+
+class BudgetSpent(Exception):
+    """A run's wall-time or step budget ran out (raised by :class:`Budget`; the driver ends
+    the run with status ``"budget"`` and keeps every output)."""
+
+
+class Budget(StepHook):
+    """Ends the run when its wall time (s, from the hook's creation) or its step count (the
+    integrator's steps, :meth:`Run.counters`) reaches the budget. Checked after every
+    driver step: a compiled stepper's stretch (up to 16 output intervals in one C call) may
+    overshoot the budget by one stretch.
+
+    Parameters
+    ----------
+    max_wall_time : float or None
+        Seconds of wall time.
+    max_steps : int or None
+        Integrator steps (accepted and rejected attempts as each stepper counts them).
+    """
+
+    def __init__(self, max_wall_time=None, max_steps=None):
+        self.max_wall_time, self.max_steps = max_wall_time, max_steps
+        self.started = time.perf_counter()
+
+    def __call__(self, run):
+        if self.max_wall_time is not None:
+            spent = time.perf_counter() - self.started
+            if spent >= self.max_wall_time:
+                raise BudgetSpent(f"the wall-time budget of {self.max_wall_time:g} s ran out at t={run.t:g} s "
+                                  f"(of {run.t_out[-1]:g} s; {spent:.3g} s spent)")
+        if self.max_steps is not None:
+            steps = run.counters()["steps"]
+            if steps >= self.max_steps:
+                raise BudgetSpent(f"the step budget of {self.max_steps} steps ran out at t={run.t:g} s "
+                                  f"(of {run.t_out[-1]:g} s)")
 
 
 def hooks_for(run, monitors, progress):

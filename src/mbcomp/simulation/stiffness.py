@@ -1,0 +1,210 @@
+"""Saying once, during a long run of an explicit method, that the model looks stiff -- and why.
+
+An explicit method's step is bounded by stability: ``h |lambda| <~ 3..6`` for the fastest
+rate ``lambda`` of the linearized right-hand side, however smooth the solution. A stiff
+spring (c = 1e7 N/m on 1 kg: 3,000 1/s) therefore forces 1e-3 s steps on a motion one
+would resolve in 1e-1 s. :class:`StiffnessWatch` (a step hook) waits until a run has lasted
+:attr:`StiffnessWatch.after` seconds of wall time with many steps, then estimates once:
+
+* the mean step so far, ``h = (t - t0) / steps``;
+* the fastest rate: the spectral radius of ``d fun / dy`` at the current state (the
+  formulation's difference Jacobian, :meth:`~mbcomp.formulations.base.Formulation.jac`);
+* which element makes it fast: for each force and flange element, how much its generalized
+  force changes along the fastest mode (``|M^-1 dQ_c|`` for a unit move along the mode's
+  coordinates), the largest named.
+
+If ``h |lambda| > 0.5`` and the fastest rate is over :data:`STIFF_SPREAD` times the
+slowest, the steps are held by that rate: the hint names the rate and the element and
+suggests an implicit method. If the steps are far smaller than any rate needs
+(``h |lambda| < 0.01``), the cause is not stiffness but a law the integrator cannot pass
+smoothly (``sign``, ``abs``, a branch): the hint says so and names the elements with laws.
+The hint is a ``RuntimeWarning`` when it is made and a note in the result's message.
+
+Examples
+--------
+>>> import mbcomp
+>>> from mbcomp.library import World, Prismatic, PointMass, TranslationalSpringDamper
+>>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, 0)))
+>>> j = m.add("j", Prismatic(n=(1, 0, 0), s0=0.01)); b = m.add("b", PointMass(m=1.0))
+>>> k = m.add("k", TranslationalSpringDamper(c=1e6))
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, b.frame_a)
+>>> m.connect(j.support, k.flange_a); m.connect(j.axis, k.flange_b)
+>>> from mbcomp.formulations import build
+>>> form = build("lagrange", "ode", mbcomp.assemble(m))
+>>> rate, who, smooth, spread = fastest_rate(form, 0.0, form.initial_state(0.0, [0.01], [0.0]))
+>>> round(rate), who, smooth, round(spread)               # sqrt(c / m); one mode
+(1000, 'k', True, 1)
+"""
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+
+from ..modeling.component import PortRef
+from .stepping import StepHook
+
+__all__ = ["StiffnessWatch", "fastest_rate", "stiffness_hint"]
+
+#: fastest / slowest rate above which steps held by the fastest mean stiffness (below it the
+#: steps follow the motion's own rates: a loose tolerance, not stiffness)
+STIFF_SPREAD = 100.0
+#: states above which the rate comes from power iteration instead of a full eigen-solve
+DENSE_STATES = 200
+
+
+def _jacobian(form, t, y, rel):
+    """``d fun / dy`` by forward differences with the relative step ``rel``."""
+    f0 = np.asarray(form.fun(t, y))
+    J = np.empty((f0.size, y.size))
+    for j in range(y.size):
+        yj = y.copy()
+        yj[j] += rel * max(abs(y[j]), 1.0)
+        J[:, j] = (np.asarray(form.fun(t, yj)) - f0) / (yj[j] - y[j])
+    return J
+
+
+def _spectrum(form, t, y, rel=1.5e-8):
+    """``(|lambda|_max, mode, |lambda|_min)``: the fastest rate of ``d fun / dy`` at ``(t, y)``
+    (differences of relative step ``rel``), its eigenvector (real and imaginary parts added)
+    and the slowest non-zero rate (None above :data:`DENSE_STATES` states)."""
+    if y.size <= DENSE_STATES:
+        lam, vec = np.linalg.eig(_jacobian(form, t, y, rel))
+        k = int(np.argmax(abs(lam)))
+        return float(abs(lam[k])), np.real(vec[:, k]) + np.imag(vec[:, k]), _slowest(abs(lam))
+    f0, v = np.asarray(form.fun(t, y)), np.random.default_rng(0).standard_normal(y.size)
+    rate = 0.0
+    for _ in range(30):  # power iteration by directional differences
+        v /= np.linalg.norm(v)
+        h = rel * max(1.0, float(np.linalg.norm(y)))
+        w = (np.asarray(form.fun(t, y + h * v)) - f0) / h
+        rate, v = float(np.linalg.norm(w)), w
+    return rate, v / np.linalg.norm(v), None
+
+
+def _slowest(rates):
+    """The slowest rate that is not zero (above 1e-6 of the fastest), or None."""
+    live = rates[rates > 1e-6 * rates.max()] if rates.size and rates.max() > 0 else rates[:0]
+    return float(live.min()) if live.size else None
+
+
+def _generalized(system, t, q, u, path):
+    """The generalized force (u-space) of the element ``path`` alone at ``(t, q, u)``."""
+    jets = system.kinematics(t, q, u)
+    topo, f = system.topology, np.zeros(system.nu)
+    for p, comp, ports in topo.forces:
+        if p == path:
+            frames = {pn: system._frame_state(jets[n]) for pn, n in ports.items()}
+            for pn, (F, T) in comp.wrenches(t, frames, system.P[p]).items():
+                J = jets[ports[pn]]
+                f += J.Jv.T @ np.asarray(F, float) + J.Jw.T @ np.asarray(T, float)
+    for p, comp in topo.flange_elements:
+        if p != path:
+            continue
+        roots = {pn: topo.flange_of[PortRef(comp, pn, "flange")] for pn, pt in comp.ports().items()
+                 if pt.kind == "flange"}
+        states = {pn: system.flange_state(r, jets, t, q, u) for pn, r in roots.items()}
+        for pn, flow in comp.flange_forces(t, states, system.P[p]).items():
+            jname, which = topo.flange_owner[roots[pn]]
+            if which != "axis":
+                continue
+            e = next(x for x in topo.edges if x.name == jname)
+            n = e.comp.axis_world(jets[e.node_a].R, system.P[e.name]) * float(flow)
+            a, b = jets[e.node_a], jets[e.node_b]
+            f += ((b.Jw - a.Jw) if e.comp.axis_kind == "rotational" else (b.Jv - a.Jv)).T @ n
+    return f
+
+
+def fastest_rate(form, t, y):
+    """``(rate, element, smooth, spread)``: the fastest rate (1/s) of the formulation's right-hand
+    side at ``(t, y)``, the name of the force or flange element that contributes most to it
+    (``None`` when no element does, e.g. a stiff mass ratio or a constraint's gains), and
+    whether the right-hand side is smooth there: a rate that grows as the difference step
+    shrinks (by over 10x for a 1000x smaller step) is a jump, not a rate; and the ratio of the
+    fastest to the slowest non-zero rate (None when unknown)."""
+    y = np.asarray(y, float)
+    rate, mode, slow = _spectrum(form, t, y)
+    spread = rate / slow if slow else None
+    smooth = rate <= 10.0 * _spectrum(form, t, y, rel=1.5e-5)[0]
+    system = form.system
+    names = [p for p, _, _ in system.topology.forces] + [p for p, _ in system.topology.flange_elements]
+    if not names:
+        return rate, None, smooth, spread
+    eps = 1e-6
+    ya, yb = form.full(t, y + eps * mode), form.full(t, y - eps * mode)
+    nq = system.nq
+    M = system.evaluate_numeric(t, ya[:nq], ya[nq:]).M
+    best, who = 0.0, None
+    for path in names:
+        dQ = (_generalized(system, t, ya[:nq], ya[nq:], path) - _generalized(system, t, yb[:nq], yb[nq:], path)) / (2 * eps)
+        size = float(np.linalg.norm(np.linalg.lstsq(M, dQ, rcond=None)[0]))
+        if size > best:
+            best, who = size, path
+    return rate, (who if best > 1e-3 * rate else None), smooth, spread
+
+
+def stiffness_hint(form, t, y, h, steps):
+    """The hint at the state ``y`` at ``t`` (s) of a run whose recent steps are ``h`` (s) long
+    and that made ``steps`` steps (see the module notes), or ``None`` when the steps are
+    neither held by a fast rate nor suspiciously small."""
+    rate, who, smooth, spread = fastest_rate(form, t, y)
+    whose = f" (element {who!r})" if who else ""
+    if not smooth:
+        return (f"the steps are held small (h={h:.2g} s, {steps} steps to t={t:g} s) by a jump in the right-hand "
+                f"side{whose}: a law with a discontinuity (sign, a branch, a table) -> smooth it (e.g. "
+                "tanh(w / 1e-3) for sign(w)), or end the run early with max_wall_time=")
+    if h * rate > 0.5 and (spread is None or spread > STIFF_SPREAD):
+        return (f"this model looks stiff: the largest rate is about {rate:.3g} 1/s{whose}, which holds the explicit "
+                f"method's steps near h={h:.2g} s ({steps} steps to t={t:g} s) -> try method='radau5' or "
+                f"method='BDF'{', or a softer ' + repr(who) if who else ''}")
+    if h * rate < 0.01:
+        comps = system_laws(form.system)
+        return (f"the steps are tiny (h={h:.2g} s, {steps} steps to t={t:g} s) although the fastest rate is only "
+                f"about {rate:.3g} 1/s: a law with a kink or a discontinuity makes the integrator creep"
+                f"{' -- laws in ' + ', '.join(comps) if comps else ''} -> smooth it (e.g. tanh(w / 1e-3) for sign(w)) "
+                "or end the run early with max_wall_time=")
+    return None
+
+
+def system_laws(system):
+    """Names of the components whose parameters are callables (laws)."""
+    return [name for name, comp in system.topology.flat.components.items()
+            if any(callable(v) for v in vars(system.P.get(name, comp.p)).values())]
+
+
+class StiffnessWatch(StepHook):
+    """Makes :func:`stiffness_hint` once, after :attr:`after` s of wall time and
+    :attr:`min_steps` steps of an explicit method, from the steps of the last half of that
+    time; warns with it and keeps it for the result's message (``note``)."""
+
+    #: wall time (s) a run lasts before the hint is made
+    after = 2.0
+    #: integrator steps a run has made before the hint is made
+    min_steps = 2000
+
+    def __init__(self):
+        self.started = time.perf_counter()
+        self.note = None
+        self.done = False
+        self.trail = []  # (wall time, t, steps) after every driver step
+
+    def __call__(self, run, now=False):
+        if self.done:
+            return
+        wall, steps = time.perf_counter() - self.started, run.counters()["steps"]
+        self.trail.append((wall, run.t, steps))
+        if not now and (wall < self.after or steps < self.min_steps):
+            return
+        self.done = True
+        past = next((x for x in self.trail if x[0] >= 0.5 * wall and x[2] < steps), self.trail[0])
+        h = (run.t - past[1]) / max(steps - past[2], 1)
+        try:
+            self.note = stiffness_hint(run.form, run.stepper.t, run.stepper.y, h, steps)
+        except Exception:  # noqa: BLE001 - a hint must never end a run
+            self.note = None
+        if self.note:
+            warnings.warn(f"mbcomp: {self.note}", RuntimeWarning, stacklevel=2)
+
+    def stats(self):
+        return {"stiffness_hint": self.note} if self.note else {}
