@@ -2,9 +2,10 @@
 
 What :func:`mbcomp.export.fmu.export_fmu` writes into ``modelDescription.xml`` (FMI 3.0 and
 2.0) and FMI 3.0's ``buildDescription.xml``: parameters with mbcomp's names, units with SI
-base-unit exponents parsed from mbcomp's unit strings (:func:`unit_exponents`), the states
-and their derivatives, the outputs (units declared where the columns are made:
-:func:`_column_units`), the inputs and the start values.
+base-unit exponents parsed from mbcomp's unit strings (:func:`unit_exponents`: mbcomp's one
+unit parser, :mod:`mbcomp.modeling.units`), the states and their derivatives, the outputs
+(units declared where the columns are made: :func:`mbcomp.assembly.column_units.column_units`,
+as the results carry them), the inputs and the start values.
 
 Examples
 --------
@@ -14,6 +15,10 @@ Examples
 from __future__ import annotations
 
 from xml.sax.saxutils import escape
+
+from ..assembly.column_units import column_units
+from ..modeling.units import BASE as _BASE
+from ..modeling.units import unit_exponents
 
 __all__ = ["unit_exponents", "unit_name"]
 
@@ -28,42 +33,6 @@ def _version():
         return version("mbcomp")
     except PackageNotFoundError:
         return "(not installed)"
-
-
-#: SI base-unit exponents (kg, m, s, A, K, mol, cd, rad) of the unit symbols mbcomp's
-#: parameters and coordinates use
-_BASE = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
-
-
-_SYMBOLS = {"kg": {"kg": 1}, "m": {"m": 1}, "s": {"s": 1}, "rad": {"rad": 1}, "N": {"kg": 1, "m": 1, "s": -2},
-            "J": {"kg": 1, "m": 2, "s": -2}, "W": {"kg": 1, "m": 2, "s": -3}, "Pa": {"kg": 1, "m": -1, "s": -2},
-            "A": {"A": 1}, "K": {"K": 1}, "1": {}}
-
-
-def unit_exponents(text):
-    """The SI base-unit exponents of a unit as mbcomp writes it (``"N m s/rad"``,
-    ``"kg m^2"``, ``"m/s^2"``), or None when it is not one unit (``"m or rad"``) or a symbol
-    is unknown.
-
-    Examples
-    --------
-    >>> unit_exponents("N m s/rad")
-    {'kg': 1, 'm': 2, 's': -1, 'rad': -1}
-    >>> unit_exponents("m or rad") is None, unit_exponents("1")
-    (True, {})
-    """
-    if not text or " or " in text:
-        return None
-    num, _, den = text.partition("/")
-    exps = {}
-    for part, sign in ((num, 1), (den, -1)):
-        for tok in part.split():
-            sym, _, power = tok.partition("^")
-            if sym not in _SYMBOLS or (power and not power.lstrip("-").isdigit()):
-                return None
-            for base, e in _SYMBOLS[sym].items():
-                exps[base] = exps.get(base, 0) + sign * e * (int(power) if power else 1)
-    return {b: exps[b] for b in _BASE if exps.get(b)}
 
 
 def unit_name(exps):
@@ -103,45 +72,9 @@ def _units(system, layout, state_units):
 
 
 def _column_units(system):
-    """``{column name: SI exponents}`` of the result columns whose unit is declared where they
-    are made: coordinates and speeds (the joints' declared units; a speed's rate per second),
-    reactions (N, N m), drive efforts (by the joint's declared axis kind), body positions,
-    velocities and angular velocities, energies. Mixed columns (residuals, multipliers,
-    joints' own outputs) have none."""
-    topo, out = system.topology, {}
-
-    def put(name, text, per_second=False):
-        e = unit_exponents(text)
-        e = _per_second(e) if per_second else e
-        if e is not None:
-            out[name] = e
-
-    for name, u in zip(system.q_names, topo.q_units):
-        put(name, u)
-    for name, u in zip(system.u_names, topo.u_units):
-        put(name, u)
-        put(f"{name}.der", u, per_second=True)
-    for e in topo.edges:
-        if e.kind == "joint" and e.dof == 1 and e.q.stop == e.q.start and e.comp.coordinates:
-            (cn, cu), (sn, su) = e.comp.coordinates[0], e.comp.speeds[0]
-            put(f"{e.name}.{cn}", cu)
-            put(f"{e.name}.{sn}", su)
-        for ax in "xyz":
-            put(f"{e.name}.f.{ax}", "N")
-            put(f"{e.name}.tau.{ax}", "N m")
-        if e.drive:
-            put(f"{e.drive}.tau" if e.comp.axis_kind == "rotational" else f"{e.drive}.f",
-                "N m" if e.comp.axis_kind == "rotational" else "N")
-    for path, _comp, _node in topo.bodies:
-        for ax in "xyz":
-            put(f"{path}.r.{ax}", "m")
-            put(f"{path}.v.{ax}", "m/s")
-            put(f"{path}.w.{ax}", "rad/s")
-        for c in "wxyz":
-            put(f"{path}.Q.{c}", "1")
-    for k in ("kinetic", "potential", "total"):
-        put(f"energy.{k}", "J")
-    return out
+    """``{column name: SI exponents}`` of the result columns whose unit is declared
+    (:func:`mbcomp.assembly.column_units.column_units`)."""
+    return {name: unit_exponents(text) for name, text in column_units(system).items()}
 
 
 def _start_names(system):

@@ -22,18 +22,24 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..errors import Problem
+from .docstring import document_component
+from .units import UnitError, example, has_unit, is_quantity, to_unit
 
 __all__ = ["Param", "Frame", "Flange", "Port", "Component", "Guess"]
 
 
 class Guess:
-    """A start value that initialization may change (not fixed).
+    """A start value that initialization may change (not fixed); like any parameter value it
+    may carry a unit (``Guess("30 deg")``), converted when the component is made.
 
     Examples
     --------
     >>> from mbcomp import Guess
     >>> Guess(0.3).value
     0.3
+    >>> from mbcomp.library import Revolute
+    >>> round(Revolute(phi0=Guess("90 deg")).p.phi0.value, 6)
+    1.570796
     """
 
     def __init__(self, value):
@@ -53,12 +59,20 @@ _CHECKS = {
 class Param:
     """A documented, validated parameter in SI units.
 
+    A value may be given with a unit (:mod:`mbcomp.modeling.units`): a string such as
+    ``"250 g"``, ``"30 deg"``, ``"2 kN/m"``, ``"(10, 0, 0) cm"``, a list or tuple of numbers and
+    such strings (``("10 cm", 0, 0)``), or a ``pint`` quantity. It is converted to the
+    parameter's ``unit`` once, when the component is made (:meth:`coerce`); a unit of another
+    dimension or an unknown one is a problem :meth:`mbcomp.Model.validate` reports, naming the
+    parameter and both units.
+
     Parameters
     ----------
     default : float, array_like, callable or None
         Default value. ``None`` means the parameter is optional.
     unit : str
-        SI unit, e.g. ``"kg"``, ``"N/m"``, ``"rad"``.
+        SI unit, e.g. ``"kg"``, ``"N/m"``, ``"rad"``; ``"1"`` for none; alternatives as
+        ``"m or rad"`` (a value in either is accepted).
     doc : str
         One-line meaning, including the frame a vector is resolved in.
     shape : tuple, optional
@@ -67,7 +81,16 @@ class Param:
         ``"positive"``, ``"nonnegative"``, ``"nonzero"``, or ``f(value) -> str | None``
         returning a message when the value is bad.
     kind : {"number", "start", "law", "any"}
-        ``"start"`` values may be a :class:`Guess`; ``"law"`` values may be callables.
+        ``"start"`` values may be a :class:`Guess`; ``"law"`` values may be callables;
+        ``"any"`` values are kept as given (only a pint quantity is converted).
+
+    Examples
+    --------
+    >>> from mbcomp import Param
+    >>> Param(1.0, unit="N/m").coerce("2 kN/m")
+    (2000.0, None)
+    >>> Param(1.0, unit="kg").coerce("30 deg")[1]
+    '"30 deg" has unit deg (angle), expected kg (mass)'
     """
 
     def __init__(self, default, unit="1", doc="", shape=(), check=None, kind="number"):
@@ -83,31 +106,40 @@ class Param:
             return self
         return obj.p.__dict__[self.name]
 
+    def __repr__(self):
+        return f"Param({self.default!r}, unit={self.unit!r}, doc={self.doc!r})"
+
     def _unit_suffix(self):
         return "" if self.unit in ("1", "") else f" {self.unit}"
 
-    def hint(self):
-        """The fix to suggest for a bad value: what the parameter means, its unit and shape."""
+    def hint(self, given=None):
+        """The fix to suggest for a bad value: what the parameter means, its unit and shape;
+        for a value ``given`` with a unit, also a value with a unit of the right dimension."""
         what = f" ({self.doc})" if self.doc else ""
         shape = f" as an array of shape {self.shape}" if self.shape else ""
         unit = " (dimensionless)" if self.unit in ("1", "") else f" in {self.unit}"
         req = {"positive": ", > 0", "nonnegative": ", >= 0", "nonzero": ", not zero"}.get(
             self.check if isinstance(self.check, str) else None, "")
-        return f"give {self.name}{what}{shape}{unit}{req}"
+        alt = example(self.unit) if given is not None and has_unit(given) else ""
+        return f"give {self.name}{what}{shape}{unit}{req}" + (f", or {alt}" if alt else "")
 
     def coerce(self, value):
-        """Return ``(value, problem_text)``: the value as stored, or why it is bad."""
+        """Return ``(value, problem_text)``: the value as stored (converted to :attr:`unit` when
+        given with a unit), or why it is bad."""
         if value is None:
             return None, None
-        if self.kind == "any":
-            return value, None
+        if self.kind == "any":  # a law, a number or text: only a pint quantity is converted
+            return self._convert(value) if is_quantity(value) else (value, None)
         if self.kind == "law" and callable(value):
             return value, None
         if self.kind == "start" and isinstance(value, Guess):
             inner, msg = self.coerce(value.value)
             return (Guess(inner) if msg is None else value), msg
+        number, msg = self._convert(value)
+        if msg:
+            return value, msg
         try:
-            arr = np.array(value, dtype=float)
+            arr = np.array(number, dtype=float)
         except (TypeError, ValueError):
             return value, f"{value!r} is not a number{'' if not self.shape else ' array'}"
         if arr.shape != self.shape:
@@ -124,6 +156,13 @@ class Param:
                 if msg:
                     return value, msg
         return (float(arr) if arr.shape == () else arr), None
+
+    def _convert(self, value):
+        """``(value in this parameter's unit, None)``, or ``(value, why not)``."""
+        try:
+            return to_unit(value, self.unit), None
+        except UnitError as exc:
+            return value, str(exc)
 
 
 def _fmt(arr):
@@ -145,6 +184,9 @@ class Port:
         if obj is None:
             return self
         return PortRef(obj, self.name, self.kind)
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self.doc!r}{', optional=True' if self.optional else ''})"
 
 
 class Frame(Port):
@@ -203,6 +245,12 @@ class Component:
     #: whether the component's forces do no work but through its :meth:`potential` (or none at
     #: all): declared by each class, read by :meth:`conserves_energy`
     conservative = True
+
+    def __init_subclass__(cls, **kwargs):
+        """Document the subclass's parameters (unit, default, doc) and ports in its docstring,
+        so ``help()``, pydoc and IDEs list them (:func:`mbcomp.modeling.docstring.document_component`)."""
+        super().__init_subclass__(**kwargs)
+        document_component(cls)
 
     def conserves_energy(self, p):
         """Whether the component, with parameter values ``p``, keeps the total energy of a
@@ -269,7 +317,7 @@ class Component:
             par = self.params()[name]
             out.append(
                 Problem(f"{self.path}.{name}", f"parameter {msg}",
-                        par.hint())
+                        par.hint(self._raw[name]))
             )
         out.extend(self.check_params(self.p))
         return out
@@ -292,7 +340,7 @@ class Component:
                 continue
             val, msg = params[k].coerce(v)
             if msg:
-                probs.append(Problem(f"{self.path}.{k}", f"parameter {msg}", params[k].hint()))
+                probs.append(Problem(f"{self.path}.{k}", f"parameter {msg}", params[k].hint(v)))
             vals[k] = val
         ns = SimpleNamespace(**vals)
         probs.extend(self.check_params(ns))

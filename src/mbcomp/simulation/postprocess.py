@@ -26,6 +26,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from ..assembly.column_units import column_units
 from ..assembly.conservation import momenta, momentum_conserved, nonconservative
 from ..assembly.outputs import output_values, result_columns
 from ..assembly.recursive import SingularTree
@@ -128,7 +129,7 @@ def postprocess(system, form, t, Y, status, message, stats, init):
     message = "; ".join([message] + notes)
     stats = dict(stats)
     stats["coordinates"] = list(system.q_names)
-    return Result(t, series, status, message, stats, summary(system, init))
+    return Result(t, series, status, message, stats, summary(system, init), units=_units(system, series))
 
 
 #: output points at most on which the momenta are computed for their alarm (evenly spaced)
@@ -203,3 +204,11 @@ def _derived(system, t, series):
             continue
         series[name] = val
     return notes
+
+
+def _units(system, series):
+    """``{column: unit}`` of the columns in ``series`` whose unit is declared (an alias has
+    its variable's)."""
+    units = column_units(system)
+    units.update({a: units[v] for a, v in system.topology.flat.aliases.items() if v in units})
+    return {name: units[name] for name in series if name in units}

@@ -57,14 +57,18 @@ class Result:
         Solver statistics: steps, nfev, nlu, restarts, projections, cpu_time, method, ...
     summary : str
         The model summary (bodies, DOF, coordinates, constraints).
+    units : dict
+        ``{column: unit}`` (``"rad"``, ``"N m"``, ``"m/s"``) of the columns whose unit is
+        declared (:func:`mbcomp.assembly.column_units.column_units`); others are absent.
     """
 
-    def __init__(self, time, series, status="success", message="", stats=None, summary=""):
+    def __init__(self, time, series, status="success", message="", stats=None, summary="", units=None):
         self.time = np.asarray(time)
         self._series = dict(series)
         self.status, self.message = status, message
         self.stats = dict(stats or {})
         self.summary = summary
+        self.units = dict(units or {})
 
     @property
     def names(self):
@@ -88,12 +92,26 @@ class Result:
     def success(self):
         return self.status == "success"
 
-    def to_csv(self, path):
-        """Write ``time`` and every variable as columns to ``path``."""
+    def to_csv(self, path, units=False):
+        """Write ``time`` and every variable as columns to ``path``; with ``units``, headers
+        ``name [unit]`` for the columns whose unit is known (:attr:`units`).
+
+        Examples
+        --------
+        >>> import numpy as np, os, pathlib, tempfile
+        >>> from mbcomp.result import Result
+        >>> r = Result(np.array([0.0, 1.0]), {"a.phi": np.array([0.0, 2.0])}, units={"a.phi": "rad"})
+        >>> path = r.to_csv(os.path.join(tempfile.mkdtemp(), "r.csv"), units=True)
+        >>> pathlib.Path(path).read_text().splitlines()[0]
+        'time [s],a.phi [rad]'
+        """
         names = self.names
+
+        def head(n, u):
+            return f"{n} [{u}]" if units and u else n
         with open(path, "w", newline="") as fh:
             w = csv.writer(fh)
-            w.writerow(["time"] + names)
+            w.writerow([head("time", "s")] + [head(n, self.units.get(n)) for n in names])
             cols = [self.time] + [self._series[n] for n in names]
             for row in zip(*cols):
                 w.writerow([f"{x:.12g}" for x in row])
