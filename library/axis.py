@@ -10,6 +10,8 @@ from mbcomp import Drive, Flange, FlangeElement, Param
 from mbcomp.errors import Problem, SimulationError
 from mbcomp.jets import is_traced
 
+from .laws import as_number, describe, law_problems, number
+
 
 class _TwoFlange(FlangeElement):
     flange_a = Flange("first flange (e.g. a joint's support)")
@@ -106,6 +108,12 @@ class TranslationalSpringDamper(_TwoFlange):
 
 class _Actuator(FlangeElement):
     flange_b = Flange("the driven flange (a joint's axis)")
+    #: the law's arguments after t (coordinate, rate) and the unit of what it returns
+    law_args = ("s", "v")
+    law_unit = "N"
+
+    def check_params(self, p):
+        return law_problems(self, p, {self.value_name: ("t", *self.law_args)})
 
     def flange_forces(self, t, states, p):
         s, v = states["flange_b"]
@@ -113,14 +121,13 @@ class _Actuator(FlangeElement):
         val = law(t, s, v) if callable(law) else law
         if is_traced(val):  # a traced run (mbcomp.symbolic, code generation): no number to check
             return {"flange_b": val}
-        try:
-            val = float(val)
-        except (TypeError, ValueError):
-            val = np.nan
-        if not np.isfinite(val):
-            raise SimulationError(f"{self.path}: the {self.value_name} law returned a non-finite value at t={t:g} "
-                                  f"(s={s:g}, v={v:g}) -> fix the law")
-        return {"flange_b": val}
+        out = as_number(val)
+        if not np.isfinite(out):
+            x, y = self.law_args
+            raise SimulationError(f"{self.path}: the {self.value_name} law returned {describe(val)} at "
+                                  f"t={number(t)} ({x}={number(s)}, {y}={number(v)}); it must return one finite "
+                                  f"number ({self.law_unit}) -> fix the law")
+        return {"flange_b": out}
 
 
 class Torque(_Actuator):
@@ -138,6 +145,8 @@ class Torque(_Actuator):
     """
 
     value_name = "tau"
+    law_args = ("phi", "w")
+    law_unit = "N m"
     tau = Param(0.0, unit="N m", kind="law", doc="torque about the axis, or tau(t, phi, w)")
 
 
@@ -216,6 +225,9 @@ class PrescribedMotion(Drive):
         return tuple(fs), None
 
     def check_params(self, p):
+        wrong = law_problems(self, p, {"s": ("t",), "v": ("t",), "a": ("t",)})
+        if wrong:
+            return wrong
         laws, why = self._laws(p)
         if why:
             return [Problem(f"{self.path}.s", why,
@@ -228,5 +240,12 @@ class PrescribedMotion(Drive):
             raise ValueError(f"{self.path}.s: {why}")
         if is_traced(t):  # traced time (mbcomp.symbolic, code generation): keep the expressions
             return tuple(f(t) for f in laws)
-        s, v, a = (float(f(t)) for f in laws)
-        return s, v, a
+        return tuple(self._number(f(t), name, t) for f, name in zip(laws, "sva"))
+
+    def _number(self, val, name, t):
+        """``val`` as a float, or the error naming this drive, the law and what it returned."""
+        out = as_number(val)
+        if np.isfinite(out):
+            return out
+        raise SimulationError(f"{self.path}: the {name} law returned {describe(val)} at t={number(t)}; it must return "
+                              "one finite number (m or rad, and their rates) -> fix the law")

@@ -5,6 +5,8 @@ from mbcomp import ForceElement, Frame, Param
 from mbcomp.errors import SimulationError
 from mbcomp.jets import is_traced
 
+from .laws import describe, law_problems, number
+
 
 class _LineForce(ForceElement):
     """Force along the line from frame_a's origin to frame_b's origin."""
@@ -96,14 +98,24 @@ class SpringDamper(Spring):
 
 def _law(value, t, state, path, what):
     out = value(t, state) if callable(value) else value
-    out = np.asarray(out)
-    if out.dtype == object and out.shape == (3,) and any(map(is_traced, out)):  # traced run (mbcomp.symbolic)
-        return out
-    out = np.asarray(out, dtype=float)
-    if out.shape != (3,) or not np.all(np.isfinite(out)):
-        raise SimulationError(f"{path}: the {what} law returned {out!r} at t={t:g}; it must return 3 finite "
-                              "numbers (world coordinates) -> fix the law")
-    return out
+    arr = np.asarray(out) if isinstance(out, (tuple, list, np.ndarray)) else None
+    if arr is not None and arr.dtype == object and arr.shape == (3,) and any(map(is_traced, arr)):
+        return arr  # traced run (mbcomp.symbolic)
+    try:
+        vec = np.asarray(arr, dtype=float) if arr is not None else None
+    except (TypeError, ValueError):
+        vec = None  # None or a string among the entries
+    if vec is None or vec.shape != (3,) or not np.all(np.isfinite(vec)):
+        unit = "N" if what == "force" else "N m"
+        where = ", ".join(number(x) for x in state.r)
+        raise SimulationError(f"{path}: the {what} law returned {describe(out)} at t={number(t)} "
+                              f"(frame at r=({where})); it must "
+                              f"return 3 finite numbers ({unit}, world coordinates) -> fix the law")
+    return vec
+
+
+def _check(comp, p, name):
+    return law_problems(comp, p, {name: ("t", "frame")})
 
 
 class WorldForce(ForceElement):
@@ -122,6 +134,9 @@ class WorldForce(ForceElement):
     frame_b = Frame("frame the force acts on (at its origin)")
     f = Param((0.0, 0.0, 0.0), unit="N", shape=(3,), kind="law", doc="force, world coordinates, or f(t, frame)")
 
+    def check_params(self, p):
+        return _check(self, p, "f")
+
     def wrenches(self, t, frames, p):
         return {"frame_b": (_law(p.f, t, frames["frame_b"], self.path, "force"), np.zeros(3))}
 
@@ -139,6 +154,9 @@ class WorldTorque(ForceElement):
     external = True
     frame_b = Frame("frame the torque acts on")
     tau = Param((0.0, 0.0, 0.0), unit="N m", shape=(3,), kind="law", doc="torque, world coordinates, or tau(t, frame)")
+
+    def check_params(self, p):
+        return _check(self, p, "tau")
 
     def wrenches(self, t, frames, p):
         return {"frame_b": (np.zeros(3), _law(p.tau, t, frames["frame_b"], self.path, "torque"))}

@@ -61,11 +61,11 @@ def test_a_model_that_cannot_start_is_described_and_left_alone():
 
 
 def test_the_implicit_free_joint_is_the_framework_s_and_the_library_s():
-    """A lone body floats on the framework's FreeMotion, which the library re-exports."""
+    """A lone body marked free floats on the framework's FreeMotion, which the library re-exports."""
     assert FreeMotion is FrameworkFreeMotion and FreeMotion.__module__ == "mbcomp.modeling.free_joint"
     m = mbcomp.Model()
     m.add("world", World())
-    m.add("body", PointMass(m=2.0))
+    m.add("body", PointMass(m=2.0), free=True)
     system = mbcomp.assemble(m)
     (free,) = [e for e in system.topology.edges if e.implicit]
     assert type(free.comp) is FreeMotion and free.name == "body.free" and (system.nq, system.nu) == (7, 6)

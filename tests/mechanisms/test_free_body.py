@@ -59,13 +59,12 @@ def explicit_free_body(g):
     return mdl
 
 
-def test_unconnected_body_floats_freely():
-    """A RigidBody whose frame_a is connected to nothing should get the implicit FreeMotion
-    (topology.py: "A group of frames carrying mass but joined to nothing gets an implicit
-    FreeMotion") and fall from rest at the origin: r_cm = R_CM + g t^2 / 2."""
+def test_body_marked_free_floats_freely():
+    """A RigidBody connected to nothing and marked free (``Model.add(..., free=True)``) gets
+    the implicit FreeMotion and falls from rest at the origin: r_cm = R_CM + g t^2 / 2."""
     mdl = mbcomp.Model()
     mdl.add("world", World())
-    mdl.add("body", RigidBody(m=M, r_cm=R_CM, I=I_BODY))
+    mdl.add("body", RigidBody(m=M, r_cm=R_CM, I=I_BODY), free=True)
     r = mbcomp.simulate(mdl, t_end=1.0, rtol=1e-10, atol=1e-12, n_out=51)
     assert r.success, r.message
     t = r.time[:, None]
@@ -75,13 +74,13 @@ def test_unconnected_body_floats_freely():
 
 
 def test_implicit_free_motion_with_off_centre_force():
-    """A body joined to nothing but a force element floats (implicit FreeMotion, starts at
-    rest at the origin). A constant force at frame_a's origin (off the CM) makes it tumble,
-    but its CM still moves with the constant acceleration g + F/m."""
+    """A body marked free, joined to nothing but a force element, floats (implicit
+    FreeMotion, starts at rest at the origin). A constant force at frame_a's origin (off the
+    CM) makes it tumble, but its CM still moves with the constant acceleration g + F/m."""
     F = np.array([3.0, 1.0, -2.0])
     mdl = mbcomp.Model()
     mdl.add("world", World())
-    body = mdl.add("body", RigidBody(m=M, r_cm=R_CM, I=I_BODY))
+    body = mdl.add("body", RigidBody(m=M, r_cm=R_CM, I=I_BODY), free=True)
     push = mdl.add("push", WorldForce(f=tuple(F)))
     mdl.connect(push.frame_b, body.frame_a)
     system = mbcomp.assemble(mdl)
@@ -161,7 +160,7 @@ def test_implicit_free_body_takes_start_values_at_run_time():
     runtime parameters. A body thrown upward at v0 is back at its start height at 2 v0 / g."""
     mdl = mbcomp.Model()
     mdl.add("world", World())
-    mdl.add("ball", RigidBody(m=1.0, I=np.eye(3) * 1e-3))
+    mdl.add("ball", RigidBody(m=1.0, I=np.eye(3) * 1e-3), free=True)
     v0 = 4.0
     t_back = 2 * v0 / 9.81
     res = mbcomp.simulate(mdl, t_end=t_back, rtol=1e-10, atol=1e-12, n_out=5,

@@ -52,9 +52,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..errors import InitializationError, Problem
+from .conditioning import check_inertia
 from .manifold import POSITION_TOL, close_positions, pivot_partition, rank, solve_speeds
 
 __all__ = ["initialize", "InitialState", "NOT_CLOSED", "VELOCITY_TOL"]
@@ -74,6 +74,7 @@ class InitialState:
     iterations: int = 0
     rank: int = 0  # rank of the holonomic constraint Jacobian
     nonholonomic: int = 0  # number of velocity-level constraint rows
+    notes: list = field(default_factory=list)  # warnings for the run (an ill-conditioned mass matrix)
 
 
 def _starts(system):
@@ -184,8 +185,8 @@ def initialize(system, t0=0.0, tol=POSITION_TOL, max_iter=60):
         raise _not_closed(system, closure, qfix, cut_fixed, closes_when_free)
     system.row_mask = mask
     u, ev = _close_speeds(system, t0, closure.q, u, ufix, cut_fixed)
-    _check_inertia(system, ev)
-    return InitialState(closure.q, u, mask, dropped, closure.iterations, rank(ev.C), ev.B.shape[0])
+    notes = check_inertia(system, ev)
+    return InitialState(closure.q, u, mask, dropped, closure.iterations, rank(ev.C), ev.B.shape[0], notes)
 
 
 def _close_positions(system, t0, q, u, cut_fixed, free, tol, max_iter):
@@ -260,23 +261,3 @@ def _close_speeds(system, t0, q, u, ufix, cut_fixed):
             f"fixed start speeds over-specify the mechanism (velocity constraint residual {np.linalg.norm(rv2):.3g})",
             "fix fewer start speeds: wrap the others in Guess(...), e.g. w0=Guess(0.0)")])
     return u, ev
-
-
-def _check_inertia(system, ev):
-    """The mass matrix restricted to the admissible motions must be positive definite."""
-    if system.nu == 0:
-        return
-    C = ev.A
-    N = sla.null_space(C) if C.size else np.eye(system.nu)
-    if N.shape[1] == 0:
-        return
-    Mr = N.T @ ev.M @ N
-    w, V = np.linalg.eigh(0.5 * (Mr + Mr.T))
-    scale = max(1.0, np.abs(np.diag(ev.M)).max())
-    if w[0] <= 1e-12 * scale:
-        mode = N @ V[:, 0]
-        who = [system.u_names[i] for i in np.argsort(-np.abs(mode)) if abs(mode[i]) > 1e-6][:4]
-        raise InitializationError([Problem(
-            ", ".join(who), "these motions carry no mass or inertia, so their accelerations are undetermined",
-            "give the bodies they move mass/inertia, or prescribe the motion with a drive")],
-            header="the mechanism has massless degrees of freedom")

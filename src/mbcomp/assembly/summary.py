@@ -175,4 +175,7 @@ def summary(system, init=None):
         lines.append(f"rigid offsets merged into their bodies (no coordinates): {', '.join(rig)}")
     if topo.floating:
         lines.append(f"free bodies (implicit FreeMotion from the world): {', '.join(topo.floating)}")
+    if topo.open_frames:
+        lines.append(f"open frames (rigid offsets ending in nothing, kept as marker frames): "
+                     f"{', '.join(topo.open_frames)}")
     return "\n".join(lines)

@@ -13,9 +13,12 @@ Built once from a validated :class:`~mbcomp.model.FlatModel`; immutable afterwar
   networkx (~0.15 s) on the way to every simulation.
 * A *constraint-only joint* (``tree_edge = False``: constraint rows, no coordinates; the
   library's rolling contacts) is never a tree edge; it is always cut.
-* A group of frames carrying mass but joined to nothing gets an implicit
-  :class:`~mbcomp.modeling.free_joint.FreeMotion` from the world (a wheel touching the
-  ground only through a rolling contact floats in the tree).
+* A group of frames carrying mass but joined to nothing that reaches the world is an error,
+  unless one of its bodies is marked free (``Model.add(..., free=True)``): that body gets an
+  implicit :class:`~mbcomp.modeling.free_joint.FreeMotion` from the world (a wheel touching
+  the ground only through a rolling contact floats in the tree).
+* A joint whose two frames are one frame node is an error; an open frame of a rigid offset
+  (a marker) is a frame node of its own (:attr:`Topology.open_frames`).
 
 Examples
 --------
@@ -36,7 +39,7 @@ from ..errors import ModelError, Problem
 from ..modeling.component import PortRef
 from ..modeling.free_joint import FreeMotion
 
-__all__ = ["Topology", "Edge", "ROOT", "spanning_tree"]
+__all__ = ["Topology", "Edge", "ROOT", "spanning_tree", "no_gravity_note"]
 
 ROOT = -1
 
@@ -148,6 +151,59 @@ def _frame_nodes(frames):
     return port_node, {i: sorted(paths) for i, paths in members.items()}
 
 
+def _self_joined(path, comp, ports):
+    """The problem of a joint whose two frames are one frame node (``ports``)."""
+    others = [x for x in ports if x.rsplit(".", 1)[0] != path]
+    how = f" (joined through {', '.join(others)})" if others else " (connected to each other)"
+    return Problem(path, f"both frames of this {type(comp).__name__}, frame_a and frame_b, are the same frame{how}, "
+                         "so it joins nothing to nothing",
+                   f"connect {path}.frame_a and {path}.frame_b to two different frames (e.g. the world or the "
+                   "previous link on frame_a, the next body on frame_b)")
+
+
+def _floating(topo, comp_nodes):
+    """The problem of a group of frames with mass joined to nothing that reaches the world."""
+    bodies = [path for path, _, n in topo.bodies if n in comp_nodes]
+    if len(bodies) == 1:
+        what = "is joined to nothing that reaches the world, so it would fall freely"
+    else:
+        what = ("are joined to each other but not to the world (a floating assembly), so they would fall "
+                "freely together")
+    first = bodies[0].rsplit(".", 1)[-1]
+    return Problem(", ".join(bodies), what,
+                   f"connect it to the mechanism (a joint from world.frame_b or another body), or, if it floats on "
+                   f"purpose, mark it: model.add({first!r}, ..., free=True) (start values {bodies[0]}.free.r0, "
+                   f".v0), or join it to the world through a FreeMotion")
+
+
+def no_gravity_note(topo):
+    """A note for a result when the model has no gravity source (no ``World``), else ``None``.
+
+    Parameters
+    ----------
+    topo : Topology
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp import Model
+    >>> from mbcomp.library import Fixed, Revolute, RigidBody
+    >>> m = Model(); base = m.add("base", Fixed()); j = m.add("j", Revolute())
+    >>> b = m.add("b", RigidBody(m=1.0, I=np.eye(3)))
+    >>> m.connect(base.frame_b, j.frame_a); m.connect(j.frame_b, b.frame_a)
+    >>> no_gravity_note(Topology(m.validate()))[:45]
+    'the model has no World, so there is no gravit'
+    """
+    if topo.gravity_source is not None:
+        return None
+    return ("the model has no World, so there is no gravity: bodies feel only the model's forces -> "
+            "add model.add('world', World()) for gravity (World(g=(0, 0, 0)) says 'no gravity' explicitly)")
+
+
 class Topology:
     """Frame nodes, spanning tree, cut joints and coordinates of a flat model."""
 
@@ -182,6 +238,8 @@ class Topology:
                         self.gravity_source = path
             elif role == "joint":
                 self.edges.append(Edge(path, comp, node(comp, "frame_a"), node(comp, "frame_b"), "joint", dof=comp.nu))
+                if self.edges[-1].node_a == self.edges[-1].node_b:
+                    probs.append(_self_joined(path, comp, self.node_ports[self.edges[-1].node_a]))
             elif role == "body":
                 self.bodies.append((path, comp, node(comp, "frame_a")))
             elif role == "force":
@@ -225,7 +283,9 @@ class Topology:
                 continue
             e = edge_by_name[owner[0]]
             if e.drive is not None:
-                probs.append(Problem(path, f"joint {e.name} is already driven by {e.drive}", "keep one drive per joint"))
+                probs.append(Problem(path, f"a second drive on joint {e.name!r} (already driven by {e.drive!r}): a "
+                                           "joint's coordinate can be prescribed only once",
+                                     f"keep one drive per joint: remove {path} or {e.drive}"))
             e.drive = path
         if probs:
             raise ModelError(probs)
@@ -251,22 +311,7 @@ class Topology:
         self._graph_edges = graph = [(e.node_a, e.node_b, e.name, self._weight(e)) for e in self.edges
                                      # constraint-only joints (the library's contacts) are always cut
                                      if e.kind != "joint" or e.comp.tree_edge]
-        # groups of frames joined to nothing that carry mass float freely
-        mass_nodes = {n for _, _, n in self.bodies}
-        self.floating = []
-        for comp_nodes in sorted(_components(nodes, graph), key=min):
-            if ROOT in comp_nodes:
-                continue
-            carriers = sorted(n for n in comp_nodes if n in mass_nodes)
-            if not carriers:
-                continue  # massless and unconnected: nothing moves it (checked in the system)
-            fm = FreeMotion()
-            name = f"{self.node_ports[carriers[0]][0].rsplit('.', 1)[0]}.free"
-            fm.name = name
-            e = Edge(name, fm, ROOT, carriers[0], "joint", dof=6, implicit=True)
-            self.edges.append(e)
-            self.floating.append(name)
-            graph.append((ROOT, carriers[0], name, 6.0))
+        self._float(nodes, graph)
         tree_edges = {n: [] for n in nodes}  # node -> [(neighbour, name)] along the tree
         for a, b, k in spanning_tree(nodes, graph):
             tree_edges[a].append((b, k))
@@ -300,6 +345,48 @@ class Topology:
                                      "drive a different joint of the loop"))
         if probs:
             raise ModelError(probs)
+
+    def _float(self, nodes, graph):
+        """An implicit :class:`FreeMotion` from the world for each body marked ``free``
+        (``Model.add(..., free=True)``) in a group of frames joined to nothing that reaches
+        the world; such a group with mass and no body marked free is an error (a forgotten
+        connection would fall freely), and so is a body marked free that is joined to the world."""
+        marked = [(path, n) for path, _, n in self.bodies if path in self.flat.free]
+        mass_nodes = {n for _, _, n in self.bodies}
+        self.floating, probs = [], []
+        for comp_nodes in sorted(_components(nodes, graph), key=min):
+            mine = [(path, n) for path, n in marked if n in comp_nodes]
+            if ROOT in comp_nodes:
+                probs += [Problem(path, "is marked free but is joined to the world through joints",
+                                  f"drop free=True from model.add({path.rsplit('.', 1)[-1]!r}, ...), or disconnect "
+                                  "it") for path, _ in mine]
+                continue
+            if not any(n in mass_nodes for n in comp_nodes):
+                continue  # massless and unconnected: nothing moves it (checked in the system)
+            if not mine:
+                probs.append(_floating(self, comp_nodes))
+                continue
+            probs += [Problem(path, f"is marked free, and so is {mine[0][0]}, which it is joined to: one free "
+                                    "joint moves them all", f"mark only {mine[0][0]} free")
+                      for path, _ in mine[1:]]
+            path, n = mine[0]
+            fm = FreeMotion()
+            fm.name = name = f"{path}.free"
+            self.edges.append(Edge(name, fm, ROOT, n, "joint", dof=6, implicit=True))
+            self.floating.append(name)
+            graph.append((ROOT, n, name, 6.0))
+        if probs:
+            raise ModelError(probs)
+
+    @property
+    def open_frames(self):
+        """Port paths of joints' frames connected to nothing: the open ends of rigid offsets
+        (``FixedTranslation.frame_b`` as a marker), which the model's validation allows."""
+        return sorted(paths[0] for paths in self.node_ports.values()
+                      if len(paths) == 1 and self._owner(paths[0]).role == "joint")
+
+    def _owner(self, port_path):
+        return self.flat.components[port_path.rsplit(".", 1)[0]]
 
     @property
     def graph(self):

@@ -30,6 +30,7 @@ Examples
 from __future__ import annotations
 
 import importlib.util
+import os
 import pathlib
 
 from ..errors import ModelError, Problem
@@ -97,6 +98,10 @@ def import_file(path):
     >>> import_file(path).g
     9.81
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise ModelError([Problem(repr(path)[:60], f"is a {type(path).__name__}, not the path of a model file",
+                                  "give the path of a .py file defining build(**params) -> Model, e.g. "
+                                  "'models/pendulum.py' (a Model itself goes to mbcomp.simulate directly)")], _HEADER)
     path = pathlib.Path(path)
     if not path.is_file():
         what = "is a directory, not a model file" if path.is_dir() else "the model file does not exist"
@@ -135,14 +140,22 @@ def build_model(module, **build_kwargs):
     ...     build_model(broken)
     ... except mbcomp.ModelError as exc:
     ...     print(exc.problems[0].what)
-    build() returned NoneType, not an mbcomp.Model
+    build() returned None; it must return an mbcomp.Model
     """
     model = module.build(**build_kwargs)
     if not isinstance(model, Model):
         where = getattr(module, "__file__", None) or module.__name__
-        raise ModelError([Problem(str(where), f"build() returned {type(model).__name__}, not an mbcomp.Model",
-                                  f"end build with 'return model': {_BUILD}")], _HEADER)
+        got = "None" if model is None else f"a {type(model).__name__} ({_short(model)})"
+        fix = ("add 'return m' at its end (m: the Model it builds)" if model is None else
+               f"return the mbcomp.Model itself: {_BUILD}")
+        raise ModelError([Problem(str(where), f"build() returned {got}; it must return an mbcomp.Model", fix)],
+                         _HEADER)
     return model
+
+
+def _short(value, limit=50):
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def load_model(path, **build_kwargs):

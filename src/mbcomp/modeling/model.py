@@ -21,8 +21,9 @@ from __future__ import annotations
 
 from ..modeling.component import Component, PortRef
 from ..errors import ModelError, Problem
+from .roles import MissingFlange
 
-__all__ = ["Model", "FlatModel"]
+__all__ = ["Model", "FlatModel", "is_rigid_offset"]
 
 
 class Model(Component):
@@ -41,10 +42,35 @@ class Model(Component):
         self._aliases: dict[str, str] = {}
         self._outputs: dict[str, tuple] = {}
         self._exposed: dict[str, PortRef] = {}
+        self._free: set[str] = set()
 
     # --- building -------------------------------------------------------------------------
-    def add(self, name: str, component: Component) -> Component:
-        """Add ``component`` under ``name`` and return it."""
+    def add(self, name: str, component: Component, free: bool = False) -> Component:
+        """Add ``component`` under ``name`` and return it.
+
+        Parameters
+        ----------
+        name : str
+            A Python identifier, unique in this model.
+        component : Component
+            A library component, a user's component or a :class:`Model`.
+        free : bool
+            Only for a body: it floats on purpose, joined to nothing that reaches the world
+            (a thrown ball, a satellite, a wheel touching the ground only through a contact).
+            The topology then gives it a 6-DOF :class:`~mbcomp.library.FreeMotion` from the
+            world to its ``frame_a``, named ``<name>.free`` (start values as parameters
+            ``<name>.free.r0``, ``.v0``, ``.R0``, ``.w0``). Without it, a body that reaches the
+            world through no joint is an error (a forgotten connection would fall freely).
+            Connecting the body through an explicit ``FreeMotion`` from the world is the same.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from mbcomp import Model
+        >>> from mbcomp.library import World, RigidBody
+        >>> m = Model(); _ = m.add("world", World())
+        >>> ball = m.add("ball", RigidBody(m=0.1, I=1e-5 * np.eye(3)), free=True)
+        """
         if not isinstance(name, str) or not name.isidentifier():
             raise ValueError(f"component name {name!r} must be a Python identifier (letters, digits, _)")
         if not isinstance(component, Component):
@@ -54,8 +80,13 @@ class Model(Component):
         if component.parent is not None:
             raise ValueError(f"{name}: this component object is already part of {component.parent._label()} "
                              f"as {component.name!r}; create a new instance for each use")
+        if free and getattr(component, "role", None) != "body":
+            raise ValueError(f"{name}: free=True marks a body that floats on purpose; a {type(component).__name__} "
+                             "is no body -> mark the body itself free, or join the part to the world with joints")
         component.name, component.parent = name, self
         self._components[name] = component
+        if free:
+            self._free.add(name)
         return component
 
     def connect(self, a: PortRef, b: PortRef):
@@ -63,6 +94,9 @@ class Model(Component):
         for x in (a, b):
             if not isinstance(x, PortRef):
                 raise TypeError(f"connect() takes ports such as body.frame_a, got {x!r}")
+        for x, y in ((a, b), (b, a)):
+            if isinstance(x, MissingFlange):
+                raise ModelError([_missing_flange(x, y)], header="cannot connect")
         if a.kind != b.kind:
             raise ValueError(f"cannot connect {a.path} ({a.kind}) to {b.path} ({b.kind}): "
                              "connect frames to frames and flanges to flanges")
@@ -116,7 +150,7 @@ class Model(Component):
     # --- flattening and validation --------------------------------------------------------
     def flatten(self) -> "FlatModel":
         """Leaf components by dotted path, every connection, and aliases with full paths."""
-        leaves, conns, aliases, outputs = {}, [], {}, {}
+        leaves, conns, aliases, outputs, free = {}, [], {}, {}, set()
 
         def walk(model, prefix):
             for name, comp in model._components.items():
@@ -125,13 +159,14 @@ class Model(Component):
                 else:
                     leaves[f"{prefix}{name}"] = comp
             conns.extend(model._connections)
+            free.update(f"{prefix}{k}" for k in model._free)
             for k, v in model._aliases.items():
                 aliases[f"{prefix}{k}"] = f"{prefix}{v}"
             for k, (fn, vs) in model._outputs.items():
                 outputs[f"{prefix}{k}"] = (fn, tuple(f"{prefix}{v}" for v in vs))
 
         walk(self, "")
-        return FlatModel(leaves, conns, aliases, outputs)
+        return FlatModel(leaves, conns, aliases, outputs, free)
 
     def validate(self):
         """Collect every problem (parameters, unconnected ports, foreign components) and raise
@@ -149,11 +184,7 @@ class Model(Component):
                                          f"add it with model.add(name, ...) before connecting {x.name}"))
                 connected.add(x)
         for path, comp in flat.components.items():
-            for pname, port in comp.ports().items():
-                if port.optional or PortRef(comp, pname, port.kind) in connected:
-                    continue
-                probs.append(Problem(f"{path}.{pname}", f"{port.kind} of {type(comp).__name__} is not connected",
-                                     f"connect {path}.{pname} to another {port.kind} with model.connect(...)"))
+            probs.extend(_open_ports(path, comp, connected))
         if not flat.components:
             probs.append(Problem(self._label(), "contains no components", "add components with model.add(name, ...)"))
         if probs:
@@ -161,11 +192,61 @@ class Model(Component):
         return flat
 
 
-class FlatModel:
-    """Leaf components by path, connections between their ports, aliases and derived
-    outputs (immutable hand-off)."""
+def is_rigid_offset(comp):
+    """True for a 0-DOF joint that is a tree edge (``FixedTranslation``, ``FixedRotation``,
+    ``Weld``): one of its frames may stay open, a harmless frame that moves with the other.
 
-    def __init__(self, components, connections, aliases, outputs=None):
+    Examples
+    --------
+    >>> from mbcomp.library import FixedTranslation, Revolute
+    >>> is_rigid_offset(FixedTranslation()), is_rigid_offset(Revolute())
+    (True, False)
+    """
+    return comp.role == "joint" and comp.nu == 0 and comp.tree_edge
+
+
+def _open_ports(path, comp, connected):
+    """Problems of the ports of ``comp`` left unconnected (a rigid offset may leave one frame open)."""
+    frames = [n for n, port in comp.ports().items() if port.kind == "frame"]
+    open_ = [n for n, port in comp.ports().items()
+             if not port.optional and PortRef(comp, n, port.kind) not in connected]
+    out = []
+    for pname in open_:
+        kind = comp.ports()[pname].kind
+        what = f"{kind} of {type(comp).__name__} is not connected"
+        fix = f"connect {path}.{pname} to another {kind} with model.connect(...)"
+        if is_rigid_offset(comp):
+            if len(set(frames) - set(open_)) >= 1:
+                continue  # an open frame at the end of a rigid offset: a harmless marker frame
+            what = f"{what}, nor is its other frame: the {type(comp).__name__} is joined to nothing"
+        elif comp.role == "joint" and kind == "frame":
+            what = (f"{what}: a joint with {comp.nu} degree{'s' * (comp.nu != 1)} of freedom must join two frames "
+                    "(its motion would move nothing, so it is undetermined); only rigid offsets (FixedTranslation, "
+                    "FixedRotation) may end in an open frame")
+        out.append(Problem(f"{path}.{pname}", what, fix))
+    return out
+
+
+def _missing_flange(x, y):
+    """The problem of connecting ``y`` to the flange ``x`` its joint does not have."""
+    joint = x.component
+    kinds = {"drive": "drive", "flange_force": "flange element"}
+    user = (f"{kinds[y.component.role]} {y.component.path!r}" if y.component.role in kinds
+            else f"{y.path}")
+    needs = "a drive" if y.component.role == "drive" else "a flange element (spring, damper, Torque, Force)"
+    return Problem(f"{user} on joint {joint.path!r} ({type(joint).__name__})",
+                   f"{needs} needs a 1-DOF joint's {x.name} flange (Revolute, Prismatic); a "
+                   f"{type(joint).__name__} has {joint.nu} degrees of freedom and no {x.name} flange",
+                   f"connect it to {x.name} of a Revolute or Prismatic: build the {type(joint).__name__}'s "
+                   "motion from 1-DOF joints in series (e.g. three Revolutes for a Spherical) and act on one of them")
+
+
+class FlatModel:
+    """Leaf components by path, connections between their ports, aliases, derived outputs
+    and the paths of the bodies marked ``free`` (immutable hand-off)."""
+
+    def __init__(self, components, connections, aliases, outputs=None, free=()):
+        self.free = frozenset(free)
         self.components = dict(components)
         self.connections = tuple(connections)
         self.aliases = dict(aliases)

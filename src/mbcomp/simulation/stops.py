@@ -24,6 +24,7 @@ import threading
 from contextlib import contextmanager
 from numbers import Real
 
+from ..errors import SimulationError
 from ..modeling.blame import blame
 
 __all__ = ["Terminated", "sigterm_interrupts", "law_failure", "start_failure", "raised_in_a_law", "interruption",
@@ -92,6 +93,9 @@ def start_failure(exc, t_start):
 def _raised(exc, t_reached):
     b = blame(exc)
     who = b.who if b.component is not None else "the model"
+    own = f"{b.path}: "  # a component's own diagnosis (a law returned None): its message as it is
+    if isinstance(exc, SimulationError) and b.component is not None and str(exc).startswith(own):
+        return f"{who}: {str(exc)[len(own):]}"
     t = time_of(exc)
     when = f"at t={t:g}" if t is not None else f"in the step from t={t_reached:g}"
     return (f"{who}: {b.law} raised {type(exc).__name__} {when}: {exc} ({b.where}) -> fix the law or the "

@@ -1,0 +1,153 @@
+"""Is the mass matrix of the admissible motions invertible, and how well?
+
+At the consistent start, initialization restricts the mass matrix ``M`` to the motions the
+constraints allow (``Mr = N^T M N``, ``N`` a null-space basis of the constraint Jacobian) and
+looks at its eigenvalues ``w_1 <= ... <= w_n`` relative to the largest, ``w_n``:
+
+* ``w_i <= MASSLESS * w_n`` -- a massless direction: ``M`` is known only to roundoff (every
+  entry is a sum of products of masses, inertias and lever arms, each rounded at ``eps``
+  relative to the largest, and ``N`` carries the rounding of its own decomposition), so a
+  smaller eigenvalue cannot be told from zero and the accelerations along it are
+  undetermined. Every such direction is listed (a point mass floating freely has three
+  massless rotations), one problem each, and initialization fails.
+* ``MASSLESS * w_n < w_1 < ILL_CONDITIONED * w_n`` -- a finite but extreme ratio (a 1 mg part on
+  a 10 kg body): the solve loses about ``log10(w_n / w_1)`` of the 16 digits, more than half
+  of them. The run goes on, with a warning naming the lightest and heaviest bodies and the
+  ratio (and a note in :attr:`InitialState.notes`).
+
+``MASSLESS = 1e-12`` is about 4500 ``eps``: the roundoff of a mass matrix summed over a few
+dozen bodies, with margin for the null-space basis. ``ILL_CONDITIONED = sqrt(eps)`` (1.5e-8)
+is where fewer than half the digits remain -- the accuracy a tight integration asks for
+(``rtol = 1e-8``), so beyond it the tolerance may no longer be met.
+
+Examples
+--------
+>>> import numpy as np
+>>> from mbcomp.assembly.conditioning import directions
+>>> massless, ratio = directions(np.diag([1.0, 1e-10, 0.0]))  # one massless direction
+>>> massless.shape[1], ratio
+(1, None)
+>>> massless, ratio = directions(np.diag([1.0, 1e-10]))  # extreme but finite: a warning
+>>> massless.shape[1], ratio
+(0, 1e-10)
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..errors import InitializationError, Problem
+
+__all__ = ["MASSLESS", "ILL_CONDITIONED", "directions", "check_inertia"]
+
+EPS = np.finfo(float).eps
+MASSLESS = 1e-12
+ILL_CONDITIONED = float(np.sqrt(EPS))
+
+
+def directions(Mr):
+    """Massless directions of the symmetric positive semi-definite ``Mr`` and its conditioning.
+
+    Parameters
+    ----------
+    Mr : ndarray (n, n)
+        The mass matrix of the admissible motions (kg, kg m, kg m^2 by coordinate).
+
+    Returns
+    -------
+    massless : ndarray (n, k)
+        Orthonormal basis of the directions whose eigenvalue is at most ``MASSLESS`` times
+        the largest (all of them when the largest is 0).
+    ratio : float or None
+        Smallest over largest eigenvalue when no direction is massless and the ratio is below
+        ``ILL_CONDITIONED``; else ``None``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.assembly.conditioning import directions
+    >>> directions(np.diag([2.0, 1.0]))[0].shape, directions(np.diag([2.0, 1.0]))[1]
+    ((2, 0), None)
+    """
+    w, V = np.linalg.eigh(0.5 * (Mr + Mr.T))
+    top = max(w[-1], 0.0) if w.size else 0.0
+    small = w <= MASSLESS * top
+    if small.any() or top == 0.0:
+        return V[:, small | (top == 0.0)], None
+    ratio = w[0] / top
+    return V[:, :0], (float(ratio) if ratio < ILL_CONDITIONED else None)
+
+
+def check_inertia(system, ev):
+    """Raise on massless directions; warn (and return notes) on an extreme mass ratio.
+
+    Parameters
+    ----------
+    system : MultibodySystem
+    ev : Evaluation
+        At the consistent start (``ev.M``, ``ev.A``).
+
+    Returns
+    -------
+    list of str
+        Notes for the run (an ill-conditioning warning's text), possibly empty.
+
+    Raises
+    ------
+    InitializationError
+        One problem per massless direction, named by the coordinate that best represents it.
+    """
+    if system.nu == 0:
+        return []
+    C = ev.A
+    N = sla.null_space(C) if C.size else np.eye(system.nu)
+    if N.shape[1] == 0:
+        return []
+    Mr = N.T @ ev.M @ N
+    Z, ratio = directions(Mr)
+    if Z.shape[1]:
+        raise _massless(system, N @ Z, ev.M)
+    if ratio is None:
+        return []
+    note = _ill_conditioned(system, ratio)
+    warnings.warn(f"mbcomp: {note}", RuntimeWarning, stacklevel=3)
+    return [note]
+
+
+def _massless(system, modes, M):
+    """One problem per massless direction (columns of ``modes``, speeds coordinates)."""
+    k = modes.shape[1]
+    _, _, piv = sla.qr(modes.T, pivoting=True, mode="economic")
+    names = system.u_names
+    probs = []
+    for i in range(k):
+        j = piv[i]
+        mode = modes[:, i]
+        also = [names[m] for m in np.argsort(-np.abs(mode)) if m != j and abs(mode[m]) > 1e-6][:3]
+        with_ = f" (moving with {', '.join(also)})" if also else ""
+        turn = system.topology.u_units[j] == "rad/s"
+        give = ("mass away from the axis or rotational inertia (a PointMass has none of its own: use a "
+                "RigidBody with I)" if turn else "mass")
+        probs.append(Problem(names[j], f"this {'rotation' if turn else 'motion'}{with_} carries no mass or "
+                                       "inertia, so its acceleration is undetermined",
+                             f"give the bodies it moves {give}, or prescribe the motion with a drive"))
+    return InitializationError(probs, header="the mechanism has massless degrees of freedom")
+
+
+def _ill_conditioned(system, ratio):
+    """Text of the warning for a finite but extreme smallest/largest eigenvalue ratio."""
+    masses = []
+    for path, comp, _ in system.topology.bodies:
+        m = float(comp.mass_properties(system.P[path])[0])
+        if m > 0:
+            masses.append((m, path))
+    bodies = ""
+    if len(masses) > 1:
+        (m_lo, lo), (m_hi, hi) = min(masses), max(masses)
+        bodies = f"; lightest body {lo} ({m_lo:.3g} kg), heaviest {hi} ({m_hi:.3g} kg), mass ratio {m_hi / m_lo:.3g}"
+    digits = int(round(-np.log10(ratio)))
+    return (f"the mass matrix is ill-conditioned: its smallest eigenvalue is {ratio:.3g} of its largest"
+            f"{bodies}; accelerations lose about {digits} of 16 digits -> make the light part heavier or lump it "
+            "into the body it rides on, or check the mass units (g vs kg)")
