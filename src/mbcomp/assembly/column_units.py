@@ -73,6 +73,7 @@ def column_units(system):
     elements = [(path, comp) for path, comp, _ports in topo.forces] + list(topo.flange_elements)
     for path, comp in elements:
         put(f"{path}.power", "W")
+        put(f"{path}.power_nc", "W")
         put(f"{path}.potential", "J")
         for key, text in getattr(comp, "output_units", {}).items():
             put(f"{path}.{key}", text)

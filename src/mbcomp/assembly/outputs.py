@@ -191,12 +191,33 @@ def _reactions(system, cols, ev, lam, reac):
         cols[f"{e.drive}.power"] = effort * cols[f"{e.name}.{e.comp.speeds[0][0]}"]
 
 
+#: time (s) of the central difference of an element's potential along the motion (its rate)
+POTENTIAL_DT = 1e-6
+
+
+def _moved(frame, dt):
+    """The frame state ``dt`` seconds along its motion (to first order)."""
+    w = frame.w
+    R = frame.R + dt * np.array([cross(w, frame.R[:, k]) for k in range(3)]).T
+    return type(frame)(frame.r + dt * frame.v, R, frame.v, frame.w)
+
+
+def _mixed(comp, base):
+    """Whether an element with a potential may also do other work: not declared conservative,
+    or its answer depends on its parameters (a spring-damper's rate)."""
+    return type(comp).potential is not base.potential and (
+        not comp.conservative or type(comp).conserves_energy is not base.conserves_energy)
+
+
 def _elements(system, cols, ev):
     """Force and flange elements' own outputs (:meth:`ForceElement.outputs`), the power each
     delivers to the mechanism (W: force times its point's velocity, torque times its frame's
-    angular velocity, a flange's flow times its rate) and, for those with a potential, that
-    potential (J)."""
-    topo, jets = system.topology, ev.jets
+    angular velocity, a flange's flow times its rate), for those with a potential that
+    potential (J), and for those that may do work beyond it (a spring-damper) the power
+    beyond the potential's rate, ``power_nc`` (W; the rate by a central difference of
+    :data:`POTENTIAL_DT` along the motion, exact for a potential quadratic in a flange's
+    coordinate)."""
+    topo, jets, dt = system.topology, ev.jets, POTENTIAL_DT
     for path, comp, ports in topo.forces:
         frames = {pn: system._frame_state(jets[n]) for pn, n in ports.items()}
         p = system.P[path]
@@ -208,6 +229,10 @@ def _elements(system, cols, ev):
         cols[f"{path}.power"] = power
         if type(comp).potential is not ForceElement.potential:
             cols[f"{path}.potential"] = comp.potential(frames, p)
+        if _mixed(comp, ForceElement):
+            ahead = comp.potential({pn: _moved(f, dt) for pn, f in frames.items()}, p)
+            back = comp.potential({pn: _moved(f, -dt) for pn, f in frames.items()}, p)
+            cols[f"{path}.power_nc"] = power + (ahead - back) / (2 * dt)
     for path, comp in topo.flange_elements:
         roots = {pn: topo.flange_of[PortRef(comp, pn, "flange")] for pn, pt in comp.ports().items()
                  if pt.kind == "flange"}
@@ -221,3 +246,7 @@ def _elements(system, cols, ev):
         cols[f"{path}.power"] = power
         if type(comp).potential is not FlangeElement.potential:
             cols[f"{path}.potential"] = comp.potential(states, p)
+        if _mixed(comp, FlangeElement):
+            ahead = comp.potential({pn: (s + dt * v, v) for pn, (s, v) in states.items()}, p)
+            back = comp.potential({pn: (s - dt * v, v) for pn, (s, v) in states.items()}, p)
+            cols[f"{path}.power_nc"] = power + (ahead - back) / (2 * dt)

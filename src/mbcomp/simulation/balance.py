@@ -12,11 +12,11 @@ in the per-point programs:
   (:attr:`mbcomp.roles.ForceElement.dissipative`) took out; ``energy.balance`` (J):
   ``energy.total(t) - energy.total(0) - work + dissipated``, zero for an exact solution.
 
-An element's non-conservative work is the integral of the power it delivers (its
-``<element>.power`` column) plus the change of its own potential (``<element>.potential``):
-for a spring-damper only the damper's part remains. The integral is taken over the output
-grid (cumulative Simpson), so the balance also measures how well the grid resolves the
-power: a balance error far above the tolerances on a coarse grid asks for more output
+An element's non-conservative work is the integral of the power it delivers beyond its own
+potential's rate (``<element>.power_nc``; ``<element>.power`` for an element without a
+potential): for a spring-damper only the damper's part. The integral is taken over the
+output grid (cumulative Simpson), so the balance also measures how well the grid resolves
+that power: a balance error far above the tolerances on a coarse grid asks for more output
 points, not a tighter ``rtol``.
 
 Examples
@@ -109,13 +109,12 @@ def energy_balance_columns(system, t, series):
     work = np.zeros(len(t))
     dissipated = np.zeros(len(t))
     for name in names:
-        power = series.get(f"{name}.power")
+        power = series.get(f"{name}.power_nc", series.get(f"{name}.power"))
         if power is None:  # a component that does work but reports no power: no balance
             return {}
+        if f"{name}.power_nc" not in series and f"{name}.potential" in series:
+            return {}  # a potential and no split of its power: the balance cannot be told
         w = _cumulative(t, power)
-        V = series.get(f"{name}.potential")
-        if V is not None:
-            w = w + (V - V[0])
         if getattr(comps[name], "dissipative", False):
             dissipated -= w
         else:

@@ -44,7 +44,7 @@ from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
 from .postprocess import postprocess
 from .result import Result
-from .setup import ALL_METHODS, check_numbers, check_request, check_singular, output_times, system_of
+from .setup import ALL_METHODS, check_model, check_numbers, check_request, check_singular, output_times, system_of
 from .stepping import Budget, BudgetSpent, Run, hooks_for
 from .stiffness import StiffnessWatch
 from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
@@ -64,7 +64,8 @@ def __getattr__(name):
 def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rtol=1e-8, atol=1e-10,
              formulation="lagrange", stabilization=None, alpha=10.0, beta=10.0, n_out=None, dt_out=None,
              max_step=np.inf, progress=False, independent=None, index=None, h=None,
-             backend="auto", singular="stop", inputs=None, max_wall_time=None, max_steps=None) -> Result:
+             backend="auto", singular="stop", inputs=None, max_wall_time=None, max_steps=None,
+             body_momenta=False) -> Result:
     """Simulate a model: Lagrange multipliers at index 1, or D'Alembert projection to an ODE.
 
     Parameters
@@ -130,6 +131,9 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         out the run ends with status ``"budget"`` and the results computed so far.
     max_steps : int, optional
         Budget of integrator steps; the same.
+    body_momenta : bool
+        Also each body's momenta (``<body>.momentum.*``, ``<body>.angular_momentum.*``); the
+        whole mechanism's are always columns.
 
     Returns
     -------
@@ -148,32 +152,12 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     with input_signals({name: signal_of(name, v) for name, v in (inputs or {}).items()}):
         return _simulate(model, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha,
                          beta, independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress,
-                         Budget(max_wall_time, max_steps) if max_wall_time or max_steps else None)
-
-
-def check_model(model):
-    """A ``TypeError`` naming what was given and the fix unless ``model`` is a
-    :class:`~mbcomp.Model` or an assembled system."""
-    from ..assembly.system import MultibodySystem
-    from ..modeling.model import Model
-
-    if isinstance(model, (Model, MultibodySystem)):
-        return
-    import os
-
-    if isinstance(model, (str, os.PathLike)):
-        raise TypeError(f"simulate() takes a Model, not the path {str(model)!r} -> load the file and build its "
-                        f"model first: mbcomp.simulate(mbcomp.load_model_file({str(model)!r}).build(), ...), or run "
-                        f"'mbcomp simulate {model}' from a shell")
-    if callable(getattr(model, "build", None)):
-        raise TypeError(f"simulate() takes a Model, not {type(model).__name__} {getattr(model, '__name__', '')!r} "
-                        "-> call its build() and pass the model it returns: mbcomp.simulate(mod.build(), ...)")
-    raise TypeError(f"simulate() takes an mbcomp.Model (or an assembled system), not {type(model).__name__} "
-                    f"{model!r:.60} -> build the model with mbcomp.Model() and pass it")
+                         Budget(max_wall_time, max_steps) if max_wall_time or max_steps else None, body_momenta)
 
 
 def _simulate(model, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha, beta,
-              independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress, budget):
+              independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress, budget,
+              body_momenta=False):
     """:func:`simulate` once the request is checked and the inputs' signals are in place."""
     system = system_of(model, params, backend)
     try:
@@ -186,6 +170,11 @@ def _simulate(model, t_start, t_end, params, backend, formulation, stepper, inde
         if not raised_in_a_law(exc):
             raise
         raise SimulationError(start_failure(exc, t_start)) from exc
+    if np.size(y0) == 0:  # every motion prescribed: nothing to integrate, the outputs are kinematics
+        stepper = SCIPY_STEPPERS["RK45"]
+        if form.problem != "ode":
+            form = build("lagrange", "ode", system, stabilization=stabilization, alpha=alpha, beta=beta)
+            y0 = form.initial_state(t_start, init.q, init.u)
     run = Run(form, stepper, output_times(t_start, t_end, n_out, dt_out), y0, rtol=rtol, atol=atol,
               max_step=max_step, h=h)
     monitors = monitors_for(system, atol, singular)
@@ -201,7 +190,7 @@ def _simulate(model, t_start, t_end, params, backend, formulation, stepper, inde
                       index=index, rtol=rtol, atol=atol)
     t_done = run.t_out[: len(run.ys)]
     return postprocess(system, form, t_done, np.array(run.ys).reshape(len(run.ys), -1), status, message, stats,
-                       init)
+                       init, body_momenta)
 
 
 def run_stats(run, monitors, init, seconds, **request):

@@ -33,6 +33,7 @@ from ..assembly.recursive import SingularTree
 from ..assembly.summary import summary
 from ..geometry.kinematics import matrix_to_quat
 from .accuracy import energy_alarm, momentum_alarm
+from .balance import energy_balance_columns, momentum_columns
 from .result import Result
 
 __all__ = ["postprocess"]
@@ -70,7 +71,7 @@ class _Columns:
         return out
 
 
-def postprocess(system, form, t, Y, status, message, stats, init):
+def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=False):
     """The :class:`Result` of a run: every column at the output times ``t`` from the kept
     states ``Y`` (rows ``[q, u]``), the joints' notes, aliases and output functions.
 
@@ -96,6 +97,8 @@ def postprocess(system, form, t, Y, status, message, stats, init):
     stats : dict
     init : Initialization
         For the model summary.
+    body_momenta : bool
+        Also each body's momenta (:func:`mbcomp.simulation.balance.momentum_columns`).
     """
     nq = system.nq
     cols = _Columns(len(t))
@@ -121,7 +124,15 @@ def postprocess(system, form, t, Y, status, message, stats, init):
         for path, R in rotations.items():
             cols.rotation(path, k, R)
     series = cols.finished()
-    notes = _joint_notes(system, t, series) + _derived(system, t, series)
+    series.update(momentum_columns(system, series, per_body=body_momenta))
+    series.update(energy_balance_columns(system, t, series))
+    notes = _joint_notes(system, t, series) + _derived(system, t, series) + _assumptions(system)
+    loop = open_loop(system, series, stats)
+    if loop:
+        import warnings
+
+        warnings.warn(f"mbcomp: {loop}", RuntimeWarning, stacklevel=3)
+        notes.append(loop)
     if status == "success" and "rtol" in stats:
         alarm, text = _alarms(system, t, Y, series, stats["rtol"])
         if alarm:
@@ -151,6 +162,40 @@ def _alarms(system, t, Y, series, rtol):
         return momentum_alarm(np.array([x[0] for x in m]), np.array([x[1] for x in m]), max(x[2] for x in m),
                               max(x[3] for x in m), rtol)
     return None, ""
+
+
+def _assumptions(system):
+    """Notes on what the model left out and mbcomp assumed: no ground component (no World)
+    means no gravity."""
+    comps = system.topology.flat.components.values()
+    if not any(c.role == "ground" for c in comps):
+        return ["no World (or other ground) in the model: no gravity acts (g = 0) -> add World(g=(0, 0, -9.81)) and "
+                "connect to its frame_b if gravity was meant"]
+    return []
+
+
+#: how far beyond the integration tolerance (``atol + rtol L``) the position constraints may
+#: be open at the end of a run before :func:`open_loop` warns
+OPEN_LOOP_FACTOR = 10.0
+
+
+def open_loop(system, series, stats):
+    """A warning text when the position constraints are open at the end of the run by more
+    than :data:`OPEN_LOOP_FACTOR` times the integration tolerance ``atol + rtol L`` (``L``:
+    the largest distance of a body from the origin, at least 1 m), else ``None``."""
+    res = series.get("residual.position")
+    if res is None or not len(res) or "rtol" not in stats or not np.isfinite(res[-1]):
+        return None
+    L = 1.0
+    for path, _comp, _node in system.topology.bodies:
+        if f"{path}.r.x" in series:
+            L = max(L, float(np.sqrt(sum(series[f"{path}.r.{ax}"][-1] ** 2 for ax in "xyz"))))
+    limit = OPEN_LOOP_FACTOR * (float(np.max(stats.get("atol", 0.0))) + stats["rtol"] * L)
+    if res[-1] <= limit:
+        return None
+    return (f"the position constraints are open by {res[-1]:.2g} at the end of the run (residual.position), beyond "
+            f"the integration tolerance (about {limit / OPEN_LOOP_FACTOR:.1g}) -> use stabilization='projection' or "
+            "formulation='dalembert' (both keep the loops closed), or tighten rtol")
 
 
 def _sample(system, form, cols, k, t, q, u):

@@ -43,11 +43,12 @@ class Result:
     ----------
     time : ndarray (n,)
         Output times (s) up to the last accepted step.
-    status : {"success", "inaccurate", "failed", "interrupted"}
+    status : {"success", "inaccurate", "failed", "budget", "interrupted"}
         ``"inaccurate"``: the run reached ``t_end`` but a conserved quantity drifted more
         than the tolerances promise (the message gives the drift and a tolerance that fixes
         it; :mod:`mbcomp.simulation.accuracy`); ``"failed"``: the run could not go on (a
-        solver failure, a singular position, a component's law that raised);
+        solver failure, a singular position, a component's law that raised); ``"budget"``: the
+        wall-time or step budget ran out (``simulate(max_wall_time=, max_steps=)``);
         ``"interrupted"``: Ctrl-C or SIGTERM. Either way the results up to the last accepted
         step are kept.
     message : str

@@ -31,7 +31,7 @@ from ..assembly.system import MultibodySystem, assemble
 from ..formulations import check
 from ..solvers import STEPPERS
 
-__all__ = ["ALL_METHODS", "BACKENDS", "check_request", "check_numbers", "system_of", "output_times"]
+__all__ = ["ALL_METHODS", "BACKENDS", "check_request", "check_numbers", "check_model", "system_of", "output_times"]
 
 #: every method name, scipy's ODE methods first
 ALL_METHODS = tuple(STEPPERS)
@@ -175,6 +175,26 @@ def check_numbers(*, t_start, t_end, rtol, atol, alpha, beta, n_out, dt_out, max
     if max_steps is not None and (isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer))
                                   or max_steps < 1):
         raise ValueError(f"max_steps={max_steps!r} must be a positive integer -> give e.g. max_steps=100000")
+
+
+def check_model(model):
+    """A ``TypeError`` naming what was given and the fix unless ``model`` is a
+    :class:`~mbcomp.Model` or an assembled system."""
+    from ..modeling.model import Model
+
+    if isinstance(model, (Model, MultibodySystem)):
+        return
+    import os
+
+    if isinstance(model, (str, os.PathLike)):
+        raise TypeError(f"simulate() takes a Model, not the path {str(model)!r} -> load the file and build its "
+                        f"model first: mbcomp.simulate(mbcomp.load_model_file({str(model)!r}).build(), ...), or run "
+                        f"'mbcomp simulate {model}' from a shell")
+    if callable(getattr(model, "build", None)):
+        raise TypeError(f"simulate() takes a Model, not {type(model).__name__} {getattr(model, '__name__', '')!r} "
+                        "-> call its build() and pass the model it returns: mbcomp.simulate(mod.build(), ...)")
+    raise TypeError(f"simulate() takes an mbcomp.Model (or an assembled system), not {type(model).__name__} "
+                    f"{model!r:.60} -> build the model with mbcomp.Model() and pass it")
 
 
 def output_times(t_start, t_end, n_out, dt_out):
