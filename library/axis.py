@@ -16,6 +16,15 @@ from .laws import as_number, describe, law_problems, number
 class _TwoFlange(FlangeElement):
     flange_a = Flange("first flange (e.g. a joint's support)")
     flange_b = Flange("second flange (e.g. a joint's axis)")
+    #: result names of the law's value and of the relative coordinate and rate
+    columns = ("tau", "phi_rel", "w_rel")
+    output_units = {"tau": "N m", "phi_rel": "rad", "w_rel": "rad/s"}
+
+    def outputs(self, t, states, p):
+        """The law's torque or force (> 0 opposes a positive relative motion), the relative
+        coordinate ``flange_b - flange_a`` and its rate."""
+        (sa, va), (sb, vb) = states["flange_a"], states["flange_b"]
+        return dict(zip(self.columns, (self.law(sb - sa, vb - va, p), sb - sa, vb - va)))
 
     def flange_forces(self, t, states, p):
         (sa, va), (sb, vb) = states["flange_a"], states["flange_b"]
@@ -55,6 +64,7 @@ class RotationalDamper(_TwoFlange):
     """
 
     d = Param(0.0, unit="N m s/rad", doc="damping coefficient", check="nonnegative")
+    dissipative = True
 
     def conserves_energy(self, p):
         return p.d == 0.0
@@ -74,6 +84,7 @@ class RotationalSpringDamper(RotationalSpring):
     """
 
     d = Param(0.0, unit="N m s/rad", doc="damping coefficient", check="nonnegative")
+    dissipative = True
 
     def conserves_energy(self, p):
         return p.d == 0.0
@@ -95,6 +106,9 @@ class TranslationalSpringDamper(_TwoFlange):
     c = Param(0.0, unit="N/m", doc="spring rate", check="nonnegative")
     d = Param(0.0, unit="N s/m", doc="damping coefficient", check="nonnegative")
     s_rel0 = Param(0.0, unit="m", doc="unstretched relative position")
+    dissipative = True
+    columns = ("f", "s_rel", "v_rel")
+    output_units = {"f": "N", "s_rel": "m", "v_rel": "m/s"}
 
     def conserves_energy(self, p):
         return p.d == 0.0
@@ -114,6 +128,10 @@ class _Actuator(FlangeElement):
 
     def check_params(self, p):
         return law_problems(self, p, {self.value_name: ("t", *self.law_args)})
+
+    def outputs(self, t, states, p):
+        """The torque or force the law gives (``tau`` or ``f``)."""
+        return {self.value_name: self.flange_forces(t, states, p)["flange_b"]}
 
     def flange_forces(self, t, states, p):
         s, v = states["flange_b"]
@@ -147,6 +165,7 @@ class Torque(_Actuator):
     value_name = "tau"
     law_args = ("phi", "w")
     law_unit = "N m"
+    output_units = {"tau": "N m"}
     tau = Param(0.0, unit="N m", kind="law", doc="torque about the axis, or tau(t, phi, w)")
 
 
@@ -161,6 +180,7 @@ class Force(_Actuator):
     """
 
     value_name = "f"
+    output_units = {"f": "N"}
     f = Param(0.0, unit="N", kind="law", doc="force along the axis, or f(t, s, v)")
 
 

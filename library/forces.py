@@ -27,6 +27,14 @@ class _LineForce(ForceElement):
     def tension(self, L, Ldot, p):
         raise NotImplementedError
 
+    output_units = {"f": "N", "length": "m", "length_rate": "m/s"}
+
+    def outputs(self, t, frames, p):
+        """``f`` (N): the tension (> 0 pulls the points together); ``length`` (m) and its rate
+        ``length_rate`` (m/s)."""
+        L, Ldot, _ = self._line(frames)
+        return {"f": self.tension(L, Ldot, p), "length": L, "length_rate": Ldot}
+
     def wrenches(self, t, frames, p):
         L, Ldot, e = self._line(frames)
         f = self.tension(L, Ldot, p)  # > 0 pulls the points together
@@ -69,6 +77,7 @@ class Damper(_LineForce):
     """
 
     d = Param(0.0, unit="N s/m", doc="damping coefficient", check="nonnegative")
+    dissipative = True
 
     def conserves_energy(self, p):
         return p.d == 0.0
@@ -88,6 +97,7 @@ class SpringDamper(Spring):
     """
 
     d = Param(0.0, unit="N s/m", doc="damping coefficient", check="nonnegative")
+    dissipative = True
 
     def conserves_energy(self, p):
         return p.d == 0.0

@@ -31,6 +31,7 @@ from ..assembly.conservation import momenta, momentum_conserved, nonconservative
 from ..assembly.outputs import output_values, result_columns
 from ..assembly.recursive import SingularTree
 from ..assembly.summary import summary
+from ..assembly.topology import no_gravity_note
 from ..geometry.kinematics import matrix_to_quat
 from .accuracy import energy_alarm, momentum_alarm
 from .balance import energy_balance_columns, momentum_columns
@@ -126,7 +127,7 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
     series = cols.finished()
     series.update(momentum_columns(system, series, per_body=body_momenta))
     series.update(energy_balance_columns(system, t, series))
-    notes = _joint_notes(system, t, series) + _derived(system, t, series) + _assumptions(system)
+    notes = _joint_notes(system, t, series) + _derived(system, t, series) + [n for n in [no_gravity_note(system.topology)] if n]
     loop = open_loop(system, series, stats)
     if loop:
         import warnings
@@ -162,16 +163,6 @@ def _alarms(system, t, Y, series, rtol):
         return momentum_alarm(np.array([x[0] for x in m]), np.array([x[1] for x in m]), max(x[2] for x in m),
                               max(x[3] for x in m), rtol)
     return None, ""
-
-
-def _assumptions(system):
-    """Notes on what the model left out and mbcomp assumed: no ground component (no World)
-    means no gravity."""
-    comps = system.topology.flat.components.values()
-    if not any(c.role == "ground" for c in comps):
-        return ["no World (or other ground) in the model: no gravity acts (g = 0) -> add World(g=(0, 0, -9.81)) and "
-                "connect to its frame_b if gravity was meant"]
-    return []
 
 
 #: how far beyond the integration tolerance (``atol + rtol L``) the position constraints may
