@@ -367,3 +367,15 @@ def test_load_model_file_given_a_model_says_it_wants_a_path():
         mbcomp.load_model_file(pendulum())
     assert "not the path of a model file" in ei.value.problems[0].what
     assert isinstance(pathlib.Path("x"), pathlib.Path)
+
+
+def test_law_whose_signature_cannot_be_read_is_named_when_it_fails_at_run_time():
+    """Some builtins have no readable signature (getattr): validation lets them through, and
+    the call tau(t, phi, w) fails in the run, which names the component; a ufunc's signature
+    is read and refused at validation."""
+    with pytest.raises(mbcomp.ModelError, match="the tau law takes"):
+        motor_on(pendulum(), Torque(tau=np.sin)).validate()
+    m = motor_on(pendulum(), Torque(tau=getattr))
+    m.validate()
+    msg = run_error(m)
+    assert msg.startswith("Torque 'motor': ") and "TypeError" in msg
