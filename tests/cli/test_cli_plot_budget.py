@@ -111,3 +111,17 @@ def test_energy_balance_error_is_relative_to_the_energy_exchanged():
             "energy.dissipated": np.array([0.0, 0.0, 2.0]), "energy.balance": np.array([0.0, 0.0, -0.02])}
     # scale: max(max T + range of V = 3 + 4, max|W| = 5, max D = 2) = 7 J
     assert _energy_line(Result(t, cols)) == "energy balance error max|E - E0 - W + D| = 2.000e-02 J (2.9e-03 of the 7 J exchanged)"
+
+
+def test_csv_units_writes_each_columns_unit_in_its_header(tmp_path):
+    out = tmp_path / "crank.csv"
+    assert main(["simulate", CRANK, "--t-end", "0.2", "--out", str(out), "--csv-units"]) == 0
+    with open(out) as fh:
+        header = next(csv.reader(fh))
+    assert header[0] == "time [s]"
+    assert "crank_joint.phi [rad]" in header and "crank_joint.w [rad/s]" in header
+    assert "energy.total [J]" in header and "rod_joint.f.x [N]" in header
+    plain = tmp_path / "plain.csv"
+    assert main(["simulate", CRANK, "--t-end", "0.2", "--out", str(plain)]) == 0
+    with open(plain) as fh:
+        assert "crank_joint.phi" in next(csv.reader(fh))

@@ -61,7 +61,7 @@ def cmd_simulate(args):
     res = simulate(model, params=runtime, progress=not args.quiet, **opts)
     _report(res)
     if args.out:
-        res.to_csv(args.out)
+        res.to_csv(args.out, units=args.csv_units)
         print(f"wrote {args.out} ({len(res.names) + 1} columns, {len(res.time)} rows)")
     if args.plot:
         try:
@@ -141,6 +141,8 @@ def add_parser(sub, common):
                         "pass through it and report each passage")
     s.add_argument("--n-out", dest="n_out", type=int, help="number of output points")
     s.add_argument("--out", help="write results to this CSV file (also the partial results of a run that stops early)")
+    s.add_argument("--csv-units", action="store_true",
+                   help="write each CSV column's unit in its header: 'crank.phi [rad]'")
     s.add_argument("--plot", help="write a plot to this PNG file")
     s.add_argument("--plot-vars", dest="plot_vars", nargs="+", metavar="PATTERN",
                    help="columns --plot draws: names or shell-style globs, e.g. 'crank_joint.*' '*.tau.z' (default: "
