@@ -44,6 +44,7 @@ class RotationalSpring(_TwoFlange):
 
     c = Param(1.0, unit="N m/rad", doc="spring rate", check="nonnegative")
     phi_rel0 = Param(0.0, unit="rad", doc="unstretched relative angle")
+    axis_kind = "rotational"
     conservative = True
 
     def law(self, s, v, p):
@@ -64,6 +65,7 @@ class RotationalDamper(_TwoFlange):
     """
 
     d = Param(0.0, unit="N m s/rad", doc="damping coefficient", check="nonnegative")
+    axis_kind = "rotational"
     dissipative = True
 
     def conserves_energy(self, p):
@@ -106,6 +108,7 @@ class TranslationalSpringDamper(_TwoFlange):
     c = Param(0.0, unit="N/m", doc="spring rate", check="nonnegative")
     d = Param(0.0, unit="N s/m", doc="damping coefficient", check="nonnegative")
     s_rel0 = Param(0.0, unit="m", doc="unstretched relative position")
+    axis_kind = "translational"
     dissipative = True
     columns = ("f", "s_rel", "v_rel")
     output_units = {"f": "N", "s_rel": "m", "v_rel": "m/s"}
@@ -163,6 +166,7 @@ class Torque(_Actuator):
     """
 
     value_name = "tau"
+    axis_kind = "rotational"
     law_args = ("phi", "w")
     law_unit = "N m"
     output_units = {"tau": "N m"}
@@ -180,6 +184,7 @@ class Force(_Actuator):
     """
 
     value_name = "f"
+    axis_kind = "translational"
     output_units = {"f": "N"}
     f = Param(0.0, unit="N", kind="law", doc="force along the axis, or f(t, s, v)")
 

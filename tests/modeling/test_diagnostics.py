@@ -379,3 +379,21 @@ def test_law_whose_signature_cannot_be_read_is_named_when_it_fails_at_run_time()
     m.validate()
     msg = run_error(m)
     assert msg.startswith("Torque 'motor': ") and "TypeError" in msg
+
+
+def test_torque_on_a_slider_and_force_on_a_hinge_are_refused():
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("slide", Prismatic(n=(1, 0, 0)))
+    m.add("block", PointMass(m=1.0))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, m["block"].frame_a)
+    with pytest.raises(mbcomp.ModelError) as ei:
+        mbcomp.assemble(motor_on(m, Torque(tau=1.0), joint="slide"))
+    (pr,) = ei.value.problems
+    assert pr.where == "motor" and pr.what == ("this Torque applies a torque (N m), but slide (Prismatic) has a "
+                                               "translational axis")
+    assert pr.fix.startswith("connect it to a Revolute")
+    with pytest.raises(mbcomp.ModelError) as ei:
+        mbcomp.assemble(motor_on(pendulum(), Force(f=1.0)))
+    assert "this Force applies a force (N), but hinge (Revolute) has a rotational axis" in str(ei.value)

@@ -161,6 +161,16 @@ def _self_joined(path, comp, ports):
                    "previous link on frame_a, the next body on frame_b)")
 
 
+def _wrong_axis(element, joint):
+    """The problem of a flange element acting on a joint axis of the other kind."""
+    unit = {"rotational": "torque (N m)", "translational": "force (N)"}
+    right = {"rotational": "a Revolute", "translational": "a Prismatic"}
+    return Problem(element.path, f"this {type(element).__name__} applies a {unit[element.axis_kind]}, but "
+                                 f"{joint.path} ({type(joint).__name__}) has a {joint.axis_kind} axis",
+                   f"connect it to {right[element.axis_kind]}, or use the {joint.axis_kind} element (Force and "
+                   "TranslationalSpringDamper on a Prismatic, Torque and the Rotational* elements on a Revolute)")
+
+
 def _floating(topo, comp_nodes):
     """The problem of a group of frames with mass joined to nothing that reaches the world."""
     bodies = [path for path, _, n in topo.bodies if n in comp_nodes]
@@ -253,7 +263,17 @@ class Topology:
                 probs.append(Problem(path, f"{type(comp).__name__} has no known role",
                                      "subclass one of Ground, Body, Joint, ForceElement, FlangeElement, Drive"))
 
-        # --- flanges: which joint axis each flange node belongs to -------------------------
+        probs += self._flanges(flanges)
+        if probs:
+            raise ModelError(probs)
+
+        self._spanning_tree()
+        self._coordinates()
+
+    def _flanges(self, flanges):
+        """Which joint axis each flange node belongs to, and which joint each drive drives;
+        the problems found on the way."""
+        probs = []
         self.flange_owner = {}  # flange root -> (edge name, "axis" | "support")
         self.flange_of = {}  # PortRef -> flange root
         members = {}
@@ -274,6 +294,9 @@ class Topology:
                                      "connect it to a Revolute/Prismatic axis or support flange"))
             elif owners:
                 self.flange_owner[root] = (owners[0].component.path, owners[0].name)
+                kind = owners[0].component.axis_kind
+                probs += [_wrong_axis(x.component, owners[0].component) for x in users
+                          if kind and getattr(x.component, "axis_kind", None) not in (None, kind)]
         for path, comp in self.drives:
             root = self.flange_of[PortRef(comp, "flange_b", "flange")]
             owner = self.flange_owner.get(root)
@@ -287,11 +310,7 @@ class Topology:
                                            "joint's coordinate can be prescribed only once",
                                      f"keep one drive per joint: remove {path} or {e.drive}"))
             e.drive = path
-        if probs:
-            raise ModelError(probs)
-
-        self._spanning_tree()
-        self._coordinates()
+        return probs
 
     # --------------------------------------------------------------------------------------
     def _weight(self, e):

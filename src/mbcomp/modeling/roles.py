@@ -325,6 +325,9 @@ class FlangeElement(Component):
 
     role = "flange_force"
     conservative = False  # a law of time and state does work; springs declare True
+    #: ``"rotational"`` (torques, N m) or ``"translational"`` (forces, N): the kind of joint
+    #: axis its flanges must be on (the topology refuses a Torque on a Prismatic); ``None``: any
+    axis_kind = None
     #: as :attr:`ForceElement.dissipative`
     dissipative = False
 
