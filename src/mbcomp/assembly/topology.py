@@ -175,10 +175,11 @@ def _floating(topo, comp_nodes):
     """The problem of a group of frames with mass joined to nothing that reaches the world."""
     bodies = [path for path, _, n in topo.bodies if n in comp_nodes]
     if len(bodies) == 1:
-        what = "is joined to nothing that reaches the world, so it would fall freely"
+        what = ("is joined to nothing that reaches the world (through joints; springs and forces do not "
+                "hold it), so it would fall freely")
     else:
-        what = ("are joined to each other but not to the world (a floating assembly), so they would fall "
-                "freely together")
+        what = ("are joined to each other but not to the world (a floating assembly; springs and forces do "
+                "not hold it), so they would fall freely together")
     first = bodies[0].rsplit(".", 1)[-1]
     return Problem(", ".join(bodies), what,
                    f"connect it to the mechanism (a joint from world.frame_b or another body), or, if it floats on "
