@@ -158,7 +158,7 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
     ounits = _column_units(system)
     for oname, k in outputs:
         rows.append(f'    <Float64 name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
-                    f'variability="continuous" initial="calculated"{unit(_define(ounits.get(oname), defs))}/>')
+                    f'variability="continuous" initial="calculated"{unit(_define(ounits.get(oname, ounits.get(oname.removesuffix("_out"))), defs))}/>')
     for k, inp in enumerate(inputs[0]):
         uname = _define(unit_exponents(inp.unit), defs)
         rows.append(f'    <Float64 name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" causality="input" '
@@ -218,7 +218,7 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
     ounits = _column_units(system)
     for oname, k in outputs:
         rows.append(f'    <ScalarVariable name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
-                    f'variability="continuous" initial="calculated"><Real{unit(_define(ounits.get(oname), defs))}/>'
+                    f'variability="continuous" initial="calculated"><Real{unit(_define(ounits.get(oname, ounits.get(oname.removesuffix("_out"))), defs))}/>'
                     f'</ScalarVariable>')
     for k, inp in enumerate(inputs[0]):
         uname = _define(unit_exponents(inp.unit), defs)

@@ -160,6 +160,8 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
+    taken = set(pnames)  # an actuator's output named as its parameter (torque.tau): the output gets "_out"
+    out_prog.variables = [(f"{n}_out" if n in taken else n, k) for n, k in out_prog.variables]
     describe = _model_description if fmi == "2.0" else _model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),

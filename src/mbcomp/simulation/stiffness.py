@@ -175,8 +175,9 @@ def system_laws(system):
 
 class StiffnessWatch(StepHook):
     """Makes :func:`stiffness_hint` once, after :attr:`after` s of wall time and
-    :attr:`min_steps` steps of an explicit method, from the steps of the last half of that
-    time; warns with it and keeps it for the result's message (``note``)."""
+    :attr:`min_steps` steps of an explicit method (or, called with ``now=True`` when a budget
+    ran out, after a quarter of that time or those steps), from the steps of the last half of
+    that time; warns with it and keeps it for the result's message (``note``)."""
 
     #: wall time (s) a run lasts before the hint is made
     after = 2.0
@@ -194,11 +195,14 @@ class StiffnessWatch(StepHook):
             return
         wall, steps = time.perf_counter() - self.started, run.counters()["steps"]
         self.trail.append((wall, run.t, steps))
-        if not now and (wall < self.after or steps < self.min_steps):
-            return
+        slow = wall >= self.after and steps >= self.min_steps
+        if not (slow or (now and (wall >= self.after / 4 or steps >= self.min_steps))):
+            return  # (a run cut short by a small budget early on is not a slow run)
         self.done = True
-        past = next((x for x in self.trail if x[0] >= 0.5 * wall and x[2] < steps), self.trail[0])
-        h = (run.t - past[1]) / max(steps - past[2], 1)
+        past = next((x for x in self.trail if x[0] >= 0.5 * wall and x[2] < steps and x[1] < run.t), None)
+        h = (run.t - past[1]) / (steps - past[2]) if past else (run.t - run.t_out[0]) / max(steps, 1)
+        if not h > 0:
+            return
         try:
             self.note = stiffness_hint(run.form, run.stepper.t, run.stepper.y, h, steps)
         except Exception:  # noqa: BLE001 - a hint must never end a run
