@@ -129,3 +129,15 @@ def test_simulate_given_a_path_or_a_model_module_says_to_build_the_model(tmp_pat
         mbcomp.simulate(mod)
     with pytest.raises(TypeError, match="not NoneType"):
         mbcomp.simulate(None)
+
+
+def test_a_law_branch_the_trace_did_not_take_is_counted_and_said():
+    m, j = pendulum()
+    fr = m.add("fr", Torque(tau=lambda t, phi, w: -0.5 * w if w > 0 else -0.1 * w))  # a Python branch on w
+    m.connect(j.axis, fr.flange_b)
+    res = mbcomp.simulate(m, t_end=5.0)
+    ref = mbcomp.simulate(m, t_end=5.0, backend="numeric")
+    assert res.stats["backend"] == "c" and res.stats["fallbacks"] > res.stats["nfev"] // 2
+    assert "evaluations left the generated program for the numeric path" in res.message
+    assert "left the generated program" not in ref.message
+    np.testing.assert_allclose(res["j.phi"], ref["j.phi"], atol=1e-6)   # same motion either way

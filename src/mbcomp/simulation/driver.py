@@ -188,6 +188,10 @@ def _simulate(model, t_start, t_end, params, backend, formulation, stepper, inde
             message = f"{message}; {watch.note}"
     stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
                       index=index, rtol=rtol, atol=atol)
+    if stats.get("fallbacks", 0) > max(100, stats["nfev"] // 2):
+        message += (f"; {stats['fallbacks']} of {stats['nfev']} evaluations left the generated program for the "
+                    "numeric path (a law's branch, if/abs/min on a state, the trace did not take) -> write the "
+                    "branch smoothly (e.g. tanh) or run with backend='numeric' (no program to leave)")
     t_done = run.t_out[: len(run.ys)]
     return postprocess(system, form, t_done, np.array(run.ys).reshape(len(run.ys), -1), status, message, stats,
                        init, body_momenta)
@@ -196,13 +200,17 @@ def _simulate(model, t_start, t_end, params, backend, formulation, stepper, inde
 def run_stats(run, monitors, init, seconds, **request):
     """The result's ``stats``: the run's counters (:meth:`Run.counters`), the formulation's
     evaluations and its own figures, the monitors', initialization's, the integration's
-    ``cpu_time`` (``seconds``) and what was asked (``request``: method, formulation, index)."""
+    ``cpu_time`` (``seconds``), what was asked (``request``: method, formulation, index) and,
+    on a generated program, its ``fallbacks`` (evaluations whose guard failed: a law's branch
+    or a singular solve, run on the numeric path)."""
     form = run.form
     stats = run.counters()
     stats.update(nfev=form.nfev, nlu=form.nlu + stats["nlu_integrator"], cpu_time=seconds, **request,
                  backend=form.system.backend, stabilization=form.stabilization,
                  projected_rows_dropped=list(init.dropped), init_iterations=init.iterations)
     stats.update(form.run_stats())
+    if "fallbacks" in form.system.stats:  # evaluations a generated program handed to the numeric path
+        stats["fallbacks"] = form.system.stats["fallbacks"]
     for m in monitors:
         stats.update(m.stats())
     for hook in run.hooks:
