@@ -1,0 +1,203 @@
+"""Fuzzing in the suite: random mechanisms on the compiled default path, every run judged by
+the oracle (``fuzz_oracle.py``): success with its invariants held (energy or energy
+balance, loop residual, every column finite), or a failed/budget status or a model error
+naming a component -- never another exception, a NaN, a hang or a wrong answer.
+
+The budget is fixed (derandomized hypothesis, no example database): four functions of
+:data:`N` examples each, so ``pytest -n 2`` spreads them; about 300 mechanisms in all.
+``bench/fuzz.py`` runs thousands with the same generator and oracle.
+"""
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, Phase, assume, given, settings
+
+import mbcomp
+from mbcomp.errors import ModelError, SimulationError
+
+from fuzz_mechanisms import build, mechanisms
+from fuzz_oracle import RTOL, Violation, run
+
+N = 75
+FUZZ = settings(max_examples=N, deadline=None, derandomize=True, database=None,
+                phases=[Phase.explicit, Phase.generate, Phase.shrink],
+                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much])
+
+
+def _point_on_axis(spec):
+    """A leaf point mass sitting on a joint that turns it (no arm): its rotation is massless."""
+    parents = {b["parent"] for b in spec["bodies"]}
+    return any(b["body"] == "PointMass" and b["arm"] is None and b["joint"] != "Prismatic" and i not in parents
+               for i, b in enumerate(spec["bodies"]))
+
+
+def _loop_across_one_joint(spec):
+    """A loop closed across at most one moving joint (frame a an ancestor of frame b): a
+    locked or nearly redundant closure."""
+    lp = spec["loop"]
+    if lp is None:
+        return False
+    moving, k = 0, lp["b"]
+    while k != lp["a"]:
+        if k < 0:
+            return False
+        moving += spec["bodies"][k]["joint"] != "Weld"
+        k = spec["bodies"][k]["parent"]
+    return moving <= 1
+
+
+def judge(spec):
+    """The oracle on one spec; mechanisms of a known, still open bug are left out (each has
+    its strict-xfail reproducer below, which fails the suite once the bug is fixed, and then
+    its line here goes)."""
+    assume(not _point_on_axis(spec))  # test_point_mass_on_an_offset_hinge_axis_is_massless
+    assume(not _loop_across_one_joint(spec))  # test_loop_within_one_body_runs_or_is_named
+    run(spec)
+
+
+@FUZZ
+@given(mechanisms(max_bodies=8, nasty=False, loops=0.0))
+def test_fuzz_trees(spec):
+    judge(spec)
+
+
+@FUZZ
+@given(mechanisms(max_bodies=8, nasty=True, loops=0.0))
+def test_fuzz_nasty_trees(spec):
+    judge(spec)
+
+
+@FUZZ
+@given(mechanisms(max_bodies=5, nasty=False, loops=1.0))
+def test_fuzz_loops(spec):
+    judge(spec)
+
+
+@FUZZ
+@given(mechanisms(max_bodies=4, nasty=True, loops=0.3))
+def test_fuzz_small_nasty(spec):
+    judge(spec)
+
+
+# --- the generator itself -----------------------------------------------------------------
+def _body(joint, start, **kw):
+    b = dict(parent=-1, offset=None, rot=None, joint=joint, axis=(0.0, 0.0, 1.0), start=start,
+             body="RigidBody", m=1.0, arm=None, r_cm=(0.2, 0.0, 0.0), I=((0.1, 0, 0), (0, 0.1, 0), (0, 0, 0.1)))
+    b.update(kw)
+    return b
+
+
+def _four_bodies(misfit, joint="Spherical"):
+    """Two spherical pendulums on offsets, their tips joined by a closing joint ``loop``."""
+    bodies = [_body("Spherical", {}, offset=(0.3, 0.0, 0.0)),
+              _body("Revolute", {"phi0": 0.4}, parent=0, offset=(0.0, -0.5, 0.1), axis=(0.0, 0.0, 3.0)),
+              _body("Cylindrical", {"phi0": -0.2, "s0": 0.1}, offset=(-0.3, 0.0, 0.0), axis=(1.0, 1.0, 0.0),
+                    rot=(0.9, 0.1, 0.3, 0.0)),
+              _body("Revolute", {"phi0": 0.7}, parent=2, offset=(0.0, -0.5, 0.0), axis=(1.0, 0.0, 0.0))]
+    bodies[2]["rot"] = tuple(np.array(bodies[2]["rot"]) / np.linalg.norm(bodies[2]["rot"]))
+    return {"g": (0.0, -9.81, 0.0), "bodies": bodies, "lines": [], "flanges": [],
+            "loop": dict(a=1, b=3, joint=joint, d_a=(0.0, -0.2, 0.0), axis=(0.0, 1.0, 1.0), misfit=misfit,
+                         guess=False)}
+
+
+@pytest.mark.parametrize("joint", ["Spherical", "Revolute"])
+def test_loop_closure_is_built_closed(joint):
+    """The generator's loop closes at the start: the constraint residual at the tree's start
+    values vanishes (the closing frames coincide), and moving frame b by 0.3 m opens it by
+    0.3 m."""
+    for misfit, expected in ((0.0, 0.0), (0.3, 0.3)):
+        system = mbcomp.assemble(build(_four_bodies(misfit, joint)))
+        ev = system.evaluate(0.0, system.default_q(), np.zeros(system.nu))
+        assert np.linalg.norm(ev.Phi[:3]) == pytest.approx(expected, abs=1e-12)
+
+
+def test_loop_that_cannot_close_is_named():
+    """A loop 5 m beyond the links' reach: initialization fails naming the loop."""
+    spec = _four_bodies(5.0)
+    spec["loop"]["guess"] = True
+    spec["bodies"][2]["start"] = {}  # free to move, and still cannot reach
+    out = run(spec)
+    assert out.kind == "InitializationError" and "loop" in out.message
+
+
+def test_conservative_loop_keeps_its_energy():
+    """A closed spatial loop with no damper: success, energy within the oracle's bar (checked
+    inside :func:`run`), at the suite's tolerance."""
+    out = run(_four_bodies(0.0))
+    assert out.kind == "success", out.message
+
+
+# --- reproducers of what the fuzz found ----------------------------------------------------
+WELDED = {"g": (0.0, -9.81, 0.0), "bodies": [_body("Weld", {})], "lines": [], "flanges": [], "loop": None}
+
+
+def test_zero_dof_mechanism_ends_named_or_at_rest():
+    """A body welded to the world (no degree of freedom at all): either a result at rest or an
+    error naming the body (found by the fuzz as 'the integrator dop853 failed at t=0: the
+    number of equations n=0 must be positive', naming nothing; fixed in the driver)."""
+    try:
+        res = mbcomp.simulate(build(WELDED), t_end=0.2, n_out=5, rtol=RTOL)
+    except (ModelError, SimulationError) as exc:
+        assert "b0" in str(exc) or "j0" in str(exc)
+        return
+    assert res.status == "success", res.message
+    assert res.time[-1] == pytest.approx(0.2) and np.all(res["b0.r.y"] == 0.0)
+
+
+def _hinge_at_offset(n=(0.0, 0.0, 1.0), offset=(-0.93, 0.0, 0.0)):
+    """A 6 kg point mass right on the axis of a hinge placed at ``offset`` (m) from the world
+    origin: the hinge's rotation carries no inertia."""
+    from mbcomp.library import FixedTranslation, PointMass, Revolute, World
+
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, 0)))
+    o = m.add("off", FixedTranslation(r=offset))
+    j = m.add("hinge", Revolute(n=n, phi0=0.3, w0=0.0))
+    b = m.add("bob", PointMass(m=6.0))
+    m.connect(w.frame_b, o.frame_a)
+    m.connect(o.frame_b, j.frame_a)
+    m.connect(j.frame_b, b.frame_a)
+    return m
+
+
+def test_point_mass_on_a_hinge_axis_is_massless():
+    """At the origin the massless rotation is diagnosed at initialization, naming the hinge."""
+    with pytest.raises(mbcomp.errors.InitializationError, match=r"hinge\.w: this rotation carries no"):
+        mbcomp.simulate(_hinge_at_offset(offset=(0.0, 0.0, 0.0)), t_end=0.2, n_out=5)
+
+
+@pytest.mark.xfail(strict=True, reason="assembly/conditioning.py judges massless directions relative to the "
+                   "largest eigenvalue of the restricted mass matrix; with one coordinate its roundoff-level "
+                   "entry (6 kg x (1e-16 m)^2 from the offset) is its own scale, so initialization passes and "
+                   "the run ends 'the mass matrix is singular at t=0.1234', naming no component")
+def test_point_mass_on_an_offset_hinge_axis_is_massless():
+    """Found by the fuzz: the same hinge 0.93 m from the origin must be diagnosed the same way."""
+    with pytest.raises(mbcomp.errors.InitializationError, match=r"hinge\.w: this rotation carries no"):
+        mbcomp.simulate(_hinge_at_offset(), t_end=0.2, n_out=5)
+
+
+SELF_LOOP = {"g": (0.0, 0.0, 0.0), "lines": [], "flanges": [], "bodies": [  # the fuzz's numbers, unrounded
+    dict(parent=-1, offset=(0.0, -0.035354409589613923, -0.206108681932714), rot=None, joint="Cylindrical",
+         axis=(-0.8456919301613565, 0.48437392631796844, -0.22402468337947662),
+         start={"phi0": 1.5e-05, "w0": 0.0, "s0": 0.18740880668043758, "v0": -0.8903777018015906},
+         body="PointMass", m=1.0743322256517325, arm=(-0.0333589828355658, 0.1753043874920975, 0.0), r_cm=None,
+         I=None),
+    dict(parent=0, offset=None, rot=None, joint="Weld", axis=(0.0, 0.0, -1.0), start={}, body="RigidBody",
+         m=1.168235723325101, arm=None, r_cm=(0.0, -0.3402034502914762, 0.3087084570109221),
+         I=((0.48905681093114794, 0.19686490490609315, 0.0), (0.19686490490609315, 0.27703353337975267, 0.0),
+            (0.0, 0.0, 0.502754963080446)))],
+    "loop": dict(a=1, b=0, joint="Spherical", d_a=(-0.2583086657651936, 0.031420591271383254, 0.26610560772264447),
+                 axis=(0.0, -5.251640879385708, 4.784698386928255), misfit=0.3, guess=True)}
+
+
+@pytest.mark.xfail(strict=True, raises=Violation,
+                   reason="codegen: on a loop closed across one joint at most (here two frames of one rigid "
+                   "body: b1 welded to b0; also a spherical 1.5e-5 m off a single hinge's axis) "
+                   "the C program's right-hand side differs from the dense Lagrange solve ('CodegenError at "
+                   "t=0.1234 ... differs by 58'), the run ends 'failed' naming '?' while backend='numeric' "
+                   "succeeds")
+def test_loop_within_one_body_runs_or_is_named():
+    """Found by the fuzz: a spherical joint closing a loop between two points of one rigid
+    body (b1 is welded to b0). The default path must agree with the numeric one (success) or
+    end naming a component."""
+    assert mbcomp.simulate(build(SELF_LOOP), t_end=0.3, n_out=31, rtol=RTOL, backend="numeric").status == "success"
+    run(SELF_LOOP)
