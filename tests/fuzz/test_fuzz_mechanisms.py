@@ -9,13 +9,13 @@ The budget is fixed (derandomized hypothesis, no example database): four functio
 """
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, assume, given, settings
+from hypothesis import HealthCheck, Phase, given, settings
 
 import mbcomp
 from mbcomp.errors import ModelError, SimulationError
 
 from fuzz_mechanisms import build, mechanisms
-from fuzz_oracle import RTOL, Violation, run
+from fuzz_oracle import RTOL, run
 
 N = 75
 FUZZ = settings(max_examples=N, deadline=None, derandomize=True, database=None,
@@ -23,34 +23,9 @@ FUZZ = settings(max_examples=N, deadline=None, derandomize=True, database=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much])
 
 
-def _point_on_axis(spec):
-    """A leaf point mass sitting on a joint that turns it (no arm): its rotation is massless."""
-    parents = {b["parent"] for b in spec["bodies"]}
-    return any(b["body"] == "PointMass" and b["arm"] is None and b["joint"] != "Prismatic" and i not in parents
-               for i, b in enumerate(spec["bodies"]))
-
-
-def _loop_across_one_joint(spec):
-    """A loop closed across at most one moving joint (frame a an ancestor of frame b): a
-    locked or nearly redundant closure."""
-    lp = spec["loop"]
-    if lp is None:
-        return False
-    moving, k = 0, lp["b"]
-    while k != lp["a"]:
-        if k < 0:
-            return False
-        moving += spec["bodies"][k]["joint"] != "Weld"
-        k = spec["bodies"][k]["parent"]
-    return moving <= 1
-
-
 def judge(spec):
-    """The oracle on one spec; mechanisms of a known, still open bug are left out (each has
-    its strict-xfail reproducer below, which fails the suite once the bug is fixed, and then
-    its line here goes)."""
-    assume(not _point_on_axis(spec))  # test_point_mass_on_an_offset_hinge_axis_is_massless
-    assume(not _loop_across_one_joint(spec))  # test_loop_within_one_body_runs_or_is_named
+    """The oracle on one spec (nothing left out: the reproducers below are of bugs it found,
+    fixed)."""
     run(spec)
 
 
@@ -165,12 +140,10 @@ def test_point_mass_on_a_hinge_axis_is_massless():
         mbcomp.simulate(_hinge_at_offset(offset=(0.0, 0.0, 0.0)), t_end=0.2, n_out=5)
 
 
-@pytest.mark.xfail(strict=True, reason="assembly/conditioning.py judges massless directions relative to the "
-                   "largest eigenvalue of the restricted mass matrix; with one coordinate its roundoff-level "
-                   "entry (6 kg x (1e-16 m)^2 from the offset) is its own scale, so initialization passes and "
-                   "the run ends 'the mass matrix is singular at t=0.1234', naming no component")
 def test_point_mass_on_an_offset_hinge_axis_is_massless():
-    """Found by the fuzz: the same hinge 0.93 m from the origin must be diagnosed the same way."""
+    """Found by the fuzz: the same hinge 0.93 m from the origin must be diagnosed the same way
+    (its mass matrix is 6 kg x (1e-16 m)^2 of rounding, once compared only with itself; now with
+    the size of what moves, ``conditioning.moving_scale``)."""
     with pytest.raises(mbcomp.errors.InitializationError, match=r"hinge\.w: this rotation carries no"):
         mbcomp.simulate(_hinge_at_offset(), t_end=0.2, n_out=5)
 
@@ -189,15 +162,13 @@ SELF_LOOP = {"g": (0.0, 0.0, 0.0), "lines": [], "flanges": [], "bodies": [  # th
                  axis=(0.0, -5.251640879385708, 4.784698386928255), misfit=0.3, guess=True)}
 
 
-@pytest.mark.xfail(strict=True, raises=Violation,
-                   reason="codegen: on a loop closed across one joint at most (here two frames of one rigid "
-                   "body: b1 welded to b0; also a spherical 1.5e-5 m off a single hinge's axis) "
-                   "the C program's right-hand side differs from the dense Lagrange solve ('CodegenError at "
-                   "t=0.1234 ... differs by 58'), the run ends 'failed' naming '?' while backend='numeric' "
-                   "succeeds")
-def test_loop_within_one_body_runs_or_is_named():
+def test_loop_within_one_body_is_named_on_every_backend():
     """Found by the fuzz: a spherical joint closing a loop between two points of one rigid
-    body (b1 is welded to b0). The default path must agree with the numeric one (success) or
-    end naming a component."""
-    assert mbcomp.simulate(build(SELF_LOOP), t_end=0.3, n_out=31, rtol=RTOL, backend="numeric").status == "success"
-    run(SELF_LOOP)
+    body (b1 is welded to b0), 0.3 m apart. Its constraint Jacobian is rounding (1e-17): the
+    closure used to step 1e16 m along it and report the loop closed, and the program check
+    then met a dependent, inconsistent row set. Now every backend says the loop cannot close."""
+    for backend in ("numeric", "auto"):
+        with pytest.raises(mbcomp.errors.InitializationError, match=r"loop: the kinematic loop cannot be assembled"):
+            mbcomp.simulate(build(SELF_LOOP), t_end=0.3, n_out=31, rtol=RTOL, backend=backend)
+    out = run(SELF_LOOP)
+    assert out.kind == "InitializationError" and "loop" in out.message

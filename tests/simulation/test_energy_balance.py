@@ -190,3 +190,34 @@ def test_a_loop_left_open_beyond_the_tolerance_is_a_warning_with_the_fix():
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)   # closed loops: no warning
         mbcomp.simulate(m, t_end=10.0, rtol=1e-6, atol=1e-8, stabilization="projection")
+
+
+def driven_pendulum():
+    """A pendulum driven by a torque 0.5 sin(2 t), undamped: integration errors in its energy
+    accumulate (nothing dissipates them)."""
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, -9.81, 0)))
+    j = m.add("j", Revolute(n=(0, 0, 1), phi0=1.0))
+    rod = m.add("rod", FixedTranslation(r=(1.0, 0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    motor = m.add("motor", Torque(tau=lambda t, phi, w: 0.5 * np.sin(2.0 * t)))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    m.connect(j.axis, motor.flange_b)
+    return m
+
+
+def test_a_balance_off_by_more_than_the_tolerance_promises_raises_the_alarm():
+    loose = mbcomp.simulate(driven_pendulum(), t_end=500.0, n_out=50001, rtol=1e-5, atol=1e-7, method="RK23")
+    assert loose.status == "inaccurate" and "the energy balance is off by" in loose.message
+    assert "rerun with rtol=1e-08" in loose.message
+    tight = mbcomp.simulate(driven_pendulum(), t_end=500.0, n_out=50001, rtol=1e-10, atol=1e-12)
+    assert tight.status == "success" and np.abs(tight["energy.balance"]).max() < 1e-6
+
+
+def test_a_grid_that_cannot_resolve_the_power_raises_no_alarm():
+    """61 points over 500 s of a 2 rad/s motion: the balance is off by the quadrature, not by
+    the integration, and the run says nothing false."""
+    coarse = mbcomp.simulate(driven_pendulum(), t_end=500.0, n_out=61, rtol=1e-10, atol=1e-12)
+    assert np.abs(coarse["energy.balance"]).max() > 1.0 and coarse.status == "success"

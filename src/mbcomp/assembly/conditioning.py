@@ -40,20 +40,25 @@ import scipy.linalg as sla
 
 from ..errors import InitializationError, Problem
 
-__all__ = ["MASSLESS", "ILL_CONDITIONED", "directions", "check_inertia"]
+__all__ = ["MASSLESS", "ILL_CONDITIONED", "directions", "check_inertia", "moving_scale"]
 
 EPS = np.finfo(float).eps
 MASSLESS = 1e-12
 ILL_CONDITIONED = float(np.sqrt(EPS))
 
 
-def directions(Mr):
+def directions(Mr, scale=0.0):
     """Massless directions of the symmetric positive semi-definite ``Mr`` and its conditioning.
 
     Parameters
     ----------
     Mr : ndarray (n, n)
         The mass matrix of the admissible motions (kg, kg m, kg m^2 by coordinate).
+    scale : float
+        The size of the masses and inertias that move (:func:`moving_scale`): the roundoff
+        of ``Mr`` is relative to it even when every eigenvalue is that roundoff (a point mass
+        on a hinge's axis 1 m from the origin: ``6 kg (1e-16 m)^2``, no larger eigenvalue to
+        compare with).
 
     Returns
     -------
@@ -72,7 +77,7 @@ def directions(Mr):
     ((2, 0), None)
     """
     w, V = np.linalg.eigh(0.5 * (Mr + Mr.T))
-    top = max(w[-1], 0.0) if w.size else 0.0
+    top = max(w[-1] if w.size else 0.0, scale, 0.0)
     small = w <= MASSLESS * top
     if small.any() or top == 0.0:
         return V[:, small | (top == 0.0)], None
@@ -106,7 +111,7 @@ def check_inertia(system, ev):
     if N.shape[1] == 0:
         return []
     Mr = N.T @ ev.M @ N
-    Z, ratio = directions(Mr)
+    Z, ratio = directions(Mr, moving_scale(system, ev.jets))
     if Z.shape[1]:
         raise _massless(system, N @ Z, ev.M)
     if ratio is None:
@@ -114,6 +119,21 @@ def check_inertia(system, ev):
     note = _ill_conditioned(system, ratio)
     warnings.warn(f"mbcomp: {note}", RuntimeWarning, stacklevel=3)
     return [note]
+
+
+def moving_scale(system, jets):
+    """``sum m (1 + |r_cm|^2) + trace(I_cm)`` over the bodies that move (their jets have a
+    speed column), SI units taken as numbers: the size of the largest entries a mass matrix
+    of these bodies can have about the world origin, which sets its roundoff."""
+    total = 0.0
+    for path, comp, node in system.topology.bodies:
+        J = jets[node]
+        if not (np.any(J.Jv) or np.any(J.Jw)):
+            continue
+        m, rc, I = comp.mass_properties(system.P[path])
+        r = J.r + J.R @ np.asarray(rc, float)
+        total += float(m) * (1.0 + float(r @ r)) + float(np.trace(I))
+    return total
 
 
 def _massless(system, modes, M):

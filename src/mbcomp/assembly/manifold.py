@@ -155,7 +155,7 @@ def close_positions(residual: Callable, increment: Callable, q, *, columns=None,
         cols = slice(None) if columns is None else columns
         step_dir = np.zeros(J.shape[1])
         if np.any(np.ones(J.shape[1], bool)[cols]):
-            step_dir[cols] = -np.linalg.lstsq(J[:, cols], r, rcond=None)[0]
+            step_dir[cols] = -_least_squares(J[:, cols], r)
         it += 1
         step = 1.0
         while True:
@@ -171,6 +171,20 @@ def close_positions(residual: Callable, increment: Callable, q, *, columns=None,
         if exact and norm <= tol and (np.abs(step_dir).max(initial=0.0) <= EXACT_STEP or norm > 0.5 * before):
             break  # closed to rounding
     return Closure(q, r, J, data, norm, it, norm <= tol, tol)
+
+
+#: singular values of a Newton closure's Jacobian below this (m per unit speed coordinate, or
+#: 1) are zero whatever the largest: a loop closed across one rigid body has a Jacobian of
+#: rounding (1e-17), and a relative cut-off let Newton step 1e16 m along it
+JACOBIAN_FLOOR = 1e-12
+
+
+def _least_squares(J, r):
+    """Minimum-norm ``x`` with ``J x ~ r``, singular values below ``eps`` of the largest or
+    :data:`JACOBIAN_FLOOR` taken as zero."""
+    U, sv, Vt = np.linalg.svd(J, full_matrices=False)
+    keep = sv > max(JACOBIAN_FLOOR, np.finfo(float).eps * max(J.shape) * (sv[0] if sv.size else 0.0))
+    return Vt[keep].T @ ((U[:, keep].T @ r) / sv[keep])
 
 
 def solve_speeds(A, res, u, columns=None, *, minimum_norm=False):

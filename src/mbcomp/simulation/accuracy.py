@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-__all__ = ["energy_alarm", "momentum_alarm", "ALARM_RTOL", "ALARM_FLOOR", "DRIFT_SHARE"]
+__all__ = ["energy_alarm", "balance_alarm", "momentum_alarm", "ALARM_RTOL", "ALARM_FLOOR", "DRIFT_SHARE"]
 
 #: a relative energy drift above this many times ``rtol`` is more than the tolerance promises
 #: (global errors grow over a run: the bar leaves room for 100 tolerances' worth)
@@ -114,3 +114,38 @@ def energy_alarm(T, V, rtol):
                           f"{scale:.3g} J the motion exchanges, over a tenth of the run) in a conservative system; "
                           f"rtol={float(np.max(rtol)):g} "
                           f"promises about {bar:.0e} -> {_fix(rtol, rel)}")
+
+
+def balance_alarm(balance, T, V, work, dissipated, quadrature, rtol):
+    """``(status, message)`` of the alarm on the energy balance (J, on the output grid) of a
+    driven or damped mechanism (:mod:`mbcomp.simulation.balance`) integrated at ``rtol``: as
+    :func:`energy_alarm`, relative to the energy the motion exchanges (largest kinetic energy,
+    range of the potential one, largest work and dissipation), and only when the output
+    grid's ``quadrature`` estimate (J) is below a tenth of the balance error -- else the grid,
+    not the integration, may be what is off, and no alarm is raised.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 10.0, 101)
+    >>> T, V, D = np.exp(-t), np.zeros(101), 1.0 - np.exp(-t)   # a damped motion, balanced
+    >>> balance_alarm(T + D - 1.0, T, V, 0 * t, D, 0.0, 1e-6)
+    (None, '')
+    >>> balance_alarm(T + D - 1.0 + 1e-3 * t, T, V, 0 * t, D, 0.0, 1e-6)[1].split(";")[0]
+    'accuracy alarm: the energy balance is off by 0.009 J (4.5e-03 of the 2 J the motion exchanges, over a tenth of the run)'
+    """
+    arrays = [np.asarray(x, float) for x in (balance, T, V, work, dissipated)]
+    ok = np.all([np.isfinite(x) for x in arrays], axis=0)
+    if ok.sum() < 2:
+        return None, ""
+    balance, T, V, work, dissipated = (x[ok] for x in arrays)
+    scale = float(np.max(T) + np.ptp(V) + np.max(np.abs(work)) + np.max(np.abs(dissipated)))
+    if not scale > 0.0:
+        return None, ""
+    drift = _drift(balance)
+    rel = drift / scale
+    bar = max(ALARM_RTOL * float(np.max(rtol)), ALARM_FLOOR)
+    if rel <= bar or quadrature >= 0.1 * drift:
+        return None, ""
+    return "inaccurate", (f"accuracy alarm: the energy balance is off by {drift:.2g} J ({rel:.1e} of the "
+                          f"{scale:.3g} J the motion exchanges, over a tenth of the run); "
+                          f"rtol={float(np.max(rtol)):g} promises about {bar:.0e} -> {_fix(rtol, rel)}")

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..assembly.conservation import nonconservative
 
-__all__ = ["momentum_columns", "energy_balance_columns"]
+__all__ = ["momentum_columns", "energy_balance_columns", "energy_balance"]
 
 _XYZ = ("x", "y", "z")
 
@@ -102,23 +102,37 @@ def energy_balance_columns(system, t, series):
     mechanism with non-conservative elements or drives (see the module notes); empty for a
     conservative one (its ``energy.total`` is the balance) or when a needed column is
     missing (a run that stopped at its start)."""
+    return energy_balance(system, t, series)[0]
+
+
+def energy_balance(system, t, series):
+    """``(columns, quadrature)``: the columns of :func:`energy_balance_columns` and an
+    estimate (J) of how much of the balance the output grid's quadrature may account for:
+    the largest difference between the work integrated by Simpson's rule and by the
+    trapezoid rule (the trapezoid's error, a bound on Simpson's on a grid that resolves the
+    power) or by Simpson's rule on every other point (a power ringing faster than the grid
+    aliases differently on the two grids)."""
     comps = system.topology.flat.components
     names = nonconservative(system)
     if not names or len(t) < 2 or "energy.total" not in series:
-        return {}
+        return {}, 0.0
     work = np.zeros(len(t))
     dissipated = np.zeros(len(t))
+    quadrature = 0.0
     for name in names:
         power = series.get(f"{name}.power_nc", series.get(f"{name}.power"))
         if power is None:  # a component that does work but reports no power: no balance
-            return {}
+            return {}, 0.0
         if f"{name}.power_nc" not in series and f"{name}.potential" in series:
-            return {}  # a potential and no split of its power: the balance cannot be told
+            return {}, 0.0  # a potential and no split of its power: the balance cannot be told
         w = _cumulative(t, power)
+        trapezoid = np.concatenate(([0.0], np.cumsum(0.5 * np.diff(t) * (power[1:] + power[:-1]))))
+        half = _cumulative(t[::2], power[::2]) if len(t) >= 5 else w[::2]
+        quadrature += max(float(np.max(np.abs(w - trapezoid))), float(np.max(np.abs(w[::2] - half))))
         if getattr(comps[name], "dissipative", False):
             dissipated -= w
         else:
             work += w
     E = series["energy.total"]
     return {"energy.work": work, "energy.dissipated": dissipated,
-            "energy.balance": E - E[0] - work + dissipated}
+            "energy.balance": E - E[0] - work + dissipated}, quadrature

@@ -202,17 +202,30 @@ class ConstraintRank:
         matter, a singular position is where no choice keeps the rank."""
         return relative_sigma(ev.C, self.rank)
 
-    def _singular(self, t, rel):
+    def _singular(self, t, rel, ev):
+        _, joints = self._dependent(ev)
         return SingularPosition(
             f"the mechanism reached a singular position at t={t:g}: the constraint Jacobian lost "
-            f"rank (smallest relative singular value {rel:.2g}); beyond it the motion is not unique "
-            "(a flat or dead-centre position) -> change the geometry or the start so it is avoided", t)
+            f"rank (smallest relative singular value {rel:.2g}; rows of {', '.join(joints)} became dependent); "
+            "beyond it the motion is not unique (a flat or dead-centre position) -> change the geometry or the "
+            "start so it is avoided, or pass it with singular='pass'", t)
+
+    def _dependent(self, ev):
+        """``(rank drop, joints)``: how many rows of the full Jacobian ``ev.C`` became
+        dependent and the joints of the rows in its left null space."""
+        U, sv, _ = np.linalg.svd(ev.C)
+        r = self.rank if self.rank is not None else ev.C.shape[0]
+        small = sv[:r] < self.SIGMA_MIN * 10 * sv[0] if sv.size else np.zeros(0, bool)
+        drop = max(1, int(small.sum()) + max(0, r - sv.size))
+        weight = np.abs(U[:, r - drop: r]).max(axis=1) if sv.size else np.zeros(0)
+        names = self.system.constraint_names(all_rows=True)
+        return drop, list(dict.fromkeys(n.rsplit(".", 1)[0] for n, w in zip(names, weight) if w > 0.1 * weight.max()))
 
     def check(self, end, t_prev, dense):
         rel = self.sigma(end.ev)
         self.sigma_min = min(self.sigma_min, rel)
         if rel < self.SIGMA_MIN and self.singular == "stop":
-            raise self._singular(end.t, rel)
+            raise self._singular(end.t, rel, end.ev)
         self.window.push(t_prev, end.t, {"sigma": rel}, dense)
         if self.window.dips():
             sysm = self.system
@@ -220,23 +233,12 @@ class ConstraintRank:
                                           sysm.nq, sysm.nu, sysm.normalize)
             self.sigma_min = min(self.sigma_min, smin)
             if smin < self.SIGMA_MIN:
+                qu = self.window.state_at(ts, sysm.nq, sysm.nu)
+                ev = sysm.evaluate(ts, sysm.normalize(qu[: sysm.nq]), qu[sysm.nq:], masked=False)
                 if self.singular == "stop":
-                    raise self._singular(ts, smin)
-                self.passages.append(self._passage(ts, smin, self.window.state_at(ts, sysm.nq, sysm.nu)))
-
-    def _passage(self, t, sigma, qu):
-        """The record of a passage at ``t``: the rank drop and the joints of the rows in the
-        left null space of the full Jacobian there (the rows that became dependent)."""
-        sysm = self.system
-        ev = sysm.evaluate(t, sysm.normalize(qu[: sysm.nq]), qu[sysm.nq:], masked=False)
-        U, sv, _ = np.linalg.svd(ev.C)
-        r = self.rank if self.rank is not None else ev.C.shape[0]
-        small = sv[:r] < self.SIGMA_MIN * 10 * sv[0] if sv.size else np.zeros(0, bool)
-        drop = max(1, int(small.sum()) + max(0, r - sv.size))
-        weight = np.abs(U[:, r - drop: r]).max(axis=1) if sv.size else np.zeros(0)
-        names = sysm.constraint_names(all_rows=True)
-        joints = list(dict.fromkeys(n.rsplit(".", 1)[0] for n, w in zip(names, weight) if w > 0.1 * weight.max()))
-        return dict(t=float(t), sigma=float(sigma), rank_drop=drop, joints=joints)
+                    raise self._singular(ts, smin, ev)
+                drop, joints = self._dependent(ev)
+                self.passages.append(dict(t=float(ts), sigma=float(smin), rank_drop=drop, joints=joints))
 
     def stats(self):
         out = {"min_constraint_sigma": self.sigma_min}

@@ -33,8 +33,8 @@ from ..assembly.recursive import SingularTree
 from ..assembly.summary import summary
 from ..assembly.topology import no_gravity_note
 from ..geometry.kinematics import matrix_to_quat
-from .accuracy import energy_alarm, momentum_alarm
-from .balance import energy_balance_columns, momentum_columns
+from .accuracy import balance_alarm, energy_alarm, momentum_alarm
+from .balance import energy_balance, momentum_columns
 from .result import Result
 
 __all__ = ["postprocess"]
@@ -126,7 +126,8 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
             cols.rotation(path, k, R)
     series = cols.finished()
     series.update(momentum_columns(system, series, per_body=body_momenta))
-    series.update(energy_balance_columns(system, t, series))
+    balance, quadrature = energy_balance(system, t, series)
+    series.update(balance)
     notes = _joint_notes(system, t, series) + _derived(system, t, series) + [n for n in [no_gravity_note(system.topology)] if n]
     loop = open_loop(system, series, stats)
     if loop:
@@ -135,7 +136,7 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
         warnings.warn(f"mbcomp: {loop}", RuntimeWarning, stacklevel=3)
         notes.append(loop)
     if status == "success" and "rtol" in stats:
-        alarm, text = _alarms(system, t, Y, series, stats["rtol"])
+        alarm, text = _alarms(system, t, Y, series, stats["rtol"], quadrature)
         if alarm:
             status, notes = alarm, [text] + notes
     message = "; ".join([message] + notes)
@@ -148,12 +149,18 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
 MOMENTUM_POINTS = 1000
 
 
-def _alarms(system, t, Y, series, rtol):
+def _alarms(system, t, Y, series, rtol, quadrature=0.0):
     """The first accuracy alarm (:mod:`mbcomp.simulation.accuracy`) a successful run raises,
-    ``(status, message)``: the energy of a conservative system, the momenta of one that
-    nothing outside loads; ``(None, "")`` for none."""
+    ``(status, message)``: the energy of a conservative system, the energy balance of a
+    driven or damped one (unless the output grid's ``quadrature`` may explain it), the momenta
+    of one that nothing outside loads; ``(None, "")`` for none."""
     if not nonconservative(system) and "energy.kinetic" in series:
         alarm = energy_alarm(series["energy.kinetic"], series["energy.potential"], rtol)
+        if alarm[0]:
+            return alarm
+    elif "energy.balance" in series:
+        alarm = balance_alarm(series["energy.balance"], series["energy.kinetic"], series["energy.potential"],
+                              series["energy.work"], series["energy.dissipated"], quadrature, rtol)
         if alarm[0]:
             return alarm
     if len(t) > 1 and momentum_conserved(system):
