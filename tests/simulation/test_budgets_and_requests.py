@@ -141,3 +141,21 @@ def test_a_law_branch_the_trace_did_not_take_is_counted_and_said():
     assert "evaluations left the generated program for the numeric path" in res.message
     assert "left the generated program" not in ref.message
     np.testing.assert_allclose(res["j.phi"], ref["j.phi"], atol=1e-6)   # same motion either way
+
+
+def test_a_run_failing_for_steps_names_the_element_that_makes_it_fast():
+    """Found by the fuzz: 'DOP853: max_steps=100000 steps were not enough' named nothing."""
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, -9.81, 0)))
+    j = m.add("j", Prismatic(n=(1, 0, 0), s0=0.01))
+    b = m.add("b", PointMass(m=1e-4))
+    sp = m.add("sp", TranslationalSpringDamper(c=1e9))      # sqrt(c / m) = 3.16e6 1/s
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, b.frame_a)
+    m.connect(j.support, sp.flange_a)
+    m.connect(j.axis, sp.flange_b)
+    with pytest.warns(RuntimeWarning, match="the motion itself is fast"):
+        res = mbcomp.simulate(m, t_end=10.0, n_out=3)
+    assert res.status == "failed" and "steps were not enough" in res.message
+    rate = float(re.search(r"every rate is near ([0-9.e+]+) 1/s \(element 'sp'\)", res.message).group(1))
+    assert rate == pytest.approx(np.sqrt(1e9 / 1e-4), rel=0.02)

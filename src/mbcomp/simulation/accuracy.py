@@ -122,7 +122,8 @@ def balance_alarm(balance, T, V, work, dissipated, quadrature, rtol):
     :func:`energy_alarm`, relative to the energy the motion exchanges (largest kinetic energy,
     range of the potential one, largest work and dissipation), and only when the output
     grid's ``quadrature`` estimate (J) is below a tenth of the balance error -- else the grid,
-    not the integration, may be what is off, and no alarm is raised.
+    not the integration, may be what is off, and no alarm is raised -- and the error is above
+    the rounding of the energies (a body at rest exchanges 1e-15 J).
 
     Examples
     --------
@@ -144,7 +145,8 @@ def balance_alarm(balance, T, V, work, dissipated, quadrature, rtol):
     drift = _drift(balance)
     rel = drift / scale
     bar = max(ALARM_RTOL * float(np.max(rtol)), ALARM_FLOOR)
-    if rel <= bar or quadrature >= 0.1 * drift:
+    rounding = 1e3 * np.finfo(float).eps * (scale + float(np.max(np.abs(T) + np.abs(V))))
+    if rel <= bar or quadrature >= 0.1 * drift or drift <= rounding:
         return None, ""
     return "inaccurate", (f"accuracy alarm: the energy balance is off by {drift:.2g} J ({rel:.1e} of the "
                           f"{scale:.3g} J the motion exchanges, over a tenth of the run); "

@@ -127,8 +127,11 @@ def energy_balance(system, t, series):
             return {}, 0.0  # a potential and no split of its power: the balance cannot be told
         w = _cumulative(t, power)
         trapezoid = np.concatenate(([0.0], np.cumsum(0.5 * np.diff(t) * (power[1:] + power[:-1]))))
-        half = _cumulative(t[::2], power[::2]) if len(t) >= 5 else w[::2]
-        quadrature += max(float(np.max(np.abs(w - trapezoid))), float(np.max(np.abs(w[::2] - half))))
+        if len(t) < 5:  # too few points to tell what the quadrature missed
+            quadrature = np.inf
+        else:
+            half = _cumulative(t[::2], power[::2])
+            quadrature += max(float(np.max(np.abs(w - trapezoid))), float(np.max(np.abs(w[::2] - half))))
         if getattr(comps[name], "dissipative", False):
             dissipated -= w
         else:

@@ -182,7 +182,7 @@ def _simulate(model, t_start, t_end, params, backend, formulation, stepper, inde
     watch = None if stepper.implicit else StiffnessWatch()
     status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None])
     if watch is not None:
-        if status == "budget" and not watch.done:  # a run cut short: say why it was slow
+        if status in ("budget", "failed") and not watch.done:  # a run cut short: say why it was slow
             watch(run, now=True)
         if watch.note:
             message = f"{message}; {watch.note}"

@@ -50,6 +50,9 @@ __all__ = ["StiffnessWatch", "fastest_rate", "stiffness_hint"]
 #: fastest / slowest rate above which steps held by the fastest mean stiffness (below it the
 #: steps follow the motion's own rates: a loose tolerance, not stiffness)
 STIFF_SPREAD = 100.0
+#: steps a run must have made before a fast motion (no stiffness: every rate alike) is worth a
+#: hint -- fewer are a normal run
+FAST_STEPS = 10_000
 #: states above which the rate comes from power iteration instead of a full eigen-solve
 DENSE_STATES = 200
 
@@ -144,11 +147,12 @@ def fastest_rate(form, t, y):
     return rate, (who if best > 1e-3 * rate else None), smooth, spread
 
 
-def stiffness_hint(form, t, y, h, steps):
+def stiffness_hint(form, t, y, h, steps, t_reached=None):
     """The hint at the state ``y`` at ``t`` (s) of a run whose recent steps are ``h`` (s) long
-    and that made ``steps`` steps (see the module notes), or ``None`` when the steps are
-    neither held by a fast rate nor suspiciously small."""
+    and that made ``steps`` steps to ``t_reached`` (default ``t``; see the module notes), or
+    ``None`` when the steps are neither held by a fast rate nor suspiciously small."""
     rate, who, smooth, spread = fastest_rate(form, t, y)
+    t = t if t_reached is None else t_reached
     whose = f" (element {who!r})" if who else ""
     if not smooth:
         return (f"the steps are held small (h={h:.2g} s, {steps} steps to t={t:g} s) by a jump in the right-hand "
@@ -158,6 +162,10 @@ def stiffness_hint(form, t, y, h, steps):
         return (f"this model looks stiff: the largest rate is about {rate:.3g} 1/s{whose}, which holds the explicit "
                 f"method's steps near h={h:.2g} s ({steps} steps to t={t:g} s) -> try method='radau5' or "
                 f"method='BDF'{', or a softer ' + repr(who) if who else ''}")
+    if h * rate > 0.5 and steps >= FAST_STEPS:
+        return (f"the motion itself is fast: every rate is near {rate:.3g} 1/s{whose}, so following it takes steps "
+                f"near h={h:.2g} s ({steps} steps to t={t:g} s) -> shorten the run, or soften{' ' + repr(who) if who else ' it'} "
+                "if that speed is not meant")
     if h * rate < 0.01:
         comps = system_laws(form.system)
         return (f"the steps are tiny (h={h:.2g} s, {steps} steps to t={t:g} s) although the fastest rate is only "
@@ -199,12 +207,13 @@ class StiffnessWatch(StepHook):
         if not (slow or (now and (wall >= self.after / 4 or steps >= self.min_steps))):
             return  # (a run cut short by a small budget early on is not a slow run)
         self.done = True
-        past = next((x for x in self.trail if x[0] >= 0.5 * wall and x[2] < steps and x[1] < run.t), None)
-        h = (run.t - past[1]) / (steps - past[2]) if past else (run.t - run.t_out[0]) / max(steps, 1)
+        t = run.stepper.t_reached  # (past the last accepted step when a failed stretch got further)
+        past = next((x for x in self.trail if x[0] >= 0.5 * wall and x[2] < steps and x[1] < t), None)
+        h = (t - past[1]) / (steps - past[2]) if past else (t - run.t_out[0]) / max(steps, 1)
         if not h > 0:
             return
         try:
-            self.note = stiffness_hint(run.form, run.stepper.t, run.stepper.y, h, steps)
+            self.note = stiffness_hint(run.form, run.stepper.t, run.stepper.y, h, steps, t)
         except Exception:  # noqa: BLE001 - a hint must never end a run
             self.note = None
         if self.note:

@@ -122,6 +122,9 @@ class Stepper:
     Attributes
     ----------
     t, y, t_old : current time, state, time before the last step.
+    t_reached : float
+        The furthest time an attempt reached (s): ``t``, or beyond it when a failed attempt
+        got further before failing (a C stretch that ran out of steps).
     status : {"running", "finished", "failed"}
     stats : dict with ``nsteps, nreject, nfev, njev, nlu, restarts`` (and solver-specific
         counters such as ``nnewton``); a counter a solver cannot know is left out.
@@ -168,6 +171,11 @@ class Stepper:
         self.first_step, self.max_step = first_step, max_step
         self.status = "running" if self.t < self.t_bound else "finished"
         self.stats = dict(nsteps=0, nreject=0, nfev=0, njev=0, nlu=0, restarts=0)
+        self._reached = self.t
+
+    @property
+    def t_reached(self):
+        return max(self.t, self._reached)
 
     def step_outputs(self):
         """The states at output times inside the last step as the integrator computed them,

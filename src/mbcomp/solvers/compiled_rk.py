@@ -113,6 +113,7 @@ class CompiledRK(Stepper):
         self.stats["c_projections"] += r.projections
         declined = r.status == 5 and r.declined != 0
         if r.status not in (0, 1) and not declined:
+            self._reached = max(self._reached, float(r.t_last))
             raise StepFailure(f"the integrator {type(self).__name__} failed at t={r.t_last:g}: {r.message}")
         ts, Ys = list(outs[: len(r.Y)]), list(r.Y)
         if r.status == 1 or declined:
