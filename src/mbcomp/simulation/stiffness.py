@@ -33,7 +33,7 @@ Examples
 >>> form = build("lagrange", "ode", mbcomp.assemble(m))
 >>> rate, who, smooth, spread = fastest_rate(form, 0.0, form.initial_state(0.0, [0.01], [0.0]))
 >>> round(rate), who, smooth, round(spread)               # sqrt(c / m); one mode
-(1000, 'k', True, 1)
+(1000, "element 'k'", True, 1)
 """
 from __future__ import annotations
 
@@ -120,9 +120,10 @@ def _generalized(system, t, q, u, path):
 
 
 def fastest_rate(form, t, y):
-    """``(rate, element, smooth, spread)``: the fastest rate (1/s) of the formulation's right-hand
-    side at ``(t, y)``, the name of the force or flange element that contributes most to it
-    (``None`` when no element does, e.g. a stiff mass ratio or a constraint's gains), and
+    """``(rate, who, smooth, spread)``: the fastest rate (1/s) of the formulation's right-hand
+    side at ``(t, y)``; ``"element '<name>'"``, the force or flange element that contributes
+    most to it, or when none does (a stiff mass ratio, a constraint's gains) ``"speed <name>"``,
+    the speed its mode moves most (``None`` if neither); and
     whether the right-hand side is smooth there: a rate that grows as the difference step
     shrinks (by over 10x for a 1000x smaller step) is a jump, not a rate; and the ratio of the
     fastest to the slowest non-zero rate (None when unknown)."""
@@ -131,29 +132,36 @@ def fastest_rate(form, t, y):
     spread = rate / slow if slow else None
     smooth = rate <= 10.0 * _spectrum(form, t, y, rel=1.5e-5)[0]
     system = form.system
-    names = [p for p, _, _ in system.topology.forces] + [p for p, _ in system.topology.flange_elements]
-    if not names:
-        return rate, None, smooth, spread
     eps = 1e-6
     ya, yb = form.full(t, y + eps * mode), form.full(t, y - eps * mode)
     nq = system.nq
+    du = np.abs(ya[nq:] - yb[nq:])
+    # the speed the fastest mode moves most names its joint when no element can be blamed
+    who = f"speed {system.u_names[int(np.argmax(du))]}" if du.size and du.max() > 0 else None
+    names = [p for p, _, _ in system.topology.forces] + [p for p, _ in system.topology.flange_elements]
+    if not names:
+        return rate, who, smooth, spread
     M = system.evaluate_numeric(t, ya[:nq], ya[nq:]).M
-    best, who = 0.0, None
+    best, blamed = 0.0, None
     for path in names:
         dQ = (_generalized(system, t, ya[:nq], ya[nq:], path) - _generalized(system, t, yb[:nq], yb[nq:], path)) / (2 * eps)
         size = float(np.linalg.norm(np.linalg.lstsq(M, dQ, rcond=None)[0]))
         if size > best:
-            best, who = size, path
-    return rate, (who if best > 1e-3 * rate else None), smooth, spread
+            best, blamed = size, path
+    return rate, (f"element {blamed!r}" if best > 1e-3 * rate else who), smooth, spread
 
 
-def stiffness_hint(form, t, y, h, steps, t_reached=None):
+def stiffness_hint(form, t, y, h, steps, t_reached=None, cut_short=False):
     """The hint at the state ``y`` at ``t`` (s) of a run whose recent steps are ``h`` (s) long
     and that made ``steps`` steps to ``t_reached`` (default ``t``; see the module notes), or
-    ``None`` when the steps are neither held by a fast rate nor suspiciously small."""
+    ``None`` when the steps are neither held by a fast rate nor suspiciously small -- unless
+    the run was cut short (``cut_short``: the span of the run, s, when a budget ran out or the
+    integrator gave up) with steps that would need over ``10 FAST_STEPS`` for it: then the
+    fastest rate and whom it belongs to are said in any case."""
     rate, who, smooth, spread = fastest_rate(form, t, y)
     t = t if t_reached is None else t_reached
-    whose = f" (element {who!r})" if who else ""
+    whose = f" ({who})" if who else ""
+    element = who.split("'")[1] if who and who.startswith("element") else None
     if not smooth:
         return (f"the steps are held small (h={h:.2g} s, {steps} steps to t={t:g} s) by a jump in the right-hand "
                 f"side{whose}: a law with a discontinuity (sign, a branch, a table) -> smooth it (e.g. "
@@ -161,11 +169,15 @@ def stiffness_hint(form, t, y, h, steps, t_reached=None):
     if h * rate > 0.5 and (spread is None or spread > STIFF_SPREAD):
         return (f"this model looks stiff: the largest rate is about {rate:.3g} 1/s{whose}, which holds the explicit "
                 f"method's steps near h={h:.2g} s ({steps} steps to t={t:g} s) -> try method='radau5' or "
-                f"method='BDF'{', or a softer ' + repr(who) if who else ''}")
+                f"method='BDF'{', or a softer ' + repr(element) if element else ''}")
     if h * rate > 0.5 and steps >= FAST_STEPS:
         return (f"the motion itself is fast: every rate is near {rate:.3g} 1/s{whose}, so following it takes steps "
-                f"near h={h:.2g} s ({steps} steps to t={t:g} s) -> shorten the run, or soften{' ' + repr(who) if who else ' it'} "
+                f"near h={h:.2g} s ({steps} steps to t={t:g} s) -> shorten the run, or soften{' ' + repr(element) if element else ' it'} "
                 "if that speed is not meant")
+    if cut_short and cut_short / h >= 10 * FAST_STEPS:
+        return (f"the steps were h={h:.2g} s ({steps} steps to t={t:g} s); the fastest rate is about {rate:.3g} "
+                f"1/s{whose} -> try method='radau5' or method='BDF', a shorter run, or "
+                f"{'a softer ' + repr(element) if element else 'heavier light parts'}")
     if h * rate < 0.01:
         comps = system_laws(form.system)
         return (f"the steps are tiny (h={h:.2g} s, {steps} steps to t={t:g} s) although the fastest rate is only "
@@ -213,7 +225,7 @@ class StiffnessWatch(StepHook):
         if not h > 0:
             return
         try:
-            self.note = stiffness_hint(run.form, run.stepper.t, run.stepper.y, h, steps, t)
+            self.note = stiffness_hint(run.form, run.stepper.t, run.stepper.y, h, steps, t, cut_short=now and float(run.t_out[-1] - run.t_out[0]))
         except Exception:  # noqa: BLE001 - a hint must never end a run
             self.note = None
         if self.note:
