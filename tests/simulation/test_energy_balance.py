@@ -213,3 +213,4 @@ def test_a_grid_that_cannot_resolve_the_power_raises_no_alarm():
     the integration, and the run says nothing false."""
     coarse = mbcomp.simulate(driven_pendulum(), t_end=500.0, n_out=61, rtol=1e-10, atol=1e-12)
     assert np.abs(coarse["energy.balance"]).max() > 1.0 and coarse.status == "success"
+    assert "cannot be judged on this output grid" in coarse.message and "n_out" in coarse.message

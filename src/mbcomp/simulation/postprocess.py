@@ -139,6 +139,8 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
         alarm, text = _alarms(system, t, Y, series, stats["rtol"], quadrature)
         if alarm:
             status, notes = alarm, [text] + notes
+        elif text:  # no alarm, but something the alarm could not judge
+            notes = [text] + notes
     message = "; ".join([message] + notes)
     stats = dict(stats)
     stats["coordinates"] = list(system.q_names)
@@ -161,7 +163,7 @@ def _alarms(system, t, Y, series, rtol, quadrature=0.0):
     elif "energy.balance" in series:
         alarm = balance_alarm(series["energy.balance"], series["energy.kinetic"], series["energy.potential"],
                               series["energy.work"], series["energy.dissipated"], quadrature, rtol)
-        if alarm[0]:
+        if alarm[0] or alarm[1]:
             return alarm
     if len(t) > 1 and momentum_conserved(system):
         nq = system.nq
