@@ -10,23 +10,23 @@ written. The sections go before ``See Also``, ``Notes``, ``References`` or ``Exa
 
 Examples
 --------
->>> from mbcomp import Component, Param, Frame
->>> class Marker(Component):
-...     '''A massless marker frame.'''
-...     frame_a = Frame("the marked frame")
-...     size = Param(0.1, unit="m", doc="drawing size", check="positive")
->>> print(Marker.__doc__)
-A massless marker frame.
+>>> from mbcomp import Component, Param, Flange
+>>> class Stop(Component):
+...     '''An end stop on a slider.'''
+...     flange_b = Flange("the stopped flange")
+...     gap = Param(0.02, unit="m", doc="free travel before contact", check="nonnegative")
+>>> print(Stop.__doc__)
+An end stop on a slider.
 <BLANKLINE>
 Parameters
 ----------
-size : float, m, default 0.1
-    drawing size; > 0
+gap : float, m, default 0.02
+    free travel before contact; >= 0
 <BLANKLINE>
 Ports
 -----
-frame_a : Frame
-    the marked frame
+flange_b : Flange
+    the stopped flange
 """
 from __future__ import annotations
 
