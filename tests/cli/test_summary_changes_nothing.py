@@ -6,7 +6,7 @@ import numpy as np
 import mbcomp
 from mbcomp.assembly.initialization import initialize
 from mbcomp.assembly.summary import dof_report, summary
-from mbcomp.library import FreeMotion, PointMass, Revolute, World
+from mbcomp.library import FreeMotion, PointMass, Revolute, RigidBody, World
 from mbcomp.modeling.free_joint import FreeMotion as FrameworkFreeMotion
 
 from conftest import load_model
@@ -65,8 +65,9 @@ def test_the_implicit_free_joint_is_the_framework_s_and_the_library_s():
     assert FreeMotion is FrameworkFreeMotion and FreeMotion.__module__ == "mbcomp.modeling.free_joint"
     m = mbcomp.Model()
     m.add("world", World())
-    m.add("body", PointMass(m=2.0), free=True)
+    m.add("body", RigidBody(m=2.0, I=np.eye(3)), free=True)
     system = mbcomp.assemble(m)
     (free,) = [e for e in system.topology.edges if e.implicit]
     assert type(free.comp) is FreeMotion and free.name == "body.free" and (system.nq, system.nu) == (7, 6)
-    assert "free bodies (implicit FreeMotion from the world): body.free" in system.summary()
+    assert "free bodies (implicit free joint from the world: FreeMotion, FreeTranslation for a lone point " \
+           "mass): body.free (FreeMotion)" in system.summary()

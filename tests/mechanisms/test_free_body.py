@@ -70,7 +70,7 @@ def test_body_marked_free_floats_freely():
     t = r.time[:, None]
     k = kinematics(r, "body")
     np.testing.assert_allclose(k["rc"], R_CM + 0.5 * G * t ** 2, rtol=0, atol=1e-9)
-    assert "implicit FreeMotion" in r.summary
+    assert "body.free (FreeMotion)" in r.summary
 
 
 def test_implicit_free_motion_with_off_centre_force():
@@ -84,7 +84,7 @@ def test_implicit_free_motion_with_off_centre_force():
     push = mdl.add("push", WorldForce(f=tuple(F)))
     mdl.connect(push.frame_b, body.frame_a)
     system = mbcomp.assemble(mdl)
-    assert "implicit FreeMotion" in system.summary() and "body.free" in system.summary()
+    assert "body.free (FreeMotion)" in system.summary() and "body.free" in system.summary()
     assert system.nu == 6 and system.nq == 7
     r = mbcomp.simulate(system, t_end=1.5, rtol=1e-11, atol=1e-12, n_out=151)
     assert r.success, r.message
@@ -169,3 +169,45 @@ def test_implicit_free_body_takes_start_values_at_run_time():
     assert abs(res["ball.r.y"][-1] - 1.0) < 1e-9
     assert abs(res["ball.r.x"][-1] - t_back) < 1e-9
     assert "ball.free" in res.summary
+
+
+@pytest.mark.parametrize("backend", ["numeric", "auto"])
+def test_a_free_point_mass_is_a_projectile_with_three_coordinates(backend):
+    """A point mass added free=True has no rotation to move: it gets a translation-only free
+    joint (three coordinates, where a 6-DOF one had three massless rotations) and flies the
+    parabola r0 + v0 t + g t^2 / 2."""
+    from mbcomp.library import PointMass
+
+    mdl = mbcomp.Model()
+    mdl.add("world", World())
+    mdl.add("ball", PointMass(m=0.5), free=True)
+    r0, v0 = np.array([0.0, 2.0, 0.3]), np.array([1.0, 3.0, -0.5])
+    res = mbcomp.simulate(mdl, t_end=1.0, n_out=11, rtol=1e-10, atol=1e-12, backend=backend,
+                          params={"ball.free.r0": tuple(r0), "ball.free.v0": tuple(v0)})
+    assert res.success and res.stats["coordinates"] == ["ball.free.r.x", "ball.free.r.y", "ball.free.r.z"]
+    t = res.time[:, None]
+    r = np.stack([res[f"ball.r.{a}"] for a in "xyz"], -1)
+    np.testing.assert_allclose(r, r0 + v0 * t + 0.5 * G * t ** 2, atol=1e-10)
+    assert "Gruebler M = 6N - C - L = 6*1 - 3 - 0 = 3" in res.summary
+
+
+def test_a_free_point_mass_on_a_spring_oscillates_at_sqrt_c_over_m():
+    """Three-dimensional harmonic motion about the spring's anchor (no gravity, rest length
+    0): r(t) = r0 cos(w t) + v0 / w sin(w t), w = sqrt(c / m); energy constant."""
+    from mbcomp.library import PointMass, Spring
+
+    mdl = mbcomp.Model()
+    w = mdl.add("world", World(g=(0, 0, 0)))
+    ball = mdl.add("ball", PointMass(m=2.0), free=True)
+    spring = mdl.add("spring", Spring(c=50.0))
+    mdl.connect(w.frame_b, spring.frame_a)
+    mdl.connect(ball.frame_a, spring.frame_b)
+    r0, v0, om = np.array([0.3, -0.1, 0.2]), np.array([0.0, 1.0, 0.5]), 5.0
+    res = mbcomp.simulate(mdl, t_end=2.0, n_out=41, rtol=1e-10, atol=1e-12,
+                          params={"ball.free.r0": tuple(r0), "ball.free.v0": tuple(v0)})
+    assert res.success, res.message
+    t = res.time[:, None]
+    r = np.stack([res[f"ball.r.{a}"] for a in "xyz"], -1)
+    np.testing.assert_allclose(r, r0 * np.cos(om * t) + v0 / om * np.sin(om * t), atol=1e-8)
+    E = res["energy.total"]
+    assert np.abs(E - E[0]).max() < 1e-8 * E[0]

@@ -96,7 +96,7 @@ def _dof_report(view, init):
             parent[find(e.node_a)] = find(e.node_b)
     groups = {find(n) for n in range(topo.n_nodes)} - {find(-1)}
     N = len(groups)
-    C = sum(6 - e.dof for e in topo.edges if e.kind == "joint" and e.dof > 0 and not e.implicit)
+    C = sum(6 - e.dof for e in topo.edges if e.kind == "joint" and e.dof > 0)  # (a point's free joint: 3)
     # constraint-only joints (the library's contacts) remove as many DOF as they have holonomic rows
     C += sum(1 for name in view.constraint_names(all_rows=True)
              if not topo.edge(name.rsplit(".", 1)[0]).comp.tree_edge)
@@ -174,7 +174,8 @@ def summary(system, init=None):
     if rig:
         lines.append(f"rigid offsets merged into their bodies (no coordinates): {', '.join(rig)}")
     if topo.floating:
-        lines.append(f"free bodies (implicit FreeMotion from the world): {', '.join(topo.floating)}")
+        lines.append("free bodies (implicit free joint from the world: FreeMotion, FreeTranslation for a lone point "
+                     f"mass): {', '.join(f'{n} ({type(topo.edge(n).comp).__name__})' for n in topo.floating)}")
     if topo.open_frames:
         lines.append(f"open frames (rigid offsets ending in nothing, kept as marker frames): "
                      f"{', '.join(topo.open_frames)}")

@@ -35,9 +35,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ..errors import ModelError, Problem
 from ..modeling.component import PortRef
-from ..modeling.free_joint import FreeMotion
+from ..modeling.free_joint import FreeMotion, FreeTranslation
 
 __all__ = ["Topology", "Edge", "ROOT", "spanning_tree", "no_gravity_note"]
 
@@ -185,6 +187,13 @@ def _floating(topo, comp_nodes):
                    f"connect it to the mechanism (a joint from world.frame_b or another body), or, if it floats on "
                    f"purpose, mark it: model.add({first!r}, ..., free=True) (start values {bodies[0]}.free.r0, "
                    f".v0), or join it to the world through a FreeMotion")
+
+
+def _is_point(body):
+    """Whether a body is a point mass: its centre on its frame and no inertia of its own (by
+    its construction-time mass properties)."""
+    _, r_cm, I = body.mass_properties(body.p)
+    return not np.any(np.asarray(r_cm, float)) and not np.any(np.asarray(I, float))
 
 
 def no_gravity_note(topo):
@@ -390,11 +399,13 @@ class Topology:
                                     "joint moves them all", f"mark only {mine[0][0]} free")
                       for path, _ in mine[1:]]
             path, n = mine[0]
-            fm = FreeMotion()
+            point = comp_nodes == {n} and all(_is_point(c) for _, c, nn in self.bodies if nn == n)
+            fm = FreeTranslation() if point else FreeMotion()  # a lone point mass has no rotation to move
             fm.name = name = f"{path}.free"
-            self.edges.append(Edge(name, fm, ROOT, n, "joint", dof=6, implicit=True))
+            dof = 3 if point else 6
+            self.edges.append(Edge(name, fm, ROOT, n, "joint", dof=dof, implicit=True))
             self.floating.append(name)
-            graph.append((ROOT, n, name, 6.0))
+            graph.append((ROOT, n, name, float(dof)))
         if probs:
             raise ModelError(probs)
 

@@ -1,8 +1,9 @@
 """The free joint: six degrees of freedom between two frames.
 
-The one joint the framework itself needs: the topology (:mod:`mbcomp.assembly.topology`)
-inserts a :class:`FreeMotion` from the world for every group of frames that carries mass but
-is joined to nothing (a floating body). It lives here, below the assembly, so that the
+The joints the framework itself needs: the topology (:mod:`mbcomp.assembly.topology`)
+inserts a :class:`FreeMotion` from the world for a body marked free (``Model.add(...,
+free=True)``) in a group of frames joined to nothing that reaches the world, and a
+:class:`FreeTranslation` when that body is a lone point mass (no rotation to move). It lives here, below the assembly, so that the
 framework never imports the component library; the library re-exports it
 (``mbcomp.library.FreeMotion`` is this class), next to the joints written against the same
 role contract (:class:`~mbcomp.modeling.roles.Joint`).
@@ -30,7 +31,7 @@ from ..geometry.kinematics import matrix_to_quat, quat_multiply, quat_rate, quat
 from .component import Param
 from .roles import Joint, split_start
 
-__all__ = ["FreeMotion", "quat_increment", "rotation_matrix_problem"]
+__all__ = ["FreeMotion", "FreeTranslation", "quat_increment", "rotation_matrix_problem"]
 
 
 def rotation_matrix_problem(R):
@@ -153,3 +154,45 @@ class FreeMotion(Joint):
 
     def constraints(self, a, b, p):
         return []
+
+
+class FreeTranslation(Joint):
+    """Three-DOF joint: frame_b translates freely relative to frame_a, its orientation that of
+    frame_a. The topology inserts it, instead of a :class:`FreeMotion`, for a point mass
+    added ``free=True`` with nothing else joined to its frame: a point has no rotational
+    inertia, so turning it would be motion nothing determines (three massless rotations).
+
+    Coordinates: position ``r`` (m, frame_a coordinates); speeds ``v = dr/dt`` (m/s).
+    Only a tree edge from the world: it closes no loop.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.modeling.free_joint import FreeTranslation
+    >>> j = FreeTranslation(r0=(0, 1.0, 0), v0=(2.0, 0, 0))
+    >>> q0, q_fixed, u0, u_fixed = j.start(j.p)
+    >>> q0.tolist(), u0.tolist(), j.motion(q0, j.p)[1].tolist()
+    ([0.0, 1.0, 0.0], [2.0, 0.0, 0.0], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    """
+
+    transmits_load = False
+    coordinates = (("r.x", "m"), ("r.y", "m"), ("r.z", "m"))
+    speeds = (("v.x", "m/s"), ("v.y", "m/s"), ("v.z", "m/s"))
+    r0 = Param(None, unit="m", shape=(3,), kind="start", doc="start position, frame_a coordinates")
+    v0 = Param(None, unit="m/s", shape=(3,), kind="start", doc="start velocity, frame_a coordinates")
+
+    def start(self, p):
+        r, rf = split_start(p.r0, 3)
+        v, vf = split_start(p.v0, 3)
+        return (r if r.size == 3 else np.zeros(3), np.array([rf] * 3),
+                v if v.size == 3 else np.zeros(3), np.array([vf] * 3))
+
+    def relative(self, q, p):
+        return np.eye(3), q[:3]
+
+    def motion(self, q, p):
+        return np.zeros((3, 3)), np.eye(3)
+
+    def constraints(self, a, b, p):
+        raise NotImplementedError(f"{self.path}: a FreeTranslation is only the implicit free joint of a point mass "
+                                  "and closes no loop")
