@@ -147,6 +147,13 @@ class WorldForce(ForceElement):
     def check_params(self, p):
         return _check(self, p, "f")
 
+    output_units = {"f.x": "N", "f.y": "N", "f.z": "N"}
+
+    def outputs(self, t, frames, p):
+        """The force (N, world coordinates) as ``f.x|y|z``."""
+        f = _law(p.f, t, frames["frame_b"], self.path, "force")
+        return {f"f.{a}": f[k] for k, a in enumerate("xyz")}
+
     def wrenches(self, t, frames, p):
         return {"frame_b": (_law(p.f, t, frames["frame_b"], self.path, "force"), np.zeros(3))}
 
@@ -167,6 +174,13 @@ class WorldTorque(ForceElement):
 
     def check_params(self, p):
         return _check(self, p, "tau")
+
+    output_units = {"tau.x": "N m", "tau.y": "N m", "tau.z": "N m"}
+
+    def outputs(self, t, frames, p):
+        """The torque (N m, world coordinates) as ``tau.x|y|z``."""
+        tau = _law(p.tau, t, frames["frame_b"], self.path, "torque")
+        return {f"tau.{a}": tau[k] for k, a in enumerate("xyz")}
 
     def wrenches(self, t, frames, p):
         return {"frame_b": (np.zeros(3), _law(p.tau, t, frames["frame_b"], self.path, "torque"))}

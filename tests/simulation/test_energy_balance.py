@@ -214,3 +214,22 @@ def test_a_grid_that_cannot_resolve_the_power_raises_no_alarm():
     coarse = mbcomp.simulate(driven_pendulum(), t_end=500.0, n_out=61, rtol=1e-10, atol=1e-12)
     assert np.abs(coarse["energy.balance"]).max() > 1.0 and coarse.status == "success"
     assert "cannot be judged on this output grid" in coarse.message and "n_out" in coarse.message
+
+
+def test_a_world_force_reports_its_force_and_the_work_it_does():
+    """A constant push F on a free body without gravity: its columns are F, its power F.v, the
+    work F.(r - r0) = the kinetic energy gained."""
+    from mbcomp.library import WorldForce
+
+    m = mbcomp.Model()
+    m.add("world", World(g=(0, 0, 0)))
+    body = m.add("body", RigidBody(m=2.0, I=np.eye(3) * 0.1), free=True)
+    push = m.add("push", WorldForce(f=(3.0, -1.0, 0.5)))
+    m.connect(body.frame_a, push.frame_b)
+    res = mbcomp.simulate(m, t_end=2.0, n_out=201, rtol=1e-10, atol=1e-12)
+    F = np.array([3.0, -1.0, 0.5])
+    assert [float(res[f"push.f.{a}"][-1]) for a in "xyz"] == F.tolist()
+    assert res.units["push.f.x"] == "N"
+    r = np.stack([res[f"body.r.{a}"] for a in "xyz"], -1)
+    np.testing.assert_allclose(res["energy.work"], (r - r[0]) @ F, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(res["energy.work"], res["energy.kinetic"], rtol=1e-9, atol=1e-12)
