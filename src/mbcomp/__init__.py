@@ -31,7 +31,7 @@ __all__ = [
     "Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState",
     "ModelError", "InitializationError", "SimulationError",
     "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",
-    "load_model_file", "load_model", "export_fmu", "Input",
+    "load_model_file", "load_model", "export_fmu", "Input", "study", "Uniform", "Normal",
 ]
 
 
@@ -57,7 +57,7 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name == "export_fmu":  # the model as an FMI FMU (needs a C compiler)
         from .export import export_fmu
         return export_fmu
-    if name in ("linearize", "steady_states", "sweep"):  # stability analysis (seed Chapter 7)
+    if name in ("linearize", "steady_states", "sweep", "study", "Uniform", "Normal"):  # analyses, studies
         from . import analysis
         return getattr(analysis, name)
     if name in _SUBPACKAGES:  # mbcomp.codegen.compile_system(...) after a plain "import mbcomp"
