@@ -129,7 +129,32 @@ class Sweep:
         return fig
 
 
-def sweep(build, parameter, values, analyze=None, backend="python"):
+class _StartState:
+    """The default analysis of :func:`sweep`: :func:`linearize` about the start state (a
+    module-level class, so that it pickles for an executor's worker processes)."""
+
+    def __init__(self, backend):
+        self.backend = backend
+
+    def __call__(self, mdl):
+        return linearize(mdl, backend=self.backend)
+
+
+class _At:
+    """One grid value's linearization, ``None`` where the analysis fails (what :func:`sweep`
+    sends to an executor, one task per grid value)."""
+
+    def __init__(self, build, analyze):
+        self.build, self.analyze = build, analyze
+
+    def __call__(self, v):
+        try:
+            return self.analyze(self.build(float(v)))
+        except (SimulationError, ModelError):
+            return None
+
+
+def sweep(build, parameter, values, analyze=None, backend="python", executor=None, progress=False):
     """Linearize at each value of ``parameter`` and locate the stability changes.
 
     Parameters
@@ -146,23 +171,27 @@ def sweep(build, parameter, values, analyze=None, backend="python"):
         e.g. to solve for a steady state first.
     backend : {"python", "numeric", "c", "auto"}
         What evaluates the model in the default ``analyze`` (as in :func:`linearize`).
+    executor : None, concurrent.futures.Executor, "dask", "tcp://host:port" or dask Client
+        Where the grid's linearizations run, one task per value
+        (:func:`mbcomp.analysis.parallel.map_on`); the root finding between neighbours then
+        runs here. A process pool needs ``build`` (and ``analyze``) defined at module level.
+        The eigenvalues equal the serial ones (``None``, the default).
+    progress : bool
+        A progress bar counting the grid's finished linearizations.
 
     Returns
     -------
     Sweep
     """
-    analyze = analyze or (lambda mdl: linearize(mdl, backend=backend))
+    from .parallel import map_on
+
+    analyze = analyze or _StartState(backend)
     values = np.asarray(values, float)
 
     def at(v):
         return analyze(build(float(v)))
 
-    lins = []
-    for v in values:
-        try:
-            lins.append(at(v))
-        except (SimulationError, ModelError):
-            lins.append(None)
+    lins = map_on(executor, _At(build, analyze), values, progress=progress)
     n = max((len(li.eigenvalues) for li in lins if li is not None), default=0)
     E = np.full((len(values), n), np.nan + 0j)
     cls = []

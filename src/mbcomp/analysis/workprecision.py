@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import time
 from dataclasses import dataclass, field
 
@@ -135,13 +136,14 @@ def _error(x, r):
 
 
 def work_precision(module, combos=None, tols=None, steps=None, build_kw=None, params=None, t_end=None,
-                   atol_ratio=1e-2, max_cpu=60.0, reference=None, log=print):
+                   atol_ratio=1e-2, max_cpu=60.0, reference=None, log=print, executor=None, progress=False):
     """Run every combo over the sweep; returns a list of row dicts.
 
     Parameters
     ----------
-    module : module
-        A model file's module (``build(**kw) -> Model``, optional ``SIMULATION``, ``REFERENCE``).
+    module : module or path
+        A model file's module (``build(**kw) -> Model``, optional ``SIMULATION``,
+        ``REFERENCE``), or the model file's path.
     combos : list of Combo, optional
         Default :func:`default_combos`.
     tols : sequence of float
@@ -153,45 +155,107 @@ def work_precision(module, combos=None, tols=None, steps=None, build_kw=None, pa
         take longer still.
     reference : tuple, optional
         ``(t_end, values, how)`` to use instead of :func:`reference_values`.
+    executor : None, concurrent.futures.Executor, "dask", "tcp://host:port" or dask Client
+        Where the combos' sweeps run, one task per combo
+        (:func:`mbcomp.analysis.parallel.map_on`; the model travels as its file's path, so
+        ``module`` must have come from a file). The rows equal the serial ones (``None``)
+        but for the CPU times; each combo's lines are logged when it has finished.
+    progress : bool
+        A progress bar counting finished combos (with an executor).
 
     Returns
     -------
     list of dict
         ``combo, family, setting, value, status, cpu_s, nfev, steps, error, message``.
-    """
-    from ..simulation.driver import simulate
 
+    Examples
+    --------
+    >>> from mbcomp.workprecision import default_combos, work_precision
+    >>> rows = work_precision("models/slider_crank.py", default_combos()[:1], tols=[1e-4], t_end=0.1,
+    ...                       reference=(0.1, {"crank_joint.phi": 0.6226207376}, "given"), log=lambda line: None)
+    >>> rows[0]["combo"], rows[0]["status"], rows[0]["error"] < 1e-3
+    ('ODE i1 Baumgarte / DOP853', 'success', True)
+    """
+    from .parallel import map_on
+
+    source = module
+    if isinstance(module, (str, os.PathLike)):
+        module = _module_at(os.fspath(module))
     combos = default_combos() if combos is None else combos
     tols = tols or [10.0 ** -k for k in range(3, 11)]
     steps = steps or [30, 100, 300, 1000, 3000, 10000]
     t_ref, values, how = reference or reference_values(module, build_kw, params, t_end)
-    names = list(values)
-    r = np.array([values[n] for n in names])
     log(f"reference at t={t_ref:g}: {how}")
+    job = dict(tols=tols, steps=steps, build_kw=build_kw, params=params, t_ref=t_ref, values=values,
+               atol_ratio=atol_ratio, max_cpu=max_cpu)
+    if executor is None:
+        return [row for c in combos for row in _combo_rows(module, c, job, log)]
+    path = os.fspath(source) if isinstance(source, (str, os.PathLike)) else getattr(module, "__file__", None)
+    if not path:
+        raise ValueError("work_precision(executor=...) sends the model file's path to the workers, and this module "
+                         "has no file -> pass the model file's path (or a module loaded from one)")
     rows = []
-    for c in combos:
-        settings = [("rtol", tol) for tol in tols] if c.sweep == "tol" else [("h", t_ref / n) for n in steps]
-        for kind, val in settings:
-            kw = dict(c.options)
-            if kind == "rtol":
-                kw.update(rtol=val, atol=val * atol_ratio)
-            else:
-                kw.update(h=val, rtol=1e-8, atol=1e-10)
-            t0 = time.process_time()
-            try:
-                res = simulate(module.build(**(build_kw or {})), t_end=t_ref, params=params, n_out=2, **kw)
-                status, msg = res.status, res.message
-                nfev, nst = res.stats.get("nfev", 0), res.stats.get("steps", 0)
-                err = _error(_positions(res, names), r) if res.success else math.nan
-            except Exception as exc:  # noqa: BLE001 - a refused combination is a row, not a crash
-                status, msg, nfev, nst, err = "error", f"{type(exc).__name__}: {exc}", 0, 0, math.nan
-            cpu = time.process_time() - t0
-            rows.append(dict(combo=c.label, family=c.family, setting=kind, value=val, status=status, cpu_s=cpu,
-                             nfev=nfev, steps=nst, error=err, message=msg[:200]))
-            log(f"  {c.label:<36} {kind}={val:<9.2g} {status:<8} cpu {cpu:8.3f} s  nfev {nfev:>8}  "
-                f"error {err:9.2e}" + ("" if status == "success" else f"  ({msg[:90]})"))
-            if cpu > max_cpu or status == "error":
-                break
+    for lines, combo_rows in map_on(executor, _ComboTask(os.path.abspath(path), job), combos, progress=progress):
+        for line in lines:
+            log(line)
+        rows.extend(combo_rows)
+    return rows
+
+
+#: model files loaded in this process (a worker's), by path
+_MODULES = {}
+
+
+def _module_at(path):
+    if path not in _MODULES:
+        from ..modeling.loader import load_model_file
+
+        _MODULES[path] = load_model_file(path)
+    return _MODULES[path]
+
+
+class _ComboTask:
+    """One combo's sweep in a worker: ``(log lines, rows)`` (module-level: it pickles)."""
+
+    def __init__(self, path, job):
+        self.path, self.job = path, job
+
+    def __call__(self, combo):
+        lines = []
+        rows = _combo_rows(_module_at(self.path), combo, self.job, lines.append)
+        return lines, rows
+
+
+def _combo_rows(module, c, job, log):
+    """The rows of combo ``c`` over the sweep of ``job`` (see :func:`work_precision`)."""
+    from ..simulation.driver import simulate
+
+    t_ref, build_kw, params = job["t_ref"], job["build_kw"], job["params"]
+    names = list(job["values"])
+    r = np.array([job["values"][n] for n in names])
+    settings = [("rtol", tol) for tol in job["tols"]] if c.sweep == "tol" else [("h", t_ref / n) for n in job["steps"]]
+    rows = []
+    for kind, val in settings:
+        kw = dict(c.options)
+        if kind == "rtol":
+            kw.update(rtol=val, atol=val * job["atol_ratio"])
+        else:
+            kw.update(h=val, rtol=1e-8, atol=1e-10)
+        t0 = time.process_time()
+        try:
+            res = simulate(module.build(**(build_kw or {})), t_end=t_ref, params=params, n_out=2, **kw)
+            status, msg = res.status, res.message
+            nfev, nst = res.stats.get("nfev", 0), res.stats.get("steps", 0)
+            err = _error(_positions(res, names), r) if res.success else math.nan
+        except Exception as exc:  # noqa: BLE001 - a refused combination is a row, not a crash
+            status, msg, nfev, nst, err = "error", f"{type(exc).__name__}: {exc}", 0, 0, math.nan
+        cpu = time.process_time() - t0
+        rows.append(dict(combo=c.label, family=c.family, setting=kind, value=val, status=status, cpu_s=cpu,
+                         nfev=nfev, steps=nst, error=err, message=msg[:200]))
+        log(f"  {c.label:<36} {kind}={val:<9.2g} {status:<8} cpu {cpu:8.3f} s  nfev {nfev:>8}  "
+            f"error {err:9.2e}" + ("" if status == "success" else f"  ({msg[:90]})"))
+        if cpu > job["max_cpu"] or status == "error":
+            break
     return rows
 
 

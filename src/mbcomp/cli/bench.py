@@ -2,7 +2,8 @@
 
 Runs :func:`mbcomp.analysis.workprecision.work_precision` over a tolerance sweep, prints the
 summary table (fastest CPU time reaching ``--target``), and writes the CSV and the plot
-(checked before the study starts).
+(checked before the study starts). ``--executor processes|dask|tcp://host:port`` runs each
+combination's sweep as one task there (:func:`mbcomp.analysis.parallel.map_on`).
 
 Examples
 --------
@@ -43,8 +44,16 @@ def cmd_bench(args):
     build_kw, runtime = split_params(args.param, mod.build)
     combos = _select(wp.default_combos(), args.combos) if args.combos else wp.default_combos()
     tols = [float(x) for x in args.tols.split(",")] if args.tols else None
-    rows = wp.work_precision(mod, combos, tols=tols, build_kw=build_kw, params=runtime or None, t_end=args.t_end,
-                             max_cpu=args.max_cpu)
+    from ..analysis.parallel import executor_of
+
+    executor, owned = executor_of(args.executor, args.workers)
+    try:
+        rows = wp.work_precision(args.model if executor is not None else mod, combos, tols=tols, build_kw=build_kw,
+                                 params=runtime or None, t_end=args.t_end, max_cpu=args.max_cpu, executor=executor,
+                                 progress=executor is not None)
+    finally:
+        if owned:
+            executor.shutdown()
     print("\n" + wp.summary(rows, args.target, title=name))
     wp.write_csv(rows, out)
     wp.plot(rows, png, title=name, target=args.target)
@@ -62,6 +71,10 @@ def add_parser(sub, common):
     b.add_argument("--combos", help="comma-separated substrings selecting combinations, e.g. 'radau5,DOP853'")
     b.add_argument("--max-cpu", dest="max_cpu", type=float, default=60.0,
                    help="stop a combination's sweep after a run slower than this (s)")
+    b.add_argument("--executor", metavar="WHERE",
+                   help="where the combinations run, one task each: serial (default), processes, dask (a local "
+                   "Dask cluster) or tcp://host:port; CPU times are measured per run in its worker")
+    b.add_argument("--workers", type=int, help="processes of --executor processes (default: the cores, at most 4)")
     b.add_argument("--out", help="CSV file (default MODEL_work_precision.csv)")
     b.add_argument("--plot", help="PNG file (default MODEL_work_precision.png)")
     b.set_defaults(func=cmd_bench)

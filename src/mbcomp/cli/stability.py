@@ -5,7 +5,8 @@ steady state found) and prints the eigenvalues and their classification; ``--swe
 name=start:stop:count`` repeats that over a build() or component parameter and locates where
 the classification changes (:mod:`mbcomp.analysis.stability`). With ``--steady`` and
 ``--sweep`` together the steady state is solved at each value, following the branch it
-starts on.
+starts on. ``--executor processes|dask|tcp://host:port`` sends the grid's linearizations
+(about the start states) to workers; the results equal the serial sweep's.
 
 Every error is one line ``mbcomp: ...`` on stderr and exit status 2; "no steady state found"
 is exit status 1.
@@ -144,11 +145,88 @@ def _stability(args):
     if args.sweep:
         from .sweep import stability_sweep
 
+        if args.executor:
+            return _sweep_on_executor(args, mod, build_kw, runtime, steady, title)
         return stability_sweep(args, mod, build_kw, runtime, steady, title)
+    if args.executor:
+        raise ValueError("--executor spreads the values of a --sweep over workers, and there is no --sweep -> add "
+                         "--sweep NAME=START:STOP:COUNT or drop --executor")
     system = st.system_for(call_build(mod, build_kw, args.model), runtime or None, args.backend)
     if steady is None:
         return _start_state(args, system, title)
     return _steady_states(args, system, steady, title)
+
+
+#: (model path, build arguments, runtime values, backend) -> this process's system, for _FileModel
+_BASES = {}
+
+
+class _FileModel:
+    """The model of a ``--sweep`` at one value, made from the model file's path: what an
+    executor's worker receives (a module-level class, so it pickles) -- the same model as
+    :meth:`mbcomp.cli.sweep.Sweep.make` makes in this process."""
+
+    def __init__(self, path, build_kw, runtime, name, backend):
+        self.path, self.build_kw, self.runtime = str(pathlib.Path(path).resolve()), dict(build_kw), dict(runtime)
+        self.name, self.backend = name, backend
+
+    def __call__(self, v):
+        from ..analysis import stability as st
+
+        mod = _module_at(self.path)
+        if "." not in self.name:
+            return call_build(mod, {**self.build_kw, self.name: v}, self.path)
+        key = (self.path, repr(sorted(self.build_kw.items())), repr(sorted(self.runtime.items())), self.backend)
+        if key not in _BASES:
+            _BASES[key] = st.system_for(call_build(mod, self.build_kw, self.path), self.runtime or None, self.backend)
+        return _BASES[key].with_params({self.name: v})
+
+
+class _StartLinearization:
+    """Linearization about the start state, as :meth:`mbcomp.cli.sweep.Sweep.analyze` does
+    without ``--steady`` (module-level: it pickles)."""
+
+    def __init__(self, params, backend):
+        self.params, self.backend = params, backend
+
+    def __call__(self, mdl):
+        from ..analysis import stability as st
+
+        return st.linearize(mdl, params=self.params, backend=self.backend)
+
+
+_MODULES = {}
+
+
+def _module_at(path):
+    if path not in _MODULES:
+        _MODULES[path] = load_model_file(path)
+    return _MODULES[path]
+
+
+def _sweep_on_executor(args, mod, build_kw, runtime, steady, title):
+    """``--sweep`` with ``--executor``: the grid's linearizations as tasks on the executor,
+    printed and written as the serial sweep is."""
+    from ..analysis import stability as st
+    from ..analysis.parallel import executor_of
+    from .sweep import Sweep, _changes, _table, _write
+
+    if steady is not None:
+        raise ValueError("--executor with --steady: the steady state is followed from one value to the next "
+                         "(continuation), which runs in order -> drop --executor, or drop --steady to linearize "
+                         "about each start state")
+    run = Sweep(args, mod, build_kw, runtime, None, title)  # checks the name and the first value
+    make = _FileModel(args.model, build_kw, runtime, run.name, args.backend)
+    executor, owned = executor_of(args.executor, args.workers)
+    try:
+        sw = st.sweep(make, run.name, run.grid, analyze=_StartLinearization(run.params, args.backend),
+                      executor=executor, progress=True)
+    finally:
+        if owned:
+            executor.shutdown()
+    _table(run, sw)
+    _write(run, sw, *_changes(run, sw))
+    return 0
 
 
 def _start_state(args, system, title):
@@ -214,6 +292,10 @@ def add_parser(sub, common):
     st.add_argument("--sweep", metavar="NAME=START:STOP:COUNT",
                     help="repeat over a build() parameter (no dot) or a component parameter (component.param) "
                     "and locate where the classification changes")
+    st.add_argument("--executor", metavar="WHERE",
+                    help="with --sweep: the grid's values as tasks on serial (default), processes (a process pool), "
+                    "dask (a local Dask cluster) or tcp://host:port (a running Dask scheduler)")
+    st.add_argument("--workers", type=int, help="processes of --executor processes (default: the cores, at most 4)")
     st.add_argument("--out", help="write the results to this JSON file")
     st.add_argument("--plot", help="PNG: eigenvalues against the swept parameter, else in the complex plane")
     st.add_argument("--backend", choices=["python", "numeric", "c", "auto"], default="python",
