@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 import os
 
-__all__ = ["dispatch", "chunks", "workers_of"]
+__all__ = ["dispatch", "chunks", "workers_of", "dask_client", "progress_bar", "tick"]
 
 
 def chunks(indexed_runs, size):
@@ -58,19 +58,19 @@ def dispatch(executor, recipe, runs, job, chunk=None, progress=False):
     ``runs``, what each kept, and ``{"executor", "chunks", "workers"}``."""
     from .study import run_chunk
 
-    client, close = _dask_client(executor)
+    client, close = dask_client(executor)
     target = client if client is not None else executor
     n = workers_of(target)
     size = chunk or max(1, math.ceil(len(runs) / (4 * n)))
     parts = chunks(list(enumerate(runs)), size)
     args = (job["t_end"], job["metrics"], job["outputs"], job["keep"], job["options"])
-    bar = _bar(len(runs)) if progress else None
+    bar = progress_bar(len(runs)) if progress else None
     done = []
     try:
         if target is None:
             for part in parts:
                 done.extend(run_chunk(recipe, part, *args))
-                _tick(bar, len(part))
+                tick(bar, len(part))
         elif client is not None:
             done = _on_dask(client, recipe, parts, args, bar)
         else:
@@ -104,7 +104,7 @@ def _on_futures(executor, recipe, parts, args, bar):
     for fut in as_completed(futures):
         rows = fut.result()
         done.extend(rows)
-        _tick(bar, len(rows))
+        tick(bar, len(rows))
     return done
 
 
@@ -119,11 +119,11 @@ def _on_dask(client, recipe, parts, args, bar):
     for fut in as_completed(futures):
         rows = fut.result()
         done.extend(rows)
-        _tick(bar, len(rows))
+        tick(bar, len(rows))
     return done
 
 
-def _dask_client(executor):
+def dask_client(executor):
     """``(client, close)`` for a Dask executor (``"dask"``, ``"tcp://..."`` or a Client), else
     ``(None, None)``; ``close`` shuts down what was started here."""
     if executor is None or not (isinstance(executor, str) or type(executor).__name__ == "Client"):
@@ -136,7 +136,7 @@ def _dask_client(executor):
         raise ImportError(f"executor={executor!r} needs Dask: pip install 'mbcomp[dask]' (dask[distributed])") from None
     if executor == "dask":
         cluster = LocalCluster(n_workers=min(os.cpu_count() or 1, 4), threads_per_worker=1, processes=True,
-                               dashboard_address=None)
+                               dashboard_address=":0")  # (None still tries port 8787)
         client = Client(cluster)
 
         def close():
@@ -150,12 +150,14 @@ def _dask_client(executor):
                      "'tcp://host:port' (a running scheduler) or a dask Client")
 
 
-def _bar(total):
+def progress_bar(total):
+    """A progress bar (tqdm) counting ``total`` finished runs."""
     from tqdm.auto import tqdm
 
     return tqdm(total=total, unit="run", leave=False)
 
 
-def _tick(bar, n):
+def tick(bar, n):
+    """Count ``n`` more finished runs on ``bar`` (``None``: no bar)."""
     if bar is not None:
         bar.update(n)

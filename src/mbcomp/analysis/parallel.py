@@ -86,17 +86,17 @@ def map_on(executor, fn, items, progress=False):
     list
         The results, ``results[k] = fn(items[k])``.
     """
-    from .executors import _bar, _dask_client, _tick
+    from .executors import progress_bar, dask_client, tick
 
     items = list(items)
-    bar = _bar(len(items)) if progress and items else None
-    client, close = _dask_client(executor)
+    bar = progress_bar(len(items)) if progress and items else None
+    client, close = dask_client(executor)
     try:
         if client is None and executor is None:
             out = []
             for x in items:
                 out.append(fn(x))
-                _tick(bar, 1)
+                tick(bar, 1)
             return out
         if client is not None:
             from distributed import as_completed
@@ -108,7 +108,7 @@ def map_on(executor, fn, items, progress=False):
             _check_pickles(executor, fn)
             futures = [executor.submit(fn, x) for x in items]
         for _ in as_completed(futures):
-            _tick(bar, 1)
+            tick(bar, 1)
         return [f.result() for f in futures]
     finally:
         if bar is not None:
