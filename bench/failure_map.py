@@ -13,7 +13,10 @@ cause (singular position, Newton failure, step-size collapse, divergence), never
 traceback and never a silently wrong answer. Writes bench/failure_map.csv and
 bench/failure_map.png and prints one table per case.
 
-Run: python bench/failure_map.py [--cases a,b,c,d] [--t-pendulum 1000]
+Run: python bench/failure_map.py [--cases a,b,c,d] [--t-pendulum 1000] [--executor processes|dask|tcp://...]
+
+Every run is one picklable task (its model file is loaded where it runs), so the map runs on
+any executor of :mod:`mbcomp.analysis.parallel`, with the same rows as the serial run.
 """
 import os
 
@@ -46,29 +49,41 @@ COMBOS = {
     "DAE i3 / gen-alpha": dict(method="genalpha", index=3, stabilization="none"),
 }
 ROWS = []
+#: where each case's model comes from (a model file, loaded in the process that runs the task)
+FILES = {"a": "models/textbook/ex6_5_pendulum.py", "b": "models/andrews.py", "c": "models/four_bar.py",
+         "d": "models/slider_crank.py"}
 
 
-def run(case, label, model, t_end, opts, extra=None, n_out=201, ref=None):
+def task(case, label, build, t_end, opts, extra=None, n_out=201):
+    """One run of the map as a picklable tuple (the model is built where it runs)."""
+    return (case, label, build, t_end, opts, extra or {}, n_out)
+
+
+def run_task(spec):
+    """The row of one run: :func:`task`'s tuple, simulated on the python backend; the
+    published error for Andrews (case b), the crank's end angle for the four-bar (case c)."""
+    case, label, build, t_end, opts, extra, n_out = spec
+    model = mbcomp.load_model_file(ROOT / FILES[case]).build(**build)
     kw = dict(backend="python", n_out=n_out)
     kw.update(opts)
     c0 = time.process_time()
     try:
         res = mbcomp.simulate(model, t_end=t_end, **kw)
     except Exception as exc:  # noqa: BLE001 - a refused request is a row of the map too
-        row = dict(case=case, combo=label, status="refused", message=f"{type(exc).__name__}: {exc}",
-                   cpu_s=time.process_time() - c0, **(extra or {}))
-        ROWS.append(row)
-        return row, None
+        return dict(case=case, combo=label, status="refused", message=f"{type(exc).__name__}: {exc}",
+                    cpu_s=time.process_time() - c0, **extra)
     E = res["energy.total"]
     row = dict(case=case, combo=label, status=res.status, message=res.message, cpu_s=time.process_time() - c0,
                t_reached=float(res.time[-1]), steps=res.stats.get("steps"), nfev=res.stats.get("nfev"),
                energy_drift=float(np.nanmax(np.abs(E - E[0]))) if len(E) else np.nan,
                residual=float(np.nanmax(res["residual.position"])), sigma_min=res.stats.get("min_constraint_sigma"),
-               **(extra or {}))
-    if ref is not None and res.success:
-        row["error"] = ref(res)
-    ROWS.append(row)
-    return row, res
+               **extra)
+    if case == "b" and res.success:
+        ref = mbcomp.load_model_file(ROOT / FILES["b"]).REFERENCE["values"]
+        row["error"] = max(abs(res[n][-1] - v) / abs(v) for n, v in ref.items())
+    if case == "c" and res.success:
+        row["crank_end"] = float(res["crank_angle"][-1])
+    return row
 
 
 def show(case, keys):
@@ -91,57 +106,53 @@ def _fmt(v):
 
 
 def case_a(t_end):
-    ex = mbcomp.load_model_file(ROOT / "models/textbook/ex6_5_pendulum.py")
+    tasks = []
     for label, opts in COMBOS.items():
         o = dict(opts, rtol=1e-6, atol=1e-8)
         if opts["method"] == "genalpha":
             o["h"] = 2e-3
-        run("a", label, ex.build(rod="constraint"), t_end, o, n_out=101)
-        print(f"  a {label}: {ROWS[-1]['status']} cpu {ROWS[-1]['cpu_s']:.1f} s", flush=True)
-    show("a", ["cpu_s", "steps", "energy_drift", "residual", "t_reached"])
+        tasks.append(task("a", label, {"rod": "constraint"}, t_end, o, n_out=101))
+    return tasks
 
 
 def case_b():
-    an = mbcomp.load_model_file(ROOT / "models/andrews.py")
-    ref = an.REFERENCE["values"]
-
-    def err(res):
-        return max(abs(res[n][-1] - v) / abs(v) for n, v in ref.items())
-
+    tasks = []
     for label, opts in {**COMBOS, "ODE i1 Baumgarte / RK45": dict(method="RK45", stabilization="baumgarte"),
                         "D'Alembert / LSODA": dict(formulation="dalembert", method="LSODA")}.items():
         o = dict(opts, rtol=1e-6, atol=1e-8)
         if opts["method"] == "genalpha":
             o["h"] = 1e-5
-        run("b", label, an.build(), 0.03, o, n_out=2, ref=err)
-        print(f"  b {label}: {ROWS[-1]['status']} cpu {ROWS[-1]['cpu_s']:.1f} s", flush=True)
-    show("b", ["cpu_s", "steps", "nfev", "error", "residual"])
+        tasks.append(task("b", label, {}, 0.03, o, n_out=2))
+    return tasks
 
 
 def case_c():
-    fb = mbcomp.load_model_file(ROOT / "models/four_bar.py")
+    tasks = []
     for gap in (1e-2, 1e-4, 1e-8, 1e-12, 0.0):
         for label in ("ODE i1 Baumgarte / DOP853", "ODE i1 projection / DOP853", "ODE i1 projection / Radau",
                       "D'Alembert / DOP853", "DAE i3 / radau5", "DAE i2 GGL / IDA", "DAE i3 / gen-alpha"):
             o = dict(COMBOS[label], rtol=1e-8, atol=1e-10)
             if o["method"] == "genalpha":
                 o["h"] = 1e-4
-            row, res = run("c", label, fb.build(gap=gap), 0.5, o, extra=dict(gap=gap), n_out=51)
-            if res is not None and res.success:
-                row["crank_end"] = float(res["crank_angle"][-1])
-        print(f"  c gap={gap:g} done", flush=True)
-    show("c", ["gap", "cpu_s", "sigma_min", "energy_drift", "crank_end"])
+            tasks.append(task("c", label, {"gap": gap}, 0.5, o, extra=dict(gap=gap), n_out=51))
+    return tasks
 
 
 def case_d():
-    sc = mbcomp.load_model_file(ROOT / "models/slider_crank.py")
+    tasks = []
     for ab in (0.0, 1.0, 10.0, 100.0, 1e3, 1e4):
         for method in ("RK45", "DOP853", "Radau"):
             o = dict(method=method, stabilization="baumgarte" if ab else "none", alpha=ab, beta=ab,
                      rtol=1e-6, atol=1e-8)
-            run("d", f"Baumgarte a=b={ab:g} / {method}", sc.build(), 10.0, o, extra=dict(alpha=ab), n_out=101)
-        print(f"  d alpha={ab:g} done", flush=True)
-    show("d", ["alpha", "cpu_s", "steps", "nfev", "residual", "energy_drift"])
+            tasks.append(task("d", f"Baumgarte a=b={ab:g} / {method}", {}, 10.0, o, extra=dict(alpha=ab), n_out=101))
+    return tasks
+
+
+#: what each case's table shows
+KEYS = {"a": ["cpu_s", "steps", "energy_drift", "residual", "t_reached"],
+        "b": ["cpu_s", "steps", "nfev", "error", "residual"],
+        "c": ["gap", "cpu_s", "sigma_min", "energy_drift", "crank_end"],
+        "d": ["alpha", "cpu_s", "steps", "nfev", "residual", "energy_drift"]}
 
 
 def chart():
@@ -187,19 +198,27 @@ def chart():
 
 
 def main(argv=None):
+    from mbcomp.analysis.parallel import executor_of, map_on
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", default="a,b,c,d")
     ap.add_argument("--t-pendulum", type=float, default=1000.0)
+    ap.add_argument("--executor", default=None,
+                    help="serial (default), processes, dask or tcp://host:port: where the runs go")
+    ap.add_argument("--workers", type=int, default=None, help="processes of --executor processes")
     args = ap.parse_args(argv)
     cases = args.cases.split(",")
-    if "a" in cases:
-        case_a(args.t_pendulum)
-    if "b" in cases:
-        case_b()
-    if "c" in cases:
-        case_c()
-    if "d" in cases:
-        case_d()
+    makers = {"a": lambda: case_a(args.t_pendulum), "b": case_b, "c": case_c, "d": case_d}
+    tasks = [t for c in "abcd" if c in cases for t in makers[c]()]
+    executor, owned = executor_of(args.executor, args.workers)
+    try:
+        ROWS.extend(map_on(executor, run_task, tasks, progress=True))
+    finally:
+        if owned:
+            executor.shutdown()
+    for c in "abcd":
+        if c in cases:
+            show(c, KEYS[c])
     keys = sorted({k for r in ROWS for k in r}, key=lambda k: (k not in ("case", "combo", "status"), k))
     with open(HERE / "failure_map.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=keys)
