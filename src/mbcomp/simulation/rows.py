@@ -72,9 +72,9 @@ class RowChoice(StepHook):
     def __call__(self, run):
         sysm, s, form = self.system, run.stepper, run.form
         mask = sysm.row_mask
-        qu = form.full(s.t, s.y)
-        q, u = qu[: sysm.nq], qu[sysm.nq: sysm.nq + sysm.nu]
-        C = sysm.evaluate(s.t, q, u, masked=False).C
+        end = run.step_end()  # (shared with the run monitors when no projection came between)
+        q, u = end.q, end.u
+        C = end.ev.C
         kept = relative_sigma(C[mask])
         if kept >= self.KEPT_MIN:
             return

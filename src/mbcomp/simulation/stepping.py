@@ -91,6 +91,7 @@ class Run:
         self.stepper = None
         self._y_start = y
         self._dense = None
+        self._end = None
         self.hooks = []  # what is done after every accepted step (set by the driver: hooks_for)
 
     def start(self, t=None, y=None):
@@ -128,6 +129,16 @@ class Run:
         self.stats["steps"] += 1
         self._dense = None
         return s.t != self.t_prev
+
+    def step_end(self):
+        """The :class:`~mbcomp.simulation.monitors.StepEnd` of the stepper's current state,
+        made once per state: the run monitors and the choice of kept rows share its unmasked
+        evaluation (a projection in between makes a new one)."""
+        s = self.stepper
+        key = (id(s), s.t, s.y.tobytes())
+        if self._end is None or self._end[0] != key:
+            self._end = (key, StepEnd(self.form.system, s.t, self.form.full(s.t, s.y)))
+        return self._end[1]
 
     def step_dense(self):
         """The stepper's dense output ``y(t)`` inside the last step (made once per step)."""
@@ -186,8 +197,7 @@ class Monitoring(StepHook):
         self.monitors = monitors
 
     def __call__(self, run):
-        s = run.stepper
-        end = StepEnd(run.form.system, s.t, run.form.full(s.t, s.y))
+        end = run.step_end()
         for m in self.monitors:
             m.check(end, run.t_prev, run.dense())
 
