@@ -161,3 +161,31 @@ def test_a_worker_killed_mid_study_loses_no_run(cluster):
     assert len(out) == 40 and list(out["status"]) == ["success"] * 40
     assert np.array_equal(out["peak"], serial["peak"])
     assert victim not in cluster.run(os.getpid).values()  # the nanny started a new worker process
+
+
+def test_runs_with_new_parameter_values_reuse_the_traced_programs(monkeypatch):
+    """Nothing re-derived per run: after the first run of a structure, runs that change only
+    component parameters trace nothing (they used to trace the right-hand side three times)."""
+    from mbcomp.codegen import tracer
+
+    grid = {"crank.m": mbcomp.Normal(1.0, 0.05), "crank_joint.w0": mbcomp.Uniform(5.7, 6.3)}
+    mbcomp.study(CRANK, grid, samples=2, seed=0, t_end=0.2)        # this process's first runs
+    traced = []
+    real = tracer._trace
+    monkeypatch.setattr(tracer, "_trace", lambda *a, **k: traced.append(a[2] if len(a) > 2 else "eval") or real(*a, **k))
+    out = mbcomp.study(CRANK, grid, samples=12, seed=1, t_end=0.2)
+    assert list(out["status"]) == ["success"] * 12
+    assert len(traced) <= 3        # the new study's one structure: right-hand side, outputs (once each)
+
+
+def test_a_law_given_as_a_run_parameter_that_cannot_be_traced_runs_numerically():
+    import math
+
+    from conftest import torque_pendulum
+    from mbcomp.simulation.setup import system_of
+
+    system = system_of(torque_pendulum(lambda t, phi, w: 0.1 * np.sin(t)), None, "auto")
+    with pytest.warns(RuntimeWarning, match="running on the numeric evaluation"):
+        res = mbcomp.simulate(system, t_end=1.0, params={"motor.tau": lambda t, phi, w: 0.1 * math.sin(t)})
+    ref = mbcomp.simulate(torque_pendulum(lambda t, phi, w: 0.1 * np.sin(t)), t_end=1.0, backend="numeric")
+    assert res.stats["backend"] == "numeric" and np.abs(res["hinge.phi"] - ref["hinge.phi"]).max() < 1e-12

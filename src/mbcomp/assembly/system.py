@@ -130,7 +130,7 @@ class NumericEvaluator:
     def q_rate(self, q, u):
         return self.system.q_rate_numeric(q, u)
 
-    def rebind(self, system):
+    def rebind(self, system, laws=False):
         return NumericEvaluator(system)
 
     @property
@@ -198,7 +198,7 @@ class MultibodySystem:
         merged.update(params)
         new = MultibodySystem(self.topology, merged)
         new.row_mask = self.row_mask
-        new.evaluator = self.evaluator.rebind(new)
+        new.evaluator = self.evaluator.rebind(new, laws=any(callable(v) for v in params.values()))
         return new
 
     def with_evaluator(self, make=None):

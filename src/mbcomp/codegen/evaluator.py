@@ -200,7 +200,7 @@ class ProgramEvaluator:
     """
 
     def __init__(self, system, backend="python", *, cache_dir=None, verify=True, max_nodes=3_000_000, code=None,
-                 fun_codes=None, lazy=False):
+                 fun_codes=None, lazy=False, checked=False):
         if backend == "auto":
             backend = "c" if c_compiler() else "python"
         if backend not in ("python", "c"):
@@ -209,7 +209,10 @@ class ProgramEvaluator:
         self.options = dict(cache_dir=cache_dir, verify=verify, max_nodes=max_nodes, lazy=lazy)
         self.bound = None
         self.numeric_calls = 0  # evaluations answered numerically while the program is not made (lazy)
-        self.funs = dict(fun_codes or {})  # row mask -> Code of the Lagrange program (or None)
+        # row mask -> Code of the Lagrange program (or None), and the output programs: one dict
+        # shared by every rebound copy (with_params), so that runs with other parameter values
+        # reuse what any of them traced (a study traced three programs per run before)
+        self.funs = fun_codes if fun_codes is not None else {}
         self._fun = None  # (row mask key, Bound or None, the mask object)
         self.stats = dict(backend=backend, traces=0, fallbacks=0)
         if code is not None:
@@ -224,7 +227,10 @@ class ProgramEvaluator:
         if lazy:
             # the evaluation program (O(N^2): the dense M) is made only when evaluations are
             # asked for often (LAZY_EVALUATIONS); the right-hand side is traced now, so a law
-            # that cannot be traced is reported before the run, as without laziness
+            # that cannot be traced is reported before the run, as without laziness (not again
+            # for a rebound copy: its structure was checked)
+            if checked:
+                return
             if system.topology.cut and system.row_mask is None:
                 trace(system, max_nodes, program="fun")  # a check: the program needs the row mask
             else:
@@ -232,12 +238,14 @@ class ProgramEvaluator:
             return
         self._build()
 
-    def rebind(self, system):
+    def rebind(self, system, laws=False):
         """This evaluator's program for ``system`` (other parameter values): reused unless the
         change alters what is baked into it (a zero pattern, a law, a guarded decision); then
-        it is traced again at the first evaluation."""
+        it is traced again at the first evaluation. ``laws``: a law was replaced, so the
+        right-hand side is traced now (a law that cannot be traced is reported here, as when
+        the program was first made)."""
         code = self.bound.code if self.bound is not None else None
-        return ProgramEvaluator(system, self.backend, code=code, fun_codes=self.funs, **self.options)
+        return ProgramEvaluator(system, self.backend, code=code, fun_codes=self.funs, checked=not laws, **self.options)
 
     # --- building ----------------------------------------------------------------------------
     def _build(self):

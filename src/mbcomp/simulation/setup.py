@@ -104,7 +104,17 @@ def system_of(model, params, backend):
     applied), traced into a generated program unless ``backend`` is ``"numeric"`` or it
     already runs one."""
     if isinstance(model, MultibodySystem):
-        system = model.with_params(params) if params else model
+        try:
+            system = model.with_params(params) if params else model
+        except Exception as exc:  # a law given in params that its program cannot hold: numeric, said once
+            from ..codegen import CodegenError
+
+            if not isinstance(exc, CodegenError):
+                raise
+            import warnings
+
+            warnings.warn(f"mbcomp: running on the numeric evaluation (slower): {exc}", RuntimeWarning, stacklevel=3)
+            system = model.with_evaluator(None).with_params(params)
     else:
         system = assemble(model, params)
     if backend != "numeric" and system.backend == "numeric":
