@@ -52,26 +52,14 @@ def test_a_run_that_fails_is_a_row_naming_the_component_and_the_others_stand():
             raise ValueError("the motor's table ends at 2.5 rad/s")
         return 0.0
 
-    def spinning():
-        m = mbcomp.Model()
-        w = m.add("world", World(g=(0, 0, 0)))
-        from mbcomp.library import FixedTranslation, Revolute
-        j = m.add("j", Revolute(n=(0, 0, 1)))
-        rod = m.add("rod", FixedTranslation(r=(1.0, 0, 0)))
-        bob = m.add("bob", PointMass(m=1.0))
-        tq = m.add("drive", Torque(tau=motor))
-        m.connect(w.frame_b, j.frame_a)
-        m.connect(j.frame_b, rod.frame_a)
-        m.connect(rod.frame_b, bob.frame_a)
-        m.connect(j.axis, tq.flange_b)
-        return m
+    from conftest import turntable
 
-    out = mbcomp.study(spinning, {"j.w0": [1.0, 2.0, 3.0], "bob.m": [1.0, -1.0]}, t_end=0.2,
+    out = mbcomp.study(lambda: turntable(motor), {"j.w0": [1.0, 2.0, 3.0], "bob.m": [1.0, -1.0]}, t_end=0.2,
                        metrics={"turned": lambda r: r["j.phi"][-1]}, backend="numeric")
     status = dict(zip(zip(out["j.w0"], out["bob.m"]), out["status"]))
     msg = dict(zip(zip(out["j.w0"], out["bob.m"]), out["message"]))
     assert status[(1.0, 1.0)] == status[(2.0, 1.0)] == "success"
-    assert "drive" in msg[(3.0, 1.0)] and "table ends at 2.5" in msg[(3.0, 1.0)]   # the law's raise, named
+    assert "motor" in msg[(3.0, 1.0)] and "table ends at 2.5" in msg[(3.0, 1.0)]   # the law's raise, named
     assert status[(1.0, -1.0)] == "error" and "bob.m" in msg[(1.0, -1.0)]           # a bad value, named
     turned = dict(zip(zip(out["j.w0"], out["bob.m"]), out["turned"]))
     assert turned[(1.0, 1.0)] == pytest.approx(0.2, rel=1e-9) and turned[(2.0, 1.0)] == pytest.approx(0.4, rel=1e-9)

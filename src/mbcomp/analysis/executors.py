@@ -99,7 +99,11 @@ def _on_futures(executor, recipe, parts, args, bar):
                         f"{type(exc).__name__}: {exc} -> pass the model file's path or a build function defined "
                         "at module level (not a lambda or a model holding lambda laws), metrics defined at module "
                         "level, or use executor='dask' (it sends lambdas)") from exc
-    futures = [executor.submit(run_chunk, recipe, part, *args) for part in parts]
+    return _collect([executor.submit(run_chunk, recipe, part, *args) for part in parts], as_completed, bar)
+
+
+def _collect(futures, as_completed, bar):
+    """Every row of the chunks' ``futures``, counted on ``bar`` as each chunk finishes."""
     done = []
     for fut in as_completed(futures):
         rows = fut.result()
@@ -114,13 +118,7 @@ def _on_dask(client, recipe, parts, args, bar):
     from .study import run_chunk
 
     shared = client.scatter(recipe, broadcast=True, hash=False)  # the recipe travels once per worker
-    futures = [client.submit(run_chunk, shared, part, *args, pure=False) for part in parts]
-    done = []
-    for fut in as_completed(futures):
-        rows = fut.result()
-        done.extend(rows)
-        tick(bar, len(rows))
-    return done
+    return _collect([client.submit(run_chunk, shared, part, *args, pure=False) for part in parts], as_completed, bar)
 
 
 def dask_client(executor):
