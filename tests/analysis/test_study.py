@@ -177,3 +177,39 @@ def test_a_law_given_as_a_run_parameter_that_cannot_be_traced_runs_numerically()
         res = mbcomp.simulate(system, t_end=1.0, params={"motor.tau": lambda t, phi, w: 0.1 * math.sin(t)})
     ref = mbcomp.simulate(torque_pendulum(lambda t, phi, w: 0.1 * np.sin(t)), t_end=1.0, backend="numeric")
     assert res.stats["backend"] == "numeric" and np.abs(res["hinge.phi"] - ref["hinge.phi"]).max() < 1e-12
+
+
+RAISING = '''
+import mbcomp
+from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
+
+
+def tau(t, phi, w):
+    if w > 2.5:
+        raise ValueError("the motor's table ends at 2.5 rad/s")
+    return 0.0
+
+
+def build():
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, 0)))
+    j = m.add("j", Revolute(n=(0, 0, 1)))
+    rod = m.add("rod", FixedTranslation(r=(1.0, 0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    motor = m.add("motor", Torque(tau=tau))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    m.connect(j.axis, motor.flange_b)
+    return m
+'''
+
+
+def test_a_law_raising_on_a_worker_comes_back_as_a_row_naming_the_component(cluster, tmp_path):
+    path = tmp_path / "raising.py"
+    path.write_text(RAISING)
+    out = mbcomp.study(str(path), {"j.w0": [1.0, 3.0]}, t_end=0.2, executor=cluster, backend="numeric",
+                       metrics={"turned": lambda r: r["j.phi"][-1]})
+    assert out.stats["executor"] == "dask" and list(out["status"]) == ["success", "error"]
+    assert "Torque 'motor'" in out["message"][1] and "table ends at 2.5" in out["message"][1]
+    assert out["turned"][0] == pytest.approx(0.2, rel=1e-9) and np.isnan(out["turned"][1])
