@@ -323,6 +323,10 @@ def study(model_or_build, grid, *, t_end=1.0, metrics=None, outputs=(), keep=Non
     Returns
     -------
     StudyResult
+        One row per run; ``status`` is the run's own (``"success"``, ``"inaccurate"``,
+        ``"failed"``, ``"budget"``, ...) or ``"error"`` when it raised before integrating (a bad
+        parameter value, an initialization failure, a law failing at the start), with the
+        exception's message naming the component.
     """
     from .executors import dispatch
 
