@@ -20,7 +20,7 @@ from ..assembly.column_units import column_units
 from ..modeling.units import BASE as _BASE
 from ..modeling.units import unit_exponents
 
-__all__ = ["unit_exponents", "unit_name"]
+__all__ = ["unit_exponents", "unit_name", "output_name"]
 
 RUNTIME_C = ("mbrt_rk.c", "mbrt_dop853.c", "mbrt_mech.c", "mbrt_linalg.c")
 
@@ -75,6 +75,25 @@ def _column_units(system):
     """``{column name: SI exponents}`` of the result columns whose unit is declared
     (:func:`mbcomp.assembly.column_units.column_units`)."""
     return {name: unit_exponents(text) for name, text in column_units(system).items()}
+
+
+def output_name(column, parameters):
+    """The FMU variable of a result column: its own name, or ``<name>_out`` when a parameter
+    has that name (an actuator's ``torque.tau``: FMI names are unique).
+
+    Examples
+    --------
+    >>> output_name("torque.tau", {"torque.tau"}), output_name("j.phi", {"torque.tau"})
+    ('torque.tau_out', 'j.phi')
+    """
+    return f"{column}_out" if column in parameters else column
+
+
+def _outputs(system, outputs, pnames, defs):
+    """``(FMU name, index, unit name)`` of the output columns ``outputs`` (``(column,
+    index)``), the units defined in ``defs``; one list for both standards."""
+    units, taken = _column_units(system), set(pnames)
+    return [(output_name(c, taken), k, _define(units.get(c), defs)) for c, k in outputs]
 
 
 def _start_names(system):
@@ -155,10 +174,9 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
         rows.append(f'    <Float64 name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
                     f'variability="continuous" initial="calculated" derivative="{npar + k}"{unit(uder[k])}/>')
     vr_out = npar + 2 * nx + 1
-    ounits = _column_units(system)
-    for oname, k in outputs:
+    for oname, k, uname in _outputs(system, outputs, pnames, defs):
         rows.append(f'    <Float64 name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
-                    f'variability="continuous" initial="calculated"{unit(_define(ounits.get(oname, ounits.get(oname.removesuffix("_out"))), defs))}/>')
+                    f'variability="continuous" initial="calculated"{unit(uname)}/>')
     for k, inp in enumerate(inputs[0]):
         uname = _define(unit_exponents(inp.unit), defs)
         rows.append(f'    <Float64 name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" causality="input" '
@@ -215,11 +233,9 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
                     f'variability="continuous" initial="calculated"><Real derivative="{first_state + k}"{unit(uder[k])}/>'
                     f'</ScalarVariable>')
     vr_out = npar + 2 * nx + 1  # the time's reference (NP + 2 NX) is not a variable in 2.0
-    ounits = _column_units(system)
-    for oname, k in outputs:
+    for oname, k, uname in _outputs(system, outputs, pnames, defs):
         rows.append(f'    <ScalarVariable name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
-                    f'variability="continuous" initial="calculated"><Real{unit(_define(ounits.get(oname, ounits.get(oname.removesuffix("_out"))), defs))}/>'
-                    f'</ScalarVariable>')
+                    f'variability="continuous" initial="calculated"><Real{unit(uname)}/></ScalarVariable>')
     for k, inp in enumerate(inputs[0]):
         uname = _define(unit_exponents(inp.unit), defs)
         rows.append(f'    <ScalarVariable name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" '

@@ -72,7 +72,8 @@ from ..codegen.printers import Program
 from ..codegen.tracer import param_vector, trace
 from ..errors import ModelError, Problem
 from ..modeling.model import Model
-from .description import RUNTIME_C, _build_description, _model_description, _model_description3, _param_doc
+from .description import (RUNTIME_C, _build_description, _model_description, _model_description3, _param_doc,
+                          output_name)
 
 __all__ = ["export_fmu"]
 
@@ -160,27 +161,34 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
-    taken = set(pnames)  # an actuator's output named as its parameter (torque.tau): the output gets "_out"
-    out_prog.variables = [(f"{n}_out" if n in taken else n, k) for n, k in out_prog.variables]
     describe = _model_description if fmi == "2.0" else _model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
                    experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0)
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
-    loops = bool(system.topology.cut)
-    model_c = (_HEADER + f"#define NQ {system.nq}\n#define NU {system.nu}\n"
-               f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
-               f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
-               + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
-               + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, layout, pv, y0))
-               + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
-               + f'\n#include "fmi{fmi[0]}.c"\n')
+    model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi)
     _build(path, ident, fmi, cc, model_c, xml)
-    return dict(states=states, parameters=pnames, outputs=[n for n, _ in out_prog.variables],
+    outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
+    return dict(states=states, parameters=pnames, outputs=outs,
                 inputs=[i.name for i in tr.inputs], projects=mech.enabled and kind != "me",
                 selects_states=select.enabled, guid=guid, size=os.path.getsize(path),
                 operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
+
+
+def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
+    """The FMU's model.c: sizes and start values as defines and tables, the generated
+    programs (``fun``: the right-hand side's trace, program, C parts and work size; outputs,
+    projection, state selection), then the standard's functions (``fmi2.c``/``fmi3.c``)."""
+    tr, prog, parts, n_work = fun
+    loops = bool(system.topology.cut)
+    return (_HEADER + f"#define NQ {system.nq}\n#define NU {system.nu}\n"
+            f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
+            f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
+            + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
+            + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, tr.layout, pv, y0))
+            + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
+            + f'\n#include "fmi{fmi[0]}.c"\n')
 
 
 def _check_request(model, fmi, kind, stop_time, tolerance, outputs):
