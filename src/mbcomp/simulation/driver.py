@@ -150,14 +150,17 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     stabilization = check_singular(singular, method, stepper, formulation, stabilization)
     check_names(inputs or {})
     with input_signals({name: signal_of(name, v) for name, v in (inputs or {}).items()}):
-        return _simulate(model, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha,
-                         beta, independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress,
-                         Budget(max_wall_time, max_steps) if max_wall_time or max_steps else None, body_momenta)
+        return _simulate(model, t_start=t_start, t_end=t_end, params=params, backend=backend,
+                         formulation=formulation, stepper=stepper, index=index, stabilization=stabilization,
+                         alpha=alpha, beta=beta, independent=independent, method=method, singular=singular,
+                         rtol=rtol, atol=atol, n_out=n_out, dt_out=dt_out, max_step=max_step, h=h,
+                         progress=progress, budget=Budget(max_wall_time, max_steps) if max_wall_time or max_steps
+                         else None, body_momenta=body_momenta)
 
 
-def _simulate(model, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha, beta,
+def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha, beta,
               independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress, budget,
-              body_momenta=False):
+              body_momenta):
     """:func:`simulate` once the request is checked and the inputs' signals are in place."""
     system = system_of(model, params, backend)
     try:
@@ -181,20 +184,30 @@ def _simulate(model, t_start, t_end, params, backend, formulation, stepper, inde
     wall0 = _time.perf_counter()
     watch = None if stepper.implicit else StiffnessWatch()
     status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None])
-    if watch is not None:
-        if status in ("budget", "failed") and not watch.done:  # a run cut short: say why it was slow
-            watch(run, now=True)
-        if watch.note:
-            message = f"{message}; {watch.note}"
     stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
                       index=index, rtol=rtol, atol=atol)
-    if stats.get("fallbacks", 0) > max(100, stats["nfev"] // 2):
-        message += (f"; {stats['fallbacks']} of {stats['nfev']} evaluations left the generated program for the "
-                    "numeric path (a law's branch, if/abs/min on a state, the trace did not take) -> write the "
-                    "branch smoothly (e.g. tanh) or run with backend='numeric' (no program to leave)")
+    message = "; ".join([message] + why_slow(run, watch, status, stats))
     t_done = run.t_out[: len(run.ys)]
     return postprocess(system, form, t_done, np.array(run.ys).reshape(len(run.ys), -1), status, message, stats,
                        init, body_momenta)
+
+
+def why_slow(run, watch, status, stats):
+    """Notes on what made a run slow: the stiffness hint (:class:`StiffnessWatch`, made now
+    for a run cut short by a budget or a failure if it was not made yet), and most evaluations
+    leaving the generated program for the numeric path (an untraced branch of a law)."""
+    notes = []
+    if watch is not None:
+        if status in ("budget", "failed") and not watch.done:
+            watch(run, now=True)
+        if watch.note:
+            notes.append(watch.note)
+            stats["stiffness_hint"] = watch.note
+    if stats.get("fallbacks", 0) > max(100, stats["nfev"] // 2):
+        notes.append(f"{stats['fallbacks']} of {stats['nfev']} evaluations left the generated program for the "
+                     "numeric path (a law's branch, if/abs/min on a state, the trace did not take) -> write the "
+                     "branch smoothly (e.g. tanh) or run with backend='numeric' (no program to leave)")
+    return notes
 
 
 def run_stats(run, monitors, init, seconds, **request):

@@ -15,7 +15,11 @@ hooks in order, each a :class:`StepHook`:
    and others do not, keep those and restart the stepper;
 5. :class:`Repartition` -- when the formulation must choose its coordinates again, restart
    the stepper from the state written in the new ones;
-6. :class:`Progress` -- the progress bar.
+6. :class:`Progress` -- the progress bar;
+
+and the driver's extra hooks after them: the stiffness hint
+(:class:`~mbcomp.simulation.stiffness.StiffnessWatch`, explicit methods) and a
+:class:`Budget` (``max_wall_time``, ``max_steps``).
 
 Examples
 --------
