@@ -15,8 +15,13 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 SRC = ROOT / "src" / "mbcomp"
 
 #: the pipeline, in import order; a module may import its own layer and the layers before it
-LAYERS = ["errors", "geometry", "modeling", "assembly", "formulations", "solvers", "codegen", "simulation",
+LAYERS = ["errors", "geometry", "modeling", "assembly", "formulations", "solvers", "codegen", "visual", "simulation",
           "analysis", "export", "cli"]
+#: the only imports against the pipeline's direction, each a public method that is a facade
+#: of a later stage (imported inside the method, on call): (importing file, imported module) -> why
+FACADES = {
+    ("modeling/model.py", "visual.topology_drawing"): "Model.draw(path) is the model's facade of the topology drawing",
+}
 MAX_FILE_LINES = 650
 MAX_FUNCTION_LINES = 80
 WHY_LONG = "# long:"  # a function over the limit must say why it cannot be split, on a line starting so
@@ -69,7 +74,7 @@ def test_layers_import_only_downwards():
             other = _layer(target)
             if other is None:
                 bad.append(f"{path.relative_to(ROOT)}:{line} imports mbcomp.{'.'.join(target)} (not a pipeline layer)")
-            elif LAYERS.index(other) > LAYERS.index(me):
+            elif LAYERS.index(other) > LAYERS.index(me) and (str(path.relative_to(SRC)), ".".join(target)) not in FACADES:
                 bad.append(f"{path.relative_to(ROOT)}:{line} ({me}) imports upwards from {other}")
     assert not bad, "\n".join(bad)
 
