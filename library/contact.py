@@ -18,9 +18,10 @@ the body, a free joint and start values given in rolling terms.
 """
 import numpy as np
 
-from mbcomp import Joint, Model, Param, SimulationError
+from mbcomp import Cylinder, Joint, Model, Param, SimulationError, Sphere
 from mbcomp.jets import is_traced, local_point, local_vector, slip_velocity, velocity_along
 from mbcomp.kinematics import rot_axis
+from mbcomp.modeling.shapes import z_to
 
 from .joints import FreeMotion
 from .parts import RigidBody
@@ -88,6 +89,13 @@ class DiskContact(Joint):
               doc="plane normal, frame_a coordinates, pointing to the wheel's side")
     axis = Param((0.0, 1.0, 0.0), unit="1", shape=(3,), check="nonzero", doc="spin axis, frame_b coordinates")
 
+    draws_body = True
+
+    def visuals(self, p, view):
+        """The wheel: a disk of radius ``r`` about the spin axis, on frame_b (the wheel draws no
+        shape of its own)."""
+        return [Cylinder(p.r, 0.08 * p.r, R=z_to(p.axis), frame="frame_b", color="darkgrey")]
+
     singularity_reason = ("the disk lies flat on the plane (spin axis parallel to the plane normal), where its "
                           "contact point is undefined")
     singularity_fix = "keep the disk from falling flat (more spin or speed, a smaller lean, a shorter run)"
@@ -154,6 +162,12 @@ class SphereContact(Joint):
     r = Param(0.1, unit="m", doc="ball radius", check="positive")
     n = Param((0.0, 0.0, 1.0), unit="1", shape=(3,), check="nonzero",
               doc="plane normal, frame_a coordinates, pointing to the ball's side")
+
+    draws_body = True
+
+    def visuals(self, p, view):
+        """The ball: a sphere of radius ``r`` on frame_b (the ball draws no shape of its own)."""
+        return [Sphere(p.r, frame="frame_b", color="orange")]
 
     def _geometry(self, a, b, p):
         n0 = _unit(p.n)

@@ -1,7 +1,7 @@
 """Force elements between frames (point to point) and applied world-frame loads."""
 import numpy as np
 
-from mbcomp import ForceElement, Frame, Param
+from mbcomp import ForceElement, Frame, Helix, Param, Rod
 from mbcomp.errors import SimulationError
 from mbcomp.jets import is_traced
 
@@ -26,6 +26,12 @@ class _LineForce(ForceElement):
 
     def tension(self, L, Ldot, p):
         raise NotImplementedError
+
+    def visuals(self, p, view):
+        """A coil from frame_a's origin to frame_b's (a rod for a damper alone)."""
+        if getattr(p, "c", None) is None:
+            return [Rod(0.012 * view.scale, color="black")]
+        return [Helix(0.03 * view.scale, turns=10, color="red")]
 
     output_units = {"f": "N", "length": "m", "length_rate": "m/s"}
 

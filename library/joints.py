@@ -11,10 +11,11 @@ re-exported here, so ``mbcomp.library.FreeMotion`` is that class.
 """
 import numpy as np
 
-from mbcomp import Flange, Joint, Param
+from mbcomp import Cylinder, Flange, Joint, Param, Sphere
 from mbcomp.jets import local_point, local_vector, position_constraints, rigid_constraints
 from mbcomp.kinematics import cross, matrix_to_quat, perpendicular_pair, quat_rate, quat_to_matrix, rot_axis
 from mbcomp.modeling.free_joint import FreeMotion, quat_increment  # noqa: F401  (FreeMotion: re-exported)
+from mbcomp.modeling.shapes import z_to
 from mbcomp.roles import split_start
 
 from .checks import rotation_matrix
@@ -49,6 +50,10 @@ class Revolute(Joint):
     n = Param((0.0, 0.0, 1.0), unit="1", shape=(3,), doc="hinge axis direction, frame_a coordinates", check="nonzero")
     phi0 = Param(None, unit="rad", kind="start", doc="start angle (fixed; wrap in Guess to let init move it)")
     w0 = Param(None, unit="rad/s", kind="start", doc="start angular rate (fixed unless a Guess)")
+
+    def visuals(self, p, view):
+        """A short cylinder along the hinge axis, on frame_a."""
+        return [Cylinder(0.035 * view.scale, 0.12 * view.scale, R=z_to(p.n), color="grey")]
 
     def start(self, p):
         q, qf = split_start(p.phi0, 1)
@@ -100,6 +105,10 @@ class Prismatic(Joint):
     n = Param((1.0, 0.0, 0.0), unit="1", shape=(3,), doc="sliding axis direction, frame_a coordinates", check="nonzero")
     s0 = Param(None, unit="m", kind="start", doc="start position (fixed unless a Guess)")
     v0 = Param(None, unit="m/s", kind="start", doc="start velocity (fixed unless a Guess)")
+
+    def visuals(self, p, view):
+        """A rod along the sliding axis through frame_a's origin (the guide)."""
+        return [Cylinder(0.012 * view.scale, view.scale, R=z_to(p.n), color="grey")]
 
     def start(self, p):
         q, qf = split_start(p.s0, 1)
@@ -155,6 +164,11 @@ class Cylindrical(Joint):
     v0 = Param(None, unit="m/s", kind="start", doc="start sliding velocity (fixed unless a Guess)")
     w0 = Param(None, unit="rad/s", kind="start", doc="start angular rate (fixed unless a Guess)")
 
+    def visuals(self, p, view):
+        """A rod along the axis through frame_a's origin, with a sleeve on frame_b."""
+        return [Cylinder(0.012 * view.scale, view.scale, R=z_to(p.n), color="grey"),
+                Cylinder(0.03 * view.scale, 0.1 * view.scale, R=z_to(p.n), frame="frame_b", color="grey")]
+
     def start(self, p):
         (s, sf), (phi, pf) = split_start(p.s0, 1), split_start(p.phi0, 1)
         (v, vf), (w, wf) = split_start(p.v0, 1), split_start(p.w0, 1)
@@ -198,6 +212,10 @@ class Spherical(Joint):
     R0 = Param(None, unit="1", shape=(3, 3), kind="start", check=rotation_matrix,
                doc="start orientation of frame_b relative to frame_a (fixed unless a Guess)")
     w0 = Param(None, unit="rad/s", shape=(3,), kind="start", doc="start relative angular velocity, frame_b axes")
+
+    def visuals(self, p, view):
+        """A ball at the joint's centre (frame_a's origin)."""
+        return [Sphere(0.04 * view.scale, color="grey")]
 
     def start(self, p):
         R, rf = split_start(p.R0, 9)

@@ -1,7 +1,8 @@
 """Ground frames and the gravity field."""
 import numpy as np
 
-from mbcomp import Frame, Ground, Param
+from mbcomp import Frame, Grid, Ground, Param
+from mbcomp.modeling.shapes import z_to
 
 from .checks import rotation_matrix
 
@@ -29,6 +30,12 @@ class World(Ground):
 
     def gravity(self, p):
         return p.g
+
+    def visuals(self, p, view):
+        """The ground: a grid normal to gravity (to z without gravity) through the origin, moved
+        down by the scene to below the motion where the motion goes lower."""
+        up = -np.asarray(p.g, dtype=float)
+        return [Grid(R=z_to(up if np.linalg.norm(up) > 0 else (0.0, 0.0, 1.0)), color="lightgrey")]
 
 
 class Fixed(Ground):

@@ -245,6 +245,9 @@ class Component:
     #: whether the component's forces do no work but through its :meth:`potential` (or none at
     #: all): declared by each class, read by :meth:`conserves_energy`
     conservative = True
+    #: whether the shapes of :meth:`visuals` draw the body the component is fixed to (a
+    #: wheel's contact draws the wheel), so that body draws none of its own
+    draws_body = False
 
     def __init_subclass__(cls, **kwargs):
         """Document the subclass's parameters (unit, default, doc) and ports in its docstring,
@@ -259,9 +262,14 @@ class Component:
         parameter (a damper's rate) overrides this."""
         return self.conservative
 
-    def __init__(self, **values):
+    def __init__(self, *, shape=None, color=None, visible=True, **values):
         self.name = None
         self.parent = None
+        from .shapes import rgb, shapes_given
+
+        where = type(self).__name__
+        self.look = SimpleNamespace(shape=shapes_given(shape, where), color=rgb(color, f"{where}.color"),
+                                    visible=bool(visible))
         params = self.params()
         unknown = [k for k in values if k not in params]
         if unknown:
@@ -280,6 +288,24 @@ class Component:
                 self._bad[name] = msg
             store[name] = val
         self.p = SimpleNamespace(**store)
+
+    def visuals(self, p, view):
+        """The component's default shapes (:mod:`mbcomp.modeling.shapes`), each placed in one
+        of its frames; none by default. ``view`` tells the scene's length ``scale`` (m) and,
+        by ``view.attached(port)``, the origins of the frames rigidly fixed to a port's frame
+        (m, that frame's axes). Components override this to be seen without extra work."""
+        return []
+
+    def shapes(self, p, view):
+        """The shapes drawn: those given at construction (``shape=``) or :meth:`visuals`,
+        recoloured by ``color=``; none when ``visible=False``."""
+        look = getattr(self, "look", None)
+        if look is not None and not look.visible:
+            return []
+        items = list(look.shape) if look is not None and look.shape is not None else list(self.visuals(p, view))
+        if look is not None and look.color is not None:
+            items = [s.placed(color=look.color) for s in items]
+        return items
 
     @classmethod
     def params(cls):

@@ -82,6 +82,18 @@ class Body(Component):
         inertia about the centre of mass (kg m^2, frame_a axes)."""
         raise NotImplementedError
 
+    def visuals(self, p, view):
+        """A link from joint to joint (rods from frame_a's origin to each frame fixed to it), or
+        alone the cylinder or box of the body's mass and inertia, or a steel sphere of its mass
+        (:func:`mbcomp.modeling.shapes.body_shapes`); nothing where another component draws
+        the body (a wheel's contact: ``view.covered``)."""
+        from .shapes import body_shapes
+
+        if view.covered("frame_a"):
+            return []
+        m, r_cm, I = self.mass_properties(p)
+        return body_shapes(m, r_cm, I, view.attached("frame_a"), view.scale)
+
 
 class MissingFlange(PortRef):
     """``joint.axis`` or ``joint.support`` of a joint that has no such flange (a

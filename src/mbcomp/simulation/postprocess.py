@@ -144,7 +144,8 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
     message = "; ".join([message] + notes)
     stats = dict(stats)
     stats["coordinates"] = list(system.q_names)
-    return Result(t, series, status, message, stats, summary(system, init), units=_units(system, series))
+    return Result(t, series, status, message, stats, summary(system, init), units=_units(system, series),
+                  system=system)
 
 
 #: output points at most on which the momenta are computed for their alarm (evenly spaced)

@@ -61,15 +61,86 @@ class Result:
     units : dict
         ``{column: unit}`` (``"rad"``, ``"N m"``, ``"m/s"``) of the columns whose unit is
         declared (:func:`mbcomp.assembly.column_units.column_units`); others are absent.
+    system : MultibodySystem or None
+        The assembled system the run integrated, for its scene (:meth:`animate`,
+        :meth:`snapshot`); not pickled (a result sent between processes has ``None``).
     """
 
-    def __init__(self, time, series, status="success", message="", stats=None, summary="", units=None):
+    def __init__(self, time, series, status="success", message="", stats=None, summary="", units=None,
+                 system=None):
         self.time = np.asarray(time)
         self._series = dict(series)
         self.status, self.message = status, message
         self.stats = dict(stats or {})
         self.summary = summary
         self.units = dict(units or {})
+        self.system = system
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["system"] = None  # laws and compiled programs need not pickle; the columns do
+        return state
+
+    def animate(self, path, hide=(), trails=(), color_by=None, fps=25, speed=1.0, title=None):
+        """Write the run as an animation: ``.html`` a self-contained 3-D player (three.js
+        inlined; opens offline), ``.gif`` or ``.mp4`` a film through matplotlib's writers.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file; its suffix picks the kind.
+        hide : iterable of str
+            Glob patterns of components not drawn (``"*_joint"``).
+        trails : iterable of str
+            Points whose path is drawn: port paths (``"rod_tip.frame_b"``) or components.
+        color_by : dict, optional
+            ``{component: column}``: colour by a result column (``"pin.f"``: the magnitude of
+            ``pin.f.x|y|z``).
+        fps : float
+            Frames per second of a film.
+        speed : float
+            Playback speed (1 = real time).
+        title : str, optional
+
+        Returns
+        -------
+        str
+            ``path``.
+
+        Examples
+        --------
+        >>> import os, tempfile, mbcomp
+        >>> from mbcomp.library import World, Revolute, PointMass, FixedTranslation
+        >>> m = mbcomp.Model(); w = m.add("world", World()); j = m.add("j", Revolute(n=(0, 0, 1), phi0=1.0))
+        >>> rod = m.add("rod", FixedTranslation(r=(1, 0, 0))); bob = m.add("bob", PointMass(m=1.0))
+        >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+        >>> res = mbcomp.simulate(m, t_end=1.0)
+        >>> out = res.animate(os.path.join(tempfile.mkdtemp(), "pendulum.html"), trails=["bob"])
+        >>> os.path.getsize(out) < 5e6
+        True
+        """
+        from ..visual.animation import animate
+
+        return animate(self, path, hide=hide, trails=trails, color_by=color_by, fps=fps, speed=speed, title=title)
+
+    def snapshot(self, path, t=None, hide=(), trails=(), color_by=None, title=None):
+        """Write one frame at time ``t`` (s; the last output by default) as a picture
+        (``.png``, ``.svg``, ``.pdf``), drawn with matplotlib's 3-D axes.
+
+        Examples
+        --------
+        >>> import os, tempfile, mbcomp
+        >>> from mbcomp.library import World, Revolute, PointMass, FixedTranslation
+        >>> m = mbcomp.Model(); w = m.add("world", World()); j = m.add("j", Revolute(n=(0, 0, 1), phi0=1.0))
+        >>> rod = m.add("rod", FixedTranslation(r=(1, 0, 0))); bob = m.add("bob", PointMass(m=1.0))
+        >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+        >>> res = mbcomp.simulate(m, t_end=1.0)
+        >>> os.path.exists(res.snapshot(os.path.join(tempfile.mkdtemp(), "t1.png"), t=1.0))
+        True
+        """
+        from ..visual.animation import snapshot
+
+        return snapshot(self, path, t=t, hide=hide, trails=trails, color_by=color_by, title=title)
 
     @property
     def names(self):
