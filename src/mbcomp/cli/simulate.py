@@ -11,6 +11,10 @@ out: ``status == "budget"``) still writes what it computed. Exit status: 0 succe
 failed, 3 a budget ran out, 130 interrupted (the partial results written in each case), 2 bad
 input.
 
+``--animate FILE`` writes the run as a self-contained HTML 3-D player (``.html``) or a film
+(``.gif``, ``.mp4``); ``--trails``, ``--color-by COMP=COLUMN`` and ``--hide`` shape it
+(:meth:`mbcomp.result.Result.animate`). Its suffix is checked before the run.
+
 ``--plot-vars PATTERN...`` chooses the columns ``--plot`` draws (names or shell-style globs,
 ``"crank_joint.*" "*.tau.z"``; :meth:`mbcomp.result.Result.plot`); by default it draws the
 coordinates, the energy and the constraint residuals. The summary prints the energy drift of a
@@ -52,6 +56,8 @@ def cmd_simulate(args):
 
     check_output(args.out, "--out")
     check_output(args.plot, "--plot")
+    check_output(args.animate, "--animate")
+    look = _look_options(args)
     if args.plot_vars and not args.plot:
         raise ValueError("--plot-vars chooses the columns --plot draws, and no --plot was given -> fix: add "
                          "--plot FILE.png")
@@ -70,7 +76,35 @@ def cmd_simulate(args):
             print(f"mbcomp: --plot-vars: {exc}" + (f" ({args.out} is written)" if args.out else ""), file=sys.stderr)
             return EXIT_USAGE
         print(f"wrote {args.plot}")
+    if args.animate:
+        try:
+            res.animate(args.animate, title=pathlib.Path(args.model).name, **look)
+        except (ValueError, RuntimeError) as exc:  # a trail or column that does not exist, no film writer
+            print(f"mbcomp: --animate: {exc}" + (f" ({args.out} is written)" if args.out else ""), file=sys.stderr)
+            return EXIT_USAGE
+        print(f"wrote {args.animate}")
     return _stopped_early(res, args)
+
+
+def _look_options(args):
+    """``--trails``, ``--color-by COMP=COLUMN``, ``--hide`` as :meth:`Result.animate`'s keywords,
+    checked before the run (an animation file of a known kind; ``=`` in every colouring)."""
+    if not args.animate:
+        if args.trails or args.color_by or args.hide:
+            raise ValueError("--trails, --color-by and --hide shape the animation, and no --animate was given -> "
+                             "fix: add --animate FILE.html")
+        return {}
+    from ..visual.animation import suffix_kind
+
+    if suffix_kind(args.animate) == "picture":
+        raise ValueError(f"--animate {args.animate}: a picture is one frame -> animate to .html, .gif or .mp4")
+    color_by = {}
+    for item in args.color_by or []:
+        comp, eq, column = item.partition("=")
+        if not eq or not comp or not column:
+            raise ValueError(f"--color-by {item!r} must be COMPONENT=COLUMN, e.g. rod=pin.f")
+        color_by[comp] = column
+    return {"trails": args.trails or (), "color_by": color_by or None, "hide": args.hide or ()}
 
 
 def _stopped_early(res, args):
@@ -147,6 +181,13 @@ def add_parser(sub, common):
     s.add_argument("--plot-vars", dest="plot_vars", nargs="+", metavar="PATTERN",
                    help="columns --plot draws: names or shell-style globs, e.g. 'crank_joint.*' '*.tau.z' (default: "
                         "coordinates, energy, constraint residuals)")
+    s.add_argument("--animate", metavar="FILE",
+                   help="write an animation: .html (a 3-D player, opens offline), .gif or .mp4 (matplotlib)")
+    s.add_argument("--trails", nargs="+", metavar="POINT",
+                   help="points whose path the animation draws: port paths (rod_tip.frame_b) or components")
+    s.add_argument("--color-by", dest="color_by", nargs="+", metavar="COMP=COLUMN",
+                   help="colour a component by a result column, e.g. rod=pin.f (a vector's magnitude)")
+    s.add_argument("--hide", nargs="+", metavar="PATTERN", help="components the animation does not draw (globs)")
     s.add_argument("--max-time", dest="max_wall_time", type=float, metavar="SECONDS",
                    help="wall-time budget: stop after this many seconds, keep and write the results so far (exit 3)")
     s.add_argument("--max-steps", dest="max_steps", type=int, metavar="N",

@@ -30,7 +30,7 @@ __all__ = ["Shape", "Box", "Cylinder", "Sphere", "Mesh", "Helix", "Rod", "Grid",
 #: named colours the scene knows, besides "#rrggbb" and (r, g, b) in 0..1
 COLORS = {
     "steelblue": "#4682b4", "grey": "#808080", "gray": "#808080", "silver": "#c0c0c0", "black": "#000000",
-    "white": "#ffffff", "red": "#d62728", "green": "#2ca02c", "blue": "#1f77b4", "orange": "#ff7f0e",
+    "white": "#ffffff", "red": "#ff0000", "green": "#008000", "blue": "#0000ff", "orange": "#ff7f0e",
     "yellow": "#e5c100", "purple": "#9467bd", "brown": "#8c564b", "pink": "#e377c2", "olive": "#bcbd22",
     "cyan": "#17becf", "gold": "#d4a017", "darkgrey": "#404040", "lightgrey": "#d3d3d3",
 }
@@ -361,8 +361,8 @@ STEEL = 7800.0
 def body_shapes(m, r_cm, I, attached, scale):
     """A body's default shapes on its ``frame_a``: a rod from the origin to each frame fixed to
     it (a link from joint to joint) and, off those rods, a rod and a ball to the centre of
-    mass; alone, a cylinder or box of the body's mass and inertia at the centre of mass, or a
-    steel sphere of its mass for a point mass.
+    mass; alone, a cylinder or box of the body's mass and inertia at the centre of mass; a
+    point mass (no inertia of its own) is a steel sphere of its mass in either case.
 
     Parameters
     ----------
@@ -381,7 +381,7 @@ def body_shapes(m, r_cm, I, attached, scale):
     --------
     >>> import numpy as np
     >>> [type(s).__name__ for s in body_shapes(1.0, (0.1, 0, 0), np.zeros((3, 3)), [(0.2, 0, 0)], 1.0)]
-    ['Cylinder']
+    ['Cylinder', 'Sphere']
     """
     rad = 0.02 * scale
     r_cm = np.asarray(r_cm, dtype=float)
@@ -389,14 +389,17 @@ def body_shapes(m, r_cm, I, attached, scale):
     points = [np.asarray(a, dtype=float) for a in attached if np.linalg.norm(a) > 1e-9 * scale]
     for a in points:
         out.append(Cylinder(rad, float(np.linalg.norm(a)), r=a / 2, R=z_to(a)))
-    if points:
-        near = min(_segment_distance(r_cm, a) for a in points)
-        if near > 2 * rad:
-            if np.linalg.norm(r_cm) > 1e-9 * scale:
-                out.append(Cylinder(rad * 0.6, float(np.linalg.norm(r_cm)), r=r_cm / 2, R=z_to(r_cm)))
-            out.append(Sphere(2.5 * rad, r=r_cm))
-        return out
-    return out + _alone(m, r_cm, np.asarray(I, dtype=float), scale)
+    if not points or _is_point(m, I, scale):
+        return out + _alone(m, r_cm, np.asarray(I, dtype=float), scale)
+    if min(_segment_distance(r_cm, a) for a in points) > 2 * rad:
+        if np.linalg.norm(r_cm) > 1e-9 * scale:
+            out.append(Cylinder(rad * 0.6, float(np.linalg.norm(r_cm)), r=r_cm / 2, R=z_to(r_cm)))
+        out.append(Sphere(2.5 * rad, r=r_cm))
+    return out
+
+
+def _is_point(m, I, scale):
+    return np.max(np.abs(np.asarray(I, dtype=float))) <= 1e-12 * max(m * scale**2, 1e-300)
 
 
 def _segment_distance(x, a):
@@ -409,7 +412,7 @@ def _alone(m, r_cm, I, scale):
     """A body with nothing fixed to it: its equivalent cylinder or box, or a sphere."""
     if m <= 0:
         return []
-    if np.max(np.abs(I)) <= 1e-12 * max(m * scale**2, 1e-300):
+    if _is_point(m, I, scale):
         radius = float(np.clip((3 * m / (4 * np.pi * STEEL)) ** (1 / 3), 0.03 * scale, 0.15 * scale))
         return [Sphere(radius, r=r_cm)]
     lam, V = np.linalg.eigh((I + I.T) / 2)

@@ -279,17 +279,18 @@ def _kinematic_poses(system, t, Y, nodes):
 
 
 def _node_name(topo, node):
-    return min(p.path for p in topo.node_ports[node])
+    return min(p if isinstance(p, str) else p.path for p in topo.node_ports[node])
 
 
 def _scale(jets0, links):
-    """Length scale (m): the size of the mechanism at the start, or of the motion."""
+    """Length scale (m): the diagonal of the box around the frames at the start, or of the
+    motion when they start in one point."""
     pts = np.array([np.asarray(j.r, dtype=float) for j in jets0.values()])
-    size = float(np.max(np.ptp(pts, axis=0))) if len(pts) > 1 else 0.0
+    size = float(np.linalg.norm(np.ptp(pts, axis=0))) if len(pts) > 1 else 0.0
     if size > 1e-6:
         return size
     moving = [L.poses[:, :3] for L in links if L.poses is not None]
-    size = float(np.max(np.ptp(np.vstack(moving), axis=0))) if moving else 0.0
+    size = float(np.linalg.norm(np.ptp(np.vstack(moving), axis=0))) if moving else 0.0
     return size if size > 1e-6 else 1.0
 
 
