@@ -34,7 +34,8 @@ the rear hub), ``yaw`` (rad, heading of the rear frame's x axis), plus the conta
 
 Run::
 
-    mbcomp info models/bicycle.py
+    mbcomp info models/bicycle.py --graph bicycle_topology.svg
+    mbcomp simulate models/bicycle.py --animate bike.html        # pushed: SIMULATE_PARAMS
     mbcomp simulate models/bicycle.py -p v=5 -p roll0=0.05 --out bicycle.csv --plot bicycle.png
     mbcomp simulate models/bicycle.py -p v=3 -p roll0=0.05
 
@@ -52,6 +53,10 @@ from mbcomp.kinematics import rot_axis
 from mbcomp.library import DiskContact, FixedTranslation, FreeMotion, Revolute, RigidBody, World
 
 SIMULATION = dict(t_end=10.0, rtol=1e-8, atol=1e-10, backend="python", n_out=501)
+#: what ``mbcomp simulate models/bicycle.py`` shows unless -p says otherwise: a push of 0.5 rad/s
+#: in roll, so the self-stable bicycle leans, weaves and rights itself (build() itself starts
+#: upright, the operating point that linearization and ``mbcomp stability`` need)
+SIMULATE_PARAMS = dict(roll_rate0=0.5)
 
 DATA = pathlib.Path(__file__).resolve().parent / "data" / "bicycle_parameters.json"
 

@@ -53,3 +53,30 @@ def test_an_animation_that_cannot_be_made_keeps_the_csv(tmp_path, capsys):
                  "--animate", str(tmp_path / "a.html"), "--trails", "no_such_part"])
     assert code == 2 and csv_path.exists()
     assert "no component 'no_such_part'" in capsys.readouterr().err
+
+
+def _roll(csv_path):
+    header = csv_path.read_text().splitlines()[0].split(",")
+    rows = np.loadtxt(csv_path, delimiter=",", skiprows=1)
+    return rows[:, header.index("time")], rows[:, header.index("roll")]
+
+
+def test_simulate_params_push_the_bicycle_unless_p_says_otherwise(tmp_path):
+    """``mbcomp simulate models/bicycle.py`` starts with the file's SIMULATE_PARAMS push
+    (roll rate 0.5 rad/s: roll ~ 0.5 t at first), while ``-p roll_rate0=0`` rides upright."""
+    pushed, upright = tmp_path / "pushed.csv", tmp_path / "upright.csv"
+    assert main(["simulate", "models/bicycle.py", "--t-end", "0.2", "-q", "--out", str(pushed)]) == 0
+    t, roll = _roll(pushed)
+    k = np.searchsorted(t, 0.02)
+    assert roll[k] == pytest.approx(0.5 * t[k], rel=0.05)
+    assert main(["simulate", "models/bicycle.py", "--t-end", "0.2", "-q", "-p", "roll_rate0=0",
+                 "--out", str(upright)]) == 0
+    assert np.max(np.abs(_roll(upright)[1])) < 1e-9
+
+
+def test_a_bad_simulate_params_names_the_fix(tmp_path, capsys):
+    model = tmp_path / "m.py"
+    model.write_text("import mbcomp\nfrom mbcomp.library import World\nSIMULATE_PARAMS = dict(speed=2)\n"
+                     "def build(v=1.0):\n    m = mbcomp.Model(); m.add('world', World()); return m\n")
+    assert main(["simulate", str(model), "-q"]) == 2
+    assert "SIMULATE_PARAMS sets speed, which build() does not take" in capsys.readouterr().err

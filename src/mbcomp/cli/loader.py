@@ -59,10 +59,21 @@ def split_params(pairs, build):
     return build_kw, runtime
 
 
-def load(args):
-    """``(module, model, runtime)`` of the command's model file and ``-p`` values."""
+def load(args, defaults=None):
+    """``(module, model, runtime)`` of the command's model file and ``-p`` values.
+
+    ``defaults`` names a dict the model file may set of build() values the command uses where
+    ``-p`` gives none (``SIMULATE_PARAMS``: what ``mbcomp simulate`` shows, e.g. the bicycle
+    with a push, while ``build()`` itself and the other commands keep the file's defaults)."""
     mod = load_model_file(args.model)
     build_kw, runtime = split_params(args.param, mod.build)
+    if defaults:
+        given = dict(getattr(mod, defaults, None) or {})
+        bad = [k for k in given if not takes(mod.build, k)]
+        if bad:
+            raise ValueError(f"{args.model}: {defaults} sets {', '.join(bad)}, which build() does not take; it takes: "
+                             f"{describe_parameters(mod.build)} -> fix {defaults} in the model file")
+        build_kw = {**given, **build_kw}
     return mod, build_model(mod, **build_kw), runtime
 
 

@@ -1,7 +1,10 @@
 """``mbcomp simulate MODEL.py``: integrate, report, write the CSV and the plot.
 
 The model file may set ``SIMULATION = dict(t_end=..., rtol=..., atol=..., method=...,
-stabilization=..., formulation=...)`` as defaults; options given on the command line win.
+stabilization=..., formulation=...)`` as defaults, and ``SIMULATE_PARAMS = dict(...)`` as
+build() values this command uses where no ``-p`` gives them (the bicycle's push, so that
+``mbcomp simulate models/bicycle.py`` shows it weave; ``build()`` and the other commands
+keep build()'s own defaults); options given on the command line win.
 
 Results are never lost: ``--out`` and ``--plot`` are checked before the model is even
 loaded (:func:`~mbcomp.cli.loader.check_output`), so a mistyped directory fails at once, not
@@ -61,7 +64,7 @@ def cmd_simulate(args):
     if args.plot_vars and not args.plot:
         raise ValueError("--plot-vars chooses the columns --plot draws, and no --plot was given -> fix: add "
                          "--plot FILE.png")
-    mod, model, runtime = load(args)
+    mod, model, runtime = load(args, defaults="SIMULATE_PARAMS")
     opts = dict(getattr(mod, "SIMULATION", {}))
     opts.update({key: getattr(args, key) for key in OPTIONS if getattr(args, key) is not None})
     res = simulate(model, params=runtime, progress=not args.quiet, **opts)
