@@ -234,11 +234,19 @@ class Component:
     (construction-time values); the assembled system passes runtime values to the role
     methods, so changing a parameter never re-derives anything.
 
+    Besides its parameters every component takes how it looks in animations and snapshots:
+    ``shape=`` a shape or a list of shapes of :mod:`mbcomp.modeling.shapes` instead of its
+    default ones (:meth:`visuals`), ``color=`` (a name, ``"#rrggbb"`` or ``(r, g, b)``) and
+    ``visible=False`` to hide it.
+
     Examples
     --------
+    >>> import mbcomp
     >>> from mbcomp.library import PointMass
     >>> PointMass(m=2.0).p.m
     2.0
+    >>> PointMass(m=2.0, shape=mbcomp.Sphere(0.05), color="gold").look.color
+    '#d4a017'
     """
 
     role = None
