@@ -156,6 +156,7 @@ class Player {
     this.renderer.setPixelRatio(window.devicePixelRatio || 1);
     container.appendChild(this.renderer.domElement);
     this.camera = new THREE.PerspectiveCamera(35, 1, 1e-3, 1e3);
+    this.camera.up.fromArray(data.up).normalize();  // before the controls: they orbit about camera.up as it is now
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.addEventListener("change", () => this.render());
     this.resize();
@@ -253,25 +254,50 @@ class Player {
       for (const o of this.byComponent[c.component] || []) if (o.material && o.material.color) o.material.color.copy(col);
     }
     this.three.updateMatrixWorld(true);
+    if (this.follow) {
+      const c = this.centroid(), d = c.clone().sub(this.anchor);
+      this.anchor.copy(c);
+      this.camera.position.add(d);
+      this.controls.target.add(d);
+      this.controls.update();
+    }
     if (this.onTime) this.onTime(this.t);
   }
 
   // the camera on the mechanism: the box of its shapes (not the ground) and of the motion
-  bounds() {
+  // the box of the mechanism's shapes now (not the ground) and, with motion, of every link origin
+  // and trail point over the run
+  bounds(motion) {
     const box = new THREE.Box3();
     for (const g of this.groups) for (const o of g.children) if (!o.userData.grid && o.isMesh) box.expandByObject(o);
     for (const s of this.spans) box.expandByObject(s.obj);
     const v = new THREE.Vector3();
-    this.poses.forEach((P) => {
-      if (P) for (let i = 0; i < P.length; i += 7) box.expandByPoint(v.set(P[i], P[i + 1], P[i + 2]));
-    });
-    for (const T of this.trails) for (let i = 0; i < T.path.length; i += 3) box.expandByPoint(v.fromArray(T.path, i));
+    if (motion) {
+      this.poses.forEach((P) => {
+        if (P) for (let i = 0; i < P.length; i += 7) box.expandByPoint(v.set(P[i], P[i + 1], P[i + 2]));
+      });
+      for (const T of this.trails) for (let i = 0; i < T.path.length; i += 3) box.expandByPoint(v.fromArray(T.path, i));
+    }
     if (box.isEmpty()) box.setFromCenterAndSize(new THREE.Vector3(), new THREE.Vector3(1, 1, 1).multiplyScalar(this.data.scale));
     return box;
   }
 
+  // the mean origin of the moving links at the current time (m, world)
+  centroid() {
+    const c = new THREE.Vector3();
+    let n = 0;
+    this.groups.forEach((g, i) => { if (this.poses[i]) { c.add(g.position); n++; } });
+    return n ? c.divideScalar(n) : c;
+  }
+
+  // a mechanism that travels far (a vehicle) is framed as it is now and followed; one that
+  // stays in place is framed with all of its motion
   frame() {
-    const box = this.bounds(), size = box.getSize(new THREE.Vector3()), centre = box.getCenter(new THREE.Vector3());
+    const still = this.bounds(false), all = this.bounds(true);
+    const reach = still.getSize(new THREE.Vector3()).length();
+    this.follow = all.getSize(new THREE.Vector3()).length() > 2.5 * Math.max(reach, 1e-9);
+    this.anchor = this.centroid();
+    const box = this.follow ? still : all, size = box.getSize(new THREE.Vector3()), centre = box.getCenter(new THREE.Vector3());
     const up = new THREE.Vector3().fromArray(this.data.up).normalize();
     const axes = [new THREE.Vector3(1, 0, 0), new THREE.Vector3(0, 1, 0), new THREE.Vector3(0, 0, 1)];
     const sizes = [size.x, size.y, size.z];
@@ -304,7 +330,7 @@ class Player {
       const z = c.dot(dir);
       dist = Math.max(dist, z + Math.abs(c.dot(right)) / th, z + Math.abs(c.dot(top)) / tv);
     }
-    return 1.15 * dist;
+    return 1.25 * dist;
   }
 
   lights() {

@@ -1,0 +1,123 @@
+"""The HTML player in a real browser: headless Chromium opens the written file (file://, no
+network) and the poses the three.js scene graph holds are the result's own numbers.
+
+Skipped when Chromium (/usr/bin/chromium) or playwright is missing. With the environment
+variable ``MBCOMP_SCREENSHOTS`` set to a folder, the test also saves 960x540 screenshots there
+(``slider_crank.png``, ``bicycle.png``).
+"""
+import os
+import pathlib
+import shutil
+
+import numpy as np
+import pytest
+
+import mbcomp
+from mbcomp.visual.html import write_html
+from mbcomp.visual.scene import build_scene
+
+MODELS = pathlib.Path(__file__).resolve().parents[2] / "models"
+CHROMIUM = "/usr/bin/chromium" if os.path.exists("/usr/bin/chromium") else shutil.which("chromium")
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking"]
+
+pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="no Chromium (apt-get install chromium)")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    sync = pytest.importorskip("playwright.sync_api")
+    with sync.sync_playwright() as p:  # playwright gives the browser a fresh profile of its own
+        b = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        yield b
+        b.close()
+
+
+CASES = {
+    "slider_crank": dict(file="slider_crank.py", build={}, t_end=1.0, trails=["rod_joint.frame_a", "rod_tip.frame_b"],
+                         color_by={"rod": "pin.f"}, shot=0.3),
+    "bicycle": dict(file="bicycle.py", build=dict(v=4.0, roll0=0.05), t_end=2.0, trails=["rear_contact"],
+                    color_by=None, shot=1.6),
+}
+
+
+@pytest.fixture(scope="module", params=sorted(CASES))
+def player(request, browser, tmp_path_factory):
+    """(name, result, page) of a model's player opened in the browser, ready."""
+    case = CASES[request.param]
+    model = mbcomp.load_model_file(str(MODELS / case["file"])).build(**case["build"])
+    res = mbcomp.simulate(model, t_end=case["t_end"])
+    scene = build_scene(res, trails=case["trails"], color_by=case["color_by"], title=request.param)
+    path = write_html(scene, tmp_path_factory.mktemp("html") / f"{request.param}.html")
+    page = browser.new_page(viewport={"width": 960, "height": 540})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(pathlib.Path(path).as_uri())
+    page.wait_for_function("window.mbcomp !== undefined")
+    page.evaluate("window.mbcomp.ready.then(() => true)")
+    assert not errors, errors
+    yield request.param, res, page
+    page.close()
+
+
+def _column_pose(res, body, k):
+    r = np.array([res[f"{body}.r.{a}"][k] for a in "xyz"])
+    q = np.array([res[f"{body}.Q.{a}"][k] for a in "wxyz"])
+    return r, q
+
+
+def _assert_pose(got, r, q, what):
+    assert np.allclose(got["r"], r, rtol=0, atol=1e-9), f"{what}: r {got['r']} != {r}"
+    dq = min(np.max(np.abs(np.array(got["q"]) - q)), np.max(np.abs(np.array(got["q"]) + q)))
+    assert dq < 1e-9, f"{what}: q {got['q']} != +-{q}"
+
+
+def test_bodies_posed_exactly_at_output_times(player):
+    name, res, page = player
+    bodies = page.evaluate("window.mbcomp.bodies()")
+    assert sorted(bodies) == sorted(path for path, _, _ in res.system.topology.bodies)
+    assert page.evaluate("window.mbcomp.duration()") == pytest.approx(res.time[-1] - res.time[0], abs=1e-12)
+    digests = []
+    for k in (10, len(res.time) - 5):
+        assert page.evaluate(f"window.mbcomp.setTime({float(res.time[k])!r})") == float(res.time[k])
+        assert page.evaluate("window.mbcomp.time()") == float(res.time[k])
+        for b in bodies:
+            _assert_pose(page.evaluate(f"window.mbcomp.bodyPose({b!r})"), *_column_pose(res, b, k), f"{name} {b} t[{k}]")
+        px = page.evaluate("window.mbcomp.pixels()")
+        assert px["nonBackground"] > 0.01 * px["width"] * px["height"], f"{name}: the canvas is blank at t[{k}]"
+        digests.append(px["hash"])
+    assert digests[0] != digests[1], f"{name}: the frames at two times look the same"
+
+
+def _slerp(q0, q1, a):
+    q1 = q1 if q0 @ q1 >= 0 else -q1
+    theta = np.arccos(np.clip(q0 @ q1, -1, 1))
+    if theta < 1e-12:
+        return q0
+    return (np.sin((1 - a) * theta) * q0 + np.sin(a * theta) * q1) / np.sin(theta)
+
+
+def test_between_outputs_linear_position_slerp_orientation(player):
+    name, res, page = player
+    k, a = len(res.time) // 3, 0.3
+    t = (1 - a) * res.time[k] + a * res.time[k + 1]
+    page.evaluate(f"window.mbcomp.setTime({float(t)!r})")
+    for b in page.evaluate("window.mbcomp.bodies()"):
+        (r0, q0), (r1, q1) = _column_pose(res, b, k), _column_pose(res, b, k + 1)
+        a_exact = (t - res.time[k]) / (res.time[k + 1] - res.time[k])
+        got = page.evaluate(f"window.mbcomp.bodyPose({b!r})")
+        _assert_pose(got, r0 + a_exact * (r1 - r0), _slerp(q0, q1, a_exact), f"{name} {b} between outputs")
+
+
+def test_play_advances_time_and_screenshot(player):
+    name, res, page = player
+    page.evaluate(f"window.mbcomp.setTime({float(res.time[0])!r})")
+    page.evaluate("window.mbcomp.play()")
+    page.wait_for_timeout(300)
+    page.evaluate("window.mbcomp.pause()")
+    t = page.evaluate("window.mbcomp.time()")
+    assert res.time[0] < t <= res.time[-1], f"{name}: playing did not advance the time (t = {t})"
+    folder = os.environ.get("MBCOMP_SCREENSHOTS")
+    if folder:
+        page.evaluate(f"window.mbcomp.setTime({CASES[name]['shot']!r})")
+        os.makedirs(folder, exist_ok=True)
+        page.screenshot(path=os.path.join(folder, f"{name}.png"))
