@@ -18,7 +18,7 @@ the body, a free joint and start values given in rolling terms.
 """
 import numpy as np
 
-from mbcomp import Cylinder, Joint, Model, Param, SimulationError, Sphere
+from mbcomp import Box, Cylinder, Grid, Joint, Model, Param, SimulationError, Sphere
 from mbcomp.jets import is_traced, local_point, local_vector, slip_velocity, velocity_along
 from mbcomp.kinematics import rot_axis
 from mbcomp.modeling.shapes import z_to
@@ -92,9 +92,12 @@ class DiskContact(Joint):
     draws_body = True
 
     def visuals(self, p, view):
-        """The wheel: a disk of radius ``r`` about the spin axis, on frame_b (the wheel draws no
-        shape of its own)."""
-        return [Cylinder(p.r, 0.08 * p.r, R=z_to(p.axis), frame="frame_b", color="darkgrey")]
+        """The wheel: a disk of radius ``r`` about the spin axis with a bar across it (so the spin
+        shows), on frame_b (the wheel draws no shape of its own); the plane, on frame_a."""
+        R = z_to(p.axis)
+        return [Cylinder(p.r, 0.08 * p.r, R=R, frame="frame_b", color="darkgrey"),
+                Box((1.9 * p.r, 0.15 * p.r, 0.1 * p.r), R=R, frame="frame_b", color="silver"),
+                Grid(R=z_to(p.n), frame="frame_a", floor=False, color="lightgrey")]
 
     singularity_reason = ("the disk lies flat on the plane (spin axis parallel to the plane normal), where its "
                           "contact point is undefined")
@@ -166,8 +169,11 @@ class SphereContact(Joint):
     draws_body = True
 
     def visuals(self, p, view):
-        """The ball: a sphere of radius ``r`` on frame_b (the ball draws no shape of its own)."""
-        return [Sphere(p.r, frame="frame_b", color="orange")]
+        """The ball: a sphere of radius ``r`` with a band (so the spin shows) on frame_b (the ball
+        draws no shape of its own); the plane, on frame_a."""
+        return [Sphere(p.r, frame="frame_b", color="orange"),
+                Cylinder(1.02 * p.r, 0.2 * p.r, frame="frame_b", color="white"),
+                Grid(R=z_to(p.n), frame="frame_a", floor=False, color="lightgrey")]
 
     def _geometry(self, a, b, p):
         n0 = _unit(p.n)

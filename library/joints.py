@@ -53,7 +53,7 @@ class Revolute(Joint):
 
     def visuals(self, p, view):
         """A short cylinder along the hinge axis, on frame_a."""
-        return [Cylinder(0.035 * view.scale, 0.12 * view.scale, R=z_to(p.n), color="grey")]
+        return [Cylinder(0.025 * view.scale, 0.1 * view.scale, R=z_to(p.n), color="grey")]
 
     def start(self, p):
         q, qf = split_start(p.phi0, 1)
@@ -107,8 +107,12 @@ class Prismatic(Joint):
     v0 = Param(None, unit="m/s", kind="start", doc="start velocity (fixed unless a Guess)")
 
     def visuals(self, p, view):
-        """A rod along the sliding axis through frame_a's origin (the guide)."""
-        return [Cylinder(0.012 * view.scale, view.scale, R=z_to(p.n), color="grey")]
+        """A rod along the sliding axis on frame_a (the guide), over the run's travel
+        (``view.range("s")``) and a tenth of the scale beyond, or a scale long about the origin."""
+        lo, hi = view.range("s") or (-view.scale / 2, view.scale / 2)
+        n = np.asarray(p.n, dtype=float) / np.linalg.norm(p.n)
+        margin = 0.1 * view.scale
+        return [Cylinder(0.012 * view.scale, hi - lo + 2 * margin, r=n * (lo + hi) / 2, R=z_to(n), color="grey")]
 
     def start(self, p):
         q, qf = split_start(p.s0, 1)

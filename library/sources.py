@@ -32,8 +32,10 @@ class World(Ground):
         return p.g
 
     def visuals(self, p, view):
-        """The ground: a grid normal to gravity (to z without gravity) through the origin, moved
-        down by the scene to below the motion where the motion goes lower."""
+        """The floor: a grid normal to gravity (to z without gravity), moved down by the scene to
+        below the motion; none where a contact draws the ground (``view.covered``)."""
+        if view.covered("frame_b"):
+            return []
         up = -np.asarray(p.g, dtype=float)
         return [Grid(R=z_to(up if np.linalg.norm(up) > 0 else (0.0, 0.0, 1.0)), color="lightgrey")]
 

@@ -48,9 +48,10 @@ import pathlib
 
 import numpy as np
 
-from mbcomp import Model
+from mbcomp import Box, Cylinder, Model
 from mbcomp.kinematics import rot_axis
 from mbcomp.library import DiskContact, FixedTranslation, FreeMotion, Revolute, RigidBody, World
+from mbcomp.modeling.shapes import z_to
 
 SIMULATION = dict(t_end=10.0, rtol=1e-8, atol=1e-10, backend="python", n_out=501)
 #: what ``mbcomp simulate models/bicycle.py`` shows unless -p says otherwise: a push of 0.5 rad/s
@@ -84,6 +85,42 @@ def _inertia(xx, yy, zz, xz=0.0):
     return np.array([[xx, 0.0, xz], [0.0, yy, 0.0], [xz, 0.0, zz]])
 
 
+def _tube(a, b, radius=0.02, color="steelblue"):
+    """A cylinder from point ``a`` to point ``b`` (m, the body's frame_a)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return Cylinder(radius, float(np.linalg.norm(b - a)), r=(a + b) / 2, R=z_to(b - a), color=color)
+
+
+def _head(p, height):
+    """The point of the steer axis ``height`` (m) above the ground, from the rear hub (frame_a
+    of the rear frame: x forward, z down)."""
+    lam = p["lam"]
+    return np.array([p["w"] + p["c"], 0.0, p["rR"]]) - height / np.cos(lam) * np.array([np.sin(lam), 0.0, np.cos(lam)])
+
+
+def _rear_frame_shapes(p):
+    """The rear frame drawn as a frame, not as the default rods: chain stay from the hub to the
+    bottom bracket, seat and down tubes, top tube to the head tube, and the rider as a block
+    at the rear body's centre of mass (the rider is rigidly part of it in the benchmark)."""
+    rR = p["rR"]
+    bracket, seat = np.array([0.45, 0.0, 0.0]), np.array([0.35, 0.0, -0.55])
+    head_low, head_top = _head(p, 0.6), _head(p, 0.85)
+    rider = np.array([p["xB"], 0.0, p["zB"] + rR])
+    return [_tube((0, 0, 0), bracket), _tube((0, 0, 0), seat), _tube(bracket, seat), _tube(bracket, head_low),
+            _tube(seat, head_top), Box((0.3, 0.35, 0.55), r=rider, color="orange"),
+            _tube(seat, rider + (0, 0, 0.25), radius=0.05, color="orange")]
+
+
+def _fork_shapes(p):
+    """The front assembly: fork blades from the front axle to the crown, the steerer up the
+    steer axis, the handlebar across it (frame_a of the fork is the steer axis at the ground)."""
+    lam, c, rF = p["lam"], p["c"], p["rF"]
+    up = -np.array([np.sin(lam), 0.0, np.cos(lam)])
+    axle, crown, top = np.array([-c, 0.0, -rF]), up * (rF + 0.15) / np.cos(lam), up * 0.95 / np.cos(lam)
+    return [_tube(axle + (0, 0.04, 0), crown, color="red"), _tube(axle - (0, 0.04, 0), crown, color="red"),
+            _tube(crown, top, color="red"), _tube(top + (-0.1, -0.25, 0), top + (-0.1, 0.25, 0), color="black")]
+
+
 def build(v=5.0, roll0=0.0, roll_rate0=0.0, **overrides):
     """The benchmark bicycle moving straight at ``v`` (m/s, forward) with roll ``roll0``
     (rad) and roll rate ``roll_rate0`` (rad/s); ``overrides`` replace Table 1 entries by
@@ -106,13 +143,14 @@ def build(v=5.0, roll0=0.0, roll_rate0=0.0, **overrides):
     free = m.add("free", FreeMotion(r0=hub, R0=R0, v0=np.array([v, 0.0, 0.0]) + np.cross(w_roll, hub),
                                     w0=R0.T @ w_roll))
     rear_frame = m.add("rear_frame", RigidBody(m=p["mB"], r_cm=(p["xB"], 0.0, p["zB"] + rR),
-                                               I=_inertia(p["IBxx"], p["IByy"], p["IBzz"], p["IBxz"])))
+                                               I=_inertia(p["IBxx"], p["IByy"], p["IBzz"], p["IBxz"]),
+                                               shape=_rear_frame_shapes(p)))
     rear_hub = m.add("rear_hub", Revolute(n=(0, 1, 0), phi0=0.0, w0=-v / rR))
     rear_wheel = m.add("rear_wheel", RigidBody(m=p["mR"], I=_inertia(p["IRxx"], p["IRyy"], p["IRxx"])))
     steer_point = m.add("steer_point", FixedTranslation(r=(w + c, 0.0, rR)))
-    steer = m.add("steer", Revolute(n=(np.sin(lam), 0.0, np.cos(lam)), phi0=0.0, w0=0.0))
+    steer = m.add("steer", Revolute(n=(np.sin(lam), 0.0, np.cos(lam)), phi0=0.0, w0=0.0, visible=False))  # the fork shows it
     fork = m.add("fork", RigidBody(m=p["mH"], r_cm=(p["xH"] - w - c, 0.0, p["zH"]),
-                                   I=_inertia(p["IHxx"], p["IHyy"], p["IHzz"], p["IHxz"])))
+                                   I=_inertia(p["IHxx"], p["IHyy"], p["IHzz"], p["IHxz"]), shape=_fork_shapes(p)))
     front_axle = m.add("front_axle", FixedTranslation(r=(-c, 0.0, -rF)))
     front_hub = m.add("front_hub", Revolute(n=(0, 1, 0), phi0=0.0, w0=-v / rF))
     front_wheel = m.add("front_wheel", RigidBody(m=p["mF"], I=_inertia(p["IFxx"], p["IFyy"], p["IFxx"])))

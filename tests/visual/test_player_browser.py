@@ -3,7 +3,8 @@ network) and the poses the three.js scene graph holds are the result's own numbe
 
 Skipped when Chromium (/usr/bin/chromium) or playwright is missing. With the environment
 variable ``MBCOMP_SCREENSHOTS`` set to a folder, the test also saves 960x540 screenshots there
-(``slider_crank.png``, ``bicycle.png``).
+(``slider_crank.png``, ``bicycle.png``, and ``bicycle_cli.png`` of the command line's file:
+the README's pictures are ``slider_crank.png`` and ``bicycle_cli.png``).
 """
 import os
 import pathlib
@@ -121,3 +122,39 @@ def test_play_advances_time_and_screenshot(player):
         page.evaluate(f"window.mbcomp.setTime({CASES[name]['shot']!r})")
         os.makedirs(folder, exist_ok=True)
         page.screenshot(path=os.path.join(folder, f"{name}.png"))
+
+
+def test_the_command_lines_bicycle_rides_and_leans(browser, tmp_path):
+    """``mbcomp simulate models/bicycle.py --animate bike.html`` (the issue's own command, its
+    SIMULATE_PARAMS push, 3 s): in the page the rear frame rides forward at about the model's
+    5 m/s and leans (roll = asin of its y axis' z component, the model's ``roll`` column) by
+    the CSV's roll, over 0.05 rad at the largest, then back towards upright."""
+    from mbcomp.cli import main
+
+    html, csv_path = tmp_path / "bike.html", tmp_path / "bike.csv"
+    assert main(["simulate", str(MODELS / "bicycle.py"), "--t-end", "3", "-q", "--out", str(csv_path),
+                 "--animate", str(html), "--trails", "rear_wheel"]) == 0
+    header = csv_path.read_text().splitlines()[0].split(",")
+    rows = np.loadtxt(csv_path, delimiter=",", skiprows=1)
+    t, roll = rows[:, header.index("time")], rows[:, header.index("roll")]
+    page = browser.new_page(viewport={"width": 960, "height": 540})
+    page.goto(html.as_uri())
+    page.wait_for_function("window.mbcomp !== undefined")
+    page.evaluate("window.mbcomp.ready.then(() => true)")
+    seen = []
+    for k in range(0, len(t), 25):
+        page.evaluate(f"window.mbcomp.setTime({float(t[k])!r})")
+        got = page.evaluate("window.mbcomp.bodyPose('rear_frame')")
+        w, x, y, z = got["q"]
+        seen.append((t[k], got["r"][0], np.arcsin(2 * (y * z + w * x))))  # R[2, 1] of the quaternion
+        assert seen[-1][2] == pytest.approx(roll[k], abs=1e-9)
+    speeds = np.diff([s[1] for s in seen]) / np.diff([s[0] for s in seen])
+    assert np.all((speeds > 4.5) & (speeds < 5.5)), speeds
+    lean = np.abs([s[2] for s in seen])
+    assert lean.max() > 0.05 and lean[-1] < lean.max()
+    folder = os.environ.get("MBCOMP_SCREENSHOTS")
+    if folder:
+        page.evaluate(f"window.mbcomp.setTime({float(seen[int(np.argmax(lean))][0])!r})")
+        os.makedirs(folder, exist_ok=True)
+        page.screenshot(path=os.path.join(folder, "bicycle_cli.png"))
+    page.close()

@@ -95,7 +95,10 @@ def test_joints_are_drawn_along_their_axes():
     scene = build_scene(res)
     (guide,) = _of(scene, "j")
     assert abs(_axis_world(scene, guide)[1]) == pytest.approx(1.0, abs=1e-12)
-    assert guide.shape.length == pytest.approx(scene.scale)
+    s = res["j.s"]  # the rail covers the travel and a tenth of the scale beyond each end
+    R, c = scene.placement(guide, 0)
+    ends = sorted([(c - R[:, 2] * guide.shape.length / 2)[1], (c + R[:, 2] * guide.shape.length / 2)[1]])
+    assert ends == pytest.approx([s.min() - 0.1 * scene.scale, s.max() + 0.1 * scene.scale], abs=1e-12)
     _, res = _pendulum(Spherical(), RigidBody(m=1.0, I=1e-3 * np.eye(3)))
     assert isinstance(_of(build_scene(res), "j")[0].shape, Sphere)
 
@@ -108,7 +111,7 @@ def test_a_point_mass_is_a_steel_sphere_of_its_mass():
         assert isinstance(rod.shape, Cylinder) and rod.shape.length == pytest.approx(0.5)
         expected = (3 * mass / (4 * np.pi * STEEL)) ** (1 / 3)
         assert scene.scale == pytest.approx(0.5)
-        assert ball.shape.radius == pytest.approx(np.clip(expected, 0.03 * 0.5, 0.15 * 0.5))
+        assert ball.shape.radius == pytest.approx(np.clip(expected, 0.04 * 0.5, 0.15 * 0.5))
 
 
 def test_a_lone_body_is_its_equivalent_box_or_cylinder():
@@ -127,6 +130,10 @@ def test_a_lone_body_is_its_equivalent_box_or_cylinder():
     Ia, Id = m * r * r / 2, m * (3 * r * r + h * h) / 12
     (disk,) = mbcomp.modeling.shapes.body_shapes(m, (0, 0, 0), np.diag([Id, Id, Ia]), [], 1.0)
     assert isinstance(disk, Cylinder) and disk.radius == pytest.approx(r) and disk.length == pytest.approx(h)
+    L = 0.8  # a slender rod along y: m L^2 / 12 about x and z, nothing about y -> a thin cylinder of length L
+    (rod,) = mbcomp.modeling.shapes.body_shapes(m, (0, 0, 0), np.diag([m * L * L / 12, 0, m * L * L / 12]), [], 1.0)
+    assert isinstance(rod, Cylinder) and rod.length == pytest.approx(L) and 0 < rod.radius < 0.05 * L
+    assert abs(rod.rotation[:, 2] @ (0, 1, 0)) == pytest.approx(1.0)
 
 
 def test_a_wheel_is_the_disk_of_its_contact():
@@ -136,12 +143,19 @@ def test_a_wheel_is_the_disk_of_its_contact():
     res = mbcomp.simulate(mod.build(), t_end=0.2)
     scene = build_scene(res)
     for contact, wheel in (("rear_contact", "rear_wheel"), ("front_contact", "front_wheel")):
-        (disk,) = _of(scene, contact)
+        disk, bar = _of(scene, contact)[:2]
         comp = res.system.topology.flat.components[contact]
-        assert disk.shape.radius == comp.p.r and disk.link == scene.bodies[wheel][0]
+        assert disk.shape.radius == comp.p.r and disk.link == bar.link == scene.bodies[wheel][0]
+        assert bar.shape.size[0] < 2 * comp.p.r  # the bar across the disk stays inside the rim
         assert _of(scene, wheel) == []
         R_link, _ = scene.link_pose(disk.link, 0)
         assert abs(_axis_world(scene, disk) @ (R_link @ comp.p.axis)) == pytest.approx(1.0, abs=1e-12)
+    # the ground is the contacts' plane z = 0 exactly (one grid for both), not a floor of the World's
+    grids = [v for v in scene.visuals if isinstance(v.shape, Grid)]
+    assert [g.component for g in grids] == ["rear_contact"] and _of(scene, "world") == []
+    assert grids[0].r[2] == 0.0 and abs(_axis_world(scene, grids[0])[2]) == pytest.approx(1.0)
+    lowest = min(res[f"{c}.p.z"].min() for c in ("rear_contact", "front_contact"))
+    assert abs(lowest) < 1e-9  # the wheels touch that plane
 
 
 def test_springs_span_their_attachment_points():

@@ -300,20 +300,24 @@ class Rod(Shape):
 @dataclass(frozen=True)
 class Grid(Shape):
     """The ground: a square grid through the shape's origin, normal to the shape's z axis;
-    ``size`` (m) ``None`` lets the scene fit it to the motion.
+    ``size`` (m) ``None`` lets the scene fit it to the motion. A ``floor`` (the world's) is
+    moved down by the scene to below the motion; otherwise (a contact's plane) it stays
+    exactly where it is placed.
 
     Examples
     --------
-    >>> Grid().divisions
-    20
+    >>> Grid().divisions, Grid(floor=False).floor
+    (20, False)
     """
 
     size: float | None = None
     divisions: int = 20
+    floor: bool = True
 
-    def __init__(self, size=None, divisions=20, **placement):
+    def __init__(self, size=None, divisions=20, floor=True, **placement):
         object.__setattr__(self, "size", size)
         object.__setattr__(self, "divisions", divisions)
+        object.__setattr__(self, "floor", bool(floor))
         super().__init__(**placement)
 
     def _check(self):
@@ -413,18 +417,18 @@ def _alone(m, r_cm, I, scale):
     if m <= 0:
         return []
     if _is_point(m, I, scale):
-        radius = float(np.clip((3 * m / (4 * np.pi * STEEL)) ** (1 / 3), 0.03 * scale, 0.15 * scale))
+        radius = float(np.clip((3 * m / (4 * np.pi * STEEL)) ** (1 / 3), 0.04 * scale, 0.15 * scale))
         return [Sphere(radius, r=r_cm)]
     lam, V = np.linalg.eigh((I + I.T) / 2)
     if np.linalg.det(V) < 0:
         V[:, 0] = -V[:, 0]
     lam = np.maximum(lam, 0.0)
-    for k in range(3):  # two equal principal moments: a rotor, drawn as a cylinder about the third
+    for k in range(3):  # two equal principal moments: a rotor or a rod, a cylinder about the third
         i, j = [x for x in range(3) if x != k]
-        if abs(lam[i] - lam[j]) <= 0.02 * max(lam[i], lam[j]) and abs(lam[k] - lam[i]) > 0.02 * lam[k]:
+        if abs(lam[i] - lam[j]) <= 0.02 * max(lam[i], lam[j]) and abs(lam[k] - lam[i]) > 0.02 * max(lam[k], lam[i]):
             radius = np.sqrt(2 * lam[k] / m)
             h = np.sqrt(max(12 * lam[i] / m - 3 * radius**2, (0.05 * radius) ** 2))
-            return [Cylinder(float(radius), float(h), r=r_cm, R=z_to(V[:, k]))]
+            return [Cylinder(float(max(radius, 0.015 * max(h, scale))), float(h), r=r_cm, R=z_to(V[:, k]))]
     edges = [np.sqrt(max(6 * (lam[(k + 1) % 3] + lam[(k + 2) % 3] - lam[k]) / m, 0.0)) for k in range(3)]
     floor = 0.02 * max(max(edges), scale)
     return [Box(tuple(float(max(e, floor)) for e in edges), r=r_cm, R=V)]

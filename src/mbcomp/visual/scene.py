@@ -153,7 +153,7 @@ def _visual_json(v):
     if isinstance(v.shape, Mesh):
         from .meshes import read_mesh
 
-        vertices, faces = read_mesh(v.shape.path)
+        vertices, faces = read_mesh(v.shape.path, component=v.component)
         geo = {"type": "mesh", "vertices": _b64(vertices * v.shape.scale, "<f4"), "faces": _b64(faces, "<u4")}
     out = {"name": v.name, "component": v.component, "role": v.role, "shape": geo, "color": v.color,
            "opacity": v.shape.opacity, "link": v.link, "r": list(v.r), "q": list(v.q)}
@@ -202,7 +202,7 @@ def build_scene(res, system=None, hide=(), trails=(), color_by=None, title=None)
     group = _rigid_groups(topo)
     links, link_of, local = _links(system, res, t, Y, group, jets0)
     scale = _scale(jets0, links)
-    view_of = _Views(topo, system, group, jets0, scale)
+    view_of = _Views(topo, res, group, jets0, scale)
     visuals = _place(system, topo, view_of, link_of, local, hide, scale)
     visuals = _fit_grid(visuals, links, t, np.asarray(_up(system)), scale)
     bodies = {path: (link_of[node], *local[node]) for path, _, node in topo.bodies}
@@ -298,8 +298,8 @@ class _Views:
     """What a component's :meth:`visuals` may ask: the scale, the frames fixed to a port, and
     whether another component draws the body on it."""
 
-    def __init__(self, topo, system, group, jets0, scale):
-        self.topo, self.group, self.jets0, self.scale = topo, group, jets0, scale
+    def __init__(self, topo, res, group, jets0, scale):
+        self.topo, self.res, self.group, self.jets0, self.scale = topo, res, group, jets0, scale
         self.drawn = {group.get(n, n) for path, comp, nodes in _framed(topo) if comp.draws_body
                       for n in nodes.values()}
 
@@ -316,7 +316,21 @@ class _Views:
             @staticmethod
             def covered(port):
                 return outer.group.get(_node(outer.topo, comp, port)) in outer.drawn
+
+            @staticmethod
+            def range(column):
+                return outer.range(comp, column)
         return View()
+
+    def range(self, comp, column):
+        """``(min, max)`` of the component's result column ``<comp>.<column>`` over the run
+        (its finite values), or ``None`` where the result has none."""
+        name = f"{comp.path}.{column}"
+        if name not in self.res:
+            return None
+        values = np.asarray(self.res[name], dtype=float)
+        values = values[np.isfinite(values)]
+        return (float(values.min()), float(values.max())) if values.size else None
 
     def attached(self, comp, port):
         node = _node(self.topo, comp, port)
@@ -362,9 +376,9 @@ def _place(system, topo, views, link_of, local, hide, scale):
                 if s.to not in ports:
                     raise ValueError(f"{path}: a {type(s).__name__} ends on {s.to!r}, which {type(comp).__name__} "
                                      f"does not have -> use one of its frames: {', '.join(ports)}")
-                extra = {"to_link": link_of[ports[s.to]], "to_r": local[ports[s.to]][0]}
-            out.append(Placed(f"{path}#{i}", path, role, s, link_of[node], tuple(r), tuple(q),
-                              s.color or default, **extra))
+                extra = {"to_link": link_of[ports[s.to]], "to_r": tuple(map(float, local[ports[s.to]][0]))}
+            out.append(Placed(f"{path}#{i}", path, role, s, link_of[node], tuple(map(float, r)),
+                              tuple(map(float, q)), s.color or default, **extra))
     return out
 
 
@@ -374,21 +388,27 @@ def _up(system):
 
 
 def _fit_grid(visuals, links, t, up, scale):
-    """Grids of unset size: sized to the motion and moved below it."""
+    """Grids of unset size sized to the motion; a floor moved down to below the motion (at
+    the origin's level, or ``0.1 scale`` below the lowest link origin where the motion goes
+    lower); a contact's plane kept exactly; one grid of several in the same place."""
     pts = [np.zeros(3)] + [L.poses[:, :3] for L in links if L.poses is not None]
     P = np.vstack([np.atleast_2d(p) for p in pts])
-    out = []
+    out, seen = [], set()
     for v in visuals:
-        if isinstance(v.shape, Grid) and v.shape.size is None and v.link == 0:
+        if isinstance(v.shape, Grid) and v.link == 0:
             n = quat_to_matrix(np.array(v.q))[:, 2]
             h = (P - np.array(v.r)) @ n
-            low = min(0.0, float(h.min()) - 0.05 * scale) if h.min() < -1e-9 * scale else 0.0
+            low = min(0.0, float(h.min()) - 0.1 * scale) if v.shape.floor else 0.0
             flat = P - np.outer(h, n)
             centre = (flat.min(axis=0) + flat.max(axis=0)) / 2
             centre -= (centre - np.array(v.r)) @ n * n
-            size = 1.5 * max(float(np.max(np.ptp(flat, axis=0))), scale)
-            shape = v.shape.placed(size=size)
-            v = Placed(v.name, v.component, v.role, shape, v.link, tuple(centre + low * n), v.q, v.color)
+            size = v.shape.size or 1.5 * max(float(np.max(np.ptp(flat, axis=0))), scale)
+            key = (tuple(np.round(centre + low * n, 9)), tuple(np.round(n, 9)))
+            if key in seen:
+                continue
+            seen.add(key)
+            v = Placed(v.name, v.component, v.role, v.shape.placed(size=size), v.link,
+                       tuple(map(float, centre + low * n)), v.q, v.color)
         out.append(v)
     return out
 
