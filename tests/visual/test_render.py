@@ -2,6 +2,7 @@
 result puts the bodies (at outputs exactly, between outputs interpolated), pictures at two
 times differ, films have the frames their rule says, and the errors name what is wrong."""
 import math
+import pathlib
 
 import numpy as np
 import pytest
@@ -148,3 +149,17 @@ def test_an_mp4_with_ffmpeg_is_written(crank, tmp_path):
     path = crank.animate(tmp_path / "crank.mp4", fps=10, speed=2.0)
     data = open(path, "rb").read()
     assert data[4:8] == b"ftyp" and len(data) > 5000
+
+
+def test_a_travelling_mechanism_is_followed_not_shrunk(tmp_path):
+    """The bicycle rides 10 m in 2 s, eight times its size: each picture frames the bicycle
+    where it is (its coloured parts fill a good part of the picture at both times) instead of
+    the whole road, where it would be a speck."""
+    from matplotlib.image import imread
+
+    mod = mbcomp.load_model_file(str(pathlib.Path(__file__).resolve().parents[2] / "models" / "bicycle.py"))
+    res = mbcomp.simulate(mod.build(**mod.SIMULATE_PARAMS), t_end=2.0)
+    for t in (0.2, 1.8):
+        img = imread(res.snapshot(tmp_path / f"bike{t}.png", t=t))[..., :3]
+        dark_or_coloured = (np.ptp(img, axis=2) > 0.2) | (img.max(axis=2) < 0.3)  # frame, rider, tyres
+        assert dark_or_coloured.mean() > 0.04, f"t={t}: {dark_or_coloured.mean():.4f}"

@@ -398,26 +398,39 @@ class _Drawing:
         self.maps = self._colorbars()
         self.title = ax.set_title("")
 
+    #: a run whose motion spans more than this many times the mechanism's size is followed
+    #: (the limits move with the mechanism) instead of shown whole
+    FOLLOW = 2.5
+
     def _frame_axes(self):
-        """Equal scales, limits that hold the whole run (grids are cut to them), axis names;
-        returns the view's azimuth."""
+        """Equal scales, limits that hold the whole run (grids are cut to them) or, for a
+        mechanism that travels far (a bicycle), a box of its own size that follows it; axis
+        names; returns the view's azimuth."""
         ax, time = self.ax, self.scene.time
-        pts, floor = [np.zeros((0, 3))], [np.zeros((0, 3))]
+        pts, floor, extent = [np.zeros((0, 3))], [np.zeros((0, 3))], np.zeros(3)
         for k in np.unique(np.linspace(0, len(time) - 1, min(len(time), 13)).astype(int)):
+            here = []
             for d in self.geometry.at(float(time[k])):
-                (floor if d.name in self.grids else pts).extend(np.asarray(p).reshape(-1, 3) for p in d.parts)
-        P, G = np.vstack(pts) @ self.U.T, np.vstack(floor) @ self.U.T
+                (floor if d.name in self.grids else here).extend(np.asarray(p).reshape(-1, 3) for p in d.parts
+                                                                 if not d.name.startswith("trail:"))
+            if here:
+                H = np.vstack(here) @ self.U.T
+                extent = np.maximum(extent, H.max(axis=0) - H.min(axis=0))
+                pts.append(H)
+        P, G = np.vstack(pts), np.vstack(floor) @ self.U.T
         if len(P) == 0:
             P = G if len(G) else np.zeros((1, 3))
         lo, hi = P.min(axis=0), P.max(axis=0)
-        if len(G):
+        self.follow = float(np.max(hi - lo)) > self.FOLLOW * max(float(np.max(extent)), self.scene.scale)
+        if self.follow:
+            lo, hi = -extent / 2, extent / 2
+        if len(G) and not self.follow:
             lo[2], hi[2] = min(lo[2], G[:, 2].min()), max(hi[2], G[:, 2].max())
         span = max(float(np.max(hi - lo)), self.scene.scale, 1e-9)
         least = np.array([0.3, 0.3, 0.04]) * span  # a flat mechanism still shows some ground
         mid, half = (lo + hi) / 2, np.maximum(hi - lo, least) / 2 + 0.03 * span
-        self.box = (mid - half, mid + half)
-        for j, setter in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
-            setter(mid[j] - half[j], mid[j] + half[j])
+        self.half = half
+        self._limits(mid)
         ax.set_box_aspect(2 * half)
         for j, setter in enumerate((ax.set_xlabel, ax.set_ylabel, ax.set_zlabel)):
             w = self.U[j]
@@ -426,6 +439,12 @@ class _Drawing:
         azim = -65.0 if hi[1] - lo[1] <= hi[0] - lo[0] else -25.0  # look across the widest side
         ax.view_init(elev=self.ELEV, azim=azim)
         return azim
+
+    def _limits(self, mid):
+        """Set the axes' limits to the box of half-sizes ``self.half`` about ``mid`` (m, plot axes)."""
+        self.box = (mid - self.half, mid + self.half)
+        for j, setter in enumerate((self.ax.set_xlim, self.ax.set_ylim, self.ax.set_zlim)):
+            setter(mid[j] - self.half[j], mid[j] + self.half[j])
 
     def _colorbars(self):
         """``{component: (colormap, norm)}`` of the coloured components, each with a colour bar."""
@@ -453,7 +472,14 @@ class _Drawing:
     def update(self, t):
         """Draw the scene at time ``t`` (s)."""
         polys, colors, lines, line_colors, widths, ground, ground_colors = [], [], [], [], [], [], []
-        for d in self.geometry.at(t):
+        drawn = self.geometry.at(t)
+        if self.follow:  # centre on the mechanism now, its ground level kept in view
+            here = [np.asarray(p).reshape(-1, 3) for d in drawn if d.name not in self.grids
+                    and not d.name.startswith("trail:") for p in d.parts]
+            if here:
+                H = np.vstack(here) @ self.U.T
+                self._limits((H.min(axis=0) + H.max(axis=0)) / 2)
+        for d in drawn:
             if d.opacity <= 0:
                 continue
             if d.kind == "faces":
