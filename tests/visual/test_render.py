@@ -149,6 +149,13 @@ def test_an_mp4_with_ffmpeg_is_written(crank, tmp_path):
     path = crank.animate(tmp_path / "crank.mp4", fps=10, speed=2.0)
     data = open(path, "rb").read()
     assert data[4:8] == b"ftyp" and len(data) > 5000
+    import shutil
+    import subprocess
+
+    if shutil.which("ffprobe"):  # the film has the frames of its rule: one per 1/fps of film time, and t_end
+        out = subprocess.run(["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+                              "stream=nb_read_frames", "-of", "csv=p=0", path], capture_output=True, text=True, check=True)
+        assert int(out.stdout.strip()) == len(film_times(build_scene(crank), fps=10, speed=2.0))
 
 
 def test_a_travelling_mechanism_is_followed_not_shrunk(tmp_path):
