@@ -6,6 +6,7 @@ Importable as ``mbcomp.library``. Every class here is an example of a role contr
 from .sources import World, Fixed
 from .parts import FixedTranslation, FixedRotation, RigidBody, PointMass
 from .joints import Revolute, Prismatic, Cylindrical, Spherical, Weld, FreeMotion
+from .compound_joints import Universal, Planar
 from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
 from .contact import DiskContact, SphereContact, RollingDisk, RollingSphere
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
@@ -18,4 +19,5 @@ __all__ = [
     "RotationalSpring", "RotationalDamper", "RotationalSpringDamper", "TranslationalSpringDamper",
     "Torque", "Force", "PrescribedMotion",
     "DiskContact", "SphereContact", "RollingDisk", "RollingSphere",
+    "Universal", "Planar",
 ]

@@ -64,12 +64,25 @@ def random_inertia(rng):
     return R @ np.diag([a, b, c]) @ R.T
 
 
+# --- parameters tied by a cross-parameter rule (check_params), which independent random values
+# break: the rule's random valid values, by class name
+def _perpendicular(first, second):
+    """Random ``first`` and a random ``second`` perpendicular to it (3-vectors)."""
+    def make(rng):
+        a = rng.normal(size=3)
+        return {first: a, second: np.cross(a, rng.normal(size=3))}
+    return make
+
+
+TIED_PARAMS = {"Universal": _perpendicular("n_a", "n_b"), "Planar": _perpendicular("n", "n_x")}
+
+
 def random_component(cls, rng):
     """An instance of ``cls`` with random valid values for its number-like parameters (start
     values and ``kind="any"`` parameters keep their defaults)."""
-    values = {}
+    values = TIED_PARAMS[cls.__name__](rng) if cls.__name__ in TIED_PARAMS else {}
     for name, par in cls.params().items():
-        if par.kind in ("start", "any") or par.default is None:
+        if par.kind in ("start", "any") or par.default is None or name in values:
             continue
         if par.shape == ():
             candidates = [rng.uniform(0.5, 2.0)]
@@ -168,9 +181,23 @@ def frame_a_jet(nj, rng):
     return a, u
 
 
+def motion_bias(joint, q, uj, p):
+    """``(bw, bv)``: the rates of ``Hw u``, ``Hv u`` at constant speeds (frame_a axes), zero
+    unless the joint declares them with ``motion_bias`` (a universal joint: no two speeds make
+    its relative angular velocity constant)."""
+    if not hasattr(joint, "motion_bias"):
+        return np.zeros(3), np.zeros(3)
+    bw, bv = joint.motion_bias(q, uj, p)
+    assert np.shape(bw) == (3,) and np.shape(bv) == (3,)
+    return np.asarray(bw, float), np.asarray(bv, float)
+
+
 def edge_args(joint, q, uj, p, bw=None, bv=None):
     R, r = joint.relative(q, p)
     Hw, Hv = joint.motion(q, p)
+    if hasattr(joint, "motion_bias"):  # the velocity-product term goes into frame_b's bias acceleration
+        cw, cv = motion_bias(joint, q, uj, p)
+        bw, bv = cw + (0.0 if bw is None else bw), cv + (0.0 if bv is None else bv)
     return (R, r, Hw, Hv, slice(0, joint.nu), Hw @ uj, Hv @ uj, bw, bv)
 
 
@@ -369,7 +396,8 @@ def _vee(W):
 @pytest.mark.parametrize("cls", JOINTS, ids=_ids(JOINTS))
 def test_joint_motion_matches_relative_and_q_rate(cls, seed):
     """d/dt of ``relative(q(t))`` with ``dq/dt = q_rate(q, u)`` is ``(S(Hw u) R, Hv u)``, and
-    ``Hw u``, ``Hv u`` are constant at constant ``u`` (the roles contract)."""
+    ``Hw u``, ``Hv u`` are constant at constant ``u`` (the roles contract) or change at the
+    rates the joint's ``motion_bias`` declares."""
     joint, p, q, u, a, rng = joint_setup(cls, seed)
     uj = rng.normal(size=joint.nu)
     qd = joint.q_rate(q, uj, p)
@@ -382,8 +410,9 @@ def test_joint_motion_matches_relative_and_q_rate(cls, seed):
     np.testing.assert_allclose(_vee(W), Hw @ uj, atol=1e-7)
     np.testing.assert_allclose((rp - rm) / (2 * h), Hv @ uj, atol=1e-7)
     (Hwp, Hvp), (Hwm, Hvm) = joint.motion(q + h * qd, p), joint.motion(q - h * qd, p)
-    np.testing.assert_allclose((Hwp - Hwm) @ uj / (2 * h), 0.0, atol=1e-6)
-    np.testing.assert_allclose((Hvp - Hvm) @ uj / (2 * h), 0.0, atol=1e-6)
+    bw, bv = motion_bias(joint, q, uj, p)
+    np.testing.assert_allclose((Hwp - Hwm) @ uj / (2 * h), bw, atol=1e-6)
+    np.testing.assert_allclose((Hvp - Hvm) @ uj / (2 * h), bv, atol=1e-6)
 
 
 @pytest.mark.parametrize("seed", SEEDS)
