@@ -19,12 +19,14 @@ the body, a free joint and start values given in rolling terms.
 import numpy as np
 
 from mbcomp import Box, Cylinder, Grid, Joint, Model, Param, SimulationError, Sphere
+from mbcomp.errors import Problem
 from mbcomp.jets import is_traced, local_point, local_vector, slip_velocity, velocity_along
 from mbcomp.kinematics import rot_axis
 from mbcomp.modeling.shapes import z_to
 
 from .joints import FreeMotion
 from .parts import RigidBody
+from .surfaces import Surface, surface_geometry, surface_rows, tangent_distance
 
 _E = np.eye(3)
 
@@ -153,27 +155,81 @@ class SphereContact(Joint):
     Outputs: ``N`` normal force on the ball (N), ``F_1``, ``F_2`` friction force on the ball
     along ``t1``, ``t2`` (N), contact point ``p.x|y|z`` (m, world).
 
+    ``surface`` (a :mod:`mbcomp.library.surfaces` object fixed in frame_a's axes, in place of
+    the plane ``n``): :class:`~mbcomp.library.surfaces.SphereSurface` (a bowl or a dome),
+    ``CylinderSurface``, ``TorusSurface``, ``HeightField`` (``z = h(x, y)``) or ``Plane``. The
+    centre then runs on the offset surface: the ``normal`` row is the centre's signed distance
+    from the surface minus ``r`` (m), the contact point ``P = c - r n`` with ``n`` the surface
+    normal at the foot point, and ``slip_1``, ``slip_2`` are taken along the unit tangents
+    ``t1 = unit(e - (e.n) n)``, ``t2 = n x t1`` (``e`` the surface's reference axis; see the
+    module :mod:`mbcomp.library.surfaces`). The run stops where ``n`` meets ``e``, the
+    tangent basis's singularity (90 degrees from a bowl's pole).
+
     Examples
     --------
     >>> from mbcomp.library import SphereContact
     >>> c = SphereContact(r=0.1)
     >>> c.tree_edge, c.nq
     (False, 0)
+
+    A ball of radius 0.1 m in a spherical bowl of radius 1 m (its bottom at the origin):
+
+    >>> import mbcomp
+    >>> from mbcomp.library import World, FreeMotion, RigidBody
+    >>> from mbcomp.library.surfaces import SphereSurface
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> free = m.add("free", FreeMotion(r0=(0, 0, 0.1), v0=(0.2, 0, 0), w0=(0, 2.0, 0)))
+    >>> ball = m.add("ball", RigidBody(m=1.0, I=0.004 * np.eye(3)))
+    >>> bowl = m.add("bowl", SphereContact(r=0.1, surface=SphereSurface(R=1.0, center=(0, 0, 1.0))))
+    >>> m.connect(w.frame_b, free.frame_a); m.connect(free.frame_b, ball.frame_a)
+    >>> m.connect(w.frame_b, bowl.frame_a); m.connect(bowl.frame_b, ball.frame_a)
+    >>> res = mbcomp.simulate(m, t_end=0.5, backend="numeric")
+    >>> c = np.array([res[f"ball.r.{k}"][-1] for k in "xyz"])
+    >>> round(float(np.linalg.norm(c - (0, 0, 1.0))), 9)   # the centre stays on the radius R - r
+    0.9
     """
 
     tree_edge = False
     r = Param(0.1, unit="m", doc="ball radius", check="positive")
     n = Param((0.0, 0.0, 1.0), unit="1", shape=(3,), check="nonzero",
               doc="plane normal, frame_a coordinates, pointing to the ball's side")
+    surface = Param(None, unit="1", kind="any",
+                    doc="surface in frame_a's axes (mbcomp.library.surfaces; m) in place of the plane n, or None")
 
     draws_body = True
 
     def visuals(self, p, view):
         """The ball: a sphere of radius ``r`` with a band (so the spin shows) on frame_b (the ball
-        draws no shape of its own); the plane, on frame_a."""
-        return [Sphere(p.r, frame="frame_b", color="orange"),
-                Cylinder(1.02 * p.r, 0.2 * p.r, frame="frame_b", color="white"),
-                Grid(R=z_to(p.n), frame="frame_a", floor=False, color="lightgrey")]
+        draws no shape of its own); the plane, on frame_a (a curved surface is not drawn)."""
+        ball = [Sphere(p.r, frame="frame_b", color="orange"),
+                Cylinder(1.02 * p.r, 0.2 * p.r, frame="frame_b", color="white")]
+        if p.surface is not None:  # a curved surface is not drawn (no shape kind for it yet)
+            return ball
+        return ball + [Grid(R=z_to(p.n), frame="frame_a", floor=False, color="lightgrey")]
+
+    singularity_reason = ("the surface normal at the contact is along the surface's tangent reference axis, where "
+                          "the contact's tangent basis is undefined")
+    singularity_fix = "keep the ball nearer the bowl's pole (SphereSurface(pole=...)) or pick a surface whose basis fits"
+
+    def check_params(self, p):
+        s = p.surface
+        if s is None:
+            return []
+        if not isinstance(s, Surface):
+            return [Problem(f"{self.path}.surface", f"{s!r} is not a surface",
+                            "give a surface of mbcomp.library.surfaces (SphereSurface, CylinderSurface, TorusSurface, "
+                            "HeightField, Plane) or None for the plane n")]
+        why = s.problem(float(p.r)) if not is_traced(p.r) else None
+        return [Problem(f"{self.path}.surface", why, "change r or the surface")] if why else []
+
+    @property
+    def has_singularity(self):
+        """Only a curved surface's tangent basis has a singular position."""
+        return self.p.surface is not None
+
+    def singularity(self, a, b, p):
+        """``|e x n|``: the sine of the angle between the normal and the surface's reference axis."""
+        return None if p.surface is None else tangent_distance(p.surface, a, b, p.r)
 
     def _geometry(self, a, b, p):
         n0 = _unit(p.n)
@@ -183,16 +239,20 @@ class SphereContact(Joint):
         return n, P, local_vector(a, t1, 0), local_vector(a, t2, 0)
 
     def constraints(self, a, b, p):
+        if p.surface is not None:
+            return surface_rows(p.surface, a, b, p.r, self.path)[0]
         n, P, _, _ = self._geometry(a, b, p)
         return [("normal", (P - local_point(a, 0)).dot_(n))]
 
     def velocity_constraints(self, a, b, p):
+        if p.surface is not None:
+            return surface_rows(p.surface, a, b, p.r, self.path)[1]
         _, P, t1, t2 = self._geometry(a, b, p)
         slip = slip_velocity(a, b, P)
         return [("slip_1", velocity_along(slip, t1)), ("slip_2", velocity_along(slip, t2))]
 
     def outputs(self, a, b, p, lam):
-        _, P, _, _ = self._geometry(a, b, p)
+        P = surface_geometry(p.surface, a, b, p.r).P if p.surface is not None else self._geometry(a, b, p)[1]
         out = {"N": -lam.get("normal", np.nan), "F_1": -lam.get("slip_1", np.nan), "F_2": -lam.get("slip_2", np.nan)}
         out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
         return out
