@@ -11,6 +11,7 @@ from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
 from .contact import DiskContact, SphereContact, RollingDisk, RollingSphere
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
+from .drivetrain import ElastoGear, BearingFriction, Motor
 
 __all__ = [
     "World", "Fixed", "FixedTranslation", "FixedRotation", "RigidBody", "PointMass",
@@ -19,5 +20,6 @@ __all__ = [
     "RotationalSpring", "RotationalDamper", "RotationalSpringDamper", "TranslationalSpringDamper",
     "Torque", "Force", "PrescribedMotion",
     "DiskContact", "SphereContact", "RollingDisk", "RollingSphere",
+    "ElastoGear", "BearingFriction", "Motor",
     "Universal", "Planar",
 ]
