@@ -22,7 +22,8 @@ from . import _aliases
 from .errors import InitializationError, ModelError, SimulationError
 from .modeling.component import Component, Flange, Frame, Guess, Param
 from .modeling.model import Model
-from .modeling.roles import Body, Drive, FlangeElement, ForceElement, FrameState, Ground, Joint
+from .modeling.roles import (Body, Drive, FlangeConstraint, FlangeElement, FlangeInertia, FlangeSum, ForceElement,
+                             FrameState, Ground, Joint)
 from .modeling.shapes import Box, Cylinder, Grid, Helix, Mesh, Rod, Sphere
 
 _aliases.install()  # old module paths (mbcomp.kinematics, mbcomp.jets, ...) stay importable
@@ -30,6 +31,7 @@ _aliases.install()  # old module paths (mbcomp.kinematics, mbcomp.jets, ...) sta
 __all__ = [
     "Component", "Param", "Frame", "Flange", "Guess", "Model",
     "Ground", "Body", "Joint", "ForceElement", "FlangeElement", "Drive", "FrameState",
+    "FlangeConstraint", "FlangeInertia", "FlangeSum",
     "ModelError", "InitializationError", "SimulationError",
     "Box", "Cylinder", "Sphere", "Mesh", "Helix", "Rod", "Grid",
     "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",

@@ -35,7 +35,8 @@ from mbcomp.roles import FrameState
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 CLASSES = [getattr(lib, name) for name in lib.__all__]
-ROLES = (Ground, Body, Joint, ForceElement, FlangeElement, Drive, mbcomp.Model)
+ROLES = (Ground, Body, Joint, ForceElement, FlangeElement, Drive, mbcomp.Model, mbcomp.FlangeConstraint,
+         mbcomp.FlangeInertia)
 JOINTS = [c for c in CLASSES if issubclass(c, Joint) and c.tree_edge]  # tree-capable joints
 CONTACTS = [c for c in CLASSES if issubclass(c, Joint) and not c.tree_edge]  # constraint-only joints
 VELOCITY_JOINTS = [c for c in CLASSES if issubclass(c, Joint) and c.velocity_constraints is not Joint.velocity_constraints]
@@ -109,7 +110,8 @@ def test_library_lists_components_of_known_roles():
     for cls in CLASSES:
         assert inspect.isclass(cls) and issubclass(cls, mbcomp.Component), cls
         assert sum(issubclass(cls, r) for r in ROLES) == 1, f"{cls.__name__} must play exactly one role"
-        assert cls.role in {"ground", "body", "joint", "force", "flange_force", "drive", "model"}
+        assert cls.role in {"ground", "body", "joint", "force", "flange_force", "drive", "model",
+                            "flange_constraint", "flange_inertia"}
 
 
 @pytest.mark.parametrize("cls", CLASSES, ids=_ids(CLASSES))
@@ -558,7 +560,20 @@ def test_force_element_returns_wrenches_on_its_frames(cls):
     assert np.isfinite(comp.potential(states, comp.p))
 
 
-TWO_FRAME = [c for c in FORCES if set(frame_ports(c)) == {"frame_a", "frame_b"}]
+# sensors (issue 21, library/sensors.py) apply nothing: checked by test_sensors_apply_nothing, not here
+TWO_FRAME = [c for c in FORCES if set(frame_ports(c)) == {"frame_a", "frame_b"} and not getattr(c, "sensor", False)]
+SENSORS = [c for c in FORCES if getattr(c, "sensor", False)]
+
+
+@pytest.mark.parametrize("cls", SENSORS, ids=_ids(SENSORS))
+def test_sensors_apply_nothing(cls):
+    """A sensor's wrenches are zero on every frame, it stores no energy and declares so."""
+    rng = _rng(cls, 0)
+    comp = random_component(cls, rng)
+    states = {n: random_state(rng) for n in frame_ports(cls)}
+    out = comp.wrenches(0.0, states, comp.p)
+    assert set(out) == set(states) and all(not np.any(f) and not np.any(tau) for f, tau in out.values())
+    assert comp.potential(states, comp.p) == 0.0 and comp.conserves_energy(comp.p)
 
 
 @pytest.mark.parametrize("seed", SEEDS)
@@ -832,3 +847,39 @@ def test_prescribed_motion_honours_runtime_law():
     new = base.with_params({"drive.s": "3*t"})
     drive = new.topology.flat.components["drive"]
     assert drive.motion(1.0, new.P["drive"]) == (3.0, 3.0, 0.0)
+
+
+# ==========================================================================================
+# flange constraints and rotors (gears: library/gears.py, assembly/flange_rows.py)
+# ==========================================================================================
+FLANGE_CONSTRAINTS = [c for c in CLASSES if issubclass(c, mbcomp.FlangeConstraint)]
+FLANGE_INERTIAS = [c for c in CLASSES if issubclass(c, mbcomp.FlangeInertia)]
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("cls", FLANGE_CONSTRAINTS, ids=_ids(FLANGE_CONSTRAINTS))
+def test_flange_constraint_rows_are_linear_forms_over_its_flanges(cls, seed):
+    """Rows name only the class's flanges, each row moves at least two of them, and the
+    coefficients scale with the forms handed in (a linear form, not a function of values)."""
+    from mbcomp.roles import FlangeSum
+
+    comp = random_component(cls, _rng(cls, seed))
+    ports = flange_ports(cls)
+    assert set(cls.flange_kinds) <= set(ports)
+    rows = comp.rows({n: FlangeSum({n: 1.0}) for n in ports}, comp.p)
+    doubled = comp.rows({n: FlangeSum({n: 2.0}) for n in ports}, comp.p)
+    assert rows and len({name for name, _ in rows}) == len(rows)
+    for (name, form), (_, form2) in zip(rows, doubled):
+        assert set(form.terms) <= set(ports), f"{cls.__name__}.{name}"
+        assert sum(1 for c in form.terms.values() if c != 0) >= 2
+        for n, c in form.terms.items():
+            assert np.isfinite(c) and abs(form2.terms[n] - 2 * c) <= 1e-12 * abs(c)
+    assert set(cls.output_units) >= set(comp.outputs(0.0, {n: (0.0, 0.0) for n in ports}, comp.p,
+                                                     {n: 1.0 for n in ports}))
+
+
+@pytest.mark.parametrize("cls", FLANGE_INERTIAS, ids=_ids(FLANGE_INERTIAS))
+def test_flange_inertia_gives_a_positive_rotor(cls):
+    comp = random_component(cls, _rng(cls, 0))
+    J, gyro = comp.rotor(comp.p)
+    assert J > 0 and isinstance(gyro, bool) and len(flange_ports(cls)) == 1

@@ -70,7 +70,7 @@ def column_units(system):
                 put(f"{path}.{suffix}.{ax}", text)
         for c in "wxyz":
             put(f"{path}.Q.{c}", "1")
-    elements = [(path, comp) for path, comp, _ports in topo.forces] + list(topo.flange_elements)
+    elements = [(path, comp) for path, comp, _ports in topo.forces] + list(topo.flange_elements) + list(topo.flange_constraints)
     for path, comp in elements:
         put(f"{path}.power", "W")
         put(f"{path}.power_nc", "W")

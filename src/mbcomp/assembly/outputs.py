@@ -39,6 +39,7 @@ import numpy as np
 from ..geometry.kinematics import cross
 from ..modeling.component import PortRef
 from ..modeling.roles import FlangeElement, ForceElement, Joint
+from .flange_rows import flange_flows, flange_states
 from .recursive import lagrange_solution, tree_links
 
 __all__ = ["output_values", "result_columns"]
@@ -87,6 +88,7 @@ def result_columns(system, ev, ud, lam, reac):
     cols, rotations = {}, {}
     _coordinates(system, cols, ev.t, ev.q, ev.u, ev.jets, ud)
     _reactions(system, cols, ev, lam, reac)
+    _flange_constraints(system, cols, ev, lam)
     _elements(system, cols, ev)
     for path, _comp, node in system.topology.bodies:
         J = ev.jets[node]
@@ -140,7 +142,7 @@ def _sampled_evaluation(system, t, q, u, jets):
     evaluation, from the recursive pass: the jets (no Jacobian columns), the cut joints'
     local row Jacobians, all position rows and the nonholonomic residual."""
     local, local_nh, Phi, Phid = [], [], [], []
-    for e, cons in system.cut_constraints(jets):
+    for e, cons in system.cut_constraints(jets, t, q):
         if cons:
             local.append((e, [n for n, _ in cons], np.array([c.jac for _, c in cons])))
             Phi += [c.val for _, c in cons]
@@ -189,6 +191,20 @@ def _reactions(system, cols, ev, lam, reac):
         effort = tb @ axis_b if e.comp.axis_kind == "rotational" else fb @ axis_b
         cols[f"{e.drive}.{'tau' if e.comp.axis_kind == 'rotational' else 'f'}"] = effort
         cols[f"{e.drive}.power"] = effort * cols[f"{e.name}.{e.comp.speeds[0][0]}"]
+
+
+def _flange_constraints(system, cols, ev, lam):
+    """A flange constraint's own columns (:meth:`FlangeConstraint.outputs`: e.g. a gear's
+    torques on its axes, from its rows' multipliers, :func:`flange_rows.flange_flows`)."""
+    rows = system.topology.flange_rows
+    if not rows:
+        return
+    lam_rows = system.row_multipliers(ev, lam)
+    for fr in rows:
+        flows = flange_flows(system, fr, lam_rows.get(fr.name, {}))
+        states = flange_states(system, fr, ev.jets, ev.t, ev.q, ev.u)
+        for key, val in fr.comp.outputs(ev.t, states, system.P[fr.name], flows).items():
+            cols[f"{fr.name}.{key}"] = val
 
 
 #: time (s) of the central difference of an element's potential along the motion (its rate)

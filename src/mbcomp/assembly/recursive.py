@@ -64,6 +64,7 @@ from __future__ import annotations
 import numpy as np
 
 from .jets import FrameJet, is_traced
+from .flange_rows import rotor_wrench, rotors
 from .topology import ROOT
 from ..geometry.kinematics import cross, skew
 
@@ -177,8 +178,9 @@ class TreePass:
         (velocity-product) wrench ``-dh/dt`` at ``du/dt = 0``.
     """
 
-    def __init__(self, links, jets, S, I, W, dt):
+    def __init__(self, links, jets, S, I, W, dt, t=0.0, q=None):
         self.links, self.jets, self.S, self.I, self.W, self.dt = links, jets, S, I, W, dt
+        self.t, self.q = t, q  # for the rows of flange constraints (assembly/flange_rows.py)
 
 
 def _link_jets(system, links, t, q, u):
@@ -215,6 +217,12 @@ def _body_terms(system, links, jets, I, W):
         F = m * (g - a_c)
         tau = cross(c, F) - (Iw @ J.alpha + cross(J.w, Iw @ J.w))
         W[i] = W[i] + np.concatenate((tau, F))
+    for node, Iw, gyro in rotors(system, jets):  # a rotor J n n^T: no mass, so no force
+        i = links.link_of.get(node, -1)
+        if i >= 0:
+            z = np.zeros((3, 3))
+            I[i] = I[i] + np.block([[Iw, z], [z, z]])
+            W[i] = W[i] + np.concatenate((-rotor_wrench(jets[node], Iw, gyro), np.zeros(3)))
 
 
 def tree_pass(system, t, q, u):
@@ -231,7 +239,7 @@ def tree_pass(system, t, q, u):
         i = links.link_of.get(node, -1)
         if i >= 0:
             W[i] = W[i] + np.concatenate((T + cross(jets[node].r, F), F))
-    return TreePass(links, jets, S, I, W, dt)
+    return TreePass(links, jets, S, I, W, dt, t, q)
 
 
 def _summed(links, vals):
@@ -270,9 +278,10 @@ def mass_matrix(tp, nu):
 
 def _row_entries(links, jets, edge, jac):
     """A constraint row's gradient w.r.t. the local twists ``(v_a, w_a, v_b, w_b)`` as
-    spatial covectors on the links of ``edge``'s two frames: ``[(link, (c_w, c_v))]``."""
+    spatial covectors on the links of ``edge``'s two frames: ``[(link, (c_w, c_v))]`` (a flange
+    constraint's rows: over the frames ``edge.nodes``, 6 columns each)."""
     out = []
-    for slot, node in ((0, edge.node_a), (1, edge.node_b)):
+    for slot, node in enumerate(edge.nodes):
         i = links.link_of.get(node, -1)
         if i < 0:
             continue
@@ -287,7 +296,7 @@ def constraint_rows(system, tp, masked=True):
     (holonomic rows masked by ``system.row_mask`` when ``masked``)."""
     links, jets = tp.links, tp.jets
     hol = [(_row_entries(links, jets, e, c.jac), c.val, c.dot, c.bias)
-           for e, cons in system.cut_constraints(jets) for _, c in cons]
+           for e, cons in system.cut_constraints(jets, tp.t, tp.q) for _, c in cons]
     if masked and system.row_mask is not None:
         hol = [r for r, keep in zip(hol, system.row_mask) if keep]
     nh = [(_row_entries(links, jets, e, c.jac), c.val, c.dot, c.bias)

@@ -98,8 +98,10 @@ def _dof_report(view, init):
     N = len(groups)
     C = sum(6 - e.dof for e in topo.edges if e.kind == "joint" and e.dof > 0)  # (a point's free joint: 3)
     # constraint-only joints (the library's contacts) remove as many DOF as they have holonomic rows
+    # ... and so do flange constraints (gears: one holonomic row each, assembly/flange_rows.py)
+    gears = {fr.name for fr in topo.flange_rows}
     C += sum(1 for name in view.constraint_names(all_rows=True)
-             if not topo.edge(name.rsplit(".", 1)[0]).comp.tree_edge)
+             if name.rsplit(".", 1)[0] in gears or not topo.edge(name.rsplit(".", 1)[0]).comp.tree_edge)
     L = sum(1 for e in topo.edges if e.drive)
     if init is None:
         init, _ = _initialize(view)
@@ -153,8 +155,12 @@ def summary(system, init=None):
     tree = [e.name for e in topo.tree if e.kind == "joint" and e.dof > 0 and not e.drive]
     lines.append(f"tree joints (minimal coordinates): {', '.join(tree) or 'none'}")
     cut_rows = view.constraint_names(all_rows=True)
-    lines.append(f"cut joints (loop closure): {', '.join(topo.cut) or 'none'}; {len(cut_rows)} constraint rows, "
+    lines.append(f"cut joints (loop closure): {', '.join(topo.cut) or 'none'}; {len(cut_rows)} constraint rows"
+                 f"{' with the gears' if topo.flange_rows else ''}, "
                  f"rank {d['rank']}")
+    if topo.flange_rows:
+        lines.append("flange constraints (gears, holonomic, phase from the start values): " + ", ".join(
+            f"{fr.name} ({sum(1 for n in cut_rows if n.rsplit('.', 1)[0] == fr.name)} rows)" for fr in topo.flange_rows))
     if d["redundant"]:
         lines.append(f"redundant constraint rows dropped: {', '.join(d['redundant'])}")
     nh = init.nonholonomic if init is not None else "?"

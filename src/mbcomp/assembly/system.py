@@ -48,6 +48,7 @@ from ..assembly.jets import FrameJet, as_array, is_traced, rigid_constraints
 from ..geometry.kinematics import cross, skew
 from ..modeling.roles import FrameState
 from ..assembly.topology import ROOT, Topology
+from .flange_rows import flange_rows, flange_starts, rotor_wrench, rotors
 
 __all__ = ["assemble", "MultibodySystem", "Evaluation", "NumericEvaluator"]
 
@@ -187,6 +188,7 @@ class MultibodySystem:
         self._edge = {e.name: e for e in topo.edges}
         self._nonholonomic = [e for e in topo.edges if e.kind == "joint" and e.comp.has_velocity_constraints]
         self.row_mask = None  # independent constraint rows, set by consistent initialization
+        self.flange_s0 = flange_starts(self)  # geared axes' start coordinates: the gears' phase
         self._row_names = None
         self.evaluator = NumericEvaluator(self)
         self._check_static()
@@ -414,6 +416,10 @@ class MultibodySystem:
             # generated program's.
             M = np.vstack(rows_v).T @ np.vstack(rows_mv) + np.vstack(rows_w).T @ np.vstack(rows_iw)
             M = 0.5 * (M + M.T)  # exactly symmetric, as the per-body products were
+        for node, Iw, gyro in rotors(self, jets):  # rotors on joint axes: bodies of inertia J n n^T
+            J = jets[node]
+            M = M + J.Jw.T @ Iw @ J.Jw
+            f = f - J.Jw.T @ rotor_wrench(J, Iw, gyro)
         return M, f
 
     def evaluate_numeric(self, t, q, u, masked=True) -> Evaluation:
@@ -426,13 +432,11 @@ class MultibodySystem:
             J = jets[node]
             f += J.Jv.T @ F + J.Jw.T @ T
         Phi, Phid, Crows, cb, local = [], [], [], [], []
-        for e, cons in self.cut_constraints(jets):
+        for e, cons in self.cut_constraints(jets, t, q):
             if not cons:
                 continue
-            a, b = jets[e.node_a], jets[e.node_b]
             jac = np.array([c.jac for _, c in cons])
-            Jab = np.vstack((a.Jv, a.Jw, b.Jv, b.Jw))
-            Crows.append(jac @ Jab)
+            Crows.append(jac @ np.vstack([X for n in e.nodes for X in (jets[n].Jv, jets[n].Jw)]))
             Phi += [c.val for _, c in cons]
             Phid += [c.dot for _, c in cons]
             cb += [c.bias for _, c in cons]
@@ -456,9 +460,11 @@ class MultibodySystem:
         return Evaluation(t, q, u, jets, M, f, Phi, Phid, C, cb, B, B @ u - gval, np.array(Bb, dt), gval,
                           local, local_nh)
 
-    def cut_constraints(self, jets):
+    def cut_constraints(self, jets, t=0.0, q=None):
         """``(edge, [(row name, ScalarJet)])`` of every cut joint at the frames' ``jets`` (a
-        cut ground frame: its six rigid rows), unmasked, in the order of ``topology.cut``."""
+        cut ground frame: its six rigid rows), unmasked, in the order of ``topology.cut``, then
+        of every flange constraint (a :class:`~mbcomp.assembly.flange_rows.FlangeRows` over its
+        ``nodes``; these need the time ``t`` and coordinates ``q``)."""
         for name in self.topology.cut:
             e = self._edge[name]
             p = self.P[name]
@@ -468,6 +474,8 @@ class MultibodySystem:
                 yield e, rigid_constraints(a, b, R0, r0)
             else:
                 yield e, e.comp.constraints(a, b, p)
+        for fr in self.topology.flange_rows:
+            yield fr, flange_rows(self, fr, jets, t, q)
 
     def velocity_constraints(self, jets):
         """``(edge, [(row name, ScalarJet)])`` of every joint with nonholonomic rows."""
@@ -506,6 +514,8 @@ class MultibodySystem:
             v = J.v + cross(J.w, rho)
             T += 0.5 * m * (v @ v) + 0.5 * J.w @ Iw @ J.w
             V -= m * (self.g @ (J.r + rho))
+        for node, Iw, _ in rotors(self, jets):
+            T += 0.5 * jets[node].w @ Iw @ jets[node].w
         for path, comp, ports in self.topology.forces:
             V += comp.potential({pn: self._frame_state(jets[n]) for pn, n in ports.items()}, self.P[path])
         for path, comp in self.topology.flange_elements:
@@ -544,6 +554,8 @@ class MultibodySystem:
             F = m * (acc - self.g)
             D[node][0] = D[node][0] + F
             D[node][1] = D[node][1] + Iw @ al + cross(J.w, Iw @ J.w) + cross(rho, F)
+        for node, Iw, gyro in rotors(self, jets):
+            D[node][1] = D[node][1] + Iw @ (rates(node, jets[node].r)[1] + np.zeros(3)) + rotor_wrench(jets[node], Iw, gyro)
         for node, (F, T) in self.applied(ev.t, ev.q, ev.u, jets).items():
             D[node][0] = D[node][0] - F
             D[node][1] = D[node][1] - T
@@ -558,11 +570,13 @@ class MultibodySystem:
         for e, rows, jac in ev.local:
             lr = full_lam[k:k + len(rows)]
             k += len(rows)
-            wa, wb = -(jac[:, :6].T @ lr), -(jac[:, 6:].T @ lr)  # constraint wrenches on a and b
-            D[e.node_a][0] = D[e.node_a][0] - wa[:3]
-            D[e.node_a][1] = D[e.node_a][1] - wa[3:]
-            D[e.node_b][0] = D[e.node_b][0] - wb[:3]
-            D[e.node_b][1] = D[e.node_b][1] - wb[3:]
+            for slot, node in enumerate(e.nodes):  # constraint wrenches on each frame of the rows
+                w = -(jac[:, 6 * slot:6 * slot + 6].T @ lr)
+                D[node][0] = D[node][0] - w[:3]
+                D[node][1] = D[node][1] - w[3:]
+            if e.kind == "flange":
+                continue  # a gear's torques act on its joints' frames, as a flange element's do
+            wb = -(jac[:, 6:].T @ lr)
             Rb = jets[e.node_b].R
             out[e.name] = (Rb.T @ wb[:3], Rb.T @ wb[3:])
         lam_nh = lam[lam.size - ev.B.shape[0]:] if ev.B.shape[0] else np.zeros(0)

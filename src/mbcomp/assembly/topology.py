@@ -40,6 +40,7 @@ import numpy as np
 from ..errors import ModelError, Problem
 from ..modeling.component import PortRef
 from ..modeling.free_joint import FreeMotion, FreeTranslation
+from .flange_rows import cut_rotational, flange_constraint_edges, geared_joints, rotor_nodes
 
 __all__ = ["Topology", "Edge", "ROOT", "spanning_tree", "no_gravity_note"]
 
@@ -63,6 +64,12 @@ class Edge:
     q: slice = field(default_factory=lambda: slice(0, 0))
     u: slice = field(default_factory=lambda: slice(0, 0))
     implicit: bool = False
+
+    @property
+    def nodes(self):
+        """The frames a cut edge's rows are taken over, in slot order (frame_a, frame_b); a
+        flange constraint's rows (:class:`~mbcomp.assembly.flange_rows.FlangeRows`) have more."""
+        return (self.node_a, self.node_b)
 
 
 class _UnionFind:
@@ -245,6 +252,7 @@ class Topology:
             return self.port_node[PortRef(comp, pname, "frame")]
 
         self.edges, self.bodies, self.forces, self.flange_elements, self.drives = [], [], [], [], []
+        self.flange_constraints, self.flange_inertias = [], []  # gears; rotors (assembly/flange_rows.py)
         self.gravity_source = None
         for path, comp in comps.items():
             role = comp.role
@@ -269,16 +277,25 @@ class Topology:
                 self.flange_elements.append((path, comp))
             elif role == "drive":
                 self.drives.append((path, comp))
+            elif role == "flange_constraint":
+                self.flange_constraints.append((path, comp))
+            elif role == "flange_inertia":
+                self.flange_inertias.append((path, comp))
             else:
                 probs.append(Problem(path, f"{type(comp).__name__} has no known role",
-                                     "subclass one of Ground, Body, Joint, ForceElement, FlangeElement, Drive"))
+                                     "subclass one of Ground, Body, Joint, ForceElement, FlangeElement, FlangeConstraint, "
+                                     "FlangeInertia, Drive"))
 
         probs += self._flanges(flanges)
         if probs:
             raise ModelError(probs)
 
         self._spanning_tree()
+        probs = cut_rotational(self)
+        if probs:
+            raise ModelError(probs)
         self._coordinates()
+        self.rotors = rotor_nodes(self)
 
     def _flanges(self, flanges):
         """Which joint axis each flange node belongs to, and which joint each drive drives;
@@ -292,7 +309,8 @@ class Topology:
         edge_by_name = {e.name: e for e in self.edges}
         for root, ports in members.items():
             owners = [x for x in ports if x.component.role == "joint"]
-            users = [x for x in ports if x.component.role != "joint"]
+            # a flange constraint's flanges are checked with its rows (flange_rows.py)
+            users = [x for x in ports if x.component.role not in ("joint", "flange_constraint")]
             for x in ports:
                 self.flange_of[x] = root
             if len(owners) > 1:
@@ -320,7 +338,8 @@ class Topology:
                                            "joint's coordinate can be prescribed only once",
                                      f"keep one drive per joint: remove {path} or {e.drive}"))
             e.drive = path
-        return probs
+        self.flange_rows, more = flange_constraint_edges(self, members)
+        return probs + more
 
     # --------------------------------------------------------------------------------------
     def _weight(self, e):
@@ -332,9 +351,12 @@ class Topology:
         q0, qf, u0, uf = e.comp.start(e.comp.p)
         if any(qf) or any(uf):
             w -= 0.5
+        if e.name in self._geared:  # a geared angle measured on a cut joint would wrap
+            w -= 0.25
         return w
 
     def _spanning_tree(self):
+        self._geared = geared_joints(self)
         nodes = [ROOT, *range(self.n_nodes)]
         # the multigraph: (node_a, node_b, name, weight) of every edge that may be a tree edge
         self._graph_edges = graph = [(e.node_a, e.node_b, e.name, self._weight(e)) for e in self.edges

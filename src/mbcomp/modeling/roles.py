@@ -12,6 +12,9 @@ vectors are numpy arrays, lengths in m, angles in rad, forces in N, torques in N
 * :class:`ForceElement` - wrenches on its frames from their kinematics, time and parameters,
   plus its potential energy.
 * :class:`FlangeElement` - forces along 1-D flanges (joint axes) from their coordinates.
+* :class:`FlangeConstraint` - rows tying flange coordinates (ideal gears, rack and pinion,
+  belts): linear forms :class:`FlangeSum` over its flanges, holonomic.
+* :class:`FlangeInertia` - a rotor of axial inertia on a joint's axis (mass without a body).
 * :class:`Drive` - prescribes the coordinate of the joint axis its flange is connected to.
 
 Examples
@@ -35,7 +38,8 @@ import numpy as np
 
 from ..modeling.component import Component, Flange, Frame, Guess, PortRef
 
-__all__ = ["Ground", "Body", "Joint", "MissingFlange", "ForceElement", "FlangeElement", "Drive", "FrameState"]
+__all__ = ["Ground", "Body", "Joint", "MissingFlange", "ForceElement", "FlangeElement", "Drive", "FrameState",
+           "FlangeConstraint", "FlangeInertia", "FlangeSum"]
 
 
 class FrameState:
@@ -369,4 +373,113 @@ class Drive(Component):
 
     def motion(self, t, p):
         """``(s, v, a)``: coordinate, rate and acceleration of the driven axis at time t."""
+        raise NotImplementedError
+
+
+class FlangeSum:
+    """A linear form ``sum_k c_k s_k`` over the coordinates ``s_k`` of a component's flanges.
+
+    :meth:`FlangeConstraint.rows` receives one per flange (``flanges["flange_a"]`` is
+    ``1 * s_a``) and combines them with ``+``, ``-``, unary ``-`` and multiplication or
+    division by numbers (parameters, possibly traced); the assembler turns each form into a
+    constraint row (value, Jacobian, rate and bias) from the flanges' joints.
+
+    Examples
+    --------
+    >>> from mbcomp.roles import FlangeSum
+    >>> a, b = FlangeSum({"flange_a": 1.0}), FlangeSum({"flange_b": 1.0})
+    >>> (a - 3.0 * b).terms
+    {'flange_a': 1.0, 'flange_b': -3.0}
+    """
+
+    __slots__ = ("terms",)
+
+    def __init__(self, terms):
+        self.terms = dict(terms)
+
+    def __add__(self, o):
+        out = dict(self.terms)
+        for k, c in o.terms.items():
+            out[k] = out[k] + c if k in out else c
+        return FlangeSum(out)
+
+    def __neg__(self):
+        return FlangeSum({k: -c for k, c in self.terms.items()})
+
+    def __sub__(self, o):
+        return self + (-o)
+
+    def __mul__(self, c):
+        if isinstance(c, FlangeSum):
+            raise TypeError("a flange constraint row is linear in the flanges' coordinates: multiply a FlangeSum "
+                            "by numbers (parameters) only")
+        return FlangeSum({k: v * c for k, v in self.terms.items()})
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, c):
+        return self * (1.0 / c)
+
+    def __repr__(self):
+        return " + ".join(f"{c!r}*{k}" for k, c in self.terms.items()) or "0"
+
+
+class FlangeConstraint(Component):
+    """Constraint rows between the coordinates of 1-D flanges (joint axes): ideal gears, rack
+    and pinion, belts. Subclasses declare ``Flange`` ports and implement :meth:`rows`.
+
+    Each row is a :class:`FlangeSum` ``c(s) = sum_k c_k s_k``; the assembler keeps
+    ``c(s) - c(s0) = 0``, a *holonomic* row whose constant comes from the flanges' start
+    coordinates ``s0`` (each joint's start value; 0 on a support flange or an unconnected
+    optional flange), so the mechanism loses one configuration degree of freedom per row and
+    the gear's phase is the start's. A flange's coordinate is its joint's relative coordinate
+    (angle in rad or displacement in m), on any joint axis: in the spanning tree, closing a
+    loop (translational), or driven. Multipliers are result columns ``lambda.<name>.<row>``;
+    the flow (torque N m or force N) the component puts on each flange is
+    ``-sum_rows lam_r c_{r,k}`` (with ``M du/dt + A^T lam = f``), handed to :meth:`outputs`.
+    """
+
+    role = "flange_constraint"
+    #: per flange port, ``"rotational"`` or ``"translational"``: the kind of joint axis it
+    #: must be on (checked by the topology); a port not listed takes either
+    flange_kinds: dict = {}
+    output_units: dict = {}
+
+    def rows(self, flanges, p):
+        """Return ``[(row name, FlangeSum)]`` from ``flanges`` (port name -> :class:`FlangeSum`)."""
+        raise NotImplementedError
+
+    def outputs(self, t, states, p, flows):
+        """Named result columns at one output time (optional), reported as ``<name>.<suffix>``.
+
+        Parameters
+        ----------
+        states : dict
+            Flange port -> ``(s, v)``: coordinate and rate.
+        flows : dict
+            Flange port -> the torque (N m) or force (N) this component puts on the flange
+            (on the joint's frame_b along/about its axis, the reaction on frame_a).
+        """
+        return {}
+
+
+class FlangeInertia(Component):
+    """A rotor on a rotational joint axis: mass without a body. Subclasses declare one
+    ``Flange`` port and implement :meth:`rotor`.
+
+    The rotor turns with the frame its flange moves (the joint's frame_b for its ``axis``,
+    frame_a for its ``support``) about the joint's axis ``n``: its inertia tensor is
+    ``J n n^T`` on that frame (no mass, no transverse inertia, which belong to the carrying
+    body), so its kinetic energy is ``J (n . w)^2 / 2`` with ``w`` that frame's absolute
+    angular velocity. With ``gyroscopic`` the carrying frame also feels the gyroscopic moment
+    ``w x (J n (n . w))``; without it, the moment is dropped (it does no work, so the energy
+    is unchanged). On an axis fixed in the world both are a body of axial inertia ``J``.
+    """
+
+    role = "flange_inertia"
+    axis_kind = "rotational"
+
+    def rotor(self, p):
+        """Return ``(J, gyroscopic)``: axial inertia (kg m^2) and whether the gyroscopic moment
+        acts on the carrying frame."""
         raise NotImplementedError

@@ -1,0 +1,226 @@
+"""Ideal transmissions between joint axes: gears, rack and pinion, belts, rotors, planetary sets.
+
+Each transmission is a :class:`~mbcomp.roles.FlangeConstraint`: one holonomic row tying the
+coordinates of the joint axes its flanges are connected to (any 1-DOF joints' ``axis``
+flanges: shafts on Revolutes, a rack on a Prismatic; across the spanning tree too, a gear
+pair then closes a loop). The row holds the displacements from the start: the phase of the
+mesh is the joints' start values. The flow each transmission puts on a flange (torque N m,
+force N; on the joint's frame_b about/along its axis, the reaction on frame_a) is a result
+column, ``<name>.tau_a`` etc.; ideal transmissions neither store nor dissipate energy, so
+``sum flow * rate = 0``. The multiplier is ``lambda.<name>.mesh``.
+
+:class:`Inertia` is a rotor on a rotational joint axis (:class:`~mbcomp.roles.FlangeInertia`),
+and :class:`PlanetaryGear` a sun-carrier-ring set built from these (a ``Model``).
+"""
+import numpy as np
+
+from mbcomp import FlangeConstraint, FlangeInertia, Flange, Model, Param
+from .joints import Revolute
+from .parts import FixedTranslation
+
+__all__ = ["IdealGear", "RackPinion", "Belt", "Inertia", "PlanetaryGear"]
+
+
+class IdealGear(FlangeConstraint):
+    """Ideal gear between two rotational joint axes: ``phi_a - phi_s = ratio (phi_b - phi_s)``.
+
+    ``phi_a``, ``phi_b`` are the angles of the axes connected to ``flange_a`` and ``flange_b``
+    (rad, from their start values) and ``phi_s`` that of ``support`` (the gear housing: a
+    planetary set's carrier; unconnected, the housing is fixed: ``phi_s = 0``). Modelica's
+    convention: ``ratio`` is the speed of ``a`` over that of ``b``, negative for an external
+    spur pair turning in opposite senses (``-z_b / z_a``). The torques it puts on the axes are
+    ``tau_b = -ratio tau_a`` and ``tau_support = (ratio - 1) tau_a``: the power balance
+    ``tau_a w_a + tau_b w_b + tau_s w_s = 0``.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import Fixed, Revolute, RigidBody, IdealGear, Torque
+    >>> m = mbcomp.Model(); base = m.add("base", Fixed())
+    >>> j1 = m.add("j1", Revolute()); j2 = m.add("j2", Revolute())
+    >>> b1 = m.add("b1", RigidBody(m=1.0, I=np.eye(3))); b2 = m.add("b2", RigidBody(m=1.0, I=np.eye(3) * 4))
+    >>> g = m.add("gear", IdealGear(ratio=2.0)); tq = m.add("motor", Torque(tau=1.0))
+    >>> m.connect(base.frame_b, j1.frame_a); m.connect(j1.frame_b, b1.frame_a)
+    >>> m.connect(base.frame_b, j2.frame_a); m.connect(j2.frame_b, b2.frame_a)
+    >>> m.connect(g.flange_a, j1.axis); m.connect(g.flange_b, j2.axis); m.connect(tq.flange_b, j1.axis)
+    >>> res = mbcomp.simulate(m, t_end=1.0)
+    >>> round(float(res["j1.w"][-1]), 9)   # tau / (I1 + I2 / ratio^2) * t
+    0.5
+    """
+
+    flange_a = Flange("first rotational axis (e.g. the input shaft's Revolute axis)")
+    flange_b = Flange("second rotational axis (e.g. the output shaft's Revolute axis)")
+    support = Flange("the housing's or carrier's rotational axis (fixed when unconnected)", optional=True)
+    ratio = Param(1.0, unit="1", doc="speed ratio w_a / w_b relative to the support (negative: opposite senses)",
+                  check="nonzero")
+    flange_kinds = {"flange_a": "rotational", "flange_b": "rotational", "support": "rotational"}
+    output_units = {"tau_a": "N m", "tau_b": "N m", "tau_support": "N m"}
+
+    def rows(self, flanges, p):
+        a, b, s = flanges["flange_a"], flanges["flange_b"], flanges["support"]
+        return [("mesh", (a - s) - p.ratio * (b - s))]
+
+    def outputs(self, t, states, p, flows):
+        """Torques on the axes (N m): ``tau_a``, ``tau_b`` and ``tau_support``."""
+        return {"tau_a": flows["flange_a"], "tau_b": flows["flange_b"], "tau_support": flows["support"]}
+
+
+class RackPinion(FlangeConstraint):
+    """Rack and pinion: the rack's travel ``s_b = radius phi_a`` (m) for the pinion's angle ``phi_a``.
+
+    ``flange_a`` on the pinion's rotational axis (a Revolute), ``flange_b`` on the rack's
+    translational axis (a Prismatic); displacements from their start values. The pinion's
+    torque and the rack's force satisfy ``tau_a = -radius f_b`` (no power lost). A rope on a
+    drum (an ideal pulley) is the same constraint.
+
+    Examples
+    --------
+    >>> from mbcomp.library import RackPinion
+    >>> from mbcomp.roles import FlangeSum
+    >>> rp = RackPinion(radius=0.05)
+    >>> rp.rows({"flange_a": FlangeSum({"flange_a": 1.0}), "flange_b": FlangeSum({"flange_b": 1.0})}, rp.p)
+    [('mesh', 1.0*flange_b + -0.05*flange_a)]
+    """
+
+    flange_a = Flange("the pinion's rotational axis (a Revolute's axis)")
+    flange_b = Flange("the rack's translational axis (a Prismatic's axis)")
+    radius = Param(0.05, unit="m", doc="pitch radius of the pinion", check="positive")
+    flange_kinds = {"flange_a": "rotational", "flange_b": "translational"}
+    output_units = {"tau_a": "N m", "f_b": "N"}
+
+    def rows(self, flanges, p):
+        return [("mesh", flanges["flange_b"] - p.radius * flanges["flange_a"])]
+
+    def outputs(self, t, states, p, flows):
+        """The pinion's torque ``tau_a`` (N m) and the rack's force ``f_b`` (N)."""
+        return {"tau_a": flows["flange_a"], "f_b": flows["flange_b"]}
+
+
+class Belt(FlangeConstraint):
+    """Two pulleys joined by a belt that does not slip: ``r_a phi_a = r_b phi_b`` (same sense).
+
+    ``flange_a``, ``flange_b`` on the two pulleys' rotational axes; angles from their start
+    values. The belt's tension difference ``F`` gives ``tau_a = -r_a F``, ``tau_b = r_b F``,
+    so ``tau_a / r_a + tau_b / r_b = 0``. A crossed belt (opposite senses) is an
+    :class:`IdealGear` with ``ratio = -r_b / r_a``.
+
+    Examples
+    --------
+    >>> from mbcomp.library import Belt
+    >>> Belt(r_a=0.1, r_b=0.3).p.r_b
+    0.3
+    """
+
+    flange_a = Flange("the first pulley's rotational axis")
+    flange_b = Flange("the second pulley's rotational axis")
+    r_a = Param(0.1, unit="m", doc="radius of pulley a", check="positive")
+    r_b = Param(0.1, unit="m", doc="radius of pulley b", check="positive")
+    flange_kinds = {"flange_a": "rotational", "flange_b": "rotational"}
+    output_units = {"tau_a": "N m", "tau_b": "N m", "f": "N"}
+
+    def rows(self, flanges, p):
+        return [("mesh", p.r_a * flanges["flange_a"] - p.r_b * flanges["flange_b"])]
+
+    def outputs(self, t, states, p, flows):
+        """Torques on the pulleys ``tau_a``, ``tau_b`` (N m) and the tension difference ``f``
+        (N, tight side minus slack side, > 0 when it drives pulley b forward)."""
+        return {"tau_a": flows["flange_a"], "tau_b": flows["flange_b"], "f": flows["flange_b"] / p.r_b}
+
+
+class Inertia(FlangeInertia):
+    """A rotor of axial inertia ``J`` on a rotational joint axis (a shaft without a body).
+
+    The rotor turns with the frame the flange moves (a Revolute's frame_b on its ``axis``)
+    about the joint's axis ``n``: inertia tensor ``J n n^T``, no mass, no transverse
+    inertia. On an axis fixed in the world it is a body of axial inertia ``J`` on frame_b.
+    On a moving carrier its kinetic energy is ``J (n . w)^2 / 2`` with ``w`` the absolute
+    angular velocity; ``gyroscopic=True`` also puts the gyroscopic moment
+    ``w x (J n (n . w))`` on the carrying frame (a spinning rotor on a turning body), which
+    ``False`` drops (it does no work: the energy is the same).
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import Fixed, FixedTranslation, Revolute, Inertia, Torque
+    >>> m = mbcomp.Model(); base = m.add("base", Fixed()); j = m.add("j", Revolute())
+    >>> hub = m.add("hub", FixedTranslation())   # the shaft's frame (a joint's frame_b must be connected)
+    >>> rotor = m.add("rotor", Inertia(J=0.5)); tq = m.add("tq", Torque(tau=2.0))
+    >>> m.connect(base.frame_b, j.frame_a); m.connect(j.frame_b, hub.frame_a)
+    >>> m.connect(rotor.flange, j.axis); m.connect(tq.flange_b, j.axis)
+    >>> round(float(mbcomp.simulate(m, t_end=1.0)["j.w"][-1]), 9)   # tau / J * t
+    4.0
+    """
+
+    flange = Flange("a rotational joint's axis (or support) flange")
+    J = Param(1.0, unit="kg m^2", doc="axial moment of inertia", check="positive")
+    gyroscopic = Param(False, unit="1", kind="any",
+                       doc="put the gyroscopic moment on the carrying frame (True/False)")
+
+    def rotor(self, p):
+        return p.J, bool(p.gyroscopic)
+
+
+class PlanetaryGear(Model):
+    """A planetary (epicyclic) gear set: sun, carrier and ring on one axis, massless planets.
+
+    Three :class:`Revolute` shafts about ``n`` from the frame ``frame_a`` (the housing),
+    each with a rotor :class:`Inertia` (``J_sun``, ``J_carrier``, ``J_ring``), tied by an
+    :class:`IdealGear` with the carrier as its support and ``ratio = -z_ring / z_sun``:
+    Willis' equation ``(w_sun - w_carrier) = -(z_ring / z_sun) (w_ring - w_carrier)``. In
+    steady state (or with massless shafts) the torques on ring and sun stand in the ratio
+    ``tau_ring / tau_sun = z_ring / z_sun``, and the carrier takes ``-(tau_sun + tau_ring)``.
+
+    Ports: ``frame_a`` (the housing frame), ``sun``, ``carrier``, ``ring`` (the shafts'
+    rotational axis flanges: connect torques, drives, dampers, other gears) and
+    ``sun_frame``, ``carrier_frame``, ``ring_frame`` (frames fixed to the shafts, on their
+    axis at the housing's origin, to attach bodies).
+    Result columns: ``<name>.sun.phi``, ``.carrier.w`` etc. (the Revolutes), the gear's
+    torques ``<name>.mesh.tau_a`` (sun), ``.tau_b`` (ring), ``.tau_support`` (carrier).
+
+    Parameters
+    ----------
+    z_sun, z_ring : int
+        Teeth of the sun and of the ring (``z_ring > z_sun``).
+    J_sun, J_carrier, J_ring : float
+        Axial inertias of the three shafts (kg m^2, > 0).
+    n : array_like (3,)
+        The common axis, ``frame_a`` coordinates.
+    w_sun0, w_carrier0 : float
+        Start speeds of sun and carrier (rad/s; the ring's follows from Willis' equation).
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import Fixed, PlanetaryGear, Torque
+    >>> m = mbcomp.Model(); base = m.add("base", Fixed())
+    >>> pg = m.add("pg", PlanetaryGear(z_sun=20, z_ring=60, w_carrier0=1.0))
+    >>> m.connect(base.frame_b, pg.frame_a)
+    >>> res = mbcomp.simulate(m, t_end=0.5)
+    >>> round(float(res["pg.ring.w"][-1]), 9)   # sun at rest: w_r = w_c (1 + z_s / z_r)
+    1.333333333
+    """
+
+    def __init__(self, z_sun=20, z_ring=60, J_sun=1e-3, J_carrier=1e-2, J_ring=1e-2, n=(0.0, 0.0, 1.0),
+                 w_sun0=0.0, w_carrier0=0.0):
+        super().__init__()
+        if not (0 < z_sun < z_ring):
+            raise ValueError(f"PlanetaryGear: z_sun={z_sun!r} and z_ring={z_ring!r} must satisfy 0 < z_sun < z_ring "
+                             "-> fix: e.g. z_sun=20, z_ring=60")
+        ratio = -float(z_ring) / float(z_sun)
+        w_ring0 = w_carrier0 + (w_sun0 - w_carrier0) / ratio
+        n = tuple(np.asarray(n, float))
+        for name, J, w0 in (("sun", J_sun, w_sun0), ("carrier", J_carrier, w_carrier0), ("ring", J_ring, w_ring0)):
+            shaft = self.add(name, Revolute(n=n, phi0=0.0, w0=w0))
+            hub = self.add(f"{name}_hub", FixedTranslation())  # the shaft's frame, to attach bodies to
+            rotor = self.add(f"J_{name}", Inertia(J=J))
+            self.connect(shaft.frame_b, hub.frame_a)
+            self.connect(rotor.flange, shaft.axis)
+            self.expose(name, shaft.axis)
+            self.expose(f"{name}_frame", hub.frame_b)
+        mesh = self.add("mesh", IdealGear(ratio=ratio))
+        self.connect(mesh.flange_a, self["sun"].axis)
+        self.connect(mesh.flange_b, self["ring"].axis)
+        self.connect(mesh.support, self["carrier"].axis)
+        for name in ("carrier", "ring"):
+            self.connect(self["sun"].frame_a, self[name].frame_a)
+        self.expose("frame_a", self["sun"].frame_a)
