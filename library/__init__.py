@@ -9,6 +9,7 @@ from .joints import Revolute, Prismatic, Cylindrical, Spherical, Weld, FreeMotio
 from .compound_joints import Universal, Planar
 from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
 from .contact import DiskContact, SphereContact, RollingDisk, RollingSphere
+from .rods import SphericalSpherical, UniversalSpherical
 from .gears import IdealGear, RackPinion, Belt, Inertia, PlanetaryGear
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
@@ -23,5 +24,6 @@ __all__ = [
     "DiskContact", "SphereContact", "RollingDisk", "RollingSphere",
     "ElastoGear", "BearingFriction", "Motor",
     "Universal", "Planar",
+    "SphericalSpherical", "UniversalSpherical",
     "IdealGear", "RackPinion", "Belt", "Inertia", "PlanetaryGear",
 ]

@@ -302,7 +302,11 @@ class MultibodySystem:
         qj, uj = q[e.q], u[e.u]
         R, r = e.comp.relative(qj, p)
         Hw, Hv = e.comp.motion(qj, p)
-        return R, r, Hw, Hv, Hw @ uj, Hv @ uj, None, None, qj, uj
+        # a joint whose Hw u, Hv u change at constant u (a rod's end on its sphere) gives their
+        # rates, the relative bias accelerations (frame_a coordinates), as motion_bias(q, u, p)
+        bias = getattr(e.comp, "motion_bias", None)
+        bw, bv = bias(qj, uj, p) if bias is not None else (None, None)
+        return R, r, Hw, Hv, Hw @ uj, Hv @ uj, bw, bv, qj, uj
 
     def kinematics(self, t, q, u):
         """Jets of every frame node (dict node -> :class:`~mbcomp.jets.FrameJet`)."""
