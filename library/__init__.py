@@ -13,6 +13,7 @@ from .rods import SphericalSpherical, UniversalSpherical
 from .gears import IdealGear, RackPinion, Belt, Inertia, PlanetaryGear
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
+from .sensors import RelativeSensor, AbsoluteSensor, AbsoluteAngles, CutForceAndTorque
 from .drivetrain import ElastoGear, BearingFriction, Motor
 
 __all__ = [
@@ -23,6 +24,7 @@ __all__ = [
     "Torque", "Force", "PrescribedMotion",
     "DiskContact", "SphereContact", "RollingDisk", "RollingSphere",
     "ElastoGear", "BearingFriction", "Motor",
+    "RelativeSensor", "AbsoluteSensor", "AbsoluteAngles", "CutForceAndTorque",
     "Universal", "Planar",
     "SphericalSpherical", "UniversalSpherical",
     "IdealGear", "RackPinion", "Belt", "Inertia", "PlanetaryGear",

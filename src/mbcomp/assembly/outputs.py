@@ -38,11 +38,11 @@ import numpy as np
 
 from ..geometry.kinematics import cross
 from ..modeling.component import PortRef
-from ..modeling.roles import FlangeElement, ForceElement, Joint
+from ..modeling.roles import FlangeElement, ForceElement, FrameState, Joint
 from .flange_rows import flange_flows, flange_states
 from .recursive import lagrange_solution, tree_links
 
-__all__ = ["output_values", "result_columns"]
+__all__ = ["output_values", "result_columns", "MeasuredFrame"]
 
 _XYZ = ("x", "y", "z")
 
@@ -76,20 +76,23 @@ def output_values(system, t, q, u, alpha=0.0, beta=0.0, baumgarte=False):
     """
     sol = lagrange_solution(system, t, q, u, alpha, beta, baumgarte)
     ev = _sampled_evaluation(system, t, q, u, sol.tp.jets)
-    reac = system.reactions(ev, _link_rates(tree_links(system), sol.acc), sol.lam)
-    return result_columns(system, ev, sol.ud, sol.lam, reac)
+    rates = _link_rates(tree_links(system), sol.acc)
+    reac = system.reactions(ev, rates, sol.lam)
+    return result_columns(system, ev, sol.ud, sol.lam, reac, rates)
 
 
-def result_columns(system, ev, ud, lam, reac):
+def result_columns(system, ev, ud, lam, reac, rates=None):
     """The columns and rotations of :func:`output_values` from what any route computed: an
     evaluation-like ``ev`` (``t, q, u, jets, local_nh, B``, all position rows ``Phi_all``,
     ``Phid_all``, the nonholonomic residual ``Psi``), the speeds' rates ``ud``, the
-    multipliers ``lam`` and the reactions ``reac`` (:meth:`MultibodySystem.reactions`)."""
+    multipliers ``lam`` and the reactions ``reac`` (:meth:`MultibodySystem.reactions`).
+    ``rates`` is the function ``(node, r) -> (a_lin, a_ang)`` of :func:`_link_rates` (jets
+    without Jacobian columns); None: from ``ud`` and the jets' Jacobians (the dense route)."""
     cols, rotations = {}, {}
     _coordinates(system, cols, ev.t, ev.q, ev.u, ev.jets, ud)
     _reactions(system, cols, ev, lam, reac)
     _flange_constraints(system, cols, ev, lam)
-    _elements(system, cols, ev)
+    _elements(system, cols, ev, rates if rates is not None else _jacobian_rates(ev.jets, ud))
     for path, _comp, node in system.topology.bodies:
         J = ev.jets[node]
         _vector(cols, f"{path}.r", J.r)
@@ -169,6 +172,61 @@ def _link_rates(links, acc):
     return rates
 
 
+def _jacobian_rates(jets, ud):
+    """:func:`_link_rates` from the speeds' rates ``ud`` and jets carrying Jacobians (as
+    :meth:`MultibodySystem.reactions` does on the dense route)."""
+    def rates(node, r):
+        J = jets[node]
+        dw = J.Jw @ ud
+        return J.Jv @ ud + cross(dw, r - J.r), dw
+    return rates
+
+
+class MeasuredFrame(FrameState):
+    """A :class:`~mbcomp.modeling.roles.FrameState` that also knows the frame's accelerations:
+    what a force element's :meth:`~mbcomp.modeling.roles.ForceElement.outputs` receives (never
+    its ``wrenches`` or ``potential``: forces do not depend on accelerations). Sensors
+    (:mod:`mbcomp.library.sensors`) read them.
+
+    Attributes
+    ----------
+    a : ndarray (3,)
+        Acceleration of the origin, m/s^2, world coordinates (computed when first read).
+    alpha : ndarray (3,)
+        Angular acceleration, rad/s^2, world coordinates (computed when first read).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.assembly.jets import FrameJet
+    >>> J = FrameJet.ground(0)
+    >>> f = MeasuredFrame(J, lambda node, r: (np.array([0.0, 1.0, 0.0]), np.zeros(3)), "n")
+    >>> f.a.tolist(), f.alpha.tolist()
+    ([0.0, 1.0, 0.0], [0.0, 0.0, 0.0])
+    """
+
+    __slots__ = ("_jet", "_rates", "_node", "_acc")
+
+    def __init__(self, jet, rates, node):
+        super().__init__(jet.r, jet.R, jet.v, jet.w)
+        self._jet, self._rates, self._node, self._acc = jet, rates, node, None
+
+    def _accelerations(self):
+        if self._acc is None:
+            J = self._jet
+            a_lin, a_ang = self._rates(self._node, J.r)
+            self._acc = (a_lin + J.a, a_ang + J.alpha)
+        return self._acc
+
+    @property
+    def a(self):
+        return self._accelerations()[0]
+
+    @property
+    def alpha(self):
+        return self._accelerations()[1]
+
+
 def _reactions(system, cols, ev, lam, reac):
     """Reaction columns, joints' own outputs and drive efforts (the dense route's
     :func:`_reaction_columns`)."""
@@ -183,6 +241,7 @@ def _reactions(system, cols, ev, lam, reac):
             extra = e.comp.outputs(ev.jets[e.node_a], ev.jets[e.node_b], system.P[e.name], lam_rows.get(e.name, {}))
             for key, val in extra.items():
                 cols[f"{e.name}.{key}"] = val
+    _reaction_outputs(system, cols, ev, reac)
     for e in topo.edges:
         if not e.drive:
             continue
@@ -191,6 +250,22 @@ def _reactions(system, cols, ev, lam, reac):
         effort = tb @ axis_b if e.comp.axis_kind == "rotational" else fb @ axis_b
         cols[f"{e.drive}.{'tau' if e.comp.axis_kind == 'rotational' else 'f'}"] = effort
         cols[f"{e.drive}.power"] = effort * cols[f"{e.name}.{e.comp.speeds[0][0]}"]
+
+
+def _reaction_outputs(system, cols, ev, reac):
+    """Columns a joint makes of its own reaction when it is a tree edge (it has no multipliers
+    there): a joint class with ``reaction_outputs(a, b, p, f, tau)`` (jets of its frames, the
+    reaction exerted on frame_b through it, N and N m, frame_b coordinates, torque about
+    frame_b's origin) returning ``{suffix: value}``, e.g. a cut-force sensor. A cut joint makes
+    the same columns from its multipliers in :meth:`Joint.outputs`."""
+    topo = system.topology
+    for e in topo.edges:
+        hook = getattr(e.comp, "reaction_outputs", None) if e.kind == "joint" else None
+        if hook is None or e.name in topo.cut or e.name not in reac:
+            continue
+        fb, tb = reac[e.name]
+        for key, val in hook(ev.jets[e.node_a], ev.jets[e.node_b], system.P[e.name], fb, tb).items():
+            cols[f"{e.name}.{key}"] = val
 
 
 def _flange_constraints(system, cols, ev, lam):
@@ -225,8 +300,9 @@ def _mixed(comp, base):
         not comp.conservative or type(comp).conserves_energy is not base.conserves_energy)
 
 
-def _elements(system, cols, ev):
-    """Force and flange elements' own outputs (:meth:`ForceElement.outputs`), the power each
+def _elements(system, cols, ev, rates):
+    """Force and flange elements' own outputs (:meth:`ForceElement.outputs`, its frames as
+    :class:`MeasuredFrame`: with accelerations by ``rates``, see :func:`_link_rates`), the power each
     delivers to the mechanism (W: force times its point's velocity, torque times its frame's
     angular velocity, a flange's flow times its rate), for those with a potential that
     potential (J), and for those that may do work beyond it (a spring-damper) the power
@@ -237,7 +313,8 @@ def _elements(system, cols, ev):
     for path, comp, ports in topo.forces:
         frames = {pn: system._frame_state(jets[n]) for pn, n in ports.items()}
         p = system.P[path]
-        for key, val in comp.outputs(ev.t, frames, p).items():
+        measured = {pn: MeasuredFrame(jets[n], rates, n) for pn, n in ports.items()}
+        for key, val in comp.outputs(ev.t, measured, p).items():
             cols[f"{path}.{key}"] = val
         power = 0.0
         for pn, (f, tau) in comp.wrenches(ev.t, frames, p).items():
