@@ -36,7 +36,7 @@ from mbcomp.jets import ScalarJet, VecJet, is_traced, slip_velocity, velocity_al
 from mbcomp.kinematics import cross
 
 __all__ = ["HeightJet", "Surface", "Plane", "SphereSurface", "CylinderSurface", "TorusSurface", "HeightField",
-           "surface_rows"]
+           "surface_rows", "surface_geometry", "tangent_distance"]
 
 _E = np.eye(3)
 
@@ -458,7 +458,12 @@ class HeightField(Surface):
             raise ValueError(f"HeightField: newton_steps={newton_steps!r} must be at least 1")
 
     def _eval(self, X, Y):
-        z = self.h(*HeightJet.variables(X, Y))
+        try:
+            z = self.h(*HeightJet.variables(X, Y))
+        except TypeError as exc:
+            raise TypeError(f"HeightField: h={getattr(self.h, '__name__', self.h)} is called with HeightJet numbers (for "
+                            f"its slope and curvature) and must be written with arithmetic and numpy functions "
+                            f"(np.sqrt, not math.sqrt; no float(), no if on x or y): {exc}") from exc
         return z if isinstance(z, HeightJet) else HeightJet(z)
 
     def distance(self, x):

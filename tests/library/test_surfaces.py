@@ -10,6 +10,8 @@ jets a ball on them gets (``surface_rows``), against finite differences along ex
   ``jac`` and ``bias``, against finite differences for two independently moving frames;
 * ``Plane`` gives the same rows as the contact without a surface; clear errors.
 """
+import math
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -217,6 +219,8 @@ def test_errors_name_the_contact_and_the_fix():
         TorusSurface(R=1.0, a=2.0)
     with pytest.raises(ValueError, match="HeightField: h="):
         HeightField(3.0)
+    with pytest.raises(TypeError, match=r"HeightField: h=.*np.sqrt, not math.sqrt"):
+        HeightField(lambda x, y: math.sqrt(1.0 + x * x)).distance(np.array([0.1, 0.2, 0.3]))
     with pytest.raises(ValueError, match="CylinderSurface: axis"):
         CylinderSurface(axis=(0, 0, 0))
     # a single Newton step on a steep wall: the numeric evaluation refuses an unconverged foot point
