@@ -187,7 +187,7 @@ def motion_bias(joint, q, uj, p):
     """``(bw, bv)``: the rates of ``Hw u``, ``Hv u`` at constant speeds (frame_a axes), zero
     unless the joint declares them with ``motion_bias`` (a universal joint: no two speeds make
     its relative angular velocity constant)."""
-    if not hasattr(joint, "motion_bias"):
+    if not joint.has_motion_bias:
         return np.zeros(3), np.zeros(3)
     bw, bv = joint.motion_bias(q, uj, p)
     assert np.shape(bw) == (3,) and np.shape(bv) == (3,)
@@ -197,7 +197,7 @@ def motion_bias(joint, q, uj, p):
 def edge_args(joint, q, uj, p, bw=None, bv=None):
     R, r = joint.relative(q, p)
     Hw, Hv = joint.motion(q, p)
-    if hasattr(joint, "motion_bias"):  # the velocity-product term goes into frame_b's bias acceleration
+    if joint.has_motion_bias:  # the velocity-product term goes into frame_b's bias acceleration
         cw, cv = motion_bias(joint, q, uj, p)
         bw, bv = cw + (0.0 if bw is None else bw), cv + (0.0 if bv is None else bv)
     return (R, r, Hw, Hv, slice(0, joint.nu), Hw @ uj, Hv @ uj, bw, bv)

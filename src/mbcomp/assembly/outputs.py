@@ -260,11 +260,11 @@ def _reaction_outputs(system, cols, ev, reac):
     the same columns from its multipliers in :meth:`Joint.outputs`."""
     topo = system.topology
     for e in topo.edges:
-        hook = getattr(e.comp, "reaction_outputs", None) if e.kind == "joint" else None
-        if hook is None or e.name in topo.cut or e.name not in reac:
+        if e.kind != "joint" or not e.comp.has_reaction_outputs or e.name in topo.cut or e.name not in reac:
             continue
         fb, tb = reac[e.name]
-        for key, val in hook(ev.jets[e.node_a], ev.jets[e.node_b], system.P[e.name], fb, tb).items():
+        for key, val in e.comp.reaction_outputs(ev.jets[e.node_a], ev.jets[e.node_b], system.P[e.name], fb,
+                                                tb).items():
             cols[f"{e.name}.{key}"] = val
 
 

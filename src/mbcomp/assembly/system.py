@@ -302,10 +302,9 @@ class MultibodySystem:
         qj, uj = q[e.q], u[e.u]
         R, r = e.comp.relative(qj, p)
         Hw, Hv = e.comp.motion(qj, p)
-        # a joint whose Hw u, Hv u change at constant u (a rod's end on its sphere) gives their
-        # rates, the relative bias accelerations (frame_a coordinates), as motion_bias(q, u, p)
-        bias = getattr(e.comp, "motion_bias", None)
-        bw, bv = bias(qj, uj, p) if bias is not None else (None, None)
+        # a joint whose Hw u, Hv u change at constant u (a rod's end on its sphere) declares their
+        # rates, the relative bias accelerations (frame_a coordinates): Joint.motion_bias
+        bw, bv = e.comp.motion_bias(qj, uj, p) if e.comp.has_motion_bias else (None, None)
         return R, r, Hw, Hv, Hw @ uj, Hv @ uj, bw, bv, qj, uj
 
     def kinematics(self, t, q, u):

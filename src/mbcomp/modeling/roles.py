@@ -160,9 +160,21 @@ class Joint(Component):
 
     def motion(self, q, p):
         """``(Hw, Hv)``, each (3, nu): relative angular velocity and d(r_rel)/dt, both in
-        frame_a coordinates, per unit speed. Their time derivative at constant ``u`` must
-        vanish (true for every joint in the standard library)."""
+        frame_a coordinates, per unit speed. Their time derivative at constant ``u`` is zero,
+        or given by :meth:`motion_bias`."""
         return np.zeros((3, self.nu)), np.zeros((3, self.nu))
+
+    def motion_bias(self, q, u, p):
+        """``(bw, bv)``: the time derivatives of ``Hw u`` and ``Hv u`` at constant speeds ``u``
+        (frame_a coordinates; rad/s^2, m/s^2), for a joint whose motion subspace turns with its
+        own coordinates whatever speeds are chosen (a universal joint's second axis, a rod's
+        end on its sphere); ``None`` (the default) where they vanish. Declared by overriding
+        (:attr:`has_motion_bias`); the assembler adds them to frame_b's bias accelerations."""
+        return None
+
+    @property
+    def has_motion_bias(self):
+        return type(self).motion_bias is not Joint.motion_bias
 
     def q_rate(self, q, u, p):
         """Coordinate rates ``dq/dt`` from speeds ``u``."""
@@ -228,6 +240,18 @@ class Joint(Component):
             ``{suffix: float}``, reported as ``<joint>.<suffix>`` (e.g. a contact's normal force).
         """
         return {}
+
+    def reaction_outputs(self, a, b, p, f, tau):
+        """Result columns a joint makes of its own reaction when it is a tree edge (it has no
+        multipliers there; a cut joint makes them from ``lam`` in :meth:`outputs`): ``a``,
+        ``b`` the frames' jets, ``f`` (N) and ``tau`` (N m, about frame_b's origin) the
+        reaction exerted on frame_b through the joint, frame_b coordinates. Returns
+        ``{suffix: float}`` (default: none; a cut-force sensor overrides it)."""
+        return {}
+
+    @property
+    def has_reaction_outputs(self):
+        return type(self).reaction_outputs is not Joint.reaction_outputs
 
     def result_notes(self, name, t, outputs):
         """Notes this joint adds to a simulation result's message (optional).
@@ -324,7 +348,9 @@ class ForceElement(Component):
 
     def outputs(self, t, frames, p):
         """Named result columns of this element at one output time (optional), reported as
-        ``<element>.<suffix>``: e.g. a spring's tension ``f`` (N) and ``length`` (m). Its
+        ``<element>.<suffix>``: e.g. a spring's tension ``f`` (N) and ``length`` (m). The
+        frames here also carry their accelerations ``a`` (m/s^2) and ``alpha`` (rad/s^2),
+        world (:class:`mbcomp.assembly.outputs.MeasuredFrame`: sensors read them). Its
         ``power`` (W, delivered to the mechanism) and, when it has a :meth:`potential`, its
         ``potential`` (J) are added by the post-processing for every element.
 
