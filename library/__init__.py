@@ -14,7 +14,7 @@ from .gears import IdealGear, RackPinion, Belt, Inertia, PlanetaryGear
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
 from .sensors import RelativeSensor, AbsoluteSensor, AbsoluteAngles, CutForceAndTorque
-from .drivetrain import ElastoGear, BearingFriction, Motor
+from .drivetrain import ElastoGear, BearingFriction, Motor, MotorTorque
 
 __all__ = [
     "World", "Fixed", "FixedTranslation", "FixedRotation", "RigidBody", "PointMass",
@@ -28,4 +28,5 @@ __all__ = [
     "Universal", "Planar",
     "SphericalSpherical", "UniversalSpherical",
     "IdealGear", "RackPinion", "Belt", "Inertia", "PlanetaryGear",
+    "MotorTorque",
 ]

@@ -1,18 +1,20 @@
 """Drivetrain elements on joint-axis flanges: an elastic gear mesh with backlash, bearing
 friction and the seed's DC motor.
 
-All three are :class:`~mbcomp.FlangeElement` force laws (no constraint, no state of their
-own); connect their flanges to 1-DOF rotational joints' ``axis`` (and ``support``) flanges.
+``ElastoGear``, ``BearingFriction`` and ``MotorTorque`` are :class:`~mbcomp.FlangeElement`
+force laws (no constraint, no state of their own); ``Motor`` is ``MotorTorque`` with the
+armature's rotor (a composite ``Model``). Connect their flanges to 1-DOF rotational joints' ``axis`` (and ``support``) flanges.
 Angles are in rad, rates in rad/s, torques in N m. The laws are plain arithmetic with
 ``abs`` and ``tanh``, so they trace into the compiled program without guards (the backlash's
 corners are written with ``abs``, not with ``if``).
 """
 import numpy as np
 
-from mbcomp import Flange, FlangeElement, Param
+from mbcomp import Flange, FlangeElement, Model, Param
 from mbcomp.errors import Problem
+from .gears import Inertia
 
-__all__ = ["ElastoGear", "BearingFriction", "Motor"]
+__all__ = ["ElastoGear", "BearingFriction", "MotorTorque", "Motor"]
 
 
 def _pos(x):
@@ -166,17 +168,8 @@ class BearingFriction(FlangeElement):
 LAWS = ("linear",)
 
 
-def _no_armature(J):
-    """Why a non-zero armature inertia cannot be given yet, or ``None``."""
-    if float(J) == 0.0:
-        return None
-    return ("is not available yet: mbcomp has no rotor Inertia flange element, so Motor cannot carry an "
-            "armature inertia; leave J_armature=0 and add it to the rotor body's inertia about the joint "
-            "axis (exact for a motor driving its joint directly)")
-
-
-class Motor(FlangeElement):
-    """DC motor on a rotational joint axis: the seed's linear torque-speed law.
+class MotorTorque(FlangeElement):
+    """The torque of a DC motor on a rotational joint axis: the seed's linear torque-speed law.
 
     Seed textbook, section 4.7 (*Example Problem: Dynamics of Two-Link Arms*): the driving
     torque falls with the speed ``w`` (rad/s) as ``Md = M0 - dM w``. Written with the motor's
@@ -188,26 +181,21 @@ class Motor(FlangeElement):
     for every ``w``: above the no-load speed the motor brakes, backwards it pulls harder
     (a DC motor at constant voltage). ``w`` is the rate of the joint whose axis flange_b is
     on; the torque acts on the joint's frame_b, its reaction on frame_a (the stator).
-
-    ``J_armature`` must be 0 for now: the rotor ``Inertia`` flange element it needs does not
-    exist yet, so add the armature's inertia to the driven body about the joint axis.
+    This element has no inertia: :class:`Motor` is this law together with the armature's
+    rotor (an :class:`~mbcomp.library.Inertia` on the same flange).
 
     Examples
     --------
-    >>> from mbcomp.library import Motor
-    >>> m = Motor(tau_stall=2.0, w_no_load=100.0)
+    >>> from mbcomp.library import MotorTorque
+    >>> m = MotorTorque(tau_stall=2.0, w_no_load=100.0)
     >>> m.flange_forces(0.0, {"flange_b": (0.0, 25.0)}, m.p)                # 2 * (1 - 0.25)
     {'flange_b': 1.5}
-    >>> [str(pr) for pr in Motor(tau_stall=2.0, w_no_load=100.0, J_armature=1e-4).problems()][0][:60]
-    '<unnamed Motor>.J_armature: parameter is not available yet: '
     """
 
     axis_kind = "rotational"
     flange_b = Flange("the driven flange (a rotational joint's axis)")
     tau_stall = Param(1.0, unit="N m", doc="stall torque M0 (torque at zero speed)", check="positive")
     w_no_load = Param(1.0, unit="rad/s", doc="no-load speed (speed at zero torque)", check="positive")
-    J_armature = Param(0.0, unit="kg m^2", doc="armature inertia (only 0: the rotor Inertia element is not "
-                       "available yet)", check=_no_armature)
     law = Param("linear", unit="1", kind="any", doc="torque-speed law: 'linear' (seed section 4.7)")
     output_units = {"tau": "N m", "w": "rad/s"}
 
@@ -229,3 +217,68 @@ class Motor(FlangeElement):
         """Motor torque ``tau`` (N m) and speed ``w`` (rad/s)."""
         w = states["flange_b"][1]
         return {"tau": self.torque(w, p), "w": w}
+
+
+def _armature(J_armature):
+    """``J_armature`` as a float >= 0 (kg m^2), or a ``ValueError`` naming the fix."""
+    try:
+        J = float(J_armature)
+    except (TypeError, ValueError):
+        J = float("nan")
+    if not (np.isfinite(J) and J >= 0.0):
+        raise ValueError(f"Motor: J_armature={J_armature!r} must be a number >= 0 (kg m^2, the armature's "
+                         "inertia about the joint axis) -> fix: e.g. J_armature=1e-4, or 0 for none")
+    return J
+
+
+class Motor(Model):
+    """DC motor on a rotational joint axis: the seed's torque-speed law and an armature inertia.
+
+    A composite of :class:`MotorTorque` (named ``torque``: ``tau = tau_stall (1 - w /
+    w_no_load)``, seed section 4.7, with ``w`` the joint's rate in rad/s) and, when
+    ``J_armature > 0``, the armature's rotor, an :class:`~mbcomp.library.Inertia` (named
+    ``armature``) on the same flange: it turns with the joint's frame_b about the joint's
+    axis, so on a fixed axis ``(J_load + J_armature) dw/dt = tau``. The stator is the joint's
+    frame_a (the torque's reaction acts there).
+
+    Parameters
+    ----------
+    tau_stall : float
+        Stall torque ``M0`` (N m, > 0): the torque at zero speed.
+    w_no_load : float
+        No-load speed (rad/s, > 0): the speed at zero torque.
+    J_armature : float, optional
+        Axial inertia of the armature (kg m^2, >= 0; 0: no rotor is added).
+    law : str, optional
+        Torque-speed law: ``'linear'`` (the only one; a ``Torque`` with a law for any other).
+    gyroscopic : bool, optional
+        Put the armature's gyroscopic moment on the carrying frame (a motor on a turning body).
+
+    Port ``flange_b``: connect it to a Revolute's ``axis``. Result columns ``<name>.tau``
+    (N m), ``<name>.w`` (rad/s) and ``<name>.power`` (W); run-time parameters
+    ``<name>.torque.tau_stall``, ``<name>.torque.w_no_load``, ``<name>.armature.J``.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import World, Revolute, RigidBody, Motor
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, 0)))
+    >>> j = m.add("j", Revolute(n=(0, 0, 1))); disk = m.add("disk", RigidBody(m=1.0, I=np.eye(3) * 0.03))
+    >>> mot = m.add("motor", Motor(tau_stall=2.0, w_no_load=100.0, J_armature=0.02))
+    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, disk.frame_a); m.connect(mot.flange_b, j.axis)
+    >>> res = mbcomp.simulate(m, t_end=1.0)
+    >>> exact = 100.0 * (1 - np.exp(-1.0 * 2.0 / ((0.03 + 0.02) * 100.0)))   # w(t), J + J_a = 0.05
+    >>> bool(abs(res["motor.w"][-1] - exact) < 1e-6)
+    True
+    """
+
+    def __init__(self, tau_stall=1.0, w_no_load=1.0, J_armature=0.0, law="linear", gyroscopic=False):
+        super().__init__()
+        J = _armature(J_armature)
+        torque = self.add("torque", MotorTorque(tau_stall=tau_stall, w_no_load=w_no_load, law=law))
+        if J > 0.0:
+            rotor = self.add("armature", Inertia(J=J, gyroscopic=gyroscopic))
+            self.connect(rotor.flange, torque.flange_b)
+        self.expose("flange_b", torque.flange_b)
+        for column in ("tau", "w", "power"):
+            self.alias(column, f"torque.{column}")

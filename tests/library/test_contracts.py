@@ -694,7 +694,7 @@ CONSERVATIVE_FLANGE = [c for c in FLANGE_ELEMENTS if conservative(c, FlangeEleme
 #: a gear stage's flows balance along its rigid motion ``s_a = ratio s_b``, not along equal rates
 RIGID_RATES = {lib.ElastoGear: lambda p: {"flange_a": p.ratio, "flange_b": 1.0}}
 #: one-flange actuators with a fixed law and no law parameter (their laws: tests/library/test_drivetrain.py)
-FIXED_LAW_ACTUATORS = [lib.Motor]
+FIXED_LAW_ACTUATORS = [lib.MotorTorque]
 
 
 def rigid_rates(comp, ports):

@@ -8,7 +8,7 @@
 * BearingFriction on a flywheel: exponential decay (viscous), the tanh-regularized Coulomb
   decay in closed form and its stop time against the exact Coulomb one;
 * Motor (seed section 4.7, ``Md = M0 - dM w``) on a flywheel from rest, with and without a
-  viscous load.
+  viscous load, and with its armature inertia (``J + J_a`` in the time constant).
 """
 import warnings
 
@@ -18,7 +18,7 @@ from scipy.interpolate import CubicSpline
 
 import mbcomp
 from mbcomp.errors import ModelError
-from mbcomp.library import BearingFriction, ElastoGear, Motor, Revolute, RigidBody, World
+from mbcomp.library import BearingFriction, ElastoGear, Motor, MotorTorque, Revolute, RigidBody, World
 
 TIGHT = dict(rtol=1e-11, atol=1e-13)
 
@@ -248,12 +248,42 @@ def test_motor_against_viscous_load_settles_where_torques_balance():
     assert abs(res["energy.balance"]).max() < 1e-6 * res["energy.total"][-1]
 
 
-def test_motor_refuses_armature_inertia_and_unknown_laws_by_name():
-    with pytest.raises(ModelError) as err:
-        mbcomp.simulate(flywheel(J, 0.0, ("motor", Motor(tau_stall=TS, w_no_load=WNL, J_armature=1e-3))), t_end=0.1)
-    assert "motor.J_armature" in str(err.value) and "not available yet" in str(err.value)
-    (problem,) = Motor(law="quadratic").problems()
+@pytest.mark.parametrize("backend", ["numeric", "c"])
+def test_motor_armature_inertia_adds_to_the_load(backend):
+    Ja = 0.013
+    res = mbcomp.simulate(flywheel(J, 0.0, ("motor", Motor(tau_stall=TS, w_no_load=WNL, J_armature=Ja))),
+                          t_end=5.0, n_out=501, backend=backend, **TIGHT)
+    assert res.stats["backend"] == backend
+    # (J + Ja) w' = TS (1 - w / WNL): w = WNL (1 - exp(-t TS / ((J + Ja) WNL)))
+    exact = WNL * (1 - np.exp(-res.time * TS / ((J + Ja) * WNL)))
+    err = np.abs(res["hub.w"] - exact).max() / WNL
+    assert err < 1e-8, err
+    np.testing.assert_allclose(res["motor.w"], res["hub.w"], atol=1e-14)
+    np.testing.assert_allclose(res["motor.tau"], TS * (1 - res["hub.w"] / WNL), atol=1e-12)
+    # the motor's work is the kinetic energy of flywheel and armature
+    work = np.concatenate([[0.0], np.cumsum(np.diff(res.time) * 0.5 * (res["motor.power"][1:] + res["motor.power"][:-1]))])
+    np.testing.assert_allclose(res["energy.kinetic"], 0.5 * (J + Ja) * res["hub.w"] ** 2, rtol=1e-12, atol=1e-14)
+    assert abs(res["energy.balance"]).max() < 1e-6 * res["energy.total"][-1]
+    assert abs(work[-1] - res["energy.kinetic"][-1]) < 1e-3 * res["energy.kinetic"][-1]
+
+
+def test_motor_armature_is_a_rotor_and_parameters_change_at_run_time():
+    m = flywheel(J, 0.0, ("motor", Motor(tau_stall=TS, w_no_load=WNL, J_armature=0.01)))
+    res = mbcomp.simulate(m, t_end=1.0, params={"motor.armature.J": 0.03, "motor.torque.tau_stall": 2 * TS}, **TIGHT)
+    exact = WNL * (1 - np.exp(-res.time * 2 * TS / ((J + 0.03) * WNL)))
+    assert np.abs(res["hub.w"] - exact).max() < 1e-8 * WNL
+
+
+def test_motor_refuses_bad_armature_inertia_and_unknown_laws_by_name():
+    for bad in (-1e-3, "heavy", float("nan")):
+        with pytest.raises(ValueError, match="J_armature") as err:
+            Motor(tau_stall=TS, w_no_load=WNL, J_armature=bad)
+        assert "fix" in str(err.value)
+    (problem,) = MotorTorque(law="quadratic").problems()
     assert problem.where.endswith(".law") and "'linear'" in problem.fix
+    with pytest.raises(ModelError) as err:
+        mbcomp.simulate(flywheel(J, 0.0, ("motor", Motor(law="quadratic"))), t_end=0.1)
+    assert "motor.torque.law" in str(err.value)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert Motor(tau_stall=TS, w_no_load=WNL, J_armature=0.0).problems() == []
+        assert MotorTorque(tau_stall=TS, w_no_load=WNL).problems() == []
