@@ -1,12 +1,14 @@
 """Gearboxes from ideal gears (library/gears.py): a planetary set's Willis equation and torque
-split, and a two-stage gearbox driven by a torque-speed law into a viscous load, reaching the
-closed-form balance speed with a closed energy balance. (A Torque law stands in for a motor.)"""
+split, and a two-stage gearbox driven by the library's Motor (the seed's torque-speed law with
+an armature inertia) into a viscous load, reaching the closed-form balance speed with a closed
+energy balance; the same gearbox driven by a Torque law with the armature added to the input
+shaft runs the same motion."""
 import numpy as np
 import pytest
 
 import mbcomp
-from mbcomp.library import (FixedTranslation, Fixed, IdealGear, Inertia, PlanetaryGear, PrescribedMotion, Revolute,
-                            RotationalDamper, Torque)
+from mbcomp.library import (FixedTranslation, Fixed, IdealGear, Inertia, Motor, PlanetaryGear, PrescribedMotion,
+                            Revolute, RotationalDamper, Torque)
 
 TIGHT = dict(rtol=1e-11, atol=1e-12)
 ZS, ZR = 18, 72
@@ -74,13 +76,18 @@ def _shaft(m, name, base, J, **start):
     return j
 
 
-def two_stage(k1=4.0, k2=-2.5, tau0=3.0, w0=50.0, d=6.0, J=(0.01, 0.03, 0.4)):
-    """Input shaft 1 driven by tau0 (1 - w/w0), geared 1 -> 2 by k1, 2 -> 3 by k2 (``w_a = k w_b``),
-    a viscous load d on shaft 3."""
+def two_stage(k1=4.0, k2=-2.5, tau0=3.0, w0=50.0, d=6.0, J=(0.01, 0.03, 0.4), J_a=0.006, stand_in=False):
+    """Input shaft 1 driven by a motor ``tau0 (1 - w/w0)`` with armature inertia ``J_a``, geared
+    1 -> 2 by k1, 2 -> 3 by k2 (``w_a = k w_b``), a viscous load d on shaft 3. ``stand_in``: the
+    motor is a Torque law instead and ``J_a`` is added to shaft 1's rotor."""
     m = mbcomp.Model()
     base = m.add("base", Fixed())
+    J = (J[0] + J_a * stand_in,) + tuple(J[1:])
     s1, s2, s3 = (_shaft(m, f"s{i + 1}", base.frame_b, J[i]) for i in range(3))
-    motor = m.add("motor", Torque(tau=lambda t, s, v: tau0 * (1.0 - v / w0)))
+    if stand_in:
+        motor = m.add("motor", Torque(tau=lambda t, s, v: tau0 * (1.0 - v / w0)))
+    else:
+        motor = m.add("motor", Motor(tau_stall=tau0, w_no_load=w0, J_armature=J_a))
     load = m.add("load", RotationalDamper(d=d))
     g1, g2 = m.add("g1", IdealGear(ratio=k1)), m.add("g2", IdealGear(ratio=k2))
     m.connect(motor.flange_b, s1.axis)
@@ -105,12 +112,25 @@ def test_a_two_stage_gearbox_reaches_the_speed_where_motor_and_load_balance(back
 
 
 def test_the_gearbox_energy_balance_closes():
-    """The motor's work = kinetic energy + the load's dissipation (a grid fine enough for the
-    quadrature of the spin-up transient, time constant ~0.13 s)."""
-    res = mbcomp.simulate(two_stage(), t_end=1.0, n_out=20001, backend="c", **TIGHT)
+    """The motor's work = kinetic energy (the armature's too) + the load's dissipation (a grid
+    fine enough for the quadrature of the spin-up transient, time constant ~0.13 s)."""
+    J_a, J = 0.006, (0.01, 0.03, 0.4)
+    res = mbcomp.simulate(two_stage(J=J, J_a=J_a), t_end=1.0, n_out=20001, backend="c", **TIGHT)
     scale = np.abs(res["energy.kinetic"]).max() + np.abs(res["energy.dissipated"]).max()
     assert np.abs(res["energy.balance"]).max() < 1e-8 * scale
     assert res["energy.dissipated"][-1] > 0.2 * scale  # the balance is not trivially small
+    shafts = (J[0] + J_a) * res["s1.w"] ** 2 + J[1] * res["s2.w"] ** 2 + J[2] * res["s3.w"] ** 2
+    np.testing.assert_allclose(res["energy.kinetic"], 0.5 * shafts, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(res["motor.power"], res["motor.tau"] * res["s1.w"], rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("backend", ["numeric", "c"])
+def test_the_library_motor_runs_as_a_torque_law_with_the_armature_on_the_shaft(backend):
+    a = mbcomp.simulate(two_stage(), t_end=2.0, backend=backend, **TIGHT)
+    b = mbcomp.simulate(two_stage(stand_in=True), t_end=2.0, backend=backend, **TIGHT)
+    for col in ("s1.w", "s3.phi", "g2.tau_b", "energy.kinetic"):
+        np.testing.assert_allclose(a[col], b[col], rtol=1e-9, atol=1e-10, err_msg=col)
+    np.testing.assert_allclose(a["motor.tau"], 3.0 * (1 - a["s1.w"] / 50.0), atol=1e-12)
 
 
 def test_the_gearbox_backends_agree():
