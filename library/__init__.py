@@ -10,7 +10,7 @@ from .compound_joints import Universal, Planar
 from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
 from .contact import DiskContact, SphereContact, RollingDisk, RollingSphere
 from .rods import SphericalSpherical, UniversalSpherical
-from .gears import IdealGear, RackPinion, Belt, Inertia, PlanetaryGear
+from .gears import IdealGear, RackPinion, Belt, Inertia, PlanetaryGear, IdealPulley
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
 from .sensors import RelativeSensor, AbsoluteSensor, AbsoluteAngles, CutForceAndTorque
@@ -29,4 +29,5 @@ __all__ = [
     "SphericalSpherical", "UniversalSpherical",
     "IdealGear", "RackPinion", "Belt", "Inertia", "PlanetaryGear",
     "MotorTorque",
+    "IdealPulley",
 ]

@@ -1,4 +1,4 @@
-"""Ideal transmissions between joint axes: gears, rack and pinion, belts, rotors, planetary sets.
+"""Ideal transmissions between joint axes: gears, rack and pinion, pulleys, belts, rotors, planetary sets.
 
 Each transmission is a :class:`~mbcomp.roles.FlangeConstraint`: one holonomic row tying the
 coordinates of the joint axes its flanges are connected to (any 1-DOF joints' ``axis``
@@ -18,7 +18,7 @@ from mbcomp import FlangeConstraint, FlangeInertia, Flange, Model, Param
 from .joints import Revolute
 from .parts import FixedTranslation
 
-__all__ = ["IdealGear", "RackPinion", "Belt", "Inertia", "PlanetaryGear"]
+__all__ = ["IdealGear", "RackPinion", "IdealPulley", "Belt", "Inertia", "PlanetaryGear"]
 
 
 class IdealGear(FlangeConstraint):
@@ -71,7 +71,7 @@ class RackPinion(FlangeConstraint):
     ``flange_a`` on the pinion's rotational axis (a Revolute), ``flange_b`` on the rack's
     translational axis (a Prismatic); displacements from their start values. The pinion's
     torque and the rack's force satisfy ``tau_a = -radius f_b`` (no power lost). A rope on a
-    drum (an ideal pulley) is the same constraint.
+    drum is the same constraint: :class:`IdealPulley`.
 
     Examples
     --------
@@ -94,6 +94,53 @@ class RackPinion(FlangeConstraint):
     def outputs(self, t, states, p, flows):
         """The pinion's torque ``tau_a`` (N m) and the rack's force ``f_b`` (N)."""
         return {"tau_a": flows["flange_a"], "f_b": flows["flange_b"]}
+
+
+class IdealPulley(FlangeConstraint):
+    """A drum winding a rope (Modelica's ``IdealRollingWheel``): the rope's end travels
+    ``s_b = radius phi_a`` (m) for the drum's angle ``phi_a`` (rad).
+
+    ``flange_a`` on the drum's rotational axis (a Revolute), ``flange_b`` on the translational
+    axis the rope's end moves along (a Prismatic; displacements from the start values). Point
+    the Prismatic's axis away from the drum: a positive drum angle then pays rope out. The
+    rope is ideal: inextensible, massless, and never slack (it pushes as well as pulls, as
+    Modelica's). Its flows satisfy ``tau_a = -radius f_b``; the rope's ``tension`` is
+    ``-f_b`` (N, > 0 while it pulls the load towards the drum).
+
+    Examples
+    --------
+    A hoist: a drum of inertia J lowers a mass m under gravity with
+    ``a = m g r^2 / (J + m r^2)``.
+
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Revolute, FixedTranslation, Inertia, Prismatic, PointMass, IdealPulley
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
+    >>> drum = m.add("drum", Revolute(n=(0, 0, 1))); hub = m.add("hub", FixedTranslation())
+    >>> rotor = m.add("drum_J", Inertia(J=0.02))
+    >>> hook = m.add("hook", Prismatic(n=(0, -1, 0))); load = m.add("load", PointMass(m=3.0))
+    >>> rope = m.add("rope", IdealPulley(radius=0.05))
+    >>> m.connect(w.frame_b, drum.frame_a); m.connect(drum.frame_b, hub.frame_a); m.connect(rotor.flange, drum.axis)
+    >>> m.connect(w.frame_b, hook.frame_a); m.connect(hook.frame_b, load.frame_a)
+    >>> m.connect(rope.flange_a, drum.axis); m.connect(rope.flange_b, hook.axis)
+    >>> res = mbcomp.simulate(m, t_end=1.0)
+    >>> a = 3.0 * 9.81 * 0.05 ** 2 / (0.02 + 3.0 * 0.05 ** 2)
+    >>> bool(abs(res["hook.s"][-1] - a / 2) < 1e-9), bool(abs(res["rope.tension"][-1] - 3.0 * (9.81 - a)) < 1e-9)
+    (True, True)
+    """
+
+    flange_a = Flange("the drum's rotational axis (a Revolute's axis)")
+    flange_b = Flange("the rope end's translational axis (a Prismatic's axis, pointing away from the drum)")
+    radius = Param(0.05, unit="m", doc="radius of the drum (to the rope's centre line)", check="positive")
+    flange_kinds = {"flange_a": "rotational", "flange_b": "translational"}
+    output_units = {"tau_a": "N m", "f_b": "N", "tension": "N"}
+
+    def rows(self, flanges, p):
+        return [("rope", flanges["flange_b"] - p.radius * flanges["flange_a"])]
+
+    def outputs(self, t, states, p, flows):
+        """The drum's torque ``tau_a`` (N m), the force on the rope's end ``f_b`` (N) and the
+        rope's ``tension`` ``-f_b`` (N)."""
+        return {"tau_a": flows["flange_a"], "f_b": flows["flange_b"], "tension": -flows["flange_b"]}
 
 
 class Belt(FlangeConstraint):

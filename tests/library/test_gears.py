@@ -1,13 +1,13 @@
 """Ideal transmissions on joint axes (library/gears.py over assembly/flange_rows.py): a geared
 pair against the reflected inertia, its tooth torque and energy on three backends, the DOF
-count, a rack lifted by a pinion, a belt, and rotors against rigid bodies."""
+count, a rack lifted by a pinion, a hoist's drum and rope, a belt, and rotors against rigid bodies."""
 import numpy as np
 import pytest
 
 import mbcomp
 from mbcomp.errors import ModelError
-from mbcomp.library import (Belt, Fixed, FixedTranslation, IdealGear, Inertia, Prismatic, RackPinion, Revolute,
-                            RigidBody, RotationalSpring, Torque, World)
+from mbcomp.library import (Belt, Fixed, FixedTranslation, IdealGear, IdealPulley, Inertia, PointMass, Prismatic,
+                            RackPinion, Revolute, RigidBody, RotationalSpring, Torque, World)
 
 TIGHT = dict(rtol=1e-12, atol=1e-12)
 
@@ -126,6 +126,39 @@ def test_a_rack_falls_against_its_pinion_with_the_closed_form_acceleration(backe
     np.testing.assert_allclose(res["mesh.f_b"], f_b, atol=1e-8)
     np.testing.assert_allclose(res["mesh.tau_a"], -r * f_b, atol=1e-9)
     assert np.abs(res["energy.total"] - res["energy.total"][0]).max() < 1e-10
+
+
+def hoist(J=0.04, m_load=2.5, r=0.08, g=9.81):
+    """A drum (a rotor of inertia J on a Revolute about z) lowering a point mass on a rope: the
+    rope's end on a Prismatic pointing down (away from the drum), gravity -y."""
+    m = mbcomp.Model()
+    world = m.add("world", World(g=(0, -g, 0)))
+    drum = m.add("drum", Revolute(n=(0, 0, 1)))
+    hub = m.add("hub", FixedTranslation())
+    rotor = m.add("drum_J", Inertia(J=J))
+    rope_end = m.add("hook", Prismatic(n=(0, -1, 0)))
+    m.add("load", PointMass(m=m_load))
+    rope = m.add("rope", IdealPulley(radius=r))
+    m.connect(world.frame_b, drum.frame_a); m.connect(drum.frame_b, hub.frame_a); m.connect(rotor.flange, drum.axis)
+    m.connect(world.frame_b, rope_end.frame_a); m.connect(rope_end.frame_b, m["load"].frame_a)
+    m.connect(rope.flange_a, drum.axis); m.connect(rope.flange_b, rope_end.axis)
+    return m
+
+
+@pytest.mark.parametrize("backend", ["numeric", "c"])
+def test_a_hoist_drum_lowers_its_load_with_the_closed_form_acceleration_and_tension(backend):
+    J, ml, r, g = 0.04, 2.5, 0.08, 9.81
+    a = ml * g * r ** 2 / (J + ml * r ** 2)  # (J / r^2 + m) a = m g
+    res = mbcomp.simulate(hoist(J, ml, r, g), t_end=0.8, backend=backend, **TIGHT)
+    t = res["time"]
+    np.testing.assert_allclose(res["hook.s"], 0.5 * a * t ** 2, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(res["hook.v"], a * t, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(res["drum.w"], a * t / r, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(res["rope.tension"], ml * (g - a), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(res["rope.f_b"], -ml * (g - a), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(res["rope.tau_a"], r * ml * (g - a), rtol=0, atol=1e-10)  # drives the drum on
+    assert np.abs(res["energy.total"] - res["energy.total"][0]).max() < 1e-10
+    assert res.units["rope.tension"] == "N" and res.units["rope.tau_a"] == "N m"
 
 
 def test_a_belt_keeps_its_speed_ratio_and_the_energy():
