@@ -183,3 +183,80 @@ def test_bad_suffix_is_a_clear_error_before_any_work(tmp_path, capsys, name):
     assert "model summary" not in captured.out and not out.exists()
     with pytest.raises(ValueError, match=r"\.svg, \.png, \.pdf"):
         draw_topology(load_model("models/slider_crank.py").build(), out)
+
+
+# --------------------------------------------------------------------------- gears
+
+def _geared_pair(ratio=3.0):
+    """Two shafts on Revolutes from one base, tied by an IdealGear ``w1 = ratio w2``."""
+    from mbcomp.library import Fixed, IdealGear, Revolute, RigidBody
+
+    m = mbcomp.Model()
+    base = m.add("base", Fixed())
+    for name in ("j1", "j2"):
+        j = m.add(name, Revolute())
+        b = m.add(f"{name}_body", RigidBody(m=1.0, I=np.eye(3)))
+        m.connect(base.frame_b, j.frame_a)
+        m.connect(j.frame_b, b.frame_a)
+    g = m.add("gear", IdealGear(ratio=ratio))
+    m.connect(g.flange_a, m["j1"].axis)
+    m.connect(g.flange_b, m["j2"].axis)
+    return m
+
+
+def _planetary():
+    from mbcomp.library import Fixed, PlanetaryGear, Torque
+
+    m = mbcomp.Model()
+    base = m.add("base", Fixed())
+    pg = m.add("pg", PlanetaryGear(z_sun=20, z_ring=80))
+    m.connect(base.frame_b, pg.frame_a)
+    tq = m.add("T_sun", Torque(tau=1.0))
+    m.connect(tq.flange_b, pg.sun)
+    return m
+
+
+@pytest.mark.parametrize("build, gear, joints", [
+    (_geared_pair, "gear", {"j1", "j2"}),
+    (_planetary, "pg.mesh", {"pg.sun", "pg.carrier", "pg.ring"}),
+])
+def test_gear_rows_are_dotted_paths_between_the_joints_they_tie(tmp_path, build, gear, joints):
+    """Each gear row is drawn as a dotted path from one geared joint's line to the next, the
+    gear is named with its type and ratio, and the title counts its rows as info does."""
+    system = mbcomp.assemble(build())
+    d = topology_graph(system)
+    rows = [n for n in system.constraint_names() if n.rsplit(".", 1)[0] == gear]
+    (g,) = d["gears"]
+    assert g["name"] == gear and [f"{gear}.{r['name']}" for r in g["rows"]] == rows
+    assert set(g["rows"][0]["joints"]) == joints  # the joints whose axis flanges the gear's flanges are on
+    path = tmp_path / "gears.svg"
+    draw_topology(system, path)
+    root = ET.parse(path).getroot()
+    text = " ".join(_texts(root))
+    ratio = "3" if gear == "gear" else "-4"  # Willis: ratio = -z_ring / z_sun
+    assert f"{gear}: IdealGear ratio {ratio} (1 row)" in text
+    for r in g["rows"]:
+        assert _dashed(_group(root, f"gear-{gear}-{r['name']}"))
+    n_rows = len(system.constraint_names(all_rows=True))
+    assert f"1 gear, {n_rows} constraint row" in text
+    assert f"{d['dof']} degree" in text and d["dof"] == len(joints) - 1
+
+
+def test_gear_paths_run_from_joint_line_to_joint_line():
+    d = topology_graph(mbcomp.assemble(_planetary()))
+    pos = layout(d)
+    from mbcomp.visual.topology_layout import gear_routes
+
+    (route,) = gear_routes(d, pos, routes(d, pos)).values()
+    pts = route["points"]
+    edges = {e["name"]: e for e in d["edges"]}
+
+    def on_line(p, e):
+        a, b = np.asarray(pos[e["a"]]), np.asarray(pos[e["b"]])
+        t = np.clip((p - a) @ (b - a) / ((b - a) @ (b - a)), 0, 1)
+        return np.linalg.norm(a + t * (b - a) - p) < 1e-9
+
+    ends = [pts[0], pts[24], pts[-1]]  # two arcs: three anchors, one on each geared joint's line
+    for name in ("pg.sun", "pg.carrier", "pg.ring"):
+        assert sum(on_line(p, edges[name]) for p in ends) == 1, name
+    assert route["label"][1] < min(p[1] for p in ends)  # bowed below the anchors (away from the world)

@@ -5,7 +5,10 @@ them) are the nodes, labelled with their bodies (or ``world``); joints with free
 edges. The spanning tree is drawn solid, layered by its depth from the world and labelled
 with each joint's independent coordinates; cut joints are dashed curves labelled with the
 constraint rows they keep and the rows initialization dropped as redundant; joints with
-nonholonomic (velocity-level) rows are dash-dotted in another colour and name those rows.
+nonholonomic (velocity-level) rows are dash-dotted in another colour and name those rows;
+flange constraints (gears, belts, racks: rows over joint-axis coordinates) are dotted green
+paths from one geared joint's line to the next, one per row, labelled with the gear's type,
+numbers and rows.
 
 :func:`topology_graph` is the plain description (dicts and lists: nodes, edges, rows,
 coordinates) the drawing is made from; :func:`draw_topology` writes it to ``.svg``, ``.png``
@@ -28,7 +31,7 @@ import textwrap
 import numpy as np
 
 from ..assembly.topology import ROOT
-from .topology_layout import layout, routes, tree_label_points
+from .topology_layout import gear_routes, layout, routes, tree_label_points
 
 __all__ = ["topology_graph", "draw_topology", "check_suffix", "SUFFIXES"]
 
@@ -36,9 +39,10 @@ __all__ = ["topology_graph", "draw_topology", "check_suffix", "SUFFIXES"]
 SUFFIXES = (".svg", ".png", ".pdf")
 
 #: colours: tree joints, cut joints (holonomic loop closure), joints with nonholonomic rows, driven joints
-COLOURS = dict(tree="#222222", cut="#d62728", nonholonomic="#7b3fb5", driven="#1f77b4", rigid="#707070")
-#: dash patterns (matplotlib line styles): cut joints and joints with nonholonomic rows
-DASHES = dict(cut=(0, (6, 3)), nonholonomic=(0, (7, 2.5, 1.5, 2.5)))
+COLOURS = dict(tree="#222222", cut="#d62728", nonholonomic="#7b3fb5", driven="#1f77b4", rigid="#707070",
+               gear="#2a8a2a")
+#: dash patterns (matplotlib line styles): cut joints, joints with nonholonomic rows, gear rows
+DASHES = dict(cut=(0, (6, 3)), nonholonomic=(0, (7, 2.5, 1.5, 2.5)), gear=(0, (1, 2.2)))
 
 
 def check_suffix(path):
@@ -146,6 +150,36 @@ def _node_entries(topo, group, edges):
     return nodes
 
 
+def _gear_entries(system, rows, dropped):
+    """The flange constraints (gears): ``name``, ``type``, ``params`` (its numbers, e.g.
+    ``"ratio 3"``), ``rows`` (each ``{"name", "joints"}``: the joints whose axis coordinates
+    the row ties, in the order of its terms), ``dropped`` rows."""
+    from ..modeling.roles import FlangeSum
+
+    out = []
+    for fr in system.topology.flange_rows:
+        p = system.P[fr.name]
+        forms = fr.comp.rows({pn: FlangeSum({pn: 1.0}) for pn in fr.ports}, p)
+        gear_rows = [dict(name=rname, joints=list(dict.fromkeys(fr.ports[pn][0] for pn, c in form.terms.items()
+                                                                if fr.ports.get(pn) is not None and c != 0)))
+                     for rname, form in forms]
+        names = rows[0].get(fr.name, [r["name"] for r in gear_rows])
+        out.append(dict(name=fr.name, type=type(fr.comp).__name__, params=_numbers(fr.comp, p), rows=gear_rows,
+                        dropped=[r for r in names if f"{fr.name}.{r}" in dropped]))
+    return out
+
+
+def _numbers(comp, p):
+    """``"ratio 3"``, ``"r_a 0.1 m, r_b 0.2 m"``: a component's numeric scalar parameters."""
+    out = []
+    for name, par in type(comp).params().items():
+        v = getattr(p, name, None)
+        if isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, bool):
+            unit = "" if getattr(par, "unit", "1") in ("1", "", None) else f" {par.unit}"
+            out.append(f"{name} {float(v):g}{unit}")
+    return ", ".join(out)
+
+
 def topology_graph(system, init=None):
     """The plain description of an assembled system's topology that :func:`draw_topology` draws.
 
@@ -167,6 +201,8 @@ def topology_graph(system, init=None):
         ``"ground"``, ``a``/``b`` the groups (parent, child for tree edges), ``dof``,
         ``coordinates`` (tree joints' q names without the joint's prefix), ``drive``,
         ``rows``/``kept``/``dropped`` (holonomic constraint rows), ``nonholonomic`` rows).
+        ``gears``: one dict per flange constraint (``name``, ``type``, ``params``, ``rows``:
+        ``{"name", "joints"}`` -- the joints whose axes each row ties --, ``dropped``).
         ``coordinates`` (every q name), ``dropped`` (full names of the redundant rows),
         ``nonholonomic`` (full names), ``dof`` (mobility, ``None`` when initialization
         fails), ``gruebler``, ``N``, ``C``, ``L``, ``rank``, ``nq``, ``nu``.
@@ -188,7 +224,8 @@ def topology_graph(system, init=None):
     kinds = {e.name: _edge_kind(e, cut) for e in topo.edges}
     dropped = set(report["redundant"])
     edges = [_edge_entry(e, topo, group, kinds, rows, dropped) for e in topo.edges]
-    return dict(nodes=_node_entries(topo, group, edges), edges=edges, coordinates=list(topo.q_names),
+    return dict(nodes=_node_entries(topo, group, edges), edges=edges, gears=_gear_entries(system, rows, dropped),
+                coordinates=list(topo.q_names),
                 dropped=list(report["redundant"]),
                 nonholonomic=[f"{j}.{r}" for j, rs in rows[1].items() for r in rs],
                 dof=report["mobility"], gruebler=report["gruebler"], N=report["N"], C=report["C"],
@@ -293,6 +330,28 @@ def _draw_cut_edges(ax, desc, curves):
         label.set_gid(f"label-cut-{e['name']}")
 
 
+def _gear_label(g):
+    """``gear: IdealGear ratio 3 (1 row)``, and the rows dropped as redundant."""
+    what = " ".join(x for x in (g["type"], g["params"]) if x)
+    text = f"{g['name']}: {what} ({_count(len(g['rows']), 'row')})"
+    return text + (f"; dropped {', '.join(g['dropped'])}" if g["dropped"] else "")
+
+
+def _draw_gears(ax, desc, paths):
+    """The flange constraints: a dotted path per row between the joints it ties, one label per gear."""
+    for g in desc.get("gears", []):
+        drawn = [(row, paths[(g["name"], row["name"])]) for row in g["rows"] if (g["name"], row["name"]) in paths]
+        for row, path in drawn:
+            line, = ax.plot(path["points"][:, 0], path["points"][:, 1], color=COLOURS["gear"], lw=1.6,
+                            ls=DASHES["gear"], zorder=2, dash_capstyle="round")
+            line.set_gid(f"gear-{g['name']}-{row['name']}")
+        if drawn:
+            label = ax.text(*drawn[0][1]["label"], _gear_label(g), ha="center", va="center", fontsize=6.5,
+                            color=COLOURS["gear"], zorder=4,
+                            bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.85))
+            label.set_gid(f"label-gear-{g['name']}")
+
+
 def _legend(fig, desc):
     """The legend: which line is which (the tree always, the rest when drawn)."""
     from matplotlib.lines import Line2D
@@ -305,6 +364,8 @@ def _legend(fig, desc):
         items.append((COLOURS["nonholonomic"], DASHES["nonholonomic"], "joint with nonholonomic (velocity) rows"))
     if any(e["drive"] for e in edges):
         items.append((COLOURS["driven"], "-", "driven joint (prescribed, no coordinate)"))
+    if desc.get("gears"):
+        items.append((COLOURS["gear"], DASHES["gear"], "gear row (flange constraint) between joint axes"))
     handles = [Line2D([], [], color=c, ls=ls, lw=1.6, label=t) for c, ls, t in items]
     legend = fig.legend(handles=handles, loc="lower right", fontsize=7.5, frameon=False, handlelength=4.5,
                         bbox_to_anchor=(0.99, 0.01))
@@ -318,18 +379,22 @@ def _count(n, what):
 def _header(desc, title):
     """The title line (DOF) and the counting line (Gruebler, rank, dropped and nonholonomic rows)."""
     dof = desc["dof"] if desc["dof"] is not None else "unknown (initialization failed)"
-    rows = sum(len(e["rows"]) for e in desc["edges"])
+    gears = desc.get("gears", [])
+    rows = sum(len(e["rows"]) for e in desc["edges"]) + sum(len(g["rows"]) for g in gears)
     head = f"{title + ': ' if title else ''}{dof} degree{'' if dof == 1 else 's'} of freedom"
     cuts = sum(e["kind"] == "cut" for e in desc["edges"])
     count = (f"Grübler M = 6N − C − L = 6·{desc['N']} − {desc['C']} − {desc['L']} = {desc['gruebler']};   "
-             f"{_count(cuts, 'cut joint')}, {_count(rows, 'constraint row')} of rank {desc['rank']}, "
+             f"{_count(cuts, 'cut joint')}, " + (f"{_count(len(gears), 'gear')}, " if gears else "")
+             + f"{_count(rows, 'constraint row')} of rank {desc['rank']}, "
              f"{len(desc['dropped'])} redundant dropped, {len(desc['nonholonomic'])} nonholonomic")
     return head, count
 
 
-def _bounds(pos, curves):
+def _bounds(pos, curves, gears=()):
     """``(x0, x1, y0, y1)`` (inches) holding every group, curve and label, with margins."""
     pts = [np.asarray(p, float) for p in pos.values()]
+    for g in gears:
+        pts += [*g["points"], np.asarray(g["label"], float)]
     for r in curves.values():
         pts += [np.asarray(r["label"], float), *np.asarray(r["ctrl"], float)[[0, 3]]]
         pts.append(0.125 * (r["ctrl"][0] + 3 * r["ctrl"][1] + 3 * r["ctrl"][2] + r["ctrl"][3]))
@@ -344,7 +409,8 @@ def _figure(desc, title):
 
     pos = layout(desc)
     curves = routes(desc, pos)
-    x0, x1, y0, y1 = _bounds(pos, curves)
+    gears = gear_routes(desc, pos, curves)
+    x0, x1, y0, y1 = _bounds(pos, curves, gears.values())
     width, top, foot = max(x1 - x0, 9.0), 0.8, 1.2
     height = (y1 - y0) + top + foot
     fig = Figure(figsize=(width, height))
@@ -355,6 +421,7 @@ def _figure(desc, title):
     ax.set_ylim(y0, y1)
     ax.set_axis_off()
     _draw_cut_edges(ax, desc, curves)
+    _draw_gears(ax, desc, gears)
     _draw_tree_edges(ax, desc, pos)
     _draw_nodes(ax, desc, pos, fig.canvas.get_renderer())
     head, count = _header(desc, title)
@@ -375,9 +442,11 @@ def draw_topology(model_or_system, path, params=None, title=None, init=None):
     spanning tree's joints are solid edges labelled with their independent coordinates, layered by
     depth from the world; cut joints are dashed curves labelled with the constraint rows they
     keep and those dropped as redundant; joints with nonholonomic rows are dash-dotted and
-    name them. The title gives the DOF and Gruebler's count; the foot lists the coordinates.
+    name them; each gear row is a dotted path between the joints it ties. The title gives the
+    DOF and Gruebler's count (gears and their rows included); the foot lists the coordinates.
     Texts stay text in an SVG (each cut edge is the group ``cut-<joint>``, its label
-    ``label-cut-<joint>``; each tree edge ``tree-<joint>``, its label ``label-tree-<joint>``).
+    ``label-cut-<joint>``; each tree edge ``tree-<joint>``, its label ``label-tree-<joint>``;
+    each gear row ``gear-<gear>-<row>``, the gear's label ``label-gear-<gear>``).
 
     Parameters
     ----------

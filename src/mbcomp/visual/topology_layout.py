@@ -242,3 +242,62 @@ def routes(desc, pos):
             chosen[e["name"]] = dict(ctrl=ctrl, label=(float(label[0]), float(label[1])), cost=float(cost),
                                     points=points)
     return chosen
+
+
+#: where a gear row's dotted path meets a tree joint's line (fraction from the parent group),
+#: between the parent's box and the joint's label
+GEAR_AT = 0.3
+
+
+def _joint_anchor(e, pos, curves):
+    """The point (inches) where a gear row meets joint ``e``'s line or curve."""
+    if e["kind"] == "cut" and e["name"] in curves:
+        points = np.asarray(curves[e["name"]]["points"], float)
+        return points[len(points) // 4]
+    a, b = np.asarray(pos[e["a"]], float), np.asarray(pos[e["b"]], float)
+    return a + GEAR_AT * (b - a)
+
+
+def gear_routes(desc, pos, curves):
+    """The dotted path of every gear row: ``{(gear, row): {"points", "label"}}``.
+
+    ``points`` (k, 2) inches: quadratic arcs, bowed downwards, from one geared joint's line to
+    the next, left to right (the joints the row ties, ``desc["gears"]``), so a row over two
+    joints is one arc and a planetary row over three is two; a row on one joint (its other
+    flange on a support or the ground) is a short hook. ``label`` where its label goes (the
+    path's lowest point, or beside the hook's end).
+
+    Examples
+    --------
+    >>> desc = {"nodes": [{"id": -1}, {"id": 0}, {"id": 1}],
+    ...         "edges": [{"name": "j1", "kind": "tree", "a": -1, "b": 0},
+    ...                   {"name": "j2", "kind": "tree", "a": -1, "b": 1}],
+    ...         "gears": [{"name": "g", "rows": [{"name": "mesh", "joints": ["j1", "j2"]}]}]}
+    >>> r = gear_routes(desc, layout(desc), {})[("g", "mesh")]
+    >>> r["points"].shape, bool(r["label"][1] < r["points"][0][1])   # one arc, bowed below its ends
+    ((25, 2), True)
+    """
+    edges = {e["name"]: e for e in desc["edges"]}
+    out = {}
+    t = np.linspace(0.0, 1.0, 25)[:, None]
+    for g in desc.get("gears", []):
+        for row in g["rows"]:
+            anchors = [_joint_anchor(edges[j], pos, curves) for j in row["joints"] if j in edges]
+            if not anchors:
+                continue
+            if len(anchors) == 1:
+                a = anchors[0]
+                points = np.array([a, a + (0.35, 0.15), a + (0.7, 0.15)])
+                out[(g["name"], row["name"])] = dict(points=points, label=tuple(points[-1] + (0.2, 0.0)))
+                continue
+            arcs = []
+            anchors.sort(key=lambda x: (x[0], x[1]))
+            for a, b in zip(anchors[:-1], anchors[1:]):
+                d = b - a
+                bow = 0.3 * np.array([d[1], -d[0]])
+                mid = (a + b) / 2 + (bow if bow[1] <= 0 else -bow)  # bowed downwards, away from the parents
+                arcs.append((1 - t) ** 2 * a + 2 * (1 - t) * t * mid + t ** 2 * b)
+            points = np.vstack(arcs)
+            low = points[np.argmin(points[:, 1])]
+            out[(g["name"], row["name"])] = dict(points=points, label=(float(low[0]), float(low[1])))
+    return out
