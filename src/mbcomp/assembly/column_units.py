@@ -6,7 +6,8 @@ request) and the FMU's output variables (:mod:`mbcomp.export.description`):
 * coordinates and speeds: the joints' declared units (``coordinates``, ``speeds``); a speed's
   rate ``<speed>.der`` per second;
 * reactions ``<joint>.f.*`` (N) and ``<joint>.tau.*`` (N m); a drive's effort ``tau`` (N m) or
-  ``f`` (N) by its joint's axis kind, and its ``power`` (W);
+  ``f`` (N) by its joint's axis kind, and its ``power`` (W); a joint's own outputs by its
+  ``output_units`` (a rod's ``f_rod`` in N, a cut sensor's ``force.*`` in N);
 * bodies: ``r`` (m), ``v`` (m/s), ``w`` (rad/s), ``Q`` (1), momenta (kg m/s, kg m^2/s);
 * force and flange elements: ``power`` (W), ``potential`` (J), and the outputs a component
   declares in its ``output_units`` (``{"f": "N", "length": "m"}``);
@@ -63,6 +64,9 @@ def column_units(system):
             rotational = e.comp.axis_kind == "rotational"
             put(f"{e.drive}.tau" if rotational else f"{e.drive}.f", "N m" if rotational else "N")
             put(f"{e.drive}.power", "W")
+        if e.kind == "joint":
+            for key, text in getattr(e.comp, "output_units", {}).items():
+                put(f"{e.name}.{key}", text)
     for path, _comp, _node in topo.bodies:
         for ax in _XYZ:
             for suffix, text in (("r", "m"), ("v", "m/s"), ("w", "rad/s"), ("momentum", "kg m/s"),
