@@ -31,9 +31,12 @@ with a surface compiles like any other; a surface is a constant of the generated
 """
 import numpy as np
 
-from mbcomp import SimulationError
+from mbcomp import Grid, Mesh, SimulationError
 from mbcomp.jets import ScalarJet, VecJet, is_traced, slip_velocity, velocity_along
 from mbcomp.kinematics import cross
+from mbcomp.modeling.shapes import z_to
+
+from . import surface_patches as patches
 
 __all__ = ["HeightJet", "Surface", "Plane", "SphereSurface", "CylinderSurface", "TorusSurface", "HeightField",
            "surface_rows", "surface_geometry", "tangent_distance"]
@@ -99,6 +102,20 @@ class Surface:
         """Why a ball of radius ``r`` (m) does not fit this surface, or None."""
         return None
 
+    def visuals(self, r, view):
+        """How the surface looks under a ball of radius ``r`` (m): a translucent triangulated
+        patch on frame_a (:meth:`patch`) around where the ball's centre went
+        (``view.track("frame_a", "frame_b")``), sized by ``view.scale`` (m) before a run."""
+        track = view.track("frame_a", "frame_b") if hasattr(view, "track") else None
+        points = self.patch(r, view.scale, None if track is None else np.asarray(track, float))
+        return [Mesh.from_grid(points, frame="frame_a", color="lightgrey", opacity=0.45)]
+
+    def patch(self, r, scale, track):
+        """A grid of points on the surface (m, frame_a; shape (m, n, 3)) for a ball of radius
+        ``r`` whose centre went through ``track`` ((k, 3), frame_a, or None); ``scale`` (m);
+        the library's surfaces use :mod:`mbcomp.library.surface_patches`."""
+        raise NotImplementedError(f"{type(self).__name__} has no patch to draw -> define patch(r, scale, track)")
+
     def _key(self):
         return (type(self).__name__,) + tuple(tuple(np.ravel(v)) if isinstance(v, np.ndarray) else v
                                              for v in vars(self).values())
@@ -135,6 +152,10 @@ class Plane(Surface):
 
     def distance(self, x):
         return (x - self.origin) @ self.n, self.n, np.zeros((3, 3)), 0.0
+
+    def visuals(self, r, view):
+        """A grid through ``origin`` normal to ``n``, fitted by the scene to the motion."""
+        return [Grid(r=self.origin, R=z_to(self.n), frame="frame_a", floor=False, color="lightgrey")]
 
 
 class _Round(Surface):
@@ -175,7 +196,8 @@ class SphereSurface(_Round):
         self.R = _positive(R, "SphereSurface: R")
         self.center = _vec3(center, "SphereSurface: center")
         self.inside = bool(inside)
-        self.ref = _normal_to(_axis(pole, "SphereSurface: pole"))
+        self.pole = _axis(pole, "SphereSurface: pole")
+        self.ref = _normal_to(self.pole)
 
     def _radius(self):
         return self.R
@@ -185,6 +207,8 @@ class SphereSurface(_Round):
         s = np.sqrt(d @ d)
         u = d / s
         return self._side(s, u, (_E - _outer(u, u)) / s, self.R)
+
+    patch = patches.sphere_cap
 
 
 class CylinderSurface(_Round):
@@ -220,6 +244,8 @@ class CylinderSurface(_Round):
         s = np.sqrt(dp @ dp)
         u = dp / s
         return self._side(s, u, (_E - _outer(k, k) - _outer(u, u)) / s, self.R)
+
+    patch = patches.half_pipe
 
 
 class TorusSurface(_Round):
@@ -264,6 +290,8 @@ class TorusSurface(_Round):
         m = e / s
         T = _E - _outer(k, k) - _outer(u, u)  # the circumferential direction's projector
         return self._side(s, m, (_E - _outer(m, m) - (self.R / rho) * T) / s, self.a)
+
+    patch = patches.whole_torus
 
 
 class HeightJet:
@@ -491,6 +519,8 @@ class HeightField(Surface):
         K = ((_E - _outer(n, n)) / W) @ (M @ (Ainv @ B))
         err = step if is_traced(step) else float(np.sqrt(step))
         return G, n, K, err
+
+    patch = patches.height_grid
 
     def _key(self):
         return ("HeightField", self.h, self.newton_steps)

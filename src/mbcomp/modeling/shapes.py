@@ -221,28 +221,109 @@ class Sphere(Shape):
 
 @dataclass(frozen=True)
 class Mesh(Shape):
-    """A triangle mesh from an STL (ASCII or binary) or OBJ file, its coordinates times
-    ``scale`` in m, in the shape's axes. The file is read when a scene is built
+    """A triangle mesh: from an STL (ASCII or binary) or OBJ file (``path``), or given inline
+    (``vertices`` (n, 3) and ``faces`` (m, 3) indices, 0-based), its coordinates times
+    ``scale`` in m, in the shape's axes. A file is read when a scene is built
     (:func:`mbcomp.visual.meshes.read_mesh`); a missing file is reported then with its path.
+    :meth:`from_grid` triangulates a grid of points (a patch of a surface).
 
     Examples
     --------
     >>> Mesh("part.stl", scale=1e-3).scale
     0.001
+    >>> tri = Mesh(vertices=[(0, 0, 0), (1, 0, 0), (0, 1, 0)], faces=[(0, 1, 2)], opacity=0.5)
+    >>> vertices, faces = tri.triangles(); vertices.shape, faces.tolist()
+    ((3, 3), [[0, 1, 2]])
     """
 
     path: str = ""
     scale: float = 1.0
+    vertices: tuple | None = None
+    faces: tuple | None = None
 
-    def __init__(self, path="", scale=1.0, **placement):
+    def __init__(self, path="", scale=1.0, vertices=None, faces=None, **placement):
         object.__setattr__(self, "path", os.fspath(path))
         object.__setattr__(self, "scale", scale)
+        object.__setattr__(self, "vertices", vertices)
+        object.__setattr__(self, "faces", faces)
         super().__init__(**placement)
 
     def _check(self):
-        if not str(self.path).lower().endswith((".stl", ".obj")):
-            raise ValueError(f"Mesh: path={self.path!r} must be an .stl or .obj file")
         object.__setattr__(self, "scale", _positive(self.scale, "scale", "Mesh"))
+        if self.vertices is None and self.faces is None:
+            if not str(self.path).lower().endswith((".stl", ".obj")):
+                raise ValueError(f"Mesh: path={self.path!r} must be an .stl or .obj file (or give vertices= and "
+                                 "faces=)")
+            return
+        if self.path:
+            raise ValueError("Mesh: give either a path or vertices= and faces=, not both")
+        v, f = _inline_mesh(self.vertices, self.faces)
+        object.__setattr__(self, "vertices", tuple(map(tuple, v.tolist())))
+        object.__setattr__(self, "faces", tuple(map(tuple, f.tolist())))
+
+    @property
+    def inline(self):
+        """True for a mesh given by its vertices and faces (no file)."""
+        return self.vertices is not None
+
+    def triangles(self):
+        """``(vertices (n, 3) in m, faces (m, 3) int)`` of an inline mesh, times ``scale`` (a
+        file's are read by the scene: :func:`mbcomp.visual.meshes.read_mesh`)."""
+        if not self.inline:
+            raise ValueError(f"Mesh({self.path!r}) is read from its file by the scene -> use "
+                             "mbcomp.visual.meshes.read_mesh")
+        return np.array(self.vertices, dtype=float) * self.scale, np.array(self.faces, dtype=np.int64)
+
+    def geometry(self):
+        """The type and, for a file, its path and scale (the scene writes the triangles)."""
+        if self.inline:
+            return {"type": "mesh", "vertices": len(self.vertices), "faces": len(self.faces)}
+        return {"type": "mesh", "path": self.path, "scale": self.scale}
+
+    @classmethod
+    def from_grid(cls, points, **placement):
+        """The mesh of a grid of points ``points[i, j]`` (m, shape (m, n, 3)): two triangles per
+        cell; cells with a non-finite corner (a height function undefined there) are left out.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> x, y = np.meshgrid(np.linspace(0, 1, 3), np.linspace(0, 1, 4), indexing="ij")
+        >>> patch = Mesh.from_grid(np.stack([x, y, 0 * x], axis=-1), opacity=0.4)
+        >>> len(patch.vertices), len(patch.faces)   # 3 x 4 points, 2 x 3 cells of two triangles
+        (12, 12)
+        """
+        P = np.asarray(points, dtype=float)
+        if P.ndim != 3 or P.shape[2] != 3 or min(P.shape[:2]) < 2:
+            raise ValueError(f"Mesh.from_grid: points must have shape (m, n, 3) with m, n >= 2, not {P.shape}")
+        m, n = P.shape[:2]
+        idx = np.arange(m * n).reshape(m, n)
+        a, b, c, d = idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]
+        faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+        flat = P.reshape(-1, 3)
+        ok = np.all(np.isfinite(flat), axis=1)
+        faces = faces[np.all(ok[faces], axis=1)]
+        if not len(faces):
+            raise ValueError("Mesh.from_grid: no cell has four finite corners")
+        used = np.unique(faces)
+        renumber = np.full(len(flat), -1)
+        renumber[used] = np.arange(len(used))
+        return cls(vertices=flat[used], faces=renumber[faces], **placement)
+
+
+def _inline_mesh(vertices, faces):
+    """The checked arrays of an inline mesh."""
+    try:
+        v = np.asarray(vertices, dtype=float)
+        f = np.asarray(faces)
+    except (TypeError, ValueError):
+        v, f = np.zeros((0, 0)), np.zeros((0, 0))
+    if v.ndim != 2 or v.shape[1:] != (3,) or not len(v) or not np.all(np.isfinite(v)):
+        raise ValueError("Mesh: vertices= must be an (n, 3) array of finite coordinates (m, the shape's axes)")
+    if f.ndim != 2 or f.shape[1:] != (3,) or not len(f) or f.dtype.kind not in "iu" or f.min() < 0 \
+            or f.max() >= len(v):
+        raise ValueError(f"Mesh: faces= must be an (m, 3) array of whole vertex indices in 0..{len(v) - 1}")
+    return v, f.astype(np.int64)
 
 
 @dataclass(frozen=True)

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..geometry.kinematics import quat_to_matrix
 from ..modeling.shapes import Box, Cylinder, Grid, Helix, Mesh, Rod, Sphere
+from .scene import mesh_triangles
 
 __all__ = ["Drawn", "frame_geometry", "pose_at", "film_times", "write_picture", "write_film"]
 
@@ -193,12 +194,11 @@ def _local(v, meshes):
     if isinstance(s, Grid):
         return "lines", _grid(s.size if s.size is not None else 1.0, s.divisions)
     if isinstance(s, Mesh):
-        if s.path not in meshes:
-            from .meshes import read_mesh
-
-            meshes[s.path] = read_mesh(s.path, component=v.component)
-        vertices, faces = meshes[s.path]
-        return "faces", [(vertices * s.scale)[faces]]
+        key = id(s) if s.inline else (s.path, s.scale)
+        if key not in meshes:
+            meshes[key] = mesh_triangles(s, v.component)
+        vertices, faces = meshes[key]
+        return "faces", [vertices[faces]]
     raise ValueError(f"{v.component}: cannot draw a {type(s).__name__} shape -> use Box, Cylinder, Sphere, Mesh, "
                      "Helix, Rod or Grid")
 

@@ -151,15 +151,24 @@ def _b64(a, dtype="<f8"):
 def _visual_json(v):
     geo = v.shape.geometry()
     if isinstance(v.shape, Mesh):
-        from .meshes import read_mesh
-
-        vertices, faces = read_mesh(v.shape.path, component=v.component)
-        geo = {"type": "mesh", "vertices": _b64(vertices * v.shape.scale, "<f4"), "faces": _b64(faces, "<u4")}
+        vertices, faces = mesh_triangles(v.shape, v.component)
+        geo = {"type": "mesh", "vertices": _b64(vertices, "<f4"), "faces": _b64(faces, "<u4")}
     out = {"name": v.name, "component": v.component, "role": v.role, "shape": geo, "color": v.color,
            "opacity": v.shape.opacity, "link": v.link, "r": list(v.r), "q": list(v.q)}
     if v.to_link is not None:
         out["to"] = {"link": v.to_link, "r": list(v.to_r)}
     return out
+
+
+def mesh_triangles(shape, component=None):
+    """``(vertices (n, 3) m, faces (m, 3))`` of a :class:`Mesh` shape in its own axes: its
+    inline arrays or its file's (``component`` is named in a file's errors), times its scale."""
+    if shape.inline:
+        return shape.triangles()
+    from .meshes import read_mesh
+
+    vertices, faces = read_mesh(shape.path, component=component)
+    return vertices * shape.scale, faces
 
 
 def build_scene(res, system=None, hide=(), trails=(), color_by=None, title=None):
@@ -202,7 +211,7 @@ def build_scene(res, system=None, hide=(), trails=(), color_by=None, title=None)
     group = _rigid_groups(topo)
     links, link_of, local = _links(system, res, t, Y, group, jets0)
     scale = _scale(jets0, links)
-    view_of = _Views(topo, res, group, jets0, scale)
+    view_of = _Views(topo, res, group, jets0, scale, (links, link_of, local))
     visuals = _place(system, topo, view_of, link_of, local, hide, scale)
     visuals = _fit_grid(visuals, links, t, np.asarray(_up(system)), scale)
     bodies = {path: (link_of[node], *local[node]) for path, _, node in topo.bodies}
@@ -298,8 +307,9 @@ class _Views:
     """What a component's :meth:`visuals` may ask: the scale, the frames fixed to a port, and
     whether another component draws the body on it."""
 
-    def __init__(self, topo, res, group, jets0, scale):
+    def __init__(self, topo, res, group, jets0, scale, placed=None):
         self.topo, self.res, self.group, self.jets0, self.scale = topo, res, group, jets0, scale
+        self.placed = placed  # (links, link_of, local): the poses of every frame node over the run
         self.drawn = {group.get(n, n) for path, comp, nodes in _framed(topo) if comp.draws_body
                       for n in nodes.values()}
 
@@ -320,7 +330,32 @@ class _Views:
             @staticmethod
             def range(column):
                 return outer.range(comp, column)
+
+            @staticmethod
+            def track(port, of):
+                return outer.track(comp, port, of)
         return View()
+
+    def _world(self, node):
+        """``(R (n, 3, 3), r (n, 3))`` of a frame node at every output (frame -> world, m)."""
+        links, link_of, local = self.placed
+        poses = links[link_of[node]].poses
+        lr, lq = local[node]
+        if poses is None:
+            return quat_to_matrix(np.array(lq))[None], np.array(lr)[None]
+        Rl = np.array([quat_to_matrix(q) for q in poses[:, 3:]])
+        return Rl @ quat_to_matrix(np.array(lq)), poses[:, :3] + Rl @ np.array(lr)
+
+    def track(self, comp, port, of):
+        """The origin of the component's frame ``of`` at every output time, m, in the axes of
+        its frame ``port`` at that time (shape (n, 3)): where a ball's centre went on the
+        surface it rolls on; ``None`` when the scene has no poses."""
+        if self.placed is None:
+            return None
+        Ra, ra = self._world(_node(self.topo, comp, port))
+        _, rb = self._world(_node(self.topo, comp, of))
+        n = max(len(ra), len(rb))
+        return np.einsum("kji,kj->ki", np.broadcast_to(Ra, (n, 3, 3)), np.broadcast_to(rb - ra, (n, 3)))
 
     def range(self, comp, column):
         """``(min, max)`` of the component's result column ``<comp>.<column>`` over the run
