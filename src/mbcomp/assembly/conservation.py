@@ -3,7 +3,7 @@ its momenta when nothing outside loads it -- and the momenta themselves.
 
 The declarations are the components' own (:attr:`mbcomp.modeling.component.Component.conservative`
 and :meth:`~mbcomp.modeling.component.Component.conserves_energy`, ``Joint.transmits_load``,
-``ForceElement.external``), never inferred from names. The accuracy alarms
+``ForceElement.external``, a sensor's ``sensor = True``), never inferred from names. The accuracy alarms
 (:mod:`mbcomp.simulation.accuracy`) watch what these functions say is conserved.
 
 Examples
@@ -45,7 +45,7 @@ def momentum_conserved(system):
     angular momentum about the world origin are constants of the motion: no gravity, no
     drive, no external load (``ForceElement.external``), and every joint or force element
     touching the ground (frames rigidly joined to the world) passes no load
-    (``Joint.transmits_load``: a free joint)."""
+    (``Joint.transmits_load``: a free joint; a sensor, ``sensor = True``, applies none)."""
     topo = system.topology
     if np.any(system.g != 0.0) or topo.drives or any(c.external for _, c, _ in topo.forces):
         return False
@@ -61,7 +61,13 @@ def momentum_conserved(system):
         loads = e.kind == "joint" and (e.dof > 0 or not getattr(e.comp, "tree_edge", True))
         if loads and (e.node_a in ground or e.node_b in ground) and e.comp.transmits_load:
             return False
-    return not any(n in ground for _, _, ports in topo.forces for n in ports.values())
+    return not any(n in ground for _, c, ports in topo.forces if _applies_load(c) for n in ports.values())
+
+
+def _applies_load(comp):
+    """Whether a force element may load the frames it touches: a sensor (``sensor = True``:
+    zero wrenches, outputs only) applies none, so one fixed to the world loads nothing."""
+    return not getattr(comp, "sensor", False)
 
 
 def momenta(system, t, q, u):
