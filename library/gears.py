@@ -14,7 +14,8 @@ and :class:`PlanetaryGear` a sun-carrier-ring set built from these (a ``Model``)
 """
 import numpy as np
 
-from mbcomp import FlangeConstraint, FlangeInertia, Flange, Model, Param
+from mbcomp import Box, Cylinder, FlangeConstraint, FlangeInertia, Flange, Model, Param
+from mbcomp.modeling.shapes import STEEL, z_to
 from .joints import Revolute
 from .parts import FixedTranslation
 
@@ -205,6 +206,19 @@ class Inertia(FlangeInertia):
 
     def rotor(self, p):
         return p.J, bool(p.gyroscopic)
+
+    def visuals(self, p, view):
+        """A steel disk of axial inertia ``J`` (thickness a quarter of its radius:
+        ``J = rho pi r^5 / 8``; radius kept within 0.03..0.25 of the scale) with a bar across
+        it, about the joint's axis, on the frame the flange turns (``view.axis``); nothing
+        where the scene cannot place it."""
+        n = view.axis("flange") if hasattr(view, "axis") else None
+        if n is None:
+            return []
+        r = float(np.clip((8.0 * p.J / (np.pi * STEEL)) ** 0.2, 0.03 * view.scale, 0.25 * view.scale))
+        R = z_to(n)
+        return [Cylinder(r, r / 4, R=R, frame="flange", color="darkgrey"),
+                Box((1.9 * r, 0.15 * r, 0.3 * r), R=R, frame="flange", color="silver")]
 
 
 class PlanetaryGear(Model):

@@ -211,7 +211,7 @@ def build_scene(res, system=None, hide=(), trails=(), color_by=None, title=None)
     group = _rigid_groups(topo)
     links, link_of, local = _links(system, res, t, Y, group, jets0)
     scale = _scale(jets0, links)
-    view_of = _Views(topo, res, group, jets0, scale, (links, link_of, local))
+    view_of = _Views(topo, res, group, jets0, scale, (links, link_of, local), system)
     visuals = _place(system, topo, view_of, link_of, local, hide, scale)
     visuals = _fit_grid(visuals, links, t, np.asarray(_up(system)), scale)
     bodies = {path: (link_of[node], *local[node]) for path, _, node in topo.bodies}
@@ -307,8 +307,9 @@ class _Views:
     """What a component's :meth:`visuals` may ask: the scale, the frames fixed to a port, and
     whether another component draws the body on it."""
 
-    def __init__(self, topo, res, group, jets0, scale, placed=None):
+    def __init__(self, topo, res, group, jets0, scale, placed=None, system=None):
         self.topo, self.res, self.group, self.jets0, self.scale = topo, res, group, jets0, scale
+        self.system = system
         self.placed = placed  # (links, link_of, local): the poses of every frame node over the run
         self.drawn = {group.get(n, n) for path, comp, nodes in _framed(topo) if comp.draws_body
                       for n in nodes.values()}
@@ -334,7 +335,21 @@ class _Views:
             @staticmethod
             def track(port, of):
                 return outer.track(comp, port, of)
+
+            @staticmethod
+            def axis(port):
+                return outer.axis(comp, port)
         return View()
+
+    def axis(self, comp, port):
+        """The axis (unit, in the axes of the frame the flange ``port`` moves) of the joint
+        whose axis or support flange ``port`` is on; ``None`` for a flange on no joint."""
+        owner = _flange_owner(self.topo, comp, port)
+        if owner is None or self.system is None:
+            return None
+        e, node = owner
+        n = e.comp.axis_world(self.jets0[e.node_a].R, self.system.P[e.name])
+        return self.jets0[node].R.T @ (np.asarray(n, dtype=float) / np.linalg.norm(n))
 
     def _world(self, node):
         """``(R (n, 3, 3), r (n, 3))`` of a frame node at every output (frame -> world, m)."""
@@ -386,10 +401,36 @@ def _framed(topo):
             yield path, comp, ports
 
 
+def _flange_owner(topo, comp, port):
+    """``(joint edge, frame node)``: the joint a flange port is on and the frame it moves (the
+    joint's frame_b for its ``axis`` flange, frame_a for its ``support``), or ``None``."""
+    root = topo.flange_of.get(PortRef(comp, port, "flange"))
+    owner = topo.flange_owner.get(root) if root is not None else None
+    if owner is None:
+        return None
+    e = topo.edge(owner[0])
+    return e, (e.node_b if owner[1] == "axis" else e.node_a)
+
+
+def _flanged(topo):
+    """``(path, comp, {port: node})`` of every component with flanges and no frames (a rotor,
+    a gear, an axis spring): each flange on a joint rides on the frame it moves. Its shapes
+    are placed in those frames (``frame=<flange port>``) and ``view.axis(port)`` gives the
+    joint's axis there."""
+    for path, comp in topo.flat.components.items():
+        kinds = {pt.kind for pt in comp.ports().values()}
+        if "frame" in kinds or "flange" not in kinds:
+            continue
+        ports = {pn: owner[1] for pn, pt in comp.ports().items() if pt.kind == "flange"
+                 for owner in [_flange_owner(topo, comp, pn)] if owner is not None}
+        if ports:
+            yield path, comp, ports
+
+
 def _place(system, topo, views, link_of, local, hide, scale):
     """Every component's shapes, placed on links."""
     out, n_body = [], 0
-    for path, comp, ports in _framed(topo):
+    for path, comp, ports in [*_framed(topo), *_flanged(topo)]:
         if any(fnmatch.fnmatchcase(path, pat) for pat in hide):
             continue
         p = system.P.get(path, comp.p) if hasattr(system, "P") else comp.p
