@@ -20,13 +20,13 @@ import numpy as np
 
 from mbcomp import Box, Cylinder, Grid, Joint, Model, Param, SimulationError, Sphere
 from mbcomp.errors import Problem
-from mbcomp.jets import is_traced, local_point, local_vector, slip_velocity, velocity_along
-from mbcomp.kinematics import rot_axis
+from mbcomp.jets import ScalarJet, VecJet, is_traced, local_point, local_vector, slip_velocity, velocity_along
+from mbcomp.kinematics import cross, rot_axis
 from mbcomp.modeling.shapes import z_to
 
 from .joints import FreeMotion
 from .parts import RigidBody
-from .surfaces import Surface, surface_geometry, surface_rows, tangent_distance
+from .surfaces import Plane, Surface, surface_geometry, surface_rows, tangent_distance
 
 _E = np.eye(3)
 
@@ -53,6 +53,111 @@ def _lift_off(name, t, outputs):
             f"(contacts are bilateral; a real wheel or ball would lift off)"]
 
 
+def _rim_step(surface, cl, al, u, r):
+    """One Newton step on the rim angle ``psi`` towards the rim point deepest in the surface:
+    ``f(psi) = G(c + r u(psi))`` with ``f' = r n . s``, ``f'' = r^2 s . K s - r n . u``
+    (``s = axis x u`` the rim tangent); ``u`` moves to ``unit(u + delta s)``, ``delta = -f'/f''``
+    (Newton in ``tan(psi)``: quadratic). All in frame_a coordinates; returns ``(u, delta)``."""
+    _, n, K, _ = surface.distance(cl + r * u)
+    s = cross(al, u)
+    delta = -(n @ s) / (r * (s @ (K @ s)) - n @ u)
+    v = u + delta * s
+    return v / np.sqrt(v @ v), delta
+
+
+def rim_point(surface, cl, al, r, steps):
+    """The rim point of a disk (centre ``cl``, unit axis ``al``, radius ``r`` in m; frame_a
+    coordinates) that touches ``surface``: the point of the rim circle with the least signed
+    distance ``G``, where the surface normal ``n`` is perpendicular to the rim tangent. Start:
+    ``u = -unit(n0 - (n0 . al) al)`` with ``n0`` the normal at the foot point of the centre
+    (exact on a plane and a sphere, and for a disk in a plane normal to a cylinder's axis, where
+    the centre's normal line meets the rim); then ``steps`` Newton steps
+    (unrolled: a generated program traces them). Returns ``(u, delta)``: the unit direction
+    from the centre to the rim point and the Newton step still left there (rad; the error
+    estimate, of order the square of the last step taken).
+
+    Examples
+    --------
+    A disk of radius 0.2 m, its axis tilted 0.5 rad from x, centre 0.7 m from the centre of a
+    sphere of radius 1 m (a dome): the rim point found is the nearest point of the rim.
+
+    >>> import numpy as np
+    >>> from mbcomp.library.contact import rim_point
+    >>> from mbcomp.library.surfaces import SphereSurface
+    >>> c, ax = np.array([0.0, 0.2, 1.1]), np.array([np.cos(0.5), np.sin(0.5), 0.0])
+    >>> u, delta = rim_point(SphereSurface(R=1.0, inside=False), c, ax, 0.2, steps=5)
+    >>> e1 = np.cross(ax, [0, 0, 1.0]); e1 /= np.linalg.norm(e1); e2 = np.cross(ax, e1)
+    >>> ring = [c + 0.2 * (np.cos(t) * e1 + np.sin(t) * e2) for t in np.linspace(0, 2 * np.pi, 200001)]
+    >>> bool(np.linalg.norm(c + 0.2 * u) <= min(np.linalg.norm(ring, axis=1)) + 1e-12 and abs(delta) < 1e-14)
+    True
+    """
+    _, n0, _, _ = surface.distance(cl)
+    v = (n0 @ al) * al - n0
+    u = v / np.sqrt(v @ v)
+    for _ in range(steps):
+        u, _ = _rim_step(surface, cl, al, u, r)
+    return u, _rim_step(surface, cl, al, u, r)[1]
+
+
+class _Rim:
+    """A disk's contact with a surface: the holonomic row, the contact point ``P`` and the
+    rolling directions ``lng``, ``lat`` (value and rate) -- see :func:`rim_geometry`."""
+
+    __slots__ = ("normal", "n", "P", "lng", "lat", "delta", "curv")
+
+    def __init__(self, normal, n, P, lng, lat, delta, curv):
+        self.normal, self.n, self.P, self.lng, self.lat = normal, n, P, lng, lat
+        self.delta, self.curv = delta, curv
+
+
+def _dir(v, vdot):
+    """A point or a direction as :func:`slip_velocity` and :func:`velocity_along` read it (value and rate)."""
+    return VecJet(v, None, vdot, None)
+
+
+def rim_geometry(surface, a, b, r, axis, steps):
+    """The jets of a thin disk (radius ``r``, m; spin axis ``axis`` in frame_b coordinates,
+    centre at frame_b's origin) touching ``surface`` (fixed in frame_a's axes).
+
+    With ``u(psi)`` the rim direction (fixed in the disk for fixed ``psi``) and
+    ``f(psi, t) = G(c + r u(psi))``, the row is ``Phi(t) = f(psi*(t), t)`` at the rim point
+    ``f_psi = 0`` (:func:`rim_point`). Its rate is ``f_t`` (envelope theorem: ``psi*`` does not
+    enter to first order): ``n . vrel``, ``vrel`` the disk's material point at ``P`` relative to
+    frame_a's, so ``jac`` is that of a material point. Its bias is
+    ``f_tt + f_tpsi psi*'`` with ``psi*' = -f_tpsi / f_psipsi`` (implicit function theorem),
+    ``f_tt = n . acc + vrel . K vrel``, ``f_tpsi = r (s . K vrel + n . ((w_b - w_a) x s))``,
+    ``f_psipsi = r^2 s . K s - r n . u``. ``psi*'`` also gives the rates of ``P = c + r u``,
+    of ``lng = u x axis`` (the rolling direction) and of ``lat = n x lng``.
+    """
+    Ra = a.R
+    aw = b.R @ axis
+    u, delta = rim_point(surface, Ra.T @ (b.r - a.r), Ra.T @ aw, r, steps)
+    G, nl, Kl, _ = surface.distance(Ra.T @ (b.r - a.r) + r * u)
+    K = lambda v: Ra @ (Kl @ (Ra.T @ v))  # noqa: E731 -- dn/dx in world axes
+    uw, n = Ra @ u, Ra @ nl
+    s = cross(aw, uw)
+    rho = r * uw
+    P = b.r + rho
+    d = P - a.r
+    vb = b.v + cross(b.w, rho)
+    vrel = vb - a.v - cross(a.w, d)
+    ab = b.a + cross(b.alpha, rho) + cross(b.w, cross(b.w, rho))
+    acc = ab - a.a - cross(a.alpha, d) - 2.0 * cross(a.w, vb - a.v) + cross(a.w, cross(a.w, d))
+    Ks = K(s)
+    curv = r * (s @ Ks) - n @ uw  # f_psipsi / r
+    f_tpsi = r * (Ks @ vrel + n @ cross(b.w - a.w, s))
+    psi_dot = -f_tpsi / (r * curv)
+    bias = n @ acc + vrel @ K(vrel) + f_tpsi * psi_dot
+    normal = ScalarJet(G, np.concatenate((-n, cross(n, d), n, cross(rho, n))), n @ vrel, bias)
+    Pdot = vb + (r * psi_dot) * s
+    udot = cross(b.w, uw) + psi_dot * s
+    lng = cross(uw, aw)
+    lng_dot = cross(udot, aw) + cross(uw, cross(b.w, aw))
+    ndot = cross(a.w, n) + K(Pdot - a.v - cross(a.w, d))
+    lat, lat_dot = cross(n, lng), cross(ndot, lng) + cross(n, lng_dot)
+    return _Rim(normal, n, _dir(P, Pdot), _dir(lng, lng_dot), _dir(lat, lat_dot), delta, curv)
+
+
 class DiskContact(Joint):
     """A thin disk (knife-edge wheel) of radius ``r`` rolling without slip on a plane.
 
@@ -66,6 +171,18 @@ class DiskContact(Joint):
 
     Outputs: ``N`` normal force on the wheel (N), ``F_long``, ``F_lat`` friction force on the
     wheel along ``l`` and ``n x l`` (N), contact point ``p.x|y|z`` (m, world).
+
+    ``surface`` (a :mod:`mbcomp.library.surfaces` object fixed in frame_a's axes, in place of
+    the plane ``n``): ``Plane``, ``SphereSurface``, ``CylinderSurface``, ``TorusSurface`` or
+    ``HeightField``. The contact point is then the rim point deepest in the surface (least
+    signed distance ``G``; there the surface normal ``n`` is perpendicular to the rim tangent),
+    found by ``rim_steps`` Newton steps on the rim angle from the normal at the centre's foot
+    point (:func:`rim_point`; quadratic convergence, exact from the start on a plane or a
+    sphere and for a disk in a plane normal to a cylinder's axis). The ``normal``
+    row is ``G(P)`` (m), ``l = u x axis`` with ``u`` from the centre to ``P``, and its jets
+    are exact (envelope and implicit function theorems, :func:`rim_geometry`). The disk must
+    be smaller than the surface's curvature radius along the rim; a numeric evaluation stops
+    with an error naming the contact if the rim point is not found to 1e-10 m.
 
     Examples
     --------
@@ -90,23 +207,65 @@ class DiskContact(Joint):
     n = Param((0.0, 0.0, 1.0), unit="1", shape=(3,), check="nonzero",
               doc="plane normal, frame_a coordinates, pointing to the wheel's side")
     axis = Param((0.0, 1.0, 0.0), unit="1", shape=(3,), check="nonzero", doc="spin axis, frame_b coordinates")
+    surface = Param(None, unit="1", kind="any",
+                    doc="surface in frame_a's axes (mbcomp.library.surfaces; m) in place of the plane n, or None")
+    rim_steps = Param(6, unit="1", kind="any", doc="Newton steps for the rim point on a surface (an integer >= 0)")
 
     draws_body = True
 
     def visuals(self, p, view):
         """The wheel: a disk of radius ``r`` about the spin axis with a bar across it (so the spin
-        shows), on frame_b (the wheel draws no shape of its own); the plane, on frame_a."""
+        shows), on frame_b (the wheel draws no shape of its own); the plane, on frame_a (a
+        curved surface is not drawn)."""
         R = z_to(p.axis)
-        return [Cylinder(p.r, 0.08 * p.r, R=R, frame="frame_b", color="darkgrey"),
-                Box((1.9 * p.r, 0.15 * p.r, 0.1 * p.r), R=R, frame="frame_b", color="silver"),
-                Grid(R=z_to(p.n), frame="frame_a", floor=False, color="lightgrey")]
+        wheel = [Cylinder(p.r, 0.08 * p.r, R=R, frame="frame_b", color="darkgrey"),
+                 Box((1.9 * p.r, 0.15 * p.r, 0.1 * p.r), R=R, frame="frame_b", color="silver")]
+        if p.surface is not None:
+            return wheel
+        return wheel + [Grid(R=z_to(p.n), frame="frame_a", floor=False, color="lightgrey")]
+
+    def check_params(self, p):
+        s, k = p.surface, p.rim_steps
+        out = []
+        if not (isinstance(k, (int, np.integer)) and not isinstance(k, bool) and k >= 0):
+            out.append(Problem(f"{self.path}.rim_steps", f"{k!r} is not a whole number >= 0", "give e.g. rim_steps=6"))
+        if s is None:
+            return out
+        if not isinstance(s, Surface):
+            return out + [Problem(f"{self.path}.surface", f"{s!r} is not a surface",
+                                  "give a surface of mbcomp.library.surfaces (SphereSurface, CylinderSurface, "
+                                  "TorusSurface, HeightField, Plane) or None for the plane n")]
+        why = s.problem(float(p.r)) if not is_traced(p.r) else None  # worded for a ball
+        why = why.replace("ball", "disk") if why else None
+        return out + ([Problem(f"{self.path}.surface", why, "change r or the surface")] if why else [])
+
+    def _rim(self, a, b, p):
+        """The rim geometry on ``p.surface`` (no Newton step on a plane: the start is exact),
+        checked when numeric: the rim point found, and a minimum of ``G`` along the rim."""
+        steps = 0 if isinstance(p.surface, Plane) else int(p.rim_steps)
+        geo = rim_geometry(p.surface, a, b, p.r, _unit(p.axis), steps)
+        if is_traced(geo.delta):
+            return geo
+        if not geo.curv > 0.0:
+            raise SimulationError(f"{self.path}: the disk (r = {p.r:g} m) is more curved than {p.surface!r} along its "
+                                  f"rim, so its deepest rim point is not a contact point -> use a smaller disk or a "
+                                  f"flatter surface")
+        if not abs(geo.delta) * p.r < 1e-10:
+            raise SimulationError(f"{self.path}: the rim point on {p.surface!r} was not found in {steps} Newton "
+                                  f"steps (last step {abs(geo.delta) * p.r:.2g} m) -> give DiskContact(rim_steps=...) "
+                                  f"more steps, or a disk smaller than the surface's curvature radius")
+        return geo
 
     singularity_reason = ("the disk lies flat on the plane (spin axis parallel to the plane normal), where its "
                           "contact point is undefined")
     singularity_fix = "keep the disk from falling flat (more spin or speed, a smaller lean, a shorter run)"
 
     def singularity(self, a, b, p):
-        """``|axis x n|``: the cosine of the lean from upright; 0 when the disk lies flat."""
+        """``|axis x n|``: the cosine of the lean from upright (``n`` the normal at the contact);
+        0 when the disk lies flat."""
+        if p.surface is not None:
+            n = self._rim(a, b, p).n
+            return float(np.linalg.norm(np.cross(n, b.R @ _unit(p.axis))))
         return float(np.linalg.norm(np.cross(a.R @ _unit(p.n), b.R @ _unit(p.axis))))
 
     def _geometry(self, a, b, p):
@@ -123,16 +282,22 @@ class DiskContact(Joint):
         return n, P, lng, n.cross_(lng)
 
     def constraints(self, a, b, p):
+        if p.surface is not None:
+            return [("normal", self._rim(a, b, p).normal)]
         n, P, _, _ = self._geometry(a, b, p)
         return [("normal", (P - local_point(a, 0)).dot_(n))]
 
     def velocity_constraints(self, a, b, p):
-        _, P, lng, lat = self._geometry(a, b, p)
+        if p.surface is not None:
+            geo = self._rim(a, b, p)
+            P, lng, lat = geo.P, geo.lng, geo.lat
+        else:
+            _, P, lng, lat = self._geometry(a, b, p)
         slip = slip_velocity(a, b, P)
         return [("longitudinal", velocity_along(slip, lng)), ("lateral", velocity_along(slip, lat))]
 
     def outputs(self, a, b, p, lam):
-        _, P, _, _ = self._geometry(a, b, p)
+        P = self._rim(a, b, p).P if p.surface is not None else self._geometry(a, b, p)[1]
         out = {"N": -lam.get("normal", np.nan), "F_long": -lam.get("longitudinal", np.nan),
                "F_lat": -lam.get("lateral", np.nan)}
         out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
