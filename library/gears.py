@@ -17,7 +17,6 @@ import numpy as np
 from mbcomp import Box, Cylinder, FlangeConstraint, FlangeInertia, Flange, Model, Param
 from mbcomp.modeling.shapes import STEEL, z_to
 from .joints import Revolute
-from .parts import FixedTranslation
 
 __all__ = ["IdealGear", "RackPinion", "IdealPulley", "Belt", "Inertia", "PlanetaryGear"]
 
@@ -114,13 +113,13 @@ class IdealPulley(FlangeConstraint):
     ``a = m g r^2 / (J + m r^2)``.
 
     >>> import mbcomp
-    >>> from mbcomp.library import World, Revolute, FixedTranslation, Inertia, Prismatic, PointMass, IdealPulley
+    >>> from mbcomp.library import World, Revolute, Inertia, Prismatic, PointMass, IdealPulley
     >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
-    >>> drum = m.add("drum", Revolute(n=(0, 0, 1))); hub = m.add("hub", FixedTranslation())
+    >>> drum = m.add("drum", Revolute(n=(0, 0, 1)))
     >>> rotor = m.add("drum_J", Inertia(J=0.02))
     >>> hook = m.add("hook", Prismatic(n=(0, -1, 0))); load = m.add("load", PointMass(m=3.0))
     >>> rope = m.add("rope", IdealPulley(radius=0.05))
-    >>> m.connect(w.frame_b, drum.frame_a); m.connect(drum.frame_b, hub.frame_a); m.connect(rotor.flange, drum.axis)
+    >>> m.connect(w.frame_b, drum.frame_a); m.connect(rotor.flange, drum.axis)
     >>> m.connect(w.frame_b, hook.frame_a); m.connect(hook.frame_b, load.frame_a)
     >>> m.connect(rope.flange_a, drum.axis); m.connect(rope.flange_b, hook.axis)
     >>> res = mbcomp.simulate(m, t_end=1.0)
@@ -180,7 +179,8 @@ class Inertia(FlangeInertia):
 
     The rotor turns with the frame the flange moves (a Revolute's frame_b on its ``axis``)
     about the joint's axis ``n``: inertia tensor ``J n n^T``, no mass, no transverse
-    inertia. On an axis fixed in the world it is a body of axial inertia ``J`` on frame_b.
+    inertia. On an axis fixed in the world it is a body of axial inertia ``J`` on frame_b. A
+    joint whose axis turns a rotor may leave its frame_b open (a shaft with no body on it).
     On a moving carrier its kinetic energy is ``J (n . w)^2 / 2`` with ``w`` the absolute
     angular velocity; ``gyroscopic=True`` also puts the gyroscopic moment
     ``w x (J n (n . w))`` on the carrying frame (a spinning rotor on a turning body), which
@@ -189,11 +189,10 @@ class Inertia(FlangeInertia):
     Examples
     --------
     >>> import mbcomp
-    >>> from mbcomp.library import Fixed, FixedTranslation, Revolute, Inertia, Torque
+    >>> from mbcomp.library import Fixed, Revolute, Inertia, Torque
     >>> m = mbcomp.Model(); base = m.add("base", Fixed()); j = m.add("j", Revolute())
-    >>> hub = m.add("hub", FixedTranslation())   # the shaft's frame (a joint's frame_b must be connected)
     >>> rotor = m.add("rotor", Inertia(J=0.5)); tq = m.add("tq", Torque(tau=2.0))
-    >>> m.connect(base.frame_b, j.frame_a); m.connect(j.frame_b, hub.frame_a)
+    >>> m.connect(base.frame_b, j.frame_a)              # j.frame_b may stay open: the rotor is the shaft
     >>> m.connect(rotor.flange, j.axis); m.connect(tq.flange_b, j.axis)
     >>> round(float(mbcomp.simulate(m, t_end=1.0)["j.w"][-1]), 9)   # tau / J * t
     4.0
@@ -272,12 +271,10 @@ class PlanetaryGear(Model):
         n = tuple(np.asarray(n, float))
         for name, J, w0 in (("sun", J_sun, w_sun0), ("carrier", J_carrier, w_carrier0), ("ring", J_ring, w_ring0)):
             shaft = self.add(name, Revolute(n=n, phi0=0.0, w0=w0))
-            hub = self.add(f"{name}_hub", FixedTranslation())  # the shaft's frame, to attach bodies to
-            rotor = self.add(f"J_{name}", Inertia(J=J))
-            self.connect(shaft.frame_b, hub.frame_a)
+            rotor = self.add(f"J_{name}", Inertia(J=J))  # the rotor carries the shaft: frame_b may stay open
             self.connect(rotor.flange, shaft.axis)
             self.expose(name, shaft.axis)
-            self.expose(f"{name}_frame", hub.frame_b)
+            self.expose(f"{name}_frame", shaft.frame_b)
         mesh = self.add("mesh", IdealGear(ratio=ratio))
         self.connect(mesh.flange_a, self["sun"].axis)
         self.connect(mesh.flange_b, self["ring"].axis)

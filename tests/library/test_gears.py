@@ -133,13 +133,12 @@ def hoist(J=0.04, m_load=2.5, r=0.08, g=9.81):
     rope's end on a Prismatic pointing down (away from the drum), gravity -y."""
     m = mbcomp.Model()
     world = m.add("world", World(g=(0, -g, 0)))
-    drum = m.add("drum", Revolute(n=(0, 0, 1)))
-    hub = m.add("hub", FixedTranslation())
+    drum = m.add("drum", Revolute(n=(0, 0, 1)))  # its frame_b stays open: the rotor is the drum
     rotor = m.add("drum_J", Inertia(J=J))
     rope_end = m.add("hook", Prismatic(n=(0, -1, 0)))
     m.add("load", PointMass(m=m_load))
     rope = m.add("rope", IdealPulley(radius=r))
-    m.connect(world.frame_b, drum.frame_a); m.connect(drum.frame_b, hub.frame_a); m.connect(rotor.flange, drum.axis)
+    m.connect(world.frame_b, drum.frame_a); m.connect(rotor.flange, drum.axis)
     m.connect(world.frame_b, rope_end.frame_a); m.connect(rope_end.frame_b, m["load"].frame_a)
     m.connect(rope.flange_a, drum.axis); m.connect(rope.flange_b, rope_end.axis)
     return m
@@ -261,3 +260,47 @@ def test_a_rotor_alone_carries_the_shaft():
     m.connect(rotor.flange, j.axis); m.connect(tq.flange_b, j.axis)
     res = mbcomp.simulate(m, t_end=2.0, **TIGHT)
     np.testing.assert_allclose(res["j.w"], np.sin(res["time"]) / 0.25, atol=1e-9)
+
+
+def _bare_shaft(rotor_on="axis", n=(0.0, 0.6, 0.8)):
+    """A Revolute about the tilted axis ``n`` with nothing on its frame_b: a rotor (J = 0.4) on
+    its ``axis`` (or ``support``, or none) and a torque 1.2 N m."""
+    m = mbcomp.Model()
+    m.add("world", World(g=(0.0, 0.0, -9.81)))
+    j = m.add("j", Revolute(n=n))
+    tq = m.add("tq", Torque(tau=1.2))
+    m.connect(m["world"].frame_b, j.frame_a); m.connect(tq.flange_b, j.axis)
+    if rotor_on:
+        rotor = m.add("rotor", Inertia(J=0.4))
+        m.connect(rotor.flange, getattr(j, rotor_on))
+    return m
+
+
+@pytest.mark.parametrize("backend", ["numeric", "c"])
+def test_a_rotor_only_shaft_needs_no_frame_on_its_joint(backend):
+    """Revolute + Inertia + Torque, frame_b open: J dw/dt = tau (gravity does no work on a rotor)."""
+    res = mbcomp.simulate(_bare_shaft(), t_end=1.5, backend=backend, **TIGHT)
+    t = res["time"]
+    np.testing.assert_allclose(res["j.w"], 1.2 / 0.4 * t, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res["j.phi"], 0.5 * 1.2 / 0.4 * t ** 2, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res["energy.kinetic"], 0.5 * 0.4 * res["j.w"] ** 2, rtol=1e-13)
+
+
+def test_an_open_frame_b_is_still_refused_without_a_rotor_on_the_axis():
+    for rotor_on in (None, "support"):  # a rotor on the support turns with frame_a: frame_b moves nothing
+        with pytest.raises(ModelError, match=r"j\.frame_b.*must join two frames"):
+            mbcomp.assemble(_bare_shaft(rotor_on))
+
+
+def test_a_motor_s_armature_carries_the_shaft_through_the_motor_s_flange():
+    """The rotor reaches the axis through the motor's own flange (flange ports connected in a chain)."""
+    from mbcomp.library import Motor
+
+    m = mbcomp.Model()
+    base = m.add("base", Fixed())
+    j = m.add("j", Revolute())
+    motor = m.add("motor", Motor(tau_stall=2.0, w_no_load=40.0, J_armature=0.05))
+    m.connect(base.frame_b, j.frame_a); m.connect(motor.flange_b, j.axis)
+    res = mbcomp.simulate(m, t_end=1.0, **TIGHT)
+    exact = 40.0 * (1 - np.exp(-res["time"] * 2.0 / (0.05 * 40.0)))
+    np.testing.assert_allclose(res["j.w"], exact, rtol=0, atol=1e-9)

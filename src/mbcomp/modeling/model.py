@@ -213,8 +213,9 @@ class Model(Component):
                     probs.append(Problem(x.path, "is connected but its component was never added to the model",
                                          f"add it with model.add(name, ...) before connecting {x.name}"))
                 connected.add(x)
+        carried = _rotor_carried(flat)
         for path, comp in flat.components.items():
-            probs.extend(_open_ports(path, comp, connected))
+            probs.extend(_open_ports(path, comp, connected, carried))
         if not flat.components:
             probs.append(Problem(self._label(), "contains no components", "add components with model.add(name, ...)"))
         if probs:
@@ -235,11 +236,33 @@ def is_rigid_offset(comp):
     return comp.role == "joint" and comp.nu == 0 and comp.tree_edge
 
 
-def _open_ports(path, comp, connected):
-    """Problems of the ports of ``comp`` left unconnected (a rigid offset may leave one frame open)."""
+def _rotor_carried(flat):
+    """Ids of the joints whose ``axis`` flange carries a rotor (a ``FlangeInertia`` connected to
+    it, directly or through other flange ports): their frame_b turns the rotor, so it may stay
+    open (a shaft without a body, :class:`~mbcomp.library.Inertia`)."""
+    parent = {}
+
+    def find(x):
+        while parent.setdefault(x, x) != x:
+            x = parent[x]
+        return x
+
+    for a, b in flat.connections:
+        if a.kind == "flange" and b.kind == "flange":
+            parent[find(a)] = find(b)
+    rotors = {find(x) for x in list(parent) if x.component.role == "flange_inertia"}
+    return {id(x.component) for x in list(parent)
+            if x.component.role == "joint" and x.name == "axis" and find(x) in rotors}
+
+
+def _open_ports(path, comp, connected, carried=frozenset()):
+    """Problems of the ports of ``comp`` left unconnected (a rigid offset may leave one frame
+    open; so may a joint's frame_b that turns a rotor on its axis, ``carried``)."""
     frames = [n for n, port in comp.ports().items() if port.kind == "frame"]
     open_ = [n for n, port in comp.ports().items()
              if not port.optional and PortRef(comp, n, port.kind) not in connected]
+    if id(comp) in carried and "frame_a" not in open_:
+        open_ = [n for n in open_ if n != "frame_b"]  # the shaft is the rotor's: a frame that moves it
     out = []
     for pname in open_:
         kind = comp.ports()[pname].kind
@@ -252,7 +275,7 @@ def _open_ports(path, comp, connected):
         elif comp.role == "joint" and kind == "frame":
             what = (f"{what}: a joint with {comp.nu} degree{'s' * (comp.nu != 1)} of freedom must join two frames "
                     "(its motion would move nothing, so it is undetermined); only rigid offsets (FixedTranslation, "
-                    "FixedRotation) may end in an open frame")
+                    "FixedRotation) may end in an open frame, and a joint whose axis turns a rotor (Inertia) in frame_b")
         out.append(Problem(f"{path}.{pname}", what, fix))
     return out
 
