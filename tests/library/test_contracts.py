@@ -561,8 +561,8 @@ def test_force_element_returns_wrenches_on_its_frames(cls):
 
 
 # sensors (issue 21, library/sensors.py) apply nothing: checked by test_sensors_apply_nothing, not here
-TWO_FRAME = [c for c in FORCES if set(frame_ports(c)) == {"frame_a", "frame_b"} and not getattr(c, "sensor", False)]
-SENSORS = [c for c in FORCES if getattr(c, "sensor", False)]
+TWO_FRAME = [c for c in FORCES if set(frame_ports(c)) == {"frame_a", "frame_b"} and not c.sensor]
+SENSORS = [c for c in FORCES if c.sensor]
 
 
 @pytest.mark.parametrize("cls", SENSORS, ids=_ids(SENSORS))

@@ -67,7 +67,7 @@ def momentum_conserved(system):
 def _applies_load(comp):
     """Whether a force element may load the frames it touches: a sensor (``sensor = True``:
     zero wrenches, outputs only) applies none, so one fixed to the world loads nothing."""
-    return not getattr(comp, "sensor", False)
+    return not comp.sensor
 
 
 def momenta(system, t, q, u):

@@ -336,6 +336,9 @@ class ForceElement(Component):
     #: True for a load from outside the mechanism (a force or torque given in the world,
     #: with no reaction on another of its frames): it changes the mechanism's momentum
     external = False
+    #: True for a sensor: an element that applies no force at all (its ``wrenches`` are zero)
+    #: and only reports ``outputs``; it loads nothing it touches
+    sensor = False
 
     def wrenches(self, t, frames, p):
         """Return ``{port_name: (f, tau)}``: force (N) at the frame origin and torque (N m),
