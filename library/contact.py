@@ -215,13 +215,12 @@ class DiskContact(Joint):
 
     def visuals(self, p, view):
         """The wheel: a disk of radius ``r`` about the spin axis with a bar across it (so the spin
-        shows), on frame_b (the wheel draws no shape of its own); the plane, on frame_a (a
-        curved surface is not drawn)."""
+        shows), on frame_b (the wheel draws no shape of its own); the plane or the surface, on frame_a."""
         R = z_to(p.axis)
         wheel = [Cylinder(p.r, 0.08 * p.r, R=R, frame="frame_b", color="darkgrey"),
                  Box((1.9 * p.r, 0.15 * p.r, 0.1 * p.r), R=R, frame="frame_b", color="silver")]
-        if p.surface is not None:
-            return wheel
+        if p.surface is not None:  # a translucent patch where the disk rolls (surfaces.Surface.visuals)
+            return wheel + p.surface.visuals(p.r, view)
         return wheel + [Grid(R=z_to(p.n), frame="frame_a", floor=False, color="lightgrey")]
 
     def check_params(self, p):
@@ -365,11 +364,11 @@ class SphereContact(Joint):
 
     def visuals(self, p, view):
         """The ball: a sphere of radius ``r`` with a band (so the spin shows) on frame_b (the ball
-        draws no shape of its own); the plane, on frame_a (a curved surface is not drawn)."""
+        draws no shape of its own); the plane or the surface, on frame_a."""
         ball = [Sphere(p.r, frame="frame_b", color="orange"),
                 Cylinder(1.02 * p.r, 0.2 * p.r, frame="frame_b", color="white")]
-        if p.surface is not None:  # a curved surface is not drawn (no shape kind for it yet)
-            return ball
+        if p.surface is not None:  # a translucent patch where the ball rolls (surfaces.Surface.visuals)
+            return ball + p.surface.visuals(p.r, view)
         return ball + [Grid(R=z_to(p.n), frame="frame_a", floor=False, color="lightgrey")]
 
     singularity_reason = ("the surface normal at the contact is along the surface's tangent reference axis, where "

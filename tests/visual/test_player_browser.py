@@ -33,7 +33,26 @@ def browser():
         b.close()
 
 
+def ball_in_bowl():
+    """A ball rolling in a spherical bowl (radius 1 m, bottom at the origin), released 0.5 rad
+    up the wall with a sideways speed: the player draws the bowl as a translucent mesh."""
+    from mbcomp.library import FreeMotion, RigidBody, SphereContact, World
+    from mbcomp.library.surfaces import SphereSurface
+
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, -9.81)))
+    free = m.add("free", FreeMotion(r0=(0.9 * np.sin(0.5), 0, 1 - 0.9 * np.cos(0.5)), v0=(0, 0.8, 0)))
+    ball = m.add("ball", RigidBody(m=0.5, I=0.002 * np.eye(3)))
+    c = m.add("contact", SphereContact(r=0.1, surface=SphereSurface(R=1.0, center=(0, 0, 1.0))))
+    m.connect(w.frame_b, free.frame_a)
+    m.connect(free.frame_b, ball.frame_a)
+    m.connect(w.frame_b, c.frame_a)
+    m.connect(c.frame_b, ball.frame_a)
+    return m
+
+
 CASES = {
+    "ball_in_bowl": dict(model=ball_in_bowl, t_end=1.5, trails=["ball"], color_by=None, shot=0.7),
     "slider_crank": dict(file="slider_crank.py", build={}, t_end=1.0, trails=["rod_joint.frame_a", "rod_tip.frame_b"],
                          color_by={"rod": "pin.f"}, shot=0.3),
     "bicycle": dict(file="bicycle.py", build=dict(v=4.0, roll0=0.05), t_end=2.0, trails=["rear_contact"],
@@ -45,7 +64,7 @@ CASES = {
 def player(request, browser, tmp_path_factory):
     """(name, result, page) of a model's player opened in the browser, ready."""
     case = CASES[request.param]
-    model = mbcomp.load_model_file(str(MODELS / case["file"])).build(**case["build"])
+    model = case["model"]() if "model" in case else mbcomp.load_model_file(str(MODELS / case["file"])).build(**case["build"])
     res = mbcomp.simulate(model, t_end=case["t_end"])
     scene = build_scene(res, trails=case["trails"], color_by=case["color_by"], title=request.param)
     path = write_html(scene, tmp_path_factory.mktemp("html") / f"{request.param}.html")
@@ -87,6 +106,33 @@ def test_bodies_posed_exactly_at_output_times(player):
         assert px["nonBackground"] > 0.01 * px["width"] * px["height"], f"{name}: the canvas is blank at t[{k}]"
         digests.append(px["hash"])
     assert digests[0] != digests[1], f"{name}: the frames at two times look the same"
+
+
+def test_the_bowl_is_drawn_where_the_ball_rolls(player):
+    """The bowl's mesh, as the browser holds it (world positions of its vertices), lies on the
+    sphere of radius 1 m about (0, 0, 1) (float32 vertices: 1e-6 m), and the ball's centre,
+    read back from the scene graph, stays 0.9 m from that centre."""
+    name, res, page = player
+    if name != "ball_in_bowl":
+        pytest.skip("the bowl case only")
+    page.evaluate(f"window.mbcomp.setTime({float(res.time[-1])!r})")
+    pts = np.array(page.evaluate("""(() => {
+        const {player, THREE} = window.mbcomp, out = [];
+        for (const o of player.byComponent["contact"]) {
+          const pos = o.geometry && o.geometry.attributes.position;
+          if (!pos || o.geometry.type !== "BufferGeometry" || !o.material.transparent) continue;
+          o.updateWorldMatrix(true, false);
+          for (let i = 0; i < pos.count; i++) {
+            const v = new THREE.Vector3().fromBufferAttribute(pos, i).applyMatrix4(o.matrixWorld);
+            out.push([v.x, v.y, v.z]);
+          }
+        }
+        return out; })()"""))
+    assert len(pts) > 100
+    np.testing.assert_allclose(np.linalg.norm(pts - (0, 0, 1.0), axis=1), 1.0, atol=2e-6)
+    assert pts[:, 2].min() < 1e-6 and pts[:, 2].max() > 0.5 - 1e-6  # from the bottom to 60 degrees up, at least
+    c = np.array(page.evaluate("window.mbcomp.bodyPose('ball')")["r"])
+    assert abs(np.linalg.norm(c - (0, 0, 1.0)) - 0.9) < 1e-6
 
 
 def _slerp(q0, q1, a):
