@@ -299,9 +299,16 @@ class Component:
 
     def visuals(self, p, view):
         """The component's default shapes (:mod:`mbcomp.modeling.shapes`), each placed in one
-        of its frames; none by default. ``view`` tells the scene's length ``scale`` (m) and,
-        by ``view.attached(port)``, the origins of the frames rigidly fixed to a port's frame
-        (m, that frame's axes). Components override this to be seen without extra work."""
+        of its frames; none by default. Components override this to be seen without extra work.
+
+        ``view`` (:mod:`mbcomp.visual.scene`) tells: ``scale``, the mechanism's size (m);
+        ``attached(port)``, the origins of the frames rigidly fixed to a port's frame (m, its
+        axes); ``covered(port)``, whether another component draws the body there (a wheel's
+        contact); ``range(column)``, ``(min, max)`` of one of the component's result columns
+        over the run (a slider's travel); ``track(port, of)``, where frame ``of`` went over the
+        run, in the axes of frame ``port`` (a surface patch covers the ball's path); and for a
+        component on a joint's axis flange (no frames: a rotor) ``axis(port)``, the joint's
+        axis in the frame the flange moves, on which its shapes are placed."""
         return []
 
     def shapes(self, p, view):
