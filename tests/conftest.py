@@ -1,5 +1,6 @@
 import pathlib
 
+import numpy as np
 import pytest
 
 import mbcomp
@@ -80,3 +81,21 @@ def step_through(solver):
         ts.append(solver.t)
         ys.append(solver.y.copy())
     return np.array(ts), np.array(ys)
+
+
+def moving_frame(R0, r0, w, v, alpha, acc):
+    """An exact motion with pose (R0, r0) and the given rates at t = 0 (world coordinates): a
+    function of t giving the frame's jet (no speed columns), for checking a row's jets against
+    finite differences in time."""
+    from scipy.spatial.transform import Rotation
+
+    from mbcomp.jets import FrameJet
+
+    def at(t):
+        A = Rotation.from_rotvec(w * t).as_matrix()
+        B = Rotation.from_rotvec(alpha * t * t / 2).as_matrix()
+        z = np.zeros((3, 0))
+        Aal = A @ alpha
+        return FrameJet(A @ B @ R0, r0 + v * t + acc * t * t / 2, w + Aal * t, v + acc * t, z, z,
+                        Aal + t * np.cross(w, Aal), acc.copy())
+    return at

@@ -21,6 +21,7 @@ from mbcomp.jets import FrameJet
 from mbcomp.library import FreeMotion, RigidBody, SphereContact, World
 from mbcomp.library.surfaces import (CylinderSurface, HeightField, HeightJet, Plane, SphereSurface, TorusSurface,
                                      surface_rows)
+from conftest import moving_frame
 
 
 def cap(R):
@@ -124,17 +125,6 @@ def test_newton_step_count_sets_the_accuracy():
 
 
 # --------------------------------------------------------------------------- jets of the rows
-
-def moving_frame(R0, r0, w, v, alpha, acc):
-    """An exact motion with pose (R0, r0) and the given rates at t = 0 (world coordinates)."""
-    def at(t):
-        A = Rotation.from_rotvec(w * t).as_matrix()
-        B = Rotation.from_rotvec(alpha * t * t / 2).as_matrix()
-        z = np.zeros((3, 0))
-        Aal = A @ alpha
-        return FrameJet(A @ B @ R0, r0 + v * t + acc * t * t / 2, w + Aal * t, v + acc * t, z, z,
-                        Aal + t * np.cross(w, Aal), acc.copy())
-    return at
 
 
 @pytest.mark.parametrize("name", list(CASES))

@@ -50,6 +50,7 @@ from mbcomp.kinematics import rot_axis  # noqa: E402
 from mbcomp.library import DiskContact, FreeMotion, RigidBody, World  # noqa: E402
 from mbcomp.library.contact import rim_point  # noqa: E402
 from mbcomp.library.surfaces import CylinderSurface, HeightField, Plane, SphereSurface, TorusSurface  # noqa: E402
+from conftest import moving_frame  # noqa: E402
 
 G = 9.81
 TIGHT = dict(rtol=1e-10, atol=1e-12, backend="python")
@@ -76,17 +77,6 @@ CASES = {
     "wavy": (HeightField(wavy), np.array([0.5, 0.4, 0.4]), 0.25),
 }
 
-
-def moving_frame(R0, r0, w, v, alpha, acc):
-    """An exact motion with pose (R0, r0) and the given rates at t = 0 (world coordinates)."""
-    def at(t):
-        A = Rotation.from_rotvec(w * t).as_matrix()
-        B = Rotation.from_rotvec(alpha * t * t / 2).as_matrix()
-        z = np.zeros((3, 0))
-        Aal = A @ alpha
-        return FrameJet(A @ B @ R0, r0 + v * t + acc * t * t / 2, w + Aal * t, v + acc * t, z, z,
-                        Aal + t * np.cross(w, Aal), acc.copy())
-    return at
 
 
 def ring(c, ax, r, k=400001):
