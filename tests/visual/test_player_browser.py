@@ -60,14 +60,13 @@ CASES = {
 }
 
 
-@pytest.fixture(scope="module", params=sorted(CASES))
-def player(request, browser, tmp_path_factory):
-    """(name, result, page) of a model's player opened in the browser, ready."""
-    case = CASES[request.param]
+def _open(name, browser, folder):
+    """(name, result, page) of a case's player opened in the browser, ready."""
+    case = CASES[name]
     model = case["model"]() if "model" in case else mbcomp.load_model_file(str(MODELS / case["file"])).build(**case["build"])
     res = mbcomp.simulate(model, t_end=case["t_end"])
-    scene = build_scene(res, trails=case["trails"], color_by=case["color_by"], title=request.param)
-    path = write_html(scene, tmp_path_factory.mktemp("html") / f"{request.param}.html")
+    scene = build_scene(res, trails=case["trails"], color_by=case["color_by"], title=name)
+    path = write_html(scene, folder / f"{name}.html")
     page = browser.new_page(viewport={"width": 960, "height": 540})
     errors = []
     page.on("pageerror", lambda e: errors.append(str(e)))
@@ -75,7 +74,22 @@ def player(request, browser, tmp_path_factory):
     page.wait_for_function("window.mbcomp !== undefined")
     page.evaluate("window.mbcomp.ready.then(() => true)")
     assert not errors, errors
-    yield request.param, res, page
+    return name, res, page
+
+
+@pytest.fixture(scope="module", params=sorted(CASES))
+def player(request, browser, tmp_path_factory):
+    """Each case's player, opened in the browser."""
+    name, res, page = _open(request.param, browser, tmp_path_factory.mktemp("html"))
+    yield name, res, page
+    page.close()
+
+
+@pytest.fixture(scope="module")
+def bowl_player(browser, tmp_path_factory):
+    """The ball-in-a-bowl case's player alone."""
+    name, res, page = _open("ball_in_bowl", browser, tmp_path_factory.mktemp("bowl"))
+    yield name, res, page
     page.close()
 
 
@@ -108,13 +122,11 @@ def test_bodies_posed_exactly_at_output_times(player):
     assert digests[0] != digests[1], f"{name}: the frames at two times look the same"
 
 
-def test_the_bowl_is_drawn_where_the_ball_rolls(player):
+def test_the_bowl_is_drawn_where_the_ball_rolls(bowl_player):
     """The bowl's mesh, as the browser holds it (world positions of its vertices), lies on the
     sphere of radius 1 m about (0, 0, 1) (float32 vertices: 1e-6 m), and the ball's centre,
     read back from the scene graph, stays 0.9 m from that centre."""
-    name, res, page = player
-    if name != "ball_in_bowl":
-        pytest.skip("the bowl case only")
+    name, res, page = bowl_player
     page.evaluate(f"window.mbcomp.setTime({float(res.time[-1])!r})")
     pts = np.array(page.evaluate("""(() => {
         const {player, THREE} = window.mbcomp, out = [];
