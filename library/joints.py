@@ -14,6 +14,7 @@ import numpy as np
 from mbcomp import Cylinder, Flange, Joint, Param, Sphere
 from mbcomp.jets import local_point, local_vector, position_constraints, rigid_constraints
 from mbcomp.kinematics import cross, matrix_to_quat, perpendicular_pair, quat_rate, quat_to_matrix, rot_axis
+from mbcomp.modeling.events import AxisRow, Impact, Switch
 from mbcomp.modeling.free_joint import FreeMotion, quat_increment  # noqa: F401  (FreeMotion: re-exported)
 from mbcomp.modeling.shapes import z_to
 from mbcomp.roles import split_start
@@ -28,7 +29,46 @@ def _axis(p):
     return p.n / np.linalg.norm(p.n)
 
 
-class Revolute(Joint):
+def _limits_ok(lim):
+    return None if lim[0] < lim[1] else f"lower limit {lim[0]:g} must be below the upper {lim[1]:g}"
+
+
+class _Stops:
+    """Rigid stops on a 1-DOF joint's coordinate: ``limits=(lo, hi)``, ``restitution=e``.
+
+    Mode ``"free"`` between the limits, with events ``"lo"`` (``s - lo`` falling through zero)
+    and ``"hi"`` (``hi - s`` falling) whose action is an impact with Newton's restitution;
+    modes ``"lo"``/``"hi"``: engaged at that limit (a row ``s = lo`` or ``s = hi``), left when
+    the row would pull (``"release"``). A compliant stop is a flange element on the axis
+    (:class:`mbcomp.library.ElasticStop`), with no events.
+    """
+
+    def start_mode(self, p):
+        if p.limits is None:
+            return None
+        return "free"
+
+    def events(self, q, u, p, mode):
+        if p.limits is None or mode != "free":
+            return []
+        lo, hi = p.limits
+        return [("lo", q[0] - lo, -1), ("hi", hi - q[0], -1)]
+
+    def on_event(self, name, p, mode):
+        if name == "release":
+            return Switch("free")
+        return Impact(p.restitution, engage=name)
+
+    def mode_rows(self, p, mode):
+        if p.limits is None or mode not in ("lo", "hi"):
+            return []
+        return [AxisRow(mode, 1.0 if mode == "lo" else -1.0, float(p.limits[0 if mode == "lo" else 1]))]
+
+    def rest_mode(self, name, p, mode):
+        return name if name in ("lo", "hi") else None
+
+
+class Revolute(_Stops, Joint):
     """Hinge: frame_b rotates about ``n`` (frame_a coordinates) by angle ``phi``.
 
     Coordinates ``phi`` (rad) and speed ``w`` (rad/s). Flanges ``axis``/``support`` let
@@ -50,6 +90,10 @@ class Revolute(Joint):
     n = Param((0.0, 0.0, 1.0), unit="1", shape=(3,), doc="hinge axis direction, frame_a coordinates", check="nonzero")
     phi0 = Param(None, unit="rad", kind="start", doc="start angle (fixed; wrap in Guess to let init move it)")
     w0 = Param(None, unit="rad/s", kind="start", doc="start angular rate (fixed unless a Guess)")
+    limits = Param(None, unit="rad", shape=(2,), check=_limits_ok,
+                   doc="rigid stops (lo, hi) on phi: impacts there, resting engaged (none by default)")
+    restitution = Param(0.0, unit="1", check=lambda e: None if 0 <= e <= 1 else "must be in [0, 1]",
+                        doc="Newton's restitution coefficient of the stops")
 
     def visuals(self, p, view):
         """A short cylinder along the hinge axis, on frame_a."""
@@ -84,7 +128,7 @@ class Revolute(Joint):
         return phi, (b.w - a.w) @ (a.R @ n)
 
 
-class Prismatic(Joint):
+class Prismatic(_Stops, Joint):
     """Slider: frame_b translates along ``n`` (frame_a coordinates) by ``s``.
 
     Coordinate ``s`` (m), speed ``v`` (m/s); flanges ``axis``/``support`` along the axis.
@@ -105,6 +149,10 @@ class Prismatic(Joint):
     n = Param((1.0, 0.0, 0.0), unit="1", shape=(3,), doc="sliding axis direction, frame_a coordinates", check="nonzero")
     s0 = Param(None, unit="m", kind="start", doc="start position (fixed unless a Guess)")
     v0 = Param(None, unit="m/s", kind="start", doc="start velocity (fixed unless a Guess)")
+    limits = Param(None, unit="m", shape=(2,), check=_limits_ok,
+                   doc="rigid stops (lo, hi) on s: impacts there, resting engaged (none by default)")
+    restitution = Param(0.0, unit="1", check=lambda e: None if 0 <= e <= 1 else "must be in [0, 1]",
+                        doc="Newton's restitution coefficient of the stops")
 
     def visuals(self, p, view):
         """A rod along the sliding axis on frame_a (the guide), over the run's travel

@@ -304,6 +304,35 @@ class Joint(Component):
     def has_velocity_constraints(self):
         return type(self).velocity_constraints is not Joint.velocity_constraints
 
+    # --- events and modes (mbcomp.modeling.events; the run: mbcomp.simulation.events) ----
+    def start_mode(self, p):
+        """The mode the joint starts in (a string), or ``None`` for a joint without modes."""
+        return None
+
+    def events(self, q, u, p, mode):
+        """Event functions of the joint's own coordinates ``q`` and speeds ``u`` in ``mode``:
+        ``[(name, value, direction)]`` (scipy's convention: ``direction`` -1 fires when the
+        value falls through zero, +1 when it rises, 0 either way)."""
+        return []
+
+    def on_event(self, name, p, mode):
+        """The action (:class:`~mbcomp.modeling.events.Impact`, ``Switch``, ``Stop``) at event
+        ``name`` in ``mode``; ``"release"`` when a row of the mode would have to pull."""
+        return None
+
+    def mode_rows(self, p, mode):
+        """The unilateral rows held in ``mode``: ``[AxisRow]`` (:mod:`mbcomp.modeling.events`)."""
+        return []
+
+    def rest_mode(self, name, p, mode):
+        """The mode to settle in when event ``name`` chatters (impacts ever closer in time),
+        or ``None``: the run then fails naming the joint."""
+        return None
+
+    @property
+    def has_events(self):
+        return type(self).start_mode is not Joint.start_mode
+
     # --- 1-D axis -----------------------------------------------------------------------
     def axis_world(self, R_a, p):
         """Unit axis (world coordinates) along which an axis flange force/torque acts."""

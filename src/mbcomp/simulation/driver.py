@@ -45,6 +45,7 @@ from .monitors import SingularPosition, monitors_for
 from .postprocess import postprocess
 from .result import Result
 from .setup import ALL_METHODS, check_model, check_numbers, check_request, check_singular, output_times, system_of
+from .events import Events, finish, stepwise
 from .stepping import Budget, BudgetSpent, Run, hooks_for
 from .stiffness import StiffnessWatch
 from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
@@ -65,7 +66,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
              formulation="lagrange", stabilization=None, alpha=10.0, beta=10.0, n_out=None, dt_out=None,
              max_step=np.inf, progress=False, independent=None, index=None, h=None,
              backend="auto", singular="stop", inputs=None, max_wall_time=None, max_steps=None,
-             body_momenta=False) -> Result:
+             body_momenta=False, events=None) -> Result:
     """Simulate a model: Lagrange multipliers at index 1, or D'Alembert projection to an ODE.
 
     Parameters
@@ -134,6 +135,13 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     body_momenta : bool
         Also each body's momenta (``<body>.momentum.*``, ``<body>.angular_momentum.*``); the
         whole mechanism's are always columns.
+    events : list of callables, optional
+        Event functions ``f(t, y)`` of ``y = [q, u]`` (``system.q_names + u_names``), scipy's
+        convention: ``f.terminal`` (bool or a count) ends the run at its root with status
+        ``"success"``, ``f.direction`` (-1, 0, +1) filters the crossings. They and the
+        components' own events (joint stops: ``Revolute(limits=..., restitution=...)``) are
+        located on each step's dense output and recorded in ``res.events``
+        (:mod:`mbcomp.simulation.events`).
 
     Returns
     -------
@@ -155,12 +163,12 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
                          alpha=alpha, beta=beta, independent=independent, method=method, singular=singular,
                          rtol=rtol, atol=atol, n_out=n_out, dt_out=dt_out, max_step=max_step, h=h,
                          progress=progress, budget=Budget(max_wall_time, max_steps) if max_wall_time or max_steps
-                         else None, body_momenta=body_momenta)
+                         else None, body_momenta=body_momenta, events=events)
 
 
 def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha, beta,
               independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress, budget,
-              body_momenta):
+              body_momenta, events=None):
     """:func:`simulate` once the request is checked and the inputs' signals are in place."""
     system = system_of(model, params, backend)
     try:
@@ -178,18 +186,28 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
         if form.problem != "ode":
             form = build("lagrange", "ode", system, stabilization=stabilization, alpha=alpha, beta=beta)
             y0 = form.initial_state(t_start, init.q, init.u)
-    run = Run(form, stepper, output_times(t_start, t_end, n_out, dt_out), y0, rtol=rtol, atol=atol,
-              max_step=max_step, h=h)
+    watcher = Events(system, lambda s: build(formulation, stepper.problem, s, index=index, stabilization=stabilization,
+                                             alpha=alpha, beta=beta, independent=independent, method=method,
+                                             max_index=stepper.max_index, singular=singular),
+                     events or (), rtol, atol)
+    watcher = watcher if watcher.active else None
+    run = Run(form, stepwise(stepper) if watcher else stepper, output_times(t_start, t_end, n_out, dt_out), y0,
+              rtol=rtol, atol=atol, max_step=max_step, h=h)
     monitors = monitors_for(system, atol, singular)
     wall0 = _time.perf_counter()
     watch = None if stepper.implicit else StiffnessWatch()
-    status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None])
+    status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None], watcher)
+    if watcher is not None and watcher.status and status == "success":
+        status, message = watcher.status, watcher.message
     stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
                       index=index, rtol=rtol, atol=atol)
     message = "; ".join([message] + why_slow(run, watch, status, stats))
     t_done = run.t_out[: len(run.ys)]
-    return postprocess(system, form, t_done, np.array(run.ys).reshape(len(run.ys), -1), status, message, stats,
-                       init, body_momenta)
+    if watcher is not None:
+        stats.update(watcher.stats)
+    res = postprocess(system, form, t_done, np.array(run.ys).reshape(len(run.ys), -1), status, message, stats,
+                      init, body_momenta)
+    return finish(res, watcher)
 
 
 def why_slow(run, watch, status, stats):
@@ -231,18 +249,21 @@ def run_stats(run, monitors, init, seconds, **request):
     return stats
 
 
-def integrate(run, monitors, progress=False, extra=()):
+def integrate(run, monitors, progress=False, extra=(), events=None):
     """Step ``run`` to its end; ``(status, message)``. Every way a run can stop early keeps
     the outputs of the accepted steps (see the module notes). ``extra`` hooks run after the
     usual ones: a :class:`~mbcomp.simulation.stepping.Budget` that runs out ends the run with
-    ``"budget"``."""
+    ``"budget"``. ``events`` (:class:`~mbcomp.simulation.events.Events`) checks every step
+    first; a step it cut at an event (a restart, or the run's end) has no hooks due."""
     hooks = run.hooks = hooks_for(run, monitors, progress) + list(extra)
     status, message = "success", "reached t_end"
     with sigterm_interrupts():
         try:
             run.start()
+            if events is not None:
+                events.arm(run.t, run.ys[0])
             while not run.done:
-                if run.advance():
+                if run.advance() and (events is None or not events(run)):
                     for hook in hooks:
                         hook(run)
         except BudgetSpent as exc:

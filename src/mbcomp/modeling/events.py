@@ -1,0 +1,113 @@
+"""What a component may declare about events: the actions at a zero crossing, and unilateral rows.
+
+A component with discrete behaviour (a joint stop; later a unilateral contact, a stick-slip
+friction) has a *mode*, a plain string (``"free"``, ``"lo"``, ``"hi"``, ...) the run carries
+for it. In each mode it declares event functions of its own state (see
+:meth:`mbcomp.modeling.roles.Joint.events`) and, for each event, an *action*:
+
+* :class:`Impact` -- the component's rows of the mode ``engage`` close with an impact:
+  the run solves the impulse equations ``M (u+ - u-) = C^T Lambda`` with Newton's restitution
+  on the rows' speeds, then engages that mode when the rebound is too slow to leave (or
+  ``restitution`` is 0), else stays in its mode and flies on;
+* :class:`Switch` -- change to another mode, with no jump in the speeds (a release);
+* :class:`Stop` -- end the run (status ``"success"``, the reason in the message).
+
+A mode holds rows: :class:`AxisRow` is a unilateral row on a 1-DOF joint's own coordinate,
+``sign (s - at) = 0`` while engaged (``sign (s - at) >= 0`` is the allowed side), whose
+multiplier the run watches: it releases (the component's event ``"release"``) when the row
+would have to pull.
+
+Examples
+--------
+>>> from mbcomp.modeling.events import AxisRow, Impact, Switch
+>>> Impact(0.5, engage="lo"), Switch("free")
+(Impact(restitution=0.5, engage='lo'), Switch(mode='free'))
+>>> AxisRow("lo", 1.0, -0.2).value(0.1)      # 0.3 rad into the allowed side
+0.30000000000000004
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Impact", "Switch", "Stop", "AxisRow", "ACTIONS"]
+
+
+@dataclass(frozen=True)
+class Impact:
+    """An impact closing the rows of mode ``engage`` with Newton's restitution.
+
+    Parameters
+    ----------
+    restitution : float
+        Newton's coefficient ``e`` in [0, 1]: the rows' speed after is ``-e`` times before.
+    engage : str
+        The mode whose rows the impact acts on, entered when the body comes to rest there.
+
+    Examples
+    --------
+    >>> Impact(0.8, engage="hi").restitution
+    0.8
+    """
+
+    restitution: float
+    engage: str
+
+
+@dataclass(frozen=True)
+class Switch:
+    """Change to ``mode`` (speeds continuous; positions and speeds made consistent with the
+    new mode's rows).
+
+    Examples
+    --------
+    >>> Switch("free").mode
+    'free'
+    """
+
+    mode: str
+
+
+@dataclass(frozen=True)
+class Stop:
+    """End the run here (status ``"success"``), saying ``reason``.
+
+    Examples
+    --------
+    >>> Stop("the door latched").reason
+    'the door latched'
+    """
+
+    reason: str
+
+
+@dataclass(frozen=True)
+class AxisRow:
+    """A unilateral row on a 1-DOF joint's coordinate ``s`` (rad or m): ``sign (s - at)``,
+    zero while engaged, positive on the allowed side.
+
+    Parameters
+    ----------
+    name : str
+        Row name (the result and messages call it ``<joint>.<name>``).
+    sign : float
+        +1 for a lower limit (``s >= at``), -1 for an upper one (``s <= at``).
+    at : float
+        The limit (rad or m).
+
+    Examples
+    --------
+    >>> AxisRow("hi", -1.0, 1.0).value(1.25)   # 0.25 beyond the upper limit
+    -0.25
+    """
+
+    name: str
+    sign: float
+    at: float
+
+    def value(self, s):
+        """``sign (s - at)`` (rad or m)."""
+        return self.sign * (s - self.at)
+
+
+#: the actions a component may return from ``on_event``
+ACTIONS = (Impact, Switch, Stop)

@@ -1,0 +1,431 @@
+"""Events in a run: zero crossings located on the dense output, actions, modes, chattering.
+
+After every accepted step :class:`Events` evaluates every event function at the step's end
+(the start's values are kept from the step before) and, where one changed sign in its
+declared direction, locates the root on the stepper's dense output by Brent's method to
+``|dt| <= min(1e-12, rtol / 1000) max(1, |t|)``. Several roots in one step are taken
+earliest first:
+
+* a user's event (``simulate(..., events=[f])``, scipy's convention: ``f(t, y)`` with
+  ``y = [q, u]`` in ``system.q_names + system.u_names``, attributes ``terminal`` (bool or a
+  count) and ``direction``) is recorded; a terminal one ends the run there with status
+  ``"success"`` and the message ``"event <name> at t=..."``, the event's state the last output;
+* a component's event (:meth:`mbcomp.modeling.roles.Joint.events`) gets the component's
+  action (:mod:`mbcomp.modeling.events`): an impact (the impulse equations,
+  :func:`mbcomp.simulation.modes.impact_speeds`), a switch of mode, or the end of the run;
+* an engaged row's push (its multiplier) falling through zero is the component's
+  ``"release"`` event.
+
+A step past an action is not kept: the outputs up to the event come from the step's dense
+output, the state is moved onto the new mode's rows (:func:`~mbcomp.simulation.modes.consistent`),
+the formulation is built again over the new mode's system and a new stepper starts there.
+
+An impact whose rebound would rise less than :data:`REST_HEIGHT` times ``atol`` above the
+limit settles in the engaged mode (a ball at rest), and so does a component whose impacts
+come ever closer in time (:data:`CHATTER` intervals each shorter than the one before: a Zeno
+accumulation) if it has a resting mode (``rest_mode``); without one the run fails naming it.
+
+Examples
+--------
+>>> import numpy as np, mbcomp
+>>> from mbcomp.library import World, Prismatic, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+>>> s = m.add("s", Prismatic(n=(0, 0, 1), s0=1.0)); b = m.add("b", PointMass(m=1.0))
+>>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+>>> def ground(t, y):
+...     return y[0]
+>>> ground.terminal, ground.direction = True, -1
+>>> r = mbcomp.simulate(m, t_end=2.0, rtol=1e-10, atol=1e-12, events=[ground])
+>>> r.status, bool(abs(r.events[0].time - np.sqrt(2 / 9.81)) < 1e-9), r.message
+('success', True, 'event ground at t=0.451523640986 s')
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import SimulationError
+from ..modeling.events import Impact, Stop, Switch
+from ..solvers.compiled_rk import CompiledRK
+from .modes import consistent, impact_speeds, mode_rows, mode_system, row_push, row_values, start_modes
+
+__all__ = ["EventRecord", "Events", "stepwise", "finish", "keep_until", "REST_HEIGHT", "CHATTER"]
+
+#: an impact whose rebound rises less than this times ``atol`` (m or rad) settles engaged
+REST_HEIGHT = 10.0
+#: this many successive shrinking intervals between a component's impacts are chattering
+CHATTER = 30
+
+
+@dataclass(frozen=True)
+class EventRecord:
+    """One event of a run.
+
+    Attributes
+    ----------
+    time : float
+        s.
+    component : str
+        The component's path, or ``"user"``.
+    name : str
+        The event's name (the user function's ``__name__``).
+    kind : str
+        ``"impact"``, ``"engage"``, ``"release"``, ``"switch"``, ``"stop"``, ``"rest"``
+        (chattering settled) or ``"user"``.
+    detail : dict
+        The impact's ``speed_before``/``speed_after`` (m/s or rad/s along the row),
+        ``energy_loss`` (J), ``restitution``; the new ``mode``.
+
+    Examples
+    --------
+    >>> EventRecord(0.5, "hinge", "lo", "impact", {"energy_loss": 1.0}).kind
+    'impact'
+    """
+
+    time: float
+    component: str
+    name: str
+    kind: str
+    detail: dict = field(default_factory=dict)
+
+
+def stepwise(stepper_class):
+    """``stepper_class``, or for a C integrator (:class:`~mbcomp.solvers.compiled_rk.CompiledRK`)
+    one that steps scipy's method of the same order over the (compiled) right-hand side one
+    step at a time: an event is located on each step's own dense output, which a C stretch
+    (outputs only at the output times) does not give."""
+    if not issubclass(stepper_class, CompiledRK):
+        return stepper_class
+
+    def __init__(self, *args, **kw):
+        stepper_class.__init__(self, *args, **kw)
+        self.engine = None
+
+    return type(stepper_class.__name__, (stepper_class,), {"__init__": __init__, "__doc__": stepper_class.__doc__})
+
+
+def _crossed(g0, g1, direction):
+    if direction <= 0 and g0 >= 0.0 > g1:
+        return True
+    return direction >= 0 and g0 <= 0.0 < g1
+
+
+class Events:
+    """The events of one run (see the module notes).
+
+    Parameters
+    ----------
+    system : MultibodySystem
+        Initialized (the modes' systems are variants of it).
+    make_form : callable
+        ``make_form(system) -> Formulation``: the run's formulation over a mode's system.
+    user : list of callables
+        scipy-style event functions ``f(t, y)``, ``y = [q, u]``.
+    rtol, atol : float
+        The run's tolerances (location tolerance; the resting threshold).
+    """
+
+    def __init__(self, system, make_form, user=(), rtol=1e-8, atol=1e-10):
+        self.system, self.make_form = system, make_form
+        self.modes = start_modes(system)
+        self.user = list(user)
+        self.user_left = [_terminal_count(f) for f in self.user]
+        self.rtol, self.atol = rtol, atol
+        self.records, self.status, self.message = [], None, ""
+        self.xtol = min(1e-12, 1e-3 * rtol)
+        self._systems, self._hits = {}, {}
+        self._g0 = None
+        self._fresh = self._last = None  # the event just handled (its function starts at zero)
+        self.stats = dict(events=0, event_evaluations=0, mode_changes=0)
+
+    @property
+    def active(self):
+        """Whether there is anything to watch."""
+        return bool(self.modes or self.user)
+
+    def system_now(self, modes=None):
+        """The system of ``modes`` (default: the current ones), made once per set of modes."""
+        modes = self.modes if modes is None else modes
+        key = tuple(sorted(modes.items()))
+        if key not in self._systems:
+            self._systems[key] = mode_system(self.system, modes)
+        return self._systems[key]
+
+    # --- the event functions ---------------------------------------------------------------
+    def _functions(self):
+        """``{key: direction}`` of every event function in the current modes."""
+        out = {}
+        sysm = self.system
+        for name, mode in self.modes.items():
+            e = sysm._edge[name]
+            qj = np.zeros(e.q.stop - e.q.start)
+            for ev_name, _, direction in e.comp.events(qj, np.zeros(e.u.stop - e.u.start), sysm.P[name], mode):
+                out[("joint", name, ev_name)] = direction
+            for row in e.comp.mode_rows(sysm.P[name], mode):
+                out[("release", name, row.name)] = -1
+        for i, f in enumerate(self.user):
+            if self.user_left[i] != 0:
+                out[("user", i, getattr(f, "__name__", f"event{i}"))] = float(getattr(f, "direction", 0.0))
+        return out
+
+    def values(self, t, qu):
+        """``{key: value}`` of every event function at ``(t, [q, u])``."""
+        self.stats["event_evaluations"] += 1
+        sysm = self.system
+        q, u = sysm.normalize(qu[: sysm.nq]), qu[sysm.nq: sysm.nq + sysm.nu]
+        out = {}
+        rows = None
+        for name, mode in self.modes.items():
+            e = sysm._edge[name]
+            for ev_name, value, _ in e.comp.events(q[e.q], u[e.u], sysm.P[name], mode):
+                out[("joint", name, ev_name)] = float(value)
+            if e.comp.mode_rows(sysm.P[name], mode):
+                rows = self._pushes(t, q, u) if rows is None else rows
+                out.update(rows[name])
+        for i, f in enumerate(self.user):
+            if self.user_left[i] != 0:
+                out[("user", i, getattr(f, "__name__", f"event{i}"))] = float(f(t, np.concatenate((q, u))))
+        return out
+
+    def _pushes(self, t, q, u):
+        """``{joint: {("release", joint, row): push}}`` of the engaged rows (N or N m)."""
+        held = mode_rows(self.system, self.modes)
+        first = self.system.evaluate(t, q, u).Phi.size
+        push = row_push(self.system_now(), t, q, u, first, len(held))
+        out = {}
+        for (name, row, _, _), p in zip(held, push):
+            out.setdefault(name, {})[("release", name, row.name)] = float(p)
+        return out
+
+    def arm(self, t, qu):
+        """Take the event functions' values at the start of the next step."""
+        self._g0 = self.values(t, qu)
+
+    # --- after a step ----------------------------------------------------------------------
+    def __call__(self, run):
+        """Check the last step of ``run``; ``True`` when the run restarted or ended at an
+        event (the step's other hooks are then not due)."""
+        dense_y = run.step_dense()
+        full = run.form.full
+
+        def qu(tt):
+            return full(tt, dense_y(tt))
+
+        t0, t1 = run.t_prev, run.stepper.t
+        g1 = self.values(t1, full(t1, run.stepper.y))
+        dirs = self._functions()
+        hits = []
+        fresh, self._fresh = self._fresh, None
+        for key, d in dirs.items():
+            a, b = self._g0.get(key), g1.get(key)
+            if a is None or b is None:
+                continue
+            if key == fresh and d != 0 and d * b > 0:  # left its zero at t0 and came back in this step
+                hits.append((self._returned(key, qu, t0, t1, d), key))
+            elif _crossed(a, b, d):
+                hits.append((self._locate(key, qu, t0, t1, a, b), key))
+        if not hits:
+            self._g0 = g1
+            return False
+        for t_e, key in sorted(hits):
+            if self._event(run, key, t_e, qu):
+                return True
+        self._g0 = g1
+        return False
+
+    def _locate(self, key, qu, t0, t1, g0, g1):
+        """The root of event function ``key`` in ``[t0, t1]`` (s)."""
+        from scipy.optimize import brentq
+
+        if g0 == 0.0:
+            return t0
+        if g1 == 0.0:
+            return t1
+        return float(brentq(lambda tt: self.values(tt, qu(tt))[key], t0, t1, xtol=self.xtol * max(1.0, abs(t1)),
+                            rtol=4 * np.finfo(float).eps))
+
+    def _returned(self, key, qu, t0, t1, d):
+        """The return through zero of event function ``key``, which left it at ``t0`` (the
+        event just handled) and is back on its far side at ``t1``: Brent's root between the
+        function's extreme on the leaving side and ``t1`` (``t0`` when it never left)."""
+        from scipy.optimize import brentq, minimize_scalar
+
+        def g(tt):
+            return self.values(tt, qu(tt))[key]
+
+        peak = minimize_scalar(lambda tt: d * g(tt), bounds=(t0, t1), method="bounded",
+                               options=dict(xatol=self.xtol * max(1.0, abs(t1))))
+        if peak.fun >= 0.0:  # d g >= 0 throughout: it never got off the zero
+            return t0
+        return float(brentq(g, float(peak.x), t1, xtol=self.xtol * max(1.0, abs(t1)), rtol=4 * np.finfo(float).eps))
+
+    def _event(self, run, key, t_e, qu):
+        """Act on event ``key`` at ``t_e``; ``True`` when the run restarted or ended."""
+        kind, who, name = key
+        if kind == "user":
+            self.records.append(EventRecord(t_e, "user", name, "user", {}))
+            self.stats["events"] += 1
+            if self.user_left[who] > 0:
+                self.user_left[who] -= 1
+                if self.user_left[who] == 0:
+                    self._end(run, t_e, qu(t_e), f"event {name} at t={t_e:.12g} s")
+                    return True
+            return False
+        comp, p = self.system._edge[who].comp, self.system.P[who]
+        action = comp.on_event("release" if kind == "release" else name, p, self.modes[who])
+        state = qu(t_e)
+        if isinstance(action, Impact) and not self._approaching(who, action, state):
+            if key != self._last:
+                return False
+            # back at the limit right after leaving it, too slow to tell apart: at rest there
+            action = Switch(self.system._edge[who].comp.rest_mode(name, p, self.modes[who]) or self.modes[who])
+        if action is None:
+            return False
+        keep_until(run, t_e, qu)
+        if isinstance(action, Stop):
+            self._record(t_e, who, name, "stop", {"reason": action.reason})
+            self._end(run, t_e, state, f"{who}: {action.reason} (event {name} at t={t_e:.12g} s)")
+            return True
+        modes = dict(self.modes)
+        q, u = state[: self.system.nq], state[self.system.nq:]
+        if isinstance(action, Switch):
+            modes[who] = action.mode
+            self._record(t_e, who, name, "release" if kind == "release" else "switch", {"mode": action.mode})
+        elif isinstance(action, Impact):
+            u, settle = self._impact(t_e, who, name, action, q, u)
+            if settle is not None:
+                modes[who] = settle
+        self._restart(run, t_e, q, u, modes)
+        self._fresh = self._last = key
+        return True
+
+    def _approaching(self, who, action, state):
+        """Whether the impact's rows close (a negative speed along them) at ``state``."""
+        rows = mode_rows(self.system, {who: action.engage})
+        _, speed, _ = row_values(self.system, rows, state[: self.system.nq], state[self.system.nq:])
+        return bool(np.any(speed < 0.0))
+
+    def _record(self, t, who, name, kind, detail):
+        self.records.append(EventRecord(float(t), who, name, kind, detail))
+        self.stats["events"] += 1
+
+    def _impact(self, t, who, name, action, q, u):
+        """``(u+, mode to settle in or None)`` of an impact of ``who`` at event ``name``."""
+        sysm, p = self.system, self.system.P[who]
+        rows = [r for r in mode_rows(sysm, {who: action.engage})]
+        _, speed, _ = row_values(sysm, rows, q, u)
+        u_plus, _, loss = impact_speeds(self.system_now(), t, q, u, rows, action.restitution)
+        _, after, _ = row_values(sysm, rows, q, u_plus)
+        self._record(t, who, name, "impact", {"speed_before": float(speed[0]), "speed_after": float(after[0]),
+                                              "energy_loss": loss, "restitution": action.restitution})
+        hits = self._hits.setdefault(who, [])
+        hits.append(t)
+        settle = None
+        if action.restitution == 0.0 or self._rests(t, q, u_plus, rows, after):
+            settle = action.engage
+        elif _chattering(hits):
+            settle = sysm._edge[who].comp.rest_mode(name, p, self.modes[who])
+            span = hits[-1] - hits[-CHATTER - 1]
+            if settle is None:
+                raise SimulationError(f"chattering: {who} hit {name!r} {len(hits)} times, the last {CHATTER} in "
+                                      f"{span:.3g} s, ever faster (a Zeno accumulation at about t={t:.9g} s) and "
+                                      f"has no resting mode -> give {who} a rest_mode, or damp the motion")
+        if settle is not None:
+            self._record(t, who, name, "engage" if action.restitution == 0.0 else "rest", {"mode": settle})
+            self.stats["mode_changes"] += 1
+        return u_plus, settle
+
+    def _rests(self, t, q, u_plus, rows, after):
+        """Whether the rebound (speeds ``after`` on ``rows``) would rise less than
+        :data:`REST_HEIGHT` ``atol`` against the acceleration pressing into the rows."""
+        from ..formulations.lagrange import LagrangeIndex1
+
+        sysm = self.system_now()
+        ud, _ = LagrangeIndex1(sysm, "none").solve(sysm.evaluate(t, q, u_plus), stabilize=False)
+        _, _, C = row_values(self.system, rows, q, u_plus)
+        acc = C @ ud
+        return bool(np.all(acc < 0.0) and np.all(after ** 2 <= -2.0 * acc * REST_HEIGHT * self.atol))
+
+    def _restart(self, run, t, q, u, modes):
+        """Continue the run at ``t`` from ``(q, u)`` in ``modes``: state made consistent with
+        their rows, formulation built over their system, a new stepper."""
+        new = self.system_now(modes)
+        q, u = consistent(new, t, q, u)
+        if any(p < 0.0 for d in self._pushes_in(new, modes, t, q, u).values() for p in d.values()):
+            modes, new = dict(self.modes), self.system_now()  # an engaged row that would pull: stay free
+            q, u = consistent(new, t, q, u)
+        self.modes = modes
+        form = self.make_form(new)
+        run.form, run.projects = form, bool(form.projects)
+        run.start(t, form.initial_state(t, q, u))
+        run.t_prev = t
+        self.arm(t, np.concatenate((q, u)))
+
+    def _pushes_in(self, new, modes, t, q, u):
+        old, self.modes = self.modes, modes
+        try:
+            return self._pushes(t, q, u) if mode_rows(self.system, modes) else {}
+        finally:
+            self.modes = old
+
+    def _end(self, run, t, state, message):
+        """End the run at ``t`` with the event's state as its last output."""
+        keep_until(run, t, lambda tt: state)
+        if run.t_out[len(run.ys) - 1] < t:
+            run.t_out = np.append(run.t_out[: len(run.ys)], t)
+            run.ys.append(np.array(state, float))
+        else:
+            run.t_out = run.t_out[: len(run.ys)]
+        self.status, self.message = "success", message
+
+
+def keep_until(run, t, qu):
+    """Keep the outputs at output times up to ``t`` (s) from ``qu(t) -> [q, u]`` (projected
+    when the formulation projects)."""
+    form = run.form
+    while len(run.ys) < len(run.t_out) and run.t_out[len(run.ys)] <= t:
+        tk = run.t_out[len(run.ys)]
+        y = qu(tk)
+        if run.projects:
+            y = form.full(tk, form.project(tk, form.initial_state(tk, y[: form.nq], y[form.nq:])))
+        run.ys.append(np.array(y, dtype=float))
+
+
+def _chattering(hits):
+    """Whether the last :data:`CHATTER` intervals between ``hits`` (s) each shrank."""
+    if len(hits) < CHATTER + 2:
+        return False
+    d = np.diff(hits[-CHATTER - 2:])
+    return bool(np.all(d[1:] < d[:-1]))
+
+
+def _terminal_count(f):
+    """scipy's ``terminal``: ``True`` -> 1, a count, ``False``/missing -> -1 (never)."""
+    term = getattr(f, "terminal", False)
+    if term is True:
+        return 1
+    return int(term) if term else -1
+
+
+def finish(res, events):
+    """``res`` with its ``events`` (a list of :class:`EventRecord`, empty without events) and,
+    after impacts, the column ``energy.impacts`` (J: the kinetic energy the impacts took, up
+    to each output time), counted in the energy alarm of a conservative system: an impact's
+    loss is no drift."""
+    res.events = list(events.records) if events is not None else []
+    impacts = [(r.time, r.detail["energy_loss"]) for r in res.events if r.kind == "impact"]
+    if not impacts:
+        return res
+    times, losses = np.array(impacts).T
+    lost = np.concatenate(([0.0], np.cumsum(losses)))[np.searchsorted(times, res.time, side="right")]
+    res._series["energy.impacts"] = lost
+    res.units["energy.impacts"] = "J"
+    if res.status == "inaccurate" and "energy.kinetic" in res and "accuracy alarm" in res.message:
+        from .accuracy import energy_alarm
+
+        T, V, rtol = res["energy.kinetic"], res["energy.potential"], res.stats["rtol"]
+        if energy_alarm(T, V + lost, rtol)[0] is None:
+            res.status = "success"
+            res.message = res.message.replace("; " + energy_alarm(T, V, rtol)[1], "")
+    return res

@@ -1,0 +1,178 @@
+"""Modes of a run: the system with the engaged unilateral rows, impacts, consistent restarts.
+
+A run with components that have modes (:meth:`mbcomp.modeling.roles.Joint.start_mode`)
+carries a dict ``{component: mode}``. The system stepped in a mode is the assembled system
+with the rows its modes hold (:class:`~mbcomp.modeling.events.AxisRow`: ``sign (s - at)`` on
+a tree joint's coordinate) appended after its holonomic rows: :func:`mode_system` makes it
+as a :meth:`~mbcomp.assembly.system.MultibodySystem.variant` whose evaluator is the original
+one (numeric or a generated program, unchanged) wrapped by :class:`ModeEvaluator`. The
+formulation is built again over it at every change of mode, so every formulation and every
+backend steps every mode.
+
+At an impact the speeds jump by the impulse equations (:func:`impact_speeds`), the rows
+kept closed throughout (loops, engaged stops) staying closed; a change of mode moves
+positions and speeds onto the new mode's rows (:func:`consistent`).
+
+Examples
+--------
+>>> import numpy as np, mbcomp
+>>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World()); j = m.add("j", Revolute(limits=(-0.1, 0.1)))
+>>> rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0))); bob = m.add("bob", PointMass(m=2.0))
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+>>> system = mbcomp.assemble(m)
+>>> held = mode_system(system, {"j": "lo"})
+>>> ev = held.evaluate(0.0, np.array([-0.05]), np.array([0.3]))
+>>> ev.Phi.tolist(), ev.C.tolist()        # the row phi - lo, 0.05 rad on the allowed side
+([0.05], [[1.0]])
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ModelError, Problem
+
+__all__ = ["mode_system", "ModeEvaluator", "start_modes", "row_values", "impact_speeds", "consistent",
+           "row_push"]
+
+
+def start_modes(system):
+    """``{joint: mode}`` of every joint of ``system`` that has modes (``start_mode`` not None)."""
+    out = {}
+    for e in system.topology.edges:
+        if e.kind == "joint" and getattr(e.comp, "has_events", False):
+            mode = e.comp.start_mode(system.P[e.name])
+            if mode is not None:
+                out[e.name] = mode
+    return out
+
+
+def _axis_index(system, name):
+    """``(q index, u index)`` of tree joint ``name``'s one coordinate; a problem otherwise."""
+    e = system._edge[name]
+    if e.drive or e.q.stop - e.q.start != 1 or e.u.stop - e.u.start != 1:
+        why = "is driven (its motion is prescribed)" if e.drive else "is no 1-DOF joint in the spanning tree"
+        raise ModelError([Problem(name, f"a stop needs the joint's own coordinate, but {name} {why}",
+                                  "put the stop on a free 1-DOF joint, or cut another joint of the loop")])
+    return e.q.start, e.u.start
+
+
+def mode_rows(system, modes):
+    """``[(joint, AxisRow, q index, u index)]`` held by ``modes``."""
+    out = []
+    for name, mode in sorted(modes.items()):
+        e = system._edge[name]
+        for row in e.comp.mode_rows(system.P[name], mode):
+            out.append((name, row, *_axis_index(system, name)))
+    return out
+
+
+class _RowsAdded:
+    """An evaluation with the mode's rows appended to the holonomic ones (everything else
+    is the wrapped evaluation's)."""
+
+    def __init__(self, ev, Phi, Phid, C, cb):
+        self._ev, self.Phi, self.Phid, self.C, self.cb = ev, Phi, Phid, C, cb
+
+    def __getattr__(self, name):
+        return getattr(self._ev, name)
+
+    @property
+    def A(self):
+        return np.vstack((self.C, self.B)) if self.B.size else self.C
+
+
+class ModeEvaluator:
+    """The evaluator of a system in a mode: the original evaluator's evaluation with the
+    engaged rows appended (masked evaluations only: an unmasked one lists the assembled
+    rows, as ``constraint_names(all_rows=True)`` does). It offers no one-call programs, so the
+    formulations assemble their equations from :meth:`evaluate`."""
+
+    capabilities = frozenset()
+
+    def __init__(self, inner, rows, nu):
+        self.inner, self.rows, self.nu = inner, rows, nu
+
+    @property
+    def backend(self):
+        return self.inner.backend
+
+    @property
+    def stats(self):
+        return self.inner.stats
+
+    def evaluate(self, t, q, u, masked=True):
+        ev = self.inner.evaluate(t, q, u, masked)
+        if not masked or not self.rows:
+            return ev
+        k = len(self.rows)
+        C = np.zeros((k, self.nu))
+        Phi, Phid = np.zeros(k), np.zeros(k)
+        for i, (_, row, iq, iu) in enumerate(self.rows):
+            Phi[i], Phid[i], C[i, iu] = row.value(q[iq]), row.sign * u[iu], row.sign
+        return _RowsAdded(ev, np.concatenate((ev.Phi, Phi)), np.concatenate((ev.Phid, Phid)),
+                          np.vstack((ev.C, C)), np.concatenate((ev.cb, np.zeros(k))))
+
+    def q_rate(self, q, u):
+        return self.inner.q_rate(q, u)
+
+    def rebind(self, system, laws=False):
+        return ModeEvaluator(self.inner.rebind(system, laws), self.rows, self.nu)
+
+
+def mode_system(system, modes):
+    """``system`` with the rows ``modes`` hold (the system itself when they hold none)."""
+    rows = mode_rows(system, modes)
+    if not rows:
+        return system
+    return system.with_evaluator(lambda new: ModeEvaluator(system.evaluator, rows, system.nu))
+
+
+def row_values(system, rows, q, u):
+    """``(values, speeds, C)`` of ``rows`` (``[(joint, AxisRow, iq, iu)]``) at ``(q, u)``."""
+    C = np.zeros((len(rows), system.nu))
+    for i, (_, row, _, iu) in enumerate(rows):
+        C[i, iu] = row.sign
+    vals = np.array([row.value(q[iq]) for _, row, iq, _ in rows])
+    return vals, C @ u, C
+
+
+def impact_speeds(system, t, q, u_minus, rows, restitution):
+    """``(u+, impulses (N s or N m s), kinetic energy lost (J))`` of an impact closing ``rows``
+    on ``system`` (the system of the modes before the impact: its rows hold through it).
+
+    :func:`mbcomp.assembly.impacts.impulse`: ``M (u+ - u-) = C^T Lambda`` with Newton's
+    restitution ``C_i u+ = -e C_i u-`` on the impact's rows and the kept rows (loops,
+    engaged stops, velocity rows) holding; an impulse that would pull is dropped."""
+    from ..assembly.impacts import impulse
+
+    ev = system.evaluate(t, q, u_minus)
+    _, _, Ci = row_values(system, rows, q, u_minus)
+    A = ev.A
+    ma = A.shape[0]
+    offset = np.concatenate((ev.Phid - ev.C @ u_minus, ev.Psi - ev.B @ u_minus if ev.B.size else np.zeros(0),
+                             np.zeros(len(rows))))
+    u_plus, lam = impulse(ev.M, np.vstack((A, Ci)), u_minus, list(range(ma, ma + len(rows))), restitution,
+                          keep_rows=list(range(ma)), offset=offset)
+    loss = 0.5 * (u_minus @ ev.M @ u_minus - u_plus @ ev.M @ u_plus)
+    return u_plus, lam[ma:], float(loss)
+
+
+def consistent(system, t, q, u):
+    """``(q, u)`` moved onto ``system``'s rows (positions by Newton, speeds by least squares;
+    as the Lagrange projection does)."""
+    from ..formulations.lagrange import LagrangeIndex1
+
+    y = LagrangeIndex1(system, "none").project(t, np.concatenate((q, u)))
+    return y[: system.nq], y[system.nq:]
+
+
+def row_push(system, t, q, u, first, k):
+    """The push (N or N m, >= 0 while the rows press) of the ``k`` mode rows appended at
+    ``first`` among ``system``'s holonomic rows: minus their multipliers in the index-1
+    solve without stabilization."""
+    from ..formulations.lagrange import LagrangeIndex1
+
+    ev = system.evaluate(t, q, u)
+    _, lam = LagrangeIndex1(system, "none").solve(ev, stabilize=False)
+    return -lam[first:first + k]
