@@ -291,7 +291,8 @@ class Events:
         q, u = state[: self.system.nq], state[self.system.nq:]
         if isinstance(action, Switch):
             modes[who] = action.mode
-            self._record(t_e, who, name, "release" if kind == "release" else "switch", {"mode": action.mode})
+            self._record(t_e, who, name, "release" if kind == "release" else "switch",
+                         {"mode": action.mode, "energy_loss": 0.0})
         elif isinstance(action, Impact):
             u, settle = self._impact(t_e, who, name, action, q, u)
             if settle is not None:
@@ -331,8 +332,9 @@ class Events:
                 raise SimulationError(f"chattering: {who} hit {name!r} {len(hits)} times, the last {CHATTER} in "
                                       f"{span:.3g} s, ever faster (a Zeno accumulation at about t={t:.9g} s) and "
                                       f"has no resting mode -> give {who} a rest_mode, or damp the motion")
-        if settle is not None:
-            self._record(t, who, name, "engage" if action.restitution == 0.0 else "rest", {"mode": settle})
+        if settle is not None:  # the rebound's energy goes with it: counted when the state is made consistent
+            self._record(t, who, name, "engage" if action.restitution == 0.0 else "rest",
+                         {"mode": settle, "energy_loss": 0.0})
             self.stats["mode_changes"] += 1
         return u_plus, settle
 
@@ -350,12 +352,15 @@ class Events:
     def _restart(self, run, t, q, u, modes):
         """Continue the run at ``t`` from ``(q, u)`` in ``modes``: state made consistent with
         their rows, formulation built over their system, a new stepper."""
-        new = self.system_now(modes)
+        new, u0 = self.system_now(modes), u
         q, u = consistent(new, t, q, u)
         if any(p < 0.0 for d in self._pushes_in(new, modes, t, q, u).values() for p in d.values()):
             modes, new = dict(self.modes), self.system_now()  # an engaged row that would pull: stay free
             q, u = consistent(new, t, q, u)
         self.modes = modes
+        if self.records and "energy_loss" in self.records[-1].detail and self.records[-1].kind != "impact":
+            M = new.evaluate(t, q, u0).M
+            self.records[-1].detail["energy_loss"] = float(0.5 * (u0 @ M @ u0 - u @ M @ u))
         form = self.make_form(new)
         run.form, run.projects = form, bool(form.projects)
         run.start(t, form.initial_state(t, q, u))
@@ -410,11 +415,11 @@ def _terminal_count(f):
 
 def finish(res, events):
     """``res`` with its ``events`` (a list of :class:`EventRecord`, empty without events) and,
-    after impacts, the column ``energy.impacts`` (J: the kinetic energy the impacts took, up
-    to each output time), counted in the energy alarm of a conservative system: an impact's
+    after impacts, the column ``energy.impacts`` (J: the kinetic energy the impacts took, and
+    a rebound too slow to follow when a stop settles, up to each output time), counted in the energy alarm of a conservative system: an impact's
     loss is no drift."""
     res.events = list(events.records) if events is not None else []
-    impacts = [(r.time, r.detail["energy_loss"]) for r in res.events if r.kind == "impact"]
+    impacts = [(r.time, r.detail["energy_loss"]) for r in res.events if "energy_loss" in r.detail]
     if not impacts:
         return res
     times, losses = np.array(impacts).T

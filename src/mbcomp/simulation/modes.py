@@ -37,12 +37,14 @@ __all__ = ["mode_system", "ModeEvaluator", "start_modes", "row_values", "impact_
 
 
 def start_modes(system):
-    """``{joint: mode}`` of every joint of ``system`` that has modes (``start_mode`` not None)."""
+    """``{joint: mode}`` of every joint of ``system`` that has modes (``start_mode`` not None);
+    a ``ModelError`` for one that is driven or not a 1-DOF tree joint (no coordinate of its own)."""
     out = {}
     for e in system.topology.edges:
         if e.kind == "joint" and getattr(e.comp, "has_events", False):
             mode = e.comp.start_mode(system.P[e.name])
             if mode is not None:
+                _axis_index(system, e.name)  # its events and rows are of its own coordinate
                 out[e.name] = mode
     return out
 
