@@ -132,6 +132,9 @@ def _report(res):
     for p in res.stats.get("singular_passages", ()):
         print(f"passed a singular position at t = {p['t']:.6g} s (rank drop {p['rank_drop']}, relative sigma "
               f"{p['sigma']:.2g}; joints {', '.join(p['joints'])})")
+    if res.events:  # impacts, stops engaging and releasing (mbcomp.simulation.events)
+        first = ", ".join(f"{e.kind} {e.component}.{e.name} at {e.time:.9g} s" for e in res.events[:5])
+        print(f"{len(res.events)} events: {first}" + (", ..." if len(res.events) > 5 else ""))
     for c in res.stats.get("row_changes", ()):
         print(f"constraint rows chosen again at t = {c['t']:.6g} s (the kept rows' relative sigma_min "
               f"{c['sigma_before']:.2g} -> {c['sigma_after']:.2g}): dropped {', '.join(c['dropped'])} "
@@ -146,8 +149,9 @@ def _energy_line(res):
     """The energy drift max|E - E0| of a conservative run; for a run with an ``energy.balance``
     column (driven or damped), its largest magnitude relative to the energy the motion exchanges."""
     if "energy.balance" not in res:
-        E = res["energy.total"]
-        return f"energy drift max|E - E0| = {np.nanmax(np.abs(E - E[0])):.3e} J"
+        E = res["energy.total"] + (res["energy.impacts"] if "energy.impacts" in res else 0.0)
+        lost = " (E counts the impacts' losses)" if "energy.impacts" in res else ""
+        return f"energy drift max|E - E0| = {np.nanmax(np.abs(E - E[0])):.3e} J{lost}"
     err = float(np.nanmax(np.abs(res["energy.balance"])))
     T, V = res["energy.kinetic"], res["energy.potential"]
     scale = float(np.nanmax([np.nanmax(T) + np.nanmax(V) - np.nanmin(V)]
