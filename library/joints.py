@@ -12,6 +12,7 @@ re-exported here, so ``mbcomp.library.FreeMotion`` is that class.
 import numpy as np
 
 from mbcomp import Cylinder, Flange, Joint, Param, Sphere
+from mbcomp.errors import Problem
 from mbcomp.jets import local_point, local_vector, position_constraints, rigid_constraints
 from mbcomp.kinematics import cross, matrix_to_quat, perpendicular_pair, quat_rate, quat_to_matrix, rot_axis
 from mbcomp.modeling.events import AxisRow, Impact, Switch
@@ -47,6 +48,19 @@ class _Stops:
         if p.limits is None:
             return None
         return "free"
+
+    def check_params(self, p):
+        """A start coordinate outside the limits is a problem naming both (the stops would
+        never let the joint there)."""
+        if p.limits is None:
+            return []
+        s0 = self.start(p)[0]
+        lo, hi = p.limits
+        if s0.size and not lo <= float(s0[0]) <= hi:
+            name = self.coordinates[0][0]
+            return [Problem(f"{self.path}.{name}0", f"start value {float(s0[0]):g} is outside the stops "
+                            f"limits=({lo:g}, {hi:g})", f"start {name} between {lo:g} and {hi:g}, or widen the limits")]
+        return []
 
     def events(self, q, u, p, mode):
         if p.limits is None or mode != "free":

@@ -44,7 +44,8 @@ from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
 from .postprocess import postprocess
 from .result import Result
-from .setup import ALL_METHODS, check_model, check_numbers, check_request, check_singular, output_times, system_of
+from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check_request, check_singular,
+                    output_times, system_of)
 from .events import Events, finish, stepwise
 from .stepping import Budget, BudgetSpent, Run, hooks_for
 from .stiffness import StiffnessWatch
@@ -155,6 +156,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     check_numbers(t_start=t_start, t_end=t_end, rtol=rtol, atol=atol, alpha=alpha, beta=beta, n_out=n_out,
                   dt_out=dt_out, max_step=max_step, h=h, max_wall_time=max_wall_time, max_steps=max_steps)
     stepper, index = check_request(method, formulation, index, h, t_start, t_end, backend)
+    events = check_events(events)
     stabilization = check_singular(singular, method, stepper, formulation, stabilization)
     check_names(inputs or {})
     with input_signals({name: signal_of(name, v) for name, v in (inputs or {}).items()}):

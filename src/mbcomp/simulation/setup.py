@@ -187,6 +187,58 @@ def check_numbers(*, t_start, t_end, rtol, atol, alpha, beta, n_out, dt_out, max
         raise ValueError(f"max_steps={max_steps!r} must be a positive integer -> give e.g. max_steps=100000")
 
 
+def check_events(events):
+    """The user's event functions as a tuple, each checked: a callable ``f(t, y)`` (``y = [q,
+    u]``) whose ``direction`` (if set) is -1, 0 or +1 and whose ``terminal`` (if set) is a
+    bool or a count >= 0 (scipy's convention); a ``ValueError``/``TypeError`` naming the event
+    and the fix otherwise.
+
+    Examples
+    --------
+    >>> def ground(t, y):
+    ...     return y[0]
+    >>> ground.terminal = True
+    >>> check_events([ground])[0] is ground
+    True
+    >>> try:
+    ...     check_events([lambda t: 0.0])
+    ... except TypeError as exc:
+    ...     print(str(exc)[:60])
+    event <lambda> takes 1 positional argument(s); an event fun
+    """
+    import inspect
+
+    if events is None:
+        return ()
+    if callable(events) or isinstance(events, (str, bytes)) or not hasattr(events, "__iter__"):
+        raise TypeError(f"events={events!r} must be a list of event functions f(t, y) -> fix: events=[f]")
+    out = tuple(events)
+    for i, f in enumerate(out):
+        name = getattr(f, "__name__", f"events[{i}]")
+        if not callable(f):
+            raise TypeError(f"events[{i}]={f!r} is not a function -> fix: give functions f(t, y) returning a number "
+                            "that crosses zero at the event (scipy's convention)")
+        try:
+            sig = inspect.signature(f)
+        except (TypeError, ValueError):
+            sig = None
+        if sig is not None:
+            params = list(sig.parameters.values())
+            positional = [q for q in params if q.kind in (q.POSITIONAL_ONLY, q.POSITIONAL_OR_KEYWORD)]
+            if not any(q.kind == q.VAR_POSITIONAL for q in params) and len(positional) < 2:
+                raise TypeError(f"event {name} takes {len(positional)} positional argument(s); an event function is "
+                                f"called as {name}(t, y) with y = [q, u] -> fix: def {name}(t, y): ...")
+        direction = getattr(f, "direction", 0)
+        if direction not in (-1, 0, 1):
+            raise ValueError(f"event {name}: direction={direction!r} must be -1 (falling through zero), +1 (rising) "
+                             "or 0 (both)")
+        terminal = getattr(f, "terminal", False)
+        if not (isinstance(terminal, (bool, np.bool_)) or (isinstance(terminal, (int, np.integer)) and terminal >= 0)):
+            raise ValueError(f"event {name}: terminal={terminal!r} must be True/False or a count >= 0 of crossings "
+                             "after which the run ends")
+    return out
+
+
 def check_model(model):
     """A ``TypeError`` naming what was given and the fix unless ``model`` is a
     :class:`~mbcomp.Model` or an assembled system."""
