@@ -56,3 +56,13 @@ def test_good_events_are_kept_and_found():
 def test_a_start_outside_the_stops_is_a_model_problem(joint, where):
     with pytest.raises(mbcomp.ModelError, match=rf"{where}: .*outside the stops"):
         mbcomp.simulate(_arm(joint), t_end=0.1)
+
+
+def test_an_fmu_of_a_model_with_stops_is_refused(tmp_path):
+    """The FMU's runtime locates no events: exported, the door would swing through its stop.
+    The export says so, naming the hinge, instead of writing such an FMU."""
+    from conftest import load_model
+
+    with pytest.raises(ValueError, match=r"cannot export hinge: components with events .* pass through"):
+        mbcomp.export_fmu(load_model("models/door.py").build(), tmp_path / "door.fmu")
+    assert not (tmp_path / "door.fmu").exists()

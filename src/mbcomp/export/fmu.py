@@ -100,6 +100,19 @@ def _c_ints(name, values):
     return f"static const int {name}[] = {{{vals}}};\n"
 
 
+def _refuse_modes(system):
+    """A ``ValueError`` naming the components with modes (rigid stops, unilateral contacts,
+    stick/slip friction): the FMU's runtime locates no events, so it would run through a stop
+    as if it were not there."""
+    with_modes = [e.name for e in system.topology.edges
+                  if e.kind == "joint" and e.comp.has_events and e.comp.start_mode(system.P[e.name]) is not None]
+    if with_modes:
+        raise ValueError(f"cannot export {', '.join(with_modes)}: components with events (rigid stops, unilateral "
+                         "contacts, stick/slip) need the driver's event location, which the FMU's runtime does not "
+                         "have yet; exported, the model would pass through them -> export without them (e.g. "
+                         "limits=None), or use a compliant stop (a flange force, which the FMU carries)")
+
+
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,
                tolerance=1e-12, max_nodes=3_000_000):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
@@ -148,6 +161,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     name = name or path.stem
     ident = _identifier(name)
     system = assemble(model, params)
+    _refuse_modes(system)
     init = initialize(system)
     tr, prog, parts, n_work = _fun_program(system, max_nodes)
     out_prog = _output_program(system, tr, max_nodes)
