@@ -15,6 +15,7 @@ from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
 from .sensors import RelativeSensor, AbsoluteSensor, AbsoluteAngles, CutForceAndTorque
 from .drivetrain import ElastoGear, BearingFriction, Motor, MotorTorque
+from .stops import ElasticStop
 
 __all__ = [
     "World", "Fixed", "FixedTranslation", "FixedRotation", "RigidBody", "PointMass",
@@ -30,4 +31,5 @@ __all__ = [
     "IdealGear", "RackPinion", "Belt", "Inertia", "PlanetaryGear",
     "MotorTorque",
     "IdealPulley",
+    "ElasticStop",
 ]

@@ -76,6 +76,8 @@ def _perpendicular(first, second):
 
 
 TIED_PARAMS = {"Universal": _perpendicular("n_a", "n_b"), "Planar": _perpendicular("n", "n_x")}
+#: ElasticStop's lo <= hi (issue 22): a free range around 0, so random flange angles hit both stops
+TIED_PARAMS["ElasticStop"] = lambda rng: {"lo": -rng.uniform(0.1, 0.5), "hi": rng.uniform(0.1, 0.5)}
 
 
 def random_component(cls, rng):
