@@ -1,0 +1,217 @@
+"""Event location: accuracy and cost per formulation x solver on cases with exact impact times.
+
+Two cases with closed-form impact times (issue 22, item 6):
+
+* **rotor**: a free rotor (J = 2 kg m^2, no gravity) from 0 at 1 rad/s between rigid stops at
+  +-0.5 rad, restitution 0.8, 6 s: impacts at 0.5, 0.5 + 1/0.8, ... (4 impacts). The motion
+  between impacts is linear in t, so every method integrates it exactly: the error is the
+  location's alone (Brent on the dense output, ``min(1e-12, rtol/1000) max(1, |t|)``).
+* **pendulum**: a 1 m pendulum (point mass, g = 9.81) released at 0.8 rad onto a stop at
+  0 rad, restitution 0.7, 5 s (5 impacts): the first at the quarter period
+  ``K(sin^2 0.4) / sqrt(g/l)``, then each rebound of amplitude ``theta_k`` with
+  ``sin(theta_k / 2) = e^k sin 0.4`` returns after half its period ``2 K(sin^2(theta_k/2)) / sqrt(g/l)``.
+  Here the integration error enters the impact times too.
+
+Each formulation (lagrange, dalembert) x solver (dop853, dopri5 -- the C integrators, stepped
+one step at a time in Python when there are events --, radau5, ida, genalpha; and scipy's
+DOP853, Radau, LSODA for comparison) runs at rtol 1e-6, 1e-9, 1e-12 (genalpha: fixed steps
+h = 1e-2, 1e-3, 1e-4 s), and once more on the same model without stops ("no events": the
+rotor turning freely, the pendulum swinging freely) for the cost ratio. Columns: method,
+formulation, rtol (or h), max |t_event - t_exact| (s), steps, f-evals, event-function
+evaluations, CPU s, and the event-free run's steps and CPU s with the ratio. A refused
+combination (the DAE solvers take no D'Alembert ODE) is a row saying so.
+
+``f-evals`` sums the steppers' right-hand-side calls over every restart (an impact starts a
+new stepper and formulation; ``res.stats["nfev"]`` counts only the last formulation's, so
+this script reads the steppers' counters instead, see ``_count_all_evaluations``).
+
+Writes bench/events.csv and prints the table.
+
+Run: python bench/events.py [--cases rotor,pendulum] [--rtols 1e-6,1e-9,1e-12]
+"""
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import csv  # noqa: E402
+import pathlib  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import mbcomp  # noqa: E402
+from mbcomp.library import FixedTranslation, PointMass, Revolute, RigidBody, World  # noqa: E402
+
+HERE = pathlib.Path(__file__).resolve().parent
+G = 9.81
+SOLVERS = ["dop853", "dopri5", "radau5", "ida", "genalpha", "DOP853", "Radau", "LSODA"]
+FORMULATIONS = ["lagrange", "dalembert"]
+GENALPHA_H = {1e-3: 1e-2, 1e-6: 1e-2, 1e-9: 1e-3, 1e-12: 1e-4}
+
+
+def rotor(stops=True, e=0.8):
+    """A rotor (J = 2 about z) from 0 at 1 rad/s, between stops at +-0.5 rad if ``stops``."""
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, 0)))
+    lim = dict(limits=(-0.5, 0.5), restitution=e) if stops else {}
+    j = m.add("hinge", Revolute(n=(0, 0, 1), phi0=0.0, w0=1.0, **lim))
+    b = m.add("disk", RigidBody(m=1.0, I=np.diag([1.0, 1.0, 2.0])))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, b.frame_a)
+    return m
+
+
+def rotor_times(n, e=0.8):
+    t, speed, out = 0.5, 1.0, []
+    for _ in range(n):
+        out.append(t)
+        speed *= e
+        t += 1.0 / speed
+    return np.array(out)
+
+
+def pendulum(stops=True, e=0.7, phi0=0.8):
+    """A 1 m pendulum released at ``phi0`` onto a stop at 0 rad if ``stops``."""
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, -G, 0)))
+    lim = dict(limits=(0.0, 3.0), restitution=e) if stops else {}
+    j = m.add("hinge", Revolute(phi0=phi0, w0=0.0, **lim))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    return m
+
+
+def pendulum_times(n, e=0.7, phi0=0.8):
+    """Impact times on the stop at the bottom: quarter period, then half periods of the rebounds."""
+    from scipy.special import ellipk
+
+    k0, om = np.sin(phi0 / 2), np.sqrt(G)
+    t, out = ellipk(k0 ** 2) / om, []
+    for k in range(n):
+        out.append(t)
+        t += 2 * ellipk((e ** (k + 1) * k0) ** 2) / om
+    return np.array(out)
+
+
+CASES = {"rotor": (rotor, rotor_times, 6.0), "pendulum": (pendulum, pendulum_times, 5.0)}
+
+
+def _count_all_evaluations():
+    """Report the steppers' right-hand-side calls summed over restarts as ``nfev_all``
+    (``Run.counters`` sums the steppers' other counters, but ``nfev`` is the formulation's)."""
+    from mbcomp.simulation.stepping import Run
+
+    if getattr(Run.counters, "_all_nfev", False):
+        return
+    plain = Run.counters
+
+    def counters(self):
+        out = plain(self)
+        out["nfev_all"] = sum(int(s.stats.get("nfev", 0)) for s in self.steppers)
+        return out
+
+    counters._all_nfev = True
+    Run.counters = counters
+
+
+def run(build, t_end, method, formulation, rtol):
+    """``(result or None, cpu s, refusal message)`` of one run."""
+    kw = dict(method=method, formulation=formulation, rtol=rtol, atol=rtol * 1e-2, n_out=2)
+    if method == "genalpha":
+        kw["h"] = GENALPHA_H.get(rtol, 1e-3)
+    c0 = time.process_time()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = mbcomp.simulate(build(), t_end=t_end, **kw)
+    except Exception as exc:  # noqa: BLE001 - a refused combination is a row
+        return None, time.process_time() - c0, f"{type(exc).__name__}: {exc}"
+    return res, time.process_time() - c0, ""
+
+
+_WARM = set()
+
+
+def row(case, method, formulation, rtol):
+    build, exact_times, t_end = CASES[case]
+    if (case, method, formulation) not in _WARM:  # the first run of a combination compiles and caches its program
+        _WARM.add((case, method, formulation))
+        run(build, t_end, method, formulation, 1e-3)
+        run(lambda: build(stops=False), t_end, method, formulation, 1e-3)
+    res, cpu, refused = run(build, t_end, method, formulation, rtol)
+    out = dict(case=case, method=method, formulation=formulation,
+               setting=f"h={GENALPHA_H.get(rtol, 1e-3):g}" if method == "genalpha" else f"{rtol:g}")
+    if res is None:
+        return dict(out, status="refused", message=refused[:160])
+    impacts = [x.time for x in res.events if x.kind == "impact"]
+    exact = exact_times(len(impacts))
+    free, cpu_free, _ = run(lambda: build(stops=False), t_end, method, formulation, rtol)
+    st = res.stats
+    out.update(status=res.status, impacts=len(impacts),
+               max_dt=float(np.max(np.abs(np.array(impacts) - exact))) if impacts else np.nan,
+               steps=st.get("steps"), fevals=st.get("nfev_all", st.get("nfev")),
+               event_evals=st.get("event_evaluations"), cpu_s=cpu,
+               steps_free=free.stats.get("steps") if free else None,
+               fevals_free=free.stats.get("nfev_all") if free else None, cpu_free=cpu_free if free else None,
+               message="" if res.status == "success" else res.message[:160])
+    if free is not None and cpu_free > 0:
+        out["cpu_ratio"] = cpu / cpu_free
+    return out
+
+
+def _fmt(v, spec):
+    if v is None or (isinstance(v, float) and v != v):
+        return "-"
+    return format(v, spec)
+
+
+def table(rows):
+    head = (f"{'case':<9}{'method':<9}{'formulation':<12}{'rtol':>9}{'max|dt| s':>11}{'steps':>7}{'f-evals':>9}"
+            f"{'ev-evals':>9}{'CPU s':>8}{'free steps':>11}{'free f-ev':>10}{'free CPU':>9}{'ratio':>7}")
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        if r["status"] == "refused":
+            lines.append(f"{r['case']:<9}{r['method']:<9}{r['formulation']:<12}{r['setting']:>9}  refused: "
+                         f"{r['message'][:90]}")
+            continue
+        lines.append(f"{r['case']:<9}{r['method']:<9}{r['formulation']:<12}{r['setting']:>9}"
+                     f"{_fmt(r['max_dt'], '11.1e')}{_fmt(r['steps'], '7d')}{_fmt(r['fevals'], '9d')}"
+                     f"{_fmt(r['event_evals'], '9d')}{_fmt(r['cpu_s'], '8.3f')}{_fmt(r['steps_free'], '11d')}"
+                     f"{_fmt(r['fevals_free'], '10d')}{_fmt(r['cpu_free'], '9.3f')}{_fmt(r.get('cpu_ratio'), '7.1f')}"
+                     + ("" if r["status"] == "success" else f"  {r['status']}: {r['message'][:70]}"))
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", default="rotor,pendulum")
+    ap.add_argument("--rtols", default="1e-6,1e-9,1e-12")
+    ap.add_argument("--methods", default=",".join(SOLVERS))
+    ap.add_argument("--out", default=str(HERE / "events.csv"))
+    args = ap.parse_args(argv)
+    _count_all_evaluations()
+    rtols = [float(x) for x in args.rtols.split(",")]
+    rows = []
+    for case in args.cases.split(","):
+        for method in args.methods.split(","):
+            for formulation in FORMULATIONS:
+                for rtol in rtols:
+                    rows.append(row(case, method, formulation, rtol))
+                    if rows[-1]["status"] == "refused":
+                        break  # refused at one tolerance: refused at all
+    print(table(rows))
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    with open(args.out, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=keys)
+        w.writeheader()
+        w.writerows(rows)
+    print(f"\nwrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
