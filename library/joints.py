@@ -21,6 +21,7 @@ from mbcomp.modeling.shapes import z_to
 from mbcomp.roles import split_start
 
 from .checks import rotation_matrix
+from .friction import _Friction
 from .parts import _Rigid
 
 _E = np.eye(3)
@@ -82,7 +83,7 @@ class _Stops:
         return name if name in ("lo", "hi") else None
 
 
-class Revolute(_Stops, Joint):
+class Revolute(_Friction, _Stops, Joint):
     """Hinge: frame_b rotates about ``n`` (frame_a coordinates) by angle ``phi``.
 
     Coordinates ``phi`` (rad) and speed ``w`` (rad/s). Flanges ``axis``/``support`` let
@@ -108,6 +109,8 @@ class Revolute(_Stops, Joint):
                    doc="rigid stops (lo, hi) on phi: impacts there, resting engaged (none by default)")
     restitution = Param(0.0, unit="1", check=lambda e: None if 0 <= e <= 1 else "must be in [0, 1]",
                         doc="Newton's restitution coefficient of the stops")
+    friction = Param(None, unit="1", kind="any",
+                     doc="Coulomb friction with stick/slip events: CoulombBearing(torque_max, torque_c) (N m)")
 
     def visuals(self, p, view):
         """A short cylinder along the hinge axis, on frame_a."""
@@ -142,7 +145,7 @@ class Revolute(_Stops, Joint):
         return phi, (b.w - a.w) @ (a.R @ n)
 
 
-class Prismatic(_Stops, Joint):
+class Prismatic(_Friction, _Stops, Joint):
     """Slider: frame_b translates along ``n`` (frame_a coordinates) by ``s``.
 
     Coordinate ``s`` (m), speed ``v`` (m/s); flanges ``axis``/``support`` along the axis.
@@ -167,6 +170,8 @@ class Prismatic(_Stops, Joint):
                    doc="rigid stops (lo, hi) on s: impacts there, resting engaged (none by default)")
     restitution = Param(0.0, unit="1", check=lambda e: None if 0 <= e <= 1 else "must be in [0, 1]",
                         doc="Newton's restitution coefficient of the stops")
+    friction = Param(None, unit="1", kind="any",
+                     doc="Coulomb friction with stick/slip events: SlidingFriction(mu_s, mu_k, normal) (N)")
 
     def visuals(self, p, view):
         """A rod along the sliding axis on frame_a (the guide), over the run's travel

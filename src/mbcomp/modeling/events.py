@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Impact", "Switch", "Stop", "AxisRow", "ACTIONS"]
+__all__ = ["Impact", "Switch", "Stop", "AxisRow", "StickRow", "ACTIONS"]
 
 
 @dataclass(frozen=True)
@@ -107,6 +107,41 @@ class AxisRow:
     def value(self, s):
         """``sign (s - at)`` (rad or m)."""
         return self.sign * (s - self.at)
+
+
+@dataclass(frozen=True)
+class StickRow(AxisRow):
+    """An :class:`AxisRow` holding a 1-DOF joint's coordinate where it stands while a
+    Coulomb friction sticks (its rate held at zero: the row's value is 0, its Jacobian
+    ``sign`` along the axis), bilateral up to a push of ``limit`` either way.
+
+    Instead of a ``"release"`` event the run watches ``limit + push`` (event ``"break+"``
+    falling through zero: the load drives the axis forward harder than the friction holds)
+    and ``limit - push`` (``"break-"``), ``push`` (N or N m) being the row's force on the
+    axis (minus its multiplier, ``sign`` = +1); the component's ``on_event`` says where it
+    slips to.
+
+    Parameters
+    ----------
+    name : str
+        Row name.
+    sign, at : float
+        As :class:`AxisRow` (``sign`` +1; ``at`` unused: the row holds the rate).
+    limit : float
+        The largest push the row holds (N or N m: the break-away force or torque).
+
+    Examples
+    --------
+    >>> row = StickRow("stick", 1.0, 0.0, limit=2.5)
+    >>> row.value(0.3), row.limit                # held by its rate only
+    (0.0, 2.5)
+    """
+
+    limit: float = float("inf")
+
+    def value(self, s):
+        """0 (the row holds the rate, not a position)."""
+        return 0.0 * s
 
 
 #: the actions a component may return from ``on_event``

@@ -193,6 +193,8 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
                                              max_index=stepper.max_index, singular=singular),
                      events or (), rtol, atol)
     watcher = watcher if watcher.active else None
+    if watcher is not None:  # a stuck friction that cannot hold at the start breaks away there
+        form, y0 = watcher.start(form, y0, t_start, init.q, init.u)
     run = Run(form, stepwise(stepper) if watcher else stepper, output_times(t_start, t_end, n_out, dt_out), y0,
               rtol=rtol, atol=atol, max_step=max_step, h=h)
     monitors = monitors_for(system, atol, singular)
@@ -209,7 +211,7 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
         stats.update(watcher.stats)
     res = postprocess(system, form, t_done, np.array(run.ys).reshape(len(run.ys), -1), status, message, stats,
                       init, body_momenta)
-    return finish(res, watcher)
+    return finish(res, watcher, np.array(run.ys).reshape(len(run.ys), -1))
 
 
 def why_slow(run, watch, status, stats):

@@ -49,6 +49,7 @@ from ..errors import SimulationError
 from ..modeling.events import Impact, Stop, Switch
 from ..solvers.compiled_rk import CompiledRK
 from .modes import consistent, impact_speeds, mode_rows, mode_system, row_push, row_values, start_modes
+from .stickslip import friction_columns, row_events, with_mode_forces
 
 __all__ = ["EventRecord", "Events", "stepwise", "finish", "keep_until", "REST_HEIGHT", "CHATTER"]
 
@@ -136,6 +137,7 @@ class Events:
         self.xtol = min(1e-12, 1e-3 * rtol)
         self._systems, self._hits = {}, {}
         self._g0 = None
+        self.history = []  # [(t, modes, q)]: the start and every restart (stick-slip's columns)
         self._fresh = self._last = None  # the event just handled (its function starts at zero)
         self.stats = dict(events=0, event_evaluations=0, mode_changes=0)
 
@@ -149,7 +151,7 @@ class Events:
         modes = self.modes if modes is None else modes
         key = tuple(sorted(modes.items()))
         if key not in self._systems:
-            self._systems[key] = mode_system(self.system, modes)
+            self._systems[key] = with_mode_forces(mode_system(self.system, modes), modes)
         return self._systems[key]
 
     # --- the event functions ---------------------------------------------------------------
@@ -163,7 +165,7 @@ class Events:
             for ev_name, _, direction in e.comp.events(qj, np.zeros(e.u.stop - e.u.start), sysm.P[name], mode):
                 out[("joint", name, ev_name)] = direction
             for row in e.comp.mode_rows(sysm.P[name], mode):
-                out[("release", name, row.name)] = -1
+                out.update(dict.fromkeys(row_events(name, row, 0.0), -1))
         for i, f in enumerate(self.user):
             if self.user_left[i] != 0:
                 out[("user", i, getattr(f, "__name__", f"event{i}"))] = float(getattr(f, "direction", 0.0))
@@ -195,7 +197,7 @@ class Events:
         push = row_push(self.system_now(), t, q, u, first, len(held))
         out = {}
         for (name, row, _, _), p in zip(held, push):
-            out.setdefault(name, {})[("release", name, row.name)] = float(p)
+            out.setdefault(name, {}).update(row_events(name, row, float(p)))
         return out
 
     def arm(self, t, qu):
@@ -354,10 +356,12 @@ class Events:
         their rows, formulation built over their system, a new stepper."""
         new, u0 = self.system_now(modes), u
         q, u = consistent(new, t, q, u)
+        modes, new = self._break_away(t, q, u, modes)
         if any(p < 0.0 for d in self._pushes_in(new, modes, t, q, u).values() for p in d.values()):
             modes, new = dict(self.modes), self.system_now()  # an engaged row that would pull: stay free
             q, u = consistent(new, t, q, u)
         self.modes = modes
+        self.history.append((float(t), dict(modes), np.array(q, float)))
         if self.records and "energy_loss" in self.records[-1].detail and self.records[-1].kind != "impact":
             M = new.evaluate(t, q, u0).M
             self.records[-1].detail["energy_loss"] = float(0.5 * (u0 @ M @ u0 - u @ M @ u))
@@ -366,6 +370,31 @@ class Events:
         run.start(t, form.initial_state(t, q, u))
         run.t_prev = t
         self.arm(t, np.concatenate((q, u)))
+
+    def start(self, form, y0, t, q, u):
+        """``(form, y0)``, the run's formulation and initial state at its start ``t``, or, when
+        a stuck friction cannot hold there (:meth:`_break_away`), those of the mode it breaks
+        away to."""
+        modes, new = self._break_away(t, q, u, self.modes)
+        if modes != self.modes or form.system is not new:
+            self.modes = modes
+            q, u = consistent(new, t, q, u)
+            form = self.make_form(new)
+            y0 = form.initial_state(t, q, u)
+        self.history = [(float(t), dict(self.modes), np.array(q, float))]
+        return form, y0
+
+    def _break_away(self, t, q, u, modes):
+        """``(modes, system)``: a stuck friction's row (:class:`~mbcomp.modeling.events.StickRow`)
+        whose push is beyond its limit at ``(t, q, u)`` in ``modes`` breaks away at once to
+        the mode its joint's ``on_event("break+" or "break-")`` names (recorded as a switch)."""
+        for name, d in self._pushes_in(self.system_now(modes), modes, t, q, u).items():
+            broken = sorted((v, key[2]) for key, v in d.items() if key[0] == "joint" and v < 0.0)
+            if broken:
+                action = self.system._edge[name].comp.on_event(broken[0][1], self.system.P[name], modes[name])
+                modes = {**modes, name: action.mode}
+                self._record(t, name, broken[0][1], "switch", {"mode": action.mode, "energy_loss": 0.0})
+        return modes, self.system_now(modes)
 
     def _pushes_in(self, new, modes, t, q, u):
         old, self.modes = self.modes, modes
@@ -413,12 +442,14 @@ def _terminal_count(f):
     return int(term) if term else -1
 
 
-def finish(res, events):
+def finish(res, events, states=None):
     """``res`` with its ``events`` (a list of :class:`EventRecord`, empty without events) and,
     after impacts, the column ``energy.impacts`` (J: the kinetic energy the impacts took, and
     a rebound too slow to follow when a stop settles, up to each output time), counted in the energy alarm of a conservative system: an impact's
     loss is no drift."""
     res.events = list(events.records) if events is not None else []
+    if events is not None and states is not None:  # stick-slip friction's columns and dissipation
+        friction_columns(res, events, states)
     impacts = [(r.time, r.detail["energy_loss"]) for r in res.events if "energy_loss" in r.detail]
     if not impacts:
         return res

@@ -1,0 +1,209 @@
+"""Coulomb friction with exact stick/slip switching on a 1-DOF joint's axis.
+
+A :class:`~mbcomp.library.Prismatic` or :class:`~mbcomp.library.Revolute` takes
+``friction=SlidingFriction(mu_s, mu_k, normal)`` or ``friction=CoulombBearing(torque_max,
+torque_c)``. The joint then has three modes (the event contract of
+:mod:`mbcomp.modeling.events`; the run's side: :mod:`mbcomp.simulation.stickslip`):
+
+* ``"stick"``: a row holds the joint's rate at zero (a
+  :class:`~mbcomp.modeling.events.StickRow`); its push, the friction force (N) or torque
+  (N m) on the axis, is free up to the static limit ``F_s`` (``mu_s normal``, or
+  ``torque_max``) either way. When the load needs more (``F_s - |push|`` falls through zero)
+  the joint slips in the direction of the load (events ``"break+"``/``"break-"``);
+* ``"slip+"``/``"slip-"``: the kinetic friction ``F_k`` (``mu_k normal``, or ``torque_c``)
+  opposes the motion, ``-F_k`` while the speed is positive, ``+F_k`` while negative (a
+  constant force per mode: no sign function, no smoothing). When the speed comes to zero
+  (event ``"stop"``) the joint sticks, or, when sticking would need more than ``F_s``,
+  slips on the other way at once.
+
+The joint starts stuck when its start speed is zero, else slipping that way. The friction's
+force and mode are the result's columns ``<joint>.friction`` (N or N m, on the axis, along
+it) and ``<joint>.sticking`` (1 or 0); its dissipated energy ``F_k |s - s_slip|`` over every
+slip is in ``energy.dissipated``.
+
+The normal force is a parameter (N), not the joint's reaction across the axis: with the
+reaction the friction force would depend on the multipliers it changes (an implicit
+problem, a fixed point per evaluation, and a stick limit that moves with the load); a
+constant normal force is exact for a block on a plane or a shaft with a preloaded bearing.
+A stop and a friction on the same joint are not combined yet (one mode per joint).
+:class:`mbcomp.library.BearingFriction` stays the regularized law (``tanh``, no events).
+"""
+from dataclasses import dataclass
+
+from mbcomp.errors import ModelError, Problem
+from mbcomp.modeling.events import StickRow, Switch
+from mbcomp.roles import split_start
+
+__all__ = ["SlidingFriction", "CoulombBearing"]
+
+_MODES = ("stick", "slip+", "slip-")
+
+
+class _Coulomb:
+    """What a joint's Coulomb friction gives: ``static`` and ``kinetic`` (N or N m)."""
+
+    axis_kind = None
+
+    @property
+    def static(self):
+        raise NotImplementedError
+
+    @property
+    def kinetic(self):
+        raise NotImplementedError
+
+    def _check(self, s, k):
+        if not (s >= 0.0 and k >= 0.0):
+            raise ValueError(f"{type(self).__name__}: the friction coefficients and forces must be >= 0, "
+                             f"got static {s:g}, kinetic {k:g}")
+        if k > s:
+            raise ValueError(f"{type(self).__name__}: the kinetic friction ({k:g}) exceeds the static one ({s:g}); "
+                             "a block would stop and start again at once -> make the kinetic value <= the static")
+
+
+@dataclass(frozen=True)
+class SlidingFriction(_Coulomb):
+    """Coulomb friction of a prismatic joint: break-away force ``mu_s normal`` (N), sliding
+    force ``mu_k normal`` (N). Pass it as ``Prismatic(friction=...)`` (see the module notes).
+
+    Parameters
+    ----------
+    mu_s : float
+        Static friction coefficient (1).
+    mu_k : float
+        Kinetic (sliding) friction coefficient (1), ``<= mu_s``; default ``mu_s``.
+    normal : float
+        Normal force pressing the sliding surfaces together (N), constant.
+
+    Examples
+    --------
+    >>> f = SlidingFriction(mu_s=0.5, mu_k=0.4, normal=10.0)
+    >>> f.static, f.kinetic
+    (5.0, 4.0)
+    """
+
+    mu_s: float
+    mu_k: float = None
+    normal: float = 1.0
+    axis_kind = "translational"
+
+    def __post_init__(self):
+        if self.mu_k is None:
+            object.__setattr__(self, "mu_k", self.mu_s)
+        if not self.normal >= 0.0:
+            raise ValueError(f"SlidingFriction: the normal force must be >= 0 N, got {self.normal:g}")
+        self._check(self.mu_s, self.mu_k)
+
+    @property
+    def static(self):
+        """Break-away force ``mu_s normal`` (N)."""
+        return float(self.mu_s * self.normal)
+
+    @property
+    def kinetic(self):
+        """Sliding force ``mu_k normal`` (N)."""
+        return float(self.mu_k * self.normal)
+
+
+@dataclass(frozen=True)
+class CoulombBearing(_Coulomb):
+    """Coulomb friction of a revolute joint (a bearing): break-away torque ``torque_max``
+    (N m), sliding torque ``torque_c`` (N m). Pass it as ``Revolute(friction=...)``.
+
+    Parameters
+    ----------
+    torque_max : float
+        Largest torque the stuck bearing holds (N m).
+    torque_c : float
+        Kinetic friction torque while turning (N m), ``<= torque_max``; default
+        ``torque_max``.
+
+    Examples
+    --------
+    >>> CoulombBearing(torque_max=2.0, torque_c=1.5).kinetic
+    1.5
+    """
+
+    torque_max: float
+    torque_c: float = None
+    axis_kind = "rotational"
+
+    def __post_init__(self):
+        if self.torque_c is None:
+            object.__setattr__(self, "torque_c", self.torque_max)
+        self._check(self.torque_max, self.torque_c)
+
+    @property
+    def static(self):
+        """Break-away torque (N m)."""
+        return float(self.torque_max)
+
+    @property
+    def kinetic(self):
+        """Sliding torque (N m)."""
+        return float(self.torque_c)
+
+
+def friction_ok(f, kind):
+    """The ``friction`` parameter's check for a joint whose axis is ``kind``."""
+    if f is None:
+        return None
+    if not isinstance(f, _Coulomb):
+        return "must be SlidingFriction(...) (prismatic) or CoulombBearing(...) (revolute), or None"
+    if f.axis_kind != kind:
+        want = "SlidingFriction" if kind == "translational" else "CoulombBearing"
+        return f"a {kind} axis takes {want}(...), not {type(f).__name__}"
+    return None
+
+
+class _Friction:
+    """The joint's side of Coulomb friction (modes ``stick``, ``slip+``, ``slip-``), ahead of
+    the stops' mixin in the joint's bases: without ``friction`` every call goes on to it."""
+
+    #: the friction's work is dissipated (energy balance)
+    dissipative = True
+
+    def start_mode(self, p):
+        if p.friction is None:
+            return super().start_mode(p)
+        wrong = friction_ok(p.friction, self.axis_kind)
+        if wrong:
+            raise ModelError([Problem(self.__class__.__name__, f"friction= {wrong}", "pass the friction of its axis")])
+        if p.limits is not None:
+            raise ModelError([Problem(self.__class__.__name__, "stops (limits=) and friction= on one joint are not "
+                                      "combined yet", "put the stops on an ElasticStop, or leave one of them out")])
+        u, _ = split_start(p.v0 if hasattr(p, "v0") else p.w0, 1)
+        v = float(u[0])
+        return "stick" if v == 0.0 else ("slip+" if v > 0.0 else "slip-")
+
+    def events(self, q, u, p, mode):
+        if p.friction is None or mode not in _MODES:
+            return super().events(q, u, p, mode)
+        if mode == "stick":
+            return []
+        return [("stop", u[0], -1 if mode == "slip+" else 1)]
+
+    def on_event(self, name, p, mode):
+        if p.friction is None or mode not in _MODES:
+            return super().on_event(name, p, mode)
+        return Switch({"break+": "slip+", "break-": "slip-", "stop": "stick"}[name])
+
+    def mode_rows(self, p, mode):
+        if p.friction is None or mode not in _MODES:
+            return super().mode_rows(p, mode)
+        return [StickRow("stick", 1.0, 0.0, limit=p.friction.static)] if mode == "stick" else []
+
+    def mode_force(self, p, mode):
+        """The kinetic friction on the joint's own speed in ``mode`` (N or N m; 0 stuck)."""
+        if p.friction is None or mode not in ("slip+", "slip-"):
+            return 0.0
+        return -p.friction.kinetic if mode == "slip+" else p.friction.kinetic
+
+    def conserves_energy(self, p):
+        return p.friction is None and super().conserves_energy(p)
+
+    def outputs(self, a, b, p, lam):
+        out = super().outputs(a, b, p, lam)
+        if p.friction is not None:  # the friction's power: the run fills it in (mbcomp.simulation.stickslip)
+            out = {**out, "power": 0.0}
+        return out
