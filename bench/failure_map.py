@@ -6,14 +6,22 @@
     t = 0.03 s at rtol 1e-6: steps, evaluations, CPU and error against the published solution;
 (c) singularity: a four-bar whose ground link is shortened by ``gap`` from the change-point
     geometry, so it passes ``gap`` from its flat position (gap = 0: through it);
-(d) Baumgarte: the slider-crank with alpha = beta from 0 to 1e4 1/s, explicit and implicit.
+(d) Baumgarte: the slider-crank with alpha = beta from 0 to 1e4 1/s, explicit and implicit;
+(e) impacts, a hinge stop: the door (models/door.py, damped, pushed shut at 3 rad/s) against
+    its stops, 8 s at rtol 1e-6 and 1e-9: impact times and the state at the end against the
+    closed form (``door.reference``): what event location costs and how far it limits accuracy;
+(f) impacts, a bouncing ball (models/bouncing_ball.py, when it is there): impact times
+    against ``t0 + 2 t0 e (1 - e^k) / (1 - e)`` and the rest at the Zeno point ``t_inf``.
 
 Each run records its status and the library's message: a failure must be a status with a
 cause (singular position, Newton failure, step-size collapse, divergence), never a numpy
 traceback and never a silently wrong answer. Writes bench/failure_map.csv and
 bench/failure_map.png and prints one table per case.
 
-Run: python bench/failure_map.py [--cases a,b,c,d] [--t-pendulum 1000] [--executor processes|dask|tcp://...]
+Run: python bench/failure_map.py [--cases a,b,c,d,e,f] [--t-pendulum 1000] [--executor processes|dask|tcp://...]
+
+A run of some cases keeps the other cases' rows of bench/failure_map.csv; the chart of (a)-(d)
+is drawn when all four ran, (e)-(f)'s chart (bench/failure_map_events.png) when either ran.
 
 Every run is one picklable task (its model file is loaded where it runs), so the map runs on
 any executor of :mod:`mbcomp.analysis.parallel`, with the same rows as the serial run.
@@ -51,7 +59,7 @@ COMBOS = {
 ROWS = []
 #: where each case's model comes from (a model file, loaded in the process that runs the task)
 FILES = {"a": "models/textbook/ex6_5_pendulum.py", "b": "models/andrews.py", "c": "models/four_bar.py",
-         "d": "models/slider_crank.py"}
+         "d": "models/slider_crank.py", "e": "models/door.py", "f": "models/bouncing_ball.py"}
 
 
 def task(case, label, build, t_end, opts, extra=None, n_out=201):
@@ -83,7 +91,32 @@ def run_task(spec):
         row["error"] = max(abs(res[n][-1] - v) / abs(v) for n, v in ref.items())
     if case == "c" and res.success:
         row["crank_end"] = float(res["crank_angle"][-1])
+    if case in ("e", "f"):
+        row.update(impact_errors(case, build, t_end, res))
     return row
+
+
+def impact_errors(case, build, t_end, res):
+    """Case (e)/(f)'s columns: ``impacts`` (how many), ``t_err`` (s: max |t_impact - exact|
+    over the impacts both have), ``state_err`` (door: max |phi - exact| (rad), |w - exact|
+    (rad/s) at the end; ball: |t_rest - t_inf| (s)), ``events_evals``."""
+    times = [x.time for x in res.events if x.kind == "impact"]
+    out = dict(impacts=len(times), event_evals=res.stats.get("event_evaluations"))
+    if case == "e":
+        ref = mbcomp.load_model_file(ROOT / FILES["e"]).reference(t_end=t_end, **build)
+        exact = ref["impacts"]
+        if res.success:
+            out["state_err"] = max(abs(float(res[n][-1]) - v) for n, v in ref["values"].items())
+    else:
+        p = dict(h0=1.0, restitution=0.8, g=9.81, **build)
+        e, t0 = p["restitution"], np.sqrt(2 * p["h0"] / p["g"])
+        exact = [t0 + 2 * t0 * e * (1 - e**k) / (1 - e) for k in range(len(times))]
+        rest = [x.time for x in res.events if x.kind == "rest"]
+        out["state_err"] = abs(rest[0] - t0 * (1 + 2 * e / (1 - e))) if rest else np.nan
+    n = min(len(times), len(exact))
+    out["t_err"] = float(np.max(np.abs(np.subtract(times[:n], exact[:n])))) if n else np.nan
+    out["impacts_exact"] = len(exact)
+    return out
 
 
 def show(case, keys):
@@ -148,11 +181,65 @@ def case_d():
     return tasks
 
 
+def case_e():
+    tasks = []
+    for rtol in (1e-6, 1e-9):
+        for label, opts in COMBOS.items():
+            o = dict(opts, rtol=rtol, atol=rtol * 1e-2)
+            if opts["method"] == "genalpha":
+                o["h"] = 1e-3 if rtol > 1e-8 else 1e-4
+            tasks.append(task("e", label, dict(damping=1.0, w0=-3.0), 8.0, o, extra=dict(rtol=rtol), n_out=2))
+    return tasks
+
+
+def case_f():
+    if not (ROOT / FILES["f"]).exists():
+        print("case f: models/bouncing_ball.py is not there yet: skipped")
+        return []
+    tasks = []
+    for rtol in (1e-6, 1e-9):
+        for label, opts in COMBOS.items():
+            o = dict(opts, rtol=rtol, atol=rtol * 1e-2)
+            if opts["method"] == "genalpha":
+                o["h"] = 1e-3 if rtol > 1e-8 else 1e-4
+            tasks.append(task("f", label, {}, 3.0, o, extra=dict(rtol=rtol), n_out=2))
+    return tasks
+
+
 #: what each case's table shows
 KEYS = {"a": ["cpu_s", "steps", "energy_drift", "residual", "t_reached"],
         "b": ["cpu_s", "steps", "nfev", "error", "residual"],
         "c": ["gap", "cpu_s", "sigma_min", "energy_drift", "crank_end"],
-        "d": ["alpha", "cpu_s", "steps", "nfev", "residual", "energy_drift"]}
+        "d": ["alpha", "cpu_s", "steps", "nfev", "residual", "energy_drift"],
+        "e": ["rtol", "cpu_s", "steps", "impacts", "t_err", "state_err", "event_evals"],
+        "f": ["rtol", "cpu_s", "steps", "impacts", "t_err", "state_err", "event_evals"]}
+
+
+def chart_events():
+    """(e)/(f): impact-time error against CPU time per combination, one panel per case."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cases = [c for c in "ef" if any(r["case"] == c for r in ROWS)]
+    fig, axes = plt.subplots(1, len(cases), figsize=(7 * len(cases), 5.2), squeeze=False)
+    titles = {"e": "(e) door against its stops: max |t_impact - exact|",
+              "f": "(f) bouncing ball: max |t_impact - exact|"}
+    for ax, c in zip(axes[0], cases):
+        rows = [r for r in ROWS if r["case"] == c and r["status"] == "success"]
+        for k, combo in enumerate(dict.fromkeys(r["combo"] for r in rows)):
+            rr = sorted((r for r in rows if r["combo"] == combo), key=lambda r: r["cpu_s"])
+            ax.loglog([r["cpu_s"] for r in rr], [max(r["t_err"], 1e-16) for r in rr], "-o", color=f"C{k % 10}",
+                      ms=4, label=combo)
+        bad = [r["combo"] for r in ROWS if r["case"] == c and r["status"] != "success"]
+        ax.set(xlabel="CPU s", ylabel="s (1e-16 plotted for exact)",
+               title=titles[c] + (f"\nfailed/refused: {len(bad)} runs" if bad else ""))
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(HERE / "failure_map_events.png", dpi=110)
+
 
 
 def chart():
@@ -201,32 +288,49 @@ def main(argv=None):
     from mbcomp.analysis.parallel import executor_of, map_on
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cases", default="a,b,c,d")
+    ap.add_argument("--cases", default="a,b,c,d,e,f")
     ap.add_argument("--t-pendulum", type=float, default=1000.0)
     ap.add_argument("--executor", default=None,
                     help="serial (default), processes, dask or tcp://host:port: where the runs go")
     ap.add_argument("--workers", type=int, default=None, help="processes of --executor processes")
     args = ap.parse_args(argv)
     cases = args.cases.split(",")
-    makers = {"a": lambda: case_a(args.t_pendulum), "b": case_b, "c": case_c, "d": case_d}
-    tasks = [t for c in "abcd" if c in cases for t in makers[c]()]
+    makers = {"a": lambda: case_a(args.t_pendulum), "b": case_b, "c": case_c, "d": case_d, "e": case_e,
+              "f": case_f}
+    tasks = [t for c in "abcdef" if c in cases for t in makers[c]()]
     executor, owned = executor_of(args.executor, args.workers)
     try:
         ROWS.extend(map_on(executor, run_task, tasks, progress=True))
     finally:
         if owned:
             executor.shutdown()
-    for c in "abcd":
+    for c in "abcdef":
         if c in cases:
             show(c, KEYS[c])
-    keys = sorted({k for r in ROWS for k in r}, key=lambda k: (k not in ("case", "combo", "status"), k))
+    rows = kept_rows(cases) + ROWS
+    keys = sorted({k for r in rows for k in r}, key=lambda k: (k not in ("case", "combo", "status"), k))
     with open(HERE / "failure_map.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=keys)
         w.writeheader()
-        w.writerows(ROWS)
-    if set(cases) == {"a", "b", "c", "d"}:
+        w.writerows(rows)
+    wrote = ["bench/failure_map.csv"]
+    if {"a", "b", "c", "d"} <= set(cases):
         chart()
-    print("\nwrote bench/failure_map.csv" + (" and bench/failure_map.png" if set(cases) == {"a", "b", "c", "d"} else ""))
+        wrote.append("bench/failure_map.png")
+    if {"e", "f"} & set(cases) and any(r["case"] in "ef" for r in ROWS):
+        chart_events()
+        wrote.append("bench/failure_map_events.png")
+    print("\nwrote " + " and ".join(wrote))
+
+
+def kept_rows(cases):
+    """The rows of the cases not run now, from the last bench/failure_map.csv (a run of some
+    cases updates theirs and keeps the others')."""
+    path = HERE / "failure_map.csv"
+    if not path.exists():
+        return []
+    with open(path, newline="") as fh:
+        return [r for r in csv.DictReader(fh) if r["case"] not in cases]
 
 
 if __name__ == "__main__":

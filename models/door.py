@@ -10,6 +10,11 @@ damper on the hinge (``damping``, N m s/rad) slows it between impacts.
 
 With no damping the impact times are exact: the first at ``phi0 / |w0|``, then every
 rebound of speed ``e^k |w0|`` travels out and back; the door stays within ``[0, open]``.
+With damping ``d`` the swing between impacts is ``w(t) = w e^(-t/tau)``,
+``phi(t) = phi + w tau (1 - e^(-t/tau))`` with ``tau = J / d`` (``J = m width^2 / 3`` about the
+hinge), so every impact time is closed-form too: :func:`reference` chains them to the state at
+``t_end``, the reference ``mbcomp bench models/door.py`` measures the methods against (the
+error is then the event location's and the integration's between impacts).
 
 Examples
 --------
@@ -22,6 +27,10 @@ import numpy as np
 
 import mbcomp
 from mbcomp.library import RigidBody, RotationalDamper, Revolute, World
+
+
+#: how ``mbcomp bench`` runs it (the closed form: :func:`reference`)
+SIMULATION = dict(t_end=8.0, rtol=1e-10, atol=1e-12)
 
 
 def build(m=20.0, width=0.9, height=2.0, phi0=1.0, w0=-1.0, restitution=0.6, open=2.0, damping=0.0):
@@ -38,3 +47,55 @@ def build(m=20.0, width=0.9, height=2.0, phi0=1.0, w0=-1.0, restitution=0.6, ope
         model.connect(d.flange_a, hinge.support)
         model.connect(d.flange_b, hinge.axis)
     return model
+
+
+def reference(t_end=None, m=20.0, width=0.9, height=2.0, phi0=1.0, w0=-1.0, restitution=0.6, open=2.0,
+              damping=0.0):
+    """The closed-form state at ``t_end`` (s): ``dict(t_end, values={"hinge.phi": rad,
+    "hinge.w": rad/s}, impacts=[s], source)``, impacts chained as in the module notes (the
+    same parameters as :func:`build`; ``height`` does not enter). A rebound too slow to
+    reach a stop again decays towards rest (damped) without an impact.
+
+    Examples
+    --------
+    >>> ref = reference(t_end=3.0)          # shut at t = 1, back out at 0.6 rad/s for 2 s
+    >>> ref["impacts"], round(ref["values"]["hinge.phi"], 12), ref["values"]["hinge.w"]
+    ([1.0], 1.2, 0.6)
+    """
+    import math
+
+    t_end = SIMULATION["t_end"] if t_end is None else t_end
+    tau = m * width**2 / 3.0 / damping if damping else math.inf
+    t, phi, w, impacts = 0.0, phi0, w0, []
+    while True:
+        target = 0.0 if w < 0 else open
+        dt = _time_to(target - phi, w, tau)
+        if w == 0.0 or t + dt > t_end:
+            phi, w = _swing(phi, w, tau, t_end - t)
+            return dict(t_end=t_end, values={"hinge.phi": phi, "hinge.w": w}, impacts=impacts,
+                        source=f"closed form (models/door.py reference: {len(impacts)} impacts before t_end)")
+        t, phi, w = t + dt, target, -restitution * _swing(phi, w, tau, dt)[1]
+        impacts.append(t)
+
+
+def _swing(phi, w, tau, dt):
+    """``(phi, w)`` after ``dt`` s of the damped free swing (``tau = inf``: undamped)."""
+    import math
+
+    if math.isinf(tau):
+        return phi + w * dt, w
+    decay = math.exp(-dt / tau)
+    return phi + w * tau * (1.0 - decay), w * decay
+
+
+def _time_to(dphi, w, tau):
+    """Time (s) to turn by ``dphi`` (same sign as ``w``) at speed ``w`` decaying with ``tau``;
+    ``inf`` when the swing stops short of it."""
+    import math
+
+    if w == 0.0:
+        return math.inf
+    if math.isinf(tau):
+        return dphi / w
+    reach = 1.0 - dphi / (w * tau)
+    return -tau * math.log(reach) if reach > 0.0 else math.inf
