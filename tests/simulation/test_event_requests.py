@@ -66,3 +66,13 @@ def test_an_fmu_of_a_model_with_stops_is_refused(tmp_path):
     with pytest.raises(ValueError, match=r"cannot export hinge: components with events .* pass through"):
         mbcomp.export_fmu(load_model("models/door.py").build(), tmp_path / "door.fmu")
     assert not (tmp_path / "door.fmu").exists()
+
+
+def test_evaluations_are_counted_over_every_mode():
+    """A run with impacts rebuilds its formulation at each change of mode; the evaluations of
+    all of them are counted (DOP853 takes 12 per step), not only the last mode's."""
+    from conftest import load_model
+
+    res = mbcomp.simulate(load_model("models/door.py").build(), t_end=8.0, rtol=1e-8)
+    assert len(res.events) >= 2
+    assert res.stats["nfev"] >= 11 * res.stats["steps"]

@@ -240,7 +240,7 @@ def run_stats(run, monitors, init, seconds, **request):
     or a singular solve, run on the numeric path)."""
     form = run.form
     stats = run.counters()
-    stats.update(nfev=form.nfev, nlu=form.nlu + stats["nlu_integrator"], cpu_time=seconds, **request,
+    stats.update(nfev=run.nfev, nlu=form.nlu + stats["nlu_integrator"], cpu_time=seconds, **request,
                  backend=form.system.backend, stabilization=form.stabilization,
                  projected_rows_dropped=list(init.dropped), init_iterations=init.iterations)
     stats.update(form.run_stats())

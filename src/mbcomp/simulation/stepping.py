@@ -83,6 +83,7 @@ class Run:
     """
 
     def __init__(self, form, stepper, t_out, y0, *, rtol=1e-6, atol=1e-8, max_step=np.inf, h=None):
+        self._forms = {}
         self.form, self.stepper_class, self.t_out = form, stepper, t_out
         self.options = dict(rtol=rtol, atol=atol, first_step=h, max_step=max_step)
         self.projects = bool(form.projects)
@@ -159,6 +160,22 @@ class Run:
         """Forget outputs after ``t`` (s); the start is always kept."""
         while len(self.ys) > 1 and self.t_out[len(self.ys) - 1] > t:
             self.ys.pop()
+
+    @property
+    def form(self):
+        """The formulation now integrated (a change of mode at an event sets a new one)."""
+        return self._form
+
+    @form.setter
+    def form(self, form):
+        self._forms[id(form)] = form
+        self._form = form
+
+    @property
+    def nfev(self):
+        """Evaluations of every formulation the run has integrated (a run with events
+        rebuilds its formulation at each change of mode)."""
+        return sum(f.nfev for f in self._forms.values())
 
     def counters(self):
         """The run's work: ``steps``, ``restarts``, ``projections``, and the steppers' counters
