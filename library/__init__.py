@@ -9,6 +9,7 @@ from .joints import Revolute, Prismatic, Cylindrical, Spherical, Weld, FreeMotio
 from .compound_joints import Universal, Planar
 from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
 from .contact import DiskContact, SphereContact, RollingDisk, RollingSphere
+from .plane_contact import PlaneContact
 from .rods import SphericalSpherical, UniversalSpherical
 from .gears import IdealGear, RackPinion, Belt, Inertia, PlanetaryGear, IdealPulley
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
@@ -23,7 +24,7 @@ __all__ = [
     "Spring", "Damper", "SpringDamper", "WorldForce", "WorldTorque",
     "RotationalSpring", "RotationalDamper", "RotationalSpringDamper", "TranslationalSpringDamper",
     "Torque", "Force", "PrescribedMotion",
-    "DiskContact", "SphereContact", "RollingDisk", "RollingSphere",
+    "DiskContact", "SphereContact", "RollingDisk", "RollingSphere", "PlaneContact",
     "ElastoGear", "BearingFriction", "Motor",
     "RelativeSensor", "AbsoluteSensor", "AbsoluteAngles", "CutForceAndTorque",
     "Universal", "Planar",

@@ -26,6 +26,7 @@ from mbcomp.modeling.shapes import z_to
 
 from .joints import FreeMotion
 from .parts import RigidBody
+from .plane_contact import Unilateral, unilateral_params
 from .surfaces import Plane, Surface, surface_geometry, surface_rows, tangent_distance
 
 _E = np.eye(3)
@@ -158,7 +159,7 @@ def rim_geometry(surface, a, b, r, axis, steps):
     return _Rim(normal, n, _dir(P, Pdot), _dir(lng, lng_dot), _dir(lat, lat_dot), delta, curv)
 
 
-class DiskContact(Joint):
+class DiskContact(Unilateral, Joint):
     """A thin disk (knife-edge wheel) of radius ``r`` rolling without slip on a plane.
 
     ``frame_a`` carries the plane (through its origin, normal ``n`` in frame_a coordinates,
@@ -210,6 +211,7 @@ class DiskContact(Joint):
     surface = Param(None, unit="1", kind="any",
                     doc="surface in frame_a's axes (mbcomp.library.surfaces; m) in place of the plane n, or None")
     rim_steps = Param(6, unit="1", kind="any", doc="Newton steps for the rim point on a surface (an integer >= 0)")
+    unilateral, restitution, open0 = unilateral_params()  # one-sided: lift-off, flight, touch-down (Unilateral)
 
     draws_body = True
 
@@ -303,11 +305,12 @@ class DiskContact(Joint):
         return out
 
     def result_notes(self, name, t, outputs):
-        """The contact holds the wheel bilaterally: where ``N < 0`` a real wheel would lift off."""
-        return _lift_off(name, t, outputs)
+        """A bilateral contact holds the wheel: where ``N < 0`` a real wheel would lift off (a
+        unilateral one does, ``unilateral=True``)."""
+        return [] if self.p.unilateral else _lift_off(name, t, outputs)
 
 
-class SphereContact(Joint):
+class SphereContact(Unilateral, Joint):
     """A ball of radius ``r`` rolling without slip on a plane.
 
     ``frame_a`` carries the plane (through its origin, normal ``n`` in frame_a coordinates,
@@ -359,6 +362,7 @@ class SphereContact(Joint):
               doc="plane normal, frame_a coordinates, pointing to the ball's side")
     surface = Param(None, unit="1", kind="any",
                     doc="surface in frame_a's axes (mbcomp.library.surfaces; m) in place of the plane n, or None")
+    unilateral, restitution, open0 = unilateral_params()  # one-sided: lift-off, flight, touch-down (Unilateral)
 
     draws_body = True
 
@@ -422,8 +426,9 @@ class SphereContact(Joint):
         return out
 
     def result_notes(self, name, t, outputs):
-        """The contact holds the ball bilaterally: where ``N < 0`` a real ball would lift off."""
-        return _lift_off(name, t, outputs)
+        """A bilateral contact holds the ball: where ``N < 0`` a real ball would lift off (a
+        unilateral one does, ``unilateral=True``)."""
+        return [] if self.p.unilateral else _lift_off(name, t, outputs)
 
 
 def _numbers(owner, **values):

@@ -56,8 +56,10 @@ from mbcomp.modeling.shapes import z_to
 SIMULATION = dict(t_end=10.0, rtol=1e-8, atol=1e-10, backend="python", n_out=501)
 #: what ``mbcomp simulate models/bicycle.py`` shows unless -p says otherwise: a push of 0.5 rad/s
 #: in roll, so the self-stable bicycle leans, weaves and rights itself (build() itself starts
-#: upright, the operating point that linearization and ``mbcomp stability`` need)
-SIMULATE_PARAMS = dict(roll_rate0=0.5)
+#: upright, the operating point that linearization and ``mbcomp stability`` need), on wheels
+#: that may leave the ground: at ``-p v=2`` it falls over, the wheels lifting off and landing
+#: (``res.events``)
+SIMULATE_PARAMS = dict(roll_rate0=0.5, unilateral=True)
 
 DATA = pathlib.Path(__file__).resolve().parent / "data" / "bicycle_parameters.json"
 
@@ -121,10 +123,13 @@ def _fork_shapes(p):
             _tube(crown, top, color="red"), _tube(top + (-0.1, -0.25, 0), top + (-0.1, 0.25, 0), color="black")]
 
 
-def build(v=5.0, roll0=0.0, roll_rate0=0.0, **overrides):
+def build(v=5.0, roll0=0.0, roll_rate0=0.0, unilateral=False, **overrides):
     """The benchmark bicycle moving straight at ``v`` (m/s, forward) with roll ``roll0``
     (rad) and roll rate ``roll_rate0`` (rad/s); ``overrides`` replace Table 1 entries by
-    name (e.g. ``c=0.0``)."""
+    name (e.g. ``c=0.0``). ``unilateral``: the wheels lift off where their normal force would
+    pull and land again (plastic impacts, ``restitution = 0``; :class:`DiskContact`'s
+    ``unilateral``), so a bicycle below its weave speed tumbles; the default keeps the
+    benchmark's bilateral contacts (linearization needs them)."""
     p = parameters()
     unknown = sorted(set(overrides) - set(p))
     if unknown:
@@ -155,8 +160,9 @@ def build(v=5.0, roll0=0.0, roll_rate0=0.0, **overrides):
     front_hub = m.add("front_hub", Revolute(n=(0, 1, 0), phi0=0.0, w0=-v / rF))
     front_wheel = m.add("front_wheel", RigidBody(m=p["mF"], I=_inertia(p["IFxx"], p["IFyy"], p["IFxx"])))
     ground_normal = (0.0, 0.0, -1.0)
-    rear_contact = m.add("rear_contact", DiskContact(r=rR, n=ground_normal, axis=(0, 1, 0)))
-    front_contact = m.add("front_contact", DiskContact(r=rF, n=ground_normal, axis=(0, 1, 0)))
+    one_sided = dict(unilateral=bool(unilateral), restitution=0.0)
+    rear_contact = m.add("rear_contact", DiskContact(r=rR, n=ground_normal, axis=(0, 1, 0), **one_sided))
+    front_contact = m.add("front_contact", DiskContact(r=rF, n=ground_normal, axis=(0, 1, 0), **one_sided))
 
     m.connect(world.frame_b, free.frame_a)
     m.connect(free.frame_b, rear_frame.frame_a)

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Impact", "Switch", "Stop", "AxisRow", "StickRow", "ACTIONS"]
+__all__ = ["Impact", "Switch", "Stop", "AxisRow", "ContactRow", "StickRow", "ACTIONS"]
 
 
 @dataclass(frozen=True)
@@ -107,6 +107,25 @@ class AxisRow:
     def value(self, s):
         """``sign (s - at)`` (rad or m)."""
         return self.sign * (s - self.at)
+
+
+@dataclass(frozen=True)
+class ContactRow:
+    """A row of a contact's own holonomic constraints (a cut joint's ``constraints``, by
+    ``name``; its value m, positive on the open side): held in a mode (``mode_rows``: the
+    framework watches its push and fires ``"release"`` when it would pull), or the value of an
+    event (``events`` returns ``(event, ContactRow(row), direction)``: the framework evaluates
+    the row, the gap while the contact is open). A unilateral contact's rows (holonomic and
+    velocity rows) are in the system only in the modes where :meth:`holds_rows
+    <mbcomp.modeling.roles.Joint.holds_rows>` is true.
+
+    Examples
+    --------
+    >>> ContactRow("normal").name
+    'normal'
+    """
+
+    name: str
 
 
 @dataclass(frozen=True)

@@ -329,6 +329,13 @@ class Joint(Component):
         or ``None``: the run then fails naming the joint."""
         return None
 
+    def holds_rows(self, p, mode):
+        """Whether the joint's own rows (a cut joint's ``constraints`` and its
+        ``velocity_constraints``) are in the system in ``mode`` (default True; an open
+        unilateral contact: False, the body flies). See ``docs/architecture.md``, *Events
+        and modes*."""
+        return True
+
     @property
     def has_events(self):
         return type(self).start_mode is not Joint.start_mode

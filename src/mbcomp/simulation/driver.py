@@ -36,7 +36,6 @@ import time as _time
 
 import numpy as np
 
-from ..assembly.initialization import initialize
 from ..errors import SimulationError
 from ..formulations import FORMULATIONS, build
 from ..modeling.inputs import check_names, input_signals, signal_of
@@ -46,6 +45,7 @@ from .postprocess import postprocess
 from .result import Result
 from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check_request, check_singular,
                     output_times, system_of)
+from .contacts import contact_columns, initialize_in_modes, open_joints
 from .events import Events, finish, stepwise
 from .stepping import Budget, BudgetSpent, Run, hooks_for
 from .stiffness import StiffnessWatch
@@ -174,7 +174,7 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
     """:func:`simulate` once the request is checked and the inputs' signals are in place."""
     system = system_of(model, params, backend)
     try:
-        init = initialize(system, t_start)
+        init = initialize_in_modes(system, t_start)  # a contact starting open: without its rows
         form = build(formulation, stepper.problem, system, index=index, stabilization=stabilization, alpha=alpha,
                      beta=beta, independent=independent, method=method, max_index=stepper.max_index,
                      singular=singular)
@@ -193,6 +193,9 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
                                              max_index=stepper.max_index, singular=singular),
                      events or (), rtol, atol)
     watcher = watcher if watcher.active else None
+    if watcher is not None and watcher.system_now() is not system:  # the start modes hold other rows
+        form = watcher.make_form(watcher.system_now())
+        y0 = form.initial_state(t_start, init.q, init.u)
     if watcher is not None:  # a stuck friction that cannot hold at the start breaks away there
         form, y0 = watcher.start(form, y0, t_start, init.q, init.u)
     run = Run(form, stepwise(stepper) if watcher else stepper, output_times(t_start, t_end, n_out, dt_out), y0,
@@ -209,8 +212,12 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
     t_done = run.t_out[: len(run.ys)]
     if watcher is not None:
         stats.update(watcher.stats)
-    res = postprocess(system, form, t_done, np.array(run.ys).reshape(len(run.ys), -1), status, message, stats,
-                      init, body_momenta)
+    Y = np.array(run.ys).reshape(len(run.ys), -1)
+    fix = None
+    if watcher is not None and any(open_joints(system, modes) for _, modes in watcher.mode_log):
+        def fix(series):  # columns at times a contact was open: over the mode's system
+            contact_columns(series, system, watcher.mode_log, t_done, Y)
+    res = postprocess(system, form, t_done, Y, status, message, stats, init, body_momenta, fix=fix)
     return finish(res, watcher, np.array(run.ys).reshape(len(run.ys), -1))
 
 

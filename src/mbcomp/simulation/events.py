@@ -46,7 +46,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import SimulationError
-from ..modeling.events import Impact, Stop, Switch
+from ..modeling.events import ContactRow, Impact, Stop, Switch
+from .contacts import contact_impact, contact_pushes, contact_rows, event_value
 from ..solvers.compiled_rk import CompiledRK
 from .modes import consistent, impact_speeds, mode_rows, mode_system, row_push, row_values, start_modes
 from .stickslip import friction_columns, row_events, with_mode_forces
@@ -140,6 +141,7 @@ class Events:
         self.history = []  # [(t, modes, q)]: the start and every restart (stick-slip's columns)
         self._fresh = self._last = None  # the event just handled (its function starts at zero)
         self.stats = dict(events=0, event_evaluations=0, mode_changes=0)
+        self.mode_log = [(-np.inf, dict(self.modes))]  # (time, modes from then on): the result's columns
 
     @property
     def active(self):
@@ -181,7 +183,7 @@ class Events:
         for name, mode in self.modes.items():
             e = sysm._edge[name]
             for ev_name, value, _ in e.comp.events(q[e.q], u[e.u], sysm.P[name], mode):
-                out[("joint", name, ev_name)] = float(value)
+                out[("joint", name, ev_name)] = event_value(sysm, name, value, t, q, u)
             if e.comp.mode_rows(sysm.P[name], mode):
                 rows = self._pushes(t, q, u) if rows is None else rows
                 out.update(rows[name])
@@ -193,9 +195,11 @@ class Events:
     def _pushes(self, t, q, u):
         """``{joint: {("release", joint, row): push}}`` of the engaged rows (N or N m)."""
         held = mode_rows(self.system, self.modes)
-        first = self.system.evaluate(t, q, u).Phi.size
+        out = contact_pushes(self.system, self.system_now(), self.modes, t, q, u)  # a closed contact's normal row
+        if not held:
+            return out
+        first = self.system_now().evaluate(t, q, u).Phi.size - len(held)  # the rows are appended
         push = row_push(self.system_now(), t, q, u, first, len(held))
-        out = {}
         for (name, row, _, _), p in zip(held, push):
             out.setdefault(name, {}).update(row_events(name, row, float(p)))
         return out
@@ -277,7 +281,7 @@ class Events:
         comp, p = self.system._edge[who].comp, self.system.P[who]
         action = comp.on_event("release" if kind == "release" else name, p, self.modes[who])
         state = qu(t_e)
-        if isinstance(action, Impact) and not self._approaching(who, action, state):
+        if isinstance(action, Impact) and not self._approaching(who, action, state, t_e):
             if key != self._last:
                 return False
             # back at the limit right after leaving it, too slow to tell apart: at rest there
@@ -303,8 +307,12 @@ class Events:
         self._fresh = self._last = key
         return True
 
-    def _approaching(self, who, action, state):
+    def _approaching(self, who, action, state, t=0.0):
         """Whether the impact's rows close (a negative speed along them) at ``state``."""
+        if not self.system._edge[who].comp.tree_edge:  # a contact: its normal row's rate
+            row = _contact_row(self.system, who, action.engage)
+            nq = self.system.nq
+            return contact_rows(self.system, who, t, state[:nq], state[nq:], row).speed < 0.0
         rows = mode_rows(self.system, {who: action.engage})
         _, speed, _ = row_values(self.system, rows, state[: self.system.nq], state[self.system.nq:])
         return bool(np.any(speed < 0.0))
@@ -316,16 +324,28 @@ class Events:
     def _impact(self, t, who, name, action, q, u):
         """``(u+, mode to settle in or None)`` of an impact of ``who`` at event ``name``."""
         sysm, p = self.system, self.system.P[who]
-        rows = [r for r in mode_rows(sysm, {who: action.engage})]
-        _, speed, _ = row_values(sysm, rows, q, u)
-        u_plus, _, loss = impact_speeds(self.system_now(), t, q, u, rows, action.restitution)
-        _, after, _ = row_values(sysm, rows, q, u_plus)
+        if not sysm._edge[who].comp.tree_edge:  # a contact touching down: its own rows
+            row = _contact_row(sysm, who, action.engage)
+            speed = [contact_rows(sysm, who, t, q, u, row).speed]
+            u_plus, _, loss, after0 = contact_impact(self.system_now(), who, t, q, u, action.restitution, row)
+            after = [after0]
+
+            def rests():
+                return self._contact_rests(t, q, u_plus, who, row, after0)
+        else:
+            rows = [r for r in mode_rows(sysm, {who: action.engage})]
+            _, speed, _ = row_values(sysm, rows, q, u)
+            u_plus, _, loss = impact_speeds(self.system_now(), t, q, u, rows, action.restitution)
+            _, after, _ = row_values(sysm, rows, q, u_plus)
+
+            def rests():
+                return self._rests(t, q, u_plus, rows, after)
         self._record(t, who, name, "impact", {"speed_before": float(speed[0]), "speed_after": float(after[0]),
                                               "energy_loss": loss, "restitution": action.restitution})
         hits = self._hits.setdefault(who, [])
         hits.append(t)
         settle = None
-        if action.restitution == 0.0 or self._rests(t, q, u_plus, rows, after):
+        if action.restitution == 0.0 or rests():
             settle = action.engage
         elif _chattering(hits):
             settle = sysm._edge[who].comp.rest_mode(name, p, self.modes[who])
@@ -351,9 +371,21 @@ class Events:
         acc = C @ ud
         return bool(np.all(acc < 0.0) and np.all(after ** 2 <= -2.0 * acc * REST_HEIGHT * self.atol))
 
+    def _contact_rests(self, t, q, u_plus, who, row, after):
+        """Whether contact ``who``'s rebound (its normal speed ``after``, m/s) would rise less
+        than :data:`REST_HEIGHT` ``atol`` against its gap's acceleration in flight."""
+        from ..formulations.lagrange import LagrangeIndex1
+
+        sysm = self.system_now()
+        ud, _ = LagrangeIndex1(sysm, "none").solve(sysm.evaluate(t, q, u_plus), stabilize=False)
+        cr = contact_rows(self.system, who, t, q, u_plus, row)
+        acc = float(cr.C[0] @ ud + cr.bias[0])
+        return acc < 0.0 and after ** 2 <= -2.0 * acc * REST_HEIGHT * self.atol
+
     def _restart(self, run, t, q, u, modes):
         """Continue the run at ``t`` from ``(q, u)`` in ``modes``: state made consistent with
         their rows, formulation built over their system, a new stepper."""
+        modes = self._open_pulling(t, q, u, modes)
         new, u0 = self.system_now(modes), u
         q, u = consistent(new, t, q, u)
         modes, new = self._break_away(t, q, u, modes)
@@ -362,6 +394,7 @@ class Events:
             q, u = consistent(new, t, q, u)
         self.modes = modes
         self.history.append((float(t), dict(modes), np.array(q, float)))
+        self.mode_log.append((float(t), dict(modes)))
         if self.records and "energy_loss" in self.records[-1].detail and self.records[-1].kind != "impact":
             M = new.evaluate(t, q, u0).M
             self.records[-1].detail["energy_loss"] = float(0.5 * (u0 @ M @ u0 - u @ M @ u))
@@ -396,10 +429,32 @@ class Events:
                 self._record(t, name, broken[0][1], "switch", {"mode": action.mode, "energy_loss": 0.0})
         return modes, self.system_now(modes)
 
+    def _open_pulling(self, t, q, u, modes):
+        """``modes`` with the contacts that were closed and would pull in them opened, the
+        most pulling first, one at a time (a contact closing elsewhere may unload another
+        one: the bicycle's front wheel landing lifts the rear one); each a ``"release"``."""
+        if all(self.system._edge[n].comp.tree_edge for n in modes):  # no contacts
+            return modes
+        for _ in range(len(modes)):
+            new = self.system_now(modes)
+            qc, uc = consistent(new, t, q, u)
+            pulls = sorted((p, n, key[2]) for n, d in contact_pushes(self.system, new, modes, t, qc, uc).items()
+                           for key, p in d.items() if p < 0.0 and self.modes.get(n) == modes[n])
+            if not pulls:
+                break
+            _, who, row = pulls[0]
+            action = self.system._edge[who].comp.on_event("release", self.system.P[who], modes[who])
+            if not isinstance(action, Switch):
+                break
+            modes = dict(modes, **{who: action.mode})
+            self._record(t, who, row, "release", {"mode": action.mode, "energy_loss": 0.0})
+        return modes
+
     def _pushes_in(self, new, modes, t, q, u):
         old, self.modes = self.modes, modes
         try:
-            return self._pushes(t, q, u) if mode_rows(self.system, modes) else {}
+            held = any(self.system._edge[n].comp.mode_rows(self.system.P[n], m) for n, m in modes.items())
+            return self._pushes(t, q, u) if held else {}
         finally:
             self.modes = old
 
@@ -424,6 +479,12 @@ def keep_until(run, t, qu):
         if run.projects:
             y = form.full(tk, form.project(tk, form.initial_state(tk, y[: form.nq], y[form.nq:])))
         run.ys.append(np.array(y, dtype=float))
+
+
+def _contact_row(system, who, mode):
+    """The holonomic row a contact holds in ``mode`` (its first :class:`ContactRow`)."""
+    rows = [r for r in system._edge[who].comp.mode_rows(system.P[who], mode) if isinstance(r, ContactRow)]
+    return rows[0].name if rows else "normal"
 
 
 def _chattering(hits):

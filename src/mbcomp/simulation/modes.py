@@ -31,9 +31,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ModelError, Problem
+from ..modeling.events import ContactRow
+from .contacts import contact_impact, contact_rows, initialize_in_modes, open_joints, without_rows
 
 __all__ = ["mode_system", "ModeEvaluator", "start_modes", "row_values", "impact_speeds", "consistent",
-           "row_push"]
+           "row_push", "open_joints", "without_rows", "contact_rows", "contact_impact", "initialize_in_modes"]
 
 
 def start_modes(system):
@@ -44,7 +46,8 @@ def start_modes(system):
         if e.kind == "joint" and getattr(e.comp, "has_events", False):
             mode = e.comp.start_mode(system.P[e.name])
             if mode is not None:
-                _axis_index(system, e.name)  # its events and rows are of its own coordinate
+                if e.comp.tree_edge:  # a stop: its events and rows are of its own coordinate
+                    _axis_index(system, e.name)
                 out[e.name] = mode
     return out
 
@@ -65,7 +68,8 @@ def mode_rows(system, modes):
     for name, mode in sorted(modes.items()):
         e = system._edge[name]
         for row in e.comp.mode_rows(system.P[name], mode):
-            out.append((name, row, *_axis_index(system, name)))
+            if not isinstance(row, ContactRow):  # a contact's rows are its own: see open_joints
+                out.append((name, row, *_axis_index(system, name)))
     return out
 
 
@@ -123,11 +127,13 @@ class ModeEvaluator:
 
 
 def mode_system(system, modes):
-    """``system`` with the rows ``modes`` hold (the system itself when they hold none)."""
-    rows = mode_rows(system, modes)
+    """``system`` with the rows ``modes`` hold (the system itself when they hold none): the
+    rows of open contacts out (:func:`without_rows`), engaged stops' rows appended."""
+    base = without_rows(system, open_joints(system, modes))
+    rows = mode_rows(base, modes)
     if not rows:
-        return system
-    return system.with_evaluator(lambda new: ModeEvaluator(system.evaluator, rows, system.nu))
+        return base
+    return base.with_evaluator(lambda new: ModeEvaluator(base.evaluator, rows, base.nu))
 
 
 def row_values(system, rows, q, u):

@@ -200,7 +200,10 @@ class ConstraintRank:
         """``sigma_r / sigma_1`` of the full ``ev.C``, ``r`` the number of kept rows (0: the
         rank is lost): which rows are kept is :class:`~mbcomp.simulation.rows.RowChoice`'s
         matter, a singular position is where no choice keeps the rank."""
-        return relative_sigma(ev.C, self.rank)
+        rank = self.rank
+        if rank is not None and ev.C.shape[0] < self.system.row_mask.size:  # an open contact's rows are out
+            rank = max(rank - (self.system.row_mask.size - ev.C.shape[0]), 0)
+        return relative_sigma(ev.C, rank)
 
     def _singular(self, t, rel, ev):
         _, joints = self._dependent(ev)
@@ -282,6 +285,8 @@ class JointSingularities:
 
     def check(self, end, t_prev, dense):
         dist = self.distances(end.t, end.q, end.u)
+        cut = set(end.system.topology.cut)  # an open unilateral contact is out of the system: not watched
+        dist = {n: d for n, d in dist.items() if self.system._edge[n].comp.tree_edge or n in cut}
         for name, d in dist.items():
             if d < self.JOINT_MIN:
                 raise self._failure(name, end.t, d)

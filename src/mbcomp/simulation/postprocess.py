@@ -72,7 +72,7 @@ class _Columns:
         return out
 
 
-def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=False):
+def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=False, fix=None):
     """The :class:`Result` of a run: every column at the output times ``t`` from the kept
     states ``Y`` (rows ``[q, u]``), the joints' notes, aliases and output functions.
 
@@ -100,6 +100,9 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
         For the model summary.
     body_momenta : bool
         Also each body's momenta (:func:`mbcomp.simulation.balance.momentum_columns`).
+    fix : callable, optional
+        ``fix(series)`` corrects the columns in place before the balances and notes (a run
+        with open contacts: :func:`mbcomp.simulation.contacts.contact_columns`).
     """
     nq = system.nq
     cols = _Columns(len(t))
@@ -125,6 +128,8 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
         for path, R in rotations.items():
             cols.rotation(path, k, R)
     series = cols.finished()
+    if fix is not None:
+        fix(series)
     series.update(momentum_columns(system, series, per_body=body_momenta))
     balance, quadrature = energy_balance(system, t, series)
     series.update(balance)

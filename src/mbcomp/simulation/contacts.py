@@ -1,0 +1,183 @@
+"""Unilateral contacts in a run: a contact's rows in and out of the system, its gap and its impacts.
+
+A contact (a cut joint, ``tree_edge = False``) with modes holds its own rows -- the
+holonomic ``constraints`` and the ``velocity_constraints`` (rolling) -- only in the modes
+where :meth:`~mbcomp.modeling.roles.Joint.holds_rows` is true (``"closed"``). In an
+``"open"`` mode the system is the assembled one *without* them (:func:`without_rows`: a
+numeric variant whose topology no longer cuts the contact, its row mask restricted to the
+other rows), so every formulation steps the free flight unchanged. The contact's rows are
+read straight from the frames' jets (:func:`contact_rows`): the gap (its normal row's value,
+m) is the event while open, the normal row's Jacobian and the rolling rows make the impact at
+touch-down (:func:`contact_impact`). A run whose contact starts open is initialized without
+its rows (:func:`initialize_in_modes`).
+
+Examples
+--------
+>>> import numpy as np, mbcomp
+>>> from mbcomp.library import World, PlaneContact, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+>>> b = m.add("ball", PointMass(m=2.0), free=True)
+>>> c = m.add("ground", PlaneContact(unilateral=True))
+>>> m.connect(w.frame_b, c.frame_a); m.connect(c.frame_b, b.frame_a)
+>>> system = mbcomp.assemble(m)
+>>> len(system.constraint_names()), len(without_rows(system, ["ground"]).constraint_names())
+(1, 0)
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import replace
+from types import SimpleNamespace
+
+import numpy as np
+
+__all__ = ["open_joints", "without_rows", "contact_rows", "contact_impact", "initialize_in_modes", "event_value",
+           "contact_pushes", "contact_columns"]
+
+
+def open_joints(system, modes):
+    """Names of the joints of ``modes`` (``{joint: mode}``) whose rows are out in their mode."""
+    return sorted(n for n, mode in modes.items() if not system._edge[n].comp.holds_rows(system.P[n], mode))
+
+
+def without_rows(system, names):
+    """``system`` without the rows of the cut joints ``names`` (itself when there are none).
+
+    A numeric variant (:meth:`~mbcomp.assembly.system.MultibodySystem.variant`): its topology
+    cuts the other joints only, its nonholonomic joints are the others, its row mask is the
+    system's restricted to the other rows. A generated program evaluates every row, so an
+    open mode is evaluated by the jets."""
+    names = set(names)
+    if not names:
+        return system
+    topo = copy.copy(system.topology)
+    topo.cut = [c for c in system.topology.cut if c not in names]
+    new = system.variant(topology=topo)
+    new._nonholonomic = [e for e in system._nonholonomic if e.name not in names]
+    new._row_names = None
+    if system.row_mask is not None:
+        keep = [n.rsplit(".", 1)[0] not in names for n in system.constraint_names(all_rows=True)]
+        new.row_mask = np.asarray(system.row_mask)[np.array(keep, bool)]
+    return new
+
+
+def contact_rows(system, name, t, q, u, row="normal"):
+    """The rows of contact ``name`` at ``(t, q, u)`` from the frames' jets.
+
+    Returns a namespace: ``gap`` (m, the holonomic ``row``'s value), ``speed`` (m/s, its
+    rate), ``C`` (k, nu: the ``row`` first, then the velocity rows), ``offset`` (k,: each row's
+    rate at ``u = 0``), ``bias`` (k,: the rows' rates' time derivatives at ``du/dt = 0``)."""
+    e, p = system._edge[name], system.P[name]
+    jets = system.kinematics(t, q, u)
+    a, b = jets[e.node_a], jets[e.node_b]
+    J = np.vstack((a.Jv, a.Jw, b.Jv, b.Jw))
+    hol = dict(e.comp.constraints(a, b, p))
+    if row not in hol:
+        raise KeyError(f"{name}: no holonomic row {row!r} (rows: {', '.join(hol)})")
+    rows = [hol[row]] + [c for _, c in e.comp.velocity_constraints(a, b, p)]
+    C = np.array([np.asarray(c.jac, float) @ J for c in rows]).reshape(len(rows), system.nu)
+    rate = np.array([float(c.dot) for c in rows[:1]] + [float(c.val) for c in rows[1:]])
+    return SimpleNamespace(gap=float(hol[row].val), speed=float(rate[0]), C=C, offset=rate - C @ u,
+                           bias=np.array([float(c.bias) for c in rows]))
+
+
+def event_value(system, name, value, t, q, u):
+    """A joint's event value: a number, or the value (m) of its own row ``value``
+    (:class:`~mbcomp.modeling.events.ContactRow`: a contact's gap while open)."""
+    from ..modeling.events import ContactRow
+
+    if isinstance(value, ContactRow):
+        return contact_rows(system, name, t, q, u, value.name).gap
+    return float(value)
+
+
+def contact_pushes(system, sysm, modes, t, q, u):
+    """``{contact: {("release", contact, row): push}}`` (N, >= 0 while pressing) of the rows
+    the contacts of ``modes`` hold (:class:`~mbcomp.modeling.events.ContactRow`) on the mode's
+    system ``sysm``: minus their multipliers in the index-1 solve without stabilization."""
+    from ..formulations.lagrange import LagrangeIndex1
+    from ..modeling.events import ContactRow
+
+    held = [(n, r.name) for n, mode in sorted(modes.items()) if not system._edge[n].comp.tree_edge
+            for r in system._edge[n].comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)]
+    if not held:
+        return {}
+    ev = sysm.evaluate(t, q, u)
+    _, lam = LagrangeIndex1(sysm, "none").solve(ev, stabilize=False)
+    mult = sysm.row_multipliers(ev, lam)
+    out = {}
+    for n, row in held:
+        if row in mult.get(n, {}):  # a row dropped as redundant has no multiplier of its own
+            out.setdefault(n, {})[("release", n, row)] = -float(mult[n][row])
+    return out
+
+
+def contact_impact(system, name, t, q, u_minus, restitution, row="normal"):
+    """``(u+, impulses (N s), kinetic energy lost (J), normal speed after (m/s))`` of contact
+    ``name`` touching down at ``(t, q, u-)`` on ``system`` (the system before, the contact
+    open: its other rows hold through the impact).
+
+    The impact rows are the contact's own: its normal ``row`` with Newton's restitution
+    (``C_n u+ = -e C_n u-``), its rolling rows (velocity rows) held, ``B u+ = b``: a rolling
+    contact's impact is perfectly rough (the no-slip rows take whatever tangential impulse
+    they need; no tangential restitution). An impulse that would pull is dropped
+    (:func:`mbcomp.assembly.impacts.impulse`)."""
+    from ..assembly.impacts import impulse
+
+    ev = system.evaluate(t, q, u_minus)
+    cr = contact_rows(system, name, t, q, u_minus, row)
+    A, ma, k = ev.A, ev.A.shape[0], cr.C.shape[0]
+    offset = np.concatenate((ev.Phid - ev.C @ u_minus, ev.Psi - ev.B @ u_minus if ev.B.size else np.zeros(0),
+                             cr.offset))
+    keep = list(range(ma)) + list(range(ma + 1, ma + k))
+    u_plus, lam = impulse(ev.M, np.vstack((A, cr.C)) if ma else cr.C, u_minus, [ma], restitution, keep_rows=keep,
+                          offset=offset)
+    loss = 0.5 * (u_minus @ ev.M @ u_minus - u_plus @ ev.M @ u_plus)
+    return u_plus, lam[ma:], float(loss), float(cr.C[0] @ u_plus + cr.offset[0])
+
+
+def initialize_in_modes(system, t0):
+    """:func:`~mbcomp.assembly.initialization.initialize` with the rows of contacts that start
+    open left out (their body starts where its start values put it); ``system.row_mask`` is
+    then the mask of the assembled rows (an open contact's rows counted independent)."""
+    from ..assembly.initialization import initialize
+    from .modes import start_modes
+
+    system.row_mask = None
+    names = open_joints(system, start_modes(system))
+    if not names:
+        return initialize(system, t0)
+    sub = without_rows(system, names)
+    init = initialize(sub, t0)
+    keep = np.array([n.rsplit(".", 1)[0] not in names for n in system.constraint_names(all_rows=True)], bool)
+    mask = np.ones(keep.size, bool)
+    mask[keep] = sub.row_mask
+    system.row_mask = mask
+    return replace(init, row_mask=mask)
+
+
+def contact_columns(series, system, log, t, Y):
+    """Correct the result's ``series`` (``{column: array}``) at output times ``t`` (s) where
+    contacts were open (``log``: ``[(time, modes from then on)]``; ``Y`` the outputs' states
+    ``[q, u]``): the post-processing evaluates the assembled rows, so these columns are
+    computed again over the mode's system (:func:`~mbcomp.assembly.outputs.output_values`:
+    reactions, residuals), and an open contact's forces (columns in N or N m) are 0."""
+    from ..assembly.column_units import column_units
+    from ..assembly.outputs import output_values
+
+    times = np.array([tt for tt, _ in log])
+    units, systems = column_units(system), {}
+    for k, tk in enumerate(t):
+        modes = log[max(int(np.searchsorted(times, tk, side="left")) - 1, 0)][1]
+        names = tuple(open_joints(system, modes))
+        if not names:
+            continue
+        sysk = systems.setdefault(names, without_rows(system, names))
+        vals, _ = output_values(sysk, tk, Y[k, :system.nq], Y[k, system.nq:])
+        for col, val in vals.items():
+            if col in series:
+                series[col][k] = val
+        for col in series:
+            own = [col[len(n) + 1:] for n in names if col.startswith(n + ".")]
+            if own and (units.get(col) in ("N", "N m") or own[0] == "N" or own[0].startswith(("F_", "f.", "tau."))):
+                series[col][k] = 0.0
