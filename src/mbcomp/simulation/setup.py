@@ -203,8 +203,8 @@ def check_events(events):
     >>> try:
     ...     check_events([lambda t: 0.0])
     ... except TypeError as exc:
-    ...     print(str(exc)[:60])
-    event <lambda> takes 1 positional argument(s); an event fun
+    ...     print(str(exc).split(";")[0])
+    event <lambda> takes 1 positional argument(s)
     """
     import inspect
 
