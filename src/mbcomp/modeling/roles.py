@@ -336,9 +336,18 @@ class Joint(Component):
         and modes*."""
         return True
 
+    def mode_force(self, p, mode):
+        """The generalized force (N or N m) the joint applies on its own speed in ``mode``
+        (kinetic friction while slipping: ``library/friction.py``); 0 by default."""
+        return 0.0
+
     @property
     def has_events(self):
         return type(self).start_mode is not Joint.start_mode
+
+    @property
+    def has_mode_force(self):
+        return type(self).mode_force is not Joint.mode_force
 
     # --- 1-D axis -----------------------------------------------------------------------
     def axis_world(self, R_a, p):

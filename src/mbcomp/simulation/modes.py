@@ -43,7 +43,7 @@ def start_modes(system):
     a ``ModelError`` for one that is driven or not a 1-DOF tree joint (no coordinate of its own)."""
     out = {}
     for e in system.topology.edges:
-        if e.kind == "joint" and getattr(e.comp, "has_events", False):
+        if e.kind == "joint" and e.comp.has_events:
             mode = e.comp.start_mode(system.P[e.name])
             if mode is not None:
                 if e.comp.tree_edge:  # a stop: its events and rows are of its own coordinate

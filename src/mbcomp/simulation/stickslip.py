@@ -52,8 +52,7 @@ def mode_forces(system, modes):
     out = []
     for name, mode in sorted(modes.items()):
         e = system._edge[name]
-        force = getattr(e.comp, "mode_force", None)
-        value = force(system.P[name], mode) if force is not None else 0.0
+        value = e.comp.mode_force(system.P[name], mode) if e.comp.has_mode_force else 0.0
         if value:
             out.append((e.u.start, float(value)))
     return out
@@ -111,7 +110,7 @@ def with_mode_forces(system, modes):
 def _frictional(system, history):
     """Names of the joints with a ``mode_force`` among the modes of ``history``."""
     names = {n for _, modes, _ in history for n in modes}
-    return sorted(n for n in names if getattr(system._edge[n].comp, "mode_force", None) is not None)
+    return sorted(n for n in names if system._edge[n].comp.has_mode_force)
 
 
 def friction_columns(res, events, Y):
