@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import Problem
 from .docstring import document_component
+from .shapes import rgb, shapes_given
 from .units import UnitError, example, has_unit, is_quantity, to_unit
 
 __all__ = ["Param", "Frame", "Flange", "Port", "Component", "Guess"]
@@ -273,8 +274,6 @@ class Component:
     def __init__(self, *, shape=None, color=None, visible=True, **values):
         self.name = None
         self.parent = None
-        from .shapes import rgb, shapes_given
-
         where = type(self).__name__
         self.look = SimpleNamespace(shape=shapes_given(shape, where), color=rgb(color, f"{where}.color"),
                                     visible=bool(visible))
