@@ -13,26 +13,10 @@ import numpy as np
 from mbcomp import Flange, FlangeElement, Model, Param
 from mbcomp.errors import Problem
 from .gears import Inertia
+from .laws import neg, pos, smax, smin
 
 __all__ = ["ElastoGear", "BearingFriction", "MotorTorque", "Motor"]
 
-
-def _pos(x):
-    """``max(x, 0)`` with ``abs`` only: exactly 0 for ``x <= 0`` (traces without a guard)."""
-    return 0.5 * (x + abs(x))
-
-
-def _neg(x):
-    """``min(x, 0)`` with ``abs`` only: exactly 0 for ``x >= 0``."""
-    return 0.5 * (x - abs(x))
-
-
-def _min(x, y):
-    return 0.5 * (x + y - abs(x - y))
-
-
-def _max(x, y):
-    return 0.5 * (x + y + abs(x - y))
 
 
 class ElastoGear(FlangeElement):
@@ -95,9 +79,9 @@ class ElastoGear(FlangeElement):
     def torque(self, e, de, p):
         """Tooth torque ``tau`` (N m) of the class's law at deflection ``e`` and rate ``de``."""
         h = 0.5 * p.backlash
-        tp, tn, td = p.c * _pos(e - h), p.c * _neg(e + h), p.d * de
+        tp, tn, td = p.c * pos(e - h), p.c * neg(e + h), p.d * de
         if p.backlash > 0:  # a guard on a parameter: one side per run
-            return _pos(tp + _min(tp, td)) + _neg(tn + _max(tn, td))
+            return pos(tp + smin(tp, td)) + neg(tn + smax(tn, td))
         return tp + tn + td
 
     def flange_forces(self, t, states, p):
@@ -107,7 +91,7 @@ class ElastoGear(FlangeElement):
     def potential(self, states, p):
         e, _ = self.deflection(states, p)
         h = 0.5 * p.backlash
-        return 0.5 * p.c * (_pos(e - h) + _neg(e + h)) ** 2
+        return 0.5 * p.c * (pos(e - h) + neg(e + h)) ** 2
 
     def outputs(self, t, states, p):
         """Tooth torque ``tau`` (N m, > 0 on the positive flank), ``deflection`` ``e`` (rad)

@@ -29,7 +29,7 @@ import numpy as np
 
 from mbcomp.errors import Problem
 
-__all__ = ["signature_problem", "law_problems", "describe", "number", "as_number"]
+__all__ = ["signature_problem", "law_problems", "describe", "number", "as_number", "pos", "neg", "smin", "smax"]
 
 
 def signature_problem(law, names):
@@ -161,3 +161,31 @@ def as_number(val):
     except (TypeError, ValueError):
         return float("nan")
     return float(arr.reshape(())) if arr.size == 1 else float("nan")
+
+
+# Piecewise-linear helpers written with ``abs`` only, so a law using them traces into a
+# generated program without a guard (a Python ``if`` on a traced value would not).
+def pos(x):
+    """``max(x, 0)``: exactly 0 for ``x <= 0``.
+
+    Examples
+    --------
+    >>> pos(-2.0), pos(3.0), neg(-2.0), smin(1.0, 2.0), smax(1.0, 2.0)
+    (0.0, 3.0, -2.0, 1.0, 2.0)
+    """
+    return 0.5 * (x + abs(x))
+
+
+def neg(x):
+    """``min(x, 0)``: exactly 0 for ``x >= 0``."""
+    return 0.5 * (x - abs(x))
+
+
+def smin(x, y):
+    """``min(x, y)`` with ``abs`` only."""
+    return 0.5 * (x + y - abs(x - y))
+
+
+def smax(x, y):
+    """``max(x, y)`` with ``abs`` only."""
+    return 0.5 * (x + y + abs(x - y))

@@ -14,25 +14,10 @@ generated program without guards.
 from mbcomp import Flange, FlangeElement, Param
 from mbcomp.errors import Problem
 
+from .laws import neg, pos, smax, smin
+
 __all__ = ["ElasticStop"]
 
-
-def _pos(x):
-    """``max(x, 0)`` with ``abs`` only: exactly 0 for ``x <= 0``."""
-    return 0.5 * (x + abs(x))
-
-
-def _neg(x):
-    """``min(x, 0)`` with ``abs`` only: exactly 0 for ``x >= 0``."""
-    return 0.5 * (x - abs(x))
-
-
-def _min(x, y):
-    return 0.5 * (x + y - abs(x - y))
-
-
-def _max(x, y):
-    return 0.5 * (x + y + abs(x - y))
 
 
 class ElasticStop(FlangeElement):
@@ -110,12 +95,12 @@ class ElasticStop(FlangeElement):
     @staticmethod
     def penetration(phi, p):
         """How far ``phi`` is beyond the limits (rad): ``phi - hi > 0``, ``phi - lo < 0``, or 0."""
-        return _pos(phi - p.hi) + _neg(phi - p.lo)
+        return pos(phi - p.hi) + neg(phi - p.lo)
 
     def torque(self, phi, w, p):
         """Stop torque ``tau`` (N m) of the class's law at relative angle ``phi`` and rate ``w``."""
-        tp, tn, td = p.c * _pos(phi - p.hi), p.c * _neg(phi - p.lo), p.d * w
-        return _pos(tp + _min(tp, td)) + _neg(tn + _max(tn, td))
+        tp, tn, td = p.c * pos(phi - p.hi), p.c * neg(phi - p.lo), p.d * w
+        return pos(tp + smin(tp, td)) + neg(tn + smax(tn, td))
 
     def flange_forces(self, t, states, p):
         tau = self.torque(*self.relative(states), p)

@@ -88,16 +88,16 @@ class _RowsAdded:
         return np.vstack((self.C, self.B)) if self.B.size else self.C
 
 
-class ModeEvaluator:
-    """The evaluator of a system in a mode: the original evaluator's evaluation with the
-    engaged rows appended (masked evaluations only: an unmasked one lists the assembled
-    rows, as ``constraint_names(all_rows=True)`` does). It offers no one-call programs, so the
-    formulations assemble their equations from :meth:`evaluate`."""
+class WrappingEvaluator:
+    """An evaluator that changes another's evaluations (a mode's rows, a mode's forces): the
+    backend, statistics and coordinate rates are the wrapped one's; it offers no one-call
+    programs, so the formulations assemble their equations from ``evaluate``. Subclasses
+    implement ``evaluate`` and ``rebind``."""
 
     capabilities = frozenset()
 
-    def __init__(self, inner, rows, nu):
-        self.inner, self.rows, self.nu = inner, rows, nu
+    def __init__(self, inner):
+        self.inner = inner
 
     @property
     def backend(self):
@@ -106,6 +106,19 @@ class ModeEvaluator:
     @property
     def stats(self):
         return self.inner.stats
+
+    def q_rate(self, q, u):
+        return self.inner.q_rate(q, u)
+
+
+class ModeEvaluator(WrappingEvaluator):
+    """The evaluator of a system in a mode: the original evaluator's evaluation with the
+    engaged rows appended (masked evaluations only: an unmasked one lists the assembled
+    rows, as ``constraint_names(all_rows=True)`` does)."""
+
+    def __init__(self, inner, rows, nu):
+        super().__init__(inner)
+        self.rows, self.nu = rows, nu
 
     def evaluate(self, t, q, u, masked=True):
         ev = self.inner.evaluate(t, q, u, masked)
@@ -118,9 +131,6 @@ class ModeEvaluator:
             Phi[i], Phid[i], C[i, iu] = row.value(q[iq]), row.sign * u[iu], row.sign
         return _RowsAdded(ev, np.concatenate((ev.Phi, Phi)), np.concatenate((ev.Phid, Phid)),
                           np.vstack((ev.C, C)), np.concatenate((ev.cb, np.zeros(k))))
-
-    def q_rate(self, q, u):
-        return self.inner.q_rate(q, u)
 
     def rebind(self, system, laws=False):
         return ModeEvaluator(self.inner.rebind(system, laws), self.rows, self.nu)

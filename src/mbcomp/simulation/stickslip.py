@@ -33,6 +33,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .modes import WrappingEvaluator
+
 __all__ = ["row_events", "with_mode_forces", "ForceEvaluator", "friction_columns"]
 
 
@@ -68,22 +70,13 @@ class _ForcesAdded:
         return getattr(self._ev, name)
 
 
-class ForceEvaluator:
+class ForceEvaluator(WrappingEvaluator):
     """An evaluator adding constant generalized forces ``[(u index, N or N m)]`` to the wrapped
-    evaluator's ``f`` (its rows and everything else unchanged; no one-call programs)."""
-
-    capabilities = frozenset()
+    evaluator's ``f`` (its rows and everything else unchanged)."""
 
     def __init__(self, inner, forces):
-        self.inner, self.forces = inner, forces
-
-    @property
-    def backend(self):
-        return self.inner.backend
-
-    @property
-    def stats(self):
-        return self.inner.stats
+        super().__init__(inner)
+        self.forces = forces
 
     def evaluate(self, t, q, u, masked=True):
         ev = self.inner.evaluate(t, q, u, masked)
@@ -91,9 +84,6 @@ class ForceEvaluator:
         for iu, value in self.forces:
             f[iu] += value
         return _ForcesAdded(ev, f)
-
-    def q_rate(self, q, u):
-        return self.inner.q_rate(q, u)
 
     def rebind(self, system, laws=False):
         return ForceEvaluator(self.inner.rebind(system, laws), self.forces)
