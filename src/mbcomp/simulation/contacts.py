@@ -32,7 +32,7 @@ from types import SimpleNamespace
 import numpy as np
 
 __all__ = ["open_joints", "without_rows", "contact_rows", "contact_impact", "initialize_in_modes", "event_value",
-           "contact_pushes", "contact_columns"]
+           "contact_pushes", "contact_columns", "zero_open"]
 
 
 def open_joints(system, modes):
@@ -177,7 +177,18 @@ def contact_columns(series, system, log, t, Y):
         for col, val in vals.items():
             if col in series:
                 series[col][k] = val
-        for col in series:
-            own = [col[len(n) + 1:] for n in names if col.startswith(n + ".")]
-            if own and (units.get(col) in ("N", "N m") or own[0] == "N" or own[0].startswith(("F_", "f.", "tau."))):
-                series[col][k] = 0.0
+        zero_open(series, system, names, k, units)
+
+
+def zero_open(series, system, names, k, units=None):
+    """Set the force columns (N or N m) of the open contacts ``names`` to 0 at output ``k``."""
+    if not names:
+        return
+    if units is None:
+        from ..assembly.column_units import column_units
+
+        units = column_units(system)
+    for col in series:
+        own = [col[len(n) + 1:] for n in names if col.startswith(n + ".")]
+        if own and (units.get(col) in ("N", "N m") or own[0] == "N" or own[0].startswith(("F_", "f.", "tau."))):
+            series[col][k] = 0.0

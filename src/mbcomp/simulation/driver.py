@@ -47,6 +47,7 @@ from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check
                     output_times, system_of)
 from .contacts import contact_columns, initialize_in_modes, open_joints
 from .events import Events, finish, stepwise
+from .modes import stop_columns
 from .stepping import Budget, BudgetSpent, Run, hooks_for
 from .stiffness import StiffnessWatch
 from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
@@ -213,12 +214,28 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
     if watcher is not None:
         stats.update(watcher.stats)
     Y = np.array(run.ys).reshape(len(run.ys), -1)
-    fix = None
-    if watcher is not None and any(open_joints(system, modes) for _, modes in watcher.mode_log):
-        def fix(series):  # columns at times a contact was open: over the mode's system
-            contact_columns(series, system, watcher.mode_log, t_done, Y)
-    res = postprocess(system, form, t_done, Y, status, message, stats, init, body_momenta, fix=fix)
+    added = {}
+    res = postprocess(system, form, t_done, Y, status, message, stats, init, body_momenta,
+                      fix=_mode_fix(system, watcher, t_done, Y, added))
+    res.units.update(added)
     return finish(res, watcher, np.array(run.ys).reshape(len(run.ys), -1))
+
+
+def _mode_fix(system, watcher, t, Y, units):
+    """The post-processing's ``fix`` of a run with modes (None without): the columns at
+    output times ``t`` where a contact was open (:func:`contact_columns`) or a stop engaged
+    (:func:`~mbcomp.simulation.modes.stop_columns`, its ``<joint>.stop`` units put in ``units``)
+    computed again over the mode's system."""
+    if watcher is None:
+        return None
+    log = watcher.mode_log
+    contacts = any(open_joints(system, modes) for _, modes in log)
+
+    def fix(series):
+        if contacts:
+            contact_columns(series, system, log, t, Y)
+        units.update(stop_columns(series, system, log, t, Y, watcher.system_now))
+    return fix
 
 
 def why_slow(run, watch, status, stats):

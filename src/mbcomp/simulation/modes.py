@@ -35,7 +35,8 @@ from ..modeling.events import ContactRow
 from .contacts import contact_impact, contact_rows, initialize_in_modes, open_joints, without_rows
 
 __all__ = ["mode_system", "ModeEvaluator", "start_modes", "row_values", "impact_speeds", "consistent",
-           "row_push", "open_joints", "without_rows", "contact_rows", "contact_impact", "initialize_in_modes"]
+           "row_push", "open_joints", "without_rows", "contact_rows", "contact_impact", "initialize_in_modes",
+           "stop_columns"]
 
 
 def start_modes(system):
@@ -194,3 +195,87 @@ def row_push(system, t, q, u, first, k):
     ev = system.evaluate(t, q, u)
     _, lam = LagrangeIndex1(system, "none").solve(ev, stabilize=False)
     return -lam[first:first + k]
+
+
+def stop_columns(series, system, log, t, Y, system_for=None):
+    """Correct the result's ``series`` at output times ``t`` (s) where a stop is engaged
+    (``log``: ``[(time, modes from then on)]``; ``Y`` the outputs' states ``[q, u]``) and add
+    ``<joint>.stop`` (N or N m) for every joint engaged in some mode of the run: the stop's
+    push along the axis, minus its row's multiplier, positive pushing the joint away from
+    the limit into the allowed range, 0 where not engaged.
+
+    The post-processing solves the assembled system, which lacks the stop's row: at engaged
+    times the speeds' rates and multipliers come from the mode's system (``system_for(modes)``,
+    default :func:`mode_system`; index-1 solve without stabilization) and every column is
+    written again from them over the system without the stop (its reactions, by the backward
+    pass, then carry the stop's force or torque: it acts across the joint). Returns
+    ``{column: unit}`` of the added columns. An open contact's force columns are 0 again
+    (:func:`~mbcomp.simulation.contacts.zero_open`).
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
+    >>> s = m.add("s", Prismatic(n=(0, 1, 0), s0=0.1, limits=(0.0, 1.0))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> r = mbcomp.simulate(m, t_end=0.5, n_out=3)     # lands on the lower stop at 0.14 s
+    >>> float(r["s.stop"][0]), round(float(r["s.stop"][-1]), 6), r.units["s.stop"]
+    (0.0, 19.62, 'N')
+    """
+    from .contacts import zero_open
+
+    times = np.array([tt for tt, _ in log])
+    engaged = sorted({n for _, modes in log for n, *_ in _stop_rows(system, modes)})
+    for n in engaged:
+        series[f"{n}.stop"] = np.zeros(len(t))
+    for k, tk in enumerate(t):
+        modes = log[max(int(np.searchsorted(times, tk, side="left")) - 1, 0)][1]
+        if not _stop_rows(system, modes):
+            continue
+        q, u = Y[k, :system.nq], Y[k, system.nq:]
+        vals, pushes = _engaged_values(system, (system_for or (lambda m: mode_system(system, m)))(modes), modes, tk, q,
+                                       u)
+        for col, val in vals.items():
+            if col in series:
+                series[col][k] = val
+        for n, push in pushes.items():
+            if f"{n}.stop" in series:
+                series[f"{n}.stop"][k] = push
+        zero_open(series, system, open_joints(system, modes), k)
+    return {f"{n}.stop": "N m" if system._edge[n].comp.axis_kind == "rotational" else "N" for n in engaged}
+
+
+def _stop_rows(system, modes):
+    """The engaged stops' rows of ``modes`` (:func:`mode_rows`, a sticking friction's
+    :class:`~mbcomp.modeling.events.StickRow` left out)."""
+    return [r for r in mode_rows(system, modes) if not _is_stick(r[1])]
+
+
+def _engaged_values(system, sysm, modes, t, q, u):
+    """``(columns, {joint: push})`` at ``(t, q, u)``: the speeds' rates and multipliers of
+    the mode's system ``sysm``, the columns over the system without the stops' rows."""
+    from types import SimpleNamespace
+
+    from ..assembly.outputs import result_columns
+    from ..formulations.lagrange import LagrangeIndex1
+
+    base = without_rows(system, open_joints(system, modes))
+    rows = mode_rows(base, modes)
+    ev = sysm.evaluate(t, q, u)
+    ud, lam = LagrangeIndex1(sysm, "none").solve(ev, stabilize=False)
+    first = ev.Phi.size - len(rows)  # the mode's rows follow the holonomic rows
+    pushes = {n: -float(lam[first + i]) for i, (n, row, _, _) in enumerate(rows) if not _is_stick(row)}
+    lam_b = np.concatenate((lam[:first], lam[first + len(rows):]))
+    evb = base.evaluate(t, q, u)
+    evf = base.evaluate(t, q, u, masked=False) if evb.local else evb
+    cols = SimpleNamespace(t=t, q=q, u=u, jets=evb.jets, local_nh=evb.local_nh, B=evb.B, Phi_all=evf.Phi,
+                           Phid_all=evf.Phid, Psi=evb.Psi)
+    values, _ = result_columns(base, cols, ud, lam_b, base.reactions(evb, ud, lam_b))
+    return values, pushes
+
+
+def _is_stick(row):
+    from ..modeling.events import StickRow
+
+    return isinstance(row, StickRow)
