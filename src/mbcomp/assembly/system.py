@@ -546,22 +546,7 @@ class MultibodySystem:
                 return J.Jv @ ud_ + cross(dw, r - J.r), dw
         else:
             rates = ud
-        D = {n: [np.zeros(3), np.zeros(3)] for n in jets}
-        for path, comp, node in self.topology.bodies:
-            J = jets[node]
-            m, rho, Iw = self._body(comp, path, J)
-            wxr = cross(J.w, rho)
-            a_lin, a_ang = rates(node, J.r + rho)
-            acc = a_lin + J.a + cross(J.alpha, rho) + cross(J.w, wxr)
-            al = a_ang + J.alpha
-            F = m * (acc - self.g)
-            D[node][0] = D[node][0] + F
-            D[node][1] = D[node][1] + Iw @ al + cross(J.w, Iw @ J.w) + cross(rho, F)
-        for node, Iw, gyro in rotors(self, jets):
-            D[node][1] = D[node][1] + Iw @ (rates(node, jets[node].r)[1] + np.zeros(3)) + rotor_wrench(jets[node], Iw, gyro)
-        for node, (F, T) in self.applied(ev.t, ev.q, ev.u, jets).items():
-            D[node][0] = D[node][0] - F
-            D[node][1] = D[node][1] - T
+        D = self._unbalanced(ev, rates)
         out = {}
         full_lam = np.zeros(len(self.constraint_names(all_rows=True)), np.asarray(lam).dtype)
         lam_h = lam[: lam.size - ev.B.shape[0]]
@@ -610,6 +595,28 @@ class MultibodySystem:
             f0, t0 = out.get(name, (np.zeros(3), np.zeros(3)))
             out[name] = (f0 + Rb.T @ wb[:3], t0 + Rb.T @ wb[3:])
         return out
+
+    def _unbalanced(self, ev, rates):
+        """Per frame node ``[F, T]`` (world, about the world origin's parallel through the node's
+        origin): the bodies' and rotors' inertia and weight less the applied wrenches -- what the
+        joints must carry (:meth:`reactions`); ``rates`` as there."""
+        jets = ev.jets
+        D = {n: [np.zeros(3), np.zeros(3)] for n in jets}
+        for path, comp, node in self.topology.bodies:
+            J = jets[node]
+            m, rho, Iw = self._body(comp, path, J)
+            a_lin, a_ang = rates(node, J.r + rho)
+            acc = a_lin + J.a + cross(J.alpha, rho) + cross(J.w, cross(J.w, rho))
+            F = m * (acc - self.g)
+            D[node][0] = D[node][0] + F
+            D[node][1] = D[node][1] + Iw @ (a_ang + J.alpha) + cross(J.w, Iw @ J.w) + cross(rho, F)
+        for node, Iw, gyro in rotors(self, jets):
+            dw = np.zeros(3) + rates(node, jets[node].r)[1]  # rates give a scalar 0 on the ground
+            D[node][1] = D[node][1] + Iw @ dw + rotor_wrench(jets[node], Iw, gyro)
+        for node, (F, T) in self.applied(ev.t, ev.q, ev.u, jets).items():
+            D[node][0] = D[node][0] - F
+            D[node][1] = D[node][1] - T
+        return D
 
     def row_multipliers(self, ev: Evaluation, lam):
         """Multipliers by joint and row name: ``{joint: {row: lam}}`` (holonomic rows of cut
