@@ -17,6 +17,7 @@ from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
 from .sensors import RelativeSensor, AbsoluteSensor, AbsoluteAngles, CutForceAndTorque
 from .drivetrain import ElastoGear, BearingFriction, Motor, MotorTorque
 from .stops import ElasticStop
+from .friction import SlidingFriction, CoulombBearing, ContactFriction  # parameters of joints and contacts, not components
 
 __all__ = [
     "World", "Fixed", "FixedTranslation", "FixedRotation", "RigidBody", "PointMass",

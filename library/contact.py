@@ -26,7 +26,7 @@ from mbcomp.modeling.shapes import z_to
 
 from .joints import FreeMotion
 from .parts import RigidBody
-from .plane_contact import Unilateral, unilateral_params
+from .plane_contact import Frictional, friction_param, unilateral_params
 from .surfaces import Plane, Surface, surface_geometry, surface_rows, tangent_distance
 
 _E = np.eye(3)
@@ -159,7 +159,7 @@ def rim_geometry(surface, a, b, r, axis, steps):
     return _Rim(normal, n, _dir(P, Pdot), _dir(lng, lng_dot), _dir(lat, lat_dot), delta, curv)
 
 
-class DiskContact(Unilateral, Joint):
+class DiskContact(Frictional, Joint):
     """A thin disk (knife-edge wheel) of radius ``r`` rolling without slip on a plane.
 
     ``frame_a`` carries the plane (through its origin, normal ``n`` in frame_a coordinates,
@@ -212,6 +212,7 @@ class DiskContact(Unilateral, Joint):
                     doc="surface in frame_a's axes (mbcomp.library.surfaces; m) in place of the plane n, or None")
     rim_steps = Param(6, unit="1", kind="any", doc="Newton steps for the rim point on a surface (an integer >= 0)")
     unilateral, restitution, open0 = unilateral_params()  # one-sided: lift-off, flight, touch-down (Unilateral)
+    friction = friction_param()  # stick (rolling) and slip with Coulomb friction (Frictional)
 
     draws_body = True
 
@@ -301,6 +302,8 @@ class DiskContact(Unilateral, Joint):
         P = self._rim(a, b, p).P if p.surface is not None else self._geometry(a, b, p)[1]
         out = {"N": -lam.get("normal", np.nan), "F_long": -lam.get("longitudinal", np.nan),
                "F_lat": -lam.get("lateral", np.nan)}
+        if p.friction is not None:  # the sliding friction's power: the run fills it in (mbcomp.simulation.slip)
+            out["power"] = 0.0
         out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
         return out
 
@@ -310,7 +313,7 @@ class DiskContact(Unilateral, Joint):
         return [] if self.p.unilateral else _lift_off(name, t, outputs)
 
 
-class SphereContact(Unilateral, Joint):
+class SphereContact(Frictional, Joint):
     """A ball of radius ``r`` rolling without slip on a plane.
 
     ``frame_a`` carries the plane (through its origin, normal ``n`` in frame_a coordinates,
@@ -363,6 +366,7 @@ class SphereContact(Unilateral, Joint):
     surface = Param(None, unit="1", kind="any",
                     doc="surface in frame_a's axes (mbcomp.library.surfaces; m) in place of the plane n, or None")
     unilateral, restitution, open0 = unilateral_params()  # one-sided: lift-off, flight, touch-down (Unilateral)
+    friction = friction_param()  # stick (rolling) and slip with Coulomb friction (Frictional)
 
     draws_body = True
 
@@ -422,6 +426,8 @@ class SphereContact(Unilateral, Joint):
     def outputs(self, a, b, p, lam):
         P = surface_geometry(p.surface, a, b, p.r).P if p.surface is not None else self._geometry(a, b, p)[1]
         out = {"N": -lam.get("normal", np.nan), "F_1": -lam.get("slip_1", np.nan), "F_2": -lam.get("slip_2", np.nan)}
+        if p.friction is not None:  # the sliding friction's power: the run fills it in (mbcomp.simulation.slip)
+            out["power"] = 0.0
         out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
         return out
 

@@ -34,7 +34,7 @@ from mbcomp.errors import ModelError, Problem
 from mbcomp.modeling.events import StickRow, Switch
 from mbcomp.roles import split_start
 
-__all__ = ["SlidingFriction", "CoulombBearing"]
+__all__ = ["SlidingFriction", "CoulombBearing", "ContactFriction"]
 
 _MODES = ("stick", "slip+", "slip-")
 
@@ -142,6 +142,48 @@ class CoulombBearing(_Coulomb):
     def kinetic(self):
         """Sliding torque (N m)."""
         return float(self.torque_c)
+
+
+@dataclass(frozen=True)
+class ContactFriction(_Coulomb):
+    """Coulomb friction at a rolling contact (``SphereContact``, ``DiskContact``): it rolls
+    (sticks) while the rolling rows' force stays in the cone ``|F_t| <= mu_s N`` and slides
+    with ``-mu_k N`` against the slip velocity otherwise, ``N`` the contact's normal force
+    (its row's multiplier, not a parameter). Pass it as ``SphereContact(unilateral=True,
+    friction=ContactFriction(mu_s, mu_k))``; the run's side is :mod:`mbcomp.simulation.slip`.
+
+    Parameters
+    ----------
+    mu_s : float
+        Static friction coefficient (1).
+    mu_k : float
+        Kinetic friction coefficient (1), ``<= mu_s``; default ``mu_s``.
+
+    Examples
+    --------
+    >>> f = ContactFriction(0.5, 0.3)
+    >>> f.static, f.kinetic
+    (0.5, 0.3)
+    """
+
+    mu_s: float
+    mu_k: float = None
+    axis_kind = "contact"
+
+    def __post_init__(self):
+        if self.mu_k is None:
+            object.__setattr__(self, "mu_k", self.mu_s)
+        self._check(self.mu_s, self.mu_k)
+
+    @property
+    def static(self):
+        """Static coefficient ``mu_s`` (1)."""
+        return float(self.mu_s)
+
+    @property
+    def kinetic(self):
+        """Kinetic coefficient ``mu_k`` (1)."""
+        return float(self.mu_k)
 
 
 def friction_ok(f, kind):

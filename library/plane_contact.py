@@ -15,6 +15,14 @@ framework (:mod:`mbcomp.modeling.events`, ``docs/architecture.md`` *Events and m
   when the bounces accumulate (Zeno: ``rest_mode`` is ``"closed"``).
 
 ``unilateral=False`` (the default) keeps the bilateral contact of old: no modes, no events.
+
+:class:`Frictional` adds Coulomb friction to a rolling contact (``friction=ContactFriction(mu_s,
+mu_k)``, unilateral only): ``"closed"`` is rolling (sticking), watched by the friction cone
+(event ``"slide"``, ``mu_s N - |F_t|`` falling through zero: ``"slip"``); ``"slip"`` holds the
+``normal`` row only, the framework applying ``-mu_k N`` against the slip velocity
+(:meth:`~mbcomp.modeling.roles.Joint.slip_friction`), and its event ``"stop"`` (the slip
+speed coming to rest) rolls again. A contact with friction starts sliding; the run turns it
+to rolling at once where its start's slip speed is zero.
 :class:`PlaneContact` is a point or a sphere on a plane, frictionless: its one row is the
 normal row.
 """
@@ -22,10 +30,11 @@ import numpy as np
 
 from mbcomp import Grid, Joint, Param, Sphere
 from mbcomp.jets import ScalarJet, local_point, local_vector
-from mbcomp.modeling.events import ContactRow, Impact, Switch
+from mbcomp.errors import ModelError, Problem
+from mbcomp.modeling.events import ContactRow, Impact, SlipSpeed, Switch
 from mbcomp.modeling.shapes import z_to
 
-__all__ = ["Unilateral", "PlaneContact"]
+__all__ = ["Unilateral", "Frictional", "PlaneContact"]
 
 
 def _restitution_ok(e):
@@ -69,6 +78,75 @@ class Unilateral:
 
     def rest_mode(self, name, p, mode):
         return "closed" if name == "touch" else None
+
+
+class Frictional(Unilateral):
+    """:class:`Unilateral` with Coulomb friction (parameter ``friction``, a
+    :class:`~mbcomp.library.friction.ContactFriction` or None): modes ``"closed"`` (rolling),
+    ``"slip"`` and ``"open"`` (see the module notes).
+
+    Examples
+    --------
+    >>> from mbcomp.library import SphereContact, ContactFriction
+    >>> c = SphereContact(r=0.1, unilateral=True, friction=ContactFriction(0.4, 0.3))
+    >>> c.start_mode(c.p), c.mode_rows(c.p, "closed"), c.slip_friction(c.p, "slip")
+    ('slip', [ContactRow(name='normal', mu_s=0.4)], 0.3)
+    >>> c.on_event("slide", c.p, "closed"), c.on_event("stop", c.p, "slip")
+    (Switch(mode='slip'), Switch(mode='closed'))
+    """
+
+    #: the sliding friction's work is dissipated (energy balance)
+    dissipative = True
+
+    def _friction(self, p):
+        f = p.friction
+        if f is None:
+            return None
+        from .friction import ContactFriction
+
+        if not isinstance(f, ContactFriction):
+            raise ModelError([Problem(f"{self.path}.friction", f"{f!r} is not a contact's friction",
+                                      "give ContactFriction(mu_s, mu_k), or None for a contact without slip")])
+        if not p.unilateral:
+            raise ModelError([Problem(f"{self.path}.friction", "friction at a contact needs a one-sided contact "
+                                      "(its normal force limits the friction, and a contact that could pull would "
+                                      "have to let go)", "add unilateral=True")])
+        return f
+
+    def start_mode(self, p):
+        if self._friction(p) is None or p.open0:
+            return super().start_mode(p)
+        return "slip"
+
+    def events(self, q, u, p, mode):
+        if mode == "slip":
+            return [("stop", SlipSpeed(), -1)]
+        return super().events(q, u, p, mode)
+
+    def on_event(self, name, p, mode):
+        if name in ("slide", "stop"):
+            return Switch("slip" if name == "slide" else "closed")
+        return super().on_event(name, p, mode)
+
+    def mode_rows(self, p, mode):
+        f = self._friction(p)
+        if f is None or mode not in ("closed", "slip"):
+            return super().mode_rows(p, mode)
+        return [ContactRow("normal", mu_s=f.static if mode == "closed" else None)]
+
+    def slip_friction(self, p, mode):
+        """``mu_k`` (1) while sliding (mode ``"slip"``), else None."""
+        f = self._friction(p)
+        return f.kinetic if f is not None and mode == "slip" else None
+
+    def conserves_energy(self, p):
+        return p.friction is None and super().conserves_energy(p)
+
+
+def friction_param():
+    """The ``friction`` parameter of a rolling contact (:class:`Frictional`)."""
+    return Param(None, unit="1", kind="any",
+                 doc="Coulomb friction with stick/slip events, ContactFriction(mu_s, mu_k) (unilateral only), or None")
 
 
 def unilateral_params():

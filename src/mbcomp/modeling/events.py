@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Impact", "Switch", "Stop", "AxisRow", "ContactRow", "StickRow", "ACTIONS"]
+__all__ = ["Impact", "Switch", "Stop", "AxisRow", "ContactRow", "StickRow", "SlipSpeed", "ACTIONS"]
 
 
 @dataclass(frozen=True)
@@ -119,13 +119,35 @@ class ContactRow:
     velocity rows) are in the system only in the modes where :meth:`holds_rows
     <mbcomp.modeling.roles.Joint.holds_rows>` is true.
 
+    With ``mu_s`` (a contact with Coulomb friction, held rolling) the framework also watches
+    the friction cone: ``mu_s N - |F_t|`` (N; ``N`` the row's push, ``F_t`` the force of the
+    contact's rolling rows, the velocity rows along orthonormal tangents) falling through zero
+    is the contact's event ``"slide"``.
+
     Examples
     --------
-    >>> ContactRow("normal").name
-    'normal'
+    >>> ContactRow("normal").name, ContactRow("normal", mu_s=0.4).mu_s
+    ('normal', 0.4)
     """
 
     name: str
+    mu_s: float = None
+
+
+@dataclass(frozen=True)
+class SlipSpeed:
+    """The value of a sliding contact's event: its slip speed (m/s) along the direction it
+    slid when its slide began (or last turned), ``v_t . d``. ``events`` returns
+    ``(event, SlipSpeed(), -1)``: the framework fires the event where the slip comes to rest
+    (``|v_t|`` at the root is ~0: the contact may roll again) -- or, in a plane slip whose
+    direction turned by 90 degrees, where ``|v_t|`` is not ~0: the framework then takes the
+    new direction and slides on (a ``"turn"``, no action of the component's).
+
+    Examples
+    --------
+    >>> SlipSpeed()
+    SlipSpeed()
+    """
 
 
 @dataclass(frozen=True)

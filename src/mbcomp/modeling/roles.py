@@ -341,6 +341,14 @@ class Joint(Component):
         (kinetic friction while slipping: ``library/friction.py``); 0 by default."""
         return 0.0
 
+    def slip_friction(self, p, mode):
+        """The kinetic friction coefficient ``mu_k`` (1) of a contact sliding in ``mode``, or
+        ``None`` where it does not slide (default). A sliding contact's rolling rows (its
+        ``velocity_constraints``, along orthonormal tangents) are out of the system and the
+        framework applies ``-mu_k N`` against the slip velocity, ``N`` the push of its
+        ``normal`` row (:mod:`mbcomp.simulation.slip`)."""
+        return None
+
     @property
     def has_events(self):
         return type(self).start_mode is not Joint.start_mode
@@ -348,6 +356,10 @@ class Joint(Component):
     @property
     def has_mode_force(self):
         return type(self).mode_force is not Joint.mode_force
+
+    @property
+    def has_slip_friction(self):
+        return type(self).slip_friction is not Joint.slip_friction
 
     # --- 1-D axis -----------------------------------------------------------------------
     def axis_world(self, R_a, p):

@@ -32,7 +32,7 @@ from types import SimpleNamespace
 import numpy as np
 
 __all__ = ["open_joints", "without_rows", "contact_rows", "contact_impact", "initialize_in_modes", "event_value",
-           "contact_pushes", "contact_columns", "zero_open"]
+           "contact_pushes", "tangent_force", "contact_columns", "zero_open"]
 
 
 def open_joints(system, modes):
@@ -61,14 +61,15 @@ def without_rows(system, names):
     return new
 
 
-def contact_rows(system, name, t, q, u, row="normal"):
-    """The rows of contact ``name`` at ``(t, q, u)`` from the frames' jets.
+def contact_rows(system, name, t, q, u, row="normal", jets=None):
+    """The rows of contact ``name`` at ``(t, q, u)`` from the frames' jets (``jets``: those of
+    an evaluation at ``(t, q, u)``, else computed).
 
     Returns a namespace: ``gap`` (m, the holonomic ``row``'s value), ``speed`` (m/s, its
     rate), ``C`` (k, nu: the ``row`` first, then the velocity rows), ``offset`` (k,: each row's
     rate at ``u = 0``), ``bias`` (k,: the rows' rates' time derivatives at ``du/dt = 0``)."""
     e, p = system._edge[name], system.P[name]
-    jets = system.kinematics(t, q, u)
+    jets = system.kinematics(t, q, u) if jets is None else jets
     a, b = jets[e.node_a], jets[e.node_b]
     J = np.vstack((a.Jv, a.Jw, b.Jv, b.Jw))
     hol = dict(e.comp.constraints(a, b, p))
@@ -94,11 +95,13 @@ def event_value(system, name, value, t, q, u):
 def contact_pushes(system, sysm, modes, t, q, u):
     """``{contact: {("release", contact, row): push}}`` (N, >= 0 while pressing) of the rows
     the contacts of ``modes`` hold (:class:`~mbcomp.modeling.events.ContactRow`) on the mode's
-    system ``sysm``: minus their multipliers in the index-1 solve without stabilization."""
+    system ``sysm``: minus their multipliers in the index-1 solve without stabilization. A
+    row with a friction cone (``mu_s``) adds ``("joint", contact, "slide"): mu_s N - |F_t|``
+    (N), ``F_t`` the force of the contact's rolling rows (:func:`tangent_force`)."""
     from ..formulations.lagrange import LagrangeIndex1
     from ..modeling.events import ContactRow
 
-    held = [(n, r.name) for n, mode in sorted(modes.items()) if not system._edge[n].comp.tree_edge
+    held = [(n, r) for n, mode in sorted(modes.items()) if not system._edge[n].comp.tree_edge
             for r in system._edge[n].comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)]
     if not held:
         return {}
@@ -107,9 +110,20 @@ def contact_pushes(system, sysm, modes, t, q, u):
     mult = sysm.row_multipliers(ev, lam)
     out = {}
     for n, row in held:
-        if row in mult.get(n, {}):  # a row dropped as redundant has no multiplier of its own
-            out.setdefault(n, {})[("release", n, row)] = -float(mult[n][row])
+        if row.name in mult.get(n, {}):  # a row dropped as redundant has no multiplier of its own
+            push = -float(mult[n][row.name])
+            out.setdefault(n, {})[("release", n, row.name)] = push
+            if row.mu_s is not None:
+                out[n][("joint", n, "slide")] = row.mu_s * push - float(np.linalg.norm(tangent_force(ev, mult, n)))
     return out
+
+
+def tangent_force(ev, mult, name):
+    """The force (N, on frame_b's body, along each rolling row's tangent) of contact ``name``'s
+    velocity rows: minus their multipliers ``mult`` (:meth:`row_multipliers
+    <mbcomp.assembly.system.MultibodySystem.row_multipliers>` at the evaluation ``ev``)."""
+    rows = [r for e, names, _ in ev.local_nh if e.name == name for r in names]
+    return np.array([-float(mult[name][r]) for r in rows])
 
 
 def contact_impact(system, name, t, q, u_minus, restitution, row="normal"):
@@ -143,12 +157,19 @@ def initialize_in_modes(system, t0):
     from ..assembly.initialization import initialize
     from .modes import start_modes
 
+    from .slip import slipping_joints, without_rolling
+
     system.row_mask = None
-    names = open_joints(system, start_modes(system))
-    if not names:
+    modes = start_modes(system)
+    names = open_joints(system, modes)
+    sliding = slipping_joints(system, modes)  # a contact starting to slide: its speeds as given
+    if not names and not sliding:
         return initialize(system, t0)
-    sub = without_rows(system, names)
+    sub = without_rolling(without_rows(system, names), sliding)
     init = initialize(sub, t0)
+    if not names:
+        system.row_mask = sub.row_mask
+        return init
     keep = np.array([n.rsplit(".", 1)[0] not in names for n in system.constraint_names(all_rows=True)], bool)
     mask = np.ones(keep.size, bool)
     mask[keep] = sub.row_mask

@@ -48,6 +48,7 @@ from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check
 from .contacts import contact_columns, initialize_in_modes, open_joints
 from .events import Events, finish, stepwise
 from .modes import stop_columns
+from .slip import slip_columns
 from .stepping import Budget, BudgetSpent, Run, hooks_for
 from .stiffness import StiffnessWatch
 from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
@@ -225,7 +226,8 @@ def _mode_fix(system, watcher, t, Y, units):
     """The post-processing's ``fix`` of a run with modes (None without): the columns at
     output times ``t`` where a contact was open (:func:`contact_columns`) or a stop engaged
     (:func:`~mbcomp.simulation.modes.stop_columns`, its ``<joint>.stop`` units put in ``units``)
-    computed again over the mode's system."""
+    or a contact slid (:func:`~mbcomp.simulation.slip.slip_columns`) computed again over the
+    mode's system."""
     if watcher is None:
         return None
     log = watcher.mode_log
@@ -235,6 +237,7 @@ def _mode_fix(system, watcher, t, Y, units):
         if contacts:
             contact_columns(series, system, log, t, Y)
         units.update(stop_columns(series, system, log, t, Y, watcher.system_now))
+        units.update(slip_columns(series, system, [entry[:3] for entry in watcher.slip_log], t, Y, watcher.system_now))
     return fix
 
 

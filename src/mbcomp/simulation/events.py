@@ -46,10 +46,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import SimulationError
-from ..modeling.events import ContactRow, Impact, Stop, Switch
+from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value
 from ..solvers.compiled_rk import CompiledRK
 from .modes import consistent, impact_speeds, mode_rows, mode_system, row_push, row_values, start_modes
+from .slip import TURN, V_TINY, closed_force, slip_dissipation, slipping_joints, start_directions, tangent_rows, \
+    with_slip_friction
 from .stickslip import friction_columns, row_events, with_mode_forces
 
 __all__ = ["EventRecord", "Events", "stepwise", "finish", "keep_until", "REST_HEIGHT", "CHATTER"]
@@ -142,18 +144,27 @@ class Events:
         self._fresh = self._last = None  # the event just handled (its function starts at zero)
         self.stats = dict(events=0, event_evaluations=0, mode_changes=0)
         self.mode_log = [(-np.inf, dict(self.modes))]  # (time, modes from then on): the result's columns
+        self.slip_dirs = {}  # {sliding contact: the unit direction (tangent coordinates) its slide started with}
+        self.slip_log = []  # [(time, modes, slip_dirs, state before, state after)]: the start and every restart
+        self._slip_keys, self._before = set(), None
 
     @property
     def active(self):
         """Whether there is anything to watch."""
         return bool(self.modes or self.user)
 
-    def system_now(self, modes=None):
-        """The system of ``modes`` (default: the current ones), made once per set of modes."""
+    def system_now(self, modes=None, dirs=None):
+        """The system of ``modes`` (default: the current ones) and sliding contacts' start
+        directions ``dirs`` (default: the current ones), made once per set of both."""
         modes = self.modes if modes is None else modes
-        key = tuple(sorted(modes.items()))
+        dirs = self.slip_dirs if dirs is None else dirs
+        sliding = slipping_joints(self.system, modes)
+        key = (tuple(sorted(modes.items())), tuple((n, tuple(dirs.get(n, ()))) for n in sliding))
         if key not in self._systems:
-            self._systems[key] = with_mode_forces(mode_system(self.system, modes), modes)
+            if len(self._systems) > 256:  # many slides, each with its direction: keep the cache small
+                self._systems.clear()
+            self._systems[key] = with_slip_friction(with_mode_forces(mode_system(self.system, modes), modes),
+                                                    self.system, modes, dirs)
         return self._systems[key]
 
     # --- the event functions ---------------------------------------------------------------
@@ -183,7 +194,11 @@ class Events:
         for name, mode in self.modes.items():
             e = sysm._edge[name]
             for ev_name, value, _ in e.comp.events(q[e.q], u[e.u], sysm.P[name], mode):
-                out[("joint", name, ev_name)] = event_value(sysm, name, value, t, q, u)
+                if isinstance(value, SlipSpeed):  # a slide's speed along its start direction
+                    self._slip_keys.add(("joint", name, ev_name))
+                    out[("joint", name, ev_name)] = float(tangent_rows(sysm, name, t, q, u)[1] @ self.slip_dirs[name])
+                else:
+                    out[("joint", name, ev_name)] = event_value(sysm, name, value, t, q, u)
             if e.comp.mode_rows(sysm.P[name], mode):
                 rows = self._pushes(t, q, u) if rows is None else rows
                 out.update(rows[name])
@@ -281,6 +296,9 @@ class Events:
         comp, p = self.system._edge[who].comp, self.system.P[who]
         action = comp.on_event("release" if kind == "release" else name, p, self.modes[who])
         state = qu(t_e)
+        self._before = np.array(state, float)
+        if key in self._slip_keys and self._turned(run, who, t_e, state, qu):
+            return True
         if isinstance(action, Impact) and not self._approaching(who, action, state, t_e):
             if key != self._last:
                 return False
@@ -306,6 +324,42 @@ class Events:
         self._restart(run, t_e, q, u, modes)
         self._fresh = self._last = key
         return True
+
+    def _turned(self, run, who, t_e, state, qu):
+        """Whether the slide of ``who`` only turned (its slip speed ``|v_t|`` is more than
+        :data:`TURN` ``atol`` where its speed along the start direction passes zero): the run
+        then slides on from ``t_e`` along the new direction (recorded as a ``"turn"``)."""
+        nq = self.system.nq
+        v_t = tangent_rows(self.system, who, t_e, state[:nq], state[nq:])[1]
+        if not np.linalg.norm(v_t) > TURN * self.atol:
+            return False
+        keep_until(run, t_e, qu)
+        self.slip_dirs = {**self.slip_dirs, who: v_t / np.linalg.norm(v_t)}
+        self._record(t_e, who, "stop", "turn", {"mode": self.modes[who], "energy_loss": 0.0})
+        self._restart(run, t_e, state[:nq], state[nq:], dict(self.modes))
+        return True
+
+    def _directions(self, t, q, u, modes, before):
+        """The start directions of the contacts sliding in ``modes`` at ``(t, q, u)``: a
+        slide going on keeps its own, one with a slip speed takes its direction, one from rest
+        (``before``: the modes it slid from) the fixed point of :func:`start_directions` from
+        ``-F_t / |F_t|``, the load its rolling rows held."""
+        dirs, fresh = {}, []
+        for n in slipping_joints(self.system, modes):
+            v_t = tangent_rows(self.system, n, t, q, u)[1]
+            if np.linalg.norm(v_t) > V_TINY:
+                dirs[n] = v_t / np.linalg.norm(v_t)
+            elif before.get(n) == modes[n] and n in self.slip_dirs:
+                dirs[n] = self.slip_dirs[n]
+            else:
+                rolling = self.system._edge[n].comp.on_event("stop", self.system.P[n], modes[n]).mode
+                F = closed_force(self.system_now({**modes, n: rolling}), n, t, q, u)
+                size = float(np.linalg.norm(F))
+                dirs[n] = -F / size if size > 0.0 else np.eye(len(F))[0]
+                fresh.append(n)
+        if fresh:
+            dirs = start_directions(lambda d: self.system_now(modes, d), fresh, t, q, u, dirs)
+        return dirs
 
     def _approaching(self, who, action, state, t=0.0):
         """Whether the impact's rows close (a negative speed along them) at ``state``."""
@@ -386,13 +440,16 @@ class Events:
         """Continue the run at ``t`` from ``(q, u)`` in ``modes``: state made consistent with
         their rows, formulation built over their system, a new stepper."""
         modes = self._open_pulling(t, q, u, modes)
-        new, u0 = self.system_now(modes), u
+        new, u0, before = self.system_now(modes), u, dict(self.modes)
         q, u = consistent(new, t, q, u)
         modes, new = self._break_away(t, q, u, modes)
         if any(p < 0.0 for d in self._pushes_in(new, modes, t, q, u).values() for p in d.values()):
             modes, new = dict(self.modes), self.system_now()  # an engaged row that would pull: stay free
             q, u = consistent(new, t, q, u)
+        self.slip_dirs = self._directions(t, q, u, modes, before)
+        new = self.system_now(modes)
         self.modes = modes
+        self.slip_log.append((float(t), dict(modes), dict(self.slip_dirs), self._before, np.concatenate((q, u))))
         self.history.append((float(t), dict(modes), np.array(q, float)))
         self.mode_log.append((float(t), dict(modes)))
         if self.records and "energy_loss" in self.records[-1].detail and self.records[-1].kind != "impact":
@@ -408,14 +465,31 @@ class Events:
         """``(form, y0)``, the run's formulation and initial state at its start ``t``, or, when
         a stuck friction cannot hold there (:meth:`_break_away`), those of the mode it breaks
         away to."""
-        modes, new = self._break_away(t, q, u, self.modes)
+        modes = self._rolling_at_start(t, q, u, self.modes)
+        if modes != self.modes:
+            q, u = consistent(self.system_now(modes), t, q, u)
+        modes, new = self._break_away(t, q, u, modes)
+        self.slip_dirs = self._directions(t, q, u, modes, self.modes)
+        new = self.system_now(modes, self.slip_dirs)
         if modes != self.modes or form.system is not new:
             self.modes = modes
             q, u = consistent(new, t, q, u)
             form = self.make_form(new)
             y0 = form.initial_state(t, q, u)
         self.history = [(float(t), dict(self.modes), np.array(q, float))]
+        self.mode_log = [(-np.inf, dict(self.modes))]
+        self.slip_log = [(float(t), dict(self.modes), dict(self.slip_dirs), None, np.concatenate((q, u)))]
         return form, y0
+
+    def _rolling_at_start(self, t, q, u, modes):
+        """``modes`` with the contacts that start sliding (a contact with friction starts in
+        its sliding mode, its speeds as given) but whose slip speed is zero (at most
+        ``atol``) rolling (``on_event("stop")``)."""
+        out = dict(modes)
+        for n in slipping_joints(self.system, modes):
+            if np.linalg.norm(tangent_rows(self.system, n, t, q, u)[1]) <= self.atol:
+                out[n] = self.system._edge[n].comp.on_event("stop", self.system.P[n], modes[n]).mode
+        return out
 
     def _break_away(self, t, q, u, modes):
         """``(modes, system)``: a stuck friction's row (:class:`~mbcomp.modeling.events.StickRow`)
@@ -511,6 +585,8 @@ def finish(res, events, states=None):
     res.events = list(events.records) if events is not None else []
     if events is not None and states is not None:  # stick-slip friction's columns and dissipation
         friction_columns(res, events, states)
+        if any(slipping_joints(events.system, modes) for _, modes, *_ in events.slip_log):
+            slip_dissipation(res, events.system, events.slip_log, states, events.system_now)
     impacts = [(r.time, r.detail["energy_loss"]) for r in res.events if "energy_loss" in r.detail]
     if not impacts:
         return res

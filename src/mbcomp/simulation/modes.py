@@ -139,8 +139,12 @@ class ModeEvaluator(WrappingEvaluator):
 
 def mode_system(system, modes):
     """``system`` with the rows ``modes`` hold (the system itself when they hold none): the
-    rows of open contacts out (:func:`without_rows`), engaged stops' rows appended."""
-    base = without_rows(system, open_joints(system, modes))
+    rows of open contacts out (:func:`without_rows`), the rolling rows of sliding contacts out
+    (:func:`~mbcomp.simulation.slip.without_rolling`; their friction is added by
+    :func:`~mbcomp.simulation.slip.with_slip_friction`), engaged stops' rows appended."""
+    from .slip import slipping_joints, without_rolling
+
+    base = without_rolling(without_rows(system, open_joints(system, modes)), slipping_joints(system, modes))
     rows = mode_rows(base, modes)
     if not rows:
         return base
@@ -260,7 +264,10 @@ def _engaged_values(system, sysm, modes, t, q, u):
     from ..assembly.outputs import result_columns
     from ..formulations.lagrange import LagrangeIndex1
 
-    base = without_rows(system, open_joints(system, modes))
+    from .slip import slipping_joints, without_rolling
+
+    # a sliding contact's rolling rows are out here too (its friction is then in no reaction)
+    base = without_rolling(without_rows(system, open_joints(system, modes)), slipping_joints(system, modes))
     rows = mode_rows(base, modes)
     ev = sysm.evaluate(t, q, u)
     ud, lam = LagrangeIndex1(sysm, "none").solve(ev, stabilize=False)

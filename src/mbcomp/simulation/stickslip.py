@@ -41,11 +41,16 @@ __all__ = ["row_events", "with_mode_forces", "ForceEvaluator", "friction_columns
 def row_events(name, row, push):
     """``{event key: value}`` the run watches for an engaged row of joint ``name`` pushing
     ``push`` (N or N m): ``("release", name, row)`` for a unilateral row, the two break-away
-    margins ``limit -+ push`` for a :class:`~mbcomp.modeling.events.StickRow`."""
-    limit = getattr(row, "limit", None)
-    if limit is None:
-        return {("release", name, row.name): push}
-    return {("joint", name, "break+"): limit + push, ("joint", name, "break-"): limit - push}
+    margins ``limit -+ push`` for a :class:`~mbcomp.modeling.events.StickRow` (a contact's row
+    with a friction cone adds the key of its ``"slide"`` event)."""
+    from ..modeling.events import ContactRow, StickRow
+
+    if isinstance(row, StickRow):
+        return {("joint", name, "break+"): row.limit + push, ("joint", name, "break-"): row.limit - push}
+    out = {("release", name, row.name): push}
+    if isinstance(row, ContactRow) and row.mu_s is not None:  # the key; its value, the cone's margin: contact_pushes
+        out[("joint", name, "slide")] = push
+    return out
 
 
 def mode_forces(system, modes):

@@ -1,0 +1,363 @@
+"""Coulomb friction at rolling contacts in a run: sliding contacts' systems, forces and columns.
+
+A contact with friction (``SphereContact``/``DiskContact(unilateral=True,
+friction=ContactFriction(mu_s, mu_k))``, :class:`mbcomp.library.plane_contact.Frictional`)
+rolls in its mode ``"closed"`` -- its rolling rows (``velocity_constraints``, the slip
+velocity along orthonormal tangents ``t1``, ``t2``) hold and the run watches the friction
+cone ``mu_s N - |F_t|`` (:func:`~mbcomp.simulation.contacts.contact_pushes`) -- and slides
+in the mode where :meth:`~mbcomp.modeling.roles.Joint.slip_friction` gives its kinetic
+coefficient ``mu_k``:
+
+* the mode's system leaves the sliding contacts' rolling rows out (:func:`without_rolling`;
+  the normal row stays) and :class:`SlipEvaluator` adds the friction ``F = -mu_k N s`` to
+  the generalized forces, ``f += C_t^T F``, ``s`` the unit slip velocity ``v_t / |v_t|``
+  (``C_t u`` plus the rows' offset, in the tangents' coordinates);
+* ``N`` is the normal row's push, which itself depends on the friction: the forces are
+  linear in ``N``, ``f + G N`` with ``G = -mu_k C_t^T s``, so one factorization of the
+  index-1 saddle-point matrix with the right-hand sides ``f`` and ``G`` gives the
+  multipliers ``lam0 + L1 N`` and the exact normal forces from ``N = -(lam0_n + L1_n N)``:
+  ``(I + L1_n) N = -lam0_n`` (:func:`friction_solve`). Where ``I + L1_n`` is not positive
+  (a single contact: ``1 + L1_n <= 0``) no normal force is consistent with sliding -- the
+  Painleve paradox -- and the run fails saying so, instead of stepping a negative mass;
+* the friction is then a force of the state, so every formulation and solver steps the
+  mode as any other (its program is the jets': a sliding mode runs on the numeric path);
+* the mode's event is the slip speed along the direction it started with, ``v_t . d``
+  (:class:`~mbcomp.modeling.events.SlipSpeed`) falling through zero: at rest
+  (``|v_t|`` ~ 0) the contact rolls again if the cone holds it there, else it slides on
+  the other way; a plane slip whose direction turned by 90 degrees takes the new direction
+  (:data:`TURN`). A slide starting from rest (a break-away, or a start at rest beyond the
+  cone) starts in the direction its own friction gives: the fixed point ``d = a_t / |a_t|``
+  of the slip acceleration under the friction along ``d`` (:func:`start_directions`), from
+  ``-F_t / |F_t|``, the load the sticking force held (exact at once for isotropic contacts).
+
+After the run, :func:`slip_columns` writes the columns at sliding outputs over the
+system with the rolling rows, their multipliers set to the friction (so the contact's
+``F_1``/``F_2`` or ``F_long``/``F_lat`` are the kinetic friction and every reaction carries
+it) and adds ``<contact>.sticking`` (1 rolling, 0 sliding or open), ``<contact>.slip`` (m/s,
+``|v_t|``) and ``<contact>.power`` (W, the friction's power, ``-mu_k N |v_t|``);
+:func:`slip_dissipation` integrates ``mu_k N |v_t|`` over each slide (Simpson's rule on the
+outputs and the slide's ends) into ``energy.dissipated`` and ``energy.balance``.
+
+Examples
+--------
+A ball thrown along a floor without spin slides until ``t = 2 v0 / (7 mu g)`` and rolls on at
+``5 v0 / 7``:
+
+>>> import numpy as np, mbcomp
+>>> from mbcomp.library import World, FreeMotion, RigidBody, SphereContact, ContactFriction
+>>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+>>> free = m.add("free", FreeMotion(r0=(0, 0, 0.1), v0=(2.0, 0, 0)))
+>>> ball = m.add("ball", RigidBody(m=1.0, I=0.004 * np.eye(3)))
+>>> c = m.add("floor", SphereContact(r=0.1, unilateral=True, friction=ContactFriction(0.3, 0.2)))
+>>> m.connect(w.frame_b, free.frame_a); m.connect(free.frame_b, ball.frame_a)
+>>> m.connect(w.frame_b, c.frame_a); m.connect(c.frame_b, ball.frame_a)
+>>> res = mbcomp.simulate(m, t_end=1.0, rtol=1e-10, atol=1e-12)
+>>> [e.kind for e in res.events], round(res.events[0].time, 9), round(2 * 2.0 / (7 * 0.2 * 9.81), 9)
+(['switch'], 0.291247998, 0.291247998)
+>>> round(float(res["ball.v.x"][-1]), 9), round(5 / 7 * 2.0, 9)
+(1.428571429, 1.428571429)
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..errors import SimulationError
+from ..modeling.events import ContactRow
+from .contacts import contact_rows, open_joints, tangent_force, without_rows
+from .modes import WrappingEvaluator
+
+__all__ = ["slipping_joints", "cone_joints", "without_rolling", "tangent_rows", "friction_solve", "SlipEvaluator",
+           "with_slip_friction", "start_directions", "slip_columns", "slip_dissipation", "V_TINY", "TURN"]
+
+#: m/s: a slip slower than this slides along the direction it started (or last turned) with
+V_TINY = 1e-12
+#: a slip-speed event with ``|v_t|`` above this times ``atol`` is a turn of a plane slip, not a stop
+TURN = 1e3
+
+
+def slipping_joints(system, modes):
+    """Names of the contacts of ``modes`` sliding in their mode (``slip_friction`` not None)."""
+    return sorted(n for n, mode in modes.items() if system._edge[n].comp.has_slip_friction
+                  and system._edge[n].comp.slip_friction(system.P[n], mode) is not None)
+
+
+def cone_joints(system, modes):
+    """Names of the contacts of ``modes`` holding a row with a friction cone (rolling)."""
+    return sorted(n for n, mode in modes.items()
+                  for r in system._edge[n].comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)
+                  and r.mu_s is not None)
+
+
+def without_rolling(system, names):
+    """``system`` without the rolling rows (``velocity_constraints``) of the contacts
+    ``names``, their holonomic rows kept (itself when there are none): a numeric variant."""
+    names = set(names)
+    if not names:
+        return system
+    new = system.variant()
+    new._nonholonomic = [e for e in system._nonholonomic if e.name not in names]
+    return new
+
+
+def tangent_rows(system, name, t, q, u, jets=None):
+    """``(C_t, v_t, bias_t)`` of contact ``name``'s rolling rows at ``(t, q, u)``: their
+    Jacobian (k, nu), the slip velocity along the tangents (k,, m/s) and its rate at
+    ``du/dt = 0`` (k,, m/s^2)."""
+    cr = contact_rows(system, name, t, q, u, jets=jets)
+    return cr.C[1:], cr.C[1:] @ u + cr.offset[1:], cr.bias[1:]
+
+
+def slip_direction(v_t, d):
+    """The unit slip direction of a slide that started along ``d``: ``v_t / |v_t|`` turned
+    to ``d``'s side (``sign(v_t . d)``), or ``d`` where ``|v_t| <=`` :data:`V_TINY`.
+
+    On the far side of the slide's stop (``v_t . d < 0``, where the integrator's trial
+    stages go before the event is located) the friction keeps pushing the way it did, as the
+    mode's constant force on a 1-DOF axis does: the right-hand side stays smooth through the
+    event, and its dense output locates it (a sign flip there would cost tiny steps and
+    spoil the location, 2e-9 s on a ball at rtol 1e-10)."""
+    d = np.asarray(d, float)
+    s = float(np.linalg.norm(v_t))
+    if not s > V_TINY:
+        return d
+    return v_t / s if v_t @ d >= 0.0 else -v_t / s
+
+
+def _normal_index(system, name):
+    names = system.constraint_names()
+    key = f"{name}.normal"
+    if key not in names:
+        raise SimulationError(f"{name}: its normal row was dropped as redundant with the mechanism's other rows, so "
+                              "its normal force, which the sliding friction needs, is not defined -> remove the "
+                              "redundant support, or give the contact no friction")
+    return names.index(key)
+
+
+def friction_solve(system, ev, slips):
+    """``(f, N)``: the generalized forces of evaluation ``ev`` (of ``system``, the mode's
+    system) with the sliding friction of ``slips`` (``[(contact, mu_k, d)]``) and the exact
+    normal forces ``N`` (N) of those contacts (see the module notes)."""
+    nu, k = system.nu, len(slips)
+    G = np.zeros((nu, k))
+    for j, (name, mu, d) in enumerate(slips):
+        C_t, v_t, _ = tangent_rows(system, name, ev.t, ev.q, ev.u, ev.jets)
+        G[:, j] = -mu * (C_t.T @ slip_direction(v_t, d))
+    A = ev.A
+    m = A.shape[0]
+    K = np.zeros((nu + m, nu + m))
+    K[:nu, :nu], K[:nu, nu:], K[nu:, :nu] = ev.M, A.T, A
+    rhs = np.zeros((nu + m, 1 + k))
+    rhs[:nu, 0], rhs[nu:, 0] = ev.f, np.concatenate((-ev.cb, -ev.Bb))
+    rhs[:nu, 1:] = G
+    try:
+        X = sla.solve(K, rhs, check_finite=False)
+    except (ValueError, np.linalg.LinAlgError):
+        raise SimulationError(f"the saddle-point matrix is singular at t={ev.t:g}") from None
+    rows = [_normal_index(system, name) for name, _, _ in slips]
+    lam0, L1 = X[nu:, 0][rows], X[nu:, 1:][rows, :]
+    S = np.eye(k) + L1
+    if np.min(np.linalg.eigvals(S).real) <= 1e-12:
+        names = ", ".join(n for n, _, _ in slips)
+        raise SimulationError(
+            f"{names}: Painleve paradox at t={ev.t:.9g} s: sliding with mu_k = "
+            f"{', '.join(f'{mu:g}' for _, mu, _ in slips)} the friction presses the contact into its surface harder "
+            "than any normal force can answer (no consistent normal force exists) -> lower mu_k, or change the "
+            "geometry (a contact trailing its body's centre of mass does not jam)")
+    N = np.linalg.solve(S, -lam0)
+    return ev.f + G @ N, N
+
+
+class _ForcesAdded:
+    def __init__(self, ev, f):
+        self._ev, self.f = ev, f
+
+    def __getattr__(self, name):
+        return getattr(self._ev, name)
+
+
+class SlipEvaluator(WrappingEvaluator):
+    """The evaluator of a mode with sliding contacts: the wrapped evaluation with the
+    friction of ``slips`` (``[(contact, mu_k, start direction)]``) in its forces ``f``
+    (:func:`friction_solve` over ``system``, the mode's system this evaluator serves)."""
+
+    def __init__(self, inner, system, slips):
+        super().__init__(inner)
+        self.system, self.slips = system, slips
+
+    def evaluate(self, t, q, u, masked=True):
+        ev = self.inner.evaluate(t, q, u, masked)
+        if not masked:
+            return ev
+        return _ForcesAdded(ev, friction_solve(self.system, ev, self.slips)[0])
+
+    def rebind(self, system, laws=False):
+        return SlipEvaluator(self.inner.rebind(system, laws), system, self.slips)
+
+
+def slips_of(system, modes, dirs):
+    """``[(contact, mu_k, direction)]`` of the contacts sliding in ``modes`` (``dirs``: their
+    start directions, default along the first tangent)."""
+    return [(n, float(system._edge[n].comp.slip_friction(system.P[n], modes[n])),
+             np.asarray(dirs.get(n, (1.0, 0.0)), float)) for n in slipping_joints(system, modes)]
+
+
+def with_slip_friction(sysm, system, modes, dirs):
+    """The mode's system ``sysm`` with the friction of the contacts sliding in ``modes``
+    (``system`` the assembled one; itself when none slides)."""
+    slips = slips_of(system, modes, dirs)
+    if not slips:
+        return sysm
+    return sysm.with_evaluator(lambda new: SlipEvaluator(sysm.evaluator, new, slips))
+
+
+def start_directions(make, names, t, q, u, dirs, steps=60):
+    """The start directions of the contacts ``names`` sliding from rest at ``(t, q, u)``:
+    the fixed point ``d = a_t / |a_t|`` of their slip accelerations with the friction along
+    ``d`` (``make(dirs)``: the mode's system with those directions), from ``dirs``."""
+    from ..formulations.lagrange import LagrangeIndex1
+
+    dirs = dict(dirs)
+    for _ in range(steps):
+        sysm = make(dirs)
+        ev = sysm.evaluate(t, q, u)
+        ud, _ = LagrangeIndex1(sysm, "none").solve(ev, stabilize=False)
+        change = 0.0
+        for n in names:
+            C_t, _, b_t = tangent_rows(sysm, n, t, q, u, ev.jets)
+            a = C_t @ ud + b_t
+            size = float(np.linalg.norm(a))
+            if size > 0.0:
+                change = max(change, float(np.linalg.norm(a / size - dirs[n])))
+                dirs[n] = a / size
+        if change < 1e-14:
+            break
+    return dirs
+
+
+def closed_force(sysc, name, t, q, u):
+    """The rolling rows' force ``F_t`` (N, on the body, along the tangents) of contact
+    ``name`` held rolling in the system ``sysc``."""
+    from ..formulations.lagrange import LagrangeIndex1
+
+    ev = sysc.evaluate(t, q, u)
+    _, lam = LagrangeIndex1(sysc, "none").solve(ev, stabilize=False)
+    return tangent_force(ev, sysc.row_multipliers(ev, lam), name)
+
+
+def _mode_at(log, tk):
+    times = np.array([tt for tt, *_ in log])
+    return log[max(int(np.searchsorted(times, tk, side="left")) - 1, 0)]
+
+
+def slip_columns(series, system, log, t, Y, system_now):
+    """Correct the result's ``series`` at the output times ``t`` (s) where contacts slid and
+    add their columns (see the module notes). ``log``: ``[(time, modes, slip directions)]``
+    from then on; ``Y``: the outputs' states ``[q, u]``; ``system_now(modes, dirs)``: the
+    mode's system. Returns ``{column: unit}`` of the added columns."""
+    from types import SimpleNamespace
+
+    from ..assembly.outputs import result_columns
+    from ..formulations.lagrange import LagrangeIndex1
+
+    names = sorted({n for _, modes, _ in log for n in slipping_joints(system, modes) + cone_joints(system, modes)})
+    if not names:
+        return {}
+    nq, n_out = system.nq, len(t)
+    for n in names:
+        series[f"{n}.sticking"], series[f"{n}.slip"] = np.zeros(n_out), np.zeros(n_out)
+    for k, tk in enumerate(t):
+        _, modes, dirs = _mode_at(log, tk)
+        q, u = Y[k, :nq], Y[k, nq:]
+        for n in names:
+            series[f"{n}.sticking"][k] = float(n in cone_joints(system, modes))
+            series[f"{n}.slip"][k] = float(np.linalg.norm(tangent_rows(system, n, tk, q, u)[1]))
+        sliding = slipping_joints(system, modes)
+        if not sliding:
+            continue
+        sysm = system_now(modes, dirs)
+        ev = sysm.evaluate(tk, q, u)
+        ud, lam = LagrangeIndex1(sysm, "none").solve(ev, stabilize=False)
+        slips = slips_of(system, modes, dirs)
+        _, N = friction_solve(sysm, ev, slips)
+        base = without_rows(system, open_joints(system, modes))
+        evb = base.evaluate(tk, q, u)
+        force = {}
+        for (n, mu, d), Nn in zip(slips, N):
+            v_t = tangent_rows(base, n, tk, q, u, evb.jets)[1]
+            force[n] = -mu * Nn * slip_direction(v_t, d)  # on the body, along the tangents
+        lam_b = _multipliers(sysm, ev, lam, evb, force)
+        Psi = np.array(evb.Psi, float)  # a sliding contact's slip is no violation
+        i = 0
+        for e, rows, _ in evb.local_nh:
+            if e.name in force:
+                Psi[i:i + len(rows)] = 0.0
+            i += len(rows)
+        evf = base.evaluate(tk, q, u, masked=False) if evb.local else evb
+        cols = SimpleNamespace(t=tk, q=q, u=u, jets=evb.jets, local_nh=evb.local_nh, B=evb.B, Phi_all=evf.Phi,
+                               Phid_all=evf.Phid, Psi=Psi)
+        values, _ = result_columns(base, cols, ud, lam_b, base.reactions(evb, ud, lam_b))
+        for col, val in values.items():
+            if col in series:
+                series[col][k] = val
+    return {**{f"{n}.sticking": "1" for n in names}, **{f"{n}.slip": "m/s" for n in names}}
+
+
+def _multipliers(sysm, ev, lam, evb, force):
+    """The multipliers over the system with the sliding contacts' rolling rows (``evb``):
+    the mode's own (``lam`` at ``ev``; rows appended by stops left out) and, for the
+    sliding contacts' rows, minus their friction ``force`` (N, along the tangents)."""
+    nh = ev.B.shape[0]
+    hol = lam[: evb.Phi.size]  # the mode's holonomic rows first: the same as the base's
+    mult_nh = {(e.name, r): lam[lam.size - nh + i] for i, (e, r) in
+               enumerate((e, r) for e, rows, _ in ev.local_nh for r in rows)}
+    out = list(hol)
+    for e, rows, _ in evb.local_nh:
+        for i, r in enumerate(rows):
+            out.append(-force[e.name][i] if e.name in force else mult_nh[(e.name, r)])
+    return np.array(out, float)
+
+
+def slip_dissipation(res, system, log, Y, system_now):
+    """Add the sliding friction's dissipated energy ``int mu_k N |v_t| dt`` (J) to
+    ``energy.dissipated`` and ``energy.balance`` of ``res`` (Simpson's rule over each slide's
+    outputs and ends; ``log`` entries ``(time, modes, dirs, state before, state after)``:
+    the start and every restart; ``Y`` the outputs' states) and judge the energy alarm again."""
+    from scipy.integrate import cumulative_simpson
+
+    from .stickslip import _count_dissipation
+
+    t = res.time
+    if "energy.balance" not in res or not len(t):
+        return res
+    nq = system.nq
+    D = np.zeros(len(t))
+    for i, (t_i, modes, dirs, _, after) in enumerate(log):
+        slips = slips_of(system, modes, dirs)
+        if not slips or t_i >= t[-1]:
+            continue
+        t_end, end_state = (log[i + 1][0], log[i + 1][3]) if i + 1 < len(log) else (t[-1], Y[-1])
+        sel = np.flatnonzero((t > t_i) & (t < t_end))
+        sysm = system_now(modes, dirs)
+
+        def power(tk, y):  # each sliding contact's mu_k N |v_t| (W)
+            q, u = y[:nq], y[nq:]
+            ev = sysm.evaluate(tk, q, u)
+            _, N = friction_solve(sysm, ev, slips)
+            return [mu * Nn * float(np.linalg.norm(tangent_rows(sysm, n, tk, q, u, ev.jets)[1]))
+                    for (n, mu, _), Nn in zip(slips, N)]
+
+        x = np.concatenate(([t_i], t[sel], [t_end]))
+        each = np.array([power(t_i, after)] + [power(t[k], Y[k]) for k in sel] + [power(t_end, end_state)])
+        first = np.flatnonzero(t == t_i) if i == 0 else []  # the run's start, in this slide
+        last = np.flatnonzero(t == t_end) if i + 1 == len(log) else []  # the run's end, in this slide
+        for j, (n, _, _) in enumerate(slips):
+            res._series[f"{n}.power"][sel] = -each[1:-1, j]
+            res._series[f"{n}.power"][first], res._series[f"{n}.power"][last] = -each[0, j], -each[-1, j]
+        p = each.sum(axis=1)
+        done = cumulative_simpson(p, x=x, initial=0.0) if len(x) > 2 else np.array([0.0, 0.5 * (p[0] + p[1]) * (
+            x[1] - x[0])])
+        D[sel] += done[1:-1]
+        D[t >= t_end] += done[-1]
+    _count_dissipation(res, D)
+    return res
