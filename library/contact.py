@@ -228,7 +228,7 @@ class DiskContact(Frictional, Joint):
 
     def check_params(self, p):
         s, k = p.surface, p.rim_steps
-        out = []
+        out = self.friction_problems(p)
         if not (isinstance(k, (int, np.integer)) and not isinstance(k, bool) and k >= 0):
             out.append(Problem(f"{self.path}.rim_steps", f"{k!r} is not a whole number >= 0", "give e.g. rim_steps=6"))
         if s is None:
@@ -384,15 +384,15 @@ class SphereContact(Frictional, Joint):
     singularity_fix = "keep the ball nearer the bowl's pole (SphereSurface(pole=...)) or pick a surface whose basis fits"
 
     def check_params(self, p):
-        s = p.surface
+        s, out = p.surface, self.friction_problems(p)
         if s is None:
-            return []
+            return out
         if not isinstance(s, Surface):
-            return [Problem(f"{self.path}.surface", f"{s!r} is not a surface",
-                            "give a surface of mbcomp.library.surfaces (SphereSurface, CylinderSurface, TorusSurface, "
-                            "HeightField, Plane) or None for the plane n")]
+            return out + [Problem(f"{self.path}.surface", f"{s!r} is not a surface",
+                                  "give a surface of mbcomp.library.surfaces (SphereSurface, CylinderSurface, "
+                                  "TorusSurface, HeightField, Plane) or None for the plane n")]
         why = s.problem(float(p.r)) if not is_traced(p.r) else None
-        return [Problem(f"{self.path}.surface", why, "change r or the surface")] if why else []
+        return out + ([Problem(f"{self.path}.surface", why, "change r or the surface")] if why else [])
 
     @property
     def has_singularity(self):

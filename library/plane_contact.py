@@ -98,20 +98,27 @@ class Frictional(Unilateral):
     #: the sliding friction's work is dissipated (energy balance)
     dissipative = True
 
-    def _friction(self, p):
+    def friction_problems(self, p):
+        """The problems of the ``friction`` parameter (for the contact's ``check_params``)."""
         f = p.friction
         if f is None:
-            return None
+            return []
         from .friction import ContactFriction
 
         if not isinstance(f, ContactFriction):
-            raise ModelError([Problem(f"{self.path}.friction", f"{f!r} is not a contact's friction",
-                                      "give ContactFriction(mu_s, mu_k), or None for a contact without slip")])
+            return [Problem(f"{self.path}.friction", f"{f!r} is not a contact's friction",
+                            "give ContactFriction(mu_s, mu_k), or None for a contact without slip")]
         if not p.unilateral:
-            raise ModelError([Problem(f"{self.path}.friction", "friction at a contact needs a one-sided contact "
-                                      "(its normal force limits the friction, and a contact that could pull would "
-                                      "have to let go)", "add unilateral=True")])
-        return f
+            return [Problem(f"{self.path}.friction", "friction at a contact needs a one-sided contact (its normal "
+                            "force limits the friction, and a contact that could pull would have to let go)",
+                            "add unilateral=True")]
+        return []
+
+    def _friction(self, p):
+        probs = self.friction_problems(p)
+        if probs:
+            raise ModelError(probs)
+        return p.friction
 
     def start_mode(self, p):
         if self._friction(p) is None or p.open0:

@@ -339,18 +339,18 @@ class Events:
         self._restart(run, t_e, state[:nq], state[nq:], dict(self.modes))
         return True
 
-    def _directions(self, t, q, u, modes, before):
+    def _directions(self, t, q, u, modes, going_on):
         """The start directions of the contacts sliding in ``modes`` at ``(t, q, u)``: a
-        slide going on keeps its own, one with a slip speed takes its direction, one from rest
-        (``before``: the modes it slid from) the fixed point of :func:`start_directions` from
-        ``-F_t / |F_t|``, the load its rolling rows held."""
+        slide going on (``going_on``: sliding before the event and after its action) takes
+        its slip velocity's direction (keeps its own below :data:`V_TINY`); a slide from
+        rolling (a break-away: its slip speed is the rolling rows' drift, of no direction)
+        starts along the fixed point of :func:`start_directions` from ``-F_t / |F_t|``, the
+        load its rolling rows held."""
         dirs, fresh = {}, []
         for n in slipping_joints(self.system, modes):
             v_t = tangent_rows(self.system, n, t, q, u)[1]
-            if np.linalg.norm(v_t) > V_TINY:
-                dirs[n] = v_t / np.linalg.norm(v_t)
-            elif before.get(n) == modes[n] and n in self.slip_dirs:
-                dirs[n] = self.slip_dirs[n]
+            if n in going_on and (np.linalg.norm(v_t) > V_TINY or n in self.slip_dirs):
+                dirs[n] = v_t / np.linalg.norm(v_t) if np.linalg.norm(v_t) > V_TINY else self.slip_dirs[n]
             else:
                 rolling = self.system._edge[n].comp.on_event("stop", self.system.P[n], modes[n]).mode
                 F = closed_force(self.system_now({**modes, n: rolling}), n, t, q, u)
@@ -440,13 +440,14 @@ class Events:
         """Continue the run at ``t`` from ``(q, u)`` in ``modes``: state made consistent with
         their rows, formulation built over their system, a new stepper."""
         modes = self._open_pulling(t, q, u, modes)
-        new, u0, before = self.system_now(modes), u, dict(self.modes)
+        new, u0 = self.system_now(modes), u
+        going_on = set(slipping_joints(self.system, self.modes)) & set(slipping_joints(self.system, modes))
         q, u = consistent(new, t, q, u)
         modes, new = self._break_away(t, q, u, modes)
         if any(p < 0.0 for d in self._pushes_in(new, modes, t, q, u).values() for p in d.values()):
             modes, new = dict(self.modes), self.system_now()  # an engaged row that would pull: stay free
             q, u = consistent(new, t, q, u)
-        self.slip_dirs = self._directions(t, q, u, modes, before)
+        self.slip_dirs = self._directions(t, q, u, modes, going_on)
         new = self.system_now(modes)
         self.modes = modes
         self.slip_log.append((float(t), dict(modes), dict(self.slip_dirs), self._before, np.concatenate((q, u))))
@@ -466,10 +467,11 @@ class Events:
         a stuck friction cannot hold there (:meth:`_break_away`), those of the mode it breaks
         away to."""
         modes = self._rolling_at_start(t, q, u, self.modes)
+        going_on = set(slipping_joints(self.system, modes))  # a start with a slip speed
         if modes != self.modes:
             q, u = consistent(self.system_now(modes), t, q, u)
         modes, new = self._break_away(t, q, u, modes)
-        self.slip_dirs = self._directions(t, q, u, modes, self.modes)
+        self.slip_dirs = self._directions(t, q, u, modes, going_on)
         new = self.system_now(modes, self.slip_dirs)
         if modes != self.modes or form.system is not new:
             self.modes = modes

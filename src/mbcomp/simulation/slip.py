@@ -60,7 +60,6 @@ A ball thrown along a floor without spin slides until ``t = 2 v0 / (7 mu g)`` an
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..errors import SimulationError
 from ..modeling.events import ContactRow
@@ -151,8 +150,8 @@ def friction_solve(system, ev, slips):
     rhs[:nu, 0], rhs[nu:, 0] = ev.f, np.concatenate((-ev.cb, -ev.Bb))
     rhs[:nu, 1:] = G
     try:
-        X = sla.solve(K, rhs, check_finite=False)
-    except (ValueError, np.linalg.LinAlgError):
+        X = np.linalg.solve(K, rhs)
+    except np.linalg.LinAlgError:
         raise SimulationError(f"the saddle-point matrix is singular at t={ev.t:g}") from None
     rows = [_normal_index(system, name) for name, _, _ in slips]
     lam0, L1 = X[nu:, 0][rows], X[nu:, 1:][rows, :]
