@@ -275,3 +275,38 @@ def test_contact_friction_needs_a_one_sided_contact():
 def test_kinetic_friction_above_static_is_refused():
     with pytest.raises(ValueError, match="kinetic friction"):
         ContactFriction(0.2, 0.3)
+
+
+def test_slide_across_an_incline_turns_and_stops_as_the_plane_ode():
+    """A ball thrown across a 0.2 rad incline (``tan < 7/2 mu``) slides with its slip velocity
+    turning downhill (``ds/dt = g_t - 7/2 mu_k g cos(alpha) s/|s|`` in the plane, the centre
+    ``dv/dt = g_t - mu_k g cos(alpha) s/|s|``) until the slip dies at ``|s| = 0``, then rolls:
+    the positions agree with the plane ODE to 1e-11 m, the stop to 1e-10 s (its slip speed
+    there 0: the ``turn`` before it changed the watched direction), and on a two-point output
+    grid the energy balance still closes (the dissipation is integrated on the steps)."""
+    alpha, mu_k, v0 = 0.2, 0.25, 3.0
+    n = np.array([np.sin(alpha), 0.0, np.cos(alpha)])
+    model = ball_on(floor(0.3, mu_k, n=tuple(n)), tuple(R_BALL * n), v0=(0.0, v0, 0.0))
+    res = mbcomp.simulate(model, t_end=0.6, n_out=61, **TOL)
+    gt, k = G * np.sin(alpha), mu_k * G * np.cos(alpha)
+
+    def rhs(t, y):
+        s = y[4:6] / np.linalg.norm(y[4:6])
+        return [*y[2:4], *(np.array([gt, 0.0]) - k * s), *(np.array([gt, 0.0]) - 3.5 * k * s)]
+
+    def rest(t, y):
+        return np.linalg.norm(y[4:6]) - 1e-9  # the slip's speed falls at ~ 3.5 k - g_t: 1.6e-10 s early
+    rest.terminal = True
+    ref = solve_ivp(rhs, (0, 0.6), [0, 0, 0, v0, 0, v0], method="DOP853", rtol=1e-13, atol=1e-14, events=rest,
+                    dense_output=True)
+    stops = [e for e in res.events if e.name == "stop" and e.kind == "switch"]
+    assert len(stops) == 1 and abs(stops[0].time - ref.t[-1]) < 1e-9
+    slide = res.time < ref.t[-1]
+    P = np.array([res[f"ball.r.{c}"] for c in "xyz"]).T[slide] - R_BALL * n
+    down = np.array([np.cos(alpha), 0.0, -np.sin(alpha)])
+    exact = ref.sol(res.time[slide])
+    assert np.max(np.abs(P @ down - exact[0])) < 1e-11 and np.max(np.abs(P[:, 1] - exact[1])) < 1e-11
+    assert np.max(np.abs(res["energy.balance"])) < 1e-9
+    two = mbcomp.simulate(model, t_end=0.6, n_out=2, **TOL)
+    assert two.status == "success" and abs(two["energy.balance"][-1]) < 1e-9
+    assert abs(two["energy.dissipated"][-1] - res["energy.dissipated"][-1]) < 1e-9

@@ -50,8 +50,8 @@ from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value
 from ..solvers.compiled_rk import CompiledRK
 from .modes import consistent, impact_speeds, mode_rows, mode_system, row_push, row_values, start_modes
-from .slip import TURN, V_TINY, closed_force, slip_dissipation, slipping_joints, start_directions, tangent_rows, \
-    with_slip_friction
+from .slip import TURN, V_TINY, closed_force, slide_work, slip_dissipation, slipping_joints, slips_of, \
+    start_directions, tangent_rows, with_slip_friction
 from .stickslip import friction_columns, row_events, with_mode_forces
 
 __all__ = ["EventRecord", "Events", "stepwise", "finish", "keep_until", "REST_HEIGHT", "CHATTER"]
@@ -147,6 +147,7 @@ class Events:
         self.slip_dirs = {}  # {sliding contact: the unit direction (tangent coordinates) its slide started with}
         self.slip_log = []  # [(time, modes, slip_dirs, state before, state after)]: the start and every restart
         self._slip_keys, self._before = set(), None
+        self.slide_worked, self.work_log, self._worked_to = 0.0, [], None  # the sliding friction's work (J)
 
     @property
     def active(self):
@@ -247,13 +248,31 @@ class Events:
             elif _crossed(a, b, d):
                 hits.append((self._locate(key, qu, t0, t1, a, b), key))
         if not hits:
+            self._slide_work(run, qu, t1)
             self._g0 = g1
             return False
         for t_e, key in sorted(hits):
+            self._slide_work(run, qu, t_e)
             if self._event(run, key, t_e, qu):
                 return True
+        self._slide_work(run, qu, t1)
         self._g0 = g1
         return False
+
+    def _slide_work(self, run, qu, t_to):
+        """Integrate the sliding contacts' friction loss from where it was integrated to up to
+        ``t_to`` (s) on the step's dense output ``qu`` (:func:`~mbcomp.simulation.slip.slide_work`),
+        recording the work done at ``t_to`` and at the output times passed."""
+        a, self._worked_to = self._worked_to, t_to
+        slips = slips_of(self.system, self.modes, self.slip_dirs)
+        if not slips or not t_to > a:
+            self.work_log.append((t_to, self.slide_worked))  # no slide: the work stays (a point to interpolate)
+            return
+        sysm = self.system_now()
+        cuts = [a] + [to for to in run.t_out if a < to < t_to] + [t_to]
+        for lo, hi in zip(cuts[:-1], cuts[1:]):
+            self.slide_worked += slide_work(sysm, slips, qu, lo, hi)
+            self.work_log.append((hi, self.slide_worked))
 
     def _locate(self, key, qu, t0, t1, g0, g1):
         """The root of event function ``key`` in ``[t0, t1]`` (s)."""
@@ -451,6 +470,7 @@ class Events:
         new = self.system_now(modes)
         self.modes = modes
         self.slip_log.append((float(t), dict(modes), dict(self.slip_dirs), self._before, np.concatenate((q, u))))
+        self._worked_to = t
         self.history.append((float(t), dict(modes), np.array(q, float)))
         self.mode_log.append((float(t), dict(modes)))
         if self.records and "energy_loss" in self.records[-1].detail and self.records[-1].kind != "impact":
@@ -481,6 +501,7 @@ class Events:
         self.history = [(float(t), dict(self.modes), np.array(q, float))]
         self.mode_log = [(-np.inf, dict(self.modes))]
         self.slip_log = [(float(t), dict(self.modes), dict(self.slip_dirs), None, np.concatenate((q, u)))]
+        self.slide_worked, self.work_log, self._worked_to = 0.0, [(float(t), 0.0)], t
         return form, y0
 
     def _rolling_at_start(self, t, q, u, modes):
@@ -588,7 +609,7 @@ def finish(res, events, states=None):
     if events is not None and states is not None:  # stick-slip friction's columns and dissipation
         friction_columns(res, events, states)
         if any(slipping_joints(events.system, modes) for _, modes, *_ in events.slip_log):
-            slip_dissipation(res, events.system, events.slip_log, states, events.system_now)
+            slip_dissipation(res, events.system, events.slip_log, events.work_log, states, events.system_now)
     impacts = [(r.time, r.detail["energy_loss"]) for r in res.events if "energy_loss" in r.detail]
     if not impacts:
         return res

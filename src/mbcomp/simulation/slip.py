@@ -34,9 +34,11 @@ After the run, :func:`slip_columns` writes the columns at sliding outputs over t
 system with the rolling rows, their multipliers set to the friction (so the contact's
 ``F_1``/``F_2`` or ``F_long``/``F_lat`` are the kinetic friction and every reaction carries
 it) and adds ``<contact>.sticking`` (1 rolling, 0 sliding or open), ``<contact>.slip`` (m/s,
-``|v_t|``) and ``<contact>.power`` (W, the friction's power, ``-mu_k N |v_t|``);
-:func:`slip_dissipation` integrates ``mu_k N |v_t|`` over each slide (Simpson's rule on the
-outputs and the slide's ends) into ``energy.dissipated`` and ``energy.balance``.
+``|v_t|``) and ``<contact>.power`` (W, the friction's power, ``-mu_k N |v_t|``). The
+friction's dissipated energy ``int mu_k N |v_t| dt`` is integrated while the run goes, on each
+step's dense output (:func:`slide_work`, Gauss-Legendre between the step's ends, events and
+output times), and :func:`slip_dissipation` adds it to ``energy.dissipated`` and
+``energy.balance`` (exact to the integrator's accuracy on any output grid, two points too).
 
 Examples
 --------
@@ -67,7 +69,8 @@ from .contacts import contact_rows, open_joints, tangent_force, without_rows
 from .modes import WrappingEvaluator
 
 __all__ = ["slipping_joints", "cone_joints", "without_rolling", "tangent_rows", "friction_solve", "SlipEvaluator",
-           "with_slip_friction", "start_directions", "slip_columns", "slip_dissipation", "V_TINY", "TURN"]
+           "with_slip_friction", "start_directions", "slip_columns", "slide_power", "slide_work", "slip_dissipation",
+           "V_TINY", "TURN"]
 
 #: m/s: a slip slower than this slides along the direction it started (or last turned) with
 V_TINY = 1e-12
@@ -317,46 +320,51 @@ def _multipliers(sysm, ev, lam, evb, force):
     return np.array(out, float)
 
 
-def slip_dissipation(res, system, log, Y, system_now):
-    """Add the sliding friction's dissipated energy ``int mu_k N |v_t| dt`` (J) to
-    ``energy.dissipated`` and ``energy.balance`` of ``res`` (Simpson's rule over each slide's
-    outputs and ends; ``log`` entries ``(time, modes, dirs, state before, state after)``:
-    the start and every restart; ``Y`` the outputs' states) and judge the energy alarm again."""
-    from scipy.integrate import cumulative_simpson
+def slide_power(sysm, slips, t, y):
+    """Each sliding contact's friction loss ``mu_k N |v_t|`` (W) at ``(t, y = [q, u])`` in the
+    mode's system ``sysm`` (``slips``: :func:`slips_of`)."""
+    q, u = y[: sysm.nq], y[sysm.nq: sysm.nq + sysm.nu]
+    ev = sysm.evaluate(t, q, u)
+    _, N = friction_solve(sysm, ev, slips)
+    return np.array([mu * Nn * float(np.linalg.norm(tangent_rows(sysm, n, t, q, u, ev.jets)[1]))
+                     for (n, mu, _), Nn in zip(slips, N)])
 
+
+_GAUSS = np.polynomial.legendre.leggauss(5)
+
+
+def slide_work(sysm, slips, qu, a, b):
+    """``int_a^b sum mu_k N |v_t| dt`` (J) along the step's dense output ``qu(t) -> [q, u]``:
+    five-point Gauss-Legendre (exact to degree 9: well below the integrator's error on a
+    step)."""
+    mid, half = 0.5 * (a + b), 0.5 * (b - a)
+    return half * sum(w * float(np.sum(slide_power(sysm, slips, mid + half * x, qu(mid + half * x))))
+                      for x, w in zip(*_GAUSS))
+
+
+def slip_dissipation(res, system, log, work_log, Y, system_now):
+    """The sliding friction's columns ``<contact>.power`` (W) at the outputs and its
+    dissipated energy (J), integrated along each step's dense output while the run went
+    (``work_log``: ``[(t, work done up to t)]`` at the step ends and output times), added to
+    ``energy.dissipated`` and ``energy.balance`` of ``res``; the energy alarm is judged again.
+    ``log`` entries: ``(time, modes, dirs, state before, state after)`` at the start and every
+    restart; ``Y`` the outputs' states."""
     from .stickslip import _count_dissipation
 
     t = res.time
-    if "energy.balance" not in res or not len(t):
+    if not len(t):
         return res
-    nq = system.nq
-    D = np.zeros(len(t))
-    for i, (t_i, modes, dirs, _, after) in enumerate(log):
+    for i, (t_i, modes, dirs, _, _) in enumerate(log):
         slips = slips_of(system, modes, dirs)
-        if not slips or t_i >= t[-1]:
+        if not slips:
             continue
-        t_end, end_state = (log[i + 1][0], log[i + 1][3]) if i + 1 < len(log) else (t[-1], Y[-1])
-        sel = np.flatnonzero((t > t_i) & (t < t_end))
+        t_end = log[i + 1][0] if i + 1 < len(log) else np.inf
+        sel = np.flatnonzero(((t > t_i) | ((t == t_i) & (i == 0))) & (t <= t_end))  # an event's output: before it
         sysm = system_now(modes, dirs)
-
-        def power(tk, y):  # each sliding contact's mu_k N |v_t| (W)
-            q, u = y[:nq], y[nq:]
-            ev = sysm.evaluate(tk, q, u)
-            _, N = friction_solve(sysm, ev, slips)
-            return [mu * Nn * float(np.linalg.norm(tangent_rows(sysm, n, tk, q, u, ev.jets)[1]))
-                    for (n, mu, _), Nn in zip(slips, N)]
-
-        x = np.concatenate(([t_i], t[sel], [t_end]))
-        each = np.array([power(t_i, after)] + [power(t[k], Y[k]) for k in sel] + [power(t_end, end_state)])
-        first = np.flatnonzero(t == t_i) if i == 0 else []  # the run's start, in this slide
-        last = np.flatnonzero(t == t_end) if i + 1 == len(log) else []  # the run's end, in this slide
-        for j, (n, _, _) in enumerate(slips):
-            res._series[f"{n}.power"][sel] = -each[1:-1, j]
-            res._series[f"{n}.power"][first], res._series[f"{n}.power"][last] = -each[0, j], -each[-1, j]
-        p = each.sum(axis=1)
-        done = cumulative_simpson(p, x=x, initial=0.0) if len(x) > 2 else np.array([0.0, 0.5 * (p[0] + p[1]) * (
-            x[1] - x[0])])
-        D[sel] += done[1:-1]
-        D[t >= t_end] += done[-1]
-    _count_dissipation(res, D)
+        for k in sel:
+            for (n, _, _), p in zip(slips, slide_power(sysm, slips, t[k], Y[k])):
+                res._series[f"{n}.power"][k] = -p
+    if "energy.balance" in res:
+        times, work = np.array(work_log).T
+        _count_dissipation(res, np.interp(t, times, work))
     return res
