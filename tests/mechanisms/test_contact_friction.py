@@ -310,3 +310,46 @@ def test_slide_across_an_incline_turns_and_stops_as_the_plane_ode():
     two = mbcomp.simulate(model, t_end=0.6, n_out=2, **TOL)
     assert two.status == "success" and abs(two["energy.balance"][-1]) < 1e-9
     assert abs(two["energy.dissipated"][-1] - res["energy.dissipated"][-1]) < 1e-9
+
+
+# --- touch-down with friction --------------------------------------------------------------------
+def landing(mu, e, vx=2.0, h=0.5):
+    """A ball (no spin) dropped from ``h`` above the floor with horizontal speed ``vx``."""
+    return ball_on(SphereContact(r=R_BALL, unilateral=True, open0=True, restitution=e,
+                                 friction=ContactFriction(mu, mu)), (0.0, 0.0, R_BALL + h), v0=(vx, 0.0, 0.0))
+
+
+@pytest.mark.parametrize("mu, e", [(0.1, 0.5), (1.0, 0.5), (1.0, 0.0)])
+def test_landing_impact_slides_or_grips(mu, e):
+    """At touch-down (``|v_z| = sqrt(2 g h)``) the rough impulse stands inside the cone: the
+    contact grips and the ball leaves rolling at ``5/7 vx`` (angular momentum about the
+    contact point); beyond the cone (``7/2 mu (1 + e) |v_z| < vx``) it slides through the
+    impact: ``vx+ = vx - mu (1 + e) |v_z|``, ``w+ = 5 mu (1 + e) |v_z| / (2 r)``; the normal
+    speed after is ``e |v_z|`` either way."""
+    vx, vz = 2.0, np.sqrt(2 * G * 0.5)
+    res = mbcomp.simulate(landing(mu, e), t_end=0.33, n_out=3, **TOL)
+    hit = [ev for ev in res.events if ev.kind == "impact"][0]
+    assert abs(hit.time - np.sqrt(2 * 0.5 / G)) < 1e-12
+    assert abs(hit.detail["speed_after"] - e * vz) < 1e-12
+    slides = 3.5 * mu * (1 + e) * vz < vx
+    assert slides == (mu < 0.5)
+    v_after = vx - mu * (1 + e) * vz if slides else 5 / 7 * vx
+    w_after = 5 * mu * (1 + e) * vz / (2 * R_BALL) if slides else v_after / R_BALL
+    assert abs(res["ball.v.x"][-1] - v_after) < 1e-11  # no horizontal force after the hit (flying or rolling)
+    assert abs(res["ball.w.y"][-1] - w_after) < 1e-9
+    assert res.status == "success" and np.max(np.abs(res["energy.balance"])) < 1e-10
+
+
+def test_landing_without_rebound_slides_then_rolls_at_five_sevenths():
+    """``e = 0`` and a slippery floor: the ball lands sliding (``vx - mu |v_z|``), slides on
+    (the contact engaged, then its ``slide``) and rolls from ``t_hit + (vx - 7/2 mu |v_z|) /
+    (7/2 mu g)`` at ``5/7 vx``: the angular momentum about the contact point is kept through
+    the impact and the slide."""
+    mu, vx, vz = 0.1, 2.0, np.sqrt(2 * G * 0.5)
+    res = mbcomp.simulate(landing(mu, 0.0), t_end=1.0, n_out=11, **TOL)
+    t_hit = np.sqrt(2 * 0.5 / G)
+    assert [(ev.kind, ev.name) for ev in res.events] == [("impact", "touch"), ("engage", "touch"),
+                                                         ("switch", "slide"), ("switch", "stop")]
+    assert abs(res.events[-1].time - (t_hit + (vx - 3.5 * mu * vz) / (3.5 * mu * G))) < 1e-12
+    assert abs(res["ball.v.x"][-1] - 5 / 7 * vx) < 1e-12
+    assert res.status == "success" and np.max(np.abs(res["energy.balance"])) < 1e-10

@@ -358,6 +358,27 @@ class Events:
         self._restart(run, t_e, state[:nq], state[nq:], dict(self.modes))
         return True
 
+    def _cone(self, who, mode):
+        """``(mu_s, mu_k)`` of contact ``who`` rolling in ``mode`` (its row's friction cone, and
+        the kinetic coefficient of the mode its ``"slide"`` event goes to), or None."""
+        comp, p = self.system._edge[who].comp, self.system.P[who]
+        cone = [r.mu_s for r in comp.mode_rows(p, mode) if isinstance(r, ContactRow) and r.mu_s is not None]
+        if not cone:
+            return None
+        return cone[0], comp.slip_friction(p, comp.on_event("slide", p, mode).mode)
+
+    def _sliding_now(self, t, q, u, modes):
+        """``modes`` with the contacts held rolling (a friction cone) but slipping faster than
+        :data:`TURN` ``atol`` (after an impact that slid: the rolling rows would take the slip
+        away) switched to their sliding mode (``on_event("slide")``, recorded)."""
+        out = dict(modes)
+        for n, mode in modes.items():
+            if self._cone(n, mode) is not None and np.linalg.norm(
+                    tangent_rows(self.system, n, t, q, u)[1]) > TURN * self.atol:
+                out[n] = self.system._edge[n].comp.on_event("slide", self.system.P[n], mode).mode
+                self._record(t, n, "slide", "switch", {"mode": out[n], "energy_loss": 0.0})
+        return out
+
     def _directions(self, t, q, u, modes, going_on):
         """The start directions of the contacts sliding in ``modes`` at ``(t, q, u)``: a
         slide going on (``going_on``: sliding before the event and after its action) takes
@@ -368,7 +389,8 @@ class Events:
         dirs, fresh = {}, []
         for n in slipping_joints(self.system, modes):
             v_t = tangent_rows(self.system, n, t, q, u)[1]
-            if n in going_on and (np.linalg.norm(v_t) > V_TINY or n in self.slip_dirs):
+            if np.linalg.norm(v_t) > TURN * self.atol or (n in going_on and (np.linalg.norm(v_t) > V_TINY
+                                                                              or n in self.slip_dirs)):
                 dirs[n] = v_t / np.linalg.norm(v_t) if np.linalg.norm(v_t) > V_TINY else self.slip_dirs[n]
             else:
                 rolling = self.system._edge[n].comp.on_event("stop", self.system.P[n], modes[n]).mode
@@ -400,7 +422,8 @@ class Events:
         if not sysm._edge[who].comp.tree_edge:  # a contact touching down: its own rows
             row = _contact_row(sysm, who, action.engage)
             speed = [contact_rows(sysm, who, t, q, u, row).speed]
-            u_plus, _, loss, after0 = contact_impact(self.system_now(), who, t, q, u, action.restitution, row)
+            u_plus, _, loss, after0 = contact_impact(self.system_now(), who, t, q, u, action.restitution, row,
+                                                     friction=self._cone(who, action.engage))
             after = [after0]
 
             def rests():
@@ -458,7 +481,7 @@ class Events:
     def _restart(self, run, t, q, u, modes):
         """Continue the run at ``t`` from ``(q, u)`` in ``modes``: state made consistent with
         their rows, formulation built over their system, a new stepper."""
-        modes = self._open_pulling(t, q, u, modes)
+        modes = self._sliding_now(t, q, u, self._open_pulling(t, q, u, modes))
         new, u0 = self.system_now(modes), u
         going_on = set(slipping_joints(self.system, self.modes)) & set(slipping_joints(self.system, modes))
         q, u = consistent(new, t, q, u)
@@ -601,38 +624,46 @@ def _terminal_count(f):
 
 
 def finish(res, events, states=None):
-    """``res`` with its ``events`` (a list of :class:`EventRecord`, empty without events) and,
-    after impacts, the column ``energy.impacts`` (J: the kinetic energy the impacts took, and
-    a rebound too slow to follow when a stop settles, up to each output time), counted in the energy alarm of a conservative system: an impact's
-    loss is no drift."""
+    """``res`` with its ``events`` (a list of :class:`EventRecord`, empty without events), the
+    stick-slip frictions' columns and dissipation (axes: :func:`friction_columns`; contacts:
+    :func:`~mbcomp.simulation.slip.slip_dissipation`) and, after impacts, the column
+    ``energy.impacts`` (J: the kinetic energy the impacts took, and a rebound too slow to
+    follow when a stop settles, up to each output time); the accuracy alarm the
+    post-processing rang without them is judged again with them all (an impact's loss, a
+    friction's work is no drift)."""
     res.events = list(events.records) if events is not None else []
+    before = None
+    if "energy.balance" in res:
+        before = (np.array(res["energy.balance"]), np.array(res["energy.dissipated"]))
     if events is not None and states is not None:  # stick-slip friction's columns and dissipation
-        friction_columns(res, events, states)
+        friction_columns(res, events, states, judge=False)
         if any(slipping_joints(events.system, modes) for _, modes, *_ in events.slip_log):
-            slip_dissipation(res, events.system, events.slip_log, events.work_log, states, events.system_now)
+            slip_dissipation(res, events.system, events.slip_log, events.work_log, states, events.system_now,
+                             judge=False)
     impacts = [(r.time, r.detail["energy_loss"]) for r in res.events if "energy_loss" in r.detail]
-    if not impacts:
-        return res
-    times, losses = np.array(impacts).T
-    lost = np.concatenate(([0.0], np.cumsum(losses)))[np.searchsorted(times, res.time, side="right")]
-    res._series["energy.impacts"] = lost
-    res.units["energy.impacts"] = "J"
-    if "energy.balance" in res:  # E - E0 - W + D, and the impacts' losses now
-        res._series["energy.balance"] = res["energy.balance"] + lost
+    lost = np.zeros(len(res.time))
+    if impacts:
+        times, losses = np.array(impacts).T
+        lost = np.concatenate(([0.0], np.cumsum(losses)))[np.searchsorted(times, res.time, side="right")]
+        res._series["energy.impacts"] = lost
+        res.units["energy.impacts"] = "J"
+        if "energy.balance" in res:  # E - E0 - W + D, and the impacts' losses now
+            res._series["energy.balance"] = res["energy.balance"] + lost
     if res.status == "inaccurate" and "energy.kinetic" in res and "accuracy alarm" in res.message:
-        _alarm_again(res, lost)
+        _alarm_again(res, lost, before)
     return res
 
 
-def _alarm_again(res, lost):
-    """Judge the accuracy alarm again with the impacts' losses counted (an impact's loss is
-    no drift): the run is ``"success"`` when the alarm no longer rings."""
+def _alarm_again(res, lost, before):
+    """Judge the accuracy alarm again with the impacts' losses and the frictions' dissipation
+    counted (``before``: the balance and dissipation the post-processing judged, or None for
+    a conservative run): the run is ``"success"`` when the alarm no longer rings."""
     from .accuracy import balance_alarm, energy_alarm
 
     T, V, rtol = res["energy.kinetic"], res["energy.potential"], res.stats["rtol"]
-    if "energy.balance" in res:
+    if before is not None:
         W, D = res["energy.work"], res["energy.dissipated"]
-        was = balance_alarm(res["energy.balance"] - lost, T, V, W, D, 0.0, rtol)
+        was = balance_alarm(before[0], T, V, W, before[1], 0.0, rtol)
         # the dissipation's quadrature on the output grid cannot follow a speed jumping
         # inside an interval: the dissipation over the intervals holding an impact is uncertain
         k = np.unique(np.searchsorted(res.time, [e.time for e in res.events if "energy_loss" in e.detail]))

@@ -342,11 +342,12 @@ def slide_work(sysm, slips, qu, a, b):
                       for x, w in zip(*_GAUSS))
 
 
-def slip_dissipation(res, system, log, work_log, Y, system_now):
+def slip_dissipation(res, system, log, work_log, Y, system_now, judge=True):
     """The sliding friction's columns ``<contact>.power`` (W) at the outputs and its
     dissipated energy (J), integrated along each step's dense output while the run went
     (``work_log``: ``[(t, work done up to t)]`` at the step ends and output times), added to
-    ``energy.dissipated`` and ``energy.balance`` of ``res``; the energy alarm is judged again.
+    ``energy.dissipated`` and ``energy.balance`` of ``res``; the energy alarm is judged again
+    (``judge``).
     ``log`` entries: ``(time, modes, dirs, state before, state after)`` at the start and every
     restart; ``Y`` the outputs' states."""
     from .stickslip import _count_dissipation
@@ -366,5 +367,5 @@ def slip_dissipation(res, system, log, work_log, Y, system_now):
                 res._series[f"{n}.power"][k] = -p
     if "energy.balance" in res:
         times, work = np.array(work_log).T
-        _count_dissipation(res, np.interp(t, times, work))
+        _count_dissipation(res, np.interp(t, times, work), judge)
     return res

@@ -108,10 +108,11 @@ def _frictional(system, history):
     return sorted(n for n in names if system._edge[n].comp.has_mode_force)
 
 
-def friction_columns(res, events, Y):
+def friction_columns(res, events, Y, judge=True):
     """Add the friction columns and the friction's dissipated energy to ``res`` (see the
     module notes); ``Y`` are the output states ``[q, u]``. Re-judges the energy alarm the
-    missing friction work rang."""
+    missing friction work rang (``judge``; :func:`mbcomp.simulation.events.finish` judges once
+    for all its corrections)."""
     system, history = events.system, events.history
     names = _frictional(system, history)
     if not names or not len(res.time):
@@ -146,7 +147,7 @@ def friction_columns(res, events, Y):
         res.units[f"{name}.sticking"], res.units[f"{name}.power"] = "1", "W"
         total += dissipated
     if "energy.balance" in res:
-        _count_dissipation(res, total)
+        _count_dissipation(res, total, judge)
     return res
 
 
@@ -156,15 +157,17 @@ def _stick_push(events, modes, name, t, q, u):
     return 0.5 * (d[("joint", name, "break+")] - d[("joint", name, "break-")])
 
 
-def _count_dissipation(res, D):
+def _count_dissipation(res, D, judge=True):
     """``D`` (J) into ``energy.dissipated`` and ``energy.balance``; the energy alarm the
-    missing friction work rang is judged again."""
+    missing friction work rang is judged again (``judge``)."""
     from .accuracy import balance_alarm
 
     T, V, W, rtol = res["energy.kinetic"], res["energy.potential"], res["energy.work"], res.stats.get("rtol", 1e-8)
     was = balance_alarm(res["energy.balance"], T, V, W, res["energy.dissipated"], 0.0, rtol)
     res._series["energy.dissipated"] = res["energy.dissipated"] + D
     res._series["energy.balance"] = res["energy.balance"] + D
+    if not judge:
+        return
     now = balance_alarm(res["energy.balance"], T, V, W, res["energy.dissipated"], 0.0, rtol)
     if res.status == "inaccurate" and was[0] and now[0] is None and was[1] in res.message:
         res.status = "success"
