@@ -54,12 +54,17 @@ from .slip import TURN, V_TINY, closed_force, slide_work, slip_dissipation, slip
     start_directions, tangent_rows, with_slip_friction
 from .stickslip import friction_columns, row_events, with_mode_forces
 
-__all__ = ["EventRecord", "Events", "stepwise", "finish", "keep_until", "REST_HEIGHT", "CHATTER"]
+__all__ = ["EventRecord", "Events", "stepwise", "finish", "keep_until", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
+           "SPIN_TURNS", "SPIN_SPAN"]
 
 #: an impact whose rebound rises less than this times ``atol`` (m or rad) settles engaged
 REST_HEIGHT = 10.0
 #: this many successive shrinking intervals between a component's impacts are chattering
 CHATTER = 30
+#: this many events of one component within BURST_SPAN max(1, |t|) seconds are chattering (an error naming it)
+BURST, BURST_SPAN = 60, 1e-9
+#: a slide turning this many times within SPIN_SPAN max(1, |t|) seconds is taken as stopped
+SPIN_TURNS, SPIN_SPAN = 3, 1e-6
 
 
 @dataclass(frozen=True)
@@ -352,6 +357,9 @@ class Events:
         v_t = tangent_rows(self.system, who, t_e, state[:nq], state[nq:])[1]
         if not np.linalg.norm(v_t) > TURN * self.atol:
             return False
+        turns = [r.time for r in self.records[-SPIN_TURNS:] if r.component == who and r.kind == "turn"]
+        if len(turns) == SPIN_TURNS and t_e - turns[0] <= SPIN_SPAN * max(1.0, abs(t_e)):
+            return False  # its direction spins as it dies (stiff near |v_t| = 0): taken as stopped
         keep_until(run, t_e, qu)
         self.slip_dirs = {**self.slip_dirs, who: v_t / np.linalg.norm(v_t)}
         self._record(t_e, who, "stop", "turn", {"mode": self.modes[who], "energy_loss": 0.0})
@@ -384,7 +392,7 @@ class Events:
         slide going on (``going_on``: sliding before the event and after its action) takes
         its slip velocity's direction (keeps its own below :data:`V_TINY`); a slide from
         rolling (a break-away: its slip speed is the rolling rows' drift, of no direction)
-        starts along the fixed point of :func:`start_directions` from ``-F_t / |F_t|``, the
+        starts along the direction of :func:`start_directions` nearest ``-F_t / |F_t|``, the
         load its rolling rows held."""
         dirs, fresh = {}, []
         for n in slipping_joints(self.system, modes):
@@ -399,7 +407,8 @@ class Events:
                 dirs[n] = -F / size if size > 0.0 else np.eye(len(F))[0]
                 fresh.append(n)
         if fresh:
-            dirs = start_directions(lambda d: self.system_now(modes, d), fresh, t, q, u, dirs)
+            plain = with_mode_forces(mode_system(self.system, modes), modes)  # the sliding mode without friction
+            dirs = start_directions(plain, slips_of(self.system, modes, dirs), t, q, u, fresh)
         return dirs
 
     def _approaching(self, who, action, state, t=0.0):
@@ -415,6 +424,15 @@ class Events:
     def _record(self, t, who, name, kind, detail):
         self.records.append(EventRecord(float(t), who, name, kind, detail))
         self.stats["events"] += 1
+        burst = [r for r in self.records[-BURST:] if r.component == who]
+        if len(burst) == BURST and burst[-1].time - burst[0].time <= BURST_SPAN * max(1.0, abs(t)):
+            modes = sorted({str(r.detail.get("mode")) for r in burst if r.detail.get("mode") is not None})
+            raise SimulationError(
+                f"chattering: {who} changed mode {BURST} times within {burst[-1].time - burst[0].time:.3g} s at "
+                f"t={t:.9g} s (events {', '.join(sorted({r.name for r in burst}))}; modes {', '.join(modes)}): its "
+                "modes do not settle there -> look at what drives it at that instant (a load at the friction "
+                "limit, a contact at the edge of lifting off), or loosen the model (a compliant contact, "
+                "friction regularized by BearingFriction)")
 
     def _impact(self, t, who, name, action, q, u):
         """``(u+, mode to settle in or None)`` of an impact of ``who`` at event ``name``."""

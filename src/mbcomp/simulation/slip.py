@@ -26,9 +26,9 @@ coefficient ``mu_k``:
   (``|v_t|`` ~ 0) the contact rolls again if the cone holds it there, else it slides on
   the other way; a plane slip whose direction turned by 90 degrees takes the new direction
   (:data:`TURN`). A slide starting from rest (a break-away, or a start at rest beyond the
-  cone) starts in the direction its own friction gives: the fixed point ``d = a_t / |a_t|``
-  of the slip acceleration under the friction along ``d`` (:func:`start_directions`), from
-  ``-F_t / |F_t|``, the load the sticking force held (exact at once for isotropic contacts).
+  cone) starts in the direction its own friction gives: ``a_t(d) = lambda d``, ``lambda >
+  0``, the slip accelerating along ``d`` with the friction against it, the root nearest
+  ``-F_t / |F_t|`` (the load the sticking force held) (:func:`start_directions`).
 
 After the run, :func:`slip_columns` writes the columns at sliding outputs over the
 system with the rolling rows, their multipliers set to the friction (so the contact's
@@ -69,7 +69,7 @@ from .contacts import contact_rows, open_joints, tangent_force, without_rows
 from .modes import WrappingEvaluator
 
 __all__ = ["slipping_joints", "cone_joints", "without_rolling", "tangent_rows", "friction_solve", "SlipEvaluator",
-           "with_slip_friction", "start_directions", "slip_columns", "slide_power", "slide_work", "slip_dissipation",
+           "with_slip_friction", "slip_accelerations", "start_directions", "slip_columns", "slide_power", "slide_work", "slip_dissipation",
            "V_TINY", "TURN"]
 
 #: m/s: a slip slower than this slides along the direction it started (or last turned) with
@@ -213,28 +213,66 @@ def with_slip_friction(sysm, system, modes, dirs):
     return sysm.with_evaluator(lambda new: SlipEvaluator(sysm.evaluator, new, slips))
 
 
-def start_directions(make, names, t, q, u, dirs, steps=60):
-    """The start directions of the contacts ``names`` sliding from rest at ``(t, q, u)``:
-    the fixed point ``d = a_t / |a_t|`` of their slip accelerations with the friction along
-    ``d`` (``make(dirs)``: the mode's system with those directions), from ``dirs``."""
-    from ..formulations.lagrange import LagrangeIndex1
+def slip_accelerations(sysm, ev, slips):
+    """``{contact: a_t}``: the slip accelerations (m/s^2, tangents' coordinates) at the
+    evaluation ``ev`` of a sliding mode's system without its friction (``sysm``) with the
+    friction of ``slips`` (``[(contact, mu_k, direction)]``) applied (index-1 solve, the
+    exact normal forces of :func:`friction_solve`)."""
+    f, _ = friction_solve(sysm, ev, slips)
+    A = ev.A
+    nu, m = sysm.nu, A.shape[0]
+    K = np.zeros((nu + m, nu + m))
+    K[:nu, :nu], K[:nu, nu:], K[nu:, :nu] = ev.M, A.T, A
+    ud = np.linalg.lstsq(K, np.concatenate((f, -ev.cb, -ev.Bb)), rcond=1e-13)[0][:nu]
+    out = {}
+    for n, _, _ in slips:
+        C_t, _, b_t = tangent_rows(sysm, n, ev.t, ev.q, ev.u, ev.jets)
+        out[n] = C_t @ ud + b_t
+    return out
 
-    dirs = dict(dirs)
-    for _ in range(steps):
-        sysm = make(dirs)
-        ev = sysm.evaluate(t, q, u)
-        ud, _ = LagrangeIndex1(sysm, "none").solve(ev, stabilize=False)
-        change = 0.0
+
+#: directions scanned on the unit circle for a slide's start (then refined by Brent)
+START_SCAN = 72
+
+
+def start_directions(sysm, slips, t, q, u, names):
+    """The start directions of the contacts ``names`` (of ``slips``: ``[(contact, mu_k,
+    first guess)]``) sliding from rest at ``(t, q, u)`` in the sliding mode's system ``sysm``
+    (without its friction): the direction ``d`` in which the slip accelerates when its
+    friction opposes ``d``, ``a_t(d) = lambda d`` with ``lambda > 0``.
+
+    On the unit circle ``d(phi)`` the roots of ``d x a_t(d)`` with ``d . a_t > 0`` are found
+    by a scan of :data:`START_SCAN` angles and Brent's method; of several, the one nearest the
+    first guess (``-F_t``, the load the rolling rows held) is taken. A contact's tangential
+    mobility may be far from isotropic (a wheel: its spin's small inertia against the whole
+    vehicle's), so the plain iteration ``d <- a_t(d)/|a_t(d)|`` does not converge there. With
+    several contacts starting at once each is solved with the others' directions fixed, in
+    turn, a few sweeps."""
+    from scipy.optimize import brentq
+
+    ev = sysm.evaluate(t, q, u)
+    cur = {n: np.asarray(d, float) for n, _, d in slips}
+
+    def residual(n, phi):
+        d = np.array([np.cos(phi), np.sin(phi)])
+        a = slip_accelerations(sysm, ev, [(m, mu, d if m == n else cur[m]) for m, mu, _ in slips])[n]
+        return d[0] * a[1] - d[1] * a[0], d @ a
+
+    for _ in range(3 if len(names) > 1 else 1):
         for n in names:
-            C_t, _, b_t = tangent_rows(sysm, n, t, q, u, ev.jets)
-            a = C_t @ ud + b_t
-            size = float(np.linalg.norm(a))
-            if size > 0.0:
-                change = max(change, float(np.linalg.norm(a / size - dirs[n])))
-                dirs[n] = a / size
-        if change < 1e-14:
-            break
-    return dirs
+            guess = np.arctan2(cur[n][1], cur[n][0])
+            phis = guess + np.linspace(0.0, 2 * np.pi, START_SCAN + 1)
+            vals = [residual(n, p) for p in phis]
+            roots = []
+            for (p0, (c0, _)), (p1, (c1, _)) in zip(zip(phis, vals), zip(phis[1:], vals[1:])):
+                if c0 == 0.0 or c0 * c1 < 0.0:
+                    p = p0 if c0 == 0.0 else brentq(lambda x: residual(n, x)[0], p0, p1, xtol=1e-14)
+                    if residual(n, p)[1] > 0.0:
+                        roots.append(p)
+            if roots:
+                best = min(roots, key=lambda p: abs(np.angle(np.exp(1j * (p - guess)))))
+                cur[n] = np.array([np.cos(best), np.sin(best)])
+    return cur
 
 
 def closed_force(sysc, name, t, q, u):
