@@ -1,6 +1,6 @@
-"""Event location: accuracy and cost per formulation x solver on cases with exact impact times.
+"""Event location: accuracy and cost per formulation x solver on cases with exact event times.
 
-Two cases with closed-form impact times (issue 22, item 6):
+Three cases with closed-form event times (issue 22, item 6):
 
 * **rotor**: a free rotor (J = 2 kg m^2, no gravity) from 0 at 1 rad/s between rigid stops at
   +-0.5 rad, restitution 0.8, 6 s: impacts at 0.5, 0.5 + 1/0.8, ... (4 impacts). The motion
@@ -11,23 +11,39 @@ Two cases with closed-form impact times (issue 22, item 6):
   ``K(sin^2 0.4) / sqrt(g/l)``, then each rebound of amplitude ``theta_k`` with
   ``sin(theta_k / 2) = e^k sin 0.4`` returns after half its period ``2 K(sin^2(theta_k/2)) / sqrt(g/l)``.
   Here the integration error enters the impact times too.
+* **ball**: a solid ball (m = 7 kg, r = 0.11 m, I = 2/5 m r^2) thrown along a level floor at
+  v0 = 3 m/s with backspin w_b = 20 rad/s (``w0 = (0, -w_b, 0)``), Coulomb friction
+  ``ContactFriction(0.3, 0.2)``, 1.5 s: it slides (``dv/dt = -mu_k g``, the slip speed
+  ``v + r w_y`` falling at ``7/2 mu_k g``) until the event ``stop`` (a ``switch`` to the
+  rolling mode ``closed``) at ``t* = (v0 + r w_b) / (3.5 mu_k g) = 0.757245 s``, then rolls at
+  ``(5 v0 - 2 r w_b) / 7``. The sliding motion is quadratic in t, so the error is again the
+  location's, on the numeric path a sliding contact runs on (see
+  :mod:`mbcomp.simulation.slip`).
 
 Each formulation (lagrange, dalembert) x solver (dop853, dopri5 -- the C integrators, stepped
 one step at a time in Python when there are events --, radau5, ida, genalpha; and scipy's
 DOP853, Radau, LSODA for comparison) runs at rtol 1e-6, 1e-9, 1e-12 (genalpha: fixed steps
-h = 1e-2, 1e-3, 1e-4 s), and once more on the same model without stops ("no events": the
-rotor turning freely, the pendulum swinging freely) for the cost ratio. Columns: method,
-formulation, rtol (or h), max |t_event - t_exact| (s), steps, f-evals, event-function
-evaluations, CPU s, and the event-free run's steps and CPU s with the ratio. A refused
-combination (the DAE solvers take no D'Alembert ODE) is a row saying so.
+h = 1e-2, 1e-3, 1e-4 s), and once more on an event-free counterpart for the cost ratio: the
+rotor turning freely and the pendulum swinging freely (no stops), and for the ball the same
+ball and frictional contact rolling from the start at its final rolling speed
+``(5 v0 - 2 r w_b) / 7`` (``w_y = v / r``): the contact stays in its rolling mode (its
+friction cone is watched but never left), so the run has no event and no sliding -- which
+also means it runs on the compiled path, so the ball's ratio holds the numeric path's cost
+as well as the events'. Columns: method, formulation, rtol (or h), max |t_event - t_exact|
+(s) over the case's events (impacts; the ball's ``stop`` switches), steps, f-evals,
+event-function evaluations, CPU s, and the event-free run's steps and CPU s with the ratio.
+A refused combination (the DAE solvers take no D'Alembert ODE; genalpha no rolling
+(nonholonomic) constraints) is a row saying so, and so is a combination left out of the default for its
+cost (:data:`SLOW`, run with ``--slow``).
 
 ``f-evals`` sums the steppers' right-hand-side calls over every restart (an impact starts a
 new stepper and formulation; ``res.stats["nfev"]`` counts only the last formulation's, so
 this script reads the steppers' counters instead, see ``_count_all_evaluations``).
 
-Writes bench/events.csv and prints the table.
+Writes bench/events.csv (a run of some ``--cases`` replaces their rows, keeping the other
+cases') and prints the table.
 
-Run: python bench/events.py [--cases rotor,pendulum] [--rtols 1e-6,1e-9,1e-12]
+Run: python bench/events.py [--cases rotor,pendulum,ball] [--rtols 1e-6,1e-9,1e-12] [--slow]
 """
 import os
 
@@ -42,7 +58,8 @@ import warnings  # noqa: E402
 import numpy as np  # noqa: E402
 
 import mbcomp  # noqa: E402
-from mbcomp.library import FixedTranslation, PointMass, Revolute, RigidBody, World  # noqa: E402
+from mbcomp.library import (ContactFriction, FixedTranslation, FreeMotion, PointMass, Revolute, RigidBody,  # noqa: E402
+                            SphereContact, World)
 
 HERE = pathlib.Path(__file__).resolve().parent
 G = 9.81
@@ -98,7 +115,58 @@ def pendulum_times(n, e=0.7, phi0=0.8):
     return np.array(out)
 
 
-CASES = {"rotor": (rotor, rotor_times, 6.0), "pendulum": (pendulum, pendulum_times, 5.0)}
+#: the ball case: kg, m, m/s, rad/s (backspin), static and kinetic friction
+BALL = dict(m=7.0, r=0.11, v0=3.0, w_b=20.0, mu_s=0.3, mu_k=0.2)
+
+
+def ball(stops=True):
+    """The ball thrown with backspin (:data:`BALL`, see the module notes); ``stops=False``: its
+    event-free counterpart, the same ball and contact rolling from the start at the final
+    rolling speed ``(5 v0 - 2 r w_b) / 7``."""
+    m, r, v0, w_b = BALL["m"], BALL["r"], BALL["v0"], BALL["w_b"]
+    if not stops:
+        v0 = (5 * v0 - 2 * r * w_b) / 7
+        w_b = -v0 / r  # rolling: w_y = v / r
+    model = mbcomp.Model()
+    w = model.add("world", World(g=(0, 0, -G)))
+    free = model.add("free", FreeMotion(r0=(0, 0, r), v0=(v0, 0, 0), w0=(0, -w_b, 0)))
+    body = model.add("ball", RigidBody(m=m, I=0.4 * m * r * r * np.eye(3)))
+    floor = model.add("floor", SphereContact(r=r, unilateral=True,
+                                             friction=ContactFriction(BALL["mu_s"], BALL["mu_k"])))
+    model.connect(w.frame_b, free.frame_a)
+    model.connect(free.frame_b, body.frame_a)
+    model.connect(w.frame_b, floor.frame_a)
+    model.connect(floor.frame_b, body.frame_a)
+    return model
+
+
+def ball_times(n):
+    """The slide's end ``(v0 + r w_b) / (3.5 mu_k g)``; a further ``stop`` has no exact time
+    (inf: it shows as an infinite error)."""
+    t_star = (BALL["v0"] + BALL["r"] * BALL["w_b"]) / (3.5 * BALL["mu_k"] * G)
+    return np.array([t_star] + [np.inf] * (n - 1))[:n]
+
+
+def impacts(res):
+    """Times (s) of the run's impacts."""
+    return [x.time for x in res.events if x.kind == "impact"]
+
+
+def stop_switches(res):
+    """Times (s) of the run's slip-to-roll switches (event ``stop``)."""
+    return [x.time for x in res.events if x.kind == "switch" and x.name == "stop"]
+
+
+#: case: (build(stops=...), exact event times(n), t_end s, the run's event times)
+CASES = {"rotor": (rotor, rotor_times, 6.0, impacts), "pendulum": (pendulum, pendulum_times, 5.0, impacts),
+         "ball": (ball, ball_times, 1.5, stop_switches)}
+
+#: combinations left out of the default for their cost (CPU s measured on one core, 2 shared),
+#: run with ``--slow``: (case, method, formulation, rtol) -> why
+SLOW = {("ball", "Radau", "dalembert", 1e-12): "275 s: scipy's Radau on the sliding ball's numeric path "
+                                                "(3080 steps, the D'Alembert form's Jacobian by differences)",
+        ("ball", "Radau", "lagrange", 1e-12): "49-64 s: scipy's Radau on the sliding ball's numeric path "
+                                               "(3022 steps)"}
 
 
 def _count_all_evaluations():
@@ -137,8 +205,11 @@ def run(build, t_end, method, formulation, rtol):
 _WARM = set()
 
 
-def row(case, method, formulation, rtol):
-    build, exact_times, t_end = CASES[case]
+def row(case, method, formulation, rtol, slow=False):
+    build, exact_times, t_end, located = CASES[case]
+    if not slow and (case, method, formulation, rtol) in SLOW:
+        return dict(case=case, method=method, formulation=formulation, setting=f"{rtol:g}", status="skipped",
+                    message=f"left out (--slow runs it): {SLOW[case, method, formulation, rtol]}")
     if (case, method, formulation) not in _WARM:  # the first run of a combination compiles and caches its program
         _WARM.add((case, method, formulation))
         run(build, t_end, method, formulation, 1e-3)
@@ -148,12 +219,12 @@ def row(case, method, formulation, rtol):
                setting=f"h={GENALPHA_H.get(rtol, 1e-3):g}" if method == "genalpha" else f"{rtol:g}")
     if res is None:
         return dict(out, status="refused", message=refused[:160])
-    impacts = [x.time for x in res.events if x.kind == "impact"]
-    exact = exact_times(len(impacts))
+    times = located(res)
+    exact = exact_times(len(times))
     free, cpu_free, _ = run(lambda: build(stops=False), t_end, method, formulation, rtol)
     st = res.stats
-    out.update(status=res.status, impacts=len(impacts),
-               max_dt=float(np.max(np.abs(np.array(impacts) - exact))) if impacts else np.nan,
+    out.update(status=res.status, events=len(times),
+               max_dt=float(np.max(np.abs(np.array(times) - exact))) if times else np.nan,
                steps=st.get("steps"), fevals=st.get("nfev_all", st.get("nfev")),
                event_evals=st.get("event_evaluations"), cpu_s=cpu,
                steps_free=free.stats.get("steps") if free else None,
@@ -175,8 +246,8 @@ def table(rows):
             f"{'ev-evals':>9}{'CPU s':>8}{'free steps':>11}{'free f-ev':>10}{'free CPU':>9}{'ratio':>7}")
     lines = [head, "-" * len(head)]
     for r in rows:
-        if r["status"] == "refused":
-            lines.append(f"{r['case']:<9}{r['method']:<9}{r['formulation']:<12}{r['setting']:>9}  refused: "
+        if r["status"] in ("refused", "skipped"):
+            lines.append(f"{r['case']:<9}{r['method']:<9}{r['formulation']:<12}{r['setting']:>9}  {r['status']}: "
                          f"{r['message'][:90]}")
             continue
         lines.append(f"{r['case']:<9}{r['method']:<9}{r['formulation']:<12}{r['setting']:>9}"
@@ -187,12 +258,22 @@ def table(rows):
     return "\n".join(lines)
 
 
+def _kept_rows(path, cases):
+    """The rows of the CSV at ``path`` (if any) of cases other than ``cases``: a run of some
+    cases replaces their rows and keeps the others'."""
+    if not os.path.exists(path):
+        return []
+    with open(path, newline="") as fh:
+        return [r for r in csv.DictReader(fh) if r.get("case") not in cases]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cases", default="rotor,pendulum")
+    ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--rtols", default="1e-6,1e-9,1e-12")
     ap.add_argument("--methods", default=",".join(SOLVERS))
     ap.add_argument("--out", default=str(HERE / "events.csv"))
+    ap.add_argument("--slow", action="store_true", help="also run the combinations of SLOW")
     args = ap.parse_args(argv)
     _count_all_evaluations()
     rtols = [float(x) for x in args.rtols.split(",")]
@@ -201,10 +282,11 @@ def main(argv=None):
         for method in args.methods.split(","):
             for formulation in FORMULATIONS:
                 for rtol in rtols:
-                    rows.append(row(case, method, formulation, rtol))
+                    rows.append(row(case, method, formulation, rtol, slow=args.slow))
                     if rows[-1]["status"] == "refused":
                         break  # refused at one tolerance: refused at all
     print(table(rows))
+    rows = _kept_rows(args.out, {r["case"] for r in rows}) + rows
     keys = list(dict.fromkeys(k for r in rows for k in r))
     with open(args.out, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=keys)

@@ -505,6 +505,8 @@ class Events:
         q, u = consistent(new, t, q, u)
         modes, new = self._break_away(t, q, u, modes)
         if any(p < 0.0 for d in self._pushes_in(new, modes, t, q, u).values() for p in d.values()):
+            for n in sorted(n for n in modes if modes[n] != self.modes.get(n)):  # the log says it stays
+                self._record(t, n, "pull", "release", {"mode": self.modes[n], "energy_loss": 0.0})
             modes, new = dict(self.modes), self.system_now()  # an engaged row that would pull: stay free
             q, u = consistent(new, t, q, u)
         self.slip_dirs = self._directions(t, q, u, modes, going_on)
