@@ -47,7 +47,7 @@ import numpy as np
 
 from ..errors import SimulationError
 from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
-from .contacts import contact_impact, contact_pushes, contact_rows, event_value
+from .contacts import contact_impact, contact_pushes, contact_rows, event_value, open_joints
 from ..solvers.compiled_rk import CompiledRK
 from .modes import consistent, impact_speeds, mode_rows, mode_system, row_push, row_values, start_modes
 from .slip import TURN, V_TINY, closed_force, slide_work, slip_dissipation, slipping_joints, slips_of, \
@@ -151,7 +151,7 @@ class Events:
         self.mode_log = [(-np.inf, dict(self.modes))]  # (time, modes from then on): the result's columns
         self.slip_dirs = {}  # {sliding contact: the unit direction (tangent coordinates) its slide started with}
         self.slip_log = []  # [(time, modes, slip_dirs, state before, state after)]: the start and every restart
-        self._slip_keys, self._before = set(), None
+        self._slip_keys, self._before, self._slip_peak = set(), None, {}
         self.slide_worked, self.work_log, self._worked_to = 0.0, [], None  # the sliding friction's work (J)
 
     @property
@@ -202,7 +202,9 @@ class Events:
             for ev_name, value, _ in e.comp.events(q[e.q], u[e.u], sysm.P[name], mode):
                 if isinstance(value, SlipSpeed):  # a slide's speed along its start direction
                     self._slip_keys.add(("joint", name, ev_name))
-                    out[("joint", name, ev_name)] = float(tangent_rows(sysm, name, t, q, u)[1] @ self.slip_dirs[name])
+                    v_t = tangent_rows(sysm, name, t, q, u)[1]
+                    self._slip_peak[name] = max(self._slip_peak.get(name, 0.0), float(np.linalg.norm(v_t)))
+                    out[("joint", name, ev_name)] = float(v_t @ self.slip_dirs[name])
                 else:
                     out[("joint", name, ev_name)] = event_value(sysm, name, value, t, q, u)
             if e.comp.mode_rows(sysm.P[name], mode):
@@ -351,11 +353,13 @@ class Events:
 
     def _turned(self, run, who, t_e, state, qu):
         """Whether the slide of ``who`` only turned (its slip speed ``|v_t|`` is more than
-        :data:`TURN` ``atol`` where its speed along the start direction passes zero): the run
+        :data:`TURN` ``atol + 10 rtol v_peak`` where its speed along the start direction passes
+        zero, ``v_peak`` the slide's fastest slip at a step's end so far: the integration's own
+        error across the slip is no turn): the run
         then slides on from ``t_e`` along the new direction (recorded as a ``"turn"``)."""
         nq = self.system.nq
         v_t = tangent_rows(self.system, who, t_e, state[:nq], state[nq:])[1]
-        if not np.linalg.norm(v_t) > TURN * self.atol:
+        if not np.linalg.norm(v_t) > TURN * self.atol + 10.0 * self.rtol * self._slip_peak.get(who, 0.0):
             return False
         turns = [r.time for r in self.records[-SPIN_TURNS:] if r.component == who and r.kind == "turn"]
         if len(turns) == SPIN_TURNS and t_e - turns[0] <= SPIN_SPAN * max(1.0, abs(t_e)):
@@ -376,12 +380,13 @@ class Events:
         return cone[0], comp.slip_friction(p, comp.on_event("slide", p, mode).mode)
 
     def _sliding_now(self, t, q, u, modes):
-        """``modes`` with the contacts held rolling (a friction cone) but slipping faster than
-        :data:`TURN` ``atol`` (after an impact that slid: the rolling rows would take the slip
-        away) switched to their sliding mode (``on_event("slide")``, recorded)."""
-        out = dict(modes)
+        """``modes`` with the contacts that land rolling (open before, a friction cone now) but
+        slip faster than :data:`TURN` ``atol`` (after an impact that slid: the rolling rows
+        would take the slip away) switched to their sliding mode (``on_event("slide")``,
+        recorded)."""
+        out, landed = dict(modes), set(open_joints(self.system, self.modes))  # only a contact that was open
         for n, mode in modes.items():
-            if self._cone(n, mode) is not None and np.linalg.norm(
+            if n in landed and self._cone(n, mode) is not None and np.linalg.norm(
                     tangent_rows(self.system, n, t, q, u)[1]) > TURN * self.atol:
                 out[n] = self.system._edge[n].comp.on_event("slide", self.system.P[n], mode).mode
                 self._record(t, n, "slide", "switch", {"mode": out[n], "energy_loss": 0.0})
@@ -396,6 +401,8 @@ class Events:
         load its rolling rows held."""
         dirs, fresh = {}, []
         for n in slipping_joints(self.system, modes):
+            if n not in going_on:  # a new slide: its fastest slip so far is its own
+                self._slip_peak.pop(n, None)
             v_t = tangent_rows(self.system, n, t, q, u)[1]
             if np.linalg.norm(v_t) > TURN * self.atol or (n in going_on and (np.linalg.norm(v_t) > V_TINY
                                                                               or n in self.slip_dirs)):
