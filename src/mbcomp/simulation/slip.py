@@ -66,16 +66,19 @@ import numpy as np
 from ..errors import SimulationError
 from ..modeling.events import ContactRow
 from .contacts import contact_rows, open_joints, tangent_force, without_rows
-from .modes import WrappingEvaluator
+from .modes import WrappingEvaluator, mode_system
+from .stickslip import with_mode_forces
 
 __all__ = ["slipping_joints", "cone_joints", "without_rolling", "tangent_rows", "friction_solve", "SlipEvaluator",
            "with_slip_friction", "slip_accelerations", "start_directions", "slip_columns", "slide_power", "slide_work", "slip_dissipation",
-           "V_TINY", "TURN"]
+           "SlideEvents", "V_TINY", "TURN", "SPIN_TURNS", "SPIN_SPAN"]
 
 #: m/s: a slip slower than this slides along the direction it started (or last turned) with
 V_TINY = 1e-12
 #: a slip-speed event with ``|v_t|`` above this times ``atol`` is a turn of a plane slip, not a stop
 TURN = 1e3
+#: a slide turning this many times within SPIN_SPAN max(1, |t|) seconds is taken as stopped
+SPIN_TURNS, SPIN_SPAN = 3, 1e-6
 
 
 def slipping_joints(system, modes):
@@ -407,3 +410,105 @@ def slip_dissipation(res, system, log, work_log, Y, system_now, judge=True):
         times, work = np.array(work_log).T
         _count_dissipation(res, np.interp(t, times, work), judge)
     return res
+
+
+class SlideEvents:
+    """The part of :class:`mbcomp.simulation.events.Events` that handles sliding contacts: a
+    start that rolls, start directions of new slides, turns of a plane slip, contacts that
+    land slipping, the cone of a contact's rolling mode and the friction's work along the
+    steps (see the module notes). Uses the events' ``system``, ``modes``, ``slip_dirs``,
+    ``records``, ``atol``/``rtol`` and their ``system_now``, ``_record`` and ``_restart``."""
+
+    def _slide_work(self, run, qu, t_to):
+        """Integrate the sliding contacts' friction loss from where it was integrated to up to
+        ``t_to`` (s) on the step's dense output ``qu`` (:func:`~mbcomp.simulation.slip.slide_work`),
+        recording the work done at ``t_to`` and at the output times passed."""
+        a, self._worked_to = self._worked_to, t_to
+        slips = slips_of(self.system, self.modes, self.slip_dirs)
+        if not slips or not t_to > a:
+            self.work_log.append((t_to, self.slide_worked))  # no slide: the work stays (a point to interpolate)
+            return
+        sysm = self.system_now()
+        cuts = [a] + [to for to in run.t_out if a < to < t_to] + [t_to]
+        for lo, hi in zip(cuts[:-1], cuts[1:]):
+            self.slide_worked += slide_work(sysm, slips, qu, lo, hi)
+            self.work_log.append((hi, self.slide_worked))
+
+    def _turned(self, run, who, t_e, state, qu):
+        """Whether the slide of ``who`` only turned (its slip speed ``|v_t|`` is more than
+        :data:`TURN` ``atol + 10 rtol v_peak`` where its speed along the start direction passes
+        zero, ``v_peak`` the slide's fastest slip at a step's end so far: the integration's own
+        error across the slip is no turn): the run
+        then slides on from ``t_e`` along the new direction (recorded as a ``"turn"``)."""
+        nq = self.system.nq
+        v_t = tangent_rows(self.system, who, t_e, state[:nq], state[nq:])[1]
+        if not np.linalg.norm(v_t) > TURN * self.atol + 10.0 * self.rtol * self._slip_peak.get(who, 0.0):
+            return False
+        turns = [r.time for r in self.records[-SPIN_TURNS:] if r.component == who and r.kind == "turn"]
+        if len(turns) == SPIN_TURNS and t_e - turns[0] <= SPIN_SPAN * max(1.0, abs(t_e)):
+            return False  # its direction spins as it dies (stiff near |v_t| = 0): taken as stopped
+        from .events import keep_until
+
+        keep_until(run, t_e, qu)
+        self.slip_dirs = {**self.slip_dirs, who: v_t / np.linalg.norm(v_t)}
+        self._record(t_e, who, "stop", "turn", {"mode": self.modes[who], "energy_loss": 0.0})
+        self._restart(run, t_e, state[:nq], state[nq:], dict(self.modes))
+        return True
+
+    def _cone(self, who, mode):
+        """``(mu_s, mu_k)`` of contact ``who`` rolling in ``mode`` (its row's friction cone, and
+        the kinetic coefficient of the mode its ``"slide"`` event goes to), or None."""
+        comp, p = self.system._edge[who].comp, self.system.P[who]
+        cone = [r.mu_s for r in comp.mode_rows(p, mode) if isinstance(r, ContactRow) and r.mu_s is not None]
+        if not cone:
+            return None
+        return cone[0], comp.slip_friction(p, comp.on_event("slide", p, mode).mode)
+
+    def _sliding_now(self, t, q, u, modes):
+        """``modes`` with the contacts that land rolling (open before, a friction cone now) but
+        slip faster than :data:`TURN` ``atol`` (after an impact that slid: the rolling rows
+        would take the slip away) switched to their sliding mode (``on_event("slide")``,
+        recorded)."""
+        out, landed = dict(modes), set(open_joints(self.system, self.modes))  # only a contact that was open
+        for n, mode in modes.items():
+            if n in landed and self._cone(n, mode) is not None and np.linalg.norm(
+                    tangent_rows(self.system, n, t, q, u)[1]) > TURN * self.atol:
+                out[n] = self.system._edge[n].comp.on_event("slide", self.system.P[n], mode).mode
+                self._record(t, n, "slide", "switch", {"mode": out[n], "energy_loss": 0.0})
+        return out
+
+    def _directions(self, t, q, u, modes, going_on):
+        """The start directions of the contacts sliding in ``modes`` at ``(t, q, u)``: a
+        slide going on (``going_on``: sliding before the event and after its action) takes
+        its slip velocity's direction (keeps its own below :data:`V_TINY`); a slide from
+        rolling (a break-away: its slip speed is the rolling rows' drift, of no direction)
+        starts along the direction of :func:`start_directions` nearest ``-F_t / |F_t|``, the
+        load its rolling rows held."""
+        dirs, fresh = {}, []
+        for n in slipping_joints(self.system, modes):
+            if n not in going_on:  # a new slide: its fastest slip so far is its own
+                self._slip_peak.pop(n, None)
+            v_t = tangent_rows(self.system, n, t, q, u)[1]
+            if np.linalg.norm(v_t) > TURN * self.atol or (n in going_on and (np.linalg.norm(v_t) > V_TINY
+                                                                              or n in self.slip_dirs)):
+                dirs[n] = v_t / np.linalg.norm(v_t) if np.linalg.norm(v_t) > V_TINY else self.slip_dirs[n]
+            else:
+                rolling = self.system._edge[n].comp.on_event("stop", self.system.P[n], modes[n]).mode
+                F = closed_force(self.system_now({**modes, n: rolling}), n, t, q, u)
+                size = float(np.linalg.norm(F))
+                dirs[n] = -F / size if size > 0.0 else np.eye(len(F))[0]
+                fresh.append(n)
+        if fresh:
+            plain = with_mode_forces(mode_system(self.system, modes), modes)  # the sliding mode without friction
+            dirs = start_directions(plain, slips_of(self.system, modes, dirs), t, q, u, fresh)
+        return dirs
+
+    def _rolling_at_start(self, t, q, u, modes):
+        """``modes`` with the contacts that start sliding (a contact with friction starts in
+        its sliding mode, its speeds as given) but whose slip speed is zero (at most
+        ``atol``) rolling (``on_event("stop")``)."""
+        out = dict(modes)
+        for n in slipping_joints(self.system, modes):
+            if np.linalg.norm(tangent_rows(self.system, n, t, q, u)[1]) <= self.atol:
+                out[n] = self.system._edge[n].comp.on_event("stop", self.system.P[n], modes[n]).mode
+        return out
