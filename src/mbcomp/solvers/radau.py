@@ -136,9 +136,7 @@ QUOT_KEEP = (1.0, 1.2)  # keep h (and the LU factors) when h_new/h lies in here
 MAX_SINGULAR = 5  # consecutive singular iteration matrices before giving up
 MAX_FAILURES = 60  # consecutive failed attempts within one step before giving up
 PIVOT_TOL = 50 * EPS  # |pivot| of the equilibrated matrix below this: singular (rank deficient)
-#: Shortest default first step (s): RADAU5's default ``H`` (Hairer & Wanner's advice for stiff
-#: problems with an initial transient). The ``0.01 ||y|| / ||dy/dt||`` rule only lengthens it:
-#: at a restart on a located root the rule's ``||y||`` is round-off (see ``_initial_step``).
+#: shortest default first step (s), RADAU5's default ``H``: see ``_initial_step``
 H_START = 1e-6
 
 
@@ -260,9 +258,7 @@ class Radau5(Stepper):
         Relative and absolute tolerance; a component's weight is
         ``atol + rtol * max(|y_old|, |y_new|)`` (divided by ``h**(index-1)``).
     first_step : float, optional
-        Initial step (s). Default: ``0.01 * ||y0|| / ||dy/dt||`` on the index-1 differential
-        rows (weighted), at least ``H_START`` (1e-6 s), at most ``|t_bound - t0|`` and
-        ``max_step``.
+        Initial step (s). Default: :meth:`_initial_step` (at least 1e-6 s).
     max_step : float, optional
         Largest step (s); default unbounded.
 
@@ -425,20 +421,12 @@ class Radau5(Stepper):
     # ------------------------------------------------------------------ initial step
     def _initial_step(self):
         """The first step (s): ``0.01 ||y|| / ||dy/dt||`` on the index-1 differential rows
-        (weighted), at least :data:`H_START`, at most the span and ``max_step``.
-
-        Only index-1 differential variables enter: a mechanism at rest has large accelerations
-        on its speed rows (index 2 in the index-3 form), and a step sized by them (1e-9 s for
-        Andrews) makes the index-3 iteration matrix numerically singular (its condition grows
-        like ``h**-3``). In the index-3 form those rows are the positions ``q`` alone (the
-        index-1 and GGL forms keep the speeds among them too), and a
-        run restarted at an event usually starts with one of them at a located root (a stop
-        at ``phi = 0``): its value is round-off (1e-16 .. 1e-15), ``||y||`` measures nothing,
-        and the ratio gave 1e-17 s, below the ``1e-14 |t|`` a step may not go under (the door,
-        ``models/door.py``, failed at its first impact at rtol <= 1e-8). The ratio is
-        therefore bounded below by RADAU5's own default first step, ``H_START``; a first step
-        that is too long costs a rejection (the first error test cuts ``h`` by 10).
-        """
+        (weighted), at least :data:`H_START`, at most the span and ``max_step``. Speed rows
+        (index 2 in the index-3 form) stay out: sized by a resting mechanism's accelerations
+        the step (1e-9 s for Andrews) leaves the index-3 matrix singular (condition ~h^-3).
+        A restart at a located root (a stop at ``phi = 0``) has round-off for ``||y||``: the
+        ratio gave 1e-17 s and the door failed at its impact; a too long first step costs a
+        rejection only."""
         span = self.t_bound - self.t
         diff = (self.mass != 0) & (self.index == 1)
         h0 = H_START
