@@ -246,13 +246,16 @@ OUTPUT_PROJECTION_LIMIT = 1e3
 
 
 def projected_output(run, t, y):
-    """The dense-output state ``y`` at output time ``t`` projected onto the constraints -- or
-    ``y`` itself where the projection would move it by more than
+    """The dense-output state ``y`` at output time ``t`` projected onto the constraints -- or,
+    in a run that passes singular positions (``singular="pass"``), ``y`` itself where the
+    projection would move it by more than
     :data:`OUTPUT_PROJECTION_LIMIT` times ``atol + rtol |y|``: the dense output is accurate
     to the tolerance, and a correction far beyond it is a Newton step along a nearly
     singular direction (an output 6e-4 s after a four-bar's flat position went 0.07 J off
     in energy, the passage itself and the steps unharmed)."""
     yp = run.form.project(t, y)
+    if getattr(run.form, "singular", "stop") != "pass":  # only a run passing singular positions
+        return yp  # (elsewhere a projection may complete what the state leaves free: the Cardan runs)
     scale = run.options["atol"] + run.options["rtol"] * np.abs(y)
     return yp if np.max(np.abs(yp - y) / scale, initial=0.0) <= OUTPUT_PROJECTION_LIMIT else y
 
