@@ -49,6 +49,8 @@ class Formulation:
         The stepper kind that can step it (see :mod:`mbcomp.solvers.base`).
     nfev, nlu : int
         Right-hand-side evaluations and linear solves (factorizations) so far.
+    singular : {"stop", "pass"}
+        What a singular position does to the run (only the Lagrange form passes them).
 
     Examples
     --------
@@ -66,6 +68,7 @@ class Formulation:
 
     stabilization = "none"
     problem = "ode"
+    singular = "stop"
 
     def __init__(self, system):
         self.system = system

@@ -67,7 +67,7 @@ from ..errors import SimulationError
 from ..modeling.events import ContactRow
 from .contacts import contact_rows, open_joints, tangent_force, without_rows
 from .modes import WrappingEvaluator, mode_system
-from .stickslip import with_mode_forces
+from .stickslip import ForcesAdded, with_mode_forces
 
 __all__ = ["slipping_joints", "cone_joints", "without_rolling", "tangent_rows", "friction_solve", "SlipEvaluator",
            "with_slip_friction", "slip_accelerations", "start_directions", "slip_columns", "slide_power", "slide_work", "slip_dissipation",
@@ -148,17 +148,16 @@ def friction_solve(system, ev, slips):
     for j, (name, mu, d) in enumerate(slips):
         C_t, v_t, _ = tangent_rows(system, name, ev.t, ev.q, ev.u, ev.jets)
         G[:, j] = -mu * (C_t.T @ slip_direction(v_t, d))
-    A = ev.A
-    m = A.shape[0]
-    K = np.zeros((nu + m, nu + m))
-    K[:nu, :nu], K[:nu, nu:], K[nu:, :nu] = ev.M, A.T, A
-    rhs = np.zeros((nu + m, 1 + k))
-    rhs[:nu, 0], rhs[nu:, 0] = ev.f, np.concatenate((-ev.cb, -ev.Bb))
-    rhs[:nu, 1:] = G
+    K, b = _saddle(ev, nu)
+    rhs = np.zeros((K.shape[0], 1 + k))
+    rhs[:, 0], rhs[:nu, 1:] = b, G
     try:
         X = np.linalg.solve(K, rhs)
     except np.linalg.LinAlgError:
-        raise SimulationError(f"the saddle-point matrix is singular at t={ev.t:g}") from None
+        names = ", ".join(n for n, _, _ in slips)
+        raise SimulationError(f"{names}: the saddle-point matrix of the sliding mode is singular at t={ev.t:.9g} s "
+                              "(the mechanism's rows are redundant there) -> remove the redundant support, or "
+                              "give the contact no friction") from None
     rows = [_normal_index(system, name) for name, _, _ in slips]
     lam0, L1 = X[nu:, 0][rows], X[nu:, 1:][rows, :]
     S = np.eye(k) + L1
@@ -173,12 +172,14 @@ def friction_solve(system, ev, slips):
     return ev.f + G @ N, N
 
 
-class _ForcesAdded:
-    def __init__(self, ev, f):
-        self._ev, self.f = ev, f
-
-    def __getattr__(self, name):
-        return getattr(self._ev, name)
+def _saddle(ev, nu):
+    """The index-1 saddle-point matrix ``[[M, A^T], [A, 0]]`` of the evaluation ``ev`` and its
+    right-hand side ``[f, -cb, -Bb]`` (no stabilization), as the Lagrange form solves it."""
+    A = ev.A
+    m = A.shape[0]
+    K = np.zeros((nu + m, nu + m))
+    K[:nu, :nu], K[:nu, nu:], K[nu:, :nu] = ev.M, A.T, A
+    return K, np.concatenate((ev.f, -ev.cb, -ev.Bb))
 
 
 class SlipEvaluator(WrappingEvaluator):
@@ -194,7 +195,7 @@ class SlipEvaluator(WrappingEvaluator):
         ev = self.inner.evaluate(t, q, u, masked)
         if not masked:
             return ev
-        return _ForcesAdded(ev, friction_solve(self.system, ev, self.slips)[0])
+        return ForcesAdded(ev, friction_solve(self.system, ev, self.slips)[0])
 
     def rebind(self, system, laws=False):
         return SlipEvaluator(self.inner.rebind(system, laws), system, self.slips)
@@ -222,11 +223,9 @@ def slip_accelerations(sysm, ev, slips):
     friction of ``slips`` (``[(contact, mu_k, direction)]``) applied (index-1 solve, the
     exact normal forces of :func:`friction_solve`)."""
     f, _ = friction_solve(sysm, ev, slips)
-    A = ev.A
-    nu, m = sysm.nu, A.shape[0]
-    K = np.zeros((nu + m, nu + m))
-    K[:nu, :nu], K[:nu, nu:], K[nu:, :nu] = ev.M, A.T, A
-    ud = np.linalg.lstsq(K, np.concatenate((f, -ev.cb, -ev.Bb)), rcond=1e-13)[0][:nu]
+    K, b = _saddle(ev, sysm.nu)
+    b[: sysm.nu] = f
+    ud = np.linalg.lstsq(K, b, rcond=1e-13)[0][: sysm.nu]
     out = {}
     for n, _, _ in slips:
         C_t, _, b_t = tangent_rows(sysm, n, ev.t, ev.q, ev.u, ev.jets)

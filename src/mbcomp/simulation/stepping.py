@@ -254,7 +254,7 @@ def projected_output(run, t, y):
     singular direction (an output 6e-4 s after a four-bar's flat position went 0.07 J off
     in energy, the passage itself and the steps unharmed)."""
     yp = run.form.project(t, y)
-    if getattr(run.form, "singular", "stop") != "pass":  # only a run passing singular positions
+    if run.form.singular != "pass":  # only a run passing singular positions
         return yp  # (elsewhere a projection may complete what the state leaves free: the Cardan runs)
     scale = run.options["atol"] + run.options["rtol"] * np.abs(y)
     return yp if np.max(np.abs(yp - y) / scale, initial=0.0) <= OUTPUT_PROJECTION_LIMIT else y

@@ -35,7 +35,7 @@ import numpy as np
 
 from .modes import WrappingEvaluator
 
-__all__ = ["row_events", "with_mode_forces", "ForceEvaluator", "friction_columns"]
+__all__ = ["row_events", "with_mode_forces", "ForceEvaluator", "ForcesAdded", "friction_columns"]
 
 
 def row_events(name, row, push):
@@ -65,7 +65,7 @@ def mode_forces(system, modes):
     return out
 
 
-class _ForcesAdded:
+class ForcesAdded:
     """An evaluation whose generalized forces ``f`` carry the modes' forces."""
 
     def __init__(self, ev, f):
@@ -88,7 +88,7 @@ class ForceEvaluator(WrappingEvaluator):
         f = np.array(ev.f, dtype=float)
         for iu, value in self.forces:
             f[iu] += value
-        return _ForcesAdded(ev, f)
+        return ForcesAdded(ev, f)
 
     def rebind(self, system, laws=False):
         return ForceEvaluator(self.inner.rebind(system, laws), self.forces)
