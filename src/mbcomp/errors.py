@@ -1,7 +1,7 @@
 """Errors a modeller sees: each names the component, the port or parameter, and the fix."""
 from __future__ import annotations
 
-__all__ = ["ModelError", "InitializationError", "SimulationError", "Problem"]
+__all__ = ["ModelError", "InitializationError", "SimulationError", "SimulationInterrupted", "Problem"]
 
 
 class Problem:
@@ -57,3 +57,34 @@ class SimulationError(RuntimeError):
     The simulation driver catches it and returns a ``Result`` with ``status`` set,
     so results computed up to the failure are never lost.
     """
+
+
+class SimulationInterrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT) or SIGTERM stopped :func:`mbcomp.simulate`; the run's results up to
+    the last accepted step are kept in :attr:`result` (status ``"interrupted"``).
+
+    It is a :class:`KeyboardInterrupt`, so a script that does not catch it stops as it would
+    on Ctrl-C instead of carrying on as if the run had finished; ``except Exception`` does
+    not swallow it.
+
+    Attributes
+    ----------
+    result : mbcomp.simulation.result.Result
+        The partial result (``result.message`` says when and by what the run was stopped).
+    signal : str
+        ``"SIGINT"`` or ``"SIGTERM"``.
+
+    Examples
+    --------
+    >>> from mbcomp.errors import SimulationInterrupted
+    >>> e = SimulationInterrupted(None, "SIGTERM", "interrupted by SIGTERM at t=0.5 s")
+    >>> isinstance(e, KeyboardInterrupt), e.signal, str(e)
+    (True, 'SIGTERM', 'interrupted by SIGTERM at t=0.5 s')
+    """
+
+    def __init__(self, result, signal, message):
+        super().__init__(message)
+        self.result, self.signal = result, signal
+
+    def __reduce__(self):  # picklable with its result (a study's worker hands it back)
+        return type(self), (self.result, self.signal, str(self))
