@@ -102,10 +102,14 @@ def check_singular(singular, method, stepper, formulation, stabilization):
 def system_of(model, params, backend):
     """The system to run: ``model`` assembled (or an assembled system, with ``params``
     applied), traced into a generated program unless ``backend`` is ``"numeric"`` or it
-    already runs one."""
+    already runs one.
+
+    A system passed in is never the one run: the run works on its own copy (same topology,
+    parameter values and program), as initialization chooses the constraint rows kept
+    (``row_mask``) and a run may choose them again; the caller's system is left as it was."""
     if isinstance(model, MultibodySystem):
         try:
-            system = model.with_params(params) if params else model
+            system = model.with_params(params or {})
         except Exception as exc:  # a law given in params that its program cannot hold: numeric, said once
             from ..codegen import CodegenError
 
