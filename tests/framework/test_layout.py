@@ -1,8 +1,15 @@
 """The package layout is the pipeline: layers import only downwards, the framework never
-imports the component library, files and functions stay small enough to read.
+imports the component library, no import cycles (imports inside functions count), no module
+uses another module's private names or another object's private attributes.
 
-These are structural invariants of the restructure (issue 14); each can fail when someone
-adds an upward import, a library import in the framework, or grows a module past its limit.
+These are structural invariants of the restructure (issues 14 and 30); each can fail when
+someone adds an upward import, a library import in the framework, a cycle hidden in a
+function, or a reach into another module's ``_private`` names.
+
+File and function length are a hint, not a design rule: the limits below stay as an alarm
+that a module or function may hold more than one responsibility, but code is split by
+responsibility (what it computes, for whom), never moved just to get under a count. A
+function over the limit says why on a ``# long:`` line.
 """
 import ast
 import pathlib
@@ -15,7 +22,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 SRC = ROOT / "src" / "mbcomp"
 
 #: the pipeline, in import order; a module may import its own layer and the layers before it
-LAYERS = ["errors", "geometry", "modeling", "assembly", "formulations", "solvers", "codegen", "visual", "simulation",
+LAYERS = ["errors", "geometry", "modeling", "assembly", "formulations", "solvers", "codegen", "visual", "hybrid", "simulation",
           "analysis", "export", "cli"]
 #: the only imports against the pipeline's direction, each a public method that is a facade
 #: of a later stage (imported inside the method, on call): (importing file, imported module) -> why
@@ -36,27 +43,43 @@ def _layer(parts):
     return parts[0] if parts[0] in LAYERS else None
 
 
-def _imports(path, parts, top_level_only=False):
-    """Every ``mbcomp`` module a file imports (top level and inside functions, or top level
-    only), as ``(part tuple, line)``."""
+def _imports(path, parts):
+    """Every ``mbcomp`` import of a file, at the top level and inside functions alike (an
+    import in a function runs as surely as one at the top, only later), as ``(target parts,
+    line, names)``: ``names`` are what a ``from ... import`` takes from the target (``[]``
+    for ``import mbcomp.x`` and ``from . import x``, whose target is the module ``x``)."""
     tree = ast.parse(path.read_text())
     pkg = parts[:-1]
-    for node in (tree.body if top_level_only else ast.walk(tree)):
+    for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom):
             if node.level:
                 base = list(pkg[: len(pkg) - node.level + 1])
                 mod = base + (node.module.split(".") if node.module else [])
                 if node.module is None:  # from . import x
                     for a in node.names:
-                        yield tuple(mod + [a.name]), node.lineno
+                        yield tuple(mod + [a.name]), node.lineno, []
                 else:
-                    yield tuple(mod), node.lineno
+                    yield tuple(mod), node.lineno, [a.name for a in node.names]
             elif node.module and node.module.split(".")[0] == "mbcomp":
-                yield tuple(node.module.split(".")[1:]), node.lineno
+                yield tuple(node.module.split(".")[1:]), node.lineno, [a.name for a in node.names]
         elif isinstance(node, ast.Import):
             for a in node.names:
                 if a.name.split(".")[0] == "mbcomp":
-                    yield tuple(a.name.split(".")[1:]), node.lineno
+                    yield tuple(a.name.split(".")[1:]), node.lineno, []
+
+
+def _is_module(target):
+    """Whether the part tuple ``target`` names an mbcomp module or package."""
+    return bool(target) and (SRC.joinpath(*target).with_suffix(".py").exists()
+                             or (SRC.joinpath(*target) / "__init__.py").exists())
+
+
+def _name(parts):
+    return ".".join(parts).removesuffix(".__init__") or "mbcomp"
+
+
+def _private(name):
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
 
 
 def test_layers_import_only_downwards():
@@ -65,7 +88,7 @@ def test_layers_import_only_downwards():
         me = _layer(parts)
         if me is None:  # mbcomp/__init__.py and the alias table sit above the pipeline
             continue
-        for target, line in _imports(path, parts):
+        for target, line, _ in _imports(path, parts):
             if not target:
                 continue
             if target[0] == "library":
@@ -138,19 +161,151 @@ def test_old_module_paths_are_the_new_modules():
         assert importlib.import_module(f"mbcomp.{old}") is importlib.import_module(f"mbcomp.{new}"), old
 
 
+def _import_graph():
+    """The module import graph: ``{(importer, imported): [file:line, ...]}`` over every
+    import, top level or inside a function (``from pkg import sub`` imports ``pkg.sub``)."""
+    edges = {}
+    for path, parts in _modules():
+        me = _name(parts)
+        for t, line, names in _imports(path, parts):
+            for target in [t] + [t + (n,) for n in names]:
+                if _is_module(target) and _name(target) != me:
+                    edges.setdefault((me, _name(target)), []).append(f"{path.relative_to(ROOT)}:{line}")
+    return edges
+
+
 def test_no_import_cycles():
-    """Module-level imports between mbcomp modules form no cycle (imports inside functions
-    are allowed to break one, and are listed by the layer test above)."""
+    """No set of mbcomp modules imports each other in a circle, counting the imports inside
+    functions: a function-local import hides a cycle from Python's loader, not from the
+    design (the two modules still cannot be understood, tested or changed one without the
+    other). Every strongly connected component of the import graph is reported, with the
+    imports that close it."""
     import networkx as nx
 
-    g = nx.DiGraph()
+    edges = _import_graph()
+    g = nx.DiGraph(list(edges))
+    sccs = sorted(sorted(c) for c in nx.strongly_connected_components(g) if len(c) > 1)
+    report = []
+    for c in sccs:
+        inside = [f"    {a} -> {b} ({', '.join(edges[a, b])})" for a, b in sorted(g.subgraph(c).edges)]
+        report.append(f"{{{', '.join(c)}}}:\n" + "\n".join(inside))
+    assert not sccs, f"{len(sccs)} import cycles (strongly connected components):\n" + "\n".join(report)
+
+
+def test_no_module_imports_another_modules_private_names():
+    """No module imports another module's private names: a name with one leading underscore
+    (``_x``, dunders aside) belongs to the module that defines it, which may change it
+    without looking elsewhere. What another module needs is public (no underscore, in
+    ``__all__`` where the module has one) in the module whose responsibility it is.
+
+    The precise rule: ``from m import _x`` is refused whenever ``_x`` is a name defined in
+    ``m``; a private *module* ``p._m`` (a file whose name starts with ``_``) is private to its
+    package ``p``: ``p/__init__.py`` and the modules directly in ``p`` may import it
+    (``from . import _aliases`` in ``mbcomp/__init__.py``), no module elsewhere may."""
+    bad = []
     for path, parts in _modules():
-        me = ".".join(parts).removesuffix(".__init__")
-        for t, _ in _imports(path, parts, top_level_only=True):
-            if SRC.joinpath(*t).with_suffix(".py").exists() or (SRC.joinpath(*t) / "__init__.py").exists():
-                g.add_edge(me, ".".join(t))
-    cycles = list(nx.simple_cycles(g))
-    assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles[:5])
+        where = f"{path.relative_to(ROOT)}"
+        pkg = parts[:-1]
+        for t, line, names in _imports(path, parts):
+            for k, part in enumerate(t):
+                if _private(part) and pkg != t[:k]:
+                    bad.append(f"{where}:{line} imports the private module mbcomp.{'.'.join(t[:k + 1])}")
+                    break
+            for n in names:
+                if not _private(n):
+                    continue
+                if _is_module(t + (n,)):
+                    if pkg != t:
+                        bad.append(f"{where}:{line} imports the private module mbcomp.{_name(t + (n,))}")
+                else:
+                    bad.append(f"{where}:{line} imports {n} from mbcomp.{_name(t)}")
+    assert not bad, f"{len(bad)} imports of another module's private names:\n" + "\n".join(bad)
+
+
+class _PrivateReads(ast.NodeVisitor):
+    """Reads of private attributes through anything but the method's own receiver.
+
+    The receiver is the first parameter of a function defined directly in a class body
+    (``self``, ``cls``, or any other name: ``def __lt__(a, b)``), except for static methods,
+    and ``super()``; functions nested in a method see their method's receiver. Attribute
+    access (``obj._x``), ``getattr``/``hasattr``/``setattr``/``delattr`` with a literal
+    ``"_x"`` and ``obj.__dict__`` lookups of a literal ``"_x"`` all count."""
+
+    ACCESSORS = ("getattr", "hasattr", "setattr", "delattr")
+
+    def __init__(self, where):
+        self.where, self.receivers, self.found = where, [frozenset()], []
+
+    def visit_ClassDef(self, node):
+        for item in node.body:
+            if isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                self._function(item, method=True)
+            else:
+                self.visit(item)
+
+    def visit_FunctionDef(self, node):
+        self._function(node, method=False)
+
+    visit_AsyncFunctionDef = visit_FunctionDef
+
+    def _function(self, node, method):
+        static = any(isinstance(d, ast.Name) and d.id == "staticmethod" for d in node.decorator_list)
+        own = self.receivers[-1]
+        if method:
+            first = (node.args.posonlyargs + node.args.args)[:1]
+            own = frozenset(a.arg for a in first) if first and not static else frozenset()
+        self.receivers.append(own)
+        self.generic_visit(node)
+        self.receivers.pop()
+
+    def _own(self, value):
+        if isinstance(value, ast.Name):
+            return value.id in self.receivers[-1]
+        return isinstance(value, ast.Call) and isinstance(value.func, ast.Name) and value.func.id == "super"
+
+    def _report(self, node, what):
+        self.found.append(f"{self.where}:{node.lineno} {what}")
+
+    def visit_Attribute(self, node):
+        if _private(node.attr) and not self._own(node.value):
+            self._report(node, f"{ast.unparse(node.value)}.{node.attr}")
+        self.generic_visit(node)
+
+    def visit_Call(self, node):
+        f, args = node.func, node.args
+        key = None
+        if isinstance(f, ast.Name) and f.id in self.ACCESSORS and len(args) >= 2:
+            obj, key = args[0], args[1]
+        elif isinstance(f, ast.Attribute) and f.attr in ("get", "pop", "setdefault") and args \
+                and isinstance(f.value, ast.Attribute) and f.value.attr == "__dict__":
+            obj, key = f.value.value, args[0]
+        if isinstance(key, ast.Constant) and isinstance(key.value, str) and _private(key.value) \
+                and not self._own(obj):
+            self._report(node, ast.unparse(node)[:80])
+        self.generic_visit(node)
+
+    def visit_Subscript(self, node):
+        v, key = node.value, node.slice
+        if isinstance(v, ast.Attribute) and v.attr == "__dict__" and isinstance(key, ast.Constant) \
+                and isinstance(key.value, str) and _private(key.value) and not self._own(v.value):
+            self._report(node, ast.unparse(node)[:80])
+        self.generic_visit(node)
+
+
+def test_no_module_reads_another_objects_private_attributes():
+    """No code reads or writes a private attribute (``obj._x``) of any object but its own
+    receiver (``self``, ``cls``, ``super()``; see :class:`_PrivateReads`): what another stage
+    needs from an object is a public method or attribute of that object, so the object can
+    change its insides without breaking its users (e.g. ``MultibodySystem._edge`` is read
+    through a public accessor outside ``assembly/system.py``). There is no exception list:
+    a module that needs another instance's insides of its own class asks it through a
+    public method as everyone else does."""
+    bad = []
+    for path, _ in _modules():
+        v = _PrivateReads(str(path.relative_to(ROOT)))
+        v.visit(ast.parse(path.read_text()))
+        bad += v.found
+    assert not bad, f"{len(bad)} reads of another object's private attributes:\n" + "\n".join(bad)
 
 
 def test_every_path_in_the_architecture_exists():
