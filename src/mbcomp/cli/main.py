@@ -38,7 +38,7 @@ import sys
 from ..errors import SimulationError
 from . import bench, export, info, simulate, stability, study
 from .loader import load_model_file, parse_value
-from .stability import parse_sweep
+from .sweep import parse_sweep
 
 __all__ = ["main", "make_parser", "load_model_file", "parse_value", "parse_sweep"]
 

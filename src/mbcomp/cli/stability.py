@@ -13,10 +13,10 @@ is exit status 1.
 
 Examples
 --------
->>> from mbcomp.cli.stability import parse_sweep
->>> name, grid = parse_sweep("v=0:10:11")
->>> name, float(grid[1]), len(grid)
-('v', 1.0, 11)
+>>> from mbcomp.cli.main import make_parser
+>>> args = make_parser().parse_args(["stability", "models/bicycle.py", "--steady", "hinge.w=0"])
+>>> args.steady, args.func.__name__
+('hinge.w=0', 'cmd_stability')
 """
 from __future__ import annotations
 
@@ -25,69 +25,13 @@ import sys
 
 import numpy as np
 
-from ..errors import ModelError, SimulationError
+from ..errors import SimulationError
 from .loader import call_build, check_output, load_model_file, split_params
+from .messages import one_line
+from .sweep import stability_sweep, sweep_on_executor
 
-__all__ = ["cmd_stability", "parse_sweep", "one_line", "add_parser"]
+__all__ = ["cmd_stability", "add_parser"]
 
-_SWEEP_HINT = "write --sweep name=start:stop:count with start < stop and an integer count >= 2, e.g. spin=1:5:9"
-
-
-def parse_sweep(spec):
-    """``"name=start:stop:count"`` -> ``(name, grid)`` with ``grid = linspace(start, stop, count)``.
-
-    Examples
-    --------
-    >>> from mbcomp.cli import parse_sweep
-    >>> parse_sweep("spin=1:5:5")
-    ('spin', array([1., 2., 3., 4., 5.]))
-    """
-    text = str(spec).strip()
-    name, sep, rng = text.partition("=")
-    name, parts = name.strip(), rng.split(":")
-    if not sep or not name or len(parts) != 3:
-        raise ValueError(f"--sweep {text!r}: {_SWEEP_HINT}")
-    try:
-        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
-    except ValueError:
-        raise ValueError(f"--sweep {text!r}: start and stop must be numbers and count an integer; "
-                         f"{_SWEEP_HINT}") from None
-    if not (np.isfinite(start) and np.isfinite(stop) and start < stop and count >= 2):
-        raise ValueError(f"--sweep {text!r}: {_SWEEP_HINT}")
-    return name, np.linspace(start, stop, count)
-
-
-def one_line(exc):
-    """An error as one line: a ModelError's header and every problem, joined by ``;``.
-
-    Examples
-    --------
-    >>> from mbcomp.errors import ModelError, Problem
-    >>> one_line(ModelError([Problem("a.m", "is negative", "give m >= 0"), Problem("b", "x", "y")]))
-    'model has problems: a.m: is negative -> fix: give m >= 0; b: x -> fix: y'
-    """
-    problems = getattr(exc, "problems", None)
-    if isinstance(exc, ModelError) and problems:
-        head = str(exc).splitlines()[0].rstrip(":")
-        head = head.rsplit(" (", 1)[0] if head.endswith(")") else head
-        return f"{head}: " + "; ".join(" ".join(str(p).split()) for p in problems)
-    return " ".join(str(exc).split())
-
-
-def _complex(z):
-    return f"{z.real:+.6g}" if z.imag == 0 else f"{z.real:+.6g}{z.imag:+.6g}j"
-
-
-def _top(eigs):
-    """The eigenvalues whose real part is (within the classification tolerance) the largest."""
-    e = np.asarray(eigs, complex)
-    e = e[np.isfinite(e)]
-    if not e.size:
-        return "-"
-    tol = 1e-7 * (1.0 + np.abs(e).max())  # the classification's: parts below it print as 0
-    sel = e[e.real >= e.real.max() - tol]
-    sel = np.where(np.abs(sel.real) <= tol, 0.0, sel.real) + 1j * np.where(np.abs(sel.imag) <= tol, 0.0, sel.imag)
-    return ", ".join(_complex(z) for z in sel[:4]) + (", ..." if sel.size > 4 else "")
 
 
 def _eigen_plot(groups, path, title):
@@ -143,10 +87,8 @@ def _stability(args):
         except ValueError as exc:
             raise ValueError(f"--steady: {exc}") from None
     if args.sweep:
-        from .sweep import stability_sweep
-
         if args.executor:
-            return _sweep_on_executor(args, mod, build_kw, runtime, steady, title)
+            return sweep_on_executor(args, mod, build_kw, runtime, steady, title)
         return stability_sweep(args, mod, build_kw, runtime, steady, title)
     if args.executor:
         raise ValueError("--executor spreads the values of a --sweep over workers, and there is no --sweep -> add "
@@ -155,78 +97,6 @@ def _stability(args):
     if steady is None:
         return _start_state(args, system, title)
     return _steady_states(args, system, steady, title)
-
-
-#: (model path, build arguments, runtime values, backend) -> this process's system, for _FileModel
-_BASES = {}
-
-
-class _FileModel:
-    """The model of a ``--sweep`` at one value, made from the model file's path: what an
-    executor's worker receives (a module-level class, so it pickles) -- the same model as
-    :meth:`mbcomp.cli.sweep.Sweep.make` makes in this process."""
-
-    def __init__(self, path, build_kw, runtime, name, backend):
-        self.path, self.build_kw, self.runtime = str(pathlib.Path(path).resolve()), dict(build_kw), dict(runtime)
-        self.name, self.backend = name, backend
-
-    def __call__(self, v):
-        from ..analysis import stability as st
-
-        mod = _module_at(self.path)
-        if "." not in self.name:
-            return call_build(mod, {**self.build_kw, self.name: v}, self.path)
-        key = (self.path, repr(sorted(self.build_kw.items())), repr(sorted(self.runtime.items())), self.backend)
-        if key not in _BASES:
-            _BASES[key] = st.system_for(call_build(mod, self.build_kw, self.path), self.runtime or None, self.backend)
-        return _BASES[key].with_params({self.name: v})
-
-
-class _StartLinearization:
-    """Linearization about the start state, as :meth:`mbcomp.cli.sweep.Sweep.analyze` does
-    without ``--steady`` (module-level: it pickles)."""
-
-    def __init__(self, params, backend):
-        self.params, self.backend = params, backend
-
-    def __call__(self, mdl):
-        from ..analysis import stability as st
-
-        return st.linearize(mdl, params=self.params, backend=self.backend)
-
-
-_MODULES = {}
-
-
-def _module_at(path):
-    if path not in _MODULES:
-        _MODULES[path] = load_model_file(path)
-    return _MODULES[path]
-
-
-def _sweep_on_executor(args, mod, build_kw, runtime, steady, title):
-    """``--sweep`` with ``--executor``: the grid's linearizations as tasks on the executor,
-    printed and written as the serial sweep is."""
-    from ..analysis import stability as st
-    from ..analysis.parallel import executor_of
-    from .sweep import Sweep, _changes, _table, _write
-
-    if steady is not None:
-        raise ValueError("--executor with --steady: the steady state is followed from one value to the next "
-                         "(continuation), which runs in order -> drop --executor, or drop --steady to linearize "
-                         "about each start state")
-    run = Sweep(args, mod, build_kw, runtime, None, title)  # checks the name and the first value
-    make = _FileModel(args.model, build_kw, runtime, run.name, args.backend)
-    executor, owned = executor_of(args.executor, args.workers)
-    try:
-        sw = st.sweep(make, run.name, run.grid, analyze=_StartLinearization(run.params, args.backend),
-                      executor=executor, progress=True)
-    finally:
-        if owned:
-            executor.shutdown()
-    _table(run, sw)
-    _write(run, sw, *_changes(run, sw))
-    return 0
 
 
 def _start_state(args, system, title):

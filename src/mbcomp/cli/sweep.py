@@ -6,7 +6,8 @@ set at run time, nothing re-derived). At each value the model is linearized abou
 state or, with ``--steady``, about a steady state solved there: the one nearest the model's
 start values at the first value, then the one nearest the branch followed so far
 (continuation). :func:`mbcomp.analysis.stability.sweep` locates where the classification
-changes.
+changes. With ``--executor`` (:func:`sweep_on_executor`) the values' linearizations about the
+start states are tasks on workers, each worker making the model from the file's path.
 
 Examples
 --------
@@ -18,14 +19,41 @@ Examples
 from __future__ import annotations
 
 import inspect
+import pathlib
 
 import numpy as np
 
 from ..errors import ModelError, SimulationError
-from .loader import call_build, takes
-from .stability import _top, one_line, parse_sweep
+from .loader import call_build, load_model_file, takes
+from .messages import dominant_eigenvalues, one_line
 
-__all__ = ["stability_sweep", "Sweep"]
+__all__ = ["stability_sweep", "sweep_on_executor", "parse_sweep", "Sweep"]
+
+_SWEEP_HINT = "write --sweep name=start:stop:count with start < stop and an integer count >= 2, e.g. spin=1:5:9"
+
+
+def parse_sweep(spec):
+    """``"name=start:stop:count"`` -> ``(name, grid)`` with ``grid = linspace(start, stop, count)``.
+
+    Examples
+    --------
+    >>> from mbcomp.cli.sweep import parse_sweep
+    >>> parse_sweep("spin=1:5:5")
+    ('spin', array([1., 2., 3., 4., 5.]))
+    """
+    text = str(spec).strip()
+    name, sep, rng = text.partition("=")
+    name, parts = name.strip(), rng.split(":")
+    if not sep or not name or len(parts) != 3:
+        raise ValueError(f"--sweep {text!r}: {_SWEEP_HINT}")
+    try:
+        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise ValueError(f"--sweep {text!r}: start and stop must be numbers and count an integer; "
+                         f"{_SWEEP_HINT}") from None
+    if not (np.isfinite(start) and np.isfinite(stop) and start < stop and count >= 2):
+        raise ValueError(f"--sweep {text!r}: {_SWEEP_HINT}")
+    return name, np.linspace(start, stop, count)
 
 
 class Sweep:
@@ -134,7 +162,7 @@ def _table(run, sw):
             z = run.solved.get(float(v))
             row += "  " + "  ".join(f"{x:>14.8g}" if z is not None else f"{'-':>14}" for x in
                                     (z if z is not None else run.names))
-        print(row + "  " + (_top(sw.eigenvalues[k]) if sw.classifications[k] != "failed" else "-"))
+        print(row + "  " + (dominant_eigenvalues(sw.eigenvalues[k]) if sw.classifications[k] != "failed" else "-"))
     print()
 
 
@@ -186,6 +214,77 @@ def stability_sweep(args, mod, build_kw, runtime, steady, title):
     """
     run = Sweep(args, mod, build_kw, runtime, steady, title)
     sw = run.run()
+    _table(run, sw)
+    _write(run, sw, *_changes(run, sw))
+    return 0
+
+
+#: (model path, build arguments, runtime values, backend) -> this process's system, for _FileModel
+_BASES = {}
+
+
+class _FileModel:
+    """The model of a ``--sweep`` at one value, made from the model file's path: what an
+    executor's worker receives (a module-level class, so it pickles) -- the same model as
+    :meth:`Sweep.make` makes in this process."""
+
+    def __init__(self, path, build_kw, runtime, name, backend):
+        self.path, self.build_kw, self.runtime = str(pathlib.Path(path).resolve()), dict(build_kw), dict(runtime)
+        self.name, self.backend = name, backend
+
+    def __call__(self, v):
+        from ..analysis import stability as st
+
+        mod = _module_at(self.path)
+        if "." not in self.name:
+            return call_build(mod, {**self.build_kw, self.name: v}, self.path)
+        key = (self.path, repr(sorted(self.build_kw.items())), repr(sorted(self.runtime.items())), self.backend)
+        if key not in _BASES:
+            _BASES[key] = st.system_for(call_build(mod, self.build_kw, self.path), self.runtime or None, self.backend)
+        return _BASES[key].with_params({self.name: v})
+
+
+class _StartLinearization:
+    """Linearization about the start state, as :meth:`Sweep.analyze` does
+    without ``--steady`` (module-level: it pickles)."""
+
+    def __init__(self, params, backend):
+        self.params, self.backend = params, backend
+
+    def __call__(self, mdl):
+        from ..analysis import stability as st
+
+        return st.linearize(mdl, params=self.params, backend=self.backend)
+
+
+_MODULES = {}
+
+
+def _module_at(path):
+    if path not in _MODULES:
+        _MODULES[path] = load_model_file(path)
+    return _MODULES[path]
+
+
+def sweep_on_executor(args, mod, build_kw, runtime, steady, title):
+    """``--sweep`` with ``--executor``: the grid's linearizations as tasks on the executor,
+    printed and written as the serial sweep is."""
+    from ..analysis import stability as st
+    from ..analysis.parallel import executor_of
+
+    if steady is not None:
+        raise ValueError("--executor with --steady: the steady state is followed from one value to the next "
+                         "(continuation), which runs in order -> drop --executor, or drop --steady to linearize "
+                         "about each start state")
+    run = Sweep(args, mod, build_kw, runtime, None, title)  # checks the name and the first value
+    make = _FileModel(args.model, build_kw, runtime, run.name, args.backend)
+    executor, owned = executor_of(args.executor, args.workers)
+    try:
+        sw = st.sweep(make, run.name, run.grid, analyze=_StartLinearization(run.params, args.backend),
+                      executor=executor, progress=True)
+    finally:
+        if owned:
+            executor.shutdown()
     _table(run, sw)
     _write(run, sw, *_changes(run, sw))
     return 0
