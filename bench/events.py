@@ -18,7 +18,7 @@ Three cases with closed-form event times (issue 22, item 6):
   rolling mode ``closed``) at ``t* = (v0 + r w_b) / (3.5 mu_k g) = 0.757245 s``, then rolls at
   ``(5 v0 - 2 r w_b) / 7``. The sliding motion is quadratic in t, so the error is again the
   location's, on the numeric path a sliding contact runs on (see
-  :mod:`mbcomp.simulation.slip`).
+  :mod:`mbcomp.hybrid.slip`).
 
 Each formulation (lagrange, dalembert) x solver (dop853, dopri5 -- the C integrators, stepped
 one step at a time in Python when there are events --, radau5, ida, genalpha; and scipy's

@@ -302,7 +302,7 @@ class DiskContact(Frictional, Joint):
         P = self._rim(a, b, p).P if p.surface is not None else self._geometry(a, b, p)[1]
         out = {"N": -lam.get("normal", np.nan), "F_long": -lam.get("longitudinal", np.nan),
                "F_lat": -lam.get("lateral", np.nan)}
-        if p.friction is not None:  # the sliding friction's power: the run fills it in (mbcomp.simulation.slip)
+        if p.friction is not None:  # the sliding friction's power: the run fills it in (mbcomp.hybrid.slip)
             out["power"] = 0.0
         out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
         return out
@@ -426,7 +426,7 @@ class SphereContact(Frictional, Joint):
     def outputs(self, a, b, p, lam):
         P = surface_geometry(p.surface, a, b, p.r).P if p.surface is not None else self._geometry(a, b, p)[1]
         out = {"N": -lam.get("normal", np.nan), "F_1": -lam.get("slip_1", np.nan), "F_2": -lam.get("slip_2", np.nan)}
-        if p.friction is not None:  # the sliding friction's power: the run fills it in (mbcomp.simulation.slip)
+        if p.friction is not None:  # the sliding friction's power: the run fills it in (mbcomp.hybrid.slip)
             out["power"] = 0.0
         out.update({f"p.{ax}": P.val[i] for i, ax in enumerate("xyz")})
         return out

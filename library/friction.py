@@ -3,7 +3,7 @@
 A :class:`~mbcomp.library.Prismatic` or :class:`~mbcomp.library.Revolute` takes
 ``friction=SlidingFriction(mu_s, mu_k, normal)`` or ``friction=CoulombBearing(torque_max,
 torque_c)``. The joint then has three modes (the event contract of
-:mod:`mbcomp.modeling.events`; the run's side: :mod:`mbcomp.simulation.stickslip`):
+:mod:`mbcomp.modeling.events`; the run's side: :mod:`mbcomp.hybrid.friction`):
 
 * ``"stick"``: a row holds the joint's rate at zero (a
   :class:`~mbcomp.modeling.events.StickRow`); its push, the friction force (N) or torque
@@ -150,7 +150,7 @@ class ContactFriction(_Coulomb):
     (sticks) while the rolling rows' force stays in the cone ``|F_t| <= mu_s N`` and slides
     with ``-mu_k N`` against the slip velocity otherwise, ``N`` the contact's normal force
     (its row's multiplier, not a parameter). Pass it as ``SphereContact(unilateral=True,
-    friction=ContactFriction(mu_s, mu_k))``; the run's side is :mod:`mbcomp.simulation.slip`.
+    friction=ContactFriction(mu_s, mu_k))``; the run's side is :mod:`mbcomp.hybrid.slip`.
 
     Parameters
     ----------
@@ -246,6 +246,6 @@ class _Friction:
 
     def outputs(self, a, b, p, lam):
         out = super().outputs(a, b, p, lam)
-        if p.friction is not None:  # the friction's power: the run fills it in (mbcomp.simulation.stickslip)
+        if p.friction is not None:  # the friction's power: the run fills it in (mbcomp.hybrid.friction)
             out = {**out, "power": 0.0}
         return out

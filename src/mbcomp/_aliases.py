@@ -39,6 +39,11 @@ OLD_PATHS = {
     "daeforms": "formulations.dae",
     "symbolic": "codegen.symbolic",  # the one-file codegen, split one file per step
     "result": "simulation.result",
+    "simulation.events": "hybrid.events",  # the hybrid layer left simulation/ (issue 30)
+    "simulation.modes": "hybrid.modes",
+    "simulation.contacts": "hybrid.contacts",
+    "simulation.slip": "hybrid.slip",
+    "simulation.stickslip": "hybrid.friction",
     "stability": "analysis.stability",
     "workprecision": "analysis.workprecision",
 }

@@ -14,7 +14,7 @@ import numpy as np
 import mbcomp
 from mbcomp.library import Revolute, RigidBody, World
 from mbcomp.modeling.events import Switch
-from mbcomp.simulation.events import BURST
+from mbcomp.hybrid.events import BURST
 
 
 class BangBang(Revolute):
@@ -34,7 +34,7 @@ class BangBang(Revolute):
         return 1.0 if mode == "up" else -1.0
 
     # its mode force does work: declared as the stick-slip frictions declare theirs (the run
-    # books a mode force's work, -F ds per mode, in energy.dissipated: mbcomp.simulation.stickslip)
+    # books a mode force's work, -F ds per mode, in energy.dissipated: mbcomp.hybrid.friction)
     dissipative = True
 
     def conserves_energy(self, p):

@@ -132,7 +132,7 @@ def _report(res):
     for p in res.stats.get("singular_passages", ()):
         print(f"passed a singular position at t = {p['t']:.6g} s (rank drop {p['rank_drop']}, relative sigma "
               f"{p['sigma']:.2g}; joints {', '.join(p['joints'])})")
-    if res.events:  # impacts, stops engaging and releasing (mbcomp.simulation.events)
+    if res.events:  # impacts, stops engaging and releasing (mbcomp.hybrid.events)
         first = ", ".join(f"{e.kind} {e.component}.{e.name} at {e.time:.9g} s" for e in res.events[:5])
         print(f"{len(res.events)} events: {first}" + (", ..." if len(res.events) > 5 else ""))
     for c in res.stats.get("row_changes", ()):

@@ -12,12 +12,12 @@ earliest first:
   ``"success"`` and the message ``"event <name> at t=..."``, the event's state the last output;
 * a component's event (:meth:`mbcomp.modeling.roles.Joint.events`) gets the component's
   action (:mod:`mbcomp.modeling.events`): an impact (the impulse equations,
-  :func:`mbcomp.simulation.modes.impact_speeds`), a switch of mode, or the end of the run;
+  :func:`mbcomp.hybrid.modes.impact_speeds`), a switch of mode, or the end of the run;
 * an engaged row's push (its multiplier) falling through zero is the component's
   ``"release"`` event.
 
 A step past an action is not kept: the outputs up to the event come from the step's dense
-output, the state is moved onto the new mode's rows (:func:`~mbcomp.simulation.modes.consistent`),
+output, the state is moved onto the new mode's rows (:func:`~mbcomp.hybrid.modes.consistent`),
 the formulation is built again over the new mode's system and a new stepper starts there.
 
 An impact whose rebound would rise less than :data:`REST_HEIGHT` times ``atol`` above the
@@ -50,11 +50,11 @@ from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value
 from ..solvers.compiled_rk import CompiledRK
 from .modes import consistent, impact_speeds, mode_rows, mode_system, row_push, row_values, start_modes
-from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, slip_dissipation, slipping_joints, tangent_rows, \
+from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, slipping_joints, tangent_rows, \
     with_slip_friction
-from .stickslip import friction_columns, row_events, with_mode_forces
+from .friction import row_events, with_mode_forces
 
-__all__ = ["EventRecord", "Events", "stepwise", "finish", "keep_until", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
+__all__ = ["EventRecord", "Events", "stepwise", "keep_until", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
            "SPIN_TURNS", "SPIN_SPAN"]
 
 #: an impact whose rebound rises less than this times ``atol`` (m or rad) settles engaged
@@ -554,57 +554,3 @@ def _terminal_count(f):
     if term is True:
         return 1
     return int(term) if term else -1
-
-
-def finish(res, events, states=None):
-    """``res`` with its ``events`` (a list of :class:`EventRecord`, empty without events), the
-    stick-slip frictions' columns and dissipation (axes: :func:`friction_columns`; contacts:
-    :func:`~mbcomp.simulation.slip.slip_dissipation`) and, after impacts, the column
-    ``energy.impacts`` (J: the kinetic energy the impacts took, and a rebound too slow to
-    follow when a stop settles, up to each output time); the accuracy alarm the
-    post-processing rang without them is judged again with them all (an impact's loss, a
-    friction's work is no drift)."""
-    res.events = list(events.records) if events is not None else []
-    before = None
-    if "energy.balance" in res:
-        before = (np.array(res["energy.balance"]), np.array(res["energy.dissipated"]))
-    if events is not None and states is not None:  # stick-slip friction's columns and dissipation
-        friction_columns(res, events, states, judge=False)
-        if any(slipping_joints(events.system, modes) for _, modes, *_ in events.slip_log):
-            slip_dissipation(res, events.system, events.slip_log, events.work_log, states, events.system_now,
-                             judge=False)
-    impacts = [(r.time, r.detail["energy_loss"]) for r in res.events if "energy_loss" in r.detail]
-    lost = np.zeros(len(res.time))
-    if impacts:
-        times, losses = np.array(impacts).T
-        lost = np.concatenate(([0.0], np.cumsum(losses)))[np.searchsorted(times, res.time, side="right")]
-        res._series["energy.impacts"] = lost
-        res.units["energy.impacts"] = "J"
-        if "energy.balance" in res:  # E - E0 - W + D, and the impacts' losses now
-            res._series["energy.balance"] = res["energy.balance"] + lost
-    if res.status == "inaccurate" and "energy.kinetic" in res and "accuracy alarm" in res.message:
-        _alarm_again(res, lost, before)
-    return res
-
-
-def _alarm_again(res, lost, before):
-    """Judge the accuracy alarm again with the impacts' losses and the frictions' dissipation
-    counted (``before``: the balance and dissipation the post-processing judged, or None for
-    a conservative run): the run is ``"success"`` when the alarm no longer rings."""
-    from .accuracy import balance_alarm, energy_alarm
-
-    T, V, rtol = res["energy.kinetic"], res["energy.potential"], res.stats["rtol"]
-    if before is not None:
-        W, D = res["energy.work"], res["energy.dissipated"]
-        was = balance_alarm(before[0], T, V, W, before[1], 0.0, rtol)
-        # the dissipation's quadrature on the output grid cannot follow a speed jumping
-        # inside an interval: the dissipation over the intervals holding an impact is uncertain
-        k = np.unique(np.searchsorted(res.time, [e.time for e in res.events if "energy_loss" in e.detail]))
-        k = k[(k > 0) & (k < len(res.time))]
-        quadrature = float(np.sum(np.abs(D[k] - D[k - 1])))
-        now = balance_alarm(res["energy.balance"], T, V, W, D + lost, quadrature, rtol)
-    else:
-        was, now = energy_alarm(T, V, rtol), energy_alarm(T, V + lost, rtol)
-    if now[0] is None and was[1]:
-        res.status = "success"
-        res.message = res.message.replace("; " + was[1], "")

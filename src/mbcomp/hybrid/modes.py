@@ -140,8 +140,8 @@ class ModeEvaluator(WrappingEvaluator):
 def mode_system(system, modes):
     """``system`` with the rows ``modes`` hold (the system itself when they hold none): the
     rows of open contacts out (:func:`without_rows`), the rolling rows of sliding contacts out
-    (:func:`~mbcomp.simulation.slip.without_rolling`; their friction is added by
-    :func:`~mbcomp.simulation.slip.with_slip_friction`), engaged stops' rows appended."""
+    (:func:`~mbcomp.hybrid.slip.without_rolling`; their friction is added by
+    :func:`~mbcomp.hybrid.slip.with_slip_friction`), engaged stops' rows appended."""
     from .slip import slipping_joints, without_rolling
 
     base = without_rolling(without_rows(system, open_joints(system, modes)), slipping_joints(system, modes))
@@ -214,7 +214,7 @@ def stop_columns(series, system, log, t, Y, system_for=None):
     written again from them over the system without the stop (its reactions, by the backward
     pass, then carry the stop's force or torque: it acts across the joint). Returns
     ``{column: unit}`` of the added columns. An open contact's force columns are 0 again
-    (:func:`~mbcomp.simulation.contacts.zero_open`).
+    (:func:`~mbcomp.hybrid.contacts.zero_open`).
 
     Examples
     --------

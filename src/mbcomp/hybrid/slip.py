@@ -4,7 +4,7 @@ A contact with friction (``SphereContact``/``DiskContact(unilateral=True,
 friction=ContactFriction(mu_s, mu_k))``, :class:`mbcomp.library.plane_contact.Frictional`)
 rolls in its mode ``"closed"`` -- its rolling rows (``velocity_constraints``, the slip
 velocity along orthonormal tangents ``t1``, ``t2``) hold and the run watches the friction
-cone ``mu_s N - |F_t|`` (:func:`~mbcomp.simulation.contacts.contact_pushes`) -- and slides
+cone ``mu_s N - |F_t|`` (:func:`~mbcomp.hybrid.contacts.contact_pushes`) -- and slides
 in the mode where :meth:`~mbcomp.modeling.roles.Joint.slip_friction` gives its kinetic
 coefficient ``mu_k``:
 
@@ -67,7 +67,7 @@ from ..errors import SimulationError
 from ..modeling.events import ContactRow
 from .contacts import contact_rows, open_joints, tangent_force, without_rows
 from .modes import WrappingEvaluator, mode_system
-from .stickslip import ForcesAdded, with_mode_forces
+from .friction import ForcesAdded, count_dissipation, with_mode_forces
 
 __all__ = ["slipping_joints", "cone_joints", "without_rolling", "tangent_rows", "friction_solve", "SlipEvaluator",
            "with_slip_friction", "slip_accelerations", "start_directions", "slip_columns", "slide_power", "slide_work", "slip_dissipation",
@@ -382,16 +382,14 @@ def slide_work(sysm, slips, qu, a, b):
                       for x, w in zip(*_GAUSS))
 
 
-def slip_dissipation(res, system, log, work_log, Y, system_now, judge=True):
+def slip_dissipation(res, system, log, work_log, Y, system_now):
     """The sliding friction's columns ``<contact>.power`` (W) at the outputs and its
     dissipated energy (J), integrated along each step's dense output while the run went
     (``work_log``: ``[(t, work done up to t)]`` at the step ends and output times), added to
-    ``energy.dissipated`` and ``energy.balance`` of ``res``; the energy alarm is judged again
-    (``judge``).
+    ``energy.dissipated`` and ``energy.balance`` of ``res`` (the energy alarm is judged again
+    by :func:`mbcomp.simulation.hybrid_columns.finish`).
     ``log`` entries: ``(time, modes, dirs, state before, state after)`` at the start and every
     restart; ``Y`` the outputs' states."""
-    from .stickslip import _count_dissipation
-
     t = res.time
     if not len(t):
         return res
@@ -407,12 +405,12 @@ def slip_dissipation(res, system, log, work_log, Y, system_now, judge=True):
                 res._series[f"{n}.power"][k] = -p
     if "energy.balance" in res:
         times, work = np.array(work_log).T
-        _count_dissipation(res, np.interp(t, times, work), judge)
+        count_dissipation(res, np.interp(t, times, work))
     return res
 
 
 class SlideEvents:
-    """The part of :class:`mbcomp.simulation.events.Events` that handles sliding contacts: a
+    """The part of :class:`mbcomp.hybrid.events.Events` that handles sliding contacts: a
     start that rolls, start directions of new slides, turns of a plane slip, contacts that
     land slipping, the cone of a contact's rolling mode and the friction's work along the
     steps (see the module notes). Uses the events' ``system``, ``modes``, ``slip_dirs``,
@@ -420,7 +418,7 @@ class SlideEvents:
 
     def _slide_work(self, run, qu, t_to):
         """Integrate the sliding contacts' friction loss from where it was integrated to up to
-        ``t_to`` (s) on the step's dense output ``qu`` (:func:`~mbcomp.simulation.slip.slide_work`),
+        ``t_to`` (s) on the step's dense output ``qu`` (:func:`~mbcomp.hybrid.slip.slide_work`),
         recording the work done at ``t_to`` and at the output times passed."""
         a, self._worked_to = self._worked_to, t_to
         slips = slips_of(self.system, self.modes, self.slip_dirs)

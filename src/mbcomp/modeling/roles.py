@@ -304,7 +304,7 @@ class Joint(Component):
     def has_velocity_constraints(self):
         return type(self).velocity_constraints is not Joint.velocity_constraints
 
-    # --- events and modes (mbcomp.modeling.events; the run: mbcomp.simulation.events) ----
+    # --- events and modes (mbcomp.modeling.events; the run: mbcomp.hybrid.events) ----
     def start_mode(self, p):
         """The mode the joint starts in (a string), or ``None`` for a joint without modes."""
         return None
@@ -346,7 +346,7 @@ class Joint(Component):
         ``None`` where it does not slide (default). A sliding contact's rolling rows (its
         ``velocity_constraints``, along orthonormal tangents) are out of the system and the
         framework applies ``-mu_k N`` against the slip velocity, ``N`` the push of its
-        ``normal`` row (:mod:`mbcomp.simulation.slip`)."""
+        ``normal`` row (:mod:`mbcomp.hybrid.slip`)."""
         return None
 
     @property

@@ -38,17 +38,18 @@ import numpy as np
 
 from ..errors import SimulationError
 from ..formulations import FORMULATIONS, build
+from ..hybrid.contacts import contact_columns, initialize_in_modes, open_joints
+from ..hybrid.events import Events, stepwise
+from ..hybrid.modes import stop_columns
+from ..hybrid.slip import slip_columns
 from ..modeling.inputs import check_names, input_signals, signal_of
 from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
 from .postprocess import postprocess
+from .hybrid_columns import finish
 from .result import Result
 from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check_request, check_singular,
                     output_times, system_of)
-from .contacts import contact_columns, initialize_in_modes, open_joints
-from .events import Events, finish, stepwise
-from .modes import stop_columns
-from .slip import slip_columns
 from .stepping import Budget, BudgetSpent, Run, hooks_for
 from .stiffness import StiffnessWatch
 from .stops import Terminated, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
@@ -144,7 +145,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         ``"success"``, ``f.direction`` (-1, 0, +1) filters the crossings. They and the
         components' own events (joint stops: ``Revolute(limits=..., restitution=...)``) are
         located on each step's dense output and recorded in ``res.events``
-        (:mod:`mbcomp.simulation.events`).
+        (:mod:`mbcomp.hybrid.events`).
 
     Returns
     -------
@@ -225,8 +226,8 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
 def _mode_fix(system, watcher, t, Y, units):
     """The post-processing's ``fix`` of a run with modes (None without): the columns at
     output times ``t`` where a contact was open (:func:`contact_columns`) or a stop engaged
-    (:func:`~mbcomp.simulation.modes.stop_columns`, its ``<joint>.stop`` units put in ``units``)
-    or a contact slid (:func:`~mbcomp.simulation.slip.slip_columns`) computed again over the
+    (:func:`~mbcomp.hybrid.modes.stop_columns`, its ``<joint>.stop`` units put in ``units``)
+    or a contact slid (:func:`~mbcomp.hybrid.slip.slip_columns`) computed again over the
     mode's system."""
     if watcher is None:
         return None
@@ -284,7 +285,7 @@ def integrate(run, monitors, progress=False, extra=(), events=None):
     """Step ``run`` to its end; ``(status, message)``. Every way a run can stop early keeps
     the outputs of the accepted steps (see the module notes). ``extra`` hooks run after the
     usual ones: a :class:`~mbcomp.simulation.stepping.Budget` that runs out ends the run with
-    ``"budget"``. ``events`` (:class:`~mbcomp.simulation.events.Events`) checks every step
+    ``"budget"``. ``events`` (:class:`~mbcomp.hybrid.events.Events`) checks every step
     first; a step it cut at an event (a restart, or the run's end) has no hooks due."""
     hooks = run.hooks = hooks_for(run, monitors, progress) + list(extra)
     status, message = "success", "reached t_end"

@@ -60,7 +60,7 @@ class Result:
         The model summary (bodies, DOF, coordinates, constraints).
     events : list of EventRecord
         The run's events in time order: ``(time, component, name, kind, detail)``
-        (:class:`mbcomp.simulation.events.EventRecord`; impacts, stops engaging and releasing,
+        (:class:`mbcomp.hybrid.events.EventRecord`; impacts, stops engaging and releasing,
         the user's event functions).
     units : dict
         ``{column: unit}`` (``"rad"``, ``"N m"``, ``"m/s"``) of the columns whose unit is
@@ -79,7 +79,7 @@ class Result:
         self.summary = summary
         self.units = dict(units or {})
         self.system = system
-        self.events = []  # EventRecord(time, component, name, kind, detail): mbcomp.simulation.events
+        self.events = []  # EventRecord(time, component, name, kind, detail): mbcomp.hybrid.events
 
     def __getstate__(self):
         state = dict(self.__dict__)
