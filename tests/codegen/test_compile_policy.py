@@ -1,4 +1,4 @@
-"""How generated C is compiled (mbcomp.codegen.compiler, printers, rolling): every program at
+"""How generated C is compiled (mbcomp.codegen.toolchain, printers, rolling): every program at
 -O2, output expressions of one shape (the mass matrix's N^2 entries) computed by table-driven
 loops, the straight-line rest in short functions split into translation units compiled in
 parallel, and each unit's object file cached by the hash of its source and flags.
@@ -20,7 +20,7 @@ import pytest
 
 import mbcomp
 from mbcomp.codegen import c_compiler, compile_system
-from mbcomp.codegen import compiler, printers
+from mbcomp.codegen import printers, toolchain
 from mbcomp.codegen.printers import Program
 from mbcomp.codegen.tracer import FIELDS, param_vector, trace, trace_point
 from mbcomp.formulations import LagrangeIndex1
@@ -77,7 +77,7 @@ def test_the_evaluation_text_grows_linearly_with_the_links():
     for N in (20, 40, 80):
         tr = trace(pendulum(N), 3_000_000)
         prog = Program(tr.graph, tr.groups, guard_groups=tr.guard_groups)
-        src, _ = prog.c_function("eval", "mbcomp_eval", compiler.CHUNK)
+        src, _ = prog.c_function("eval", "mbcomp_eval", toolchain.CHUNK)
         sizes[N] = (prog.n_ops("eval"), len(src))
     assert sizes[80][0] > 3 * sizes[40][0] and sizes[40][0] > 2.7 * sizes[20][0]  # operations: ~N^2
     assert sizes[80][1] < 2.2 * sizes[40][1] and sizes[40][1] < 2.2 * sizes[20][1]  # text: ~N
@@ -89,10 +89,10 @@ def test_many_units_and_tiny_functions_give_the_same_values(tmp_path, monkeypatc
     come from different functions read them from the work array)."""
     s = chain_3d(4)
     one = compile_system(s, "c", cache_dir=str(tmp_path))
-    monkeypatch.setattr(compiler, "PART", 150)
-    monkeypatch.setattr(compiler, "CHUNK", 7)
-    monkeypatch.setattr(compiler, "SMALL_CHUNK", 7)
-    monkeypatch.setattr(compiler, "LOOP_CHUNK", 7)
+    monkeypatch.setattr(toolchain, "PART", 150)
+    monkeypatch.setattr(toolchain, "CHUNK", 7)
+    monkeypatch.setattr(toolchain, "SMALL_CHUNK", 7)
+    monkeypatch.setattr(toolchain, "LOOP_CHUNK", 7)
     many = compile_system(s, "c", cache_dir=str(tmp_path))
     form_one, form_many = LagrangeIndex1(one, alpha=5.0, beta=5.0), LagrangeIndex1(many, alpha=5.0, beta=5.0)
     num = LagrangeIndex1(s, alpha=5.0, beta=5.0)
@@ -111,8 +111,8 @@ def test_many_units_and_tiny_functions_give_the_same_values(tmp_path, monkeypatc
 def _units(prog, groups, n_parts=1):
     units = []
     for group in groups:
-        parts, _ = prog.c_parts(group, f"mbcomp_{group}", compiler.CHUNK, n_parts)
-        units += [(f"{group}{k}", compiler._HEADER + src, list(compiler.FLAGS)) for k, src in enumerate(parts)]
+        parts, _ = prog.c_parts(group, f"mbcomp_{group}", toolchain.CHUNK, n_parts)
+        units += [(f"{group}{k}", toolchain.HEADER + src, list(toolchain.FLAGS)) for k, src in enumerate(parts)]
     return units
 
 
@@ -149,20 +149,20 @@ def test_a_rebuilt_library_compiles_only_the_changed_unit(tmp_path, monkeypatch)
     eval_units = _units(prog_e, ["eval"], n_parts=3)
     lib1, lib2 = os.path.join(d, "one.so"), os.path.join(d, "two.so")
     runs = []
-    real_popen = compiler.subprocess.Popen
+    real_popen = toolchain.subprocess.Popen
 
     def popen(args, *x, **k):
         if "-c" in args:  # a compilation (not the link)
             runs.append(args[-1])
         return real_popen(args, *x, **k)
 
-    monkeypatch.setattr(compiler.subprocess, "Popen", popen)
-    first = compiler._compile_units(cc, eval_units + _units(prog_a, ["fun"]), lib1, d)
+    monkeypatch.setattr(toolchain.subprocess, "Popen", popen)
+    first = toolchain.compile_units(cc, eval_units + _units(prog_a, ["fun"]), lib1, d)
     assert sorted(first["compiled"]) == ["eval0", "eval1", "eval2", "fun0"] and len(runs) == 4
     objs = sorted(tmp_path.glob("mbcomp_*.o"))
     before = {o: (o.stat().st_mtime_ns, o.read_bytes()) for o in objs}
     runs.clear()
-    second = compiler._compile_units(cc, eval_units + _units(prog_b, ["fun"]), lib2, d)
+    second = toolchain.compile_units(cc, eval_units + _units(prog_b, ["fun"]), lib2, d)
     assert second == {"compiled": ["fun0"], "reused": ["eval0", "eval1", "eval2"]} and len(runs) == 1
     assert all((o.stat().st_mtime_ns, o.read_bytes()) == before[o] for o in objs)
     # results: the evaluation (same object in both) and each Lagrange program against numerics

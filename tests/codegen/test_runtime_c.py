@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from mbcomp.codegen.compiler import c_compiler
+from mbcomp.codegen import c_compiler
 from mbcomp.codegen.runtime import RUNTIME_DIR, SOURCES
 
 CC = c_compiler()

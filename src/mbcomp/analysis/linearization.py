@@ -47,12 +47,20 @@ from .evaluation import system_for
 from .reduced import Reduced, direction_names
 from .steady import SteadyState
 
-__all__ = ["Linearization", "linearize", "classify"]
+__all__ = ["Linearization", "linearize", "classify", "zero_tolerance"]
 
 
-def _tol(eigs):
-    """The classification's zero: ``1e-7 (1 + max |lambda|)``, the linearization's accuracy."""
-    return 1e-7 * (1.0 + (np.abs(eigs).max() if len(eigs) else 0.0))
+def zero_tolerance(eigenvalues):
+    """The classification's zero for a set of eigenvalues (1/s): ``1e-7 (1 + max |lambda|)``,
+    the accuracy of the linearization; a real part within it counts as zero (:func:`classify`).
+
+    Examples
+    --------
+    >>> from mbcomp.analysis.linearization import zero_tolerance
+    >>> print(zero_tolerance([3j, -3j]), zero_tolerance([]))     # max |lambda| = 3
+    4e-07 1e-07
+    """
+    return 1e-7 * (1.0 + (np.abs(eigenvalues).max() if len(eigenvalues) else 0.0))
 
 
 def classify(eigenvalues, tol=None):
@@ -70,7 +78,7 @@ def classify(eigenvalues, tol=None):
     eigs = np.asarray(eigenvalues, complex)
     if eigs.size == 0:
         return "marginally stable"
-    tol = _tol(eigs) if tol is None else tol
+    tol = zero_tolerance(eigs) if tol is None else tol
     top = eigs.real.max()
     if top > tol:
         return "unstable"

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ModelError, SimulationError
-from .linearization import _tol, linearize
+from .linearization import linearize, zero_tolerance
 
 __all__ = ["Sweep", "sweep"]
 
@@ -203,7 +203,7 @@ def sweep(build, parameter, values, analyze=None, backend="python", executor=Non
         cls.append(li.classification)
 
     def unstable_count(li):
-        tol = _tol(li.eigenvalues)
+        tol = zero_tolerance(li.eigenvalues)
         return int(np.sum(li.eigenvalues.real > tol))
 
     def top_root(li):
@@ -231,7 +231,7 @@ def sweep(build, parameter, values, analyze=None, backend="python", executor=Non
         ru = top_root(un)
         changes.append(dict(value=float(x), **{"from": cls[k], "to": cls[k + 1]},
                             eigenvalue=[float(root.real), float(root.imag)],
-                            kind="oscillatory" if abs(ru.imag) > _tol(un.eigenvalues) else "divergence",
+                            kind="oscillatory" if abs(ru.imag) > zero_tolerance(un.eigenvalues) else "divergence",
                             method=method))
     return Sweep(parameter, values, E, cls, changes)
 
@@ -247,7 +247,7 @@ def _locate(at, la, lb, a, b, cls_a, unstable_count, top_root):
     from scipy.optimize import brentq  # here: scipy.optimize costs ~0.5 s to import
 
     fa, fb = top_root(la).real, top_root(lb).real
-    if fa * fb < 0 and abs(fa) > _tol(la.eigenvalues) and abs(fb) > _tol(lb.eigenvalues):
+    if fa * fb < 0 and abs(fa) > zero_tolerance(la.eigenvalues) and abs(fb) > zero_tolerance(lb.eigenvalues):
         x = brentq(lambda v: top_root(at(v)).real, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps)
         return x, "Brent's method on the largest real part"
     if {la.classification, lb.classification} == {"unstable", "marginally stable"}:
@@ -257,7 +257,7 @@ def _locate(at, la, lb, a, b, cls_a, unstable_count, top_root):
         # the classification, so the root is the classification's change whatever the sizes.
         def signed(v):
             li = at(v)
-            tol = _tol(li.eigenvalues)
+            tol = zero_tolerance(li.eigenvalues)
             if li.classification == "unstable":
                 return float(top_root(li).real) ** 2
             if li.classification != "marginally stable":

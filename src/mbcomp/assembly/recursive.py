@@ -35,7 +35,8 @@ parent is a plain sum):
 Links
 -----
 A *link* is the set of frames rigidly moved by one tree joint with speeds (everything down
-the tree up to the next joint with speeds). ``TreeLinks`` numbers them in tree order
+the tree up to the next joint with speeds). :class:`~mbcomp.assembly.topology.TreeLinks`
+(a topology's :attr:`~mbcomp.assembly.topology.Topology.links`) numbers them in tree order
 (parents first); frames fixed to the ground have link -1. Drives make their joint a rigid
 (rheonomic) part of the parent link: its motion is in the jets' bias terms.
 
@@ -68,7 +69,7 @@ from .flange_rows import rotor_wrench, rotors
 from .topology import ROOT
 from ..geometry.kinematics import cross, skew
 
-__all__ = ["TreeLinks", "SingularTree", "tree_links", "tree_pass", "tree_evaluation", "articulated",
+__all__ = ["SingularTree", "tree_links", "tree_pass", "tree_evaluation", "articulated",
            "tree_solve", "constraint_rows", "lagrange_accelerations", "lagrange_solution", "PIVOT_TOL"]
 
 #: a Cholesky pivot at or below ``PIVOT_TOL`` times the matrix's trace counts as singular
@@ -89,66 +90,10 @@ class SingularTree(ArithmeticError):
     which gives the diagnosis (massless motion, redundant rows) or a minimum-norm answer."""
 
 
-class TreeLinks:
-    """The moving links of a topology's spanning tree (see *Links* above).
-
-    Attributes
-    ----------
-    edges : list of Edge
-        The tree joints with speeds, parents before children; link ``i`` is ``edges[i]``'s child side.
-    parent : list of int
-        Parent link of each link (-1: the ground).
-    link_of : dict
-        Frame node -> link (-1 for the ground and frames fixed to it).
-    cols : list of slice
-        Each link's columns in ``u``.
-
-    Examples
-    --------
-    >>> import mbcomp
-    >>> from mbcomp.assembly.recursive import tree_links
-    >>> from mbcomp.library import World, Revolute, PointMass
-    >>> m = mbcomp.Model(); w = m.add("world", World())
-    >>> j1 = m.add("j1", Revolute()); b1 = m.add("b1", PointMass())
-    >>> j2 = m.add("j2", Revolute()); b2 = m.add("b2", PointMass())
-    >>> m.connect(w.frame_b, j1.frame_a); m.connect(j1.frame_b, b1.frame_a)
-    >>> m.connect(b1.frame_a, j2.frame_a); m.connect(j2.frame_b, b2.frame_a)
-    >>> t = tree_links(mbcomp.assemble(m))
-    >>> [e.name for e in t.edges], t.parent
-    (['j1', 'j2'], [-1, 0])
-    """
-
-    def __init__(self, topology):
-        self.edges, self.parent, self.cols = [], [], []
-        link_of = {ROOT: -1}
-        for e in topology.tree:
-            up = link_of[e.parent]
-            if e.u.stop > e.u.start:
-                link_of[e.child] = len(self.edges)
-                self.edges.append(e)
-                self.parent.append(up)
-                self.cols.append(e.u)
-            else:
-                link_of[e.child] = up
-        self.link_of = link_of
-        self.n = len(self.edges)
-
-    def ancestors(self, i):
-        """Link ``i`` and its ancestors, from ``i`` to the root."""
-        out = []
-        while i >= 0:
-            out.append(i)
-            i = self.parent[i]
-        return out
-
-
 def tree_links(system):
-    """The :class:`TreeLinks` of ``system``'s topology (computed once per topology)."""
-    topo = system.topology
-    links = topo.__dict__.get("_tree_links")
-    if links is None:
-        links = topo._tree_links = TreeLinks(topo)
-    return links
+    """The :class:`~mbcomp.assembly.topology.TreeLinks` of ``system``'s topology (made once
+    per topology: :attr:`~mbcomp.assembly.topology.Topology.links`)."""
+    return system.topology.links
 
 
 def _dtype(*xs):

@@ -34,6 +34,7 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -42,7 +43,7 @@ from ..modeling.component import PortRef
 from ..modeling.free_joint import FreeMotion, FreeTranslation
 from .flange_rows import cut_rotational, flange_constraint_edges, geared_joints, rotor_nodes
 
-__all__ = ["Topology", "Edge", "ROOT", "spanning_tree", "no_gravity_note"]
+__all__ = ["Topology", "Edge", "TreeLinks", "ROOT", "spanning_tree", "no_gravity_note"]
 
 ROOT = -1
 
@@ -441,6 +442,11 @@ class Topology:
     def _owner(self, port_path):
         return self.flat.components[port_path.rsplit(".", 1)[0]]
 
+    @cached_property
+    def links(self):
+        """The moving links of the spanning tree (:class:`TreeLinks`; made once)."""
+        return TreeLinks(self)
+
     @property
     def graph(self):
         """The multigraph the tree was chosen from, as a ``networkx.MultiGraph``: frame nodes
@@ -475,3 +481,58 @@ class Topology:
                 return e
         raise KeyError(name)
 
+
+class TreeLinks:
+    """The moving links of a topology's spanning tree: a *link* is the set of frames rigidly
+    moved by one tree joint with speeds (everything down the tree up to the next joint with
+    speeds), numbered in tree order (parents first); frames fixed to the ground have link -1.
+    Drives make their joint a rigid (rheonomic) part of the parent link. What the recursive
+    algorithms (:mod:`mbcomp.assembly.recursive`) walk.
+
+    Attributes
+    ----------
+    edges : list of Edge
+        The tree joints with speeds, parents before children; link ``i`` is ``edges[i]``'s child side.
+    parent : list of int
+        Parent link of each link (-1: the ground).
+    link_of : dict
+        Frame node -> link (-1 for the ground and frames fixed to it).
+    cols : list of slice
+        Each link's columns in ``u``.
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Revolute, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World())
+    >>> j1 = m.add("j1", Revolute()); b1 = m.add("b1", PointMass())
+    >>> j2 = m.add("j2", Revolute()); b2 = m.add("b2", PointMass())
+    >>> m.connect(w.frame_b, j1.frame_a); m.connect(j1.frame_b, b1.frame_a)
+    >>> m.connect(b1.frame_a, j2.frame_a); m.connect(j2.frame_b, b2.frame_a)
+    >>> t = mbcomp.assemble(m).topology.links
+    >>> [e.name for e in t.edges], t.parent
+    (['j1', 'j2'], [-1, 0])
+    """
+
+    def __init__(self, topology):
+        self.edges, self.parent, self.cols = [], [], []
+        link_of = {ROOT: -1}
+        for e in topology.tree:
+            up = link_of[e.parent]
+            if e.u.stop > e.u.start:
+                link_of[e.child] = len(self.edges)
+                self.edges.append(e)
+                self.parent.append(up)
+                self.cols.append(e.u)
+            else:
+                link_of[e.child] = up
+        self.link_of = link_of
+        self.n = len(self.edges)
+
+    def ancestors(self, i):
+        """Link ``i`` and its ancestors, from ``i`` to the root."""
+        out = []
+        while i >= 0:
+            out.append(i)
+            i = self.parent[i]
+        return out

@@ -1,5 +1,6 @@
-"""Turning a trace into callables: the Python program (``compile``) or the C program (the
-system compiler, a shared library cached on disk, loaded with :mod:`ctypes`).
+"""Turning a trace into callables: the Python program (``compile``) or the C program (a
+shared library built by :mod:`~mbcomp.codegen.toolchain`, cached on disk, loaded with
+:mod:`ctypes`).
 
 A :class:`Code` is shared by every system that differs only in parameter values; a
 :class:`Bound` is a code bound to one parameter set (the hoisted values, the C buffers) and
@@ -26,10 +27,6 @@ import concurrent.futures
 import ctypes
 import hashlib
 import os
-import shutil
-import subprocess
-import sys
-import tempfile
 import time
 
 import numpy as np
@@ -37,31 +34,14 @@ import numpy as np
 from .engine import integrate_signature, runtime_objects
 from .graph import CodegenError, Fallback, Retrace, no_gc
 from .printers import PY_ENV, ParamProgram, Program
+from .toolchain import (FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_objects, compile_units, n_units,
+                        object_path, unit_key)
 from .tracer import FIELDS, param_vector
 
-__all__ = ["c_compiler", "Code", "Bound"]
+__all__ = ["Code", "Bound"]
 
-def c_compiler():
-    """Path of the C compiler used by ``backend="c"`` (``$CC``, else ``gcc``, else ``cc``), or None.
-
-    Examples
-    --------
-    >>> from mbcomp.codegen import c_compiler
-    >>> c_compiler() is None or isinstance(c_compiler(), str)
-    True
-    """
-    for cand in (os.environ.get("CC"), "gcc", "cc"):
-        if cand:
-            path = shutil.which(cand)
-            if path:
-                return path
-    return None
-
-
-def _cache_dir(cache_dir=None):
-    d = cache_dir or os.environ.get("MBCOMP_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "mbcomp")
-    os.makedirs(d, exist_ok=True)
-    return d
+#: kept for compatibility: every program is now compiled at -O2
+OPT_O2 = OPT_O1 = float("inf")
 
 
 class Code:
@@ -131,36 +111,36 @@ class Code:
         for group, fname in groups:
             def n_parts(n, group=group):
                 self.n_statements[group] = n
-                return _n_parts(n)
+                return n_units(n)
 
-            parts, n_w = prog.c_parts(group, fname, _chunk, n_parts=n_parts)
+            parts, n_w = prog.c_parts(group, fname, chunk, n_parts=n_parts)
             n_work = max(n_work, n_w)
             for k, src in enumerate(parts):
-                units.append((f"{group}{k}" if len(parts) > 1 else group, _HEADER + src, list(FLAGS)))
+                units.append((f"{group}{k}" if len(parts) > 1 else group, HEADER + src, list(FLAGS)))
         self.n_work = n_work
         self.c_source = "\n".join(src for _, src, _ in units)
         self.opt = {group: FLAGS[0] for group, _ in groups}
         self.n_units = len(units)
-        d = _cache_dir(cache_dir)
+        d = cache_directory(cache_dir)
         # the C engine (the runtime's integrators over mbcomp_fun) when no drive needs Python per call
         self.has_engine = self.has_fun and not self.drives and not self.inputs
         self.objects = {"compiled": [], "reused": []}
-        if self.has_engine and not all(os.path.exists(_object(cc, d, src, fl)) for _, src, fl in units):
+        if self.has_engine and not all(os.path.exists(object_path(cc, d, src, fl)) for _, src, fl in units):
             # the runtime's objects (compiled once per machine) while this program's units compile
             with concurrent.futures.ThreadPoolExecutor(1) as pool:
                 runtime = pool.submit(runtime_objects, cc, d)
-                self.objects = _compile_objects(cc, units, d)[1]
+                self.objects = compile_objects(cc, units, d)[1]
                 extra = runtime.result()
         else:
             extra = runtime_objects(cc, d) if self.has_engine else []
-        key = hashlib.sha256("\0".join([_unit_key(cc, src, fl) for _, src, fl in units] + list(extra))
+        key = hashlib.sha256("\0".join([unit_key(cc, src, fl) for _, src, fl in units] + list(extra))
                              .encode()).hexdigest()[:32]
         lib = os.path.join(d, f"mbcomp_{key}.so")
         if os.path.exists(lib):
             self.cache = "hit"
         else:
             self.cache = "miss"
-            done = _compile_units(cc, units, lib, d, extra)
+            done = compile_units(cc, units, lib, d, extra)
             self.objects["compiled"] += done["compiled"]
             self.objects["reused"] = [n for n in done["reused"] if n not in self.objects["compiled"]]
         self.lib_path = lib
@@ -172,130 +152,6 @@ class Code:
             fn.restype = ctypes.c_int
         if self.has_engine:
             integrate_signature(self.dll)
-
-
-#: the flags of every generated program: -O2 at every size (affordable since output
-#: expressions are rolled into loops and functions are CHUNK statements; gcc's time is then
-#: linear in the program's size). -fno-math-errno: sqrt becomes one instruction (the values
-#: are IEEE's either way; a domain error is a NaN the callers check)
-FLAGS = ("-O2", "-fno-math-errno", "-fno-tree-slp-vectorize", "-fno-schedule-insns2", "-fno-tree-dse", "-fPIC",
-         "-fno-fast-math")
-#: statements per C function (values crossing a function live in the work array): gcc -O2
-#: takes ~0.15-0.2 ms per statement with 100-400 statements per function, 1.3-1.9 times
-#: that with 1000 (measured on the pendulum's programs, N = 100 to 1000); 400 runs 2-3%
-#: faster than 200 (fewer values through the work array) for the same compile time
-CHUNK = 400
-#: ... except where most values are stored for loops (the evaluation's straight-line part
-#: feeding the mass matrix): 200 compiles 15-20% faster there and runs as fast
-LOOP_CHUNK = 200
-#: programs of at most SMALL straight-line statements use functions of SMALL_CHUNK: as fast
-#: to compile at that size, and 5-10% faster to run
-SMALL, SMALL_CHUNK = 5000, 1000
-#: statements per translation unit, about (a program is split into a multiple of the
-#: processors' number of units so that the compilations keep every processor busy)
-PART = 6000
-#: kept for compatibility: every program is now compiled at -O2
-OPT_O2 = OPT_O1 = float("inf")
-_HEADER = "/* generated by mbcomp.codegen; do not edit */\n#include <math.h>\n"
-
-
-def _chunk(n_statements, n_loop_values):
-    """Statements per C function for a program of ``n_statements`` straight-line statements
-    whose loops read ``n_loop_values`` of its values."""
-    if n_statements <= SMALL:
-        return SMALL_CHUNK
-    return LOOP_CHUNK if 4 * n_loop_values > n_statements else CHUNK
-
-
-def _n_parts(n_statements):
-    """Translation units for a program of ``n_statements``: one up to :data:`PART`, else a
-    multiple of the processors' number."""
-    if n_statements <= PART:
-        return 1
-    cpus = os.cpu_count() or 1
-    return cpus * -(-n_statements // (cpus * PART))
-
-
-def _unit_key(cc, src, flags):
-    """The cache key of one translation unit's object file."""
-    return hashlib.sha256("\0".join([src, " ".join(flags), cc, sys.platform]).encode()).hexdigest()[:32]
-
-
-def _compile_units(cc, units, lib, cache_dir, extra=()):
-    """Compile ``(name, source, flags)`` translation units and link them into the shared
-    library ``lib`` (replaced atomically; the cache may be shared by processes).
-
-    Each unit's object file is cached in ``cache_dir`` under a hash of its source, flags and
-    compiler: a unit compiled before (by this or another library) is reused. The others
-    are compiled in parallel, as many at a time as there are processors. Returns
-    ``{"compiled": [names], "reused": [names]}``."""
-    objs, done = _compile_objects(cc, units, cache_dir)
-    with tempfile.TemporaryDirectory(dir=cache_dir) as tmp:
-        out = os.path.join(tmp, "prog.so")
-        res = subprocess.run([cc, "-shared", "-o", out, *objs, *extra, "-lm"], capture_output=True, text=True)
-        if res.returncode != 0:
-            raise CodegenError(f"the C linker failed ({cc}): {res.stderr[-2000:]} -> fix: use backend='python'")
-        os.replace(out, lib)
-    return done
-
-
-def _object(cc, cache_dir, src, flags):
-    """The cached object file of one translation unit."""
-    return os.path.join(cache_dir, f"mbcomp_{_unit_key(cc, src, flags)}.o")
-
-
-def _compile_objects(cc, units, cache_dir):
-    """The object files of ``(name, source, flags)`` units, compiling those not in the cache
-    (see :func:`_compile_units`): ``(paths, {"compiled": [names], "reused": [names]})``."""
-    todo, objs, reused = [], [], []
-    for name, src, flags in units:
-        obj = _object(cc, cache_dir, src, flags)
-        objs.append(obj)
-        if os.path.exists(obj):
-            reused.append(name)
-        else:
-            todo.append((name, src, flags, obj))
-    if todo:
-        with tempfile.TemporaryDirectory(dir=cache_dir) as tmp:
-            _run_parallel(cc, todo, tmp)
-    return objs, {"compiled": [name for name, *_ in todo], "reused": reused}
-
-
-def _run_parallel(cc, todo, tmp):
-    """Compile ``(name, source, flags, object)`` units, at most one per processor at a time,
-    biggest first; each object is moved into place when it is complete."""
-    cpus = os.cpu_count() or 1
-    queue = sorted(todo, key=lambda u: -len(u[1]))
-    running, error = [], None
-    try:
-        while (queue and error is None) or running:
-            while queue and error is None and len(running) < cpus:
-                name, src, flags, obj = queue.pop(0)
-                cpath, tobj = os.path.join(tmp, f"{name}.c"), os.path.join(tmp, f"{name}.o")
-                with open(cpath, "w") as fh:
-                    fh.write(src)
-                with open(cpath + ".err", "w") as err:
-                    proc = subprocess.Popen([cc, *flags, "-c", "-o", tobj, cpath], stdout=subprocess.DEVNULL,
-                                            stderr=err)
-                running.append((proc, cpath, tobj, obj))
-            done = [r for r in running if r[0].poll() is not None]
-            if not done:
-                time.sleep(0.005)
-                continue
-            for r in done:
-                running.remove(r)
-                proc, cpath, tobj, obj = r
-                if proc.returncode != 0:
-                    with open(cpath + ".err") as fh:
-                        error = error or fh.read()
-                else:
-                    os.replace(tobj, obj)
-    finally:
-        for proc, *_ in running:
-            proc.kill()
-            proc.wait()
-    if error is not None:
-        raise CodegenError(f"the C compiler failed ({cc}): {error[-2000:]} -> fix: use backend='python'")
 
 
 class Bound:

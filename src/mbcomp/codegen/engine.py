@@ -52,6 +52,7 @@ import numpy as np
 
 from .graph import CodegenError
 from .runtime import RUNTIME_DIR, SOURCES
+from .toolchain import c_compiler
 
 __all__ = ["GLUE", "Integrator", "Mech", "DAlembertProgram", "runtime_objects", "runtime_library",
            "coordinate_map", "mech_of", "dalembert_program", "DAEProgram", "dae_program", "STATUS", "MECH_STATUS",
@@ -422,8 +423,6 @@ class DAEProgram:
 
 def _library_for(code):
     """:func:`runtime_library` in the cache directory of a C program, or None without a compiler."""
-    from .compiler import c_compiler
-
     cc = c_compiler()
     return runtime_library(cc, os.path.dirname(code.lib_path)) if cc is not None else None
 

@@ -86,8 +86,9 @@ import numpy as np
 
 from ..errors import SimulationError
 from ..assembly.system import MultibodySystem
-from .compiler import Bound, Code, c_compiler
+from .compiler import Bound, Code
 from .graph import CodegenError, Fallback, Retrace
+from .toolchain import c_compiler
 from .tracer import FIELDS, param_layout, trace, trace_point
 
 __all__ = ["compile_system", "ProgramEvaluator", "CompiledEvaluation"]

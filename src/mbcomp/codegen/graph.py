@@ -28,10 +28,11 @@ import math
 
 import numpy as np
 
+from .ieee import COMPARE, call_or_nan, div, power
+
 __all__ = ["CodegenError", "Fallback", "Retrace", "Graph", "Sym"]
 
 _NUM = (int, float, np.number)
-_INF = float("inf")
 
 
 class CodegenError(RuntimeError):
@@ -95,11 +96,6 @@ class Graph:
     ...     z = x * np.cos(x)              # the same node as cos(x) * x
     >>> y is z, len(g), round(y.v, 12)
     (True, 3, 0.438791280945)
-    >>> print(g.python_source([y], "f"))
-    def f(q, u, t, d, h):
-        (q0,) = q[:1]
-        x2 = q0 * (_cos(q0))
-        return [x2]
     """
 
     __slots__ = ("keys", "nodes", "memo", "guards", "_guard_keys", "max_nodes", "baked", "_prev", "_gc")
@@ -131,17 +127,13 @@ class Graph:
     def new(self, key, v, s):
         i = len(self.keys)
         if i >= self.max_nodes:
-            self._too_big()
+            _too_big(self.max_nodes)
         n = _new_sym(Sym)
         n.i, n.v, n.s = i, v, s
         self.keys.append(key)
         self.nodes.append(n)
         self.memo[key] = n
         return n
-
-    def _too_big(self):
-        raise CodegenError(f"the generated program exceeds max_nodes={self.max_nodes} operations; the "
-                           "model is too large for code generation (use the numeric path, or raise max_nodes)")
 
     def input(self, kind, k, value, state=True):
         """A new input ``(kind, k)`` with trace-time value ``value``; ``state=False`` marks a
@@ -154,17 +146,23 @@ class Graph:
         return n if n is not None else self.new(("c", x), x, False)
 
     def guard(self, op, a, b, result):
+        """Record the decision ``a op b == result`` taken on traced values (once)."""
         key = (op, a.i, b.i, result)
         if key not in self._guard_keys:
             self._guard_keys.add(key)
             self.guards.append(key)
 
-    def python_source(self, outputs, name="f"):
-        """Python source of one function computing ``outputs`` (nodes or numbers) from the
-        inputs ``q, u, t, d`` (lists) and no hoisting (for inspection and tests)."""
-        from .printers import Program
+    def drop_guards(self, n):
+        """Forget the guards recorded after the first ``n`` (those of a branch of the trace
+        that was abandoned: its program is not made)."""
+        for key in self.guards[n:]:
+            self._guard_keys.discard(key)
+        del self.guards[n:]
 
-        return Program(self, {"out": list(outputs)}, hoist=False).python_main("out", name)
+
+def _too_big(max_nodes):
+    raise CodegenError(f"the generated program exceeds max_nodes={max_nodes} operations; the "
+                       "model is too large for code generation (use the numeric path, or raise max_nodes)")
 
 
 def _mk(key, v, s):
@@ -174,34 +172,13 @@ def _mk(key, v, s):
         keys = g.keys
         i = len(keys)
         if i >= g.max_nodes:
-            g._too_big()
+            _too_big(g.max_nodes)
         n = _new_sym(Sym)
         n.i, n.v, n.s = i, v, s
         keys.append(key)
         g.nodes.append(n)
         g.memo[key] = n
     return n
-
-
-def _div(x, y):
-    try:
-        return x / y
-    except ZeroDivisionError:
-        return math.copysign(_INF, x) * math.copysign(1.0, y) if x else float("nan")
-
-
-def _pow(x, y):
-    try:
-        return math.pow(x, y)
-    except (ValueError, OverflowError):
-        return float("nan")
-
-
-def _safe(f, *a):
-    try:
-        return f(*a)
-    except (ValueError, OverflowError):
-        return float("nan")
 
 
 def _split(n):
@@ -297,7 +274,7 @@ def _neg(a):
 
 
 def _un(op, f, a):
-    return _mk((op, a.i), _safe(f, a.v), a.s)
+    return _mk((op, a.i), call_or_nan(f, a.v), a.s)
 
 
 def _bin(op, f, a, b):
@@ -392,23 +369,23 @@ class Sym:
                 na = _G.nodes[ka[1]] if ka[0] == "neg" else a
                 nb = _G.nodes[kb[1]] if kb[0] == "neg" else b
                 return na / nb if (ka[0] == "neg") == (kb[0] == "neg") else -(na / nb)
-            return _bin("/", _div, a, b)
+            return _bin("/", div, a, b)
         if isinstance(b, _NUM):
             if b == 1:
                 return a
             if b == -1:
                 return _neg(a)
-            return _bin("/", _div, a, _G.const(b))
+            return _bin("/", div, a, _G.const(b))
         return NotImplemented
 
     def __rtruediv__(a, b):
         if isinstance(b, _NUM):
-            return 0.0 if b == 0 else _bin("/", _div, _G.const(b), a)
+            return 0.0 if b == 0 else _bin("/", div, _G.const(b), a)
         return NotImplemented
 
     def __pow__(a, b):
         if type(b) is Sym:
-            return _bin("pow", _pow, a, b)
+            return _bin("pow", power, a, b)
         if isinstance(b, _NUM):
             if b == 0:
                 return 1.0
@@ -420,12 +397,12 @@ class Sym:
                 return a.sqrt()
             if b == -1:
                 return 1.0 / a
-            return _bin("pow", _pow, a, _G.const(b))
+            return _bin("pow", power, a, _G.const(b))
         return NotImplemented
 
     def __rpow__(a, b):
         if isinstance(b, _NUM):
-            return 1.0 if b == 1 else _bin("pow", _pow, _G.const(b), a)
+            return 1.0 if b == 1 else _bin("pow", power, _G.const(b), a)
         return NotImplemented
 
     def __neg__(a):
@@ -497,7 +474,7 @@ class Sym:
         bs = _sym(b)
         if bs is None:
             return NotImplemented
-        res = bool(_CMP[op](a.v, bs.v))
+        res = bool(COMPARE[op](a.v, bs.v))
         _G.guard(op, a, bs, res)
         return res
 
@@ -540,5 +517,3 @@ class Sym:
 
 
 _new_sym = object.__new__
-_CMP = {"<": float.__lt__, "<=": float.__le__, ">": float.__gt__, ">=": float.__ge__,
-        "==": float.__eq__, "!=": float.__ne__}

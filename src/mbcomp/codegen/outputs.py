@@ -35,9 +35,9 @@ import time
 import numpy as np
 
 from ..geometry.kinematics import matrix_to_quat
-from .compiler import _HEADER, FLAGS, _cache_dir, _chunk, _compile_units, _n_parts, c_compiler
 from .graph import CodegenError, Fallback, Retrace
 from .printers import PY_ENV, ParamProgram, Program
+from .toolchain import FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_units, n_units
 from .tracer import param_vector, trace
 
 __all__ = ["OutputProgram"]
@@ -154,19 +154,19 @@ class OutputProgram:
         # the compile policy of the other programs (docs/architecture.md): -O2, outputs of one
         # shape rolled into loops, functions of a few hundred statements in translation units
         # compiled in parallel and cached one by one; the grid loop is one more small unit
-        parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", _chunk, n_parts=_n_parts)
+        parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", chunk, n_parts=n_units)
         # -O2 at every size: the outputs written at the end (constants, inputs) are copied from
         # static tables (printers._tail_c), so gcc's time stays linear (the 1000-link chain's
         # 180,000 operations: 24 s CPU, was 65 s with 5,000 straight-line stores in one function)
         flags = list(FLAGS)
-        units = [(f"outputs{k}", _HEADER + src, flags) for k, src in enumerate(parts)]
-        units.append(("outputs_grid", _HEADER + _GRID_DECL + _GRID_C, list(FLAGS)))
+        units = [(f"outputs{k}", HEADER + src, flags) for k, src in enumerate(parts)]
+        units.append(("outputs_grid", HEADER + _GRID_DECL + _GRID_C, list(FLAGS)))
         src = "\n".join(u[1] for u in units)
         key = hashlib.sha256("\0".join([src, " ".join(flags), cc, sys.platform]).encode()).hexdigest()[:32]
-        d = _cache_dir(cache_dir)
+        d = cache_directory(cache_dir)
         lib = os.path.join(d, f"mbcomp_out_{key}.so")
         if not os.path.exists(lib):
-            _compile_units(cc, units, lib, d)
+            compile_units(cc, units, lib, d)
         self.dll = ctypes.CDLL(lib)
         fn = self.dll.mbcomp_outputs_grid
         L, P = ctypes.c_long, ctypes.c_void_p

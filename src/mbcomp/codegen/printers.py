@@ -33,10 +33,11 @@ import re
 
 import numpy as np
 
-from .graph import _CMP, _INF, Retrace, Sym, _div, _pow, _safe
+from .graph import Retrace, Sym
+from .ieee import COMPARE, INF, call_or_nan, div, power
 from .rolling import ROLL_MIN, rolled as _rolled
 
-__all__ = ["PY_ENV", "Program", "ParamProgram"]
+__all__ = ["PY_ENV", "Program", "ParamProgram", "python_source"]
 
 _PY_UNARY = {"cos": "_cos", "sin": "_sin", "tan": "_tan", "asin": "_asin", "acos": "_acos", "atan": "_atan",
              "sqrt": "_sqrt", "exp": "_exp", "log": "_log", "sinh": "_sinh", "cosh": "_cosh", "tanh": "_tanh",
@@ -48,7 +49,7 @@ _C_UNARY = {"cos": "cos", "sin": "sin", "tan": "tan", "asin": "asin", "acos": "a
 PY_ENV = {"_cos": math.cos, "_sin": math.sin, "_tan": math.tan, "_asin": math.asin, "_acos": math.acos,
            "_atan": math.atan, "_sqrt": math.sqrt, "_exp": math.exp, "_log": math.log, "_sinh": math.sinh,
            "_cosh": math.cosh, "_tanh": math.tanh, "_atan2": math.atan2, "_hypot": math.hypot, "_pow": math.pow,
-           "_inf": _INF, "_nan": float("nan")}
+           "_inf": INF, "_nan": float("nan")}
 
 
 def _py_num(x):
@@ -91,6 +92,28 @@ def _expr(key, a, lang):
 def _c_expr(op, a):
     """C expression of operation ``op`` on operand names ``a`` (a constant: ``("c", value)``)."""
     return _c_num(op[1]) if type(op) is tuple else _expr((op,), a, "c")
+
+
+def python_source(g, outputs, name="f"):
+    """Python source of one function ``name(q, u, t, d, h)`` computing ``outputs`` (nodes of
+    the graph ``g`` or numbers) from the inputs ``q, u, t, d`` (lists), without hoisting (the
+    parameters come in ``h``): a graph printed for reading and for tests.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.codegen import Graph
+    >>> from mbcomp.codegen.printers import python_source
+    >>> with Graph() as g:
+    ...     x = g.input("q", 0, 0.5)
+    ...     y = np.cos(x) * x + 0 * x      # the "+ 0 * x" folds away
+    >>> print(python_source(g, [y], "f"))
+    def f(q, u, t, d, h):
+        (q0,) = q[:1]
+        x2 = q0 * (_cos(q0))
+        return [x2]
+    """
+    return Program(g, {"out": list(outputs)}, hoist=False).python_main("out", name)
 
 
 class Program:
@@ -537,7 +560,7 @@ class ParamProgram:
     per parameter set (no compilation), and for the traced values it reproduces the trace-time
     values bit for bit. Raises :class:`~mbcomp.codegen.graph.Retrace` when a parameter guard fails."""
 
-    _BIN = {"+": float.__add__, "-": float.__sub__, "*": float.__mul__, "/": _div, "pow": _pow,
+    _BIN = {"+": float.__add__, "-": float.__sub__, "*": float.__mul__, "/": div, "pow": power,
             "atan2": math.atan2, "hypot": math.hypot}
     _UN = {"neg": float.__neg__, "abs": abs, "cos": math.cos, "sin": math.sin, "tan": math.tan, "asin": math.asin,
            "acos": math.acos, "atan": math.atan, "sqrt": math.sqrt, "exp": math.exp, "log": math.log,
@@ -566,8 +589,8 @@ class ParamProgram:
             if len(k) == 3:
                 val[i] = BIN[k[0]](val[k[1]], val[k[2]])
             else:
-                val[i] = _safe(UN[k[0]], val[k[1]])
+                val[i] = call_or_nan(UN[k[0]], val[k[1]])
         for op, ai, bi, res in self.guards:
-            if bool(_CMP[op](val[ai], val[bi])) != res:
+            if bool(COMPARE[op](val[ai], val[bi])) != res:
                 raise Retrace
         return [val[i] for i in self.hoisted]

@@ -243,9 +243,7 @@ def _unless_singular(g, make):
     try:
         return make()
     except SingularTree:
-        for gd in g.guards[n:]:
-            g._guard_keys.discard(gd)
-        del g.guards[n:]
+        g.drop_guards(n)
         return None
 
 

@@ -20,7 +20,8 @@ from ..assembly.column_units import column_units
 from ..modeling.units import BASE as _BASE
 from ..modeling.units import unit_exponents
 
-__all__ = ["unit_exponents", "unit_name", "output_name"]
+__all__ = ["unit_exponents", "unit_name", "output_name", "parameter_doc", "build_description", "model_description3",
+           "model_description2"]
 
 RUNTIME_C = ("mbrt_rk.c", "mbrt_dop853.c", "mbrt_mech.c", "mbrt_linalg.c")
 
@@ -65,7 +66,7 @@ def _units(system, layout, state_units):
     where unknown) and ``{name: exponents}`` of every unit used; ``state_units``: the states'
     unit texts (None: unknown)."""
     defs = {}
-    par = [_define(unit_exponents(_param_doc(system, path, pname)[0]), defs) for path, pname, _ in layout]
+    par = [_define(unit_exponents(parameter_doc(system, path, pname)[0]), defs) for path, pname, _ in layout]
     sta = [_define(unit_exponents(u), defs) for u in state_units]
     der = [_define(_per_second(unit_exponents(u)), defs) for u in state_units]
     return par, sta, der, defs
@@ -139,21 +140,35 @@ def _unit_definitions(defs):
     return "  <UnitDefinitions>\n" + "\n".join(rows) + "\n  </UnitDefinitions>\n" if rows else ""
 
 
-def _param_doc(system, path, name):
+def parameter_doc(system, path, name):
+    """``(unit text, description)`` of the parameter ``name`` of the component at ``path``
+    (as the component declares them; either may be None)."""
     comp = system.topology.flat.components[path]
     par = comp.params()[name]
     return par.unit, par.doc
 
 
-def _build_description(ident):
+def build_description(ident):
+    """FMI 3.0's ``sources/buildDescription.xml`` of the model ``ident``: its C file and the
+    runtime's, in C99.
+
+    Examples
+    --------
+    >>> print(build_description("pendulum").splitlines()[3].strip())
+    <SourceFileSet language="C99">
+    """
     files = "".join(f'      <SourceFile name="{f}"/>\n' for f in (f"{ident}.c",) + RUNTIME_C)
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n<fmiBuildDescription fmiVersion="3.0">\n'
             f'  <BuildConfiguration modelIdentifier="{ident}">\n    <SourceFileSet language="C99">\n{files}'
             f'    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n')
 
 
-def _model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                        experiment=(1.0, 1e-12), state_units=(), starts=()):
+def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
+                       experiment=(1.0, 1e-12), state_units=(), starts=()):
+    """FMI 3.0's ``modelDescription.xml``: the parameters (value references ``0..NP-1``), the
+    states and their derivatives, the time, the outputs, the inputs and the start values, in
+    the order the generated C (``fmi3.c``) numbers them; ``kind`` is ``"me"``, ``"cs"`` or
+    ``"both"``. :func:`mbcomp.export.fmu.export_fmu` calls it with what it built."""
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, state_units)
     defs["s"] = {"s": 1}
@@ -164,7 +179,7 @@ def _model_description3(ident, name, system, layout, pnames, pv, states, y0, gui
     rows = [f'    <Float64 name="time" valueReference="{npar + 2 * nx}" causality="independent" '
             f'variability="continuous" description="time" unit="s"/>']
     for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
-        text, doc = _param_doc(system, path, pname)
+        text, doc = parameter_doc(system, path, pname)
         rows.append(f'    <Float64 name="{escape(full)}" valueReference="{k}" causality="parameter" variability="fixed" '
                     f'start="{pv[k]!r}" description="{escape(doc or "")} [{escape(text or "")}]"{unit(upar[k])}/>')
     for k, s in enumerate(states):
@@ -209,8 +224,10 @@ def _interface(tag, ident):
             f'    <SourceFiles>\n{files}    </SourceFiles>\n  </{tag}>\n')
 
 
-def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
+def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
                        experiment=(1.0, 1e-12), state_units=(), starts=()):
+    """FMI 2.0's ``modelDescription.xml``: the variables of :func:`model_description3` (the
+    same value references; the time is no variable in 2.0) with 2.0's model structure."""
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, state_units)
 
@@ -219,7 +236,7 @@ def _model_description(ident, name, system, layout, pnames, pv, states, y0, guid
 
     rows = []
     for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
-        text, doc = _param_doc(system, path, pname)
+        text, doc = parameter_doc(system, path, pname)
         rows.append(f'    <ScalarVariable name="{escape(full)}" valueReference="{k}" causality="parameter" '
                     f'variability="fixed" initial="exact" description="{escape(doc or "")} [{escape(text or "")}]">'
                     f'<Real start="{pv[k]!r}"{unit(upar[k])}/></ScalarVariable>')

@@ -65,15 +65,15 @@ import numpy as np
 
 from ..assembly.initialization import initialize
 from ..assembly.system import assemble
-from ..codegen.compiler import _HEADER, _chunk, c_compiler
 from ..codegen.graph import CodegenError
 from ..codegen.outputs import QUAT_C
 from ..codegen.printers import Program
+from ..codegen.toolchain import HEADER, c_compiler, chunk
 from ..codegen.tracer import param_vector, trace
 from ..errors import ModelError, Problem
 from ..modeling.model import Model
-from .description import (RUNTIME_C, _build_description, _model_description, _model_description3, _param_doc,
-                          output_name)
+from .description import (RUNTIME_C, build_description, model_description2, model_description3, output_name,
+                          parameter_doc)
 
 __all__ = ["export_fmu"]
 
@@ -175,7 +175,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
-    describe = _model_description if fmi == "2.0" else _model_description3
+    describe = model_description2 if fmi == "2.0" else model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
                    experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0)
@@ -196,7 +196,7 @@ def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
     projection, state selection), then the standard's functions (``fmi2.c``/``fmi3.c``)."""
     tr, prog, parts, n_work = fun
     loops = bool(system.topology.cut)
-    return (_HEADER + f"#define NQ {system.nq}\n#define NU {system.nu}\n"
+    return (HEADER + f"#define NQ {system.nq}\n#define NU {system.nu}\n"
             f"#define NP {len(pv)}\n#define NH {max(len(prog.hoisted), 1)}\n#define NW {max(n_work, 1)}\n"
             f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
             + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
@@ -236,7 +236,7 @@ def _fun_program(system, max_nodes):
         raise ModelError([Problem(", ".join(tr.drives), "the motion law cannot be traced into C, so an FMU cannot "
                                   "hold it", "write the law with numpy functions and plain arithmetic")])
     prog = Program(tr.graph, {"fun": tr.groups["fun"]}, guard_groups={"fun": tr.guard_groups["fun"]})
-    parts, n_work = prog.c_parts("fun", "mbcomp_fun", _chunk, n_parts=lambda n: 1)
+    parts, n_work = prog.c_parts("fun", "mbcomp_fun", chunk, n_parts=lambda n: 1)
     return tr, prog, parts, n_work
 
 
@@ -258,7 +258,7 @@ def _nominals(system, layout, pv, y0):
     length (the largest length parameter, m), its speed that length per second, an angle
     1 rad and its rate 1 rad/s (the importer's absolute tolerances scale with them); never
     below the start value's magnitude."""
-    lengths = [abs(v) for (path, name, _), v in zip(layout, pv) if _param_doc(system, path, name)[0] == "m"]
+    lengths = [abs(v) for (path, name, _), v in zip(layout, pv) if parameter_doc(system, path, name)[0] == "m"]
     L = max(lengths, default=1.0) or 1.0
     scale = {"m": L, "m/s": L, "rad": 1.0, "rad/s": 1.0, "1": 1.0}
     units = list(system.topology.q_units) + list(system.topology.u_units)
@@ -273,7 +273,7 @@ def _build(path, ident, fmi, cc, model_c, xml):
         platform = "linux64" if fmi == "2.0" else "x86_64-linux"
         (root / "binaries" / platform).mkdir(parents=True)
         if fmi == "3.0":
-            (root / "sources" / "buildDescription.xml").write_text(_build_description(ident))
+            (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
         for f in ("fmu_core.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
@@ -357,9 +357,9 @@ def _projection(system, tr_fun, max_nodes):
         return none
     groups = {"eval": tr.groups["eval"], "qrate": tr.groups["qrate"]}
     prog = Program(tr.graph, groups, guard_groups={k: tr.guard_groups[k] for k in groups})
-    parts, n_work = prog.c_parts("eval", "mbcomp_eval", _chunk, n_parts=lambda n: 1)
+    parts, n_work = prog.c_parts("eval", "mbcomp_eval", chunk, n_parts=lambda n: 1)
     if not tr.qrate_identity:
-        qparts, n_w = prog.c_parts("qrate", "mbcomp_qrate", _chunk, n_parts=lambda n: 1)
+        qparts, n_w = prog.c_parts("qrate", "mbcomp_qrate", chunk, n_parts=lambda n: 1)
         parts, n_work = parts + qparts, max(n_work, n_w)
     off, offs = 0, {}
     for name in FIELDS:
@@ -391,7 +391,7 @@ def _output_program(system, tr_fun, max_nodes):
     if not ok:  # a drive the program does not hold, or a singular trace point: no outputs
         return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0)
     prog = Program(tr.graph, {"outputs": tr.groups["outputs"]}, guard_groups={"outputs": tr.guard_groups["outputs"]})
-    parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", _chunk, n_parts=lambda n: 1)
+    parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", chunk, n_parts=lambda n: 1)
     cols, rots = list(tr.output_names), list(tr.rotation_paths)
     variables = list(zip(cols, range(len(cols))))
     variables += [(f"{b}.Q.{c}", len(cols) + 4 * i + j) for i, b in enumerate(rots) for j, c in enumerate("wxyz")]

@@ -48,7 +48,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..geometry.kinematics import cross, unit
-from ..geometry.rotations import _is_symbolic, _sympy, _vector
+from .symbolic import as_vector, is_symbolic, sympy_module
 
 __all__ = [
     "homogeneous", "homogeneous_inverse", "compose", "transform_points", "screw_motion",
@@ -80,14 +80,14 @@ def homogeneous(R=None, r=None):
     >>> np.allclose(T @ [1, 0, 0, 1], [1, 1, 0, 1])
     True
     """
-    sym = _is_symbolic(R, r)
+    sym = is_symbolic(R, r)
     if sym:
-        sp = _sympy()
+        sp = sympy_module()
         T = sp.eye(4)
         if R is not None:
             T[:3, :3] = sp.Matrix(R)
         if r is not None:
-            T[:3, 3] = _vector(r, True)
+            T[:3, 3] = as_vector(r, True)
         return T
     T = np.eye(4)
     if R is not None:
@@ -118,8 +118,8 @@ def homogeneous_inverse(T):
     >>> np.allclose(homogeneous_inverse(T) @ T, np.eye(4))
     True
     """
-    if _is_symbolic(T):
-        T = _sympy().Matrix(T)
+    if is_symbolic(T):
+        T = sympy_module().Matrix(T)
         Rt = T[:3, :3].T
         return homogeneous(Rt, -Rt * T[:3, 3])
     T = np.asarray(T, dtype=float)
@@ -148,10 +148,10 @@ def compose(*transforms):
     >>> np.allclose(T, homogeneous(C3(0.5), [1, 0, 0]))
     True
     """
-    sym = _is_symbolic(*transforms)
-    out = _sympy().eye(4) if sym else np.eye(4)
+    sym = is_symbolic(*transforms)
+    out = sympy_module().eye(4) if sym else np.eye(4)
     for T in transforms:
-        out = out * _sympy().Matrix(T) if sym else out @ np.asarray(T, dtype=float)
+        out = out * sympy_module().Matrix(T) if sym else out @ np.asarray(T, dtype=float)
     return out
 
 
@@ -179,9 +179,9 @@ def transform_points(T, points):
     array([[-1.,  0.,  1.],
            [ 0., -2.,  1.]])
     """
-    if _is_symbolic(T, points):
-        T = _sympy().Matrix(T)
-        return T[:3, :3] * _vector(points, True) + T[:3, 3]
+    if is_symbolic(T, points):
+        T = sympy_module().Matrix(T)
+        return T[:3, :3] * as_vector(points, True) + T[:3, 3]
     T = np.asarray(T, dtype=float)
     p = np.asarray(points, dtype=float)
     return p @ T[:3, :3].T + T[:3, 3]
@@ -349,7 +349,7 @@ def _vecs(sym, *vs):
     for v in vs:
         if v is None:
             v = [0, 0, 0]
-        out.append(_vector(v, sym))
+        out.append(as_vector(v, sym))
     return out
 
 
@@ -386,7 +386,7 @@ def point_velocity(v_O, omega, r, v_rel=None):
     >>> point_velocity([0, 0, 0], [0, p, y], [b, a, 0]).total.T     # the book's Example 1.1
     Matrix([[-a*psidot, b*psidot, -b*phidot]])
     """
-    sym = _is_symbolic(v_O, omega, r, v_rel)
+    sym = is_symbolic(v_O, omega, r, v_rel)
     v_O, omega, r, v_rel = _vecs(sym, v_O, omega, r, v_rel)
     return VelocityTerms(v_O, _cross(omega, r, sym), v_rel)
 
@@ -424,7 +424,7 @@ def point_acceleration(a_O, omega, alpha, r, v_rel=None, a_rel=None):
     >>> acc.coriolis.tolist()
     [0.0, 2.0, 0.0]
     """
-    sym = _is_symbolic(a_O, omega, alpha, r, v_rel, a_rel)
+    sym = is_symbolic(a_O, omega, alpha, r, v_rel, a_rel)
     a_O, omega, alpha, r, v_rel, a_rel = _vecs(sym, a_O, omega, alpha, r, v_rel, a_rel)
     return AccelerationTerms(a_O, _cross(alpha, r, sym), _cross(omega, _cross(omega, r, sym), sym),
                              2 * _cross(omega, v_rel, sym), a_rel)

@@ -65,6 +65,7 @@ import math
 import numpy as np
 
 from ..geometry.kinematics import quat_multiply, quat_to_matrix, skew
+from .symbolic import as_matrix, as_vector, cos_sin, elements, is_symbolic, sympy_module
 
 __all__ = [
     "C1", "C2", "C3",
@@ -81,46 +82,6 @@ _TINY = 8 * np.finfo(float).eps
 
 
 # ------------------------------------------------------------------------------ helpers
-def _is_symbolic(*args) -> bool:
-    """True when any argument (or element of a list/tuple/object array) is a sympy object."""
-    for a in args:
-        if any((cls.__module__ or "").startswith("sympy") for cls in type(a).__mro__):
-            return True  # (the MRO also covers sympy's dynamically created function classes)
-        if isinstance(a, (list, tuple)) and _is_symbolic(*a):
-            return True
-        if isinstance(a, np.ndarray) and a.dtype == object and _is_symbolic(*a.ravel()):
-            return True
-    return False
-
-
-def _sympy():
-    import sympy
-    return sympy
-
-
-def _trig(sym):
-    if sym:
-        sp = _sympy()
-        return sp.cos, sp.sin
-    return math.cos, math.sin
-
-
-def _matrix(rows, sym):
-    return _sympy().Matrix(rows) if sym else np.array(rows, dtype=float)
-
-
-def _flat(v):
-    """Elements of a list, tuple, array or sympy Matrix, flattened."""
-    return list(np.asarray(v, dtype=object).ravel())
-
-
-def _vector(v, sym):
-    """3-vector as a sympy column or a float array of shape (3,)."""
-    if sym:
-        return _sympy().Matrix(_flat(v))
-    return np.asarray(v, dtype=float).reshape(3)
-
-
 def _check_seq(seq):
     if seq not in SEQUENCES:
         raise ValueError(f"unknown Euler sequence {seq!r}: use '313' (precession-nutation-spin) "
@@ -129,14 +90,14 @@ def _check_seq(seq):
 
 
 def _angles(angles, sym):
-    a = _flat(angles)
+    a = elements(angles)
     if len(a) != 3:
         raise ValueError(f"expected three Euler angles, got {len(a)}")
     return a if sym else [float(x) for x in a]
 
 
 def _elementary(axis, angle, sym):
-    c, s = _trig(sym)
+    c, s = cos_sin(sym)
     ca, sa = c(angle), s(angle)
     if axis == 0:
         rows = [[1, 0, 0], [0, ca, -sa], [0, sa, ca]]
@@ -144,7 +105,7 @@ def _elementary(axis, angle, sym):
         rows = [[ca, 0, sa], [0, 1, 0], [-sa, 0, ca]]
     else:
         rows = [[ca, -sa, 0], [sa, ca, 0], [0, 0, 1]]
-    return _matrix(rows, sym)
+    return as_matrix(rows, sym)
 
 
 # ------------------------------------------------------------------------------ rotations
@@ -168,7 +129,7 @@ def C1(angle):
     >>> np.allclose(C1(np.pi / 2) @ [0, 1, 0], [0, 0, 1])
     True
     """
-    return _elementary(0, angle, _is_symbolic(angle))
+    return _elementary(0, angle, is_symbolic(angle))
 
 
 def C2(angle):
@@ -190,7 +151,7 @@ def C2(angle):
     >>> np.allclose(C2(np.pi / 2) @ [0, 0, 1], [1, 0, 0])
     True
     """
-    return _elementary(1, angle, _is_symbolic(angle))
+    return _elementary(1, angle, is_symbolic(angle))
 
 
 def C3(angle):
@@ -215,7 +176,7 @@ def C3(angle):
     [1],
     [0]])
     """
-    return _elementary(2, angle, _is_symbolic(angle))
+    return _elementary(2, angle, is_symbolic(angle))
 
 
 def tilde(a):
@@ -243,10 +204,10 @@ def tilde(a):
     [ omega3,       0, -omega1],
     [-omega2,  omega1,       0]])
     """
-    if not _is_symbolic(a):
+    if not is_symbolic(a):
         return skew(np.asarray(a, dtype=float).reshape(3))
-    x, y, z = _vector(a, True)
-    return _sympy().Matrix([[0, -z, y], [z, 0, -x], [-y, x, 0]])
+    x, y, z = as_vector(a, True)
+    return sympy_module().Matrix([[0, -z, y], [z, 0, -x], [-y, x, 0]])
 
 
 def vee(S):
@@ -268,10 +229,10 @@ def vee(S):
     >>> np.allclose(vee(tilde([1.0, 2.0, 3.0])), [1, 2, 3])
     True
     """
-    sym = _is_symbolic(S)
+    sym = is_symbolic(S)
     if sym:
-        S = _sympy().Matrix(S)
-        return _sympy().Matrix([(S[2, 1] - S[1, 2]) / 2, (S[0, 2] - S[2, 0]) / 2, (S[1, 0] - S[0, 1]) / 2])
+        S = sympy_module().Matrix(S)
+        return sympy_module().Matrix([(S[2, 1] - S[1, 2]) / 2, (S[0, 2] - S[2, 0]) / 2, (S[1, 0] - S[0, 1]) / 2])
     S = np.asarray(S, dtype=float)
     return 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])
 
@@ -303,7 +264,7 @@ def euler_to_matrix(seq, angles):
     True
     """
     axes = _check_seq(seq)
-    sym = _is_symbolic(angles)
+    sym = is_symbolic(angles)
     a = _angles(angles, sym)
     R = _elementary(axes[0], a[0], sym)
     for ax, ang in zip(axes[1:], a[1:]):
@@ -345,8 +306,8 @@ def matrix_to_euler(seq, R):
     True
     """
     _check_seq(seq)
-    if _is_symbolic(R):
-        sp = _sympy()
+    if is_symbolic(R):
+        sp = sympy_module()
         R = sp.Matrix(R)
         if seq == "313":
             return sp.Matrix([sp.atan2(R[0, 2], -R[1, 2]), sp.acos(R[2, 2]), sp.atan2(R[2, 0], R[2, 1])])
@@ -378,7 +339,7 @@ def _wrap(a):
 
 
 def _axis_quat(axis, angle, sym):
-    c, s = _trig(sym)
+    c, s = cos_sin(sym)
     q = [c(angle / 2), 0, 0, 0]
     q[1 + axis] = s(angle / 2)
     return q
@@ -410,13 +371,13 @@ def euler_to_quat(seq, angles):
     True
     """
     axes = _check_seq(seq)
-    sym = _is_symbolic(angles)
+    sym = is_symbolic(angles)
     a = _angles(angles, sym)
     Q = _axis_quat(axes[0], a[0], sym)
     for ax, ang in zip(axes[1:], a[1:]):
         Q = quat_multiply(Q, _axis_quat(ax, ang, sym))
     if sym:
-        return _sympy().Matrix(list(Q))
+        return sympy_module().Matrix(list(Q))
     Q = np.asarray(Q, dtype=float)
     return Q if Q[0] >= 0 else -Q
 
@@ -443,9 +404,9 @@ def quat_to_euler(seq, Q):
     >>> np.allclose(quat_to_euler("313", euler_to_quat("313", (0.1, 0.2, 0.3))), (0.1, 0.2, 0.3))
     True
     """
-    if not _is_symbolic(Q):
+    if not is_symbolic(Q):
         return matrix_to_euler(seq, quat_to_matrix(Q))
-    sp = _sympy()
+    sp = sympy_module()
     Q = list(sp.Matrix(Q))
     conj = [Q[0], -Q[1], -Q[2], -Q[3]]
     cols = []
@@ -500,9 +461,9 @@ def euler_rate_matrix(seq, angles, frame="body"):
     _check_seq(seq)
     if frame not in ("body", "space"):
         raise ValueError(f"frame must be 'body' or 'space', got {frame!r}")
-    sym = _is_symbolic(angles)
+    sym = is_symbolic(angles)
     a1, th, a3 = _angles(angles, sym)
-    c, s = _trig(sym)
+    c, s = cos_sin(sym)
     if seq == "313":
         phi, psi = a1, a3
         if frame == "body":
@@ -515,7 +476,7 @@ def euler_rate_matrix(seq, angles, frame="body"):
             rows = [[-s(th), 0, 1], [c(th) * s(phi), c(phi), 0], [c(th) * c(phi), -s(phi), 0]]
         else:
             rows = [[0, -s(psi), c(psi) * c(th)], [0, c(psi), s(psi) * c(th)], [1, 0, -s(th)]]
-    return _matrix(rows, sym)
+    return as_matrix(rows, sym)
 
 
 def euler_rates(seq, angles, omega, frame="body", tol=1e-12):
@@ -559,10 +520,10 @@ def euler_rates(seq, angles, omega, frame="body", tol=1e-12):
     _check_seq(seq)
     if frame not in ("body", "space"):
         raise ValueError(f"frame must be 'body' or 'space', got {frame!r}")
-    sym = _is_symbolic(angles, omega)
+    sym = is_symbolic(angles, omega)
     a1, th, a3 = _angles(angles, sym)
-    wx, wy, wz = _vector(omega, sym)
-    c, s = _trig(sym)
+    wx, wy, wz = as_vector(omega, sym)
+    c, s = cos_sin(sym)
     d = s(th) if seq == "313" else c(th)
     if (sym and d == 0) or (not sym and abs(d) <= tol):
         name = _NAMES[seq][1]
@@ -591,5 +552,5 @@ def euler_rates(seq, angles, omega, frame="body", tol=1e-12):
             r2 = -s(psi) * wx + c(psi) * wy
             r1 = wz + s(th) * r3
     if sym:
-        return _sympy().Matrix([r1, r2, r3])
+        return sympy_module().Matrix([r1, r2, r3])
     return np.array([r1, r2, r3])

@@ -76,9 +76,9 @@ class Model(Component):
         if not isinstance(component, Component):
             raise TypeError(f"{name}: {component!r} is not a Component; build it from mbcomp.library or subclass a role")
         if name in self._components:
-            raise ValueError(f"{self._label()}: a component named {name!r} already exists; choose another name")
+            raise ValueError(f"{self.label()}: a component named {name!r} already exists; choose another name")
         if component.parent is not None:
-            raise ValueError(f"{name}: this component object is already part of {component.parent._label()} "
+            raise ValueError(f"{name}: this component object is already part of {component.parent.label()} "
                              f"as {component.name!r}; create a new instance for each use")
         if free and getattr(component, "role", None) != "body":
             raise ValueError(f"{name}: free=True marks a body that floats on purpose; a {type(component).__name__} "
@@ -166,36 +166,37 @@ class Model(Component):
         return draw_topology(self, path, params=params)
 
     def __getitem__(self, name):
-        comp = self
-        for part in name.split("."):
-            comp = comp._components[part]
-        return comp
+        head, _, rest = name.partition(".")
+        comp = self._components[head]
+        return comp[rest] if rest else comp
 
     def components(self):
         return dict(self._components)
 
-    def _label(self):
+    def label(self):
+        """How messages name this model: ``"model"`` at the top, ``"model <path>"`` when nested."""
         return "model" if self.parent is None else f"model {self.path}"
 
     # --- flattening and validation --------------------------------------------------------
     def flatten(self) -> "FlatModel":
-        """Leaf components by dotted path, every connection, and aliases with full paths."""
+        """Leaf components by dotted path, every connection, and aliases with full paths (a
+        nested model flattens itself; its paths get its name as a prefix; its connections,
+        aliases and outputs come before this model's own)."""
         leaves, conns, aliases, outputs, free = {}, [], {}, {}, set()
-
-        def walk(model, prefix):
-            for name, comp in model._components.items():
-                if isinstance(comp, Model):
-                    walk(comp, f"{prefix}{name}.")
-                else:
-                    leaves[f"{prefix}{name}"] = comp
-            conns.extend(model._connections)
-            free.update(f"{prefix}{k}" for k in model._free)
-            for k, v in model._aliases.items():
-                aliases[f"{prefix}{k}"] = f"{prefix}{v}"
-            for k, (fn, vs) in model._outputs.items():
-                outputs[f"{prefix}{k}"] = (fn, tuple(f"{prefix}{v}" for v in vs))
-
-        walk(self, "")
+        for name, comp in self._components.items():
+            if not isinstance(comp, Model):
+                leaves[name] = comp
+                continue
+            inner, pre = comp.flatten(), f"{name}."
+            leaves.update((pre + k, c) for k, c in inner.components.items())
+            conns.extend(inner.connections)
+            free.update(pre + k for k in inner.free)
+            aliases.update((pre + k, pre + v) for k, v in inner.aliases.items())
+            outputs.update((pre + k, (fn, tuple(pre + v for v in vs))) for k, (fn, vs) in inner.outputs.items())
+        conns.extend(self._connections)
+        free.update(self._free)
+        aliases.update(self._aliases)
+        outputs.update(self._outputs)
         return FlatModel(leaves, conns, aliases, outputs, free)
 
     def validate(self):
@@ -217,7 +218,7 @@ class Model(Component):
         for path, comp in flat.components.items():
             probs.extend(_open_ports(path, comp, connected, carried))
         if not flat.components:
-            probs.append(Problem(self._label(), "contains no components", "add components with model.add(name, ...)"))
+            probs.append(Problem(self.label(), "contains no components", "add components with model.add(name, ...)"))
         if probs:
             raise ModelError(probs)
         return flat
