@@ -157,7 +157,7 @@ def flange_starts(system):
         for v in fr.ports.values():
             if v is None or v[0] in out:
                 continue
-            e = system._edge[v[0]]
+            e = system.edge(v[0])
             if e.drive:
                 out[v[0]] = float(system.topology.flat.components[e.drive].motion(0.0, system.P[e.drive])[0])
             else:
@@ -198,7 +198,7 @@ def flange_rows(system, fr, jets, t, q):
     axes = {}
     for pn, v in fr.ports.items():
         if v is not None:
-            e = system._edge[v[0]]
+            e = system.edge(v[0])
             axes[pn] = _axis_jet(system, e, jets[e.node_a], jets[e.node_b], t, q)
     out = []
     for rname, form in forms:
@@ -257,7 +257,7 @@ def rotors(system, jets):
     the frame node it turns with, and whether its gyroscopic moment acts."""
     out = []
     for path, comp, node, ename in system.topology.rotors:
-        e = system._edge[ename]
+        e = system.edge(ename)
         J, gyro = comp.rotor(system.P[path])
         n = e.comp.axis_world(jets[e.node_a].R, system.P[ename])
         out.append((node, J * np.outer(n, n), bool(gyro)))

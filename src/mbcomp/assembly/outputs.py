@@ -311,7 +311,7 @@ def _elements(system, cols, ev, rates):
     coordinate)."""
     topo, jets, dt = system.topology, ev.jets, POTENTIAL_DT
     for path, comp, ports in topo.forces:
-        frames = {pn: system._frame_state(jets[n]) for pn, n in ports.items()}
+        frames = {pn: system.frame_state(jets[n]) for pn, n in ports.items()}
         p = system.P[path]
         measured = {pn: MeasuredFrame(jets[n], rates, n) for pn, n in ports.items()}
         for key, val in comp.outputs(ev.t, measured, p).items():

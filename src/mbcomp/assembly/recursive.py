@@ -154,7 +154,7 @@ def _body_terms(system, links, jets, I, W):
         if i < 0:
             continue
         J = jets[node]
-        m, rho, Iw = system._body(comp, path, J)
+        m, rho, Iw = system.body_inertia(comp, path, J)
         c = J.r + rho
         Cx = skew(c)
         I[i] = I[i] + np.block([[Iw - m * (Cx @ Cx), m * Cx], [-m * Cx, m * np.eye(3)]])

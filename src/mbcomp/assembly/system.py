@@ -7,7 +7,7 @@ and returns a :class:`MultibodySystem`. The system evaluates, for given ``(t, q,
   velocity-product terms), so that the tree obeys ``M du/dt = f - C^T lam``;
 * the loop-closure constraints ``Phi(q, t)``, their velocity Jacobian ``C`` (``dPhi/dt =
   C u + c_t``) and bias ``c_b`` (``d2Phi/dt2 = C du/dt + c_b``);
-* nonholonomic constraints ``B(q) u = b(q, t)`` (none in the standard library yet; the
+* nonholonomic constraints ``B(q) u = b(q, t)`` (a rolling contact's no-slip rows; the
   rows are carried through every formulation);
 * reactions of every joint, energies, and named outputs.
 
@@ -211,17 +211,18 @@ class MultibodySystem:
             new.evaluator = make(new)
         return new
 
-    def variant(self, *, topology=None, P=None, g=None):
-        """A numeric copy with its topology, parameter values ``P`` or gravity ``g`` replaced.
-
-        For tracers, which run the numeric code on traced parameter values (and stand-ins for
-        some components): nothing is validated or re-derived; the copy's evaluator is
-        :class:`NumericEvaluator` and it shares everything not replaced (row mask, caches)."""
+    def variant(self, *, topology=None, P=None, g=None, nonholonomic=None):
+        """A numeric copy with its topology, parameter values ``P``, gravity ``g`` or held
+        velocity rows (``nonholonomic``: edges) replaced -- for tracers (traced parameter values,
+        stand-ins) and a hybrid run's rows in force (:mod:`mbcomp.hybrid`). Nothing is validated
+        or re-derived; the evaluator is :class:`NumericEvaluator`; all else is shared (row mask,
+        caches; the rows' names are found again when the cut joints changed)."""
         new = object.__new__(MultibodySystem)
-        new.__dict__.update(vars(self))
-        for name, value in (("topology", topology), ("P", P), ("g", g)):
+        new.__dict__.update(vars(self), _row_names=self._row_names if topology is None
+                            or list(topology.cut) == list(self.topology.cut) else None)
+        for name, value in (("topology", topology), ("P", P), ("g", g), ("_nonholonomic", nonholonomic)):
             if value is not None:
-                setattr(new, name, value)
+                setattr(new, name, list(value) if name == "_nonholonomic" else value)
         new.evaluator = NumericEvaluator(new)
         return new
 
@@ -242,12 +243,9 @@ class MultibodySystem:
         return self.evaluator.source
 
     def _check_static(self):
-        topo, probs = self.topology, []
-        if self.nu == 0 and not topo.cut:
-            pass
-        for n in topo.unreached:
-            probs.append(Problem(", ".join(topo.node_ports[n]), "frame is joined neither to the world nor to any body with mass",
-                                 "connect it to the mechanism or remove the components that use it"))
+        topo = self.topology
+        probs = [Problem(", ".join(topo.node_ports[n]), "frame is joined neither to the world nor to any body with mass",
+                         "connect it to the mechanism or remove the components that use it") for n in topo.unreached]
         if probs:
             raise ModelError(probs)
 
@@ -259,6 +257,15 @@ class MultibodySystem:
     @property
     def u_names(self):
         return self.topology.u_names
+
+    def edge(self, name):
+        """Joint ``name``'s topology edge: its component ``comp``, frame nodes, slices ``q``, ``u``."""
+        return self._edge[name]
+
+    @property
+    def nonholonomic(self):
+        """The edges of the joints whose velocity rows (``B u = b``) the system holds."""
+        return list(self._nonholonomic)
 
     def owners(self):
         """``{path: component}`` of every parameter owner: the model's components and the
@@ -327,7 +334,8 @@ class MultibodySystem:
             return pj.through(R, r, Hw, Hv, cols, wr, vr, bw, bv)
         return pj.back_through(R, r, Hw, Hv, cols, wr, vr, bw, bv)
 
-    def _frame_state(self, J):
+    def frame_state(self, J):
+        """The :class:`~mbcomp.modeling.roles.FrameState` a component sees of frame jet ``J``."""
         return FrameState(J.r, J.R, J.v, J.w)
 
     def flange_state(self, root, jets, t, q, u):
@@ -354,7 +362,7 @@ class MultibodySystem:
             w[1] = w[1] + tau
 
         for path, comp, ports in self.topology.forces:
-            states = {pn: self._frame_state(jets[n]) for pn, n in ports.items()}
+            states = {pn: self.frame_state(jets[n]) for pn, n in ports.items()}
             for pn, (f, tau) in comp.wrenches(t, states, self.P[path]).items():
                 add(ports[pn], np.asarray(f, dt), np.asarray(tau, dt))
         for path, comp in self.topology.flange_elements:
@@ -376,7 +384,8 @@ class MultibodySystem:
                     add(e.node_a, -n, z)
         return out
 
-    def _body(self, comp, path, J):
+    def body_inertia(self, comp, path, J):
+        """``(m, rho, Iw)`` of body ``comp`` on jet ``J``: kg, centre of mass (m), inertia (kg m^2); world."""
         m, rc, I = comp.mass_properties(self.P[path])
         rho = J.R @ rc
         Iw = J.R @ I @ J.R.T
@@ -400,7 +409,7 @@ class MultibodySystem:
         rows_v, rows_mv, rows_w, rows_iw = [], [], [], []
         for path, comp, node in self.topology.bodies:
             J = jets[node]
-            m, rho, Iw = self._body(comp, path, J)
+            m, rho, Iw = self.body_inertia(comp, path, J)
             Jv = J.Jv - skew(rho) @ J.Jw
             wxr = cross(J.w, rho)
             a = J.a + cross(J.alpha, rho) + cross(J.w, wxr)
@@ -513,14 +522,14 @@ class MultibodySystem:
         jets = ev.jets
         for path, comp, node in self.topology.bodies:
             J = jets[node]
-            m, rho, Iw = self._body(comp, path, J)
+            m, rho, Iw = self.body_inertia(comp, path, J)
             v = J.v + cross(J.w, rho)
             T += 0.5 * m * (v @ v) + 0.5 * J.w @ Iw @ J.w
             V -= m * (self.g @ (J.r + rho))
         for node, Iw, _ in rotors(self, jets):
             T += 0.5 * jets[node].w @ Iw @ jets[node].w
         for path, comp, ports in self.topology.forces:
-            V += comp.potential({pn: self._frame_state(jets[n]) for pn, n in ports.items()}, self.P[path])
+            V += comp.potential({pn: self.frame_state(jets[n]) for pn, n in ports.items()}, self.P[path])
         for path, comp in self.topology.flange_elements:
             states = {pn: self.flange_state(self.topology.flange_of[PortRef(comp, pn, "flange")], jets, ev.t, ev.q, ev.u)
                       for pn, pt in comp.ports().items() if pt.kind == "flange"}
@@ -574,10 +583,8 @@ class MultibodySystem:
             lr = lam_nh[k:k + len(rows)]
             k += len(rows)
             wa, wb = -(jac[:, :6].T @ lr), -(jac[:, 6:].T @ lr)
-            D[e.node_a][0] = D[e.node_a][0] - wa[:3]
-            D[e.node_a][1] = D[e.node_a][1] - wa[3:]
-            D[e.node_b][0] = D[e.node_b][0] - wb[:3]
-            D[e.node_b][1] = D[e.node_b][1] - wb[3:]
+            for node, w in ((e.node_a, wa), (e.node_b, wb)):
+                D[node] = [D[node][0] - w[:3], D[node][1] - w[3:]]
             nh_on_b[e.name] = wb
         for e in reversed(self.topology.tree):
             F, Mc = D[e.child]
@@ -604,7 +611,7 @@ class MultibodySystem:
         D = {n: [np.zeros(3), np.zeros(3)] for n in jets}
         for path, comp, node in self.topology.bodies:
             J = jets[node]
-            m, rho, Iw = self._body(comp, path, J)
+            m, rho, Iw = self.body_inertia(comp, path, J)
             a_lin, a_ang = rates(node, J.r + rho)
             acc = a_lin + J.a + cross(J.alpha, rho) + cross(J.w, cross(J.w, rho))
             F = m * (acc - self.g)

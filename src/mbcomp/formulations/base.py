@@ -167,4 +167,4 @@ def projection_needed(system):
     """Whether a projection can change anything: position rows to close (cut joints, including
     constraint-only joints such as contacts), quaternions to normalize (``nq != nu``) or
     nonholonomic rows to satisfy."""
-    return bool(system.topology.cut or system.nq != system.nu or system._nonholonomic)
+    return bool(system.topology.cut or system.nq != system.nu or system.nonholonomic)

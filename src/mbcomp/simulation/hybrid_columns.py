@@ -36,10 +36,10 @@ def finish(res, events, states=None):
     if impacts:
         times, losses = np.array(impacts).T
         lost = np.concatenate(([0.0], np.cumsum(losses)))[np.searchsorted(times, res.time, side="right")]
-        res._series["energy.impacts"] = lost
+        res.set_column("energy.impacts", lost)
         res.units["energy.impacts"] = "J"
         if "energy.balance" in res:  # E - E0 - W + D, and the impacts' losses now
-            res._series["energy.balance"] = res["energy.balance"] + lost
+            res.set_column("energy.balance", res["energy.balance"] + lost)
     if res.status == "inaccurate" and "energy.kinetic" in res and "accuracy alarm" in res.message:
         _alarm_again(res, lost, before)
     return res

@@ -286,7 +286,7 @@ class JointSingularities:
     def check(self, end, t_prev, dense):
         dist = self.distances(end.t, end.q, end.u)
         cut = set(end.system.topology.cut)  # an open unilateral contact is out of the system: not watched
-        dist = {n: d for n, d in dist.items() if self.system._edge[n].comp.tree_edge or n in cut}
+        dist = {n: d for n, d in dist.items() if self.system.edge(n).comp.tree_edge or n in cut}
         for name, d in dist.items():
             if d < self.JOINT_MIN:
                 raise self._failure(name, end.t, d)

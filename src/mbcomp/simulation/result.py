@@ -165,6 +165,12 @@ class Result:
     def __contains__(self, name):
         return name == "time" or name in self._series
 
+    def set_column(self, name, values, unit=None):
+        """Add or replace the column ``name`` (one value per output time; ``unit``: its unit)."""
+        self._series[name] = values
+        if unit is not None:
+            self.units[name] = unit
+
     @property
     def success(self):
         return self.status == "success"

@@ -98,7 +98,7 @@ def _generalized(system, t, q, u, path):
     topo, f = system.topology, np.zeros(system.nu)
     for p, comp, ports in topo.forces:
         if p == path:
-            frames = {pn: system._frame_state(jets[n]) for pn, n in ports.items()}
+            frames = {pn: system.frame_state(jets[n]) for pn, n in ports.items()}
             for pn, (F, T) in comp.wrenches(t, frames, system.P[p]).items():
                 J = jets[ports[pn]]
                 f += J.Jv.T @ np.asarray(F, float) + J.Jw.T @ np.asarray(T, float)
