@@ -25,10 +25,9 @@ Examples
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg as sla
 
-from ..assembly.manifold import ACCEPT_FACTOR, POSITION_TOL, close_positions, solve_speeds
-from ..errors import SimulationError
+from ..assembly.kkt import project_state, solve_kkt
+from ..assembly.manifold import ACCEPT_FACTOR, POSITION_TOL
 from .base import Formulation, projection_needed
 
 __all__ = ["LagrangeIndex1"]
@@ -87,65 +86,17 @@ class LagrangeIndex1(Formulation):
         """Accelerations ``du/dt`` and multipliers ``[lam, mu]`` at an evaluation ``ev``.
 
         ``stabilize=False`` leaves out the Baumgarte terms (the plain index-1 solve used for
-        consistent accelerations and reactions).
+        consistent accelerations and reactions). The solve is :func:`mbcomp.assembly.kkt.solve_kkt`
+        (with ``singular="pass"`` by the range space, :attr:`PASS_RANK`).
         """
-        M, f, A = ev.M, ev.f, ev.A
-        m = A.shape[0]
         self.nlu += 1
-        if m == 0:
-            try:
-                c = sla.cho_factor(M)
-            except np.linalg.LinAlgError:
-                raise SimulationError(f"the mass matrix is singular at t={ev.t:g}: some coordinate carries no "
-                                      "inertia; give the bodies mass or prescribe that motion") from None
-            return sla.cho_solve(c, f), np.zeros(0)
         rhs = -ev.cb
         rhs_nh = -ev.Bb
         if stabilize and self.stabilization == "baumgarte":
             rhs = rhs - 2.0 * self.alpha * ev.Phid - self.beta ** 2 * ev.Phi
             rhs_nh = rhs_nh - self.alpha * ev.Psi
-        if self.singular == "pass":
-            return self._solve_passing(M, f, A, np.concatenate((rhs, rhs_nh)), ev.t)
-        n = self.nu
-        K = np.zeros((n + m, n + m))
-        K[:n, :n] = M
-        K[:n, n:] = A.T
-        K[n:, :n] = A
-        try:
-            lu = sla.lu_factor(K, check_finite=False)
-        except (ValueError, np.linalg.LinAlgError):
-            raise SimulationError(f"the saddle-point matrix is singular at t={ev.t:g}") from None
-        d = np.abs(np.diag(lu[0]))
-        b = np.concatenate((f, rhs, rhs_nh))
-        if d.min() <= 1e-13 * d.max():
-            # rank lost at this state: often a trial stage of an explicit method far off the
-            # manifold (stiff Baumgarte terms), which error control rejects. Minimum-norm answer
-            # here; a singular position on the accepted path is reported by the driver's
-            # singularity monitor (mbcomp.simulation), which sees accepted steps only.
-            x = np.linalg.lstsq(K, b, rcond=1e-13)[0]
-        else:
-            x = sla.lu_solve(lu, b, check_finite=False)
-        return x[:n], x[n:]
-
-    def _solve_passing(self, M, f, A, rhs, t):
-        """The solve of :meth:`solve` by the range space, ``G = A M^-1 A^T``, with the
-        eigen-directions of ``G`` below :attr:`PASS_RANK` of its largest left out: at and near a
-        singular position the rows that lost rank are not enforced for that instant (their
-        multipliers, and the Baumgarte terms that would divide by the vanishing eigenvalue,
-        are zero), and the motion goes on continuously; the stabilization pulls it back onto
-        every row once the rank is back."""
-        try:
-            c = sla.cho_factor(M)
-        except np.linalg.LinAlgError:
-            raise SimulationError(f"the mass matrix is singular at t={t:g}: some coordinate carries no "
-                                  "inertia; give the bodies mass or prescribe that motion") from None
-        x0 = sla.cho_solve(c, f)
-        Y = sla.cho_solve(c, A.T)
-        g, V = np.linalg.eigh(A @ Y)
-        keep = g > self.PASS_RANK * max(g[-1], 0.0)
-        r = V[:, keep].T @ (A @ x0 - rhs)
-        lam = V[:, keep] @ (r / g[keep])
-        return x0 - Y @ lam, lam
+        return solve_kkt(ev.M, ev.f, ev.A, np.concatenate((rhs, rhs_nh)), ev.t,
+                         pass_rank=self.PASS_RANK if self.singular == "pass" else None)
 
     def fun(self, t, y):
         """``dy/dt`` for ``y = [q, u]``."""
@@ -199,17 +150,4 @@ class LagrangeIndex1(Formulation):
         """``y = [q, u]`` moved onto ``Phi = 0`` and ``[dPhi/dt, Psi] = 0`` by minimum-norm
         corrections (Newton on the positions, then least squares on the speeds), quaternions
         normalized."""
-        sysm = self.system
-        q, u = sysm.normalize(y[: self.nq]), y[self.nq:]
-
-        def residual(qq):
-            ev = sysm.evaluate(t, qq, u)
-            return ev.Phi, ev.C, ev
-
-        c = close_positions(residual, sysm.increment, q)
-        if not c.acceptable:
-            raise SimulationError(f"position projection did not converge at t={t:g} (residual {c.norm:.3g}); "
-                                  "the mechanism may be near a singular position")
-        ev = c.data
-        u = solve_speeds(ev.A, np.concatenate((ev.Phid, ev.Psi)), u)
-        return np.concatenate((c.q, u))
+        return project_state(self.system, t, y)

@@ -31,13 +31,15 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from ..assembly.kkt import accelerations
+
 __all__ = ["open_joints", "without_rows", "contact_rows", "contact_impact", "initialize_in_modes", "event_value",
            "contact_pushes", "tangent_force", "contact_columns", "zero_open"]
 
 
 def open_joints(system, modes):
     """Names of the joints of ``modes`` (``{joint: mode}``) whose rows are out in their mode."""
-    return sorted(n for n, mode in modes.items() if not system._edge[n].comp.holds_rows(system.P[n], mode))
+    return sorted(n for n, mode in modes.items() if not system.edge(n).comp.holds_rows(system.P[n], mode))
 
 
 def without_rows(system, names):
@@ -52,9 +54,7 @@ def without_rows(system, names):
         return system
     topo = copy.copy(system.topology)
     topo.cut = [c for c in system.topology.cut if c not in names]
-    new = system.variant(topology=topo)
-    new._nonholonomic = [e for e in system._nonholonomic if e.name not in names]
-    new._row_names = None
+    new = system.variant(topology=topo, nonholonomic=[e for e in system.nonholonomic if e.name not in names])
     if system.row_mask is not None:
         keep = [n.rsplit(".", 1)[0] not in names for n in system.constraint_names(all_rows=True)]
         new.row_mask = np.asarray(system.row_mask)[np.array(keep, bool)]
@@ -68,7 +68,7 @@ def contact_rows(system, name, t, q, u, row="normal", jets=None):
     Returns a namespace: ``gap`` (m, the holonomic ``row``'s value), ``speed`` (m/s, its
     rate), ``C`` (k, nu: the ``row`` first, then the velocity rows), ``offset`` (k,: each row's
     rate at ``u = 0``), ``bias`` (k,: the rows' rates' time derivatives at ``du/dt = 0``)."""
-    e, p = system._edge[name], system.P[name]
+    e, p = system.edge(name), system.P[name]
     jets = system.kinematics(t, q, u) if jets is None else jets
     a, b = jets[e.node_a], jets[e.node_b]
     J = np.vstack((a.Jv, a.Jw, b.Jv, b.Jw))
@@ -98,15 +98,14 @@ def contact_pushes(system, sysm, modes, t, q, u):
     system ``sysm``: minus their multipliers in the index-1 solve without stabilization. A
     row with a friction cone (``mu_s``) adds ``("joint", contact, "slide"): mu_s N - |F_t|``
     (N), ``F_t`` the force of the contact's rolling rows (:func:`tangent_force`)."""
-    from ..formulations.lagrange import LagrangeIndex1
     from ..modeling.events import ContactRow
 
-    held = [(n, r) for n, mode in sorted(modes.items()) if not system._edge[n].comp.tree_edge
-            for r in system._edge[n].comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)]
+    held = [(n, r) for n, mode in sorted(modes.items()) if not system.edge(n).comp.tree_edge
+            for r in system.edge(n).comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)]
     if not held:
         return {}
     ev = sysm.evaluate(t, q, u)
-    _, lam = LagrangeIndex1(sysm, "none").solve(ev, stabilize=False)
+    _, lam = accelerations(ev)
     mult = sysm.row_multipliers(ev, lam)
     out = {}
     for n, row in held:

@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..assembly.kkt import accelerations
 from ..errors import SimulationError
 from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value
@@ -177,7 +178,7 @@ class Events(SlideEvents):
         out = {}
         sysm = self.system
         for name, mode in self.modes.items():
-            e = sysm._edge[name]
+            e = sysm.edge(name)
             qj = np.zeros(e.q.stop - e.q.start)
             for ev_name, _, direction in e.comp.events(qj, np.zeros(e.u.stop - e.u.start), sysm.P[name], mode):
                 out[("joint", name, ev_name)] = direction
@@ -196,7 +197,7 @@ class Events(SlideEvents):
         out = {}
         rows = None
         for name, mode in self.modes.items():
-            e = sysm._edge[name]
+            e = sysm.edge(name)
             for ev_name, value, _ in e.comp.events(q[e.q], u[e.u], sysm.P[name], mode):
                 if isinstance(value, SlipSpeed):  # a slide's speed along its start direction
                     self._slip_keys.add(("joint", name, ev_name))
@@ -302,7 +303,7 @@ class Events(SlideEvents):
                     self._end(run, t_e, qu(t_e), f"event {name} at t={t_e:.12g} s")
                     return True
             return False
-        comp, p = self.system._edge[who].comp, self.system.P[who]
+        comp, p = self.system.edge(who).comp, self.system.P[who]
         action = comp.on_event("release" if kind == "release" else name, p, self.modes[who])
         state = qu(t_e)
         self._before = np.array(state, float)
@@ -312,7 +313,7 @@ class Events(SlideEvents):
             if key != self._last:
                 return False
             # back at the limit right after leaving it, too slow to tell apart: at rest there
-            action = Switch(self.system._edge[who].comp.rest_mode(name, p, self.modes[who]) or self.modes[who])
+            action = Switch(self.system.edge(who).comp.rest_mode(name, p, self.modes[who]) or self.modes[who])
         if action is None:
             return False
         keep_until(run, t_e, qu)
@@ -336,7 +337,7 @@ class Events(SlideEvents):
 
     def _approaching(self, who, action, state, t=0.0):
         """Whether the impact's rows close (a negative speed along them) at ``state``."""
-        if not self.system._edge[who].comp.tree_edge:  # a contact: its normal row's rate
+        if not self.system.edge(who).comp.tree_edge:  # a contact: its normal row's rate
             row = _contact_row(self.system, who, action.engage)
             nq = self.system.nq
             return contact_rows(self.system, who, t, state[:nq], state[nq:], row).speed < 0.0
@@ -360,7 +361,7 @@ class Events(SlideEvents):
     def _impact(self, t, who, name, action, q, u):
         """``(u+, mode to settle in or None)`` of an impact of ``who`` at event ``name``."""
         sysm, p = self.system, self.system.P[who]
-        if not sysm._edge[who].comp.tree_edge:  # a contact touching down: its own rows
+        if not sysm.edge(who).comp.tree_edge:  # a contact touching down: its own rows
             row = _contact_row(sysm, who, action.engage)
             speed = [contact_rows(sysm, who, t, q, u, row).speed]
             u_plus, _, loss, after0 = contact_impact(self.system_now(), who, t, q, u, action.restitution, row,
@@ -385,7 +386,7 @@ class Events(SlideEvents):
         if action.restitution == 0.0 or rests():
             settle = action.engage
         elif _chattering(hits):
-            settle = sysm._edge[who].comp.rest_mode(name, p, self.modes[who])
+            settle = sysm.edge(who).comp.rest_mode(name, p, self.modes[who])
             span = hits[-1] - hits[-CHATTER - 1]
             if settle is None:
                 raise SimulationError(f"chattering: {who} hit {name!r} {len(hits)} times, the last {CHATTER} in "
@@ -400,10 +401,8 @@ class Events(SlideEvents):
     def _rests(self, t, q, u_plus, rows, after):
         """Whether the rebound (speeds ``after`` on ``rows``) would rise less than
         :data:`REST_HEIGHT` ``atol`` against the acceleration pressing into the rows."""
-        from ..formulations.lagrange import LagrangeIndex1
-
         sysm = self.system_now()
-        ud, _ = LagrangeIndex1(sysm, "none").solve(sysm.evaluate(t, q, u_plus), stabilize=False)
+        ud, _ = accelerations(sysm.evaluate(t, q, u_plus))
         _, _, C = row_values(self.system, rows, q, u_plus)
         acc = C @ ud
         return bool(np.all(acc < 0.0) and np.all(after ** 2 <= -2.0 * acc * REST_HEIGHT * self.atol))
@@ -411,10 +410,8 @@ class Events(SlideEvents):
     def _contact_rests(self, t, q, u_plus, who, row, after):
         """Whether contact ``who``'s rebound (its normal speed ``after``, m/s) would rise less
         than :data:`REST_HEIGHT` ``atol`` against its gap's acceleration in flight."""
-        from ..formulations.lagrange import LagrangeIndex1
-
         sysm = self.system_now()
-        ud, _ = LagrangeIndex1(sysm, "none").solve(sysm.evaluate(t, q, u_plus), stabilize=False)
+        ud, _ = accelerations(sysm.evaluate(t, q, u_plus))
         cr = contact_rows(self.system, who, t, q, u_plus, row)
         acc = float(cr.C[0] @ ud + cr.bias[0])
         return acc < 0.0 and after ** 2 <= -2.0 * acc * REST_HEIGHT * self.atol
@@ -427,7 +424,7 @@ class Events(SlideEvents):
         going_on = set(slipping_joints(self.system, self.modes)) & set(slipping_joints(self.system, modes))
         q, u = consistent(new, t, q, u)
         modes, new = self._break_away(t, q, u, modes)
-        if any(p < 0.0 for d in self._pushes_in(new, modes, t, q, u).values() for p in d.values()):
+        if any(p < 0.0 for d in self.pushes_in(new, modes, t, q, u).values() for p in d.values()):
             for n in sorted(n for n in modes if modes[n] != self.modes.get(n)):  # the log says it stays
                 self._record(t, n, "pull", "release", {"mode": self.modes[n], "energy_loss": 0.0})
             modes, new = dict(self.modes), self.system_now()  # an engaged row that would pull: stay free
@@ -474,10 +471,10 @@ class Events(SlideEvents):
         """``(modes, system)``: a stuck friction's row (:class:`~mbcomp.modeling.events.StickRow`)
         whose push is beyond its limit at ``(t, q, u)`` in ``modes`` breaks away at once to
         the mode its joint's ``on_event("break+" or "break-")`` names (recorded as a switch)."""
-        for name, d in self._pushes_in(self.system_now(modes), modes, t, q, u).items():
+        for name, d in self.pushes_in(self.system_now(modes), modes, t, q, u).items():
             broken = sorted((v, key[2]) for key, v in d.items() if key[0] == "joint" and v < 0.0)
             if broken:
-                action = self.system._edge[name].comp.on_event(broken[0][1], self.system.P[name], modes[name])
+                action = self.system.edge(name).comp.on_event(broken[0][1], self.system.P[name], modes[name])
                 modes = {**modes, name: action.mode}
                 self._record(t, name, broken[0][1], "switch", {"mode": action.mode, "energy_loss": 0.0})
         return modes, self.system_now(modes)
@@ -486,7 +483,7 @@ class Events(SlideEvents):
         """``modes`` with the contacts that were closed and would pull in them opened, the
         most pulling first, one at a time (a contact closing elsewhere may unload another
         one: the bicycle's front wheel landing lifts the rear one); each a ``"release"``."""
-        if all(self.system._edge[n].comp.tree_edge for n in modes):  # no contacts
+        if all(self.system.edge(n).comp.tree_edge for n in modes):  # no contacts
             return modes
         for _ in range(len(modes)):
             new = self.system_now(modes)
@@ -496,17 +493,18 @@ class Events(SlideEvents):
             if not pulls:
                 break
             _, who, row = pulls[0]
-            action = self.system._edge[who].comp.on_event("release", self.system.P[who], modes[who])
+            action = self.system.edge(who).comp.on_event("release", self.system.P[who], modes[who])
             if not isinstance(action, Switch):
                 break
             modes = dict(modes, **{who: action.mode})
             self._record(t, who, row, "release", {"mode": action.mode, "energy_loss": 0.0})
         return modes
 
-    def _pushes_in(self, new, modes, t, q, u):
+    def pushes_in(self, new, modes, t, q, u):
+        """``{joint: {event key: push}}`` of the rows held in ``modes`` at ``(t, q, u)`` (empty when none is held)."""
         old, self.modes = self.modes, modes
         try:
-            held = any(self.system._edge[n].comp.mode_rows(self.system.P[n], m) for n, m in modes.items())
+            held = any(self.system.edge(n).comp.mode_rows(self.system.P[n], m) for n, m in modes.items())
             return self._pushes(t, q, u) if held else {}
         finally:
             self.modes = old
@@ -539,7 +537,7 @@ def keep_until(run, t, qu):
 
 def _contact_row(system, who, mode):
     """The holonomic row a contact holds in ``mode`` (its first :class:`ContactRow`)."""
-    rows = [r for r in system._edge[who].comp.mode_rows(system.P[who], mode) if isinstance(r, ContactRow)]
+    rows = [r for r in system.edge(who).comp.mode_rows(system.P[who], mode) if isinstance(r, ContactRow)]
     return rows[0].name if rows else "normal"
 
 

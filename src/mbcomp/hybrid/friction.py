@@ -58,7 +58,7 @@ def mode_forces(system, modes):
     on their own speed in their mode (``mode_force(p, mode)``, e.g. kinetic friction)."""
     out = []
     for name, mode in sorted(modes.items()):
-        e = system._edge[name]
+        e = system.edge(name)
         value = e.comp.mode_force(system.P[name], mode) if e.comp.has_mode_force else 0.0
         if value:
             out.append((e.u.start, float(value)))
@@ -105,7 +105,7 @@ def with_mode_forces(system, modes):
 def _frictional(system, history):
     """Names of the joints with a ``mode_force`` among the modes of ``history``."""
     names = {n for _, modes, _ in history for n in modes}
-    return sorted(n for n in names if system._edge[n].comp.has_mode_force)
+    return sorted(n for n in names if system.edge(n).comp.has_mode_force)
 
 
 def friction_columns(res, events, Y):
@@ -123,7 +123,7 @@ def friction_columns(res, events, Y):
     k_mode[t <= starts[0]] = 0
     total = np.zeros(len(t))
     for name in names:
-        e, p, comp = system._edge[name], system.P[name], system._edge[name].comp
+        e, p, comp = system.edge(name), system.P[name], system.edge(name).comp
         iq, iu = e.q.start, e.u.start
         force, stuck, dissipated = np.zeros(len(t)), np.zeros(len(t)), np.zeros(len(t))
         done = 0.0  # the dissipation of the slip intervals already over (J)
@@ -140,9 +140,9 @@ def friction_columns(res, events, Y):
             dissipated[sel] = done - F * (Y[sel, iq] - q_i[iq])
             if i + 1 < len(history):
                 done -= F * (history[i + 1][2][iq] - q_i[iq])
-        res._series[f"{name}.friction"] = force
-        res._series[f"{name}.sticking"] = stuck
-        res._series[f"{name}.power"] = force * Y[:, system.nq + iu]
+        res.set_column(f"{name}.friction", force)
+        res.set_column(f"{name}.sticking", stuck)
+        res.set_column(f"{name}.power", force * Y[:, system.nq + iu])
         res.units[f"{name}.friction"] = "N m" if comp.axis_kind == "rotational" else "N"
         res.units[f"{name}.sticking"], res.units[f"{name}.power"] = "1", "W"
         total += dissipated
@@ -153,7 +153,7 @@ def friction_columns(res, events, Y):
 
 def _stick_push(events, modes, name, t, q, u):
     """The stick row's push (N or N m) of joint ``name`` at ``(t, q, u)`` in ``modes``."""
-    d = events._pushes_in(events.system_now(modes), modes, t, q, u).get(name, {})
+    d = events.pushes_in(events.system_now(modes), modes, t, q, u).get(name, {})
     return 0.5 * (d[("joint", name, "break+")] - d[("joint", name, "break-")])
 
 
@@ -161,5 +161,5 @@ def count_dissipation(res, D):
     """``D`` (J) into ``energy.dissipated`` and ``energy.balance`` of ``res`` (the accuracy alarm
     is judged again once, with every correction, by the post-processing:
     :func:`mbcomp.simulation.hybrid_columns.finish`)."""
-    res._series["energy.dissipated"] = res["energy.dissipated"] + D
-    res._series["energy.balance"] = res["energy.balance"] + D
+    res.set_column("energy.dissipated", res["energy.dissipated"] + D)
+    res.set_column("energy.balance", res["energy.balance"] + D)

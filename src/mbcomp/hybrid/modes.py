@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..assembly.kkt import accelerations, project_state
 from ..errors import ModelError, Problem
 from ..modeling.events import ContactRow
 from .contacts import contact_impact, contact_rows, initialize_in_modes, open_joints, without_rows
@@ -55,7 +56,7 @@ def start_modes(system):
 
 def _axis_index(system, name):
     """``(q index, u index)`` of tree joint ``name``'s one coordinate; a problem otherwise."""
-    e = system._edge[name]
+    e = system.edge(name)
     if e.drive or e.q.stop - e.q.start != 1 or e.u.stop - e.u.start != 1:
         why = "is driven (its motion is prescribed)" if e.drive else "is no 1-DOF joint in the spanning tree"
         raise ModelError([Problem(name, f"a stop needs the joint's own coordinate, but {name} {why}",
@@ -67,7 +68,7 @@ def mode_rows(system, modes):
     """``[(joint, AxisRow, q index, u index)]`` held by ``modes``."""
     out = []
     for name, mode in sorted(modes.items()):
-        e = system._edge[name]
+        e = system.edge(name)
         for row in e.comp.mode_rows(system.P[name], mode):
             if not isinstance(row, ContactRow):  # a contact's rows are its own: see open_joints
                 out.append((name, row, *_axis_index(system, name)))
@@ -184,9 +185,7 @@ def impact_speeds(system, t, q, u_minus, rows, restitution):
 def consistent(system, t, q, u):
     """``(q, u)`` moved onto ``system``'s rows (positions by Newton, speeds by least squares;
     as the Lagrange projection does)."""
-    from ..formulations.lagrange import LagrangeIndex1
-
-    y = LagrangeIndex1(system, "none").project(t, np.concatenate((q, u)))
+    y = project_state(system, t, np.concatenate((q, u)))
     return y[: system.nq], y[system.nq:]
 
 
@@ -194,10 +193,8 @@ def row_push(system, t, q, u, first, k):
     """The push (N or N m, >= 0 while the rows press) of the ``k`` mode rows appended at
     ``first`` among ``system``'s holonomic rows: minus their multipliers in the index-1
     solve without stabilization."""
-    from ..formulations.lagrange import LagrangeIndex1
-
     ev = system.evaluate(t, q, u)
-    _, lam = LagrangeIndex1(system, "none").solve(ev, stabilize=False)
+    _, lam = accelerations(ev)
     return -lam[first:first + k]
 
 
@@ -247,7 +244,7 @@ def stop_columns(series, system, log, t, Y, system_for=None):
             if f"{n}.stop" in series:
                 series[f"{n}.stop"][k] = push
         zero_open(series, system, open_joints(system, modes), k)
-    return {f"{n}.stop": "N m" if system._edge[n].comp.axis_kind == "rotational" else "N" for n in engaged}
+    return {f"{n}.stop": "N m" if system.edge(n).comp.axis_kind == "rotational" else "N" for n in engaged}
 
 
 def _stop_rows(system, modes):
@@ -262,15 +259,13 @@ def _engaged_values(system, sysm, modes, t, q, u):
     from types import SimpleNamespace
 
     from ..assembly.outputs import result_columns
-    from ..formulations.lagrange import LagrangeIndex1
-
     from .slip import slipping_joints, without_rolling
 
     # a sliding contact's rolling rows are out here too (its friction is then in no reaction)
     base = without_rolling(without_rows(system, open_joints(system, modes)), slipping_joints(system, modes))
     rows = mode_rows(base, modes)
     ev = sysm.evaluate(t, q, u)
-    ud, lam = LagrangeIndex1(sysm, "none").solve(ev, stabilize=False)
+    ud, lam = accelerations(ev)
     first = ev.Phi.size - len(rows)  # the mode's rows follow the holonomic rows
     pushes = {n: -float(lam[first + i]) for i, (n, row, _, _) in enumerate(rows) if not _is_stick(row)}
     lam_b = np.concatenate((lam[:first], lam[first + len(rows):]))

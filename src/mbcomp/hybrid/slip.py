@@ -63,6 +63,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..assembly.kkt import accelerations
 from ..errors import SimulationError
 from ..modeling.events import ContactRow
 from .contacts import contact_rows, open_joints, tangent_force, without_rows
@@ -83,14 +84,14 @@ SPIN_TURNS, SPIN_SPAN = 3, 1e-6
 
 def slipping_joints(system, modes):
     """Names of the contacts of ``modes`` sliding in their mode (``slip_friction`` not None)."""
-    return sorted(n for n, mode in modes.items() if system._edge[n].comp.has_slip_friction
-                  and system._edge[n].comp.slip_friction(system.P[n], mode) is not None)
+    return sorted(n for n, mode in modes.items() if system.edge(n).comp.has_slip_friction
+                  and system.edge(n).comp.slip_friction(system.P[n], mode) is not None)
 
 
 def cone_joints(system, modes):
     """Names of the contacts of ``modes`` holding a row with a friction cone (rolling)."""
     return sorted(n for n, mode in modes.items()
-                  for r in system._edge[n].comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)
+                  for r in system.edge(n).comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)
                   and r.mu_s is not None)
 
 
@@ -100,9 +101,7 @@ def without_rolling(system, names):
     names = set(names)
     if not names:
         return system
-    new = system.variant()
-    new._nonholonomic = [e for e in system._nonholonomic if e.name not in names]
-    return new
+    return system.variant(nonholonomic=[e for e in system.nonholonomic if e.name not in names])
 
 
 def tangent_rows(system, name, t, q, u, jets=None):
@@ -204,7 +203,7 @@ class SlipEvaluator(WrappingEvaluator):
 def slips_of(system, modes, dirs):
     """``[(contact, mu_k, direction)]`` of the contacts sliding in ``modes`` (``dirs``: their
     start directions, default along the first tangent)."""
-    return [(n, float(system._edge[n].comp.slip_friction(system.P[n], modes[n])),
+    return [(n, float(system.edge(n).comp.slip_friction(system.P[n], modes[n])),
              np.asarray(dirs.get(n, (1.0, 0.0)), float)) for n in slipping_joints(system, modes)]
 
 
@@ -280,10 +279,8 @@ def start_directions(sysm, slips, t, q, u, names):
 def closed_force(sysc, name, t, q, u):
     """The rolling rows' force ``F_t`` (N, on the body, along the tangents) of contact
     ``name`` held rolling in the system ``sysc``."""
-    from ..formulations.lagrange import LagrangeIndex1
-
     ev = sysc.evaluate(t, q, u)
-    _, lam = LagrangeIndex1(sysc, "none").solve(ev, stabilize=False)
+    _, lam = accelerations(ev)
     return tangent_force(ev, sysc.row_multipliers(ev, lam), name)
 
 
@@ -300,8 +297,6 @@ def slip_columns(series, system, log, t, Y, system_now):
     from types import SimpleNamespace
 
     from ..assembly.outputs import result_columns
-    from ..formulations.lagrange import LagrangeIndex1
-
     names = sorted({n for _, modes, _ in log for n in slipping_joints(system, modes) + cone_joints(system, modes)})
     if not names:
         return {}
@@ -319,7 +314,7 @@ def slip_columns(series, system, log, t, Y, system_now):
             continue
         sysm = system_now(modes, dirs)
         ev = sysm.evaluate(tk, q, u)
-        ud, lam = LagrangeIndex1(sysm, "none").solve(ev, stabilize=False)
+        ud, lam = accelerations(ev)
         slips = slips_of(system, modes, dirs)
         _, N = friction_solve(sysm, ev, slips)
         base = without_rows(system, open_joints(system, modes))
@@ -402,7 +397,7 @@ def slip_dissipation(res, system, log, work_log, Y, system_now):
         sysm = system_now(modes, dirs)
         for k in sel:
             for (n, _, _), p in zip(slips, slide_power(sysm, slips, t[k], Y[k])):
-                res._series[f"{n}.power"][k] = -p
+                res[f"{n}.power"][k] = -p
     if "energy.balance" in res:
         times, work = np.array(work_log).T
         count_dissipation(res, np.interp(t, times, work))
@@ -455,7 +450,7 @@ class SlideEvents:
     def _cone(self, who, mode):
         """``(mu_s, mu_k)`` of contact ``who`` rolling in ``mode`` (its row's friction cone, and
         the kinetic coefficient of the mode its ``"slide"`` event goes to), or None."""
-        comp, p = self.system._edge[who].comp, self.system.P[who]
+        comp, p = self.system.edge(who).comp, self.system.P[who]
         cone = [r.mu_s for r in comp.mode_rows(p, mode) if isinstance(r, ContactRow) and r.mu_s is not None]
         if not cone:
             return None
@@ -470,7 +465,7 @@ class SlideEvents:
         for n, mode in modes.items():
             if n in landed and self._cone(n, mode) is not None and np.linalg.norm(
                     tangent_rows(self.system, n, t, q, u)[1]) > TURN * self.atol:
-                out[n] = self.system._edge[n].comp.on_event("slide", self.system.P[n], mode).mode
+                out[n] = self.system.edge(n).comp.on_event("slide", self.system.P[n], mode).mode
                 self._record(t, n, "slide", "switch", {"mode": out[n], "energy_loss": 0.0})
         return out
 
@@ -490,7 +485,7 @@ class SlideEvents:
                                                                               or n in self.slip_dirs)):
                 dirs[n] = v_t / np.linalg.norm(v_t) if np.linalg.norm(v_t) > V_TINY else self.slip_dirs[n]
             else:
-                rolling = self.system._edge[n].comp.on_event("stop", self.system.P[n], modes[n]).mode
+                rolling = self.system.edge(n).comp.on_event("stop", self.system.P[n], modes[n]).mode
                 F = closed_force(self.system_now({**modes, n: rolling}), n, t, q, u)
                 size = float(np.linalg.norm(F))
                 dirs[n] = -F / size if size > 0.0 else np.eye(len(F))[0]
@@ -507,5 +502,5 @@ class SlideEvents:
         out = dict(modes)
         for n in slipping_joints(self.system, modes):
             if np.linalg.norm(tangent_rows(self.system, n, t, q, u)[1]) <= self.atol:
-                out[n] = self.system._edge[n].comp.on_event("stop", self.system.P[n], modes[n]).mode
+                out[n] = self.system.edge(n).comp.on_event("stop", self.system.P[n], modes[n]).mode
         return out
