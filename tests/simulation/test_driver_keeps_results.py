@@ -1,5 +1,9 @@
 """A run that cannot go on still returns its results: a law that raises, Ctrl-C, SIGTERM.
 
+An interrupted run raises :class:`mbcomp.errors.SimulationInterrupted` (a
+``KeyboardInterrupt``: a script must not carry on as if the run had finished) carrying the
+partial result; the other endings return it.
+
 Every case uses a pendulum driven by a torque law that misbehaves from t = 0.3 s and is zero
 before: up to the last accepted step the run is the undisturbed pendulum's, so the kept
 results must equal an undisturbed run's at the same times (same steps, same dense output),
@@ -15,6 +19,7 @@ import pytest
 
 import mbcomp
 from conftest import torque_pendulum
+from mbcomp.errors import SimulationInterrupted
 from mbcomp.library import WorldForce
 
 T_BAD = 0.3
@@ -24,6 +29,14 @@ METHODS = ["RK45", "LSODA", "radau5", "ida", "genalpha"]
 def run(law, method):
     extra = dict(h=1e-3) if method == "genalpha" else {}
     return mbcomp.simulate(torque_pendulum(law), t_end=1.0, method=method, n_out=101, rtol=1e-8, atol=1e-10, **extra)
+
+
+def interrupted(call, signal_name):
+    """The partial result an interrupted ``call()`` carries (it must raise, naming the signal)."""
+    with pytest.raises(SimulationInterrupted) as info:
+        call()
+    assert info.value.signal == signal_name and str(info.value) == info.value.result.message
+    return info.value.result
 
 
 def quiet(t, phi, w):
@@ -79,13 +92,13 @@ def test_a_force_law_that_raises_is_named_too(undisturbed):
 
 
 @pytest.mark.parametrize("method", METHODS)
-def test_ctrl_c_returns_the_partial_result_as_interrupted(method, undisturbed):
+def test_ctrl_c_raises_with_the_partial_result_as_interrupted(method, undisturbed):
     def ctrl_c(t, phi, w):
         if t >= T_BAD:
             raise KeyboardInterrupt
         return 0.0
 
-    res = run(ctrl_c, method)
+    res = interrupted(lambda: run(ctrl_c, method), "SIGINT")
     assert res.status == "interrupted" and not res.success
     assert res.message.startswith("interrupted by Ctrl-C"), res.message
     assert_kept_as_undisturbed(res, undisturbed[method])
@@ -111,7 +124,7 @@ def test_sigterm_returns_the_partial_result_and_restores_the_handler(method, und
 
     try:
         mine = signal.getsignal(signal.SIGTERM)
-        res = run(terminate, method)
+        res = interrupted(lambda: run(terminate, method), "SIGTERM")
         assert signal.getsignal(signal.SIGTERM) is mine  # restored after the run
     finally:
         signal.signal(signal.SIGTERM, previous)
@@ -137,8 +150,8 @@ def test_sigterm_from_a_timer_interrupts_a_long_run():
     try:
         # on the numeric path, where the law runs at every step (a compiled program calls it
         # only while tracing, which would start the timer before the integration)
-        res = mbcomp.simulate(torque_pendulum(law), t_end=2000.0, method="RK45", dt_out=0.01, rtol=1e-10, atol=1e-12,
-                              backend="numeric")
+        res = interrupted(lambda: mbcomp.simulate(torque_pendulum(law), t_end=2000.0, method="RK45", dt_out=0.01,
+                                                  rtol=1e-10, atol=1e-12, backend="numeric"), "SIGTERM")
     finally:
         timers[0].cancel()
         signal.signal(signal.SIGTERM, previous)
@@ -163,7 +176,8 @@ def test_sigterm_stops_the_compiled_engine_with_what_it_reached():
     timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGTERM))
     try:
         timer.start()
-        res = mbcomp.simulate(fast, t_end=1e6, method="dop853", dt_out=10.0, rtol=1e-10, atol=1e-12)
+        res = interrupted(lambda: mbcomp.simulate(fast, t_end=1e6, method="dop853", dt_out=10.0, rtol=1e-10,
+                                                  atol=1e-12), "SIGTERM")
     finally:
         timer.cancel()
         signal.signal(signal.SIGTERM, previous)

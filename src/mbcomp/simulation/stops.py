@@ -28,6 +28,7 @@ from ..errors import SimulationError
 from ..modeling.blame import blame
 
 __all__ = ["Terminated", "sigterm_interrupts", "law_failure", "start_failure", "raised_in_a_law", "interruption",
+           "interrupted_by",
            "time_of"]
 
 
@@ -111,3 +112,9 @@ def raised_in_a_law(exc):
 def interruption(how, t_reached, t_kept):
     """``"interrupted <how> at t=<s> s; the results up to t=<s> s are kept"``."""
     return f"interrupted {how} at t={t_reached:g} s; the results up to t={t_kept:g} s are kept"
+
+
+def interrupted_by(message):
+    """The signal an :func:`interruption` message names: ``"SIGTERM"`` for ``"interrupted by
+    SIGTERM ..."``, else ``"SIGINT"`` (Ctrl-C)."""
+    return "SIGTERM" if message.startswith("interrupted by SIGTERM") else "SIGINT"
