@@ -28,7 +28,7 @@ import numpy as np
 from ..geometry.kinematics import cross
 from .topology import ROOT
 
-__all__ = ["nonconservative", "momentum_conserved", "momenta"]
+__all__ = ["nonconservative", "momentum_conserved", "momenta", "impulse_work"]
 
 
 def nonconservative(system):
@@ -85,3 +85,26 @@ def momenta(system, t, q, u):
         P, L = P + p, L + h
         sP, sL = sP + float(np.linalg.norm(p)), sL + float(np.linalg.norm(h))
     return P, L, sP, sL
+
+
+def impulse_work(system, t, q, u_minus, u_plus, loss):
+    """The work (J) the prescribed motions' impulses do in an impact at ``(t, q)`` that takes
+    the speeds from ``u_minus`` to ``u_plus`` and dissipates ``loss`` (J): the kinetic energy
+    gained plus the loss, ``T(u+) - T(u-) + loss``. A drive keeps its prescribed speed through
+    the impact, so its impulse does work (a cart driven at 1 m/s whose load hits a stop on it);
+    without drives the kinetic energy drops by the loss and this is 0 to roundoff.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, 0)))
+    >>> j = m.add("j", Prismatic(n=(1, 0, 0))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, b.frame_a)
+    >>> s = mbcomp.assemble(m)                     # stopped from 1 m/s: 1 J lost, no drive
+    >>> impulse_work(s, 0.0, np.zeros(1), np.array([1.0]), np.array([0.0]), 1.0)
+    0.0
+    """
+    T_minus = system.energies(system.evaluate(t, q, u_minus))[0]
+    T_plus = system.energies(system.evaluate(t, q, u_plus))[0]
+    return float(T_plus - T_minus + loss)

@@ -50,6 +50,7 @@ from ..errors import SimulationError
 from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value
 from ..solvers.compiled_rk import CompiledRK
+from ..assembly.conservation import impulse_work
 from .modes import consistent, impact_speeds, mode_rows, mode_system, row_push, row_values, start_modes
 from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, slipping_joints, tangent_rows, \
     with_slip_friction
@@ -379,7 +380,8 @@ class Events(SlideEvents):
             def rests():
                 return self._rests(t, q, u_plus, rows, after)
         self._record(t, who, name, "impact", {"speed_before": float(speed[0]), "speed_after": float(after[0]),
-                                              "energy_loss": loss, "restitution": action.restitution})
+                                              "energy_loss": loss, "restitution": action.restitution,
+                                              "drive_work": impulse_work(self.system_now(), t, q, u, u_plus, loss)})
         hits = self._hits.setdefault(who, [])
         hits.append(t)
         settle = None
@@ -438,7 +440,8 @@ class Events(SlideEvents):
         self.mode_log.append((float(t), dict(modes)))
         if self.records and "energy_loss" in self.records[-1].detail and self.records[-1].kind != "impact":
             M = new.evaluate(t, q, u0).M
-            self.records[-1].detail["energy_loss"] = float(0.5 * (u0 @ M @ u0 - u @ M @ u))
+            self.records[-1].detail["energy_loss"] = loss = float(0.5 * (u0 @ M @ u0 - u @ M @ u))
+            self.records[-1].detail["drive_work"] = impulse_work(new, t, q, u0, u, loss)
         form = self.make_form(new)
         run.form, run.projects = form, bool(form.projects)
         run.start(t, form.initial_state(t, q, u))

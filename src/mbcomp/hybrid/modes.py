@@ -232,7 +232,7 @@ def stop_columns(series, system, log, t, Y, system_for=None):
         series[f"{n}.stop"] = np.zeros(len(t))
     for k, tk in enumerate(t):
         modes = log[max(int(np.searchsorted(times, tk, side="left")) - 1, 0)][1]
-        if not _stop_rows(system, modes):
+        if not _changes_dynamics(system, modes):
             continue
         q, u = Y[k, :system.nq], Y[k, system.nq:]
         vals, pushes = _engaged_values(system, (system_for or (lambda m: mode_system(system, m)))(modes), modes, tk, q,
@@ -245,6 +245,14 @@ def stop_columns(series, system, log, t, Y, system_for=None):
                 series[f"{n}.stop"][k] = push
         zero_open(series, system, open_joints(system, modes), k)
     return {f"{n}.stop": "N m" if system.edge(n).comp.axis_kind == "rotational" else "N" for n in engaged}
+
+
+def _changes_dynamics(system, modes):
+    """Whether ``modes`` hold rows (engaged stops, a stuck friction's row) or apply forces
+    (a slipping friction's) the assembled system lacks: their columns (the speeds' rates, the
+    reactions and drive efforts carrying them) are solved again over the mode's system."""
+    return bool(mode_rows(system, modes)) or any(
+        system.edge(n).comp.has_mode_force and system.edge(n).comp.mode_force(system.P[n], m) for n, m in modes.items())
 
 
 def _stop_rows(system, modes):

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..hybrid.friction import friction_columns
 from ..hybrid.slip import slip_dissipation, slipping_joints
-from .accuracy import balance_alarm, energy_alarm
+from .accuracy import balance_alarm, between_events, energy_alarm
 
 __all__ = ["finish"]
 
@@ -26,11 +26,17 @@ def finish(res, events, states=None):
     res.events = list(events.records) if events is not None else []
     before = None
     if "energy.balance" in res:
-        before = (np.array(res["energy.balance"]), np.array(res["energy.dissipated"]))
+        before = (np.array(res["energy.balance"]), np.array(res["energy.dissipated"]), np.array(res["energy.work"]))
     if events is not None and states is not None:  # stick-slip friction's columns and dissipation
         friction_columns(res, events, states)
         if any(slipping_joints(events.system, modes) for _, modes, *_ in events.slip_log):
             slip_dissipation(res, events.system, events.slip_log, events.work_log, states, events.system_now)
+    drives = [(r.time, r.detail["drive_work"]) for r in res.events if r.detail.get("drive_work")]
+    if drives and "energy.work" in res:  # the drives' impulses at impacts do work (J)
+        times, work = np.array(drives).T
+        done = np.concatenate(([0.0], np.cumsum(work)))[np.searchsorted(times, res.time, side="right")]
+        res.set_column("energy.work", res["energy.work"] + done)
+        res.set_column("energy.balance", res["energy.balance"] - done)
     impacts = [(r.time, r.detail["energy_loss"]) for r in res.events if "energy_loss" in r.detail]
     lost = np.zeros(len(res.time))
     if impacts:
@@ -52,13 +58,11 @@ def _alarm_again(res, lost, before):
     T, V, rtol = res["energy.kinetic"], res["energy.potential"], res.stats["rtol"]
     if before is not None:
         W, D = res["energy.work"], res["energy.dissipated"]
-        was = balance_alarm(before[0], T, V, W, before[1], 0.0, rtol)
-        # the dissipation's quadrature on the output grid cannot follow a speed jumping
-        # inside an interval: the dissipation over the intervals holding an impact is uncertain
-        k = np.unique(np.searchsorted(res.time, [e.time for e in res.events if "energy_loss" in e.detail]))
-        k = k[(k > 0) & (k < len(res.time))]
-        quadrature = float(np.sum(np.abs(D[k] - D[k - 1])))
-        now = balance_alarm(res["energy.balance"], T, V, W, D + lost, quadrature, rtol)
+        was = balance_alarm(before[0], T, V, before[2], before[1], 0.0, rtol)
+        # the work's and dissipation's quadrature on the output grid cannot follow a power
+        # jumping inside an interval (an impact, a switch): the balance is judged between them
+        judged = between_events(res["energy.balance"], res.time, [e.time for e in res.events])
+        now = balance_alarm(judged, T, V, W, D + lost, 0.0, rtol)
     else:
         was, now = energy_alarm(T, V, rtol), energy_alarm(T, V + lost, rtol)
     if now[0] is None and was[1]:
