@@ -3,7 +3,7 @@
 A contact (a cut joint, ``tree_edge = False``) with modes holds its own rows -- the
 holonomic ``constraints`` and the ``velocity_constraints`` (rolling) -- only in the modes
 where :meth:`~mbcomp.modeling.roles.Joint.holds_rows` is true (``"closed"``). In an
-``"open"`` mode the system is the assembled one *without* them (:func:`without_rows`: a
+``"open"`` mode the system is the assembled one *without* them (:func:`~mbcomp.hybrid.active.without_rows`: a
 numeric variant whose topology no longer cuts the contact, its row mask restricted to the
 other rows), so every formulation steps the free flight unchanged. The contact's rows are
 read straight from the frames' jets (:func:`contact_rows`): the gap (its normal row's value,
@@ -25,40 +25,16 @@ Examples
 """
 from __future__ import annotations
 
-import copy
 from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
 
 from ..assembly.kkt import accelerations
+from .active import open_joints, slipping_joints, start_modes, without_rolling, without_rows
 
-__all__ = ["open_joints", "without_rows", "contact_rows", "contact_impact", "initialize_in_modes", "event_value",
+__all__ = ["contact_rows", "contact_impact", "initialize_in_modes", "event_value",
            "contact_pushes", "tangent_force", "contact_columns", "zero_open"]
-
-
-def open_joints(system, modes):
-    """Names of the joints of ``modes`` (``{joint: mode}``) whose rows are out in their mode."""
-    return sorted(n for n, mode in modes.items() if not system.edge(n).comp.holds_rows(system.P[n], mode))
-
-
-def without_rows(system, names):
-    """``system`` without the rows of the cut joints ``names`` (itself when there are none).
-
-    A numeric variant (:meth:`~mbcomp.assembly.system.MultibodySystem.variant`): its topology
-    cuts the other joints only, its nonholonomic joints are the others, its row mask is the
-    system's restricted to the other rows. A generated program evaluates every row, so an
-    open mode is evaluated by the jets."""
-    names = set(names)
-    if not names:
-        return system
-    topo = copy.copy(system.topology)
-    topo.cut = [c for c in system.topology.cut if c not in names]
-    new = system.variant(topology=topo, nonholonomic=[e for e in system.nonholonomic if e.name not in names])
-    if system.row_mask is not None:
-        keep = [n.rsplit(".", 1)[0] not in names for n in system.constraint_names(all_rows=True)]
-        new.row_mask = np.asarray(system.row_mask)[np.array(keep, bool)]
-    return new
 
 
 def contact_rows(system, name, t, q, u, row="normal", jets=None):
@@ -181,9 +157,6 @@ def initialize_in_modes(system, t0):
     open left out (their body starts where its start values put it); ``system.row_mask`` is
     then the mask of the assembled rows (an open contact's rows counted independent)."""
     from ..assembly.initialization import initialize
-    from .modes import start_modes
-
-    from .slip import slipping_joints, without_rolling
 
     system.row_mask = None
     modes = start_modes(system)

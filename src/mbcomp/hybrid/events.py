@@ -51,12 +51,13 @@ from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value
 from ..solvers.compiled_rk import CompiledRK
 from ..assembly.conservation import impulse_work
-from .modes import consistent, impact_speeds, mode_rows, mode_system, row_push, row_values, start_modes
-from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, slipping_joints, tangent_rows, \
-    with_slip_friction
-from .friction import row_events, with_mode_forces
+from .active import mode_rows, mode_system, slipping_joints, start_modes, with_mode_forces
+from .modes import consistent, impact_speeds, row_push, row_values
+from .outputs import keep_until
+from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, tangent_rows, with_slip_friction
+from .friction import row_events
 
-__all__ = ["EventRecord", "Events", "stepwise", "keep_until", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
+__all__ = ["EventRecord", "Events", "stepwise", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
            "SPIN_TURNS", "SPIN_SPAN"]
 
 #: an impact whose rebound rises less than this times ``atol`` (m or rad) settles engaged
@@ -521,21 +522,6 @@ class Events(SlideEvents):
         else:
             run.t_out = run.t_out[: len(run.ys)]
         self.status, self.message = "success", message
-
-
-def keep_until(run, t, qu):
-    """Keep the outputs at output times up to ``t`` (s) from ``qu(t) -> [q, u]`` (projected
-    when the formulation projects). Every state is taken from ``qu`` before any is projected:
-    ``qu`` reads the step's dense output in the formulation's coordinates, and a projection's
-    ``initial_state`` may choose them again (D'Alembert's independent speeds: the outputs
-    after the first were read over the wrong speeds, 6.5 J of a ladder's 28 J missing)."""
-    form = run.form
-    k0 = len(run.ys)
-    times = run.t_out[k0: max(k0, int(np.searchsorted(run.t_out, t, side="right")))]
-    for tk, y in [(tk, np.array(qu(tk), dtype=float)) for tk in times]:
-        if run.projects:
-            y = form.full(tk, form.project(tk, form.initial_state(tk, y[: form.nq], y[form.nq:])))
-        run.ys.append(np.array(y, dtype=float))
 
 
 def _contact_row(system, who, mode):

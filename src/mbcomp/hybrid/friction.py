@@ -11,7 +11,8 @@ A joint with friction (``Prismatic(friction=SlidingFriction(...))``,
   Brent like any other event;
 * in a slip mode the joint applies its kinetic friction as a generalized force on its own
   speed (``mode_force(p, mode)``: ``-F_k`` in ``"slip+"``, ``+F_k`` in ``"slip-"``),
-  added to the evaluation's ``f`` by :class:`ForceEvaluator` (:func:`with_mode_forces`);
+  added to the evaluation's ``f`` by :class:`~mbcomp.hybrid.active.ForceEvaluator`
+  (:func:`~mbcomp.hybrid.active.with_mode_forces`);
   its event is the speed crossing zero (``"stop"``), whose action is ``Switch("stick")``;
 * entering ``"stick"`` (or starting in it) the run checks at once whether the row can hold
   (:meth:`mbcomp.hybrid.events.Events`' restart): a push beyond ``limit`` breaks away
@@ -33,9 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .modes import WrappingEvaluator
-
-__all__ = ["row_events", "with_mode_forces", "ForceEvaluator", "ForcesAdded", "friction_columns", "count_dissipation"]
+__all__ = ["row_events", "friction_columns", "count_dissipation"]
 
 
 def row_events(name, row, push):
@@ -51,55 +50,6 @@ def row_events(name, row, push):
     if isinstance(row, ContactRow) and row.mu_s is not None:  # the key; its value, the cone's margin: contact_pushes
         out[("joint", name, "slide")] = push
     return out
-
-
-def mode_forces(system, modes):
-    """``[(u index, force)]``: the generalized forces (N or N m) the joints of ``modes`` apply
-    on their own speed in their mode (``mode_force(p, mode)``, e.g. kinetic friction)."""
-    out = []
-    for name, mode in sorted(modes.items()):
-        e = system.edge(name)
-        value = e.comp.mode_force(system.P[name], mode) if e.comp.has_mode_force else 0.0
-        if value:
-            out.append((e.u.start, float(value)))
-    return out
-
-
-class ForcesAdded:
-    """An evaluation whose generalized forces ``f`` carry the modes' forces."""
-
-    def __init__(self, ev, f):
-        self._ev, self.f = ev, f
-
-    def __getattr__(self, name):
-        return getattr(self._ev, name)
-
-
-class ForceEvaluator(WrappingEvaluator):
-    """An evaluator adding constant generalized forces ``[(u index, N or N m)]`` to the wrapped
-    evaluator's ``f`` (its rows and everything else unchanged)."""
-
-    def __init__(self, inner, forces):
-        super().__init__(inner)
-        self.forces = forces
-
-    def evaluate(self, t, q, u, masked=True):
-        ev = self.inner.evaluate(t, q, u, masked)
-        f = np.array(ev.f, dtype=float)
-        for iu, value in self.forces:
-            f[iu] += value
-        return ForcesAdded(ev, f)
-
-    def rebind(self, system, laws=False):
-        return ForceEvaluator(self.inner.rebind(system, laws), self.forces)
-
-
-def with_mode_forces(system, modes):
-    """``system`` (a mode's system) with the forces its ``modes`` apply (itself when none)."""
-    forces = mode_forces(system, modes)
-    if not forces:
-        return system
-    return system.with_evaluator(lambda new: ForceEvaluator(system.evaluator, forces))
 
 
 def _frictional(system, history):

@@ -1,13 +1,13 @@
-"""Modes of a run: the system with the engaged unilateral rows, impacts, consistent restarts.
+"""Stops in a run: the rows the modes hold, their impacts and pushes, consistent restarts.
 
-A run with components that have modes (:meth:`mbcomp.modeling.roles.Joint.start_mode`)
-carries a dict ``{component: mode}``. The system stepped in a mode is the assembled system
-with the rows its modes hold (:class:`~mbcomp.modeling.events.AxisRow`: ``sign (s - at)`` on
-a tree joint's coordinate) appended after its holonomic rows: :func:`mode_system` makes it
-as a :meth:`~mbcomp.assembly.system.MultibodySystem.variant` whose evaluator is the original
-one (numeric or a generated program, unchanged) wrapped by :class:`ModeEvaluator`. The
+The system of an active set (:func:`~mbcomp.hybrid.active.mode_system`) holds the rows its
+modes hold (:class:`~mbcomp.modeling.events.AxisRow`: ``sign (s - at)`` on a tree joint's
+coordinate: an engaged stop, a stuck friction) appended after its holonomic rows; the
 formulation is built again over it at every change of mode, so every formulation and every
-backend steps every mode.
+backend steps every mode. Here are the rows' values (:func:`row_values`), their pushes (the
+multipliers, :func:`row_push`), the impact closing them (:func:`impact_speeds`), the move of
+a state onto a new mode's rows (:func:`consistent`) and the stop's columns after the run
+(:func:`stop_columns`).
 
 At an impact the speeds jump by the impulse equations (:func:`impact_speeds`), the rows
 kept closed throughout (loops, engaged stops) staying closed; a change of mode moves
@@ -20,6 +20,7 @@ Examples
 >>> m = mbcomp.Model(); w = m.add("world", World()); j = m.add("j", Revolute(limits=(-0.1, 0.1)))
 >>> rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0))); bob = m.add("bob", PointMass(m=2.0))
 >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+>>> from mbcomp.hybrid.active import mode_system
 >>> system = mbcomp.assemble(m)
 >>> held = mode_system(system, {"j": "lo"})
 >>> ev = held.evaluate(0.0, np.array([-0.05]), np.array([0.3]))
@@ -33,123 +34,10 @@ import numpy as np
 from ..assembly.kkt import accelerations, project_state
 from ..errors import ModelError, Problem
 from ..modeling.events import ContactRow
-from .contacts import contact_impact, contact_rows, initialize_in_modes, open_joints, without_rows
+from .active import mode_rows, mode_system, open_joints, slipping_joints, without_rolling, without_rows
+from .contacts import zero_open
 
-__all__ = ["mode_system", "ModeEvaluator", "start_modes", "row_values", "impact_speeds", "consistent",
-           "row_push", "open_joints", "without_rows", "contact_rows", "contact_impact", "initialize_in_modes",
-           "stop_columns"]
-
-
-def start_modes(system):
-    """``{joint: mode}`` of every joint of ``system`` that has modes (``start_mode`` not None);
-    a ``ModelError`` for one that is driven or not a 1-DOF tree joint (no coordinate of its own)."""
-    out = {}
-    for e in system.topology.edges:
-        if e.kind == "joint" and e.comp.has_events:
-            mode = e.comp.start_mode(system.P[e.name])
-            if mode is not None:
-                if e.comp.tree_edge:  # a stop: its events and rows are of its own coordinate
-                    _axis_index(system, e.name)
-                out[e.name] = mode
-    return out
-
-
-def _axis_index(system, name):
-    """``(q index, u index)`` of tree joint ``name``'s one coordinate; a problem otherwise."""
-    e = system.edge(name)
-    if e.drive or e.q.stop - e.q.start != 1 or e.u.stop - e.u.start != 1:
-        why = "is driven (its motion is prescribed)" if e.drive else "is no 1-DOF joint in the spanning tree"
-        raise ModelError([Problem(name, f"a stop needs the joint's own coordinate, but {name} {why}",
-                                  "put the stop on a free 1-DOF joint, or cut another joint of the loop")])
-    return e.q.start, e.u.start
-
-
-def mode_rows(system, modes):
-    """``[(joint, AxisRow, q index, u index)]`` held by ``modes``."""
-    out = []
-    for name, mode in sorted(modes.items()):
-        e = system.edge(name)
-        for row in e.comp.mode_rows(system.P[name], mode):
-            if not isinstance(row, ContactRow):  # a contact's rows are its own: see open_joints
-                out.append((name, row, *_axis_index(system, name)))
-    return out
-
-
-class _RowsAdded:
-    """An evaluation with the mode's rows appended to the holonomic ones (everything else
-    is the wrapped evaluation's)."""
-
-    def __init__(self, ev, Phi, Phid, C, cb):
-        self._ev, self.Phi, self.Phid, self.C, self.cb = ev, Phi, Phid, C, cb
-
-    def __getattr__(self, name):
-        return getattr(self._ev, name)
-
-    @property
-    def A(self):
-        return np.vstack((self.C, self.B)) if self.B.size else self.C
-
-
-class WrappingEvaluator:
-    """An evaluator that changes another's evaluations (a mode's rows, a mode's forces): the
-    backend, statistics and coordinate rates are the wrapped one's; it offers no one-call
-    programs, so the formulations assemble their equations from ``evaluate``. Subclasses
-    implement ``evaluate`` and ``rebind``."""
-
-    capabilities = frozenset()
-
-    def __init__(self, inner):
-        self.inner = inner
-
-    @property
-    def backend(self):
-        return self.inner.backend
-
-    @property
-    def stats(self):
-        return self.inner.stats
-
-    def q_rate(self, q, u):
-        return self.inner.q_rate(q, u)
-
-
-class ModeEvaluator(WrappingEvaluator):
-    """The evaluator of a system in a mode: the original evaluator's evaluation with the
-    engaged rows appended (masked evaluations only: an unmasked one lists the assembled
-    rows, as ``constraint_names(all_rows=True)`` does)."""
-
-    def __init__(self, inner, rows, nu):
-        super().__init__(inner)
-        self.rows, self.nu = rows, nu
-
-    def evaluate(self, t, q, u, masked=True):
-        ev = self.inner.evaluate(t, q, u, masked)
-        if not masked or not self.rows:
-            return ev
-        k = len(self.rows)
-        C = np.zeros((k, self.nu))
-        Phi, Phid = np.zeros(k), np.zeros(k)
-        for i, (_, row, iq, iu) in enumerate(self.rows):
-            Phi[i], Phid[i], C[i, iu] = row.value(q[iq]), row.sign * u[iu], row.sign
-        return _RowsAdded(ev, np.concatenate((ev.Phi, Phi)), np.concatenate((ev.Phid, Phid)),
-                          np.vstack((ev.C, C)), np.concatenate((ev.cb, np.zeros(k))))
-
-    def rebind(self, system, laws=False):
-        return ModeEvaluator(self.inner.rebind(system, laws), self.rows, self.nu)
-
-
-def mode_system(system, modes):
-    """``system`` with the rows ``modes`` hold (the system itself when they hold none): the
-    rows of open contacts out (:func:`without_rows`), the rolling rows of sliding contacts out
-    (:func:`~mbcomp.hybrid.slip.without_rolling`; their friction is added by
-    :func:`~mbcomp.hybrid.slip.with_slip_friction`), engaged stops' rows appended."""
-    from .slip import slipping_joints, without_rolling
-
-    base = without_rolling(without_rows(system, open_joints(system, modes)), slipping_joints(system, modes))
-    rows = mode_rows(base, modes)
-    if not rows:
-        return base
-    return base.with_evaluator(lambda new: ModeEvaluator(base.evaluator, rows, base.nu))
+__all__ = ["row_values", "impact_speeds", "consistent", "row_push", "stop_columns"]
 
 
 def row_values(system, rows, q, u):
@@ -207,7 +95,7 @@ def stop_columns(series, system, log, t, Y, system_for=None):
 
     The post-processing solves the assembled system, which lacks the stop's row: at engaged
     times the speeds' rates and multipliers come from the mode's system (``system_for(modes)``,
-    default :func:`mode_system`; index-1 solve without stabilization) and every column is
+    default :func:`~mbcomp.hybrid.active.mode_system`; index-1 solve without stabilization) and every column is
     written again from them over the system without the stop (its reactions, by the backward
     pass, then carry the stop's force or torque: it acts across the joint). Returns
     ``{column: unit}`` of the added columns. An open contact's force columns are 0 again
@@ -224,8 +112,6 @@ def stop_columns(series, system, log, t, Y, system_for=None):
     >>> float(r["s.stop"][0]), round(float(r["s.stop"][-1]), 6), r.units["s.stop"]
     (0.0, 19.62, 'N')
     """
-    from .contacts import zero_open
-
     times = np.array([tt for tt, _ in log])
     engaged = sorted({n for _, modes in log for n, *_ in _stop_rows(system, modes)})
     for n in engaged:
@@ -267,7 +153,6 @@ def _engaged_values(system, sysm, modes, t, q, u):
     from types import SimpleNamespace
 
     from ..assembly.outputs import result_columns
-    from .slip import slipping_joints, without_rolling
 
     # a sliding contact's rolling rows are out here too (its friction is then in no reaction)
     base = without_rolling(without_rows(system, open_joints(system, modes)), slipping_joints(system, modes))

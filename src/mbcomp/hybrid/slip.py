@@ -8,7 +8,7 @@ cone ``mu_s N - |F_t|`` (:func:`~mbcomp.hybrid.contacts.contact_pushes`) -- and 
 in the mode where :meth:`~mbcomp.modeling.roles.Joint.slip_friction` gives its kinetic
 coefficient ``mu_k``:
 
-* the mode's system leaves the sliding contacts' rolling rows out (:func:`without_rolling`;
+* the mode's system leaves the sliding contacts' rolling rows out (:func:`~mbcomp.hybrid.active.without_rolling`;
   the normal row stays) and :class:`SlipEvaluator` adds the friction ``F = -mu_k N s`` to
   the generalized forces, ``f += C_t^T F``, ``s`` the unit slip velocity ``v_t / |v_t|``
   (``C_t u`` plus the rows' offset, in the tangents' coordinates);
@@ -66,11 +66,13 @@ import numpy as np
 from ..assembly.kkt import accelerations
 from ..errors import SimulationError
 from ..modeling.events import ContactRow
-from .contacts import contact_rows, open_joints, tangent_force, without_rows
-from .modes import WrappingEvaluator, mode_system
-from .friction import ForcesAdded, count_dissipation, with_mode_forces
+from .active import (ForcesAdded, WrappingEvaluator, cone_joints, mode_system, open_joints, slipping_joints,
+                     with_mode_forces, without_rows)
+from .contacts import contact_rows, tangent_force
+from .friction import count_dissipation
+from .outputs import keep_until
 
-__all__ = ["slipping_joints", "cone_joints", "without_rolling", "tangent_rows", "friction_solve", "SlipEvaluator",
+__all__ = ["tangent_rows", "friction_solve", "SlipEvaluator",
            "with_slip_friction", "slip_accelerations", "start_directions", "slip_columns", "slide_power", "slide_work", "slip_dissipation",
            "SlideEvents", "V_TINY", "TURN", "SPIN_TURNS", "SPIN_SPAN"]
 
@@ -80,28 +82,6 @@ V_TINY = 1e-12
 TURN = 1e3
 #: a slide turning this many times within SPIN_SPAN max(1, |t|) seconds is taken as stopped
 SPIN_TURNS, SPIN_SPAN = 3, 1e-6
-
-
-def slipping_joints(system, modes):
-    """Names of the contacts of ``modes`` sliding in their mode (``slip_friction`` not None)."""
-    return sorted(n for n, mode in modes.items() if system.edge(n).comp.has_slip_friction
-                  and system.edge(n).comp.slip_friction(system.P[n], mode) is not None)
-
-
-def cone_joints(system, modes):
-    """Names of the contacts of ``modes`` holding a row with a friction cone (rolling)."""
-    return sorted(n for n, mode in modes.items()
-                  for r in system.edge(n).comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)
-                  and r.mu_s is not None)
-
-
-def without_rolling(system, names):
-    """``system`` without the rolling rows (``velocity_constraints``) of the contacts
-    ``names``, their holonomic rows kept (itself when there are none): a numeric variant."""
-    names = set(names)
-    if not names:
-        return system
-    return system.variant(nonholonomic=[e for e in system.nonholonomic if e.name not in names])
 
 
 def tangent_rows(system, name, t, q, u, jets=None):
@@ -439,8 +419,6 @@ class SlideEvents:
         turns = [r.time for r in self.records[-SPIN_TURNS:] if r.component == who and r.kind == "turn"]
         if len(turns) == SPIN_TURNS and t_e - turns[0] <= SPIN_SPAN * max(1.0, abs(t_e)):
             return False  # its direction spins as it dies (stiff near |v_t| = 0): taken as stopped
-        from .events import keep_until
-
         keep_until(run, t_e, qu)
         self.slip_dirs = {**self.slip_dirs, who: v_t / np.linalg.norm(v_t)}
         self._record(t_e, who, "stop", "turn", {"mode": self.modes[who], "energy_loss": 0.0})

@@ -38,7 +38,8 @@ import numpy as np
 
 from ..errors import SimulationError, SimulationInterrupted
 from ..formulations import FORMULATIONS, build
-from ..hybrid.contacts import contact_columns, initialize_in_modes, open_joints
+from ..hybrid.active import open_joints
+from ..hybrid.contacts import contact_columns, initialize_in_modes
 from ..hybrid.events import Events, stepwise
 from ..hybrid.modes import stop_columns
 from ..hybrid.slip import slip_columns
