@@ -52,7 +52,8 @@ from .error_estimate import companion_tolerances, estimate
 from .result import Result
 from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check_request, check_singular,
                     output_times, system_of)
-from .stepping import Budget, BudgetSpent, Run, hooks_for
+from .rows import RowChoice
+from .stepping import Budget, BudgetSpent, KeepOutputs, Monitoring, Progress, Projection, Repartition, Run
 from .stiffness import StiffnessWatch
 from .stops import Terminated, interrupted_by, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
 
@@ -323,6 +324,23 @@ def run_stats(run, monitors, init, seconds, **request):
     for hook in run.hooks:
         stats.update(hook.stats())
     return stats
+
+
+def hooks_for(run, monitors, progress):
+    """The hooks of a run, in order: monitors (if any), outputs, projection (if the
+    formulation projects), the choice of kept constraint rows (if rows were dropped:
+    :class:`mbcomp.simulation.rows.RowChoice`), repartition, progress bar (if asked)."""
+    hooks = [Monitoring(monitors)] if monitors else []
+    hooks.append(KeepOutputs())
+    if run.projects:
+        hooks.append(Projection())
+    mask = run.form.system.row_mask
+    if mask is not None and not mask.all():
+        hooks.append(RowChoice(run.form.system))
+    hooks.append(Repartition())
+    if progress:
+        hooks.append(Progress(run.t_out[0], run.t_out[-1]))
+    return hooks
 
 
 def integrate(run, monitors, progress=False, extra=(), events=None):

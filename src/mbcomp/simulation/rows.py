@@ -45,7 +45,7 @@ class RowChoice(StepHook):
     Examples
     --------
     The driver adds one to every run of a model that dropped rows
-    (:func:`mbcomp.simulation.stepping.hooks_for`); its
+    (:func:`mbcomp.simulation.driver.hooks_for`); its
     changes are the result's ``stats["row_changes"]``:
 
     >>> import pathlib, mbcomp

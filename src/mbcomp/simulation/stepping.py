@@ -3,7 +3,7 @@
 :class:`Run` holds the state of one integration of a formulation by a stepper class: the
 stepper now stepping (a new one after a restart), the outputs kept so far (``[q, u]`` at
 the output times), the counters. After every accepted step the driver calls the run's
-hooks in order, each a :class:`StepHook`:
+hooks in order (:func:`mbcomp.simulation.driver.hooks_for` makes them), each a :class:`StepHook`:
 
 1. :class:`Monitoring` -- the run monitors (:mod:`mbcomp.simulation.monitors`), before the
    step's outputs are kept;
@@ -26,14 +26,14 @@ Examples
 >>> import numpy as np, mbcomp
 >>> from mbcomp.formulations import build
 >>> from mbcomp.solvers import STEPPERS
->>> from mbcomp.simulation.stepping import Run, hooks_for
+>>> from mbcomp.simulation.stepping import KeepOutputs, Repartition, Run
 >>> from mbcomp.library import World, Prismatic, PointMass
 >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
 >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=1.0))
 >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
 >>> form = build("lagrange", "ode", mbcomp.assemble(m))
 >>> run = Run(form, STEPPERS["RK45"], np.linspace(0.0, 1.0, 3), np.zeros(2), rtol=1e-10, atol=1e-12)
->>> hooks = hooks_for(run, monitors=[], progress=False)
+>>> hooks = [KeepOutputs(), Repartition()]    # the driver's hooks_for for this run
 >>> _ = run.start()
 >>> while not run.done:
 ...     if run.advance():
@@ -52,7 +52,7 @@ from ..errors import SimulationError
 from .monitors import StepEnd
 
 __all__ = ["Run", "StepHook", "Monitoring", "KeepOutputs", "Projection", "Repartition", "Progress", "Budget",
-           "BudgetSpent", "hooks_for"]
+           "BudgetSpent"]
 
 
 class Run:
@@ -97,7 +97,7 @@ class Run:
         self._y_start = y
         self._dense = None
         self._end = None
-        self.hooks = []  # what is done after every accepted step (set by the driver: hooks_for)
+        self.hooks = []  # what is done after every accepted step (set by the driver: mbcomp.simulation.driver.hooks_for)
 
     def start(self, t=None, y=None):
         """Make a new stepper at ``(t, y)`` (default: the run's start)."""
@@ -347,22 +347,3 @@ class Budget(StepHook):
             if steps >= self.max_steps:
                 raise BudgetSpent(f"the step budget of {self.max_steps} steps ran out at t={run.t:g} s "
                                   f"(of {run.t_out[-1]:g} s)")
-
-
-def hooks_for(run, monitors, progress):
-    """The hooks of a run, in order: monitors (if any), outputs, projection (if the
-    formulation projects), the choice of kept constraint rows (if rows were dropped:
-    :class:`mbcomp.simulation.rows.RowChoice`), repartition, progress bar (if asked)."""
-    hooks = [Monitoring(monitors)] if monitors else []
-    hooks.append(KeepOutputs())
-    if run.projects:
-        hooks.append(Projection())
-    mask = run.form.system.row_mask
-    if mask is not None and not mask.all():
-        from .rows import RowChoice
-
-        hooks.append(RowChoice(run.form.system))
-    hooks.append(Repartition())
-    if progress:
-        hooks.append(Progress(run.t_out[0], run.t_out[-1]))
-    return hooks
