@@ -144,3 +144,89 @@ def test_the_rod_leaves_the_wall_at_the_closed_form_angle():
         pre = mbcomp.simulate(_ladder(), t_end=t_r, n_out=2, formulation=formulation, backend="numeric", **TOL)
         assert pre.status == "success" and pre.time[-1] == t_r
         assert abs(pre["free.r.z"][-1] / (L / 2) - COS_R) < 1e-8
+
+
+# --- a ball touching the floor at the start ------------------------------------------------
+MB, R, E_REST = 0.5, 0.1, 0.5
+ROUNDED = 0.1 - 1e-17  # the centre's height: a gap of -1.4e-17 m
+
+
+def _ball(z0, vz0=0.0, open0=False, n=(0.0, 0.0, 1.0)):
+    """A ball (point mass, contact radius R) on a free translation; the plane through the
+    origin with normal ``n`` (the floor, or with n = -z a ceiling)."""
+    md = mbcomp.Model()
+    w = md.add("world", World(g=(0, 0, -G)))
+    free = md.add("free", FreeTranslation(r0=(0.0, 0.0, z0), v0=(0.0, 0.0, vz0)))
+    ball = md.add("ball", PointMass(m=MB))
+    ground = md.add("ground", PlaneContact(r=R, n=n, unilateral=True, restitution=E_REST, open0=open0))
+    md.connect(w.frame_b, free.frame_a)
+    md.connect(free.frame_b, ball.frame_a)
+    md.connect(w.frame_b, ground.frame_a)
+    md.connect(ground.frame_b, ball.frame_a)
+    return md
+
+
+def _run(model, combo, t_end=1.0):
+    formulation, method = combo
+    return mbcomp.simulate(model, t_end=t_end, n_out=101, formulation=formulation, method=method, backend="numeric",
+                           **TOL)
+
+
+@pytest.mark.parametrize("open0", [False, True], ids=["closed", "open0"])
+@pytest.mark.parametrize("combo", COMBOS, ids=["-".join(c) for c in COMBOS])
+def test_a_ball_touching_from_a_rounding_gap_rests_on_the_floor(combo, open0):
+    """Started open (open0) it fell through the floor: z = -4.8 m after 1 s, "success"."""
+    res = _run(_ball(ROUNDED, open0=open0), combo)
+    assert res.status == "success", res.message  # no alarm over a ball at rest either
+    assert [(e.component, e.kind, e.time) for e in res.events] == ([("ground", "engage", 0.0)] if open0 else [])
+    assert np.max(np.abs(res["ball.r.z"] - R)) < 1e-9
+    assert np.max(np.abs(res["ground.N"] / (MB * G) - 1)) < 1e-8
+
+
+@pytest.mark.parametrize("z0", [ROUNDED, R], ids=["gap-1e-17", "gap0"])
+@pytest.mark.parametrize("combo", COMBOS, ids=["-".join(c) for c in COMBOS])
+def test_a_ball_thrown_down_from_touching_bounces_per_restitution(combo, z0):
+    """Thrown down at v from touching (open0): the impact at t = 0 (speed e v after, the
+    loss 1/2 m v^2 (1 - e^2)), a flight z = R + e v t - g t^2 / 2 to the next touch at
+    2 e v / g, the energy with the impacts' losses kept. From -1e-17 m it fell through."""
+    v = 1.0
+    res = _run(_ball(z0, -v, open0=True), combo, t_end=0.3)
+    assert res.status == "success", res.message
+    hits = [e for e in res.events if e.kind == "impact"]
+    assert hits[0].time == 0.0 and hits[0].detail["speed_before"] == pytest.approx(-v, rel=1e-12)
+    assert hits[0].detail["speed_after"] == pytest.approx(E_REST * v, rel=1e-12)
+    assert hits[0].detail["energy_loss"] == pytest.approx(0.5 * MB * v ** 2 * (1 - E_REST ** 2), rel=1e-12)
+    assert abs(hits[1].time - 2 * E_REST * v / G) < 1e-9
+    flight = res.time < hits[1].time
+    exact = R + E_REST * v * res.time - G * res.time ** 2 / 2
+    assert np.max(np.abs(res["ball.r.z"][flight] - exact[flight])) < 1e-9
+    assert np.all(res["ground.N"][flight] == 0.0)
+    total = res["energy.kinetic"] + res["energy.potential"] + res["energy.impacts"]
+    E0 = MB * G * z0 + 0.5 * MB * v ** 2  # the start, before its impact
+    assert np.max(np.abs(total - E0)) < 1e-9 * E0
+
+
+@pytest.mark.parametrize("combo", COMBOS, ids=["-".join(c) for c in COMBOS])
+def test_a_ball_started_inside_the_floor_is_an_error(combo):
+    """1 mm inside: open0 fell through silently (z = -4.9 m after 1 s, "success"); closed,
+    the initialization cannot put the fixed start on the floor. Both name the contact and
+    the depth."""
+    with pytest.raises(InitializationError) as err:
+        _run(_ball(R - 1e-3, open0=True), combo)
+    msg = str(err.value)
+    assert "ground" in msg and "starts 0.001 m inside" in msg and "fix:" in msg
+    assert "move the body's start 0.001 m out" in msg
+    with pytest.raises(InitializationError) as err:
+        _run(_ball(R - 1e-3, open0=False), combo)
+    assert "ground" in str(err.value) and "0.001" in str(err.value) and "fix:" in str(err.value)
+
+
+@pytest.mark.parametrize("combo", COMBOS, ids=["-".join(c) for c in COMBOS])
+def test_a_ball_touching_a_ceiling_lets_go_at_the_start(combo):
+    """Under a ceiling (normal -z) the closed contact would pull: it released nothing and
+    held the ball up with N = -m g, "success". It lets go at t = 0 and the ball falls."""
+    res = _run(_ball(-R, n=(0.0, 0.0, -1.0)), combo)
+    assert res.status == "success", res.message
+    assert [(e.component, e.kind, e.time) for e in res.events] == [("ground", "release", 0.0)]
+    assert np.max(np.abs(res["ball.r.z"] - (-R - G * res.time ** 2 / 2))) < 1e-9
+    assert np.all(res["ground.N"] == 0.0)

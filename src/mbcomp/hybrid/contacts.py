@@ -34,7 +34,7 @@ from ..assembly.kkt import accelerations
 from .active import open_joints, slipping_joints, start_modes, without_rolling, without_rows
 
 __all__ = ["contact_rows", "contact_impact", "initialize_in_modes", "event_value",
-           "contact_pushes", "tangent_force", "contact_columns", "zero_open"]
+           "contact_pushes", "tangent_force", "contact_columns", "zero_open", "touching_at_start"]
 
 
 def contact_rows(system, name, t, q, u, row="normal", jets=None):
@@ -212,3 +212,54 @@ def zero_open(series, system, names, k, units=None):
         own = [col[len(n) + 1:] for n in names if col.startswith(n + ".")]
         if own and (units.get(col) in ("N", "N m") or own[0] == "N" or own[0].startswith(("F_", "f.", "tau."))):
             series[col][k] = 0.0
+
+
+def touching_at_start(system, modes, t, q, u, tol):
+    """``[(contact, event, action, row, gap (m), normal speed (m/s))]`` of the contacts open
+    in ``modes`` that touch at the start ``(t, q, u)`` (``action``: the contact's
+    ``on_event(event)``, its touch-down impact): the gap of their touch event's row
+    (:class:`~mbcomp.modeling.events.ContactRow`) within ``tol`` (m) of zero, rounding's
+    -1e-17 m included (its event, the gap falling through zero, could never fire from
+    there: the body would pass through). An :class:`~mbcomp.errors.InitializationError`
+    names every contact that starts inside beyond ``tol``, with its depth and the fix.
+
+    Examples
+    --------
+    A ball of radius 0.1 m whose centre starts at 0.1 m less rounding's 1.4e-17 m:
+
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import World, PlaneContact, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> b = m.add("ball", PointMass(m=2.0), free=True)
+    >>> c = m.add("ground", PlaneContact(r=0.1, unilateral=True, open0=True))
+    >>> m.connect(w.frame_b, c.frame_a); m.connect(c.frame_b, b.frame_a)
+    >>> system = mbcomp.assemble(m)
+    >>> q, u = np.array([0.0, 0.0, 0.1 - 1e-17]), np.zeros(3)    # the free ball: r (m), v (m/s)
+    >>> [(n, ev, row, gap < 0) for n, ev, _, row, gap, _ in touching_at_start(system, {"ground": "open"}, 0.0, q, u, 1e-9)]
+    [('ground', 'touch', 'normal', True)]
+    """
+    from ..errors import InitializationError, Problem
+    from ..modeling.events import ContactRow
+
+    edges = {e.name: e for e in system.topology.edges}
+    out, inside = [], []
+    for n in open_joints(system, modes):
+        e, p = edges[n], system.P[n]
+        if e.comp.tree_edge:
+            continue
+        for name, value, _ in e.comp.events(q[e.q], u[e.u], p, modes[n]):
+            if not isinstance(value, ContactRow):
+                continue
+            cr = contact_rows(system, n, t, q, u, value.name)
+            if cr.gap < -tol:
+                inside.append(Problem(n, f"starts {-cr.gap:.3g} m inside what it touches (its row {value.name!r} is "
+                                         f"{cr.gap:.3g} m at t={t:g} s; touching is within {tol:.3g} m): a one-sided "
+                                         "contact cannot start inside, its body would pass through",
+                                      f"move the body's start {-cr.gap:.3g} m out along the contact's normal, or "
+                                      "start the contact closed (open0=False) with the start position a Guess(...) "
+                                      "so the initialization puts it on the surface"))
+            elif cr.gap <= tol:
+                out.append((n, name, e.comp.on_event(name, p, modes[n]), value.name, cr.gap, cr.speed))
+    if inside:
+        raise InitializationError(inside, "a contact starts inside what it touches")
+    return out

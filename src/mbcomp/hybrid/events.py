@@ -48,7 +48,7 @@ import numpy as np
 from ..assembly.kkt import accelerations
 from ..errors import SimulationError
 from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
-from .contacts import contact_impact, contact_pushes, contact_rows, event_value
+from .contacts import contact_impact, contact_pushes, contact_rows, event_value, touching_at_start
 from ..solvers.compiled_rk import CompiledRK
 from ..assembly.conservation import impulse_work
 from .active import mode_rows, mode_system, slipping_joints, start_modes, with_mode_forces
@@ -452,15 +452,18 @@ class Events(SlideEvents):
     def start(self, form, y0, t, q, u):
         """``(form, y0)``, the run's formulation and initial state at its start ``t``, or, when
         a stuck friction cannot hold there (:meth:`_break_away`), those of the mode it breaks
-        away to."""
-        modes = self._rolling_at_start(t, q, u, self.modes)
+        away to; a contact touching there has its impact, engages or lets go at once
+        (:meth:`_touching_at_start`, :meth:`_open_pulling`)."""
+        u0 = u
+        u, modes = self._touching_at_start(t, q, u)
+        modes = self._open_pulling(t, q, u, self._rolling_at_start(t, q, u, modes))
         going_on = set(slipping_joints(self.system, modes))  # a start with a slip speed
         if modes != self.modes:
             q, u = consistent(self.system_now(modes), t, q, u)
         modes, new = self._break_away(t, q, u, modes)
         self.slip_dirs = self._directions(t, q, u, modes, going_on)
         new = self.system_now(modes, self.slip_dirs)
-        if modes != self.modes or form.system is not new:
+        if modes != self.modes or form.system is not new or u is not u0:
             self.modes = modes
             q, u = consistent(new, t, q, u)
             form = self.make_form(new)
@@ -470,6 +473,28 @@ class Events(SlideEvents):
         self.slip_log = [(float(t), dict(self.modes), dict(self.slip_dirs), None, np.concatenate((q, u)))]
         self.slide_worked, self.work_log, self._worked_to = 0.0, [(float(t), 0.0)], t
         return form, y0
+
+    def _touching_at_start(self, t, q, u):
+        """``(u, modes)`` at the start with the contacts that start open but touch (their gap
+        within :data:`REST_HEIGHT` ``atol`` of zero, where their touch event could not fire:
+        :func:`~mbcomp.hybrid.contacts.touching_at_start`, an error for one inside beyond it):
+        one closing has its impact now, one at rest on the surface (its rebound too small,
+        :meth:`_contact_rests`) engages, one leaving stays open."""
+        modes = dict(self.modes)
+        for who, name, action, row, _, speed in touching_at_start(self.system, self.modes, t, q, u,
+                                                                   REST_HEIGHT * self.atol):
+            if not isinstance(action, Impact):
+                continue
+            settle = None
+            if speed < 0.0:
+                u, settle = self._impact(t, who, name, action, q, u)
+                self._fresh = self._last = ("joint", who, name)  # a rebound may come back in the first step
+            elif self._contact_rests(t, q, u, who, row, speed):
+                settle = action.engage
+                self._record(t, who, name, "engage", {"mode": settle, "energy_loss": 0.0})
+            if settle is not None:
+                modes[who] = settle
+        return u, modes
 
     def _break_away(self, t, q, u, modes):
         """``(modes, system)``: a stuck friction's row (:class:`~mbcomp.modeling.events.StickRow`)
