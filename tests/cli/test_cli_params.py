@@ -2,6 +2,7 @@
 booleans, lists, strings, "<number> <unit>" passed on), or an error naming the parameter,
 its default and the fix; unknown names list build()'s parameters."""
 import ast
+import math
 import csv
 
 import numpy as np
@@ -53,7 +54,7 @@ def build_args(model, *pairs):
 def test_values_reach_build_parsed_as_their_defaults_declare(model, capsys):
     got = build_args(model, "length=1e-3", "n=3", "damped=TRUE", "r=0.2,0,1", "rs=[3, 4.5]", "mode='slow'",
                      "angle=30 deg", "gain=2.5", "anything=abc")
-    assert got == dict(length=0.001, n=3, damped=True, r=(0.2, 0, 1), rs=[3, 4.5], mode="slow", angle="30 deg",
+    assert got == dict(length=0.001, n=3, damped=True, r=(0.2, 0, 1), rs=[3, 4.5], mode="slow", angle=pytest.approx(math.radians(30), rel=1e-15),
                        gain=2.5, anything="abc")
     assert type(got["n"]) is int and type(got["r"]) is tuple and type(got["rs"]) is list
 

@@ -11,16 +11,19 @@ Every value is first read as a Python literal or a word (:func:`parse_value`):
 A build() parameter then gets the kind its default value (or its annotation, ``float``,
 ``int``, ``bool``, ``str``) declares (:func:`build_value`):
 
-* a number: a number, or text that looks like ``<number> <unit>`` (``"30 deg"``, ``"250 g"``),
-  which is passed on unchanged for the component that receives it to convert;
+* a number: a number, or ``<number> <unit>`` (``"30 deg"``, ``"250 g"``, ``"3000 rpm"``)
+  converted to its SI value (``0.5236``, ``0.25``, ``314.16``: angles in rad) -- build() is
+  Python code that may compute with the value (``m * L**2``), and a number default is in SI,
+  as every mbcomp parameter is; so ``-p m_crank="250 g"`` is ``-p m_crank=0.25``;
 * ``True``/``False``: ``true``/``false`` (or 1/0);
 * a tuple or list (or array) of numbers: a list of numbers, given as above (a tuple, or a list
-  when the default is one);
+  when the default is one), or an array with one unit, ``"(10, 0, 0) cm"``, converted to SI;
 * a string: the text itself, with one pair of surrounding quotes removed;
 * no default, ``None`` or ``**kwargs``: whatever :func:`parse_value` makes of it.
 
 Anything else is a ``ValueError`` naming the parameter, its default and the fix. Component
-parameters (``-p spring.c=200``) get :func:`parse_value`; the component checks them.
+parameters (``-p spring.c=200``, ``-p crank.m="250 g"``) get :func:`parse_value`; the
+component checks them and converts a unit into the one its parameter declares.
 
 Examples
 --------
@@ -29,7 +32,13 @@ Examples
 >>> build_value(build, "length", "1e-3"), build_value(build, "damped", "TRUE")
 (0.001, True)
 >>> build_value(build, "r", "0.2,0,1"), build_value(build, "mode", "'slow'"), build_value(build, "length", "30 cm")
-((0.2, 0, 1), 'slow', '30 cm')
+((0.2, 0, 1), 'slow', 0.3)
+>>> build_value(build, "r", "(10, 0, 5) mm"), round(build_value(build, "length", "90 deg"), 6)
+((0.01, 0.0, 0.005), 1.570796)
+>>> build_value(build, "length", "3 furlong")
+Traceback (most recent call last):
+...
+ValueError: -p length=3 furlong: unknown unit 'furlong'; known: m, g, s, rad, A, K, mol, cd, N, J, W, Pa, Hz with SI prefixes (T, G, M, k, h, da, d, c, m, u, µ, n, p); kg, %, deg, rev, rpm, min, h, in, ft, bar, Nm -> give a number in SI units, e.g. -p length=0.5, or a number with a known unit, e.g. "250 g", "30 deg"
 >>> build_value(build, "length", "abc")
 Traceback (most recent call last):
 ...
@@ -44,10 +53,14 @@ import re
 
 import numpy as np
 
+from ..modeling.units import UnitError, parse_unit, to_unit, unit_text
+
 __all__ = ["parse_value", "build_value", "expected_kind", "describe_parameters"]
 
-#: a number followed by a unit (``"30 deg"``, ``"250 g"``, ``"9.81 m/s^2"``): left to the component
-_WITH_UNIT = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[A-Za-z\u00b0\u00b5][A-Za-z0-9_/*^.\s\u00b0\u00b5\u00b7-]*$")
+#: a number followed by a unit (``"30 deg"``, ``"250 g"``, ``"9.81 m/s^2"``, ``"50 %"``)
+_WITH_UNIT = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*([A-Za-z\u00b0\u00b5%][A-Za-z0-9_/*^.\s\u00b0\u00b5\u00b7-]*)$")
+#: an array in brackets followed by one unit (``"(10, 0, 0) cm"``)
+_ARRAY_WITH_UNIT = re.compile(r"^[(\[][^()\[\]]*[)\]]\s*([A-Za-z\u00b0\u00b5%][A-Za-z0-9_/*^.\s\u00b0\u00b5\u00b7-]*)$")
 
 
 def parse_value(text):
@@ -141,8 +154,11 @@ def build_value(build, name, text):
         quoted = len(text) >= 2 and text[0] == text[-1] and text[0] in "'\""
         return text[1:-1] if quoted else text
     if kind == "number":
-        if _real(value) or (isinstance(value, str) and _WITH_UNIT.match(value.strip())):
+        if _real(value):
             return value
+        unit = _WITH_UNIT.match(text.strip())
+        if unit:
+            return _in_si(name, text, unit.group(3), param)
         what, fix = "a number", "give a number"
     elif kind == "bool":
         if isinstance(value, bool) or (_real(value) and value in (0, 1)):
@@ -151,6 +167,24 @@ def build_value(build, name, text):
     else:
         if isinstance(value, (tuple, list)) and all(_real(x) for x in value):
             return list(value) if isinstance(param.default, list) else tuple(value)
+        unit = _ARRAY_WITH_UNIT.match(text.strip())
+        if unit:
+            values = [float(x) for x in _in_si(name, text, unit.group(1), param)]
+            return values if isinstance(param.default, list) else tuple(values)
         what, fix = "a list of numbers", "give numbers separated by commas"
     raise ValueError(f"-p {name}={text}: {text.strip()!r} is not {what}; build() takes {name} ({_default(param)}) "
                      f"-> {fix}, e.g. -p {name}={_example(param, kind)}")
+
+
+def _in_si(name, text, unit, param):
+    """``text`` (``"<number> <unit>"`` or ``"(<numbers>) <unit>"``) in the SI unit of its
+    dimension (angles in rad): build()'s number defaults are SI, as every mbcomp parameter."""
+    try:
+        si = unit_text(parse_unit(unit)[1])
+        value = to_unit(text.strip(), si)
+    except UnitError as exc:
+        d = param.default
+        example = f"{d!r}" if _real(d) else "0.5"
+        raise ValueError(f"-p {name}={text}: {exc} -> give a number in SI units, e.g. -p {name}={example}, or a "
+                         "number with a known unit, e.g. \"250 g\", \"30 deg\"") from None
+    return float(value) if np.ndim(value) == 0 else np.asarray(value, float).tolist()

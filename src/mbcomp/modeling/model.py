@@ -100,6 +100,11 @@ class Model(Component):
         if a.kind != b.kind:
             raise ValueError(f"cannot connect {a.path} ({a.kind}) to {b.path} ({b.kind}): "
                              "connect frames to frames and flanges to flanges")
+        if a == b:  # the same port, perhaps reached once by name and once through expose()
+            other = ("a frame of another component, e.g. the next body's frame_a or the world's frame_b"
+                     if a.kind == "frame" else "a flange of another component, e.g. a Torque's flange_b")
+            raise ModelError([Problem(a.path, f"is connected to itself (a {a.kind} joined to itself joins nothing)",
+                                      f"connect {a.path} to {other}")], header="cannot connect")
         self._connections.append((a, b))
 
     def alias(self, name: str, variable: str):
