@@ -2,7 +2,8 @@
 
 :func:`dispatch` cuts the runs into chunks (a task carries many runs: a run of a compiled
 model takes milliseconds, a task's round trip about as long), orders them so that runs of the
-same ``build()`` arguments share chunks, and sends each chunk to :func:`~mbcomp.analysis.study.run_chunk`:
+same ``build()`` arguments share chunks, and sends each chunk to the task it is given (a study's
+:func:`~mbcomp.analysis.study.run_chunk`; this module knows nothing of studies):
 
 * ``executor=None``: in this process, one chunk after the other;
 * any :class:`concurrent.futures.Executor` (a ``ProcessPoolExecutor``): one task per chunk;
@@ -13,8 +14,16 @@ same ``build()`` arguments share chunks, and sends each chunk to :func:`~mbcomp.
   ``dask.distributed.Client``. The recipe is scattered to every worker once (broadcast), and
   Dask reschedules the tasks of a worker that dies.
 
-Each worker process keeps the systems it built (:data:`mbcomp.analysis.study._PREPARED`), so
-a model is assembled and compiled once per worker, whatever the number of chunks.
+Each worker process keeps the systems it built (see :mod:`mbcomp.analysis.study`), so a model
+is assembled and compiled once per worker, whatever the number of chunks.
+
+Ctrl-C and SIGTERM stop a dispatch on every executor and keep what finished
+(``info["interrupted"]``): a task running in a process's main thread listens to both while it
+runs (:func:`stoppable`) and hands back the rows it finished (:class:`ChunkStopped`); tasks not
+started are cancelled; a :class:`Workers` pool (``--executor processes``) is told to stop its
+running tasks and, by its owner, terminated, so no worker process is left behind; a Dask
+task that was running is lost (Dask runs it in a worker's thread, which no signal reaches: its
+rows are not kept) and the local cluster is closed.
 
 Examples
 --------
@@ -25,9 +34,146 @@ Examples
 from __future__ import annotations
 
 import math
+import multiprocessing
 import os
+import signal
+import threading
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 
-__all__ = ["dispatch", "chunks", "workers_of", "dask_client", "progress_bar", "tick"]
+from ..simulation.stops import Terminated, sigterm_interrupts
+
+__all__ = ["dispatch", "chunks", "workers_of", "dask_client", "progress_bar", "tick", "Workers", "ChunkStopped",
+           "stoppable", "signal_name", "CONNECT_TIMEOUT", "STOP_GRACE"]
+
+#: seconds a ``"tcp://host:port"`` executor waits for its Dask scheduler to answer
+CONNECT_TIMEOUT = 5.0
+#: seconds the running tasks of a :class:`Workers` pool have, after a signal, to hand back the
+#: rows they finished (a run stops at its next step; then its worker is terminated)
+STOP_GRACE = 5.0
+
+
+class ChunkStopped(Exception):
+    """A task stopped by Ctrl-C or SIGTERM, carrying the ``rows`` it finished before (each
+    ``(index, row, kept)``) and the ``signal`` (``"SIGINT"`` or ``"SIGTERM"``).
+
+    Examples
+    --------
+    >>> import pickle
+    >>> e = pickle.loads(pickle.dumps(ChunkStopped([(3, {"x": 1.0}, None)], "SIGTERM")))
+    >>> e.rows, e.signal
+    ([(3, {'x': 1.0}, None)], 'SIGTERM')
+    """
+
+    def __init__(self, rows, signal):
+        super().__init__(f"stopped by {signal} after {len(rows)} finished")
+        self.rows, self.signal = rows, signal
+
+    def __reduce__(self):  # it travels back from a worker process
+        return type(self), (self.rows, self.signal)
+
+
+def signal_name(exc):
+    """``"SIGTERM"`` for :class:`~mbcomp.simulation.stops.Terminated`, the ``signal`` an
+    exception carries (:class:`~mbcomp.errors.SimulationInterrupted`), else ``"SIGINT"``."""
+    if isinstance(exc, Terminated):
+        return "SIGTERM"
+    return getattr(exc, "signal", None) or "SIGINT"
+
+
+#: set in a :class:`Workers` process by the pool when a signal stopped the dispatch
+_STOP = None
+
+
+def _worker_start(stop):
+    """A :class:`Workers` process ignores Ctrl-C and SIGTERM between tasks (a signal then
+    would end the process and break the pool: the other workers' finished rows would be lost);
+    :func:`stoppable` listens to them while a task runs."""
+    global _STOP
+    _STOP = stop
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+
+
+def _raise_once(signum, _frame):
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # one signal stops the task; a second is not a second error
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    raise Terminated("SIGTERM") if signum == signal.SIGTERM else KeyboardInterrupt
+
+
+@contextmanager
+def stoppable():
+    """While a task runs in a process's main thread, Ctrl-C raises ``KeyboardInterrupt`` and
+    SIGTERM :class:`~mbcomp.simulation.stops.Terminated` (the task turns them into
+    :class:`ChunkStopped`); the handlers before are restored after. Raises at once when the
+    :class:`Workers` pool has asked its tasks to stop. Elsewhere (a Dask worker's thread) it
+    does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    signal.signal(signal.SIGINT, _raise_once)
+    signal.signal(signal.SIGTERM, _raise_once)
+    try:
+        if _STOP is not None and _STOP.is_set():
+            raise Terminated("SIGTERM")
+        yield
+    finally:
+        for sig, handler in zip((signal.SIGINT, signal.SIGTERM), before):
+            if handler is not None:
+                signal.signal(sig, handler)
+
+
+class Workers(ProcessPoolExecutor):
+    """A process pool whose running tasks can be stopped: what ``--executor processes`` makes.
+
+    Its processes ignore Ctrl-C and SIGTERM between tasks; :meth:`stop_running` tells the
+    running tasks to stop (each hands back the rows it finished: :class:`ChunkStopped`) and
+    the queued ones to return at once; :meth:`terminate` ends every process (no worker left
+    behind after a signal, whatever the tasks were doing).
+
+    Examples
+    --------
+    >>> from mbcomp.analysis.executors import Workers
+    >>> with Workers(1) as pool:
+    ...     pool.submit(abs, -2).result()
+    2
+    """
+
+    def __init__(self, max_workers=None):
+        ctx = multiprocessing.get_context()
+        self.stop = ctx.Event()
+        self.max_workers = max_workers or os.cpu_count() or 1
+        super().__init__(max_workers=self.max_workers, mp_context=ctx, initializer=_worker_start,
+                         initargs=(self.stop,))
+
+    def processes(self):
+        """The live worker processes (:class:`multiprocessing.Process`)."""
+        return [p for p in dict(self._processes or {}).values() if p.is_alive()]
+
+    def stop_running(self):
+        """Ask every task to stop: the running ones at their next step (SIGTERM to the
+        processes), the queued ones before they start."""
+        self.stop.set()
+        for proc in self.processes():
+            try:
+                os.kill(proc.pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+
+    def terminate(self, timeout=STOP_GRACE):
+        """Cancel what has not started, end every worker process (SIGTERM, then SIGKILL after
+        ``timeout`` s) and wait for them."""
+        procs = self.processes()
+        self.stop.set()
+        self.shutdown(wait=False, cancel_futures=True)
+        for proc in procs:
+            proc.terminate()
+        for proc in procs:
+            proc.join(timeout)
+            if proc.is_alive():
+                proc.kill()
+                proc.join()
 
 
 def chunks(indexed_runs, size):
@@ -41,10 +187,11 @@ def chunks(indexed_runs, size):
 
 
 def workers_of(executor):
-    """How many runs an executor runs at once (1 in-process)."""
+    """How many runs an executor runs at once: 1 in-process, a :class:`Workers` pool's
+    ``max_workers``, a Dask cluster's workers, else this machine's cores."""
     if executor is None:
         return 1
-    n = getattr(executor, "_max_workers", None)
+    n = getattr(executor, "max_workers", None)  # a Workers pool says it
     if n:
         return int(n)
     try:
@@ -53,72 +200,132 @@ def workers_of(executor):
         return os.cpu_count() or 1
 
 
-def dispatch(executor, recipe, runs, job, chunk=None, progress=False):
-    """``(rows, kept, info)``: every run's row (parameter values first) in the order of
-    ``runs``, what each kept, and ``{"executor", "chunks", "workers"}``."""
-    from .study import run_chunk
+def dispatch(executor, task, shared, items, args=(), chunk=None, progress=False):
+    """Every item through ``task(shared, part, *args)``, in chunks, on ``executor``.
 
+    Parameters
+    ----------
+    executor : None, concurrent.futures.Executor, "dask", "tcp://host:port" or dask Client
+        Where the tasks run (module notes).
+    task : callable
+        ``task(shared, part, *args) -> [(index, row, kept), ...]`` for a part, a list of
+        ``(index, item)``; a module-level function (it travels to the workers by name). On a
+        signal it raises :class:`ChunkStopped` with the rows it finished (see :func:`stoppable`).
+    shared : object
+        What every task needs (a study's recipe): scattered once to every Dask worker.
+    items : list
+    args : tuple
+        Further arguments of every task.
+    chunk : int, optional
+        Items per task (default: about four tasks per worker).
+    progress : bool
+        A progress bar counting finished items.
+
+    Returns
+    -------
+    done : list
+        ``(index, row, kept)`` of every finished item, in the order of ``items``.
+    info : dict
+        ``executor``, ``chunks``, ``workers``, and ``interrupted``: ``None``, or ``"SIGINT"`` /
+        ``"SIGTERM"`` when Ctrl-C or SIGTERM stopped the dispatch (then ``done`` holds the
+        items finished before it: the tasks not started are cancelled, a process pool of
+        :class:`Workers` is told to stop its running tasks, which hand back what they finished).
+    """
     client, close = dask_client(executor)
     target = client if client is not None else executor
     n = workers_of(target)
-    size = chunk or max(1, math.ceil(len(runs) / (4 * n)))
-    parts = chunks(list(enumerate(runs)), size)
-    args = (job["t_end"], job["metrics"], job["outputs"], job["keep"], job["options"])
-    bar = progress_bar(len(runs)) if progress else None
-    done = []
+    size = chunk or max(1, math.ceil(len(items) / (4 * n)))
+    parts = chunks(list(enumerate(items)), size)
+    bar = progress_bar(len(items)) if progress else None
+    done, futures, stopped = [], [], None
     try:
-        if target is None:
-            for part in parts:
-                done.extend(run_chunk(recipe, part, *args))
-                tick(bar, len(part))
-        elif client is not None:
-            done = _on_dask(client, recipe, parts, args, bar)
-        else:
-            done = _on_futures(executor, recipe, parts, args, bar)
+        with sigterm_interrupts():  # SIGTERM, like Ctrl-C, is an exception here: the finished rows are kept
+            try:
+                if target is None:
+                    for part in parts:
+                        done.extend(task(shared, part, *args))
+                        tick(bar, len(part))
+                elif client is not None:
+                    _on_dask(client, task, shared, parts, args, bar, done, futures)
+                else:
+                    _on_futures(executor, task, shared, parts, args, bar, done, futures)
+            except ChunkStopped as exc:  # the serial task, stopped: its finished rows
+                done.extend(exc.rows)
+                stopped = exc.signal
+            except (KeyboardInterrupt, Terminated) as exc:
+                stopped = signal_name(exc)
+                _harvest(target, futures, done)
     finally:
         if bar is not None:
             bar.close()
         if close is not None:
             close()
     done.sort(key=lambda x: x[0])
-    rows = [dict(runs[i], **row) for i, row, _ in done]
     kind = "serial" if target is None else ("dask" if client is not None else type(executor).__name__)
-    return rows, [k for _, _, k in done], dict(executor=kind, chunks=len(parts), workers=n)
+    return done, dict(executor=kind, chunks=len(parts), workers=n, interrupted=stopped)
 
 
-def _on_futures(executor, recipe, parts, args, bar):
+def _on_futures(executor, task, shared, parts, args, bar, done, futures):
     import pickle
     from concurrent.futures import as_completed
 
-    from .study import run_chunk
-
     try:
-        pickle.dumps((recipe, args))
+        pickle.dumps((task, shared, args))
     except Exception as exc:  # noqa: BLE001 - pickle raises many types
         raise TypeError(f"the study cannot be sent to {type(executor).__name__}'s worker processes: "
                         f"{type(exc).__name__}: {exc} -> pass the model file's path or a build function defined "
                         "at module level (not a lambda or a model holding lambda laws), metrics defined at module "
                         "level, or use executor='dask' (it sends lambdas)") from exc
-    return _collect([executor.submit(run_chunk, recipe, part, *args) for part in parts], as_completed, bar)
+    futures.extend(executor.submit(task, shared, part, *args) for part in parts)
+    _collect(futures, as_completed, bar, done)
 
 
-def _collect(futures, as_completed, bar):
-    """Every row of the chunks' ``futures``, counted on ``bar`` as each chunk finishes."""
-    done = []
-    for fut in as_completed(futures):
+def _collect(futures, as_completed, bar, done):
+    """Every row of the chunks' ``futures`` into ``done``, counted on ``bar`` as each chunk finishes."""
+    for fut in as_completed(list(futures)):
         rows = fut.result()
         done.extend(rows)
+        futures.remove(fut)  # what is left in futures after a signal is not collected yet
         tick(bar, len(rows))
-    return done
 
 
-def _on_dask(client, recipe, parts, args, bar):
+def _on_dask(client, task, shared, parts, args, bar, done, futures):
     from distributed import as_completed
 
-    from .study import run_chunk
+    shared = client.scatter(shared, broadcast=True, hash=False)  # travels once per worker
+    futures.extend(client.submit(task, shared, part, *args, pure=False) for part in parts)
+    _collect(futures, as_completed, bar, done)
 
-    shared = client.scatter(recipe, broadcast=True, hash=False)  # the recipe travels once per worker
-    return _collect([client.submit(run_chunk, shared, part, *args, pure=False) for part in parts], as_completed, bar)
+
+def _harvest(target, futures, done):
+    """After a signal: the rows of the tasks that finished but were not collected yet, and of
+    the running tasks of a :class:`Workers` pool (told to stop, each hands back its finished
+    rows within :data:`STOP_GRACE` s); every other task cancelled."""
+    if type(target).__name__ == "Client":
+        target.cancel([f for f in futures if not f.done()])
+        pending = []
+    else:
+        pending = [f for f in futures if not f.cancel() and not f.done()]  # cancel() fails only on running ones
+        if pending and isinstance(target, Workers):
+            target.stop_running()
+        else:
+            pending = []
+    if pending:
+        from concurrent.futures import wait
+
+        try:
+            wait(pending, timeout=STOP_GRACE)
+        except (KeyboardInterrupt, Terminated):  # a second signal: no more waiting
+            pass
+    for fut in futures:
+        if not fut.done() or fut.cancelled():
+            continue
+        try:
+            done.extend(fut.result(timeout=STOP_GRACE) if type(target).__name__ == "Client" else fut.result())
+        except ChunkStopped as exc:
+            done.extend(exc.rows)
+        except BaseException:  # noqa: BLE001 - a task lost to the interruption (a killed worker): no rows
+            continue
 
 
 def dask_client(executor):
@@ -142,7 +349,13 @@ def dask_client(executor):
             cluster.close()
         return client, close
     if executor.startswith("tcp://"):
-        client = Client(executor)
+        try:
+            client = Client(executor, timeout=CONNECT_TIMEOUT)
+        except OSError as exc:  # refused, unknown host, timed out (TimeoutError is an OSError)
+            raise ConnectionError(f"executor {executor}: no Dask scheduler answered within {CONNECT_TIMEOUT:g} s "
+                                  f"({type(exc).__name__}: {exc}) -> fix: check the address, start the scheduler "
+                                  "(dask scheduler --host HOST --port PORT, and workers: dask worker "
+                                  "tcp://HOST:PORT), or use executor 'dask' for a local cluster") from None
         return client, client.close
     raise ValueError(f"executor={executor!r}: use None, a concurrent.futures executor, 'dask' (a local cluster), "
                      "'tcp://host:port' (a running scheduler) or a dask Client")

@@ -28,9 +28,11 @@ def executor_of(text, workers=None):
     Parameters
     ----------
     text : str or None
-        ``None``/``"serial"``: in this process; ``"processes"``: a new
-        :class:`~concurrent.futures.ProcessPoolExecutor` with ``workers`` processes (default:
-        the cores); ``"dask"`` or ``"tcp://host:port"``: passed on as they are.
+        ``None``/``"serial"``: in this process; ``"processes"``: a new process pool
+        (:class:`~mbcomp.analysis.executors.Workers`, a
+        :class:`~concurrent.futures.ProcessPoolExecutor` whose running tasks can be stopped)
+        with ``workers`` processes (default: the cores, at most 4); ``"dask"`` or
+        ``"tcp://host:port"``: passed on as they are.
     workers : int, optional
         Processes of the pool (``"processes"`` only).
 
@@ -38,7 +40,8 @@ def executor_of(text, workers=None):
     -------
     executor : None, Executor or str
     owned : bool
-        Whether the caller must shut the executor down (``executor.shutdown()``).
+        Whether the caller must shut the executor down (``executor.shutdown()``, or
+        ``executor.terminate()`` after a signal: no worker process left behind).
 
     Examples
     --------
@@ -49,9 +52,9 @@ def executor_of(text, workers=None):
     if text is None or text == "serial":
         return None, False
     if text == "processes":
-        from concurrent.futures import ProcessPoolExecutor
+        from .executors import Workers
 
-        return ProcessPoolExecutor(max_workers=workers or min(os.cpu_count() or 1, 4)), True
+        return Workers(max_workers=workers or min(os.cpu_count() or 1, 4)), True
     if text == "dask" or text.startswith("tcp://"):
         return text, False
     raise ValueError(f"--executor {text}: use serial, processes (a process pool on this machine), dask (a local "
@@ -59,12 +62,14 @@ def executor_of(text, workers=None):
 
 
 def executor_name(executor):
-    """A short name of an executor for reports: ``serial``, ``dask``, ``ProcessPoolExecutor``."""
+    """A short name of an executor for reports: ``serial``, ``dask``, ``processes`` (a
+    :class:`~mbcomp.analysis.executors.Workers` pool), ``ProcessPoolExecutor``."""
     if executor is None:
         return "serial"
     if isinstance(executor, str):
         return "dask" if executor == "dask" else f"dask ({executor})"
-    return "dask" if type(executor).__name__ == "Client" else type(executor).__name__
+    name = type(executor).__name__
+    return "dask" if name == "Client" else ("processes" if name == "Workers" else name)
 
 
 def map_on(executor, fn, items, progress=False):

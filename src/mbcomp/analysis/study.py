@@ -45,9 +45,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ModelError, SimulationError
+from ..errors import ModelError, SimulationError, SimulationInterrupted
+from ..simulation.stops import Terminated
+from .executors import ChunkStopped, dispatch, signal_name, stoppable
 
-__all__ = ["study", "Uniform", "Normal", "StudyResult", "runs_of"]
+__all__ = ["study", "Uniform", "Normal", "StudyResult", "StudyInterrupted", "runs_of"]
+
+
+class StudyInterrupted(SimulationInterrupted):
+    """Ctrl-C (SIGINT) or SIGTERM stopped :func:`study`; :attr:`result` is the
+    :class:`StudyResult` of the runs that finished before (their rows are those an
+    uninterrupted study gives them), :attr:`signal` ``"SIGINT"`` or ``"SIGTERM"``.
+
+    A :class:`KeyboardInterrupt` (through :class:`~mbcomp.errors.SimulationInterrupted`), so a
+    script that does not catch it stops.
+
+    Examples
+    --------
+    >>> e = StudyInterrupted(None, "SIGINT", "study interrupted by SIGINT: 3 of 9 runs finished")
+    >>> isinstance(e, KeyboardInterrupt), e.signal
+    (True, 'SIGINT')
+    """
 
 
 # --- what to run ------------------------------------------------------------------------------
@@ -187,10 +205,17 @@ def prepared(recipe, build_kwargs, backend):
 
 # --- one chunk of runs, where it runs -----------------------------------------------------------
 def run_chunk(recipe, chunk, t_end, metrics, outputs, keep, options):
-    """Rows of the runs ``chunk`` (a list of ``(index, run dict)``): see :func:`study`."""
+    """Rows ``(index, row, kept)`` of the runs ``chunk`` (a list of ``(index, run dict)``): see
+    :func:`study`. Ctrl-C or SIGTERM stops it: it raises
+    :class:`~mbcomp.analysis.executors.ChunkStopped` with the rows of the runs that finished
+    (the run it stopped is no row)."""
     rows = []
-    for index, run in chunk:
-        rows.append((index,) + _one(recipe, run, t_end, metrics, outputs, keep, options))
+    try:
+        with stoppable():
+            for index, run in chunk:
+                rows.append((index,) + _one(recipe, run, t_end, metrics, outputs, keep, options))
+    except (KeyboardInterrupt, Terminated) as exc:  # SimulationInterrupted is a KeyboardInterrupt
+        raise ChunkStopped(rows, signal_name(exc)) from None
     return rows
 
 
@@ -320,6 +345,12 @@ def study(model_or_build, grid, *, t_end=1.0, metrics=None, outputs=(), keep=Non
     **simulate_options
         Passed to every :func:`mbcomp.simulate` (``rtol``, ``method``, ``n_out``, ...).
 
+    Raises
+    ------
+    StudyInterrupted
+        Ctrl-C or SIGTERM stopped the study (on any executor): ``.result`` holds the rows of
+        the runs that finished.
+
     Returns
     -------
     StudyResult
@@ -328,8 +359,6 @@ def study(model_or_build, grid, *, t_end=1.0, metrics=None, outputs=(), keep=Non
         parameter value, an initialization failure, a law failing at the start), with the
         exception's message naming the component.
     """
-    from .executors import dispatch
-
     metrics = dict(metrics or {})
     for name, fn in metrics.items():
         if not callable(fn):
@@ -339,9 +368,16 @@ def study(model_or_build, grid, *, t_end=1.0, metrics=None, outputs=(), keep=Non
     runs = runs_of(grid, samples, seed)
     recipe = recipe_of(model_or_build)
     params = list(dict.fromkeys(k for r in runs for k in r))
-    job = dict(t_end=t_end, metrics=metrics, outputs=list(outputs), keep=keep, options=simulate_options)
     wall = time.perf_counter()
-    rows, kept, info = dispatch(executor, recipe, runs, job, chunk, progress)
-    stats = dict(runs=len(runs), failed=sum(1 for r in rows if r["status"] != "success"),
+    args = (t_end, metrics, list(outputs), keep, simulate_options)
+    done, info = dispatch(executor, run_chunk, recipe, runs, args, chunk, progress)
+    stopped = info.pop("interrupted")
+    finished = [runs[i] for i, _, _ in done]
+    rows = [dict(runs[i], **row) for i, row, _ in done]
+    stats = dict(runs=len(finished), failed=sum(1 for r in rows if r["status"] != "success"),
                  wall_time=time.perf_counter() - wall, **info)
-    return StudyResult(params, metrics, rows, runs, kept if keep else None, stats)
+    res = StudyResult(params, metrics, rows, finished, [k for _, _, k in done] if keep else None, stats)
+    if stopped:
+        raise StudyInterrupted(res, stopped, f"study interrupted by {stopped}: {len(finished)} of {len(runs)} runs "
+                                             "finished (their rows are kept)")
+    return res

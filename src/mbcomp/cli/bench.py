@@ -51,9 +51,12 @@ def cmd_bench(args):
         rows = wp.work_precision(args.model if executor is not None else mod, combos, tols=tols, build_kw=build_kw,
                                  params=runtime or None, t_end=args.t_end, max_cpu=args.max_cpu, executor=executor,
                                  progress=executor is not None)
-    finally:
+    except BaseException:  # an error, Ctrl-C: the pool's processes are ended, not waited for
         if owned:
-            executor.shutdown()
+            executor.terminate()
+        raise
+    if owned:
+        executor.shutdown()
     print("\n" + wp.summary(rows, args.target, title=name))
     wp.write_csv(rows, out)
     wp.plot(rows, png, title=name, target=args.target)

@@ -17,7 +17,8 @@ their classification; ``--sweep name=start:stop:count`` repeats that over a buil
 component parameter and locates where the classification changes (:mod:`mbcomp.stability`).
 
 Exit status: 0 success; 1 the run or the analysis did not succeed; 2 bad input (a model
-file, a parameter or an option; the message names the fix); 130 interrupted.
+file, a parameter or an option; the message names the fix); 130 interrupted by Ctrl-C, 143 by
+SIGTERM (``simulate`` and ``study`` write what they finished first).
 
 Examples
 --------
@@ -36,8 +37,10 @@ import os
 import sys
 
 from ..errors import SimulationError
+from ..simulation.stops import Terminated
 from . import bench, export, info, simulate, stability, study
 from .loader import load_model_file, parse_value
+from .messages import EXIT_SIGNAL
 from .sweep import parse_sweep
 
 __all__ = ["main", "make_parser", "load_model_file", "parse_value", "parse_sweep"]
@@ -72,12 +75,13 @@ def main(argv=None):
     except ValueError as exc:  # ModelError is a ValueError; every input error names its fix
         print(f"mbcomp: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    except SimulationError as exc:  # a run that could not start (e.g. a law raising at t_start)
-        print(f"mbcomp: {exc}", file=sys.stderr)
+    except (SimulationError, ConnectionError) as exc:  # a run that could not start (e.g. a law raising at
+        print(f"mbcomp: {exc}", file=sys.stderr)           # t_start), a Dask scheduler that does not answer
         return EXIT_FAILED
-    except KeyboardInterrupt:  # outside a simulation (which returns its partial results itself)
-        print("mbcomp: interrupted", file=sys.stderr)
-        return simulate.EXIT_INTERRUPTED
+    except (KeyboardInterrupt, Terminated) as exc:  # outside a run (whose command writes its results itself)
+        name = "SIGTERM" if isinstance(exc, Terminated) else getattr(exc, "signal", None) or "SIGINT"
+        print(f"mbcomp: interrupted by {name}", file=sys.stderr)
+        return EXIT_SIGNAL[name]
     except BrokenPipeError:  # output piped into e.g. `head`, which closed early
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())

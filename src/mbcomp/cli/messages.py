@@ -1,7 +1,8 @@
 """How the command line words what it prints: an error as one line, the eigenvalues that
-decide a classification.
+decide a classification, the exit status of a command a signal stopped.
 
-``mbcomp stability`` and its ``--sweep`` print both, so they live here, below both commands.
+``mbcomp stability`` and its ``--sweep`` print the first two, ``mbcomp simulate`` and ``mbcomp
+study`` exit with the last, so they live here, below the commands.
 
 Examples
 --------
@@ -17,7 +18,11 @@ import numpy as np
 
 from ..errors import ModelError
 
-__all__ = ["one_line", "dominant_eigenvalues"]
+__all__ = ["one_line", "dominant_eigenvalues", "EXIT_SIGNAL"]
+
+#: exit status of a command stopped by a signal, the shell's 128 + signal number: Ctrl-C
+#: (SIGINT) 130, SIGTERM 143 (the results kept so far written)
+EXIT_SIGNAL = {"SIGINT": 130, "SIGTERM": 143}
 
 
 def one_line(exc):

@@ -11,8 +11,8 @@ loaded (:func:`~mbcomp.cli.loader.check_output`), so a mistyped directory fails 
 after an hour of integration; a run that stops early (failed, or interrupted by Ctrl-C /
 SIGTERM: ``status == "interrupted"``; or a budget, ``--max-time`` / ``--max-steps``, that ran
 out: ``status == "budget"``) still writes what it computed. Exit status: 0 success, 1 the run
-failed, 3 a budget ran out, 130 interrupted (the partial results written in each case), 2 bad
-input.
+failed, 3 a budget ran out, 130 interrupted by Ctrl-C, 143 by SIGTERM (the partial results
+written in each case, and an interruption says so in one line on stderr), 2 bad input.
 
 ``--animate FILE`` writes the run as a self-contained HTML 3-D player (``.html``) or a film
 (``.gif``, ``.mp4``); ``--trails``, ``--color-by COMP=COLUMN`` and ``--hide`` shape it
@@ -38,15 +38,17 @@ import sys
 
 import numpy as np
 
+from ..errors import SimulationInterrupted
 from .loader import check_output, load
+from .messages import EXIT_SIGNAL
 
 __all__ = ["cmd_simulate", "add_parser", "OPTIONS", "EXIT_INTERRUPTED", "EXIT_BUDGET"]
 
 #: command-line options passed on to :func:`mbcomp.simulate` (overriding the file's SIMULATION)
 OPTIONS = ("t_end", "rtol", "atol", "method", "stabilization", "formulation", "n_out", "index", "h", "backend",
            "singular", "max_wall_time", "max_steps")
-#: exit status of an interrupted run (128 + SIGINT, the shell's convention)
-EXIT_INTERRUPTED = 130
+#: exit status of a run interrupted by Ctrl-C (128 + SIGINT, the shell's convention; SIGTERM: 143)
+EXIT_INTERRUPTED = EXIT_SIGNAL["SIGINT"]
 #: exit status of a run whose wall-time or step budget ran out (the partial results written)
 EXIT_BUDGET = 3
 #: exit status of a bad --plot-vars pattern (bad input; the CSV is written first)
@@ -67,7 +69,11 @@ def cmd_simulate(args):
     mod, model, runtime = load(args, defaults="SIMULATE_PARAMS")
     opts = dict(getattr(mod, "SIMULATION", {}))
     opts.update({key: getattr(args, key) for key in OPTIONS if getattr(args, key) is not None})
-    res = simulate(model, params=runtime, progress=not args.quiet, **opts)
+    stopped = None
+    try:
+        res = simulate(model, params=runtime, progress=not args.quiet, **opts)
+    except SimulationInterrupted as exc:  # Ctrl-C or SIGTERM: the results up to the last accepted step
+        res, stopped = exc.result, exc.signal
     _report(res)
     if args.out:
         res.to_csv(args.out, units=args.csv_units)
@@ -86,7 +92,7 @@ def cmd_simulate(args):
             print(f"mbcomp: --animate: {exc}" + (f" ({args.out} is written)" if args.out else ""), file=sys.stderr)
             return EXIT_USAGE
         print(f"wrote {args.animate}")
-    return _stopped_early(res, args)
+    return _stopped_early(res, args, stopped)
 
 
 def _look_options(args):
@@ -110,16 +116,25 @@ def _look_options(args):
     return {"trails": args.trails or (), "color_by": color_by or None, "hide": args.hide or ()}
 
 
-def _stopped_early(res, args):
-    """The exit status; for an interrupted run or a spent budget, says where the results are."""
-    why = {"interrupted": ("interrupted", EXIT_INTERRUPTED), "budget": ("budget spent", EXIT_BUDGET)}
-    if res.status not in why:
+def _stopped_early(res, args, stopped=None):
+    """The exit status; for an interrupted run (``stopped``: the signal) or a spent budget,
+    says where the results are (an interruption also as one line on stderr: 130 after Ctrl-C,
+    143 after SIGTERM)."""
+    if res.status not in ("interrupted", "budget"):
         return 0 if res.success else 1
-    what, code = why[res.status]
     end = f"t = {res.time[-1]:g} s" if len(res.time) else "the start"
-    print(f"{what} at {end}: " + (f"{args.out} holds the partial results up to then" if args.out else
-                                  "nothing written (give --out FILE.csv to keep the partial results)"))
-    return code
+    kept = (f"{args.out} holds the partial results up to then" if args.out else
+            "nothing written (give --out FILE.csv to keep the partial results)")
+    if res.status == "budget":
+        print(f"budget spent at {end}: {kept}")
+        return EXIT_BUDGET
+    signal = stopped or ("SIGTERM" if "SIGTERM" in res.message else "SIGINT")
+    print(f"interrupted at {end}: {kept}")
+    written = [f"{args.out} ({len(res.time)} rows)"] if args.out else []
+    written += [path for path in (args.plot, args.animate) if path]
+    print(f"mbcomp: interrupted by {signal} at {end}; " + (f"wrote {', '.join(written)} up to then" if written else
+                                                          "nothing written (give --out FILE.csv)"), file=sys.stderr)
+    return EXIT_SIGNAL[signal]
 
 
 def _report(res):

@@ -19,7 +19,9 @@ value for every run. Metrics are text parsed by :mod:`mbcomp.analysis.metrics`
 
 The model travels to the workers as its file's path, so a file without an
 ``if __name__ == "__main__":`` guard works on every executor. Exit status 0 unless every run
-failed (1); bad input 2.
+failed (1); bad input 2; Ctrl-C 130 and SIGTERM 143, on every executor: the rows of the runs
+that finished are written to ``--out`` (and ``--plot``), one line on stderr says so, and no
+worker process is left behind (:mod:`mbcomp.analysis.executors`).
 
 Examples
 --------
@@ -28,6 +30,10 @@ Examples
 ('crank_joint.w0', [2.0, 4.0, 6.0, 8.0, 10.0])
 >>> parse_grid("crank.m=U(0.9, 1.1)"), parse_grid("crank.m=0.5,1,2")
 (('crank.m', Uniform(lo=0.9, hi=1.1)), ('crank.m', [0.5, 1, 2]))
+>>> parse_grid("crank_joint.w0=2:10")
+Traceback (most recent call last):
+...
+ValueError: --grid 'crank_joint.w0=2:10': a range lo:hi:n needs the number of points n after the second ':' -> fix: e.g. --grid crank_joint.w0=2:10:9 (9 points), or list the values: NAME=v1,v2,...
 """
 from __future__ import annotations
 
@@ -37,7 +43,9 @@ import sys
 
 import numpy as np
 
+from ..simulation.stops import sigterm_interrupts
 from .loader import check_output, load_model_file, split_params, takes
+from .messages import EXIT_SIGNAL
 from .params import build_value, describe_parameters, parse_value
 
 __all__ = ["cmd_study", "parse_grid", "add_parser"]
@@ -57,6 +65,21 @@ def _number(text, spec):
     if not np.isfinite(value):
         raise ValueError(f"--grid {spec!r}: {text.strip()!r} is not finite; {_GRID_HINT}")
     return value
+
+
+def _check_range(values, spec):
+    """``lo:hi:n`` has three parts, each a number: a forgotten point count (``2:10``) or a
+    range with a part too many is no value of the parameter."""
+    parts = [p.strip() for p in values.split(":")]
+    if len(parts) == 3 and all(parts):
+        return
+    example = f"{spec.partition('=')[0].strip()}={parts[0] or 2}:{parts[1] if len(parts) > 1 and parts[1] else 10}:9"
+    if len(parts) < 3 or (len(parts) == 3 and not parts[2]):
+        raise ValueError(f"--grid {spec!r}: a range lo:hi:n needs the number of points n after the second ':' "
+                         f"-> fix: e.g. --grid {example} (9 points), or list the values: NAME=v1,v2,...")
+    what = f"three parts, not {len(parts)}" if len(parts) > 3 else "a number on each side of the first ':'"
+    raise ValueError(f"--grid {spec!r}: a range lo:hi:n needs {what} -> fix: e.g. --grid {example}, or list the "
+                     "values: NAME=v1,v2,...")
 
 
 def parse_grid(spec, build=None):
@@ -94,7 +117,8 @@ def parse_grid(spec, build=None):
         if b < 0:
             raise ValueError(f"--grid {text!r}: N(mu,sigma) needs sigma >= 0")
         return name, Normal(a, b)
-    if values.count(":") == 2 and not values.startswith(("(", "[")):
+    if ":" in values and not values.startswith(("(", "[", "'", '"')):
+        _check_range(values, text)
         lo, hi, n = values.split(":")
         count = _number(n, text)
         if count < 1 or count != int(count):
@@ -147,39 +171,80 @@ def _summary(res, executor):
 
 
 def cmd_study(args):
-    """The study of the model file; exit status 1 only when every run failed."""
+    """The study of the model file; exit status 1 only when every run failed, 130 / 143 when
+    Ctrl-C / SIGTERM stopped it (the finished rows written)."""
     from ..analysis.metrics import parse_metric
-    from ..analysis.parallel import executor_name, executor_of
-    from ..analysis.study import study
+    from ..analysis.parallel import executor_of
 
     check_output(args.out, "--out")
     check_output(args.plot, "--plot")
     metrics = dict(parse_metric(m) for m in args.metric or [])
     mod = load_model_file(args.model)
     grid = _grid(args, mod)
-    x = args.x or next(iter(grid))
-    y = args.y or next(iter(metrics), None)
-    if args.plot and y is None:
-        raise ValueError("--plot draws a metric against a parameter, and there is no --metric -> add --metric "
-                         "NAME=EXPR or choose the column with --y")
+    x, y = _axes(args, grid, metrics)
     sim = dict(getattr(mod, "SIMULATION", {}))
     t_end = args.t_end or sim.pop("t_end", 1.0)
     sim.pop("t_end", None)
     sim.update({k: getattr(args, k) for k in _OPTIONS if getattr(args, k) is not None})
-    executor, owned = executor_of(args.executor, args.workers)
+    with sigterm_interrupts():  # SIGTERM anywhere in the command: the pool's workers are ended all the same
+        executor, owned = executor_of(args.executor, args.workers)
+        res, stopped = None, None
+        try:
+            res, stopped = _run(args, grid, t_end, metrics, sim, executor)
+        finally:
+            if owned and (res is None or stopped):  # a signal, an error: no worker process left behind
+                executor.terminate()
+            elif owned:
+                executor.shutdown()
+        return _report(res, stopped, args, executor, x, y)
+
+
+def _run(args, grid, t_end, metrics, sim, executor):
+    """``(table, stopped)``: the study's table, and the :class:`StudyInterrupted` that stopped
+    it (its table: the finished runs) or None."""
+    from ..analysis.study import StudyInterrupted, study
+
     try:
         res = study(str(pathlib.Path(args.model).resolve()), grid, t_end=t_end, metrics=metrics, samples=args.samples,
                     seed=args.seed, executor=executor, chunk=args.chunk, progress=not args.quiet, **sim)
-    finally:
-        if owned:
-            executor.shutdown()
+    except StudyInterrupted as exc:
+        return exc.result, exc
+    return res, None
+
+
+def _axes(args, grid, metrics):
+    """The chart's columns ``(x, y)``, checked against the table's columns before any run."""
+    x = args.x or next(iter(grid))
+    y = args.y or next(iter(metrics), None)
+    if (args.x or args.y) and not args.plot:
+        raise ValueError("--x and --y choose the chart's columns, and no --plot was given -> fix: add --plot FILE.png")
+    if args.plot and y is None:
+        raise ValueError("--plot draws a metric against a parameter, and there is no --metric -> add --metric "
+                         "NAME=EXPR or choose the column with --y")
+    columns = list(grid) + list(metrics) + ["cpu_time"]
+    for flag, name in (("--x", x), ("--y", y)):
+        if args.plot and name not in columns:
+            raise ValueError(f"{flag} {name}: the table has no column {name!r}; its numeric columns are "
+                             f"{', '.join(columns)} -> fix: choose one of them (a --grid parameter or a --metric)")
+    return x, y
+
+
+def _report(res, stopped, args, executor, x, y):
+    """Summary, ``--out``, ``--plot``; the exit status."""
+    from ..analysis.parallel import executor_name
+
     _summary(res, executor_name(executor))
     if args.out:
         res.to_csv(args.out)
         print(f"wrote {args.out} ({len(res)} rows, {len(res.columns)} columns)")
-    if args.plot:
+    if args.plot and len(res):
         res.plot(x, y, args.plot)
         print(f"wrote {args.plot} ({y} against {x})")
+    if stopped is not None:
+        kept = (f"wrote {args.out} ({len(res)} rows)" if args.out else
+                "nothing written (give --out FILE.csv to keep the finished rows)")
+        print(f"mbcomp: {stopped}; {kept}", file=sys.stderr)
+        return EXIT_SIGNAL[stopped.signal]
     if len(res) and res.stats["failed"] == len(res):
         print("mbcomp: every run failed (the messages above say why)", file=sys.stderr)
         return 1

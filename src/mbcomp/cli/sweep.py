@@ -282,9 +282,12 @@ def sweep_on_executor(args, mod, build_kw, runtime, steady, title):
     try:
         sw = st.sweep(make, run.name, run.grid, analyze=_StartLinearization(run.params, args.backend),
                       executor=executor, progress=True)
-    finally:
+    except BaseException:  # an error, Ctrl-C: the pool's processes are ended, not waited for
         if owned:
-            executor.shutdown()
+            executor.terminate()
+        raise
+    if owned:
+        executor.shutdown()
     _table(run, sw)
     _write(run, sw, *_changes(run, sw))
     return 0

@@ -1,0 +1,228 @@
+"""Ctrl-C and SIGTERM stop ``mbcomp study`` on every executor (serial, a process pool, a local
+Dask cluster) and ``mbcomp simulate``: the finished work is written, the exit status is 130
+(SIGINT) or 143 (SIGTERM), one line on stderr says so, and no process of the command is left.
+
+The commands run in a session of their own; Ctrl-C is SIGINT to that whole process group (as
+a terminal sends it: the workers get it too), SIGTERM goes to the command's process only (as
+``kill PID`` sends it). The model is a damped pendulum (``build(k)``: released from 0.5 k rad,
+damping torque -0.1 k w) whose torque law writes ``pid k t`` to a log at every evaluation
+(``--backend numeric``: the law is Python). The test writes a ``SIGNAL`` line to that log just
+before it signals, at a moment when every worker is in the middle of a run; a run *finished*
+before the signal when its law reached t_end above that line. The table must hold exactly those
+runs, each row equal to an uninterrupted study's row for the same k.
+"""
+import csv
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import mbcomp
+from mbcomp.analysis.metrics import parse_metric
+
+psutil = pytest.importorskip("psutil")
+
+MODEL = '''
+import os
+
+from mbcomp import Model
+from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
+
+SIMULATION = dict(t_end=2.0, rtol=1e-10, atol=1e-12)
+
+
+def build(k=1.0):
+    log = os.environ.get("MBCOMP_STUDY_LOG")
+
+    def law(t, phi, w):
+        if log:
+            with open(log, "a") as fh:
+                fh.write(f"{os.getpid()} {k!r} {float(t)!r}\\n")
+        return -0.1 * k * w
+
+    m = Model()
+    world = m.add("world", World())
+    hinge = m.add("hinge", Revolute(n=(0, 0, 1), phi0=0.5 * k, w0=0.0))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    motor = m.add("motor", Torque(tau=law))
+    m.connect(world.frame_b, hinge.frame_a)
+    m.connect(hinge.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    m.connect(motor.flange_b, hinge.axis)
+    return m
+'''
+T_END = 2.0
+KS = np.linspace(1.0, 2.5, 6).tolist()
+METRICS = ["final=last(hinge.phi)", "peak=max(abs(hinge.w))"]
+EXIT = {signal.SIGINT: 130, signal.SIGTERM: 143}
+
+
+@pytest.fixture(scope="module")
+def model_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("interrupts") / "pendulum.py"
+    path.write_text(MODEL)
+    return path
+
+
+@pytest.fixture(scope="module")
+def reference(model_file):
+    """The uninterrupted study's metrics, k -> (final, peak), in this process."""
+    res = mbcomp.study(str(model_file), {"k": KS}, t_end=T_END, metrics=dict(parse_metric(m) for m in METRICS),
+                       rtol=1e-10, atol=1e-12, backend="numeric")
+    assert list(res["status"]) == ["success"] * len(KS)
+    return {round(k, 9): (f, p) for k, f, p in zip(res["k"], res["final"], res["peak"])}
+
+
+def _log(path):
+    """``[(pid, k, t)]`` and the index of the SIGNAL line (complete lines only)."""
+    if not path.exists():
+        return [], None
+    entries, marker = [], None
+    for line in path.read_text().split("\n")[:-1]:
+        if line == "SIGNAL":
+            marker = len(entries)
+            continue
+        pid, k, t = line.split()
+        entries.append((int(pid), round(float(k), 9), float(t)))
+    return entries, marker
+
+
+def _finished(entries):
+    """The runs a process had left for another run: finished, their rows made (a law called
+    at t_end is no proof: a rejected step may have tried it)."""
+    latest = {}
+    for pid, k, _ in entries:
+        latest[pid] = k
+    return {k for _, k, _ in entries} - set(latest.values())
+
+
+def _mid_run(entries):
+    """At least two runs finished, and every process's latest evaluation lies mid-run."""
+    if len(_finished(entries)) < 2:
+        return False
+    latest = {}
+    for pid, _, t in entries:
+        latest[pid] = t
+    return all(0.15 * T_END < t < 0.85 * T_END for t in latest.values())
+
+
+def _group_alive(pgid):
+    alive = []
+    for p in psutil.process_iter(["pid", "status"]):
+        try:
+            if os.getpgid(p.pid) == pgid and p.info["status"] != psutil.STATUS_ZOMBIE:
+                alive.append(p.pid)
+        except (ProcessLookupError, psutil.Error):
+            continue
+    return alive
+
+
+def _no_process_left(pgid, grace=3.0):
+    """No process of the command's group alive (``grace`` s for the exiting ones to go)."""
+    deadline = time.monotonic() + grace
+    while _group_alive(pgid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return _group_alive(pgid)
+
+
+def _signal(proc, sig):
+    if sig == signal.SIGINT:
+        os.killpg(proc.pid, sig)  # Ctrl-C: the terminal signals the whole foreground group
+    else:
+        proc.send_signal(sig)
+
+
+def _run_until(cmd, log, ready, sig, deadline_s=60):
+    """Start ``cmd`` in its own session, wait until ``ready(log entries)``, mark the log, send
+    ``sig``; ``(returncode, stdout, stderr, pgid)``."""
+    env = dict(os.environ, MBCOMP_STUDY_LOG=str(log))
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + deadline_s
+        while not ready(_log(log)[0]):
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "the command never reached the point to interrupt it"
+            time.sleep(0.02)
+        with open(log, "a") as fh:
+            fh.write("SIGNAL\n")
+        _signal(proc, sig)
+        out, err = proc.communicate(timeout=60)
+        left = _no_process_left(proc.pid)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)  # nothing of a failed test survives it
+        except ProcessLookupError:
+            pass
+    return proc.returncode, out, err, left
+
+
+def _table(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.mark.parametrize("executor", ["serial", "processes", "dask"])
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_an_interrupted_study_writes_exactly_the_finished_rows(model_file, reference, tmp_path, executor, sig):
+    if executor == "dask":
+        pytest.importorskip("distributed")
+    log, out = tmp_path / "calls.log", tmp_path / "table.csv"
+    cmd = [sys.executable, "-m", "mbcomp.cli", "study", str(model_file), "--grid", "k=1:2.5:6",
+           *[a for m in METRICS for a in ("--metric", m)], "--backend", "numeric", "--executor", executor,
+           "--out", str(out), "-q"] + (["--workers", "2"] if executor == "processes" else [])
+    code, stdout, stderr, left = _run_until(cmd, log, _mid_run, sig)
+    name = signal.Signals(sig).name
+    assert code == EXIT[sig], (stdout, stderr)
+    assert left == [], f"processes left behind: {left}"
+    entries, marker = _log(log)
+    before = _finished(entries[:marker])
+    rows = _table(out)
+    got = {round(float(r["k"]), 9): r for r in rows}
+    assert len(got) == len(rows) and set(got) == before  # exactly the runs that finished before the signal
+    assert 2 <= len(rows) < len(KS)  # it stopped: not every run is there
+    for k, r in got.items():  # each row is the uninterrupted study's
+        assert r["status"] == "success"
+        np.testing.assert_allclose([float(r["final"]), float(r["peak"])], reference[k], rtol=1e-11, atol=0)
+    line = f"mbcomp: study interrupted by {name}: {len(rows)} of {len(KS)} runs finished (their rows are kept); " \
+           f"wrote {out} ({len(rows)} rows)"
+    assert line in stderr.splitlines(), stderr
+
+
+def _simulation_started(entries):
+    return any(t > 0.5 for _, _, t in entries)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_an_interrupted_simulation_writes_its_rows_and_plot(model_file, tmp_path, sig):
+    """``mbcomp simulate`` of a 1e4 s run stopped once t > 0.5 s: the CSV (and the plot asked
+    for) hold the rows up to the last accepted step, equal to an uninterrupted run's rows at
+    the same times."""
+    log, out, plot = tmp_path / "calls.log", tmp_path / "run.csv", tmp_path / "run.png"
+    cmd = [sys.executable, "-m", "mbcomp.cli", "simulate", str(model_file), "--t-end", "1e4", "--n-out", "1000001",
+           "--backend", "numeric", "--out", str(out), "--plot", str(plot), "-q"]
+    code, stdout, stderr, left = _run_until(cmd, log, _simulation_started, sig)
+    name = signal.Signals(sig).name
+    assert code == EXIT[sig], (stdout, stderr)
+    assert left == []
+    with open(out, newline="") as fh:
+        rows = list(csv.reader(fh))
+    header, data = rows[0], np.array(rows[1:], float)
+    t = data[:, 0]
+    assert 0.5 - 0.01 <= t[-1] < 1e4 and np.allclose(np.diff(t), 0.01)
+    assert plot.exists() and plot.stat().st_size > 0
+    last = [ln for ln in stderr.splitlines() if ln.startswith("mbcomp: ")]
+    assert last == [f"mbcomp: interrupted by {name} at t = {t[-1]:g} s; wrote {out} ({len(t)} rows), {plot} up to then"]
+    ref = mbcomp.simulate(mbcomp.load_model_file(model_file).build(), t_end=float(t[-1]), n_out=len(t),
+                          rtol=1e-10, atol=1e-12, backend="numeric")
+    np.testing.assert_allclose(ref.time, t, rtol=0, atol=1e-9)
+    for col in ("hinge.phi", "hinge.w"):
+        np.testing.assert_allclose(data[:, header.index(col)], ref[col], rtol=0, atol=1e-8)
