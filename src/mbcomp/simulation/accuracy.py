@@ -31,8 +31,8 @@ import math
 
 import numpy as np
 
-__all__ = ["energy_alarm", "balance_alarm", "momentum_alarm", "between_events", "ALARM_RTOL", "ALARM_FLOOR",
-           "DRIFT_SHARE"]
+__all__ = ["energy_alarm", "balance_alarm", "momentum_alarm", "between_events", "tolerance_energy", "ALARM_RTOL",
+           "ALARM_FLOOR", "DRIFT_SHARE", "TOLERANCE_SPAN"]
 
 #: a relative energy drift above this many times ``rtol`` is more than the tolerance promises
 #: (global errors grow over a run: the bar leaves room for 100 tolerances' worth)
@@ -41,6 +41,60 @@ ALARM_RTOL = 100.0
 ALARM_FLOOR = 1e-5
 #: the drift is the deviation from the start exceeded over this share of the output grid
 DRIFT_SHARE = 0.1
+#: ... and above this many times the energy the tolerances leave open at one state
+#: (:func:`tolerance_energy`): a nearly still mechanism exchanges almost no energy, so the
+#: bars relative to the exchanged energy would judge the tolerance's own resolution (one
+#: state's worth: a drift that grew over many steps beyond it is the integration's; a pendulum
+#: spinning to 300 rad at rtol 1e-5 leaves 0.03 J open and drifts 0.29 J)
+TOLERANCE_SPAN = 1.0
+#: output points at most on which :func:`tolerance_energy` evaluates the mechanism
+TOLERANCE_POINTS = 20
+
+
+def _rounding(T, V):
+    """The rounding (J) of energies summed from terms as large as ``|T| + |V|``: a hundred
+    roundings of the largest (a pendulum swinging 1e-7 rad exchanges 1e-13 J of its 9.81 J)."""
+    return 100.0 * np.finfo(float).eps * float(np.max(np.abs(T) + np.abs(V)))
+
+
+def tolerance_energy(system, t, Y, rtol, atol):
+    """The energy (J) the integration tolerances leave open: how far ``E = T + V`` moves when
+    every state moves by its tolerance, ``sum |dE/dq_i| (atol + rtol |q_i|) + |dE/du_i| (atol +
+    rtol |u_i|)``, with ``dE/du = M u`` (the momenta) and ``|dE/dq|`` sized by the generalized
+    forces ``f`` (``-dV/dq`` at rest); the largest over up to :data:`TOLERANCE_POINTS` of the
+    outputs ``Y`` (``[q, u]`` rows at times ``t``, s). A ball resting on a floor at rtol 1e-10
+    leaves ``m g rtol z`` open: its energy wanders by that much, and exchanges nothing else.
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -10.0)))
+    >>> j = m.add("j", Prismatic(n=(0, 0, 1), s0=2.0)); b = m.add("b", PointMass(m=1.0))
+    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, b.frame_a)
+    >>> s = mbcomp.assemble(m)                     # 10 N along z = 2 m, at rest: 10 (1e-12 + 1e-10 2)
+    >>> float(np.round(tolerance_energy(s, [0.0], np.array([[2.0, 0.0]]), 1e-10, 1e-12), 15))
+    2.01e-09
+    """
+    Y = np.asarray(Y, float)
+    if not len(Y):
+        return 0.0
+    nq, nu = system.nq, system.nu
+    atol = float(np.max(atol))
+    rtol = float(np.max(rtol))
+    worst = 0.0
+    for k in np.unique(np.linspace(0, len(Y) - 1, min(len(Y), TOLERANCE_POINTS)).astype(int)):
+        q, u = Y[k, :nq], Y[k, nq:nq + nu]
+        if not (np.isfinite(q).all() and np.isfinite(u).all()):
+            continue
+        try:
+            ev = system.evaluate(t[k], q, u)
+            f, p = np.abs(np.asarray(ev.f, float)), np.abs(np.asarray(ev.M, float) @ u)
+        except Exception:  # noqa: BLE001 - a state the mechanism cannot evaluate adds nothing here
+            continue
+        dq = atol + rtol * (np.abs(q) if nq == nu else np.max(np.abs(q), initial=0.0))
+        worst = max(worst, float(f @ (dq * np.ones(nu)) + p @ (atol + rtol * np.abs(u))))
+    return worst
 
 
 def _drift(x):
@@ -92,10 +146,12 @@ def momentum_alarm(P, L, P_scale, L_scale, rtol):
     return None, ""
 
 
-def energy_alarm(T, V, rtol):
+def energy_alarm(T, V, rtol, floor=0.0):
     """``(status, message)`` of the alarm on the kinetic and potential energies ``T``, ``V``
     (J, on the output grid) of a conservative system integrated at ``rtol``: ``("inaccurate",
-    text)`` or ``(None, "")``."""
+    text)`` or ``(None, "")``. A drift within the energies' rounding or within
+    :data:`TOLERANCE_SPAN` times ``floor`` (J, what the tolerances leave open:
+    :func:`tolerance_energy`) rings no alarm."""
     T, V = np.asarray(T, float), np.asarray(V, float)
     E = T + V
     ok = np.isfinite(E)
@@ -109,7 +165,7 @@ def energy_alarm(T, V, rtol):
     drift = _drift(E[ok])
     rel = drift / scale
     bar = max(ALARM_RTOL * float(np.max(rtol)), ALARM_FLOOR)
-    if rel <= bar:
+    if rel <= bar or drift <= _rounding(T[ok], V[ok]) or drift <= TOLERANCE_SPAN * floor:
         return None, ""
     return "inaccurate", (f"accuracy alarm: the total energy drifted by {drift:.2g} J ({rel:.1e} of the "
                           f"{scale:.3g} J the motion exchanges, over a tenth of the run) in a conservative system; "
@@ -117,14 +173,15 @@ def energy_alarm(T, V, rtol):
                           f"promises about {bar:.0e} -> {_fix(rtol, rel)}")
 
 
-def balance_alarm(balance, T, V, work, dissipated, quadrature, rtol):
+def balance_alarm(balance, T, V, work, dissipated, quadrature, rtol, floor=0.0):
     """``(status, message)`` of the alarm on the energy balance (J, on the output grid) of a
     driven or damped mechanism (:mod:`mbcomp.simulation.balance`) integrated at ``rtol``: as
     :func:`energy_alarm`, relative to the energy the motion exchanges (largest kinetic energy,
     range of the potential one, largest work and dissipation), and only when the output
     grid's ``quadrature`` estimate (J) is below a tenth of the balance error -- else the grid,
     not the integration, may be what is off: no alarm, ``(None, note)`` saying so -- and the
-    error is above the rounding of the energies (a body at rest exchanges 1e-15 J).
+    error is above the rounding of the energies (a body at rest exchanges 1e-15 J) and above
+    :data:`TOLERANCE_SPAN` times ``floor`` (J, :func:`tolerance_energy`).
 
     Examples
     --------
@@ -147,7 +204,7 @@ def balance_alarm(balance, T, V, work, dissipated, quadrature, rtol):
     rel = drift / scale
     bar = max(ALARM_RTOL * float(np.max(rtol)), ALARM_FLOOR)
     rounding = 1e3 * np.finfo(float).eps * (scale + float(np.max(np.abs(T) + np.abs(V))))
-    if rel <= bar or drift <= rounding:
+    if rel <= bar or drift <= rounding or drift <= TOLERANCE_SPAN * floor:
         return None, ""
     if quadrature >= 0.1 * drift:
         return None, (f"the energy balance ({drift:.2g} J off) cannot be judged on this output grid: the elements' "

@@ -56,15 +56,16 @@ def _alarm_again(res, lost, before):
     counted (``before``: the balance and dissipation the post-processing judged, or None for
     a conservative run): the run is ``"success"`` when the alarm no longer rings."""
     T, V, rtol = res["energy.kinetic"], res["energy.potential"], res.stats["rtol"]
+    floor = res.stats.get("energy_tolerance", 0.0)  # the energy the tolerances leave open (J)
     if before is not None:
         W, D = res["energy.work"], res["energy.dissipated"]
-        was = balance_alarm(before[0], T, V, before[2], before[1], 0.0, rtol)
+        was = balance_alarm(before[0], T, V, before[2], before[1], 0.0, rtol, floor)
         # the work's and dissipation's quadrature on the output grid cannot follow a power
         # jumping inside an interval (an impact, a switch): the balance is judged between them
         judged = between_events(res["energy.balance"], res.time, [e.time for e in res.events])
-        now = balance_alarm(judged, T, V, W, D + lost, 0.0, rtol)
+        now = balance_alarm(judged, T, V, W, D + lost, 0.0, rtol, floor)
     else:
-        was, now = energy_alarm(T, V, rtol), energy_alarm(T, V + lost, rtol)
+        was, now = energy_alarm(T, V, rtol, floor), energy_alarm(T, V + lost, rtol, floor)
     if now[0] is None and was[1]:
         res.status = "success"
         res.message = res.message.replace("; " + was[1], "")

@@ -33,7 +33,7 @@ from ..assembly.recursive import SingularTree
 from ..assembly.summary import summary
 from ..assembly.topology import no_gravity_note
 from ..geometry.kinematics import matrix_to_quat
-from .accuracy import balance_alarm, energy_alarm, momentum_alarm
+from .accuracy import balance_alarm, energy_alarm, momentum_alarm, tolerance_energy
 from .balance import energy_balance, momentum_columns
 from .result import Result
 
@@ -140,8 +140,9 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
 
         warnings.warn(f"mbcomp: {loop}", RuntimeWarning, stacklevel=3)
         notes.append(loop)
-    if status == "success" and "rtol" in stats:
-        alarm, text = _alarms(system, t, Y, series, stats["rtol"], quadrature)
+    if status == "success" and "rtol" in stats:  # the energy the tolerances leave open (J) scales the alarms
+        stats = dict(stats, energy_tolerance=tolerance_energy(system, t, Y, stats["rtol"], stats.get("atol", 0.0)))
+        alarm, text = _alarms(system, t, Y, series, stats["rtol"], quadrature, stats["energy_tolerance"])
         if alarm:
             status, notes = alarm, [text] + notes
         elif text:  # no alarm, but something the alarm could not judge
@@ -157,18 +158,19 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
 MOMENTUM_POINTS = 1000
 
 
-def _alarms(system, t, Y, series, rtol, quadrature=0.0):
+def _alarms(system, t, Y, series, rtol, quadrature=0.0, floor=0.0):
     """The first accuracy alarm (:mod:`mbcomp.simulation.accuracy`) a successful run raises,
     ``(status, message)``: the energy of a conservative system, the energy balance of a
     driven or damped one (unless the output grid's ``quadrature`` may explain it), the momenta
-    of one that nothing outside loads; ``(None, "")`` for none."""
+    of one that nothing outside loads; ``(None, "")`` for none. ``floor``: the energy (J) the
+    tolerances leave open (:func:`~mbcomp.simulation.accuracy.tolerance_energy`)."""
     if not nonconservative(system) and "energy.kinetic" in series:
-        alarm = energy_alarm(series["energy.kinetic"], series["energy.potential"], rtol)
+        alarm = energy_alarm(series["energy.kinetic"], series["energy.potential"], rtol, floor)
         if alarm[0]:
             return alarm
     elif "energy.balance" in series:
         alarm = balance_alarm(series["energy.balance"], series["energy.kinetic"], series["energy.potential"],
-                              series["energy.work"], series["energy.dissipated"], quadrature, rtol)
+                              series["energy.work"], series["energy.dissipated"], quadrature, rtol, floor)
         if alarm[0] or alarm[1]:
             return alarm
     if len(t) > 1 and momentum_conserved(system):
