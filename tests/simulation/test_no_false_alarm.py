@@ -177,3 +177,49 @@ def test_a_small_motion_integrated_badly_still_rings(formulation):
     and what the tolerances leave open: "inaccurate"."""
     r = mbcomp.simulate(pendulum(1e-6), t_end=200.0, formulation=formulation, method="RK23", rtol=1e-4, atol=1e-14)
     assert r.status == "inaccurate" and "total energy drifted" in r.message
+
+
+# --- a stiff mass ratio is no massless motion ------------------------------------------------
+def sliders(m_heavy, m_light, x=10.0):
+    """A slider along x (``m_heavy``) 10 m from the origin carrying a slider along y
+    (``m_light``), gravity -y: the light one falls freely, the heavy one stays."""
+    from mbcomp.library import FixedTranslation
+
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, -G, 0)))
+    off = m.add("off", FixedTranslation(r=(x, 0, 0)))
+    j1 = m.add("j1", Prismatic(n=(1, 0, 0)))
+    b1 = m.add("b1", PointMass(m=m_heavy))
+    j2 = m.add("j2", Prismatic(n=(0, 1, 0)))
+    b2 = m.add("b2", PointMass(m=m_light))
+    m.connect(w.frame_b, off.frame_a)
+    m.connect(off.frame_b, j1.frame_a)
+    m.connect(j1.frame_b, b1.frame_a)
+    m.connect(j1.frame_b, j2.frame_a)
+    m.connect(j2.frame_b, b2.frame_a)
+    return m
+
+
+@pytest.mark.parametrize("formulation,method", RUNS)
+def test_a_1e10_mass_ratio_is_called_ill_conditioned_not_massless(formulation, method):
+    """1e10 kg and 1 kg 10 m from the origin: the roundoff scale took the heavy body's m |r|^2
+    (1e12) although nothing turns, and the 1 kg motion was "massless". It is a stiff mass ratio:
+    a warning saying so, and the run gives the free fall y = -g t^2 / 2."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = mbcomp.simulate(sliders(1e10, 1.0), t_end=1.0, formulation=formulation, method=method, **TOL)
+    texts = [str(w.message) for w in caught]
+    assert any("ill-conditioned" in x and "mass ratio 1e+10" in x for x in texts), texts
+    assert not any("massless" in x for x in texts + [r.message])
+    assert r.status == "success", r.message
+    assert np.max(np.abs(r["j2.s"] + 0.5 * G * r.time ** 2)) < 1e-6 and np.max(np.abs(r["j1.s"])) < 1e-9
+
+
+def test_a_truly_massless_motion_is_still_an_error():
+    """The same sliders with the light one massless: its motion has no inertia at all."""
+    from mbcomp.errors import InitializationError
+
+    with pytest.raises(InitializationError, match=r"massless(.|\n)*j2\.v: this motion carries no mass"):
+        mbcomp.simulate(sliders(1e10, 0.0), t_end=0.1)

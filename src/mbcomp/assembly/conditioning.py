@@ -122,17 +122,26 @@ def check_inertia(system, ev):
 
 
 def moving_scale(system, jets):
-    """``sum m (1 + |r_cm|^2) + trace(I_cm)`` over the bodies that move (their jets have a
-    speed column), SI units taken as numbers: the size of the largest entries a mass matrix
-    of these bodies can have about the world origin, which sets its roundoff."""
+    """``sum m (|J_c|^2 + |r_cm|^2 |J_w|^2) + trace(I_cm) |J_w|^2`` over the bodies that move
+    (``J_c``, ``J_w``: the Jacobians of the centre's velocity and of the angular velocity,
+    Frobenius norms; SI units taken as numbers): the size of the entries the bodies give the
+    mass matrix, which sets its roundoff. A turning body's lever arm ``r x w`` is rounded
+    relative to its distance from the origin ``|r_cm|`` (a point mass on a hinge's axis 1 m
+    from the origin has ``m (1e-16 m)^2`` about it: roundoff, not inertia); a body that only
+    translates has no lever arm to round (a 1e10 kg slider 10 m out next to a 1 kg one is a
+    stiff mass ratio, not a massless motion)."""
     total = 0.0
     for path, comp, node in system.topology.bodies:
         J = jets[node]
         if not (np.any(J.Jv) or np.any(J.Jw)):
             continue
         m, rc, I = comp.mass_properties(system.P[path])
-        r = J.r + J.R @ np.asarray(rc, float)
-        total += float(m) * (1.0 + float(r @ r)) + float(np.trace(I))
+        rho = J.R @ np.asarray(rc, float)
+        r = J.r + rho
+        Jw = np.atleast_2d(np.asarray(J.Jw, float))
+        Jc = np.atleast_2d(np.asarray(J.Jv, float)) - np.cross(rho, Jw.T).T  # v_c = v + w x rho
+        w2 = float(np.sum(Jw * Jw))
+        total += float(m) * (float(np.sum(Jc * Jc)) + float(r @ r) * w2) + float(np.trace(I)) * w2
     return total
 
 
