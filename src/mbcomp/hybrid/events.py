@@ -50,6 +50,7 @@ from ..errors import SimulationError
 from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value, touching_at_start
 from ..solvers.compiled_rk import CompiledRK
+from ..solvers.locate import return_root, root, time_tolerance
 from ..assembly.conservation import impulse_work
 from .active import mode_rows, mode_system, slipping_joints, start_modes, with_mode_forces
 from .modes import consistent, impact_speeds, row_push, row_values
@@ -143,7 +144,6 @@ class Events(SlideEvents):
         self.user_left = [_terminal_count(f) for f in self.user]
         self.rtol, self.atol = rtol, atol
         self.records, self.status, self.message = [], None, ""
-        self.xtol = min(1e-12, 1e-3 * rtol)
         self._systems, self._hits = {}, {}
         self._g0 = None
         self.history = []  # [(t, modes, q)]: the start and every restart (stick-slip's columns)
@@ -268,30 +268,16 @@ class Events(SlideEvents):
         return False
 
     def _locate(self, key, qu, t0, t1, g0, g1):
-        """The root of event function ``key`` in ``[t0, t1]`` (s)."""
-        from scipy.optimize import brentq
-
-        if g0 == 0.0:
-            return t0
-        if g1 == 0.0:
-            return t1
-        return float(brentq(lambda tt: self.values(tt, qu(tt))[key], t0, t1, xtol=self.xtol * max(1.0, abs(t1)),
-                            rtol=4 * np.finfo(float).eps))
+        """The root of event function ``key`` in ``[t0, t1]`` (s) on the step's dense output
+        (:func:`mbcomp.solvers.locate.root`)."""
+        return root(lambda tt: self.values(tt, qu(tt))[key], t0, t1, g0, g1, tol=time_tolerance(t1, self.rtol))
 
     def _returned(self, key, qu, t0, t1, d):
         """The return through zero of event function ``key``, which left it at ``t0`` (the
         event just handled) and is back on its far side at ``t1``: Brent's root between the
-        function's extreme on the leaving side and ``t1`` (``t0`` when it never left)."""
-        from scipy.optimize import brentq, minimize_scalar
-
-        def g(tt):
-            return self.values(tt, qu(tt))[key]
-
-        peak = minimize_scalar(lambda tt: d * g(tt), bounds=(t0, t1), method="bounded",
-                               options=dict(xatol=self.xtol * max(1.0, abs(t1))))
-        if peak.fun >= 0.0:  # d g >= 0 throughout: it never got off the zero
-            return t0
-        return float(brentq(g, float(peak.x), t1, xtol=self.xtol * max(1.0, abs(t1)), rtol=4 * np.finfo(float).eps))
+        function's extreme on the leaving side and ``t1`` (``t0`` when it never left;
+        :func:`mbcomp.solvers.locate.return_root`)."""
+        return return_root(lambda tt: self.values(tt, qu(tt))[key], t0, t1, d, tol=time_tolerance(t1, self.rtol))
 
     def _event(self, run, key, t_e, qu):
         """Act on event ``key`` at ``t_e``; ``True`` when the run restarted or ended."""
@@ -452,11 +438,11 @@ class Events(SlideEvents):
     def start(self, form, y0, t, q, u):
         """``(form, y0)``, the run's formulation and initial state at its start ``t``, or, when
         a stuck friction cannot hold there (:meth:`_break_away`), those of the mode it breaks
-        away to; a contact touching there has its impact, engages or lets go at once
-        (:meth:`_touching_at_start`, :meth:`_open_pulling`)."""
+        away to; a contact touching there has its impact, engages (sliding if it slips) or
+        lets go at once (:meth:`_touching_at_start`, :meth:`_sliding_now`, :meth:`_open_pulling`)."""
         u0 = u
         u, modes = self._touching_at_start(t, q, u)
-        modes = self._open_pulling(t, q, u, self._rolling_at_start(t, q, u, modes))
+        modes = self._sliding_now(t, q, u, self._open_pulling(t, q, u, self._rolling_at_start(t, q, u, modes)))
         going_on = set(slipping_joints(self.system, modes))  # a start with a slip speed
         if modes != self.modes:
             q, u = consistent(self.system_now(modes), t, q, u)

@@ -47,6 +47,7 @@ import numpy as np
 
 from ..assembly.system import MultibodySystem
 from ..errors import SimulationError
+from ..solvers.locate import minimum, time_tolerance
 
 __all__ = ["relative_sigma", "SingularPosition", "StepEnd", "StepWindow", "RedundantRows", "ConstraintRank", "JointSingularities",
            "monitors_for"]
@@ -119,9 +120,8 @@ class StepWindow:
 
     def locate(self, value, nq, nu, normalize=None):
         """``(t, value)`` at the minimum of ``value(t, q, u)`` along the last two steps (bounded
-        scalar search on the dense output; ``q`` normalized by ``normalize`` if given)."""
-        from scipy.optimize import minimize_scalar
-
+        scalar search on the dense output, :func:`mbcomp.solvers.locate.minimum`; ``q``
+        normalized by ``normalize`` if given)."""
         (a0, a1, _, da), (_, b1, _, db) = self._steps[-2:]
 
         def at(tt):
@@ -129,8 +129,7 @@ class StepWindow:
             q = qu[:nq] if normalize is None else normalize(qu[:nq])
             return value(tt, q, qu[nq: nq + nu])
 
-        r = minimize_scalar(at, bounds=(a0, b1), method="bounded", options=dict(xatol=1e-12 * max(1.0, abs(b1))))
-        return float(r.x), float(r.fun)
+        return minimum(at, a0, b1, tol=time_tolerance(b1))
 
     def state_at(self, t, nq, nu):
         """``[q, u]`` at ``t`` (s) inside the last two steps, from their dense output."""
