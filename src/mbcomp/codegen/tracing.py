@@ -29,6 +29,7 @@ Examples
 """
 from __future__ import annotations
 
+import copy
 from types import SimpleNamespace
 
 import numpy as np
@@ -141,8 +142,8 @@ def traced_system(system, P, drive_motion=None):
         comps = dict(topo.flat.components)
         for path in drives(system):
             comps[path] = DriveInputs(comps[path], drive_motion(path, comps[path], P[path]))
-        topology = SimpleNamespace(**vars(topo))
-        topology.flat = SimpleNamespace(**vars(topo.flat))
+        topology = copy.copy(topo)  # the same topology (and its methods), other components
+        topology.flat = copy.copy(topo.flat)
         topology.flat.components = comps
     g = None
     if topo.gravity_source:
