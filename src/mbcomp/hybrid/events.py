@@ -16,9 +16,14 @@ earliest first:
 * an engaged row's push (its multiplier) falling through zero is the component's
   ``"release"`` event.
 
-A step past an action is not kept: the outputs up to the event come from the step's dense
-output, the state is moved onto the new mode's rows (:func:`~mbcomp.hybrid.modes.consistent`),
-the formulation is built again over the new mode's system and a new stepper starts there.
+The run is integrated in *segments* (:func:`mbcomp.simulation.driver.integrate`), as scipy's
+``solve_ivp`` and diffrax do: after every accepted step the driver asks :meth:`Events.check`
+for the first event in the step that acts (detect, locate); it keeps the outputs up to the
+event from the step's dense output (:func:`~mbcomp.hybrid.outputs.keep_until`), then
+:meth:`Events.act` acts (an impulse, a switch of mode, the end of the run) and returns an
+:class:`Outcome`: the run's end, or the next segment -- the state moved onto the new active
+set's rows (:func:`~mbcomp.hybrid.modes.consistent`) and the formulation built over its
+system -- from which the driver starts a new stepper. The events never touch the run.
 
 An impact whose rebound would rise less than :data:`REST_HEIGHT` times ``atol`` above the
 limit settles in the engaged mode (a ball at rest), and so does a component whose impacts
@@ -54,11 +59,10 @@ from ..solvers.locate import return_root, root, time_tolerance
 from ..assembly.conservation import impulse_work
 from .active import mode_rows, mode_system, slipping_joints, start_modes, with_mode_forces
 from .modes import consistent, impact_speeds, row_push, row_values
-from .outputs import keep_until
 from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, tangent_rows, with_slip_friction
 from .friction import row_events
 
-__all__ = ["EventRecord", "Events", "stepwise", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
+__all__ = ["EventRecord", "Events", "Cut", "Outcome", "stepwise", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
            "SPIN_TURNS", "SPIN_SPAN"]
 
 #: an impact whose rebound rises less than this times ``atol`` (m or rad) settles engaged
@@ -99,6 +103,61 @@ class EventRecord:
     name: str
     kind: str
     detail: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Cut:
+    """An event that acts, located in the last accepted step (:meth:`Events.check`).
+
+    Attributes
+    ----------
+    t : float
+        The event's time (s); the step is cut there.
+    qu : callable
+        ``qu(t) -> [q, u]``: the step's dense output (the outputs up to ``t`` come from it).
+    key : tuple
+        The event function's key: ``("user", index, name)``, ``("joint", joint, event)`` or
+        ``("release", joint, row)``.
+    state : ndarray
+        ``[q, u]`` at ``t`` before the action.
+    action : object
+        The component's action (:class:`~mbcomp.modeling.events.Impact`, ``Switch`` or
+        ``Stop``), or None for a user's terminal event.
+    turn : ndarray or None
+        A plane slide's new direction (tangent coordinates) when the event only turned it.
+    """
+
+    t: float
+    qu: object
+    key: tuple
+    state: np.ndarray
+    action: object = None
+    turn: object = None
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What an event did to the run (:meth:`Events.act`): the run ends at ``t`` (``form`` is
+    None; ``state`` its last output, ``message`` why), or a new segment starts at ``t`` (s)
+    with ``form`` over the new active set from its state ``y0``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> Outcome(0.5, np.zeros(2), message="event ground at t=0.5 s").ends
+    True
+    """
+
+    t: float
+    state: np.ndarray
+    form: object = None
+    y0: object = None
+    message: str = ""
+
+    @property
+    def ends(self):
+        """Whether the run ends at :attr:`t`."""
+        return self.form is None
 
 
 def stepwise(stepper_class):
@@ -143,7 +202,7 @@ class Events(SlideEvents):
         self.user = list(user)
         self.user_left = [_terminal_count(f) for f in self.user]
         self.rtol, self.atol = rtol, atol
-        self.records, self.status, self.message = [], None, ""
+        self.records = []
         self._systems, self._hits = {}, {}
         self._g0 = None
         self.history = []  # [(t, modes, q)]: the start and every restart (stick-slip's columns)
@@ -233,9 +292,11 @@ class Events(SlideEvents):
         self._g0 = self.values(t, qu)
 
     # --- after a step ----------------------------------------------------------------------
-    def __call__(self, run):
-        """Check the last step of ``run``; ``True`` when the run restarted or ended at an
-        event (the step's other hooks are then not due)."""
+    def check(self, run):
+        """Detect and locate the events in the last accepted step of ``run`` (read only): the
+        first that acts, a :class:`Cut` (the step's other hooks are then not due; the driver
+        keeps the outputs up to it and calls :meth:`act`), or None. Events that do not act (a
+        user's non-terminal event, an impact not closing) are recorded on the way."""
         dense_y = run.step_dense()
         full = run.form.full
 
@@ -255,17 +316,14 @@ class Events(SlideEvents):
                 hits.append((self._returned(key, qu, t0, t1, d), key))
             elif _crossed(a, b, d):
                 hits.append((self._locate(key, qu, t0, t1, a, b), key))
-        if not hits:
-            self._slide_work(run, qu, t1)
-            self._g0 = g1
-            return False
         for t_e, key in sorted(hits):
             self._slide_work(run, qu, t_e)
-            if self._event(run, key, t_e, qu):
-                return True
+            cut = self._decide(key, t_e, qu)
+            if cut is not None:
+                return cut
         self._slide_work(run, qu, t1)
         self._g0 = g1
-        return False
+        return None
 
     def _locate(self, key, qu, t0, t1, g0, g1):
         """The root of event function ``key`` in ``[t0, t1]`` (s) on the step's dense output
@@ -279,8 +337,9 @@ class Events(SlideEvents):
         :func:`mbcomp.solvers.locate.return_root`)."""
         return return_root(lambda tt: self.values(tt, qu(tt))[key], t0, t1, d, tol=time_tolerance(t1, self.rtol))
 
-    def _event(self, run, key, t_e, qu):
-        """Act on event ``key`` at ``t_e``; ``True`` when the run restarted or ended."""
+    def _decide(self, key, t_e, qu):
+        """The :class:`Cut` of event ``key`` at ``t_e`` if it acts, else None (recorded if it
+        is a user's)."""
         kind, who, name = key
         if kind == "user":
             self.records.append(EventRecord(t_e, "user", name, "user", {}))
@@ -288,29 +347,41 @@ class Events(SlideEvents):
             if self.user_left[who] > 0:
                 self.user_left[who] -= 1
                 if self.user_left[who] == 0:
-                    self._end(run, t_e, qu(t_e), f"event {name} at t={t_e:.12g} s")
-                    return True
-            return False
+                    return Cut(t_e, qu, key, np.array(qu(t_e), float))
+            return None
         comp, p = self.system.edge(who).comp, self.system.P[who]
         action = comp.on_event("release" if kind == "release" else name, p, self.modes[who])
         state = qu(t_e)
         self._before = np.array(state, float)
-        if key in self._slip_keys and self._turned(run, who, t_e, state, qu):
-            return True
+        if key in self._slip_keys:
+            turn = self._turns(who, t_e, state)
+            if turn is not None:
+                return Cut(t_e, qu, key, state, turn=turn)
         if isinstance(action, Impact) and not self._approaching(who, action, state, t_e):
             if key != self._last:
-                return False
+                return None
             # back at the limit right after leaving it, too slow to tell apart: at rest there
             action = Switch(self.system.edge(who).comp.rest_mode(name, p, self.modes[who]) or self.modes[who])
         if action is None:
-            return False
-        keep_until(run, t_e, qu)
+            return None
+        return Cut(t_e, qu, key, state, action)
+
+    def act(self, cut):
+        """Act on the event ``cut`` (:meth:`check`; the driver has kept the outputs up to it):
+        the :class:`Outcome` -- the run's end, or the next segment over the new active set."""
+        (kind, who, name), t_e, state, action = cut.key, cut.t, cut.state, cut.action
+        if kind == "user":
+            return Outcome(t_e, state, message=f"event {name} at t={t_e:.12g} s")
+        nq = self.system.nq
+        if cut.turn is not None:  # a plane slide turned: it slides on along the new direction
+            self.slip_dirs = {**self.slip_dirs, who: cut.turn}
+            self._record(t_e, who, "stop", "turn", {"mode": self.modes[who], "energy_loss": 0.0})
+            return self._segment(t_e, state[:nq], state[nq:], dict(self.modes))
         if isinstance(action, Stop):
             self._record(t_e, who, name, "stop", {"reason": action.reason})
-            self._end(run, t_e, state, f"{who}: {action.reason} (event {name} at t={t_e:.12g} s)")
-            return True
+            return Outcome(t_e, np.array(state, float), message=f"{who}: {action.reason} (event {name} at t={t_e:.12g} s)")
         modes = dict(self.modes)
-        q, u = state[: self.system.nq], state[self.system.nq:]
+        q, u = state[:nq], state[nq:]
         if isinstance(action, Switch):
             modes[who] = action.mode
             self._record(t_e, who, name, "release" if kind == "release" else "switch",
@@ -319,9 +390,9 @@ class Events(SlideEvents):
             u, settle = self._impact(t_e, who, name, action, q, u)
             if settle is not None:
                 modes[who] = settle
-        self._restart(run, t_e, q, u, modes)
-        self._fresh = self._last = key
-        return True
+        out = self._segment(t_e, q, u, modes)
+        self._fresh = self._last = cut.key
+        return out
 
     def _approaching(self, who, action, state, t=0.0):
         """Whether the impact's rows close (a negative speed along them) at ``state``."""
@@ -405,9 +476,11 @@ class Events(SlideEvents):
         acc = float(cr.C[0] @ ud + cr.bias[0])
         return acc < 0.0 and after ** 2 <= -2.0 * acc * REST_HEIGHT * self.atol
 
-    def _restart(self, run, t, q, u, modes):
-        """Continue the run at ``t`` from ``(q, u)`` in ``modes``: state made consistent with
-        their rows, formulation built over their system, a new stepper."""
+    def _segment(self, t, q, u, modes):
+        """The next segment, from ``t`` at ``(q, u)`` in ``modes`` (an :class:`Outcome`): the
+        active set settled (contacts that would pull open, landings that slip slide, stuck
+        frictions that cannot hold break away), the state made consistent with its rows, the
+        formulation built over its system; the event functions armed there."""
         modes = self._sliding_now(t, q, u, self._open_pulling(t, q, u, modes))
         new, u0 = self.system_now(modes), u
         going_on = set(slipping_joints(self.system, self.modes)) & set(slipping_joints(self.system, modes))
@@ -430,10 +503,9 @@ class Events(SlideEvents):
             self.records[-1].detail["energy_loss"] = loss = float(0.5 * (u0 @ M @ u0 - u @ M @ u))
             self.records[-1].detail["drive_work"] = impulse_work(new, t, q, u0, u, loss)
         form = self.make_form(new)
-        run.form, run.projects = form, bool(form.projects)
-        run.start(t, form.initial_state(t, q, u))
-        run.t_prev = t
+        y0 = form.initial_state(t, q, u)
         self.arm(t, np.concatenate((q, u)))
+        return Outcome(float(t), np.concatenate((q, u)), form, y0)
 
     def start(self, form, y0, t, q, u):
         """``(form, y0)``, the run's formulation and initial state at its start ``t``, or, when
@@ -523,17 +595,6 @@ class Events(SlideEvents):
             return self._pushes(t, q, u) if held else {}
         finally:
             self.modes = old
-
-    def _end(self, run, t, state, message):
-        """End the run at ``t`` with the event's state as its last output."""
-        keep_until(run, t, lambda tt: state)
-        if run.t_out[len(run.ys) - 1] < t:
-            run.t_out = np.append(run.t_out[: len(run.ys)], t)
-            run.ys.append(np.array(state, float))
-        else:
-            run.t_out = run.t_out[: len(run.ys)]
-        self.status, self.message = "success", message
-
 
 def _contact_row(system, who, mode):
     """The holonomic row a contact holds in ``mode`` (its first :class:`ContactRow`)."""

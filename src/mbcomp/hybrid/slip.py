@@ -70,7 +70,6 @@ from .active import (ForcesAdded, WrappingEvaluator, cone_joints, mode_system, o
                      with_mode_forces, without_rows)
 from .contacts import contact_rows, tangent_force
 from .friction import count_dissipation
-from .outputs import keep_until
 
 __all__ = ["tangent_rows", "friction_solve", "SlipEvaluator",
            "with_slip_friction", "slip_accelerations", "start_directions", "slip_columns", "slide_power", "slide_work", "slip_dissipation",
@@ -389,7 +388,7 @@ class SlideEvents:
     start that rolls, start directions of new slides, turns of a plane slip, contacts that
     land slipping, the cone of a contact's rolling mode and the friction's work along the
     steps (see the module notes). Uses the events' ``system``, ``modes``, ``slip_dirs``,
-    ``records``, ``atol``/``rtol`` and their ``system_now``, ``_record`` and ``_restart``."""
+    ``records``, ``atol``/``rtol`` and their ``system_now`` and ``_record``."""
 
     def _slide_work(self, run, qu, t_to):
         """Integrate the sliding contacts' friction loss from where it was integrated to up to
@@ -406,24 +405,21 @@ class SlideEvents:
             self.slide_worked += slide_work(sysm, slips, qu, lo, hi)
             self.work_log.append((hi, self.slide_worked))
 
-    def _turned(self, run, who, t_e, state, qu):
-        """Whether the slide of ``who`` only turned (its slip speed ``|v_t|`` is more than
-        :data:`TURN` ``atol + 10 rtol v_peak`` where its speed along the start direction passes
-        zero, ``v_peak`` the slide's fastest slip at a step's end so far: the integration's own
-        error across the slip is no turn): the run
-        then slides on from ``t_e`` along the new direction (recorded as a ``"turn"``)."""
+    def _turns(self, who, t_e, state):
+        """The new direction (unit, tangent coordinates) of the slide of ``who`` if it only
+        turned, else None: its slip speed ``|v_t|`` is more than :data:`TURN` ``atol + 10 rtol
+        v_peak`` where its speed along the start direction passes zero (``v_peak`` the slide's
+        fastest slip at a step's end so far: the integration's own error across the slip is no
+        turn); the run then slides on from ``t_e`` along the new direction (recorded as a
+        ``"turn"`` by :meth:`~mbcomp.hybrid.events.Events.act`)."""
         nq = self.system.nq
         v_t = tangent_rows(self.system, who, t_e, state[:nq], state[nq:])[1]
         if not np.linalg.norm(v_t) > TURN * self.atol + 10.0 * self.rtol * self._slip_peak.get(who, 0.0):
-            return False
+            return None
         turns = [r.time for r in self.records[-SPIN_TURNS:] if r.component == who and r.kind == "turn"]
         if len(turns) == SPIN_TURNS and t_e - turns[0] <= SPIN_SPAN * max(1.0, abs(t_e)):
-            return False  # its direction spins as it dies (stiff near |v_t| = 0): taken as stopped
-        keep_until(run, t_e, qu)
-        self.slip_dirs = {**self.slip_dirs, who: v_t / np.linalg.norm(v_t)}
-        self._record(t_e, who, "stop", "turn", {"mode": self.modes[who], "energy_loss": 0.0})
-        self._restart(run, t_e, state[:nq], state[nq:], dict(self.modes))
-        return True
+            return None  # its direction spins as it dies (stiff near |v_t| = 0): taken as stopped
+        return v_t / np.linalg.norm(v_t)
 
     def _cone(self, who, mode):
         """``(mu_s, mu_k)`` of contact ``who`` rolling in ``mode`` (its row's friction cone, and

@@ -252,8 +252,6 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
     wall0 = _time.perf_counter()
     watch = None if stepper.implicit else StiffnessWatch()
     status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None], watcher)
-    if watcher is not None and watcher.status and status == "success":
-        status, message = watcher.status, watcher.message
     stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
                       index=index, rtol=rtol, atol=atol)
     message = "; ".join([message] + why_slow(run, watch, status, stats))
@@ -347,8 +345,15 @@ def integrate(run, monitors, progress=False, extra=(), events=None):
     """Step ``run`` to its end; ``(status, message)``. Every way a run can stop early keeps
     the outputs of the accepted steps (see the module notes). ``extra`` hooks run after the
     usual ones: a :class:`~mbcomp.simulation.stepping.Budget` that runs out ends the run with
-    ``"budget"``. ``events`` (:class:`~mbcomp.hybrid.events.Events`) checks every step
-    first; a step it cut at an event (a restart, or the run's end) has no hooks due."""
+    ``"budget"``.
+
+    With ``events`` (:class:`~mbcomp.hybrid.events.Events`) the run is integrated in
+    segments: after every accepted step the events detect and locate the first event in it
+    that acts (:meth:`~mbcomp.hybrid.events.Events.check`); the step is cut there (its hooks
+    are not due), the outputs up to the event are kept from its dense output, the events act
+    (:meth:`~mbcomp.hybrid.events.Events.act`: an impulse, a switch of mode, the end) and the
+    next segment starts over the new active set with a new stepper -- or the run ends there
+    with status ``"success"`` and the event's message."""
     hooks = run.hooks = hooks_for(run, monitors, progress) + list(extra)
     status, message = "success", "reached t_end"
     with sigterm_interrupts():
@@ -357,9 +362,20 @@ def integrate(run, monitors, progress=False, extra=(), events=None):
             if events is not None:
                 events.arm(run.t, run.ys[0])
             while not run.done:
-                if run.advance() and (events is None or not events(run)):
+                if not run.advance():
+                    continue
+                cut = events.check(run) if events is not None else None
+                if cut is None:
                     for hook in hooks:
                         hook(run)
+                    continue
+                run.keep_until(cut.t, cut.qu)  # the step's outputs up to the event
+                outcome = events.act(cut)
+                if outcome.ends:
+                    run.end_at(outcome.t, outcome.state)
+                    message = outcome.message
+                else:
+                    run.begin_segment(outcome.form, outcome.t, outcome.y0)
         except BudgetSpent as exc:
             status, message = "budget", f"{exc}; the results up to t={run.t_kept:g} s are kept"
         except SingularPosition as exc:  # results past the singular position are not valid

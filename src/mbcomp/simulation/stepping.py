@@ -156,6 +156,37 @@ class Run:
         d, full = self.step_dense(), self.form.full
         return lambda tt: full(tt, d(tt))
 
+    def keep_until(self, t, qu):
+        """Keep the outputs at output times up to ``t`` (s) from ``qu(t) -> [q, u]`` (projected
+        when the formulation projects): a step cut at an event inside it. Every state is taken
+        from ``qu`` before any is projected: ``qu`` reads the step's dense output in the
+        formulation's coordinates, and a projection's ``initial_state`` may choose them again
+        (D'Alembert's independent speeds: the outputs after the first were read over the wrong
+        speeds, 6.5 J of a ladder's 28 J missing)."""
+        form = self.form
+        k0 = len(self.ys)
+        times = self.t_out[k0: max(k0, int(np.searchsorted(self.t_out, t, side="right")))]
+        for tk, y in [(tk, np.array(qu(tk), dtype=float)) for tk in times]:
+            if self.projects:
+                y = form.full(tk, form.project(tk, form.initial_state(tk, y[: form.nq], y[form.nq:])))
+            self.ys.append(np.array(y, dtype=float))
+
+    def begin_segment(self, form, t, y):
+        """Integrate on from ``t`` (s) in a new segment: ``form`` (over the new active set of a
+        hybrid run, :class:`mbcomp.hybrid.events.Outcome`) from its state ``y``, a new stepper."""
+        self.form, self.projects = form, bool(form.projects)
+        self.start(t, y)
+        self.t_prev = t
+
+    def end_at(self, t, state):
+        """End the run at ``t`` (s), inside the output grid: ``state`` (``[q, u]``) is its last
+        output (the outputs up to ``t`` kept first, :meth:`keep_until`)."""
+        if self.t_out[len(self.ys) - 1] < t:
+            self.t_out = np.append(self.t_out[: len(self.ys)], t)
+            self.ys.append(np.array(state, float))
+        else:
+            self.t_out = self.t_out[: len(self.ys)]
+
     def trim(self, t):
         """Forget outputs after ``t`` (s); the start is always kept."""
         while len(self.ys) > 1 and self.t_out[len(self.ys) - 1] > t:
