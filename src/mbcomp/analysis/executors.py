@@ -21,9 +21,11 @@ Ctrl-C and SIGTERM stop a dispatch on every executor and keep what finished
 (``info["interrupted"]``): a task running in a process's main thread listens to both while it
 runs (:func:`stoppable`) and hands back the rows it finished (:class:`ChunkStopped`); tasks not
 started are cancelled; a :class:`Workers` pool (``--executor processes``) is told to stop its
-running tasks and, by its owner, terminated, so no worker process is left behind; a Dask
-task that was running is lost (Dask runs it in a worker's thread, which no signal reaches: its
-rows are not kept) and the local cluster is closed.
+running tasks and, by its owner, terminated, so no worker process is left behind; a Dask task
+runs in a worker's thread, which no signal reaches: it is told through a Dask ``Event`` to stop
+before its next run (:func:`stop_requested`), so it hands back its finished rows when the run
+it is in ends within :data:`STOP_GRACE` s (else they are lost with it); the local cluster is
+closed.
 
 Examples
 --------
@@ -38,19 +40,23 @@ import multiprocessing
 import os
 import signal
 import threading
+import time
+import uuid
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 
 from ..simulation.stops import Terminated, sigterm_interrupts
 
 __all__ = ["dispatch", "chunks", "workers_of", "dask_client", "progress_bar", "tick", "Workers", "ChunkStopped",
-           "stoppable", "signal_name", "CONNECT_TIMEOUT", "STOP_GRACE"]
+           "stoppable", "stop_requested", "signal_name", "CONNECT_TIMEOUT", "STOP_GRACE", "STOP_POLL"]
 
 #: seconds a ``"tcp://host:port"`` executor waits for its Dask scheduler to answer
 CONNECT_TIMEOUT = 5.0
 #: seconds the running tasks of a :class:`Workers` pool have, after a signal, to hand back the
 #: rows they finished (a run stops at its next step; then its worker is terminated)
 STOP_GRACE = 5.0
+#: seconds between a Dask task's questions whether its dispatch was stopped (a scheduler round trip)
+STOP_POLL = 0.2
 
 
 class ChunkStopped(Exception):
@@ -83,6 +89,13 @@ def signal_name(exc):
 
 #: set in a :class:`Workers` process by the pool when a signal stopped the dispatch
 _STOP = None
+#: a Dask task's stop event (its name) and when it was last asked, per worker thread
+_LOCAL = threading.local()
+
+
+def _ignore(_signum, _frame):
+    """A handler that does nothing: a signal already tripped when a handler changes finds a
+    Python function (``SIG_IGN`` there would raise "signal ignored due to race condition")."""
 
 
 def _worker_start(stop):
@@ -91,13 +104,13 @@ def _worker_start(stop):
     :func:`stoppable` listens to them while a task runs."""
     global _STOP
     _STOP = stop
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, _ignore)
+    signal.signal(signal.SIGTERM, _ignore)
 
 
 def _raise_once(signum, _frame):
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # one signal stops the task; a second is not a second error
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, _ignore)  # one signal stops the task; a second is not a second error
+    signal.signal(signal.SIGTERM, _ignore)
     raise Terminated("SIGTERM") if signum == signal.SIGTERM else KeyboardInterrupt
 
 
@@ -105,9 +118,9 @@ def _raise_once(signum, _frame):
 def stoppable():
     """While a task runs in a process's main thread, Ctrl-C raises ``KeyboardInterrupt`` and
     SIGTERM :class:`~mbcomp.simulation.stops.Terminated` (the task turns them into
-    :class:`ChunkStopped`); the handlers before are restored after. Raises at once when the
-    :class:`Workers` pool has asked its tasks to stop. Elsewhere (a Dask worker's thread) it
-    does nothing."""
+    :class:`ChunkStopped`); the handlers before are restored after. Elsewhere (a Dask worker's
+    thread) it does nothing: the task asks :func:`stop_requested` between its runs (in a
+    :class:`Workers` process too: a stop asked before the handlers were in place)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -115,8 +128,6 @@ def stoppable():
     signal.signal(signal.SIGINT, _raise_once)
     signal.signal(signal.SIGTERM, _raise_once)
     try:
-        if _STOP is not None and _STOP.is_set():
-            raise Terminated("SIGTERM")
         yield
     finally:
         for sig, handler in zip((signal.SIGINT, signal.SIGTERM), before):
@@ -161,19 +172,17 @@ class Workers(ProcessPoolExecutor):
             except ProcessLookupError:
                 pass
 
-    def terminate(self, timeout=STOP_GRACE):
-        """Cancel what has not started, end every worker process (SIGTERM, then SIGKILL after
-        ``timeout`` s) and wait for them."""
+    def terminate(self):
+        """Cancel what has not started, end every worker process and wait for them to go.
+        SIGKILL: the processes ignore SIGTERM between tasks, and what a task finished was
+        handed back before (:meth:`stop_running`) or is lost with the signal anyway."""
         procs = self.processes()
         self.stop.set()
         self.shutdown(wait=False, cancel_futures=True)
         for proc in procs:
-            proc.terminate()
+            proc.kill()
         for proc in procs:
-            proc.join(timeout)
-            if proc.is_alive():
-                proc.kill()
-                proc.join()
+            proc.join()
 
 
 def chunks(indexed_runs, size):
@@ -238,6 +247,7 @@ def dispatch(executor, task, shared, items, args=(), chunk=None, progress=False)
     parts = chunks(list(enumerate(items)), size)
     bar = progress_bar(len(items)) if progress else None
     done, futures, stopped = [], [], None
+    stop = f"mbcomp-stop-{uuid.uuid4().hex}"  # a Dask dispatch's stop event
     try:
         with sigterm_interrupts():  # SIGTERM, like Ctrl-C, is an exception here: the finished rows are kept
             try:
@@ -246,7 +256,7 @@ def dispatch(executor, task, shared, items, args=(), chunk=None, progress=False)
                         done.extend(task(shared, part, *args))
                         tick(bar, len(part))
                 elif client is not None:
-                    _on_dask(client, task, shared, parts, args, bar, done, futures)
+                    _on_dask(client, task, shared, parts, args, bar, done, futures, stop)
                 else:
                     _on_futures(executor, task, shared, parts, args, bar, done, futures)
             except ChunkStopped as exc:  # the serial task, stopped: its finished rows
@@ -254,7 +264,7 @@ def dispatch(executor, task, shared, items, args=(), chunk=None, progress=False)
                 stopped = exc.signal
             except (KeyboardInterrupt, Terminated) as exc:
                 stopped = signal_name(exc)
-                _harvest(target, futures, done)
+                _harvest(target, futures, done, stop)
     finally:
         if bar is not None:
             bar.close()
@@ -289,39 +299,79 @@ def _collect(futures, as_completed, bar, done):
         tick(bar, len(rows))
 
 
-def _on_dask(client, task, shared, parts, args, bar, done, futures):
+def _on_dask(client, task, shared, parts, args, bar, done, futures, stop):
     from distributed import as_completed
 
     shared = client.scatter(shared, broadcast=True, hash=False)  # travels once per worker
-    futures.extend(client.submit(task, shared, part, *args, pure=False) for part in parts)
+    futures.extend(client.submit(_dask_task, stop, task, shared, part, *args, pure=False) for part in parts)
     _collect(futures, as_completed, bar, done)
 
 
-def _harvest(target, futures, done):
+def _dask_task(stop, task, shared, part, *args):
+    """``task`` on a Dask worker, told to stop between its runs by the Dask ``Event`` named
+    ``stop`` (:func:`stop_requested`; no signal reaches a Dask worker's task thread)."""
+    _LOCAL.stop, _LOCAL.checked = stop, 0.0
+    try:
+        return task(shared, part, *args)
+    except ChunkStopped as exc:  # its finished rows, as a result (Dask logs a task's error as a failure)
+        return exc.rows
+    finally:
+        _LOCAL.stop = None
+
+
+def stop_requested():
+    """Whether the dispatch of the task calling it was stopped: a :class:`Workers` pool told
+    its tasks to stop, or (on Dask, asked at most every :data:`STOP_POLL` s) the dispatch set
+    its stop event. A task asks it between its runs."""
+    if _STOP is not None and _STOP.is_set():
+        return True
+    name = getattr(_LOCAL, "stop", None)
+    now = time.monotonic()
+    if name is None or now - _LOCAL.checked < STOP_POLL:
+        return False
+    _LOCAL.checked = now
+    from distributed import Event
+
+    return Event(name).is_set()
+
+
+def _harvest(target, futures, done, stop):
     """After a signal: the rows of the tasks that finished but were not collected yet, and of
-    the running tasks of a :class:`Workers` pool (told to stop, each hands back its finished
-    rows within :data:`STOP_GRACE` s); every other task cancelled."""
-    if type(target).__name__ == "Client":
-        target.cancel([f for f in futures if not f.done()])
-        pending = []
+    the running tasks, told to stop (a :class:`Workers` pool's at their next step, a Dask
+    cluster's before their next run), each handing back its finished rows within
+    :data:`STOP_GRACE` s; every other task cancelled."""
+    dask = type(target).__name__ == "Client"
+    if dask:
+        from distributed import Event, wait
+
+        pending = [f for f in futures if not f.done()]
+        try:
+            Event(stop, client=target).set()
+        except Exception:  # noqa: BLE001 - a scheduler gone: nothing more comes back
+            pending = []
     else:
+        from concurrent.futures import wait
+
         pending = [f for f in futures if not f.cancel() and not f.done()]  # cancel() fails only on running ones
         if pending and isinstance(target, Workers):
             target.stop_running()
         else:
             pending = []
-    if pending:
-        from concurrent.futures import wait
-
-        try:
+    try:
+        if pending:
             wait(pending, timeout=STOP_GRACE)
-        except (KeyboardInterrupt, Terminated):  # a second signal: no more waiting
+    except (Exception, KeyboardInterrupt, Terminated):  # noqa: BLE001 - the grace spent, a second signal, a
+        pass                                              # worker lost: what finished is kept below
+    if dask:
+        try:
+            target.cancel([f for f in futures if not f.done()])
+        except Exception:  # noqa: BLE001 - a scheduler gone: its tasks went with it
             pass
     for fut in futures:
         if not fut.done() or fut.cancelled():
             continue
         try:
-            done.extend(fut.result(timeout=STOP_GRACE) if type(target).__name__ == "Client" else fut.result())
+            done.extend(fut.result())
         except ChunkStopped as exc:
             done.extend(exc.rows)
         except BaseException:  # noqa: BLE001 - a task lost to the interruption (a killed worker): no rows
@@ -343,6 +393,7 @@ def dask_client(executor):
         cluster = LocalCluster(n_workers=min(os.cpu_count() or 1, 4), threads_per_worker=1, processes=True,
                                dashboard_address=":0")  # (None still tries port 8787)
         client = Client(cluster)
+        client.run(_ignore_ctrl_c)  # the cluster is this command's: Ctrl-C reaches it through this process
 
         def close():
             client.close()
@@ -359,6 +410,14 @@ def dask_client(executor):
         return client, client.close
     raise ValueError(f"executor={executor!r}: use None, a concurrent.futures executor, 'dask' (a local cluster), "
                      "'tcp://host:port' (a running scheduler) or a dask Client")
+
+
+def _ignore_ctrl_c():
+    """In a local Dask cluster's worker process (run there by :func:`dask_client`): Ctrl-C at
+    the terminal, which signals every process of the command, does not kill the worker; the
+    dispatch stops its tasks (:func:`stop_requested`) and closes the cluster."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def progress_bar(total):

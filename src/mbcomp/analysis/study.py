@@ -47,7 +47,7 @@ import numpy as np
 
 from ..errors import ModelError, SimulationError, SimulationInterrupted
 from ..simulation.stops import Terminated
-from .executors import ChunkStopped, dispatch, signal_name, stoppable
+from .executors import ChunkStopped, dispatch, signal_name, stop_requested, stoppable
 
 __all__ = ["study", "Uniform", "Normal", "StudyResult", "StudyInterrupted", "runs_of"]
 
@@ -213,6 +213,8 @@ def run_chunk(recipe, chunk, t_end, metrics, outputs, keep, options):
     try:
         with stoppable():
             for index, run in chunk:
+                if stop_requested():  # the dispatch was stopped (a Dask task: no signal reaches it)
+                    raise Terminated("stop requested")
                 rows.append((index,) + _one(recipe, run, t_end, metrics, outputs, keep, options))
     except (KeyboardInterrupt, Terminated) as exc:  # SimulationInterrupted is a KeyboardInterrupt
         raise ChunkStopped(rows, signal_name(exc)) from None
