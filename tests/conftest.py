@@ -1,10 +1,20 @@
+import os
 import pathlib
 
-import numpy as np
-import pytest
+# One BLAS thread per test process, set before numpy is first imported (this file is the first
+# to import it; the xdist workers inherit the environment). The suite's matrices are small and
+# `pytest -n 2` already keeps both cores busy: OpenBLAS's extra threads only spin and take the
+# other worker's core (the N = 40 four-bar: 71 s of CPU with two threads, 9 s with one; an SVD
+# of 200 x 121, 35 ms against 2.4 ms on a loaded 2-core machine). A test file setting this
+# itself comes too late: numpy is loaded by then.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-import mbcomp
-from mbcomp.modeling.loader import import_file
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import mbcomp  # noqa: E402
+from mbcomp.modeling.loader import import_file  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
