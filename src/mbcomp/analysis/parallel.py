@@ -18,8 +18,11 @@ from __future__ import annotations
 
 import os
 import pickle
+from contextlib import contextmanager
 
-__all__ = ["map_on", "executor_of", "executor_name"]
+from ..simulation.stops import sigterm_interrupts
+
+__all__ = ["map_on", "executor_of", "executor_name", "running_on"]
 
 
 def executor_of(text, workers=None):
@@ -59,6 +62,32 @@ def executor_of(text, workers=None):
         return text, False
     raise ValueError(f"--executor {text}: use serial, processes (a process pool on this machine), dask (a local "
                      "Dask cluster) or tcp://host:port (a running Dask scheduler)")
+
+
+@contextmanager
+def running_on(text, workers=None):
+    """The executor of the command line's ``--executor`` ``text`` (:func:`executor_of`) for a
+    ``with`` block, in which SIGTERM raises as Ctrl-C does; a process pool made here is shut
+    down after the block, or, when the block raises (an error, Ctrl-C, SIGTERM), its processes
+    are ended at once: none is left behind.
+
+    Examples
+    --------
+    >>> from mbcomp.analysis.parallel import map_on, running_on
+    >>> with running_on("processes", 1) as ex:
+    ...     map_on(ex, abs, [-1, 2])
+    [1, 2]
+    """
+    with sigterm_interrupts():
+        executor, owned = executor_of(text, workers)
+        try:
+            yield executor
+        except BaseException:
+            if owned:
+                executor.terminate()
+            raise
+        if owned:
+            executor.shutdown()
 
 
 def executor_name(executor):

@@ -44,19 +44,12 @@ def cmd_bench(args):
     build_kw, runtime = split_params(args.param, mod.build)
     combos = _select(wp.default_combos(), args.combos) if args.combos else wp.default_combos()
     tols = [float(x) for x in args.tols.split(",")] if args.tols else None
-    from ..analysis.parallel import executor_of
+    from ..analysis.parallel import running_on
 
-    executor, owned = executor_of(args.executor, args.workers)
-    try:
+    with running_on(args.executor, args.workers) as executor:  # Ctrl-C, SIGTERM: no worker left behind
         rows = wp.work_precision(args.model if executor is not None else mod, combos, tols=tols, build_kw=build_kw,
                                  params=runtime or None, t_end=args.t_end, max_cpu=args.max_cpu, executor=executor,
                                  progress=executor is not None)
-    except BaseException:  # an error, Ctrl-C: the pool's processes are ended, not waited for
-        if owned:
-            executor.terminate()
-        raise
-    if owned:
-        executor.shutdown()
     print("\n" + wp.summary(rows, args.target, title=name))
     wp.write_csv(rows, out)
     wp.plot(rows, png, title=name, target=args.target)

@@ -270,7 +270,7 @@ def sweep_on_executor(args, mod, build_kw, runtime, steady, title):
     """``--sweep`` with ``--executor``: the grid's linearizations as tasks on the executor,
     printed and written as the serial sweep is."""
     from ..analysis import stability as st
-    from ..analysis.parallel import executor_of
+    from ..analysis.parallel import running_on
 
     if steady is not None:
         raise ValueError("--executor with --steady: the steady state is followed from one value to the next "
@@ -278,16 +278,9 @@ def sweep_on_executor(args, mod, build_kw, runtime, steady, title):
                          "about each start state")
     run = Sweep(args, mod, build_kw, runtime, None, title)  # checks the name and the first value
     make = _FileModel(args.model, build_kw, runtime, run.name, args.backend)
-    executor, owned = executor_of(args.executor, args.workers)
-    try:
+    with running_on(args.executor, args.workers) as executor:  # Ctrl-C, SIGTERM: no worker left behind
         sw = st.sweep(make, run.name, run.grid, analyze=_StartLinearization(run.params, args.backend),
                       executor=executor, progress=True)
-    except BaseException:  # an error, Ctrl-C: the pool's processes are ended, not waited for
-        if owned:
-            executor.terminate()
-        raise
-    if owned:
-        executor.shutdown()
     _table(run, sw)
     _write(run, sw, *_changes(run, sw))
     return 0
