@@ -535,24 +535,45 @@ class Events(SlideEvents):
     def _touching_at_start(self, t, q, u):
         """``(u, modes)`` at the start with the contacts that start open but touch (their gap
         within :data:`REST_HEIGHT` ``atol`` of zero, where their touch event could not fire:
-        :func:`~mbcomp.hybrid.contacts.touching_at_start`, an error for one inside beyond it):
-        one closing has its impact now, one at rest on the surface (its rebound too small,
-        :meth:`_contact_rests`) engages, one leaving stays open."""
+        :func:`~mbcomp.hybrid.contacts.touching_at_start`, an error for one inside beyond it)
+        and the stops that start free at a limit (:meth:`_stops_touching`): one closing has
+        its impact now, one at rest there (its rebound too small, :meth:`_contact_rests`,
+        :meth:`_rests`) engages, one leaving stays open."""
         modes = dict(self.modes)
-        for who, name, action, row, _, speed in touching_at_start(self.system, self.modes, t, q, u,
-                                                                   REST_HEIGHT * self.atol):
+        tol = REST_HEIGHT * self.atol
+        for who, name, action, row, _, speed in (touching_at_start(self.system, self.modes, t, q, u, tol)
+                                                 + self._stops_touching(t, q, u, tol)):
             if not isinstance(action, Impact):
                 continue
             settle = None
             if speed < 0.0:
                 u, settle = self._impact(t, who, name, action, q, u)
                 self._fresh = self._last = ("joint", who, name)  # a rebound may come back in the first step
-            elif self._contact_rests(t, q, u, who, row, speed):
+            elif (self._contact_rests(t, q, u, who, row, speed) if row is not None else
+                  self._rests(t, q, u, mode_rows(self.system, {who: action.engage}), np.array([speed]))):
                 settle = action.engage
                 self._record(t, who, name, "engage", {"mode": settle, "energy_loss": 0.0})
             if settle is not None:
                 modes[who] = settle
         return u, modes
+
+    def _stops_touching(self, t, q, u, tol):
+        """``[(joint, event, action, None, value, speed)]`` of the stops free at the start whose
+        impact event's value (m or rad from the limit) is within ``tol`` of zero, ``speed``
+        along the row it would engage (a start beyond a limit is a model problem: the stop's
+        ``check_params``). At a limit exactly its event starts at zero and is located at the
+        start, where an impact at speed 0 was dropped: the joint went through its stop."""
+        out = []
+        for who, mode in self.modes.items():
+            e, p = self.system.edge(who), self.system.P[who]
+            if not e.comp.tree_edge:
+                continue
+            for name, value, _ in e.comp.events(q[e.q], u[e.u], p, mode):
+                action = e.comp.on_event(name, p, mode)
+                if isinstance(action, Impact) and abs(float(value)) <= tol:
+                    _, speed, _ = row_values(self.system, mode_rows(self.system, {who: action.engage}), q, u)
+                    out.append((who, name, action, None, float(value), float(speed[0])))
+        return out
 
     def _break_away(self, t, q, u, modes):
         """``(modes, system)``: a stuck friction's row (:class:`~mbcomp.modeling.events.StickRow`)
