@@ -2,7 +2,11 @@
 
 A run with components that have modes (:meth:`mbcomp.modeling.roles.Joint.start_mode`)
 carries its *active set*, a dict ``{joint: mode}`` saying what is closed, open, sticking or
-sliding. The system stepped over it (:func:`mode_system`) is the assembled system with
+sliding. What holds in it -- its *rows in force* -- is described in one place,
+:func:`rows_in_force` (as MuJoCo's ``mj_makeConstraint`` builds its constraint set), and every
+consumer reads that description: the system stepped over it (:func:`mode_system`, from
+:func:`system_in_force`), the initialization, the impacts and the columns after the run. The
+system stepped is the assembled system with
 
 * the rows of open contacts out (:func:`without_rows`: a numeric variant whose topology no
   longer cuts the contact), the rolling rows of sliding contacts out (:func:`without_rolling`);
@@ -13,7 +17,9 @@ sliding. The system stepped over it (:func:`mode_system`) is the assembled syste
 * the constant forces the modes apply on their joints' speeds (a slipping friction's
   ``mode_force``) added by :class:`ForceEvaluator` (:func:`with_mode_forces`).
 
-Everything here reads the system and the active set only; the physics of contacts, friction
+A run is a list of segments, each over one active set from its start time on
+(:class:`SegmentStart`); :func:`segment_at` answers which segment, so which active set, an
+output time belongs to. Everything here reads the system and the active set only; the physics of contacts, friction
 and slides (:mod:`.contacts`, :mod:`.friction`, :mod:`.slip`) and the events that change the
 active set (:mod:`.events`) sit above.
 
@@ -29,17 +35,21 @@ Examples
 >>> ev = held.evaluate(0.0, np.array([-0.05]), np.array([0.3]))
 >>> ev.Phi.tolist(), ev.C.tolist()        # the row phi - lo, 0.05 rad on the allowed side
 ([0.05], [[1.0]])
+>>> rows = rows_in_force(system, {"j": "lo"})
+>>> [(n, row.sign) for n, row, _, _ in rows.held], rows.open, rows.sliding
+([('j', 1.0)], (), ())
 """
 from __future__ import annotations
 
 import copy
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import ModelError, Problem
 from ..modeling.events import ContactRow
 
-__all__ = ["start_modes", "mode_rows", "open_joints", "slipping_joints", "cone_joints", "without_rows",
+__all__ = ["RowsInForce", "rows_in_force", "system_in_force", "SegmentStart", "segment_at", "start_modes", "mode_rows", "open_joints", "slipping_joints", "cone_joints", "without_rows",
            "without_rolling", "WrappingEvaluator", "ModeEvaluator", "mode_system", "mode_forces", "ForcesAdded",
            "ForceEvaluator", "with_mode_forces"]
 
@@ -188,16 +198,84 @@ class ModeEvaluator(WrappingEvaluator):
         return ModeEvaluator(self.inner.rebind(system, laws), self.rows, self.nu)
 
 
-def mode_system(system, modes):
-    """``system`` with the rows ``modes`` hold (the system itself when they hold none): the
-    rows of open contacts out (:func:`without_rows`), the rolling rows of sliding contacts out
-    (:func:`without_rolling`; their friction is added by
-    :func:`~mbcomp.hybrid.slip.with_slip_friction`), engaged stops' rows appended."""
-    base = without_rolling(without_rows(system, open_joints(system, modes)), slipping_joints(system, modes))
-    rows = mode_rows(base, modes)
-    if not rows:
+@dataclass(frozen=True)
+class RowsInForce:
+    """What holds in an active set (:func:`rows_in_force`).
+
+    Attributes
+    ----------
+    open : tuple of str
+        Joints whose own rows are out (an open contact): :func:`without_rows`.
+    sliding : tuple of str
+        Contacts sliding: their rolling rows are out (:func:`without_rolling`), their friction
+        a force of the state (:mod:`mbcomp.hybrid.slip`).
+    held : tuple
+        ``(joint, AxisRow, q index, u index)`` of the rows the modes hold on tree joints' own
+        coordinates (an engaged stop, a stuck friction), appended after the holonomic rows.
+    forces : tuple
+        ``(u index, N or N m)``: the constant forces the modes apply on their joints' speeds
+        (a slipping friction's ``mode_force``).
+    """
+
+    open: tuple
+    sliding: tuple
+    held: tuple
+    forces: tuple
+
+
+def rows_in_force(system, active):
+    """The :class:`RowsInForce` of the active set ``active`` (``{joint: mode}``) on ``system``:
+    the one description of what is closed, open, sticking and sliding that the system stepped,
+    the initialization, the impacts and the columns are made from."""
+    return RowsInForce(tuple(open_joints(system, active)), tuple(slipping_joints(system, active)),
+                       tuple(mode_rows(system, active)), tuple(mode_forces(system, active)))
+
+
+def system_in_force(system, rows, held=True):
+    """``system`` with the rows in force ``rows`` (:class:`RowsInForce`): open contacts' rows
+    and sliding contacts' rolling rows out and, with ``held``, the held rows appended
+    (:class:`ModeEvaluator`); the system itself when nothing changes. The modes' forces are
+    added by :func:`with_mode_forces`, a slide's friction by
+    :func:`~mbcomp.hybrid.slip.with_slip_friction`."""
+    base = without_rolling(without_rows(system, rows.open), rows.sliding)
+    if not held or not rows.held:
         return base
-    return base.with_evaluator(lambda new: ModeEvaluator(base.evaluator, rows, base.nu))
+    return base.with_evaluator(lambda new: ModeEvaluator(base.evaluator, list(rows.held), base.nu))
+
+
+def mode_system(system, modes):
+    """``system`` stepped in the active set ``modes`` (the system itself when nothing changes):
+    :func:`system_in_force` of its :func:`rows_in_force` -- the rows of open contacts out, the
+    rolling rows of sliding contacts out (their friction is added by
+    :func:`~mbcomp.hybrid.slip.with_slip_friction`), engaged stops' rows appended."""
+    return system_in_force(system, rows_in_force(system, modes))
+
+
+@dataclass(frozen=True)
+class SegmentStart:
+    """The start of one segment of a hybrid run: from ``t`` (s) on, the active set ``modes``
+    (``{joint: mode}``) and the sliding contacts' start directions ``dirs`` hold; ``state``
+    is ``[q, u]`` there (consistent with the segment's rows), ``before`` the state before the
+    event's action (None at the run's start)."""
+
+    t: float
+    modes: dict
+    dirs: dict
+    before: object
+    state: np.ndarray
+
+
+def segment_at(starts, t):
+    """The index of the segment each output time of ``t`` (s) belongs to, the segments starting
+    at ``starts`` (s, non-decreasing; the first also takes what is before it): an output at an
+    event's time belongs to the segment before the event (its state was kept before the action).
+
+    Examples
+    --------
+    >>> segment_at([0.0, 0.5, 1.0], np.array([0.0, 0.25, 0.5, 0.75, 1.0, 1.5])).tolist()
+    [0, 0, 0, 1, 1, 2]
+    """
+    return np.maximum(np.searchsorted(np.asarray(starts, float), t, side="left") - 1, 0)
 
 
 def mode_forces(system, modes):

@@ -31,7 +31,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..assembly.kkt import accelerations
-from .active import open_joints, slipping_joints, start_modes, without_rolling, without_rows
+from .active import open_joints, rows_in_force, segment_at, start_modes, system_in_force, without_rows
 
 __all__ = ["contact_rows", "contact_impact", "initialize_in_modes", "event_value",
            "contact_pushes", "tangent_force", "contact_columns", "zero_open", "touching_at_start"]
@@ -159,12 +159,11 @@ def initialize_in_modes(system, t0):
     from ..assembly.initialization import initialize
 
     system.row_mask = None
-    modes = start_modes(system)
-    names = open_joints(system, modes)
-    sliding = slipping_joints(system, modes)  # a contact starting to slide: its speeds as given
+    in_force = rows_in_force(system, start_modes(system))
+    names, sliding = in_force.open, in_force.sliding  # a contact starting to slide: its speeds as given
     if not names and not sliding:
         return initialize(system, t0)
-    sub = without_rolling(without_rows(system, names), sliding)
+    sub = system_in_force(system, in_force, held=False)
     init = initialize(sub, t0)
     if not names:
         system.row_mask = sub.row_mask
@@ -176,20 +175,19 @@ def initialize_in_modes(system, t0):
     return replace(init, row_mask=mask)
 
 
-def contact_columns(series, system, log, t, Y):
+def contact_columns(series, system, segments, t, Y):
     """Correct the result's ``series`` (``{column: array}``) at output times ``t`` (s) where
-    contacts were open (``log``: ``[(time, modes from then on)]``; ``Y`` the outputs' states
-    ``[q, u]``): the post-processing evaluates the assembled rows, so these columns are
-    computed again over the mode's system (:func:`~mbcomp.assembly.outputs.output_values`:
+    contacts were open (``segments``: the run's :class:`~mbcomp.hybrid.active.SegmentStart`
+    list; ``Y`` the outputs' states ``[q, u]``): the post-processing evaluates the assembled
+    rows, so these columns are computed again over the mode's system (:func:`~mbcomp.assembly.outputs.output_values`:
     reactions, residuals), and an open contact's forces (columns in N or N m) are 0."""
     from ..assembly.column_units import column_units
     from ..assembly.outputs import output_values
 
-    times = np.array([tt for tt, _ in log])
+    at = segment_at([seg.t for seg in segments], t)
     units, systems = column_units(system), {}
     for k, tk in enumerate(t):
-        modes = log[max(int(np.searchsorted(times, tk, side="left")) - 1, 0)][1]
-        names = tuple(open_joints(system, modes))
+        names = tuple(open_joints(system, segments[at[k]].modes))
         if not names:
             continue
         sysk = systems.setdefault(names, without_rows(system, names))

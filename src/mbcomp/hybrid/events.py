@@ -57,7 +57,7 @@ from .contacts import contact_impact, contact_pushes, contact_rows, event_value,
 from ..solvers.compiled_rk import CompiledRK
 from ..solvers.locate import return_root, root, time_tolerance
 from ..assembly.conservation import impulse_work
-from .active import mode_rows, mode_system, slipping_joints, start_modes, with_mode_forces
+from .active import SegmentStart, mode_rows, mode_system, slipping_joints, start_modes, with_mode_forces
 from .modes import consistent, impact_speeds, row_push, row_values
 from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, tangent_rows, with_slip_friction
 from .friction import row_events
@@ -205,12 +205,10 @@ class Events(SlideEvents):
         self.records = []
         self._systems, self._hits = {}, {}
         self._g0 = None
-        self.history = []  # [(t, modes, q)]: the start and every restart (stick-slip's columns)
         self._fresh = self._last = None  # the event just handled (its function starts at zero)
         self.stats = dict(events=0, event_evaluations=0, mode_changes=0)
-        self.mode_log = [(-np.inf, dict(self.modes))]  # (time, modes from then on): the result's columns
         self.slip_dirs = {}  # {sliding contact: the unit direction (tangent coordinates) its slide started with}
-        self.slip_log = []  # [(time, modes, slip_dirs, state before, state after)]: the start and every restart
+        self.segments = []  # [SegmentStart]: the run's start and every event's next segment (the columns)
         self._slip_keys, self._before, self._slip_peak = set(), None, {}
         self.slide_worked, self.work_log, self._worked_to = 0.0, [], None  # the sliding friction's work (J)
 
@@ -494,10 +492,9 @@ class Events(SlideEvents):
         self.slip_dirs = self._directions(t, q, u, modes, going_on)
         new = self.system_now(modes)
         self.modes = modes
-        self.slip_log.append((float(t), dict(modes), dict(self.slip_dirs), self._before, np.concatenate((q, u))))
+        self.segments.append(SegmentStart(float(t), dict(modes), dict(self.slip_dirs), self._before,
+                                          np.concatenate((q, u))))
         self._worked_to = t
-        self.history.append((float(t), dict(modes), np.array(q, float)))
-        self.mode_log.append((float(t), dict(modes)))
         if self.records and "energy_loss" in self.records[-1].detail and self.records[-1].kind != "impact":
             M = new.evaluate(t, q, u0).M
             self.records[-1].detail["energy_loss"] = loss = float(0.5 * (u0 @ M @ u0 - u @ M @ u))
@@ -526,9 +523,7 @@ class Events(SlideEvents):
             q, u = consistent(new, t, q, u)
             form = self.make_form(new)
             y0 = form.initial_state(t, q, u)
-        self.history = [(float(t), dict(self.modes), np.array(q, float))]
-        self.mode_log = [(-np.inf, dict(self.modes))]
-        self.slip_log = [(float(t), dict(self.modes), dict(self.slip_dirs), None, np.concatenate((q, u)))]
+        self.segments = [SegmentStart(float(t), dict(self.modes), dict(self.slip_dirs), None, np.concatenate((q, u)))]
         self.slide_worked, self.work_log, self._worked_to = 0.0, [(float(t), 0.0)], t
         return form, y0
 

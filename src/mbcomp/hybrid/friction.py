@@ -34,6 +34,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .active import segment_at
+
 __all__ = ["row_events", "friction_columns", "count_dissipation"]
 
 
@@ -52,9 +54,9 @@ def row_events(name, row, push):
     return out
 
 
-def _frictional(system, history):
-    """Names of the joints with a ``mode_force`` among the modes of ``history``."""
-    names = {n for _, modes, _ in history for n in modes}
+def _frictional(system, segments):
+    """Names of the joints with a ``mode_force`` among the active sets of ``segments``."""
+    names = {n for seg in segments for n in seg.modes}
     return sorted(n for n in names if system.edge(n).comp.has_mode_force)
 
 
@@ -63,21 +65,20 @@ def friction_columns(res, events, Y):
     module notes); ``Y`` are the output states ``[q, u]``. The energy alarm the missing
     friction work rang is judged again by :func:`mbcomp.simulation.hybrid_columns.finish`,
     once for all its corrections."""
-    system, history = events.system, events.history
-    names = _frictional(system, history)
+    system, segments = events.system, events.segments
+    names = _frictional(system, segments)
     if not names or not len(res.time):
         return res
     t = res.time
-    starts = np.array([h[0] for h in history])
-    k_mode = np.maximum(np.searchsorted(starts, t, side="left") - 1, 0)  # an output at an event: the mode before
-    k_mode[t <= starts[0]] = 0
+    k_mode = segment_at([seg.t for seg in segments], t)  # an output at an event: the mode before
     total = np.zeros(len(t))
     for name in names:
         e, p, comp = system.edge(name), system.P[name], system.edge(name).comp
         iq, iu = e.q.start, e.u.start
         force, stuck, dissipated = np.zeros(len(t)), np.zeros(len(t)), np.zeros(len(t))
         done = 0.0  # the dissipation of the slip intervals already over (J)
-        for i, (t_i, modes, q_i) in enumerate(history):
+        for i, seg in enumerate(segments):
+            modes, q_i = seg.modes, seg.state
             sel = np.flatnonzero(k_mode == i)
             mode = modes.get(name)
             F = comp.mode_force(p, mode)
@@ -88,8 +89,8 @@ def friction_columns(res, events, Y):
             else:
                 force[sel] = F
             dissipated[sel] = done - F * (Y[sel, iq] - q_i[iq])
-            if i + 1 < len(history):
-                done -= F * (history[i + 1][2][iq] - q_i[iq])
+            if i + 1 < len(segments):
+                done -= F * (segments[i + 1].state[iq] - q_i[iq])
         res.set_column(f"{name}.friction", force)
         res.set_column(f"{name}.sticking", stuck)
         res.set_column(f"{name}.power", force * Y[:, system.nq + iu])

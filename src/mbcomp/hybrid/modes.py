@@ -34,7 +34,7 @@ import numpy as np
 from ..assembly.kkt import accelerations, project_state
 from ..errors import ModelError, Problem
 from ..modeling.events import ContactRow
-from .active import mode_rows, mode_system, open_joints, slipping_joints, without_rolling, without_rows
+from .active import mode_rows, mode_system, open_joints, rows_in_force, segment_at, system_in_force
 from .contacts import zero_open
 
 __all__ = ["row_values", "impact_speeds", "consistent", "row_push", "stop_columns"]
@@ -86,9 +86,10 @@ def row_push(system, t, q, u, first, k):
     return -lam[first:first + k]
 
 
-def stop_columns(series, system, log, t, Y, system_for=None):
+def stop_columns(series, system, segments, t, Y, system_for=None):
     """Correct the result's ``series`` at output times ``t`` (s) where a stop is engaged
-    (``log``: ``[(time, modes from then on)]``; ``Y`` the outputs' states ``[q, u]``) and add
+    (``segments``: the run's :class:`~mbcomp.hybrid.active.SegmentStart` list; ``Y`` the
+    outputs' states ``[q, u]``) and add
     ``<joint>.stop`` (N or N m) for every joint engaged in some mode of the run: the stop's
     push along the axis, minus its row's multiplier, positive pushing the joint away from
     the limit into the allowed range, 0 where not engaged.
@@ -112,12 +113,12 @@ def stop_columns(series, system, log, t, Y, system_for=None):
     >>> float(r["s.stop"][0]), round(float(r["s.stop"][-1]), 6), r.units["s.stop"]
     (0.0, 19.62, 'N')
     """
-    times = np.array([tt for tt, _ in log])
-    engaged = sorted({n for _, modes in log for n, *_ in _stop_rows(system, modes)})
+    at = segment_at([seg.t for seg in segments], t)
+    engaged = sorted({n for seg in segments for n, *_ in _stop_rows(system, seg.modes)})
     for n in engaged:
         series[f"{n}.stop"] = np.zeros(len(t))
     for k, tk in enumerate(t):
-        modes = log[max(int(np.searchsorted(times, tk, side="left")) - 1, 0)][1]
+        modes = segments[at[k]].modes
         if not _changes_dynamics(system, modes):
             continue
         q, u = Y[k, :system.nq], Y[k, system.nq:]
@@ -155,8 +156,8 @@ def _engaged_values(system, sysm, modes, t, q, u):
     from ..assembly.outputs import result_columns
 
     # a sliding contact's rolling rows are out here too (its friction is then in no reaction)
-    base = without_rolling(without_rows(system, open_joints(system, modes)), slipping_joints(system, modes))
-    rows = mode_rows(base, modes)
+    in_force = rows_in_force(system, modes)
+    base, rows = system_in_force(system, in_force, held=False), list(in_force.held)
     ev = sysm.evaluate(t, q, u)
     ud, lam = accelerations(ev)
     first = ev.Phi.size - len(rows)  # the mode's rows follow the holonomic rows

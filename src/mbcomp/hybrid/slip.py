@@ -66,8 +66,8 @@ import numpy as np
 from ..assembly.kkt import accelerations
 from ..errors import SimulationError
 from ..modeling.events import ContactRow
-from .active import (ForcesAdded, WrappingEvaluator, cone_joints, mode_system, open_joints, slipping_joints,
-                     with_mode_forces, without_rows)
+from .active import (ForcesAdded, WrappingEvaluator, cone_joints, mode_system, open_joints, rows_in_force, segment_at,
+                     slipping_joints, with_mode_forces, without_rows)
 from .contacts import contact_rows, tangent_force
 from .friction import count_dissipation
 
@@ -263,27 +263,24 @@ def closed_force(sysc, name, t, q, u):
     return tangent_force(ev, sysc.row_multipliers(ev, lam), name)
 
 
-def _mode_at(log, tk):
-    times = np.array([tt for tt, *_ in log])
-    return log[max(int(np.searchsorted(times, tk, side="left")) - 1, 0)]
-
-
-def slip_columns(series, system, log, t, Y, system_now):
+def slip_columns(series, system, segments, t, Y, system_now):
     """Correct the result's ``series`` at the output times ``t`` (s) where contacts slid and
-    add their columns (see the module notes). ``log``: ``[(time, modes, slip directions)]``
-    from then on; ``Y``: the outputs' states ``[q, u]``; ``system_now(modes, dirs)``: the
+    add their columns (see the module notes). ``segments``: the run's
+    :class:`~mbcomp.hybrid.active.SegmentStart` list (active sets and slip directions); ``Y``: the outputs' states ``[q, u]``; ``system_now(modes, dirs)``: the
     mode's system. Returns ``{column: unit}`` of the added columns."""
     from types import SimpleNamespace
 
     from ..assembly.outputs import result_columns
-    names = sorted({n for _, modes, _ in log for n in slipping_joints(system, modes) + cone_joints(system, modes)})
+    names = sorted({n for seg in segments for n in slipping_joints(system, seg.modes) + cone_joints(system, seg.modes)})
     if not names:
         return {}
     nq, n_out = system.nq, len(t)
     for n in names:
         series[f"{n}.sticking"], series[f"{n}.slip"] = np.zeros(n_out), np.zeros(n_out)
+    at = segment_at([seg.t for seg in segments], t)
     for k, tk in enumerate(t):
-        _, modes, dirs = _mode_at(log, tk)
+        seg = segments[at[k]]
+        modes, dirs = seg.modes, seg.dirs
         q, u = Y[k, :nq], Y[k, nq:]
         for n in names:
             series[f"{n}.sticking"][k] = float(n in cone_joints(system, modes))
@@ -296,7 +293,7 @@ def slip_columns(series, system, log, t, Y, system_now):
         ud, lam = accelerations(ev)
         slips = slips_of(system, modes, dirs)
         _, N = friction_solve(sysm, ev, slips)
-        base = without_rows(system, open_joints(system, modes))
+        base = without_rows(system, rows_in_force(system, modes).open)  # the rolling rows carry the friction
         evb = base.evaluate(tk, q, u)
         force = {}
         for (n, mu, d), Nn in zip(slips, N):
@@ -356,24 +353,24 @@ def slide_work(sysm, slips, qu, a, b):
                       for x, w in zip(*_GAUSS))
 
 
-def slip_dissipation(res, system, log, work_log, Y, system_now):
+def slip_dissipation(res, system, segments, work_log, Y, system_now):
     """The sliding friction's columns ``<contact>.power`` (W) at the outputs and its
     dissipated energy (J), integrated along each step's dense output while the run went
     (``work_log``: ``[(t, work done up to t)]`` at the step ends and output times), added to
     ``energy.dissipated`` and ``energy.balance`` of ``res`` (the energy alarm is judged again
     by :func:`mbcomp.simulation.hybrid_columns.finish`).
-    ``log`` entries: ``(time, modes, dirs, state before, state after)`` at the start and every
-    restart; ``Y`` the outputs' states."""
+    ``segments``: the run's :class:`~mbcomp.hybrid.active.SegmentStart` list; ``Y`` the
+    outputs' states."""
     t = res.time
     if not len(t):
         return res
-    for i, (t_i, modes, dirs, _, _) in enumerate(log):
-        slips = slips_of(system, modes, dirs)
+    at = segment_at([seg.t for seg in segments], t)  # an event's output: the segment before it
+    for i, seg in enumerate(segments):
+        slips = slips_of(system, seg.modes, seg.dirs)
         if not slips:
             continue
-        t_end = log[i + 1][0] if i + 1 < len(log) else np.inf
-        sel = np.flatnonzero(((t > t_i) | ((t == t_i) & (i == 0))) & (t <= t_end))  # an event's output: before it
-        sysm = system_now(modes, dirs)
+        sel = np.flatnonzero(at == i)
+        sysm = system_now(seg.modes, seg.dirs)
         for k in sel:
             for (n, _, _), p in zip(slips, slide_power(sysm, slips, t[k], Y[k])):
                 res[f"{n}.power"][k] = -p

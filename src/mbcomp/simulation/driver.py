@@ -274,14 +274,14 @@ def _mode_fix(system, watcher, t, Y, units):
     mode's system."""
     if watcher is None:
         return None
-    log = watcher.mode_log
-    contacts = any(open_joints(system, modes) for _, modes in log)
+    segments = watcher.segments
+    contacts = any(open_joints(system, seg.modes) for seg in segments)
 
     def fix(series):
         if contacts:
-            contact_columns(series, system, log, t, Y)
-        units.update(stop_columns(series, system, log, t, Y, watcher.system_now))
-        units.update(slip_columns(series, system, [entry[:3] for entry in watcher.slip_log], t, Y, watcher.system_now))
+            contact_columns(series, system, segments, t, Y)
+        units.update(stop_columns(series, system, segments, t, Y, watcher.system_now))
+        units.update(slip_columns(series, system, segments, t, Y, watcher.system_now))
     return fix
 
 

@@ -29,8 +29,8 @@ def finish(res, events, states=None):
         before = (np.array(res["energy.balance"]), np.array(res["energy.dissipated"]), np.array(res["energy.work"]))
     if events is not None and states is not None:  # stick-slip friction's columns and dissipation
         friction_columns(res, events, states)
-        if any(slipping_joints(events.system, modes) for _, modes, *_ in events.slip_log):
-            slip_dissipation(res, events.system, events.slip_log, events.work_log, states, events.system_now)
+        if any(slipping_joints(events.system, seg.modes) for seg in events.segments):
+            slip_dissipation(res, events.system, events.segments, events.work_log, states, events.system_now)
     drives = [(r.time, r.detail["drive_work"]) for r in res.events if r.detail.get("drive_work")]
     if drives and "energy.work" in res:  # the drives' impulses at impacts do work (J)
         times, work = np.array(drives).T
