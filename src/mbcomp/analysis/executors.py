@@ -392,8 +392,15 @@ def dask_client(executor):
     if executor == "dask":
         cluster = LocalCluster(n_workers=min(os.cpu_count() or 1, 4), threads_per_worker=1, processes=True,
                                dashboard_address=":0")  # (None still tries port 8787)
-        client = Client(cluster)
-        client.run(_ignore_ctrl_c)  # the cluster is this command's: Ctrl-C reaches it through this process
+        client = None
+        try:
+            client = Client(cluster)
+            client.run(_ignore_ctrl_c)  # the cluster is this command's: Ctrl-C reaches it through this process
+        except BaseException:  # Ctrl-C, SIGTERM while it starts: its processes go with it
+            if client is not None:
+                client.close()
+            cluster.close()
+            raise
 
         def close():
             client.close()
