@@ -296,11 +296,45 @@ def why_slow(run, watch, status, stats):
         if watch.note:
             notes.append(watch.note)
             stats["stiffness_hint"] = watch.note
+    pace = _pace(run, status, stats)
+    if pace:
+        notes.append(pace)
     if stats.get("fallbacks", 0) > max(100, stats["nfev"] // 2):
         notes.append(f"{stats['fallbacks']} of {stats['nfev']} evaluations left the generated program for the "
                      "numeric path (a law's branch, if/abs/min on a state, the trace did not take) -> write the "
                      "branch smoothly (e.g. tanh) or run with backend='numeric' (no program to leave)")
     return notes
+
+
+def _keep_reached(run):
+    """Keep the state a run cut short by its budget reached past its last output, as one more
+    output at that time (a 1e9 s run with 2e6 s between outputs kept only t = 0)."""
+    t = float(run.t)
+    if len(run.ys) < len(run.t_out) and t > run.t_kept:
+        y = np.asarray(run.form.full(t, run.stepper.y), float)
+        if np.isfinite(y).all():
+            run.t_out = np.append(run.t_out[: len(run.ys)], t)
+            run.ys.append(y)
+
+
+#: steps a run cut short has made before its pace is worth a note
+PACE_STEPS = 100
+
+
+def _pace(run, status, stats):
+    """For a run cut short (a budget, a failure) after :data:`PACE_STEPS` steps: how many steps
+    and how much wall time the whole span would take at its pace so far (a 1e9 s pendulum
+    needs 7e9 steps of 0.14 s: no integrator and no output grid changes that), else None."""
+    t0, t_end = float(run.t_out[0]), float(getattr(run.stepper, "t_bound", run.t_out[-1]))
+    done, steps, wall = float(run.t) - t0, stats.get("steps", 0), stats.get("cpu_time", 0.0)
+    if status not in ("budget", "failed") or steps < PACE_STEPS or not 0.0 < done < t_end - t0:
+        return None
+    need, seconds = (t_end - t0) / done * steps, (t_end - t0) / done * wall
+    took = f"{seconds / 3600.0:.2g} h" if seconds >= 3600.0 else f"{seconds:.2g} s"
+    return (f"at its pace so far (h={done / steps:.2g} s on average, {steps} steps to t={float(run.t):g} s) the "
+            f"run needs about {need:.2g} steps and {took} of wall time to reach t_end={t_end:g} s -> shorten "
+            "t_end or loosen rtol (the steps follow the motion: more or fewer output points change nothing)"
+            + ("" if status == "budget" else ", and give max_wall_time= to keep what a long run reaches"))
 
 
 def run_stats(run, monitors, init, seconds, **request):
@@ -377,6 +411,7 @@ def integrate(run, monitors, progress=False, extra=(), events=None):
                 else:
                     run.begin_segment(outcome.form, outcome.t, outcome.y0)
         except BudgetSpent as exc:
+            _keep_reached(run)
             status, message = "budget", f"{exc}; the results up to t={run.t_kept:g} s are kept"
         except SingularPosition as exc:  # results past the singular position are not valid
             run.trim(exc.t)

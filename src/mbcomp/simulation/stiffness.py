@@ -174,7 +174,7 @@ def stiffness_hint(form, t, y, h, steps, t_reached=None, cut_short=False):
         return (f"the motion itself is fast: every rate is near {rate:.3g} 1/s{whose}, so following it takes steps "
                 f"near h={h:.2g} s ({steps} steps to t={t:g} s) -> shorten the run, or soften{' ' + repr(element) if element else ' it'} "
                 "if that speed is not meant")
-    if cut_short and cut_short / h >= 10 * FAST_STEPS:
+    if cut_short and cut_short / h >= 10 * FAST_STEPS and h * rate > 0.5:  # (below: the motion sets the steps)
         return (f"the steps were h={h:.2g} s ({steps} steps to t={t:g} s); the fastest rate is about {rate:.3g} "
                 f"1/s{whose} -> try method='radau5' or method='BDF', a shorter run, or "
                 f"{'a softer ' + repr(element) if element else 'heavier light parts'}")

@@ -112,7 +112,10 @@ class CompiledRK(Stepper):
         self.h = r.h_last or self.h
         self.stats["c_projections"] += r.projections
         declined = r.status == 5 and r.declined != 0
-        if r.status not in (0, 1) and not declined:
+        # the C call's own step cap (status 3, MAX_STEPS) is no failure: the stretch ends at its
+        # last accepted step and the next call goes on (a 1e9 s run's 2e6 s output intervals)
+        capped = r.status == 3 and r.t_last > self.t
+        if r.status not in (0, 1) and not declined and not capped:
             self._reached = max(self._reached, float(r.t_last))
             raise StepFailure(f"the integrator {type(self).__name__} failed at t={r.t_last:g}: {r.message}")
         ts, Ys = list(outs[: len(r.Y)]), list(r.Y)
@@ -129,6 +132,8 @@ class CompiledRK(Stepper):
             else:
                 ts.append(r.t_last)
                 Ys.append(r.y_last)
+        elif capped:
+            ts, Ys = ts + [r.t_last], Ys + [r.y_last]
         self._y_old, self.t_old = self.y, self.t
         self._outs = (np.array(ts), np.array(Ys))
         self.t, self.y = float(ts[-1]), np.array(Ys[-1])
