@@ -130,7 +130,7 @@ def _mid_run(entries):
     latest = {}
     for pid, _, t in entries:
         latest[pid] = t
-    return all(0.15 * T_END < t < 0.85 * T_END for t in latest.values())
+    return all(0.1 * T_END < t < 0.6 * T_END for t in latest.values())  # 40 % of each run still to go
 
 
 def _group_alive(pgid):
