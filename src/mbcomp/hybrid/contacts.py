@@ -31,10 +31,10 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..assembly.kkt import accelerations
-from .active import open_joints, rows_in_force, segment_at, start_modes, system_in_force, without_rows
+from .active import open_joints, rows_in_force, start_modes, system_in_force, without_rows
 
 __all__ = ["contact_rows", "contact_impact", "initialize_in_modes", "event_value",
-           "contact_pushes", "tangent_force", "contact_columns", "zero_open", "touching_at_start"]
+           "contact_pushes", "tangent_force", "zero_open", "touching_at_start"]
 
 
 def contact_rows(system, name, t, q, u, row="normal", jets=None):
@@ -173,29 +173,6 @@ def initialize_in_modes(system, t0):
     mask[keep] = sub.row_mask
     system.row_mask = mask
     return replace(init, row_mask=mask)
-
-
-def contact_columns(series, system, segments, t, Y):
-    """Correct the result's ``series`` (``{column: array}``) at output times ``t`` (s) where
-    contacts were open (``segments``: the run's :class:`~mbcomp.hybrid.active.SegmentStart`
-    list; ``Y`` the outputs' states ``[q, u]``): the post-processing evaluates the assembled
-    rows, so these columns are computed again over the mode's system (:func:`~mbcomp.assembly.outputs.output_values`:
-    reactions, residuals), and an open contact's forces (columns in N or N m) are 0."""
-    from ..assembly.column_units import column_units
-    from ..assembly.outputs import output_values
-
-    at = segment_at([seg.t for seg in segments], t)
-    units, systems = column_units(system), {}
-    for k, tk in enumerate(t):
-        names = tuple(open_joints(system, segments[at[k]].modes))
-        if not names:
-            continue
-        sysk = systems.setdefault(names, without_rows(system, names))
-        vals, _ = output_values(sysk, tk, Y[k, :system.nq], Y[k, system.nq:])
-        for col, val in vals.items():
-            if col in series:
-                series[col][k] = val
-        zero_open(series, system, names, k, units)
 
 
 def zero_open(series, system, names, k, units=None):

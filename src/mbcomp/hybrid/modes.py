@@ -6,8 +6,9 @@ coordinate: an engaged stop, a stuck friction) appended after its holonomic rows
 formulation is built again over it at every change of mode, so every formulation and every
 backend steps every mode. Here are the rows' values (:func:`row_values`), their pushes (the
 multipliers, :func:`row_push`), the impact closing them (:func:`impact_speeds`), the move of
-a state onto a new mode's rows (:func:`consistent`) and the stop's columns after the run
-(:func:`stop_columns`).
+a state onto a new mode's rows (:func:`consistent`) and, after the run, the columns at an
+output where rows hold or forces act (:func:`engaged_values`, for
+:func:`mbcomp.simulation.hybrid_columns.segment_columns`).
 
 At an impact the speeds jump by the impulse equations (:func:`impact_speeds`), the rows
 kept closed throughout (loops, engaged stops) staying closed; a change of mode moves
@@ -32,12 +33,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..assembly.kkt import accelerations, project_state
-from ..errors import ModelError, Problem
-from ..modeling.events import ContactRow
-from .active import mode_rows, mode_system, open_joints, rows_in_force, segment_at, system_in_force
-from .contacts import zero_open
+from .active import mode_rows, rows_in_force, system_in_force
 
-__all__ = ["row_values", "impact_speeds", "consistent", "row_push", "stop_columns"]
+__all__ = ["row_values", "impact_speeds", "consistent", "row_push", "stop_joints", "stop_units", "changes_dynamics",
+           "engaged_values"]
 
 
 def row_values(system, rows, q, u):
@@ -86,58 +85,22 @@ def row_push(system, t, q, u, first, k):
     return -lam[first:first + k]
 
 
-def stop_columns(series, system, segments, t, Y, system_for=None):
-    """Correct the result's ``series`` at output times ``t`` (s) where a stop is engaged
-    (``segments``: the run's :class:`~mbcomp.hybrid.active.SegmentStart` list; ``Y`` the
-    outputs' states ``[q, u]``) and add
-    ``<joint>.stop`` (N or N m) for every joint engaged in some mode of the run: the stop's
-    push along the axis, minus its row's multiplier, positive pushing the joint away from
-    the limit into the allowed range, 0 where not engaged.
-
-    The post-processing solves the assembled system, which lacks the stop's row: at engaged
-    times the speeds' rates and multipliers come from the mode's system (``system_for(modes)``,
-    default :func:`~mbcomp.hybrid.active.mode_system`; index-1 solve without stabilization) and every column is
-    written again from them over the system without the stop (its reactions, by the backward
-    pass, then carry the stop's force or torque: it acts across the joint). Returns
-    ``{column: unit}`` of the added columns. An open contact's force columns are 0 again
-    (:func:`~mbcomp.hybrid.contacts.zero_open`).
-
-    Examples
-    --------
-    >>> import mbcomp
-    >>> from mbcomp.library import World, Prismatic, PointMass
-    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
-    >>> s = m.add("s", Prismatic(n=(0, 1, 0), s0=0.1, limits=(0.0, 1.0))); b = m.add("b", PointMass(m=2.0))
-    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
-    >>> r = mbcomp.simulate(m, t_end=0.5, n_out=3)     # lands on the lower stop at 0.14 s
-    >>> float(r["s.stop"][0]), round(float(r["s.stop"][-1]), 6), r.units["s.stop"]
-    (0.0, 19.62, 'N')
-    """
-    at = segment_at([seg.t for seg in segments], t)
-    engaged = sorted({n for seg in segments for n, *_ in _stop_rows(system, seg.modes)})
-    for n in engaged:
-        series[f"{n}.stop"] = np.zeros(len(t))
-    for k, tk in enumerate(t):
-        modes = segments[at[k]].modes
-        if not _changes_dynamics(system, modes):
-            continue
-        q, u = Y[k, :system.nq], Y[k, system.nq:]
-        vals, pushes = _engaged_values(system, (system_for or (lambda m: mode_system(system, m)))(modes), modes, tk, q,
-                                       u)
-        for col, val in vals.items():
-            if col in series:
-                series[col][k] = val
-        for n, push in pushes.items():
-            if f"{n}.stop" in series:
-                series[f"{n}.stop"][k] = push
-        zero_open(series, system, open_joints(system, modes), k)
-    return {f"{n}.stop": "N m" if system.edge(n).comp.axis_kind == "rotational" else "N" for n in engaged}
+def stop_joints(system, segments):
+    """The joints whose stop is engaged in some segment of ``segments`` (the run's
+    :class:`~mbcomp.hybrid.active.SegmentStart` list; a sticking friction's row is no stop)."""
+    return sorted({n for seg in segments for n, *_ in _stop_rows(system, seg.modes)})
 
 
-def _changes_dynamics(system, modes):
+def stop_units(system, names):
+    """``{"<joint>.stop": unit}`` of the stops of ``names``: N m on a rotational axis, else N."""
+    return {f"{n}.stop": "N m" if system.edge(n).comp.axis_kind == "rotational" else "N" for n in names}
+
+
+def changes_dynamics(system, modes):
     """Whether ``modes`` hold rows (engaged stops, a stuck friction's row) or apply forces
     (a slipping friction's) the assembled system lacks: their columns (the speeds' rates, the
-    reactions and drive efforts carrying them) are solved again over the mode's system."""
+    reactions and drive efforts carrying them) are solved again over the mode's system
+    (:func:`engaged_values`)."""
     return bool(mode_rows(system, modes)) or any(
         system.edge(n).comp.has_mode_force and system.edge(n).comp.mode_force(system.P[n], m) for n, m in modes.items())
 
@@ -148,9 +111,14 @@ def _stop_rows(system, modes):
     return [r for r in mode_rows(system, modes) if not _is_stick(r[1])]
 
 
-def _engaged_values(system, sysm, modes, t, q, u):
-    """``(columns, {joint: push})`` at ``(t, q, u)``: the speeds' rates and multipliers of
-    the mode's system ``sysm``, the columns over the system without the stops' rows."""
+def engaged_values(system, sysm, modes, t, q, u):
+    """``(columns, {joint: push})`` at ``(t, q, u)`` in the active set ``modes`` whose rows
+    hold or forces act (:func:`changes_dynamics`): the speeds' rates and multipliers of the
+    mode's system ``sysm`` (index-1 solve without stabilization), every column written again
+    from them over the system without the stops' rows (its reactions, by the backward pass,
+    then carry a stop's force or torque: it acts across the joint), and each engaged stop's
+    push along its axis (N or N m, minus its row's multiplier, positive pushing the joint away
+    from the limit into the allowed range)."""
     from types import SimpleNamespace
 
     from ..assembly.outputs import result_columns

@@ -30,11 +30,13 @@ coefficient ``mu_k``:
   0``, the slip accelerating along ``d`` with the friction against it, the root nearest
   ``-F_t / |F_t|`` (the load the sticking force held) (:func:`start_directions`).
 
-After the run, :func:`slip_columns` writes the columns at sliding outputs over the
-system with the rolling rows, their multipliers set to the friction (so the contact's
-``F_1``/``F_2`` or ``F_long``/``F_lat`` are the kinetic friction and every reaction carries
-it) and adds ``<contact>.sticking`` (1 rolling, 0 sliding or open), ``<contact>.slip`` (m/s,
-``|v_t|``) and ``<contact>.power`` (W, the friction's power, ``-mu_k N |v_t|``). The
+After the run (:func:`mbcomp.simulation.hybrid_columns.segment_columns`),
+:func:`sliding_values` gives the columns at sliding outputs over the system with the rolling
+rows, their multipliers set to the friction (so the contact's ``F_1``/``F_2`` or
+``F_long``/``F_lat`` are the kinetic friction and every reaction carries it);
+:func:`slip_state` gives ``<contact>.sticking`` (1 rolling, 0 sliding or open) and
+``<contact>.slip`` (m/s, ``|v_t|``), :func:`slip_dissipation` ``<contact>.power`` (W, the
+friction's power, ``-mu_k N |v_t|``). The
 friction's dissipated energy ``int mu_k N |v_t| dt`` is integrated while the run goes, on each
 step's dense output (:func:`slide_work`, Gauss-Legendre between the step's ends, events and
 output times), and :func:`slip_dissipation` adds it to ``energy.dissipated`` and
@@ -72,7 +74,8 @@ from .contacts import contact_rows, tangent_force
 from .friction import count_dissipation
 
 __all__ = ["tangent_rows", "friction_solve", "SlipEvaluator",
-           "with_slip_friction", "slip_accelerations", "start_directions", "slip_columns", "slide_power", "slide_work", "slip_dissipation",
+           "with_slip_friction", "slip_accelerations", "start_directions", "frictional_contacts", "slip_state",
+           "sliding_values", "slide_power", "slide_work", "slip_dissipation",
            "SlideEvents", "V_TINY", "TURN", "SPIN_TURNS", "SPIN_SPAN"]
 
 #: m/s: a slip slower than this slides along the direction it started (or last turned) with
@@ -263,57 +266,58 @@ def closed_force(sysc, name, t, q, u):
     return tangent_force(ev, sysc.row_multipliers(ev, lam), name)
 
 
-def slip_columns(series, system, segments, t, Y, system_now):
-    """Correct the result's ``series`` at the output times ``t`` (s) where contacts slid and
-    add their columns (see the module notes). ``segments``: the run's
-    :class:`~mbcomp.hybrid.active.SegmentStart` list (active sets and slip directions); ``Y``: the outputs' states ``[q, u]``; ``system_now(modes, dirs)``: the
-    mode's system. Returns ``{column: unit}`` of the added columns."""
+def frictional_contacts(system, segments):
+    """The contacts with a friction cone that roll (a cone row held) or slide in some segment
+    of ``segments`` (the run's :class:`~mbcomp.hybrid.active.SegmentStart` list): they get the
+    columns ``<contact>.sticking`` (1 rolling, 0 sliding or open) and ``<contact>.slip`` (m/s,
+    ``|v_t|``)."""
+    return sorted({n for seg in segments for n in slipping_joints(system, seg.modes) + cone_joints(system, seg.modes)})
+
+
+def slip_state(system, names, modes, t, q, u):
+    """``{column: value}`` of the contacts ``names`` at ``(t, q, u)`` in the active set
+    ``modes``: ``<contact>.sticking`` (1 rolling, 0 sliding or open) and ``<contact>.slip``
+    (m/s, ``|v_t|``)."""
+    rolling = cone_joints(system, modes)
+    out = {}
+    for n in names:
+        out[f"{n}.sticking"] = float(n in rolling)
+        out[f"{n}.slip"] = float(np.linalg.norm(tangent_rows(system, n, t, q, u)[1]))
+    return out
+
+
+def sliding_values(system, sysm, modes, dirs, t, q, u):
+    """Every column at ``(t, q, u)`` in the active set ``modes`` with sliding contacts (start
+    directions ``dirs``; ``sysm`` the mode's system, its friction included): over the system
+    with the rolling rows, their multipliers set to the kinetic friction (so the contact's
+    ``F_1``/``F_2`` or ``F_long``/``F_lat`` are the friction and every reaction carries it;
+    see the module notes)."""
     from types import SimpleNamespace
 
     from ..assembly.outputs import result_columns
-    names = sorted({n for seg in segments for n in slipping_joints(system, seg.modes) + cone_joints(system, seg.modes)})
-    if not names:
-        return {}
-    nq, n_out = system.nq, len(t)
-    for n in names:
-        series[f"{n}.sticking"], series[f"{n}.slip"] = np.zeros(n_out), np.zeros(n_out)
-    at = segment_at([seg.t for seg in segments], t)
-    for k, tk in enumerate(t):
-        seg = segments[at[k]]
-        modes, dirs = seg.modes, seg.dirs
-        q, u = Y[k, :nq], Y[k, nq:]
-        for n in names:
-            series[f"{n}.sticking"][k] = float(n in cone_joints(system, modes))
-            series[f"{n}.slip"][k] = float(np.linalg.norm(tangent_rows(system, n, tk, q, u)[1]))
-        sliding = slipping_joints(system, modes)
-        if not sliding:
-            continue
-        sysm = system_now(modes, dirs)
-        ev = sysm.evaluate(tk, q, u)
-        ud, lam = accelerations(ev)
-        slips = slips_of(system, modes, dirs)
-        _, N = friction_solve(sysm, ev, slips)
-        base = without_rows(system, rows_in_force(system, modes).open)  # the rolling rows carry the friction
-        evb = base.evaluate(tk, q, u)
-        force = {}
-        for (n, mu, d), Nn in zip(slips, N):
-            v_t = tangent_rows(base, n, tk, q, u, evb.jets)[1]
-            force[n] = -mu * Nn * slip_direction(v_t, d)  # on the body, along the tangents
-        lam_b = _multipliers(sysm, ev, lam, evb, force)
-        Psi = np.array(evb.Psi, float)  # a sliding contact's slip is no violation
-        i = 0
-        for e, rows, _ in evb.local_nh:
-            if e.name in force:
-                Psi[i:i + len(rows)] = 0.0
-            i += len(rows)
-        evf = base.evaluate(tk, q, u, masked=False) if evb.local else evb
-        cols = SimpleNamespace(t=tk, q=q, u=u, jets=evb.jets, local_nh=evb.local_nh, B=evb.B, Phi_all=evf.Phi,
-                               Phid_all=evf.Phid, Psi=Psi)
-        values, _ = result_columns(base, cols, ud, lam_b, base.reactions(evb, ud, lam_b))
-        for col, val in values.items():
-            if col in series:
-                series[col][k] = val
-    return {**{f"{n}.sticking": "1" for n in names}, **{f"{n}.slip": "m/s" for n in names}}
+
+    ev = sysm.evaluate(t, q, u)
+    ud, lam = accelerations(ev)
+    slips = slips_of(system, modes, dirs)
+    _, N = friction_solve(sysm, ev, slips)
+    base = without_rows(system, rows_in_force(system, modes).open)  # the rolling rows carry the friction
+    evb = base.evaluate(t, q, u)
+    force = {}
+    for (n, mu, d), Nn in zip(slips, N):
+        v_t = tangent_rows(base, n, t, q, u, evb.jets)[1]
+        force[n] = -mu * Nn * slip_direction(v_t, d)  # on the body, along the tangents
+    lam_b = _multipliers(sysm, ev, lam, evb, force)
+    Psi = np.array(evb.Psi, float)  # a sliding contact's slip is no violation
+    i = 0
+    for e, rows, _ in evb.local_nh:
+        if e.name in force:
+            Psi[i:i + len(rows)] = 0.0
+        i += len(rows)
+    evf = base.evaluate(t, q, u, masked=False) if evb.local else evb
+    cols = SimpleNamespace(t=t, q=q, u=u, jets=evb.jets, local_nh=evb.local_nh, B=evb.B, Phi_all=evf.Phi,
+                           Phid_all=evf.Phid, Psi=Psi)
+    values, _ = result_columns(base, cols, ud, lam_b, base.reactions(evb, ud, lam_b))
+    return values
 
 
 def _multipliers(sysm, ev, lam, evb, force):

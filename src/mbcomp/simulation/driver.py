@@ -38,16 +38,13 @@ import numpy as np
 
 from ..errors import SimulationError, SimulationInterrupted
 from ..formulations import FORMULATIONS, build
-from ..hybrid.active import open_joints
-from ..hybrid.contacts import contact_columns, initialize_in_modes
+from ..hybrid.contacts import initialize_in_modes
 from ..hybrid.events import Events, stepwise
-from ..hybrid.modes import stop_columns
-from ..hybrid.slip import slip_columns
 from ..modeling.inputs import check_names, input_signals, signal_of
 from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
 from .postprocess import postprocess
-from .hybrid_columns import finish
+from .hybrid_columns import finish, segment_columns
 from .error_estimate import companion_tolerances, estimate
 from .result import Result
 from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check_request, check_singular,
@@ -267,21 +264,15 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
 
 
 def _mode_fix(system, watcher, t, Y, units):
-    """The post-processing's ``fix`` of a run with modes (None without): the columns at
-    output times ``t`` where a contact was open (:func:`contact_columns`) or a stop engaged
-    (:func:`~mbcomp.hybrid.modes.stop_columns`, its ``<joint>.stop`` units put in ``units``)
-    or a contact slid (:func:`~mbcomp.hybrid.slip.slip_columns`) computed again over the
-    mode's system."""
+    """The post-processing's ``fix`` of a run with modes (None without): the columns at the
+    output times ``t`` computed over each output's segment's system
+    (:func:`~mbcomp.simulation.hybrid_columns.segment_columns`; the added columns' units put in
+    ``units``)."""
     if watcher is None:
         return None
-    segments = watcher.segments
-    contacts = any(open_joints(system, seg.modes) for seg in segments)
 
     def fix(series):
-        if contacts:
-            contact_columns(series, system, segments, t, Y)
-        units.update(stop_columns(series, system, segments, t, Y, watcher.system_now))
-        units.update(slip_columns(series, system, segments, t, Y, watcher.system_now))
+        units.update(segment_columns(series, system, watcher.segments, t, Y, watcher.system_now))
     return fix
 
 

@@ -1,18 +1,95 @@
-"""The columns a hybrid run adds after it ends: its event records, the frictions' columns
-and dissipation, the impacts' energy, and the accuracy alarm judged again with them.
+"""The columns of a hybrid run: each output over its own segment's system, then what the run
+adds after it ends (its event records, the frictions' columns and dissipation, the impacts'
+energy, and the accuracy alarm judged again with them).
 
-The run's side of events, modes, impacts, contacts and friction lives in :mod:`mbcomp.hybrid`;
-this module is the post-processing above it (it reads :mod:`.accuracy`'s alarms).
+The post-processing (:func:`~mbcomp.simulation.postprocess.postprocess`) evaluates the
+assembled system; an output inside a segment whose rows in force differ
+(:func:`~mbcomp.hybrid.active.rows_in_force`: an open contact, an engaged stop, a stuck or
+slipping friction, a sliding contact) has its columns computed again over that segment's
+system by :func:`segment_columns`, the one place that asks which segment an output time
+belongs to (:func:`~mbcomp.hybrid.active.segment_at`). The run's side of events, modes,
+impacts, contacts and friction lives in :mod:`mbcomp.hybrid`; this module is the
+post-processing above it (it reads :mod:`.accuracy`'s alarms).
 """
 from __future__ import annotations
 
 import numpy as np
 
+from ..assembly.column_units import column_units
+from ..assembly.outputs import output_values
+from ..hybrid.active import open_joints, rows_in_force, segment_at, without_rows
+from ..hybrid.contacts import zero_open
 from ..hybrid.friction import friction_columns
-from ..hybrid.slip import slip_dissipation, slipping_joints
+from ..hybrid.modes import changes_dynamics, engaged_values, stop_joints, stop_units
+from ..hybrid.slip import frictional_contacts, slip_dissipation, slip_state, sliding_values, slipping_joints
 from .accuracy import balance_alarm, between_events, energy_alarm
 
-__all__ = ["finish"]
+__all__ = ["segment_columns", "finish"]
+
+
+def segment_columns(series, system, segments, t, Y, system_now):  # long: one pass, each segment kind a few lines
+    """Correct the result's ``series`` (``{column: array}``, over the assembled ``system``) at
+    the output times ``t`` (s; ``Y`` their states ``[q, u]``) whose segment's rows in force
+    differ, and add the hybrid run's own columns; returns ``{column: unit}`` of the added ones.
+
+    ``segments`` is the run's :class:`~mbcomp.hybrid.active.SegmentStart` list and
+    ``system_now(modes, dirs=None)`` a segment's system (:meth:`mbcomp.hybrid.events.Events.system_now`).
+    At each output, in its segment (an output at an event's time: the segment before it):
+
+    * open contacts: every column over the system without their rows
+      (:func:`~mbcomp.assembly.outputs.output_values`), their force columns (N or N m) 0;
+    * rows held or forces acting (an engaged stop, a stuck or slipping friction,
+      :func:`~mbcomp.hybrid.modes.changes_dynamics`): every column again from the segment's
+      system (:func:`~mbcomp.hybrid.modes.engaged_values`) and ``<joint>.stop`` (N or N m,
+      the stop's push, 0 where not engaged) for every joint engaged in some segment;
+    * contacts with a friction cone: ``<contact>.sticking`` and ``<contact>.slip``
+      (:func:`~mbcomp.hybrid.slip.slip_state`) and, where they slide, every column again
+      with the friction as their rolling rows' multipliers
+      (:func:`~mbcomp.hybrid.slip.sliding_values`).
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
+    >>> s = m.add("s", Prismatic(n=(0, 1, 0), s0=0.1, limits=(0.0, 1.0))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> r = mbcomp.simulate(m, t_end=0.5, n_out=3)     # lands on the lower stop at 0.14 s
+    >>> float(r["s.stop"][0]), round(float(r["s.stop"][-1]), 6), r.units["s.stop"]
+    (0.0, 19.62, 'N')
+    """
+    nq = system.nq
+    at = segment_at([seg.t for seg in segments], t)
+    stops, cones = stop_joints(system, segments), frictional_contacts(system, segments)
+    for n in stops:
+        series[f"{n}.stop"] = np.zeros(len(t))
+    for n in cones:
+        series[f"{n}.sticking"], series[f"{n}.slip"] = np.zeros(len(t)), np.zeros(len(t))
+    units, opened = column_units(system), {}
+
+    def put(k, values):
+        for col, val in values.items():
+            if col in series:
+                series[col][k] = val
+
+    for k, tk in enumerate(t):
+        modes, dirs = segments[at[k]].modes, segments[at[k]].dirs
+        q, u = Y[k, :nq], Y[k, nq:]
+        names = rows_in_force(system, modes).open
+        if names:
+            put(k, output_values(opened.setdefault(names, without_rows(system, names)), tk, q, u)[0])
+            zero_open(series, system, names, k, units)
+        if changes_dynamics(system, modes):
+            values, pushes = engaged_values(system, system_now(modes), modes, tk, q, u)
+            put(k, values)
+            put(k, {f"{n}.stop": push for n, push in pushes.items()})
+            zero_open(series, system, open_joints(system, modes), k)
+        if cones:
+            put(k, slip_state(system, cones, modes, tk, q, u))
+            if slipping_joints(system, modes):
+                put(k, sliding_values(system, system_now(modes, dirs), modes, dirs, tk, q, u))
+    sticking = {f"{n}.sticking": "1" for n in cones}
+    return {**stop_units(system, stops), **sticking, **{f"{n}.slip": "m/s" for n in cones}}
 
 
 def finish(res, events, states=None):

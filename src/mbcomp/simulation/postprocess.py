@@ -102,7 +102,7 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
         Also each body's momenta (:func:`mbcomp.simulation.balance.momentum_columns`).
     fix : callable, optional
         ``fix(series)`` corrects the columns in place before the balances and notes (a run
-        with open contacts: :func:`mbcomp.hybrid.contacts.contact_columns`).
+        with modes: :func:`mbcomp.simulation.hybrid_columns.segment_columns`).
     """
     nq = system.nq
     cols = _Columns(len(t))
