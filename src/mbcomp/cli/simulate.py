@@ -46,7 +46,7 @@ __all__ = ["cmd_simulate", "add_parser", "OPTIONS", "EXIT_INTERRUPTED", "EXIT_BU
 
 #: command-line options passed on to :func:`mbcomp.simulate` (overriding the file's SIMULATION)
 OPTIONS = ("t_end", "rtol", "atol", "method", "stabilization", "formulation", "n_out", "index", "h", "backend",
-           "singular", "max_wall_time", "max_steps")
+           "singular", "max_wall_time", "max_steps", "error_estimate")
 #: exit status of a run interrupted by Ctrl-C (128 + SIGINT, the shell's convention; SIGTERM: 143)
 EXIT_INTERRUPTED = EXIT_SIGNAL["SIGINT"]
 #: exit status of a run whose wall-time or step budget ran out (the partial results written)
@@ -154,6 +154,12 @@ def _report(res):
         print(f"constraint rows chosen again at t = {c['t']:.6g} s (the kept rows' relative sigma_min "
               f"{c['sigma_before']:.2g} -> {c['sigma_after']:.2g}): dropped {', '.join(c['dropped'])} "
               f"instead of {', '.join(c['was'])}")
+    if "global_error" in res.stats:  # simulate(error_estimate=True): mbcomp.simulation.error_estimate
+        col = res.stats["global_error_column"]
+        unit = f" {res.units[col]}" if col in res.units else ""
+        print(f"estimated global error {res.stats['global_error']:.3e}{unit} (in {col}; against a run at rtol="
+              f"{res.stats['error_estimate_rtol']:g})" + (f"; {res.stats['error_estimate_note']}"
+                                                          if "error_estimate_note" in res.stats else ""))
     E = res["energy.total"]
     if len(E):
         print(f"{_energy_line(res)}; max position residual {np.nanmax(res['residual.position']):.3e}, "
@@ -214,6 +220,9 @@ def add_parser(sub, common):
                    help="wall-time budget: stop after this many seconds, keep and write the results so far (exit 3)")
     s.add_argument("--max-steps", dest="max_steps", type=int, metavar="N",
                    help="step budget: stop after N integrator steps, keep and write the results so far (exit 3)")
+    s.add_argument("--error-estimate", dest="error_estimate", action="store_true", default=None,
+                   help="also run at 100x tighter tolerances on the same outputs and print the difference: the "
+                        "global error (phase error included, which no energy alarm sees)")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=cmd_simulate)
     return s
