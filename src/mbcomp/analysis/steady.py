@@ -34,7 +34,7 @@ import numpy as np
 from ..assembly.initialization import initialize
 from ..assembly.manifold import close_positions, solve_speeds
 from ..errors import ModelError, Problem, SimulationError
-from ..formulations.lagrange import LagrangeIndex1
+from ..assembly.kkt import accelerations
 from .evaluation import system_for
 from .reduced import direction_names
 
@@ -136,7 +136,6 @@ class _Trial:
         named_speeds = {self.u_idx[n] for n in named if n in self.u_idx}
         self.free_dirs = np.array([i for i in range(system.nu) if i not in named_dirs], int)
         self.free_speeds = np.array([i for i in range(system.nu) if i not in named_speeds], int)
-        self.form = LagrangeIndex1(system, stabilization="none")
 
     def state(self, z):
         """``(q, u)``: the unknowns set to ``z``, positions closed along the directions not
@@ -165,7 +164,7 @@ class _Trial:
         """``[du/dt, Phi, dPhi/dt, Psi]`` at the trial state."""
         q, u = self.state(z)
         ev = self.s.evaluate(self.t, q, u)
-        ud, _ = self.form.solve(ev, stabilize=False)
+        ud, _ = accelerations(ev)
         return np.concatenate((ud, ev.Phi, ev.Phid, ev.Psi))
 
 

@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..assembly.kkt import accelerations, project_state
 from ..errors import SimulationError
 from .base import Formulation, projection_needed
 from .lagrange import LagrangeIndex1
@@ -67,16 +68,15 @@ class _Multipliers(Formulation):
         ev = system.evaluate(0.0, system.default_q(), np.zeros(system.nu))  # row counts only
         self.mh, self.mn = ev.Phi.size, ev.Psi.size  # holonomic and nonholonomic rows (independent ones)
         self.m = self.mh + self.mn
-        self._ode = LagrangeIndex1(system, "none")
 
     def solve(self, ev, stabilize=True):
         """Accelerations ``du/dt`` and multipliers at an evaluation (index-1 solve)."""
         self.nlu += 1
-        return self._ode.solve(ev, stabilize=False)
+        return accelerations(ev)
 
     def consistent(self, t, q, u):
         """``(a, lam)`` at consistent ``(q, u)``: accelerations (m/s^2, rad/s^2) and multipliers."""
-        return self._ode.solve(self.system.evaluate(t, q, u), stabilize=False)
+        return accelerations(self.system.evaluate(t, q, u))
 
 
 class _SemiExplicit(_Multipliers):
@@ -290,9 +290,10 @@ class Index1(_SemiExplicit):
 
     def __init__(self, system, stabilization="baumgarte", alpha=10.0, beta=10.0):
         super().__init__(system)
-        self._ode = LagrangeIndex1(system, stabilization, alpha, beta)  # solve() leaves stabilization out
+        if stabilization not in LagrangeIndex1.stabilizations:
+            raise ValueError(f"stabilization {stabilization!r} is unknown; use one of {LagrangeIndex1.stabilizations}")
         self.stabilization = stabilization
-        self.alpha, self.beta = self._ode.alpha, self._ode.beta
+        self.alpha, self.beta = float(alpha), float(beta)
         self.n = self.nq + 2 * self.nu + self.m
         self.index = np.ones(self.n, int)
 
@@ -326,7 +327,7 @@ class Index1(_SemiExplicit):
 
     def project(self, t, y):
         """Positions and speeds onto the constraint manifold, then consistent ``a``, ``lam``."""
-        qu = self._ode.project(t, np.asarray(y[: self.nq + self.nu]))
+        qu = project_state(self.system, t, np.asarray(y[: self.nq + self.nu]))
         return self.initial_state(t, qu[: self.nq], qu[self.nq:])
 
 
