@@ -1,15 +1,25 @@
 """The hybrid layer: what a run does at events -- modes, impacts, unilateral contacts, friction.
 
-A run is smooth between events; this layer says what holds in between (the rows in force of
-the active set: which stops and contacts are closed, which frictions stick or slide) and
-what happens at an event (an impulse, a switch of mode, the end of the run):
+A run is smooth between events; it is integrated in *segments*, each over one *active set*
+(``{joint: mode}``: which stops are engaged, which contacts closed or open, which frictions
+stick or slip). This layer says what holds in a segment (its *rows in force*) and what an
+event does (an impulse, a switch of the active set, the end of the run). Bottom to top:
 
-* :mod:`.modes` -- the modes of a run's joints and the system over a mode's rows;
-* :mod:`.contacts` -- unilateral contacts: their rows, pushes, impacts and columns;
+* :mod:`.active` -- the active set and what it makes: :func:`~.active.rows_in_force`, the
+  one description every consumer reads, the system stepped over it
+  (:func:`~.active.mode_system`), and the run's segments (:class:`~.active.SegmentStart`,
+  :func:`~.active.segment_at`);
+* :mod:`.contacts` -- unilateral contacts: their rows, gaps, pushes and impacts;
+* :mod:`.modes` -- rows held on tree joints' coordinates (stops): pushes, impacts,
+  consistent states, the columns where they hold;
 * :mod:`.friction` -- Coulomb friction sticking and slipping on a 1-DOF joint's axis;
-* :mod:`.slip` -- sliding contacts: the friction along a slide's direction;
-* :mod:`.events` -- zero crossings located on a step's dense output, and the actions.
+* :mod:`.slip` -- contacts that slide: the friction along the slip, its work, its columns;
+* :mod:`.events` -- event functions detected and located on a step's dense output
+  (:meth:`~.events.Events.check`) and the action on them (:meth:`~.events.Events.act`,
+  an :class:`~.events.Outcome` the driver starts the next segment from).
 
-It sits between the solvers and :mod:`mbcomp.simulation` (which drives the run and writes
-the result's columns) and imports nothing above it.
+It sits between the solvers and :mod:`mbcomp.simulation` (whose driver integrates the
+segments and whose post-processing writes each output's columns over its segment's system)
+and imports nothing above it; the constrained and impulse solves it calls are
+:mod:`mbcomp.assembly.kkt` and :mod:`mbcomp.assembly.impacts`.
 """

@@ -3,7 +3,8 @@
 After every accepted step :class:`Events` evaluates every event function at the step's end
 (the start's values are kept from the step before) and, where one changed sign in its
 declared direction, locates the root on the stepper's dense output by Brent's method to
-``|dt| <= min(1e-12, rtol / 1000) max(1, |t|)``. Several roots in one step are taken
+``|dt| <= min(1e-12, rtol / 1000) max(1, |t|)`` (:mod:`mbcomp.solvers.locate`, shared with the
+singularity monitors). Several roots in one step are taken
 earliest first:
 
 * a user's event (``simulate(..., events=[f])``, scipy's convention: ``f(t, y)`` with
