@@ -2,8 +2,8 @@
 
 A :class:`~mbcomp.library.Prismatic` or :class:`~mbcomp.library.Revolute` takes
 ``friction=SlidingFriction(mu_s, mu_k, normal)`` or ``friction=CoulombBearing(torque_max,
-torque_c)``. The joint then has three modes (the event contract of
-:mod:`mbcomp.modeling.events`; the run's side: :mod:`mbcomp.hybrid.friction`):
+torque_c)``. The joint then has three modes (its :class:`StickSlipModes`, the contract of
+:mod:`mbcomp.modeling.modes`; the run's side: :mod:`mbcomp.hybrid.friction`):
 
 * ``"stick"``: a row holds the joint's rate at zero (a
   :class:`~mbcomp.modeling.events.StickRow`); its push, the friction force (N) or torque
@@ -32,11 +32,10 @@ from dataclasses import dataclass
 
 from mbcomp.errors import ModelError, Problem
 from mbcomp.modeling.events import StickRow, Switch
+from mbcomp.modeling.modes import Modes
 from mbcomp.roles import split_start
 
-__all__ = ["SlidingFriction", "CoulombBearing", "ContactFriction"]
-
-_MODES = ("stick", "slip+", "slip-")
+__all__ = ["SlidingFriction", "CoulombBearing", "ContactFriction", "StickSlipModes"]
 
 
 class _Coulomb:
@@ -198,16 +197,65 @@ def friction_ok(f, kind):
     return None
 
 
+class StickSlipModes(Modes):
+    """The modes of a Coulomb friction on a 1-DOF joint's axis: ``"stick"``, ``"slip+"``,
+    ``"slip-"`` (see the module notes).
+
+    Parameters
+    ----------
+    start : str
+        The start mode (``"stick"`` at a zero start speed, else the slip of its sign).
+    static, kinetic : float
+        The break-away limit ``F_s`` and the kinetic friction ``F_k`` (N, or N m on a
+        rotational axis).
+
+    Examples
+    --------
+    >>> m = StickSlipModes("slip+", static=3.0, kinetic=2.0)
+    >>> m.has_force, m.force("slip+"), m.force("stick"), m.action("stop", "slip+")
+    (True, -2.0, 0.0, Switch(mode='stick'))
+    >>> m.rows("stick")
+    [StickRow(name='stick', sign=1.0, at=0.0, limit=3.0)]
+    """
+
+    #: kinetic friction on the joint's own speed while it slips
+    has_force = True
+
+    def __init__(self, start, static, kinetic):
+        super().__init__(start)
+        self.static, self.kinetic = float(static), float(kinetic)
+
+    def events(self, q, u, mode):
+        """``"stop"``: the slip speed (m/s or rad/s) coming to zero; none while stuck."""
+        if mode not in ("slip+", "slip-"):
+            return []
+        return [("stop", u[0], -1 if mode == "slip+" else 1)]
+
+    def action(self, name, mode):
+        """Slip the way the load breaks away (``"break+"``/``"break-"``), stick at a ``"stop"``."""
+        return Switch({"break+": "slip+", "break-": "slip-", "stop": "stick"}[name])
+
+    def rows(self, mode):
+        """The :class:`~mbcomp.modeling.events.StickRow` holding the rate while stuck."""
+        return [StickRow("stick", 1.0, 0.0, limit=self.static)] if mode == "stick" else []
+
+    def force(self, mode):
+        """The kinetic friction on the joint's own speed in ``mode`` (N or N m; 0 stuck)."""
+        if mode not in ("slip+", "slip-"):
+            return 0.0
+        return -self.kinetic if mode == "slip+" else self.kinetic
+
+
 class _Friction:
-    """The joint's side of Coulomb friction (modes ``stick``, ``slip+``, ``slip-``), ahead of
-    the stops' mixin in the joint's bases: without ``friction`` every call goes on to it."""
+    """The joint's side of Coulomb friction (:class:`StickSlipModes`), ahead of the stops'
+    mixin in the joint's bases: without ``friction`` the joint's modes are the stops'."""
 
     #: the friction's work is dissipated (energy balance)
     dissipative = True
 
-    def start_mode(self, p):
+    def modes(self, p):
         if p.friction is None:
-            return super().start_mode(p)
+            return super().modes(p)
         wrong = friction_ok(p.friction, self.axis_kind)
         if wrong:
             raise ModelError([Problem(self.__class__.__name__, f"friction= {wrong}", "pass the friction of its axis")])
@@ -216,30 +264,8 @@ class _Friction:
                                       "combined yet", "put the stops on an ElasticStop, or leave one of them out")])
         u, _ = split_start(p.v0 if hasattr(p, "v0") else p.w0, 1)
         v = float(u[0])
-        return "stick" if v == 0.0 else ("slip+" if v > 0.0 else "slip-")
-
-    def events(self, q, u, p, mode):
-        if p.friction is None or mode not in _MODES:
-            return super().events(q, u, p, mode)
-        if mode == "stick":
-            return []
-        return [("stop", u[0], -1 if mode == "slip+" else 1)]
-
-    def on_event(self, name, p, mode):
-        if p.friction is None or mode not in _MODES:
-            return super().on_event(name, p, mode)
-        return Switch({"break+": "slip+", "break-": "slip-", "stop": "stick"}[name])
-
-    def mode_rows(self, p, mode):
-        if p.friction is None or mode not in _MODES:
-            return super().mode_rows(p, mode)
-        return [StickRow("stick", 1.0, 0.0, limit=p.friction.static)] if mode == "stick" else []
-
-    def mode_force(self, p, mode):
-        """The kinetic friction on the joint's own speed in ``mode`` (N or N m; 0 stuck)."""
-        if p.friction is None or mode not in ("slip+", "slip-"):
-            return 0.0
-        return -p.friction.kinetic if mode == "slip+" else p.friction.kinetic
+        start = "stick" if v == 0.0 else ("slip+" if v > 0.0 else "slip-")
+        return StickSlipModes(start, p.friction.static, p.friction.kinetic)
 
     def conserves_energy(self, p):
         return p.friction is None and super().conserves_energy(p)

@@ -16,6 +16,7 @@ from mbcomp.errors import Problem
 from mbcomp.jets import local_point, local_vector, position_constraints, rigid_constraints
 from mbcomp.kinematics import cross, matrix_to_quat, perpendicular_pair, quat_rate, quat_to_matrix, rot_axis
 from mbcomp.modeling.events import AxisRow, Impact, Switch
+from mbcomp.modeling.modes import Modes
 from mbcomp.modeling.free_joint import FreeMotion, quat_increment  # noqa: F401  (FreeMotion: re-exported)
 from mbcomp.modeling.shapes import z_to
 from mbcomp.roles import split_start
@@ -35,20 +36,67 @@ def _limits_ok(lim):
     return None if lim[0] < lim[1] else f"lower limit {lim[0]:g} must be below the upper {lim[1]:g}"
 
 
-class _Stops:
-    """Rigid stops on a 1-DOF joint's coordinate: ``limits=(lo, hi)``, ``restitution=e``.
+class StopModes(Modes):
+    """The modes of rigid stops on a 1-DOF joint's coordinate ``s`` (rad or m).
 
     Mode ``"free"`` between the limits, with events ``"lo"`` (``s - lo`` falling through zero)
     and ``"hi"`` (``hi - s`` falling) whose action is an impact with Newton's restitution;
     modes ``"lo"``/``"hi"``: engaged at that limit (a row ``s = lo`` or ``s = hi``), left when
-    the row would pull (``"release"``). A compliant stop is a flange element on the axis
+    the row would pull (``"release"``), and the mode a chattering impact settles in.
+
+    Parameters
+    ----------
+    lo, hi : float
+        The limits (rad or m), ``lo < hi``.
+    restitution : float
+        Newton's coefficient (1) of the impacts.
+
+    Examples
+    --------
+    >>> m = StopModes(-0.5, 0.5, restitution=0.8)
+    >>> m.start, m.events([0.2], [1.0], "free")
+    ('free', [('lo', 0.7, -1), ('hi', 0.3, -1)])
+    >>> m.action("hi", "free"), m.rows("hi"), m.action("release", "hi")
+    (Impact(restitution=0.8, engage='hi'), [AxisRow(name='hi', sign=-1.0, at=0.5)], Switch(mode='free'))
+    """
+
+    def __init__(self, lo, hi, restitution):
+        super().__init__("free")
+        self.lo, self.hi, self.restitution = float(lo), float(hi), float(restitution)
+
+    def events(self, q, u, mode):
+        """The distances (rad or m) to each limit while free."""
+        if mode != "free":
+            return []
+        return [("lo", q[0] - self.lo, -1), ("hi", self.hi - q[0], -1)]
+
+    def action(self, name, mode):
+        """An impact engaging the limit hit; free again at a ``"release"``."""
+        if name == "release":
+            return Switch("free")
+        return Impact(self.restitution, engage=name)
+
+    def rows(self, mode):
+        """The :class:`~mbcomp.modeling.events.AxisRow` of the engaged limit."""
+        if mode not in ("lo", "hi"):
+            return []
+        return [AxisRow(mode, 1.0 if mode == "lo" else -1.0, self.lo if mode == "lo" else self.hi)]
+
+    def rest(self, name, mode):
+        """Engaged at the limit whose impacts chatter."""
+        return name if name in ("lo", "hi") else None
+
+
+class _Stops:
+    """Rigid stops on a 1-DOF joint's coordinate: ``limits=(lo, hi)``, ``restitution=e``
+    (:class:`StopModes`). A compliant stop is a flange element on the axis
     (:class:`mbcomp.library.ElasticStop`), with no events.
     """
 
-    def start_mode(self, p):
+    def modes(self, p):
         if p.limits is None:
-            return None
-        return "free"
+            return super().modes(p)
+        return StopModes(p.limits[0], p.limits[1], p.restitution)
 
     def check_params(self, p):
         """A start coordinate outside the limits is a problem naming both (the stops would
@@ -62,25 +110,6 @@ class _Stops:
             return [Problem(f"{self.path}.{name}0", f"start value {float(s0[0]):g} is outside the stops "
                             f"limits=({lo:g}, {hi:g})", f"start {name} between {lo:g} and {hi:g}, or widen the limits")]
         return []
-
-    def events(self, q, u, p, mode):
-        if p.limits is None or mode != "free":
-            return []
-        lo, hi = p.limits
-        return [("lo", q[0] - lo, -1), ("hi", hi - q[0], -1)]
-
-    def on_event(self, name, p, mode):
-        if name == "release":
-            return Switch("free")
-        return Impact(p.restitution, engage=name)
-
-    def mode_rows(self, p, mode):
-        if p.limits is None or mode not in ("lo", "hi"):
-            return []
-        return [AxisRow(mode, 1.0 if mode == "lo" else -1.0, float(p.limits[0 if mode == "lo" else 1]))]
-
-    def rest_mode(self, name, p, mode):
-        return name if name in ("lo", "hi") else None
 
 
 class Revolute(_Friction, _Stops, Joint):

@@ -1,9 +1,9 @@
 """Unilateral contacts: lift-off, free flight, touch-down with an impact, rolling again.
 
 :class:`Unilateral` is the mixin that gives a contact joint (``tree_edge = False``) with a
-holonomic row ``normal`` (its gap, m, positive on the open side) the modes of the event
-framework (:mod:`mbcomp.modeling.events`, ``docs/architecture.md`` *Events and modes*) when
-``unilateral=True``:
+holonomic row ``normal`` (its gap, m, positive on the open side) its modes, a
+:class:`ContactModes` (:mod:`mbcomp.modeling.modes`, ``docs/architecture.md`` *Events and
+modes*), when ``unilateral=True``:
 
 * ``"closed"``: the contact's rows (``normal`` and its rolling rows) are in the system, as a
   bilateral contact's; the framework watches the normal row's push and fires ``"release"``
@@ -12,15 +12,15 @@ framework (:mod:`mbcomp.modeling.events`, ``docs/architecture.md`` *Events and m
   the gap falling through zero, an :class:`~mbcomp.modeling.events.Impact` with Newton's
   ``restitution`` on the normal row (the rolling rows held through it: a perfectly rough
   impact) that closes the contact when the rebound is too small to leave (or ``e = 0``), or
-  when the bounces accumulate (Zeno: ``rest_mode`` is ``"closed"``).
+  when the bounces accumulate (Zeno: it rests ``"closed"``).
 
 ``unilateral=False`` (the default) keeps the bilateral contact of old: no modes, no events.
 
 :class:`Frictional` adds Coulomb friction to a rolling contact (``friction=ContactFriction(mu_s,
-mu_k)``, unilateral only): ``"closed"`` is rolling (sticking), watched by the friction cone
-(event ``"slide"``, ``mu_s N - |F_t|`` falling through zero: ``"slip"``); ``"slip"`` holds the
-``normal`` row only, the framework applying ``-mu_k N`` against the slip velocity
-(:meth:`~mbcomp.modeling.roles.Joint.slip_friction`), and its event ``"stop"`` (the slip
+mu_k)``, unilateral only; its :class:`SlidingContactModes`): ``"closed"`` is rolling
+(sticking), watched by the friction cone (event ``"slide"``, ``mu_s N - |F_t|`` falling
+through zero: ``"slip"``); ``"slip"`` holds the ``normal`` row only, the framework applying ``-mu_k N`` against the slip velocity
+(:meth:`~mbcomp.modeling.modes.Modes.slip_friction`), and its event ``"stop"`` (the slip
 speed coming to rest) rolls again. A contact with friction starts sliding; the run turns it
 to rolling at once where its start's slip speed is zero.
 :class:`PlaneContact` is a point or a sphere on a plane, frictionless: its one row is the
@@ -32,17 +32,63 @@ from mbcomp import Grid, Joint, Param, Sphere
 from mbcomp.jets import ScalarJet, local_point, local_vector
 from mbcomp.errors import ModelError, Problem
 from mbcomp.modeling.events import ContactRow, Impact, SlipSpeed, Switch
+from mbcomp.modeling.modes import Modes
 from mbcomp.modeling.shapes import z_to
 
-__all__ = ["Unilateral", "Frictional", "PlaneContact"]
+__all__ = ["Unilateral", "Frictional", "PlaneContact", "ContactModes", "SlidingContactModes"]
 
 
 def _restitution_ok(e):
     return None if 0 <= e <= 1 else "must be in [0, 1]"
 
 
+class ContactModes(Modes):
+    """The modes ``"closed"``/``"open"`` of a one-sided contact with a ``normal`` row (see the
+    module notes).
+
+    Parameters
+    ----------
+    open0 : bool
+        Start open (in flight) rather than closed.
+    restitution : float
+        Newton's coefficient (1) at touch-down.
+
+    Examples
+    --------
+    >>> m = ContactModes(open0=False, restitution=0.5)
+    >>> m.start, m.holds_rows("open"), m.action("touch", "open"), m.rows("closed")
+    ('closed', False, Impact(restitution=0.5, engage='closed'), [ContactRow(name='normal', mu_s=None)])
+    """
+
+    def __init__(self, open0, restitution):
+        super().__init__("open" if open0 else "closed")
+        self.restitution = float(restitution)
+
+    def events(self, q, u, mode):
+        """``"touch"``: the gap (m, the ``normal`` row) falling through zero while open."""
+        return [("touch", ContactRow("normal"), -1)] if mode == "open" else []
+
+    def action(self, name, mode):
+        """Open at a ``"release"``; an impact closing the contact at a ``"touch"``."""
+        if name == "release":
+            return Switch("open")
+        return Impact(self.restitution, engage="closed")
+
+    def rows(self, mode):
+        """The ``normal`` row, held while closed."""
+        return [ContactRow("normal")] if mode == "closed" else []
+
+    def holds_rows(self, mode):
+        """None of the contact's rows while open (the body flies)."""
+        return mode != "open"
+
+    def rest(self, name, mode):
+        """Closed, where touch-downs chatter."""
+        return "closed" if name == "touch" else None
+
+
 class Unilateral:
-    """Modes ``"closed"``/``"open"`` of a contact with a ``normal`` row (see the module notes).
+    """The modes of a contact with ``unilateral=True`` (:class:`ContactModes`; the module notes).
 
     Parameters (declared by the contact class): ``unilateral`` (bool), ``restitution`` (1),
     ``open0`` (bool: start open, in flight, the start pose kept as given).
@@ -50,34 +96,72 @@ class Unilateral:
     Examples
     --------
     >>> from mbcomp.library import PlaneContact
+    >>> PlaneContact(unilateral=True, restitution=0.5).modes(PlaneContact().p) is None     # two-sided
+    True
     >>> c = PlaneContact(unilateral=True, restitution=0.5)
-    >>> c.start_mode(c.p), c.holds_rows(c.p, "open"), c.on_event("touch", c.p, "open")
-    ('closed', False, Impact(restitution=0.5, engage='closed'))
+    >>> c.modes(c.p)
+    ContactModes(start='closed')
     """
 
-    def start_mode(self, p):
+    def modes(self, p):
         if not p.unilateral:
-            return None
-        return "open" if p.open0 else "closed"
+            return super().modes(p)
+        return ContactModes(p.open0, p.restitution)
 
-    def events(self, q, u, p, mode):
-        if not p.unilateral or mode != "open":
-            return []
-        return [("touch", ContactRow("normal"), -1)]
 
-    def on_event(self, name, p, mode):
-        if name == "release":
-            return Switch("open")
-        return Impact(float(p.restitution), engage="closed")
+class SlidingContactModes(ContactModes):
+    """:class:`ContactModes` with Coulomb friction: ``"closed"`` (rolling, watched by the
+    friction cone), ``"slip"`` (sliding, its ``normal`` row held) and ``"open"`` (see the
+    module notes).
 
-    def mode_rows(self, p, mode):
-        return [ContactRow("normal")] if p.unilateral and mode == "closed" else []
+    Parameters
+    ----------
+    open0 : bool
+        Start open; else sliding (the run rolls it at once where its start's slip speed is 0).
+    restitution : float
+        Newton's coefficient (1) at touch-down.
+    mu_s, mu_k : float
+        Static and kinetic friction coefficients (1).
 
-    def holds_rows(self, p, mode):
-        return not (p.unilateral and mode == "open")
+    Examples
+    --------
+    >>> m = SlidingContactModes(open0=False, restitution=0.0, mu_s=0.4, mu_k=0.3)
+    >>> m.start, m.slips, m.rows("closed"), m.slip_friction("slip"), m.slip_friction("closed")
+    ('slip', True, [ContactRow(name='normal', mu_s=0.4)], 0.3, None)
+    >>> m.action("slide", "closed"), m.action("stop", "slip")
+    (Switch(mode='slip'), Switch(mode='closed'))
+    """
 
-    def rest_mode(self, name, p, mode):
-        return "closed" if name == "touch" else None
+    #: slides with kinetic friction in mode ``"slip"``
+    slips = True
+
+    def __init__(self, open0, restitution, mu_s, mu_k):
+        super().__init__(open0, restitution)
+        if not open0:
+            self.start = "slip"
+        self.mu_s, self.mu_k = float(mu_s), float(mu_k)
+
+    def events(self, q, u, mode):
+        """``"stop"`` while sliding: the slip speed (m/s) along its direction coming to rest."""
+        if mode == "slip":
+            return [("stop", SlipSpeed(), -1)]
+        return super().events(q, u, mode)
+
+    def action(self, name, mode):
+        """Slide when the cone is left (``"slide"``), roll at a ``"stop"``; else as contacts do."""
+        if name in ("slide", "stop"):
+            return Switch("slip" if name == "slide" else "closed")
+        return super().action(name, mode)
+
+    def rows(self, mode):
+        """The ``normal`` row, with the friction cone while rolling."""
+        if mode not in ("closed", "slip"):
+            return super().rows(mode)
+        return [ContactRow("normal", mu_s=self.mu_s if mode == "closed" else None)]
+
+    def slip_friction(self, mode):
+        """``mu_k`` (1) while sliding (mode ``"slip"``), else None."""
+        return self.mu_k if mode == "slip" else None
 
 
 class Frictional(Unilateral):
@@ -89,10 +173,8 @@ class Frictional(Unilateral):
     --------
     >>> from mbcomp.library import SphereContact, ContactFriction
     >>> c = SphereContact(r=0.1, unilateral=True, friction=ContactFriction(0.4, 0.3))
-    >>> c.start_mode(c.p), c.mode_rows(c.p, "closed"), c.slip_friction(c.p, "slip")
-    ('slip', [ContactRow(name='normal', mu_s=0.4)], 0.3)
-    >>> c.on_event("slide", c.p, "closed"), c.on_event("stop", c.p, "slip")
-    (Switch(mode='slip'), Switch(mode='closed'))
+    >>> c.modes(c.p)
+    SlidingContactModes(start='slip')
     """
 
     #: the sliding friction's work is dissipated (energy balance)
@@ -120,31 +202,11 @@ class Frictional(Unilateral):
             raise ModelError(probs)
         return p.friction
 
-    def start_mode(self, p):
-        if self._friction(p) is None or p.open0:
-            return super().start_mode(p)
-        return "slip"
-
-    def events(self, q, u, p, mode):
-        if mode == "slip":
-            return [("stop", SlipSpeed(), -1)]
-        return super().events(q, u, p, mode)
-
-    def on_event(self, name, p, mode):
-        if name in ("slide", "stop"):
-            return Switch("slip" if name == "slide" else "closed")
-        return super().on_event(name, p, mode)
-
-    def mode_rows(self, p, mode):
+    def modes(self, p):
         f = self._friction(p)
-        if f is None or mode not in ("closed", "slip"):
-            return super().mode_rows(p, mode)
-        return [ContactRow("normal", mu_s=f.static if mode == "closed" else None)]
-
-    def slip_friction(self, p, mode):
-        """``mu_k`` (1) while sliding (mode ``"slip"``), else None."""
-        f = self._friction(p)
-        return f.kinetic if f is not None and mode == "slip" else None
+        if f is None:
+            return super().modes(p)
+        return SlidingContactModes(p.open0, p.restitution, f.static, f.kinetic)
 
     def conserves_energy(self, p):
         return p.friction is None and super().conserves_energy(p)

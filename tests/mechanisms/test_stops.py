@@ -8,6 +8,7 @@ import pytest
 import mbcomp
 from mbcomp.library import (FixedTranslation, PointMass, PrescribedMotion, Prismatic, Revolute, RigidBody, Torque,
                             World)
+from mbcomp.library.joints import StopModes
 
 TOL = dict(rtol=1e-10, atol=1e-12)
 
@@ -141,9 +142,13 @@ def test_bouncing_on_a_stop_comes_to_rest(method, formulation):
 
 
 def test_chattering_without_rest_mode_fails_naming_the_joint():
-    class Bare(Revolute):
-        def rest_mode(self, name, p, mode):
+    class NoRest(StopModes):
+        def rest(self, name, mode):
             return None
+
+    class Bare(Revolute):
+        def modes(self, p):
+            return NoRest(*p.limits, p.restitution)
 
     m = mbcomp.Model()
     w = m.add("world", World(g=(0, -9.81, 0)))

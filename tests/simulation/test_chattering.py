@@ -14,24 +14,31 @@ import numpy as np
 import mbcomp
 from mbcomp.library import Revolute, RigidBody, World
 from mbcomp.modeling.events import Switch
+from mbcomp.modeling.modes import Modes
 from mbcomp.hybrid.events import BURST
+
+
+class UpDown(Modes):
+    """+1 N m in mode 'up' and -1 N m in mode 'down', switching where phi crosses 0.5 rad."""
+
+    has_force = True
+
+    def events(self, q, u, mode):
+        return [("cross", 0.5 - q[0] if mode == "up" else q[0] - 0.5, -1)]
+
+    def action(self, name, mode):
+        return Switch("down" if mode == "up" else "up")
+
+    def force(self, mode):
+        return 1.0 if mode == "up" else -1.0
 
 
 class BangBang(Revolute):
     """A rotor axis driven by +1 N m in mode 'up' and -1 N m in mode 'down', switching where
     phi crosses 0.5 rad."""
 
-    def start_mode(self, p):
-        return "up"
-
-    def events(self, q, u, p, mode):
-        return [("cross", 0.5 - q[0] if mode == "up" else q[0] - 0.5, -1)]
-
-    def on_event(self, name, p, mode):
-        return Switch("down" if mode == "up" else "up")
-
-    def mode_force(self, p, mode):
-        return 1.0 if mode == "up" else -1.0
+    def modes(self, p):
+        return UpDown("up")
 
     # its mode force does work: declared as the stick-slip frictions declare theirs (the run
     # books a mode force's work, -F ds per mode, in energy.dissipated: mbcomp.hybrid.friction)

@@ -105,7 +105,7 @@ def _refuse_modes(system):
     stick/slip friction): the FMU's runtime locates no events, so it would run through a stop
     as if it were not there."""
     with_modes = [e.name for e in system.topology.edges
-                  if e.kind == "joint" and e.comp.has_events and e.comp.start_mode(system.P[e.name]) is not None]
+                  if e.kind == "joint" and e.comp.modes(system.P[e.name]) is not None]
     if with_modes:
         raise ValueError(f"cannot export {', '.join(with_modes)}: components with events (rigid stops, unilateral "
                          "contacts, stick/slip) need the driver's event location, which the FMU's runtime does not "

@@ -1,6 +1,6 @@
 """The active set of a hybrid run and the system it makes: the rows in force.
 
-A run with components that have modes (:meth:`mbcomp.modeling.roles.Joint.start_mode`)
+A run with components that have modes (:meth:`mbcomp.modeling.roles.Joint.modes`)
 carries its *active set*, a dict ``{joint: mode}`` saying what is closed, open, sticking or
 sliding. What holds in it -- its *rows in force* -- is described in one place,
 :func:`rows_in_force` (as MuJoCo's ``mj_makeConstraint`` builds its constraint set), and every
@@ -55,16 +55,15 @@ __all__ = ["RowsInForce", "rows_in_force", "system_in_force", "SegmentStart", "s
 
 
 def start_modes(system):
-    """``{joint: mode}`` of every joint of ``system`` that has modes (``start_mode`` not None);
+    """``{joint: mode}`` of every joint of ``system`` that has modes (``modes(p)`` not None);
     a ``ModelError`` for one that is driven or not a 1-DOF tree joint (no coordinate of its own)."""
     out = {}
     for e in system.topology.edges:
-        if e.kind == "joint" and e.comp.has_events:
-            mode = e.comp.start_mode(system.P[e.name])
-            if mode is not None:
-                if e.comp.tree_edge:  # a stop: its events and rows are of its own coordinate
-                    _axis_index(system, e.name)
-                out[e.name] = mode
+        declared = e.comp.modes(system.P[e.name]) if e.kind == "joint" else None
+        if declared is not None:
+            if e.comp.tree_edge:  # a stop: its events and rows are of its own coordinate
+                _axis_index(system, e.name)
+            out[e.name] = declared.start
     return out
 
 
@@ -83,7 +82,7 @@ def mode_rows(system, modes):
     out = []
     for name, mode in sorted(modes.items()):
         e = system.edge(name)
-        for row in e.comp.mode_rows(system.P[name], mode):
+        for row in e.comp.modes(system.P[name]).rows(mode):
             if not isinstance(row, ContactRow):  # a contact's rows are its own: see open_joints
                 out.append((name, row, *_axis_index(system, name)))
     return out
@@ -91,19 +90,19 @@ def mode_rows(system, modes):
 
 def open_joints(system, modes):
     """Names of the joints of ``modes`` (``{joint: mode}``) whose rows are out in their mode."""
-    return sorted(n for n, mode in modes.items() if not system.edge(n).comp.holds_rows(system.P[n], mode))
+    return sorted(n for n, mode in modes.items() if not system.edge(n).comp.modes(system.P[n]).holds_rows(mode))
 
 
 def slipping_joints(system, modes):
-    """Names of the contacts of ``modes`` sliding in their mode (``slip_friction`` not None)."""
-    return sorted(n for n, mode in modes.items() if system.edge(n).comp.has_slip_friction
-                  and system.edge(n).comp.slip_friction(system.P[n], mode) is not None)
+    """Names of the contacts of ``modes`` sliding in their mode (``Modes.slip_friction`` not None)."""
+    return sorted(n for n, mode in modes.items() if system.edge(n).comp.modes(system.P[n]).slips
+                  and system.edge(n).comp.modes(system.P[n]).slip_friction(mode) is not None)
 
 
 def cone_joints(system, modes):
     """Names of the contacts of ``modes`` holding a row with a friction cone (rolling)."""
     return sorted(n for n, mode in modes.items()
-                  for r in system.edge(n).comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)
+                  for r in system.edge(n).comp.modes(system.P[n]).rows(mode) if isinstance(r, ContactRow)
                   and r.mu_s is not None)
 
 
@@ -214,7 +213,7 @@ class RowsInForce:
         coordinates (an engaged stop, a stuck friction), appended after the holonomic rows.
     forces : tuple
         ``(u index, N or N m)``: the constant forces the modes apply on their joints' speeds
-        (a slipping friction's ``mode_force``).
+        (a slipping friction's ``Modes.force``).
     """
 
     open: tuple
@@ -280,11 +279,12 @@ def segment_at(starts, t):
 
 def mode_forces(system, modes):
     """``[(u index, force)]``: the generalized forces (N or N m) the joints of ``modes`` apply
-    on their own speed in their mode (``mode_force(p, mode)``, e.g. kinetic friction)."""
+    on their own speed in their mode (``Modes.force(mode)``, e.g. kinetic friction)."""
     out = []
     for name, mode in sorted(modes.items()):
         e = system.edge(name)
-        value = e.comp.mode_force(system.P[name], mode) if e.comp.has_mode_force else 0.0
+        declared = e.comp.modes(system.P[name])
+        value = declared.force(mode) if declared.has_force else 0.0
         if value:
             out.append((e.u.start, float(value)))
     return out

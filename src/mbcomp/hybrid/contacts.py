@@ -2,7 +2,7 @@
 
 A contact (a cut joint, ``tree_edge = False``) with modes holds its own rows -- the
 holonomic ``constraints`` and the ``velocity_constraints`` (rolling) -- only in the modes
-where :meth:`~mbcomp.modeling.roles.Joint.holds_rows` is true (``"closed"``). In an
+where :meth:`~mbcomp.modeling.modes.Modes.holds_rows` is true (``"closed"``). In an
 ``"open"`` mode the system is the assembled one *without* them (:func:`~mbcomp.hybrid.active.without_rows`: a
 numeric variant whose topology no longer cuts the contact, its row mask restricted to the
 other rows), so every formulation steps the free flight unchanged. The contact's rows are
@@ -77,7 +77,7 @@ def contact_pushes(system, sysm, modes, t, q, u):
     from ..modeling.events import ContactRow
 
     held = [(n, r) for n, mode in sorted(modes.items()) if not system.edge(n).comp.tree_edge
-            for r in system.edge(n).comp.mode_rows(system.P[n], mode) if isinstance(r, ContactRow)]
+            for r in system.edge(n).comp.modes(system.P[n]).rows(mode) if isinstance(r, ContactRow)]
     if not held:
         return {}
     ev = sysm.evaluate(t, q, u)
@@ -192,7 +192,7 @@ def zero_open(series, system, names, k, units=None):
 def touching_at_start(system, modes, t, q, u, tol):
     """``[(contact, event, action, row, gap (m), normal speed (m/s))]`` of the contacts open
     in ``modes`` that touch at the start ``(t, q, u)`` (``action``: the contact's
-    ``on_event(event)``, its touch-down impact): the gap of their touch event's row
+    ``Modes.action(event)``, its touch-down impact): the gap of their touch event's row
     (:class:`~mbcomp.modeling.events.ContactRow`) within ``tol`` (m) of zero, rounding's
     -1e-17 m included (its event, the gap falling through zero, could never fire from
     there: the body would pass through). An :class:`~mbcomp.errors.InitializationError`
@@ -222,7 +222,7 @@ def touching_at_start(system, modes, t, q, u, tol):
         e, p = edges[n], system.P[n]
         if e.comp.tree_edge:
             continue
-        for name, value, _ in e.comp.events(q[e.q], u[e.u], p, modes[n]):
+        for name, value, _ in e.comp.modes(p).events(q[e.q], u[e.u], modes[n]):
             if not isinstance(value, ContactRow):
                 continue
             cr = contact_rows(system, n, t, q, u, value.name)
@@ -234,7 +234,7 @@ def touching_at_start(system, modes, t, q, u, tol):
                                       "start the contact closed (open0=False) with the start position a Guess(...) "
                                       "so the initialization puts it on the surface"))
             elif cr.gap <= tol:
-                out.append((n, name, e.comp.on_event(name, p, modes[n]), value.name, cr.gap, cr.speed))
+                out.append((n, name, e.comp.modes(p).action(name, modes[n]), value.name, cr.gap, cr.speed))
     if inside:
         raise InitializationError(inside, "a contact starts inside what it touches")
     return out

@@ -29,7 +29,7 @@ system -- from which the driver starts a new stepper. The events never touch the
 An impact whose rebound would rise less than :data:`REST_HEIGHT` times ``atol`` above the
 limit settles in the engaged mode (a ball at rest), and so does a component whose impacts
 come ever closer in time (:data:`CHATTER` intervals each shorter than the one before: a Zeno
-accumulation) if it has a resting mode (``rest_mode``); without one the run fails naming it.
+accumulation) if it has a resting mode (``Modes.rest``); without one the run fails naming it.
 
 Examples
 --------
@@ -240,9 +240,10 @@ class Events(SlideEvents):
         for name, mode in self.modes.items():
             e = sysm.edge(name)
             qj = np.zeros(e.q.stop - e.q.start)
-            for ev_name, _, direction in e.comp.events(qj, np.zeros(e.u.stop - e.u.start), sysm.P[name], mode):
+            declared = e.comp.modes(sysm.P[name])
+            for ev_name, _, direction in declared.events(qj, np.zeros(e.u.stop - e.u.start), mode):
                 out[("joint", name, ev_name)] = direction
-            for row in e.comp.mode_rows(sysm.P[name], mode):
+            for row in declared.rows(mode):
                 out.update(dict.fromkeys(row_events(name, row, 0.0), -1))
         for i, f in enumerate(self.user):
             if self.user_left[i] != 0:
@@ -258,7 +259,8 @@ class Events(SlideEvents):
         rows = None
         for name, mode in self.modes.items():
             e = sysm.edge(name)
-            for ev_name, value, _ in e.comp.events(q[e.q], u[e.u], sysm.P[name], mode):
+            declared = e.comp.modes(sysm.P[name])
+            for ev_name, value, _ in declared.events(q[e.q], u[e.u], mode):
                 if isinstance(value, SlipSpeed):  # a slide's speed along its start direction
                     self._slip_keys.add(("joint", name, ev_name))
                     v_t = tangent_rows(sysm, name, t, q, u)[1]
@@ -266,7 +268,7 @@ class Events(SlideEvents):
                     out[("joint", name, ev_name)] = float(v_t @ self.slip_dirs[name])
                 else:
                     out[("joint", name, ev_name)] = event_value(sysm, name, value, t, q, u)
-            if e.comp.mode_rows(sysm.P[name], mode):
+            if declared.rows(mode):
                 rows = self._pushes(t, q, u) if rows is None else rows
                 out.update(rows[name])
         for i, f in enumerate(self.user):
@@ -349,7 +351,7 @@ class Events(SlideEvents):
                     return Cut(t_e, qu, key, np.array(qu(t_e), float))
             return None
         comp, p = self.system.edge(who).comp, self.system.P[who]
-        action = comp.on_event("release" if kind == "release" else name, p, self.modes[who])
+        action = comp.modes(p).action("release" if kind == "release" else name, self.modes[who])
         state = qu(t_e)
         self._before = np.array(state, float)
         if key in self._slip_keys:
@@ -360,7 +362,7 @@ class Events(SlideEvents):
             if key != self._last:
                 return None
             # back at the limit right after leaving it, too slow to tell apart: at rest there
-            action = Switch(self.system.edge(who).comp.rest_mode(name, p, self.modes[who]) or self.modes[who])
+            action = Switch(comp.modes(p).rest(name, self.modes[who]) or self.modes[who])
         if action is None:
             return None
         return Cut(t_e, qu, key, state, action)
@@ -445,12 +447,12 @@ class Events(SlideEvents):
         if action.restitution == 0.0 or rests():
             settle = action.engage
         elif _chattering(hits):
-            settle = sysm.edge(who).comp.rest_mode(name, p, self.modes[who])
+            settle = sysm.edge(who).comp.modes(p).rest(name, self.modes[who])
             span = hits[-1] - hits[-CHATTER - 1]
             if settle is None:
                 raise SimulationError(f"chattering: {who} hit {name!r} {len(hits)} times, the last {CHATTER} in "
                                       f"{span:.3g} s, ever faster (a Zeno accumulation at about t={t:.9g} s) and "
-                                      f"has no resting mode -> give {who} a rest_mode, or damp the motion")
+                                      f"has no resting mode -> give {who}'s modes a rest, or damp the motion")
         if settle is not None:  # the rebound's energy goes with it: counted when the state is made consistent
             self._record(t, who, name, "engage" if action.restitution == 0.0 else "rest",
                          {"mode": settle, "energy_loss": 0.0})
@@ -564,8 +566,8 @@ class Events(SlideEvents):
             e, p = self.system.edge(who), self.system.P[who]
             if not e.comp.tree_edge:
                 continue
-            for name, value, _ in e.comp.events(q[e.q], u[e.u], p, mode):
-                action = e.comp.on_event(name, p, mode)
+            for name, value, _ in e.comp.modes(p).events(q[e.q], u[e.u], mode):
+                action = e.comp.modes(p).action(name, mode)
                 if isinstance(action, Impact) and abs(float(value)) <= tol:
                     _, speed, _ = row_values(self.system, mode_rows(self.system, {who: action.engage}), q, u)
                     out.append((who, name, action, None, float(value), float(speed[0])))
@@ -574,11 +576,11 @@ class Events(SlideEvents):
     def _break_away(self, t, q, u, modes):
         """``(modes, system)``: a stuck friction's row (:class:`~mbcomp.modeling.events.StickRow`)
         whose push is beyond its limit at ``(t, q, u)`` in ``modes`` breaks away at once to
-        the mode its joint's ``on_event("break+" or "break-")`` names (recorded as a switch)."""
+        the mode its joint's ``Modes.action("break+" or "break-")`` names (recorded as a switch)."""
         for name, d in self.pushes_in(self.system_now(modes), modes, t, q, u).items():
             broken = sorted((v, key[2]) for key, v in d.items() if key[0] == "joint" and v < 0.0)
             if broken:
-                action = self.system.edge(name).comp.on_event(broken[0][1], self.system.P[name], modes[name])
+                action = self.system.edge(name).comp.modes(self.system.P[name]).action(broken[0][1], modes[name])
                 modes = {**modes, name: action.mode}
                 self._record(t, name, broken[0][1], "switch", {"mode": action.mode, "energy_loss": 0.0})
         return modes, self.system_now(modes)
@@ -597,7 +599,7 @@ class Events(SlideEvents):
             if not pulls:
                 break
             _, who, row = pulls[0]
-            action = self.system.edge(who).comp.on_event("release", self.system.P[who], modes[who])
+            action = self.system.edge(who).comp.modes(self.system.P[who]).action("release", modes[who])
             if not isinstance(action, Switch):
                 break
             modes = dict(modes, **{who: action.mode})
@@ -608,14 +610,14 @@ class Events(SlideEvents):
         """``{joint: {event key: push}}`` of the rows held in ``modes`` at ``(t, q, u)`` (empty when none is held)."""
         old, self.modes = self.modes, modes
         try:
-            held = any(self.system.edge(n).comp.mode_rows(self.system.P[n], m) for n, m in modes.items())
+            held = any(self.system.edge(n).comp.modes(self.system.P[n]).rows(m) for n, m in modes.items())
             return self._pushes(t, q, u) if held else {}
         finally:
             self.modes = old
 
 def _contact_row(system, who, mode):
     """The holonomic row a contact holds in ``mode`` (its first :class:`ContactRow`)."""
-    rows = [r for r in system.edge(who).comp.mode_rows(system.P[who], mode) if isinstance(r, ContactRow)]
+    rows = [r for r in system.edge(who).comp.modes(system.P[who]).rows(mode) if isinstance(r, ContactRow)]
     return rows[0].name if rows else "normal"
 
 

@@ -10,7 +10,7 @@ A joint with friction (``Prismatic(friction=SlidingFriction(...))``,
   joint's events ``"break+"``/``"break-"`` (the load beats the static friction), located by
   Brent like any other event;
 * in a slip mode the joint applies its kinetic friction as a generalized force on its own
-  speed (``mode_force(p, mode)``: ``-F_k`` in ``"slip+"``, ``+F_k`` in ``"slip-"``),
+  speed (``Modes.force(mode)``: ``-F_k`` in ``"slip+"``, ``+F_k`` in ``"slip-"``),
   added to the evaluation's ``f`` by :class:`~mbcomp.hybrid.active.ForceEvaluator`
   (:func:`~mbcomp.hybrid.active.with_mode_forces`);
   its event is the speed crossing zero (``"stop"``), whose action is ``Switch("stick")``;
@@ -55,9 +55,9 @@ def row_events(name, row, push):
 
 
 def _frictional(system, segments):
-    """Names of the joints with a ``mode_force`` among the active sets of ``segments``."""
+    """Names of the joints with a mode force (``Modes.has_force``) among the active sets of ``segments``."""
     names = {n for seg in segments for n in seg.modes}
-    return sorted(n for n in names if system.edge(n).comp.has_mode_force)
+    return sorted(n for n in names if system.edge(n).comp.modes(system.P[n]).has_force)
 
 
 def friction_columns(res, events, Y):
@@ -81,7 +81,7 @@ def friction_columns(res, events, Y):
             modes, q_i = seg.modes, seg.state
             sel = np.flatnonzero(k_mode == i)
             mode = modes.get(name)
-            F = comp.mode_force(p, mode)
+            F = comp.modes(p).force(mode)
             if mode == "stick":
                 stuck[sel] = 1.0
                 for k in sel:

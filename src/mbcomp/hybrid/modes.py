@@ -102,7 +102,8 @@ def changes_dynamics(system, modes):
     reactions and drive efforts carrying them) are solved again over the mode's system
     (:func:`engaged_values`)."""
     return bool(mode_rows(system, modes)) or any(
-        system.edge(n).comp.has_mode_force and system.edge(n).comp.mode_force(system.P[n], m) for n, m in modes.items())
+        system.edge(n).comp.modes(system.P[n]).has_force and system.edge(n).comp.modes(system.P[n]).force(m)
+        for n, m in modes.items())
 
 
 def _stop_rows(system, modes):

@@ -5,7 +5,7 @@ friction=ContactFriction(mu_s, mu_k))``, :class:`mbcomp.library.plane_contact.Fr
 rolls in its mode ``"closed"`` -- its rolling rows (``velocity_constraints``, the slip
 velocity along orthonormal tangents ``t1``, ``t2``) hold and the run watches the friction
 cone ``mu_s N - |F_t|`` (:func:`~mbcomp.hybrid.contacts.contact_pushes`) -- and slides
-in the mode where :meth:`~mbcomp.modeling.roles.Joint.slip_friction` gives its kinetic
+in the mode where :meth:`~mbcomp.modeling.modes.Modes.slip_friction` gives its kinetic
 coefficient ``mu_k``:
 
 * the mode's system leaves the sliding contacts' rolling rows out (:func:`~mbcomp.hybrid.active.without_rolling`;
@@ -185,7 +185,7 @@ class SlipEvaluator(WrappingEvaluator):
 def slips_of(system, modes, dirs):
     """``[(contact, mu_k, direction)]`` of the contacts sliding in ``modes`` (``dirs``: their
     start directions, default along the first tangent)."""
-    return [(n, float(system.edge(n).comp.slip_friction(system.P[n], modes[n])),
+    return [(n, float(system.edge(n).comp.modes(system.P[n]).slip_friction(modes[n])),
              np.asarray(dirs.get(n, (1.0, 0.0)), float)) for n in slipping_joints(system, modes)]
 
 
@@ -425,22 +425,22 @@ class SlideEvents:
     def _cone(self, who, mode):
         """``(mu_s, mu_k)`` of contact ``who`` rolling in ``mode`` (its row's friction cone, and
         the kinetic coefficient of the mode its ``"slide"`` event goes to), or None."""
-        comp, p = self.system.edge(who).comp, self.system.P[who]
-        cone = [r.mu_s for r in comp.mode_rows(p, mode) if isinstance(r, ContactRow) and r.mu_s is not None]
+        declared = self.system.edge(who).comp.modes(self.system.P[who])
+        cone = [r.mu_s for r in declared.rows(mode) if isinstance(r, ContactRow) and r.mu_s is not None]
         if not cone:
             return None
-        return cone[0], comp.slip_friction(p, comp.on_event("slide", p, mode).mode)
+        return cone[0], declared.slip_friction(declared.action("slide", mode).mode)
 
     def _sliding_now(self, t, q, u, modes):
         """``modes`` with the contacts that land rolling (open before, a friction cone now) but
         slip faster than :data:`TURN` ``atol`` (after an impact that slid: the rolling rows
-        would take the slip away) switched to their sliding mode (``on_event("slide")``,
+        would take the slip away) switched to their sliding mode (``Modes.action("slide")``,
         recorded)."""
         out, landed = dict(modes), set(open_joints(self.system, self.modes))  # only a contact that was open
         for n, mode in modes.items():
             if n in landed and self._cone(n, mode) is not None and np.linalg.norm(
                     tangent_rows(self.system, n, t, q, u)[1]) > TURN * self.atol:
-                out[n] = self.system.edge(n).comp.on_event("slide", self.system.P[n], mode).mode
+                out[n] = self.system.edge(n).comp.modes(self.system.P[n]).action("slide", mode).mode
                 self._record(t, n, "slide", "switch", {"mode": out[n], "energy_loss": 0.0})
         return out
 
@@ -460,7 +460,7 @@ class SlideEvents:
                                                                               or n in self.slip_dirs)):
                 dirs[n] = v_t / np.linalg.norm(v_t) if np.linalg.norm(v_t) > V_TINY else self.slip_dirs[n]
             else:
-                rolling = self.system.edge(n).comp.on_event("stop", self.system.P[n], modes[n]).mode
+                rolling = self.system.edge(n).comp.modes(self.system.P[n]).action("stop", modes[n]).mode
                 F = closed_force(self.system_now({**modes, n: rolling}), n, t, q, u)
                 size = float(np.linalg.norm(F))
                 dirs[n] = -F / size if size > 0.0 else np.eye(len(F))[0]
@@ -473,9 +473,9 @@ class SlideEvents:
     def _rolling_at_start(self, t, q, u, modes):
         """``modes`` with the contacts that start sliding (a contact with friction starts in
         its sliding mode, its speeds as given) but whose slip speed is zero (at most
-        ``atol``) rolling (``on_event("stop")``)."""
+        ``atol``) rolling (``Modes.action("stop")``)."""
         out = dict(modes)
         for n in slipping_joints(self.system, modes):
             if np.linalg.norm(tangent_rows(self.system, n, t, q, u)[1]) <= self.atol:
-                out[n] = self.system.edge(n).comp.on_event("stop", self.system.P[n], modes[n]).mode
+                out[n] = self.system.edge(n).comp.modes(self.system.P[n]).action("stop", modes[n]).mode
         return out

@@ -2,8 +2,10 @@
 
 A component with discrete behaviour (a joint stop; later a unilateral contact, a stick-slip
 friction) has a *mode*, a plain string (``"free"``, ``"lo"``, ``"hi"``, ...) the run carries
-for it. In each mode it declares event functions of its own state (see
-:meth:`mbcomp.modeling.roles.Joint.events`) and, for each event, an *action*:
+for it, declared by one :class:`~mbcomp.modeling.modes.Modes` object (``Joint.modes(p)``). In
+each mode it declares event functions of its own state (:meth:`Modes.events
+<mbcomp.modeling.modes.Modes.events>`) and, for each event, an *action*
+(:meth:`Modes.action <mbcomp.modeling.modes.Modes.action>`):
 
 * :class:`Impact` -- the component's rows of the mode ``engage`` close with an impact:
   the run solves the impulse equations ``M (u+ - u-) = C^T Lambda`` with Newton's restitution
@@ -12,9 +14,9 @@ for it. In each mode it declares event functions of its own state (see
 * :class:`Switch` -- change to another mode, with no jump in the speeds (a release);
 * :class:`Stop` -- end the run (status ``"success"``, the reason in the message).
 
-A mode holds rows: :class:`AxisRow` is a unilateral row on a 1-DOF joint's own coordinate,
+A mode holds rows (:meth:`Modes.rows <mbcomp.modeling.modes.Modes.rows>`): :class:`AxisRow` is a unilateral row on a 1-DOF joint's own coordinate,
 ``sign (s - at) = 0`` while engaged (``sign (s - at) >= 0`` is the allowed side), whose
-multiplier the run watches: it releases (the component's event ``"release"``) when the row
+multiplier the run watches: it releases (the action at the event ``"release"``) when the row
 would have to pull.
 
 Examples
@@ -112,12 +114,12 @@ class AxisRow:
 @dataclass(frozen=True)
 class ContactRow:
     """A row of a contact's own holonomic constraints (a cut joint's ``constraints``, by
-    ``name``; its value m, positive on the open side): held in a mode (``mode_rows``: the
+    ``name``; its value m, positive on the open side): held in a mode (``Modes.rows``: the
     framework watches its push and fires ``"release"`` when it would pull), or the value of an
-    event (``events`` returns ``(event, ContactRow(row), direction)``: the framework evaluates
-    the row, the gap while the contact is open). A unilateral contact's rows (holonomic and
-    velocity rows) are in the system only in the modes where :meth:`holds_rows
-    <mbcomp.modeling.roles.Joint.holds_rows>` is true.
+    event (``Modes.events`` returns ``(event, ContactRow(row), direction)``: the framework
+    evaluates the row, the gap while the contact is open). A unilateral contact's rows
+    (holonomic and velocity rows) are in the system only in the modes where :meth:`Modes.holds_rows
+    <mbcomp.modeling.modes.Modes.holds_rows>` is true.
 
     With ``mu_s`` (a contact with Coulomb friction, held rolling) the framework also watches
     the friction cone: ``mu_s N - |F_t|`` (N; ``N`` the row's push, ``F_t`` the force of the
@@ -137,7 +139,7 @@ class ContactRow:
 @dataclass(frozen=True)
 class SlipSpeed:
     """The value of a sliding contact's event: its slip speed (m/s) along the direction it
-    slid when its slide began (or last turned), ``v_t . d``. ``events`` returns
+    slid when its slide began (or last turned), ``v_t . d``. ``Modes.events`` returns
     ``(event, SlipSpeed(), -1)``: the framework fires the event where the slip comes to rest
     (``|v_t|`` at the root is ~0: the contact may roll again) -- or, in a plane slip whose
     direction turned by 90 degrees, where ``|v_t|`` is not ~0: the framework then takes the
@@ -159,8 +161,8 @@ class StickRow(AxisRow):
     Instead of a ``"release"`` event the run watches ``limit + push`` (event ``"break+"``
     falling through zero: the load drives the axis forward harder than the friction holds)
     and ``limit - push`` (``"break-"``), ``push`` (N or N m) being the row's force on the
-    axis (minus its multiplier, ``sign`` = +1); the component's ``on_event`` says where it
-    slips to.
+    axis (minus its multiplier, ``sign`` = +1); the component's ``Modes.action`` says where
+    it slips to.
 
     Parameters
     ----------
@@ -185,5 +187,5 @@ class StickRow(AxisRow):
         return 0.0 * s
 
 
-#: the actions a component may return from ``on_event``
+#: the actions a component may return from ``Modes.action``
 ACTIONS = (Impact, Switch, Stop)

@@ -304,62 +304,14 @@ class Joint(Component):
     def has_velocity_constraints(self):
         return type(self).velocity_constraints is not Joint.velocity_constraints
 
-    # --- events and modes (mbcomp.modeling.events; the run: mbcomp.hybrid.events) ----
-    def start_mode(self, p):
-        """The mode the joint starts in (a string), or ``None`` for a joint without modes."""
+    # --- modes (mbcomp.modeling.modes; the run: mbcomp.hybrid) ------------------------------
+    def modes(self, p):
+        """The joint's modes with parameters ``p``: a :class:`~mbcomp.modeling.modes.Modes`
+        (its start mode, events, the action at each event, the rows each mode holds, its
+        declared force and slip), or ``None`` (the default) for a joint without modes: the
+        run then watches nothing of it. Declared, not inferred: a stop, a one-sided contact
+        or a stick-slip friction returns one where its parameters give it modes."""
         return None
-
-    def events(self, q, u, p, mode):
-        """Event functions of the joint's own coordinates ``q`` and speeds ``u`` in ``mode``:
-        ``[(name, value, direction)]`` (scipy's convention: ``direction`` -1 fires when the
-        value falls through zero, +1 when it rises, 0 either way)."""
-        return []
-
-    def on_event(self, name, p, mode):
-        """The action (:class:`~mbcomp.modeling.events.Impact`, ``Switch``, ``Stop``) at event
-        ``name`` in ``mode``; ``"release"`` when a row of the mode would have to pull."""
-        return None
-
-    def mode_rows(self, p, mode):
-        """The unilateral rows held in ``mode``: ``[AxisRow]`` (:mod:`mbcomp.modeling.events`)."""
-        return []
-
-    def rest_mode(self, name, p, mode):
-        """The mode to settle in when event ``name`` chatters (impacts ever closer in time),
-        or ``None``: the run then fails naming the joint."""
-        return None
-
-    def holds_rows(self, p, mode):
-        """Whether the joint's own rows (a cut joint's ``constraints`` and its
-        ``velocity_constraints``) are in the system in ``mode`` (default True; an open
-        unilateral contact: False, the body flies). See ``docs/architecture.md``, *Events
-        and modes*."""
-        return True
-
-    def mode_force(self, p, mode):
-        """The generalized force (N or N m) the joint applies on its own speed in ``mode``
-        (kinetic friction while slipping: ``library/friction.py``); 0 by default."""
-        return 0.0
-
-    def slip_friction(self, p, mode):
-        """The kinetic friction coefficient ``mu_k`` (1) of a contact sliding in ``mode``, or
-        ``None`` where it does not slide (default). A sliding contact's rolling rows (its
-        ``velocity_constraints``, along orthonormal tangents) are out of the system and the
-        framework applies ``-mu_k N`` against the slip velocity, ``N`` the push of its
-        ``normal`` row (:mod:`mbcomp.hybrid.slip`)."""
-        return None
-
-    @property
-    def has_events(self):
-        return type(self).start_mode is not Joint.start_mode
-
-    @property
-    def has_mode_force(self):
-        return type(self).mode_force is not Joint.mode_force
-
-    @property
-    def has_slip_friction(self):
-        return type(self).slip_friction is not Joint.slip_friction
 
     # --- 1-D axis -----------------------------------------------------------------------
     def axis_world(self, R_a, p):
