@@ -223,3 +223,45 @@ def test_a_truly_massless_motion_is_still_an_error():
 
     with pytest.raises(InitializationError, match=r"massless(.|\n)*j2\.v: this motion carries no mass"):
         mbcomp.simulate(sliders(1e10, 0.0), t_end=0.1)
+
+
+# --- warnings on correct runs ----------------------------------------------------------------
+@pytest.mark.parametrize("formulation", ["lagrange", "dalembert"])
+@pytest.mark.parametrize("method", ["RK23", "RK45"])
+def test_a_plain_pendulum_at_a_tight_tolerance_is_no_law_with_a_kink(formulation, method):
+    """RK23 at rtol 1e-9 steps a pendulum at h |lambda| = 2e-3: what a third-order method needs
+    for a smooth motion at that tolerance (rtol^(1/4) = 5.6e-3), not a creep. It was told "a
+    law with a kink or a discontinuity makes the integrator creep" (there is no law)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        r = mbcomp.simulate(pendulum(1.0), t_end=30.0, formulation=formulation, method=method, rtol=1e-9,
+                            atol=1e-11, max_steps=3000)
+    assert r.status in ("budget", "success") and "kink" not in r.message
+    # the motion is right where it got: the energy of the swing is kept to 100 rtol of its 5.3 J
+    assert np.max(np.abs(r["energy.total"] - r["energy.total"][0])) < 100 * 1e-9 * 5.3
+
+
+def square_wave_torque():
+    """The pendulum with a torque switching between 0 and 0.5 N m every 2.5 ms (a law in t
+    with a jump every 2.5 ms: the integrator steps onto each)."""
+    from mbcomp.library import Torque
+
+    m = pendulum(1.0)
+    tq = m.add("tq", Torque(tau=lambda t, phi, w: 0.5 * (np.floor(400.0 * t) % 2.0)))
+    m.connect(m["j"].axis, tq.flange_b)
+    return m
+
+
+@pytest.mark.parametrize("formulation", ["lagrange", "dalembert"])
+@pytest.mark.parametrize("method", ["DOP853", "RK45"])
+def test_a_law_with_jumps_in_time_still_gets_the_creep_hint(formulation, method):
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = mbcomp.simulate(square_wave_torque(), t_end=30.0, formulation=formulation, method=method, rtol=1e-9,
+                            atol=1e-11, max_steps=3000)
+    assert r.status == "budget" and "a law with a kink or a discontinuity" in r.stats["stiffness_hint"]
+    assert "laws in tq" in r.stats["stiffness_hint"] and any("kink" in str(w.message) for w in caught)
