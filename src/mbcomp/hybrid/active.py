@@ -15,7 +15,7 @@ system stepped is the assembled system with
   rows by :class:`ModeEvaluator`, which wraps the original evaluator (numeric or a generated
   program, unchanged);
 * the constant forces the modes apply on their joints' speeds (a slipping friction's
-  ``mode_force``) added by :class:`ForceEvaluator` (:func:`with_mode_forces`).
+  ``Modes.force``) added by :class:`ForceEvaluator` (:func:`with_mode_forces`).
 
 A run is a list of segments, each over one active set from its start time on
 (:class:`SegmentStart`); :func:`segment_at` answers which segment, so which active set, an
