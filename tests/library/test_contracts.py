@@ -538,6 +538,86 @@ def conservative(cls, base):
     return type.__getattribute__(cls, "potential") is not base.potential
 
 
+# --- modes: declared by one capability object (Joint.modes(p) -> Modes | None) --------------
+#: the parameters that give a library joint modes, by class name; every joint class with such a
+#: parameter must be listed (a new one is then checked here too)
+MODE_PARAMS = ("limits", "unilateral", "friction")
+MODE_CASES = {
+    "Revolute": [dict(limits=(-0.5, 1.0), restitution=0.5), dict(friction=lib.CoulombBearing(2.0, 1.5), w0=0.0)],
+    "Prismatic": [dict(limits=(-0.1, 0.2), restitution=0.0), dict(friction=lib.SlidingFriction(0.5, 0.4, 10.0), v0=-1.0)],
+    "PlaneContact": [dict(unilateral=True, restitution=0.8), dict(unilateral=True, open0=True)],
+    "SphereContact": [dict(r=0.1, unilateral=True), dict(r=0.1, unilateral=True, friction=lib.ContactFriction(0.4, 0.3))],
+    "DiskContact": [dict(unilateral=True), dict(unilateral=True, friction=lib.ContactFriction(0.6, 0.5))],
+}
+ALL_JOINTS = [c for c in CLASSES if issubclass(c, Joint)]
+#: the 11 optional methods a mode used to need on Joint: none may come back
+RETIRED = ("start_mode", "events", "on_event", "mode_rows", "rest_mode", "holds_rows", "mode_force",
+           "slip_friction", "has_events", "has_mode_force", "has_slip_friction")
+
+
+def _reachable(joint, declared):
+    """``{mode: [(event, action)]}`` of every mode reached from the start through the actions
+    at the events a mode watches: its own event functions, ``"release"`` of a held row that
+    may let go, ``"break+"``/``"break-"`` of a stuck row, ``"slide"`` of a friction cone."""
+    from mbcomp.modeling.events import ContactRow, Impact, StickRow, Switch
+
+    todo, seen = [declared.start], {}
+    while todo:
+        mode = todo.pop()
+        if mode in seen:
+            continue
+        names = [name for name, _, _ in declared.events(np.zeros(joint.nq), np.zeros(joint.nu), mode)]
+        for row in declared.rows(mode):
+            names += (["break+", "break-"] if isinstance(row, StickRow) else
+                      ["release"] + (["slide"] if isinstance(row, ContactRow) and row.mu_s is not None else []))
+        seen[mode] = [(name, declared.action(name, mode)) for name in names]
+        for name, action in seen[mode]:
+            todo += [action.mode] if isinstance(action, Switch) else [action.engage] if isinstance(action, Impact) else []
+            todo += [m for m in [declared.rest(name, mode)] if m is not None]
+    return seen
+
+
+@pytest.mark.parametrize("cls", ALL_JOINTS, ids=_ids(ALL_JOINTS))
+def test_a_joint_without_mode_parameters_declares_no_modes(cls):
+    """``Joint.modes`` is the one place modes are declared: a library joint with its default
+    parameters has none (``None``: the run watches nothing of it), every joint class whose
+    parameters can give it modes has its cases below, and none of the retired optional
+    methods is back on the joint."""
+    assert cls().modes(cls().p) is None
+    if set(cls.params()) & set(MODE_PARAMS):
+        assert cls.__name__ in MODE_CASES, f"{cls.__name__} takes {MODE_PARAMS}: add its cases to MODE_CASES"
+    assert not [n for n in RETIRED if hasattr(cls, n)], f"{cls.__name__} declares modes outside Joint.modes"
+
+
+@pytest.mark.parametrize("name, case", [(n, i) for n, cases in MODE_CASES.items() for i in range(len(cases))])
+def test_declared_modes_match_what_the_joint_does(name, case):
+    """A joint's :class:`~mbcomp.modeling.modes.Modes` says what it does: it watches events or
+    holds rows; its declared ``has_force`` and ``slips`` are true exactly when some reachable
+    mode applies a force or slides; an impact engages a mode that holds rows; the rows are
+    the joint's kind (a tree joint's on its axis, a contact's its own); only a contact's
+    rows leave the system (``holds_rows``), and every action is one of the three."""
+    from mbcomp.modeling.events import ACTIONS, AxisRow, ContactRow, Impact
+    from mbcomp.modeling.modes import Modes
+
+    joint = getattr(lib, name)(**MODE_CASES[name][case])
+    declared = joint.modes(joint.p)
+    assert isinstance(declared, Modes) and isinstance(declared.start, str)
+    seen = _reachable(joint, declared)
+    assert any(declared.events(np.zeros(joint.nq), np.zeros(joint.nu), m) or declared.rows(m) for m in seen)
+    assert declared.has_force == any(declared.force(m) != 0.0 for m in seen)
+    assert declared.slips == any(declared.slip_friction(m) is not None for m in seen)
+    for mode, acts in seen.items():
+        for ev, action in acts:
+            assert isinstance(action, ACTIONS), f"{name} in {mode!r} at {ev!r}: {action!r} is no action"
+            if isinstance(action, Impact):
+                assert declared.rows(action.engage) and 0.0 <= action.restitution <= 1.0
+        for _, _, direction in declared.events(np.zeros(joint.nq), np.zeros(joint.nu), mode):
+            assert direction in (-1, 0, 1)
+        kind = AxisRow if joint.tree_edge else ContactRow
+        assert all(isinstance(r, kind) for r in declared.rows(mode)), declared.rows(mode)
+        assert declared.holds_rows(mode) or not joint.tree_edge
+
+
 def advanced(states, t):
     """Frame states moved for time t with their velocities (first order is enough for a
     central difference of a smooth function)."""
