@@ -70,7 +70,7 @@ import scipy.linalg as sla
 from ..errors import SimulationError
 from .manifold import pivot_partition, rank
 
-__all__ = ["impulse", "impact_energy_loss", "single_row_loss", "post_impact_state", "Impulse",
+__all__ = ["impulse", "sliding_impulse", "impact_energy_loss", "single_row_loss", "post_impact_state", "Impulse",
            "PostImpact", "IMPACT_TOL"]
 
 #: relative size below which an impulse counts as zero (not pulling) and a normal speed as
@@ -273,6 +273,25 @@ def _complementarity(C, G, rhs, normal, keep):
     raise SimulationError(f"impact: the contact rows {normal.tolist()} did not settle on an active set in "
                           f"{limit} pivots (redundant impacting rows?): model the contacts so their rows are "
                           "independent")
+
+
+def sliding_impulse(M, A, u_minus, offset_keep, c_n, C_t, normal_speed, restitution, mu_k, s):
+    """``(u+, [P_n, P_t...])``: an impact through which a contact slides against the unit slip
+    direction ``s`` (tangents' coordinates): ``M (u+ - u-) = A^T L + (c_n - mu_k s C_t)^T P_n``
+    with the kept rows ``A`` (rates ``A u + offset_keep``) holding and Newton's restitution on
+    the contact's normal speed, ``c_n u+ + offset = -e normal_speed`` (``normal_speed``: before,
+    with its offset). Exact while the slip keeps its direction through the impact (a ball); the
+    tangential impulse is ``-mu_k P_n s``. Kept rows may be redundant: a least-squares solve.
+    """
+    nu, ma = M.shape[0], A.shape[0]
+    D = c_n - mu_k * (s @ C_t)
+    K = np.zeros((nu + ma + 1, nu + ma + 1))
+    K[:nu, :nu], K[:nu, nu:nu + ma], K[:nu, -1] = M, -A.T, -D
+    K[nu:nu + ma, :nu], K[-1, :nu] = A, c_n
+    rhs = np.concatenate((np.zeros(nu), -(A @ u_minus + offset_keep), [-(1.0 + restitution) * normal_speed]))
+    x = np.linalg.lstsq(K, rhs, rcond=1e-13)[0]
+    P_n = x[-1]
+    return u_minus + x[:nu], np.concatenate(([P_n], -mu_k * P_n * s))
 
 
 def impact_energy_loss(M, u_minus, u_plus):

@@ -37,7 +37,7 @@ import scipy.linalg as sla
 from ..errors import SimulationError
 from .manifold import close_positions, solve_speeds
 
-__all__ = ["solve_kkt", "accelerations", "project_state"]
+__all__ = ["solve_kkt", "saddle_matrix", "saddle_point", "accelerations", "project_state"]
 
 
 def _singular_mass(t):
@@ -78,10 +78,7 @@ def solve_kkt(M, f, A, rhs, t, pass_rank=None):
         lam = V[:, keep] @ (r / g[keep])
         return x0 - Y @ lam, lam
     n = M.shape[0]
-    K = np.zeros((n + m, n + m))
-    K[:n, :n] = M
-    K[:n, n:] = A.T
-    K[n:, :n] = A
+    K = saddle_matrix(M, A)
     try:
         lu = sla.lu_factor(K, check_finite=False)
     except (ValueError, np.linalg.LinAlgError):
@@ -93,6 +90,24 @@ def solve_kkt(M, f, A, rhs, t, pass_rank=None):
     else:
         x = sla.lu_solve(lu, b, check_finite=False)
     return x[:n], x[n:]
+
+
+def saddle_matrix(M, A):
+    """The saddle-point (KKT) matrix ``[[M, A^T], [A, 0]]`` of mass matrix ``M`` (nu, nu) and
+    rows ``A`` (m, nu)."""
+    n, m = M.shape[0], A.shape[0]
+    K = np.zeros((n + m, n + m))
+    K[:n, :n] = M
+    K[:n, n:] = A.T
+    K[n:, :n] = A
+    return K
+
+
+def saddle_point(ev):
+    """``(K, b)``: the saddle-point matrix of the evaluation ``ev`` (:func:`saddle_matrix`) and
+    its plain index-1 right side ``[f, -c_b, -B_b]``, for a solve with several right sides (a
+    sliding contact's friction, linear in its normal force: :mod:`mbcomp.hybrid.slip`)."""
+    return saddle_matrix(ev.M, ev.A), np.concatenate((ev.f, -ev.cb, -ev.Bb))
 
 
 def accelerations(ev):

@@ -114,9 +114,10 @@ def contact_impact(system, name, t, q, u_minus, restitution, row="normal", frict
 
     With ``friction = (mu_s, mu_k)`` the rough impulse stands only inside the cone,
     ``|P_t| <= mu_s P_n``; beyond it the contact slides through the impact: the tangential
-    impulse is ``-mu_k P_n s`` against the slip direction before it (:func:`_sliding_impact`;
+    impulse is ``-mu_k P_n s`` against the slip direction before it
+    (:func:`~mbcomp.assembly.impacts.sliding_impulse`;
     exact while the slip keeps its direction through the impact, as on a ball)."""
-    from ..assembly.impacts import impulse
+    from ..assembly.impacts import impulse, sliding_impulse
 
     ev = system.evaluate(t, q, u_minus)
     cr = contact_rows(system, name, t, q, u_minus, row)
@@ -130,26 +131,10 @@ def contact_impact(system, name, t, q, u_minus, restitution, row="normal", frict
     if friction is not None and k > 1 and np.linalg.norm(imp[1:]) > friction[0] * imp[0]:
         v_t = cr.C[1:] @ u_minus + cr.offset[1:]
         s = v_t / np.linalg.norm(v_t) if np.linalg.norm(v_t) > 0.0 else -imp[1:] / np.linalg.norm(imp[1:])
-        u_plus, imp = _sliding_impact(ev, cr, u_minus, offset[:ma], restitution, friction[1], s)
+        u_plus, imp = sliding_impulse(ev.M, ev.A, u_minus, offset[:ma], cr.C[0], cr.C[1:],
+                                      cr.C[0] @ u_minus + cr.offset[0], restitution, friction[1], s)
     loss = 0.5 * (u_minus @ ev.M @ u_minus - u_plus @ ev.M @ u_plus)
     return u_plus, imp, float(loss), float(cr.C[0] @ u_plus + cr.offset[0])
-
-
-def _sliding_impact(ev, cr, u_minus, offset_keep, e, mu_k, s):
-    """``(u+, [P_n, P_t...])``: the impact with the contact sliding against ``s`` (unit, the
-    tangents' coordinates): ``M (u+ - u-) = A^T L + (C_n - mu_k s C_t)^T P_n`` with the kept
-    rows ``A`` holding and ``C_n u+ = -e C_n u-`` (the normal speed with its offset)."""
-    M, A = ev.M, ev.A
-    nu, ma = M.shape[0], A.shape[0]
-    D = cr.C[0] - mu_k * (s @ cr.C[1:])
-    K = np.zeros((nu + ma + 1, nu + ma + 1))
-    K[:nu, :nu], K[:nu, nu:nu + ma], K[:nu, -1] = M, -A.T, -D
-    K[nu:nu + ma, :nu], K[-1, :nu] = A, cr.C[0]
-    before = cr.C[0] @ u_minus + cr.offset[0]
-    rhs = np.concatenate((np.zeros(nu), -(A @ u_minus + offset_keep), [-(1.0 + e) * before]))
-    x = np.linalg.lstsq(K, rhs, rcond=1e-13)[0]  # kept rows may be redundant
-    P_n = x[-1]
-    return u_minus + x[:nu], np.concatenate(([P_n], -mu_k * P_n * s))
 
 
 def initialize_in_modes(system, t0):

@@ -65,7 +65,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..assembly.kkt import accelerations
+from ..assembly.kkt import accelerations, saddle_point
 from ..errors import SimulationError
 from ..modeling.events import ContactRow
 from .active import (ForcesAdded, WrappingEvaluator, cone_joints, mode_system, open_joints, rows_in_force, segment_at,
@@ -129,7 +129,7 @@ def friction_solve(system, ev, slips):
     for j, (name, mu, d) in enumerate(slips):
         C_t, v_t, _ = tangent_rows(system, name, ev.t, ev.q, ev.u, ev.jets)
         G[:, j] = -mu * (C_t.T @ slip_direction(v_t, d))
-    K, b = _saddle(ev, nu)
+    K, b = saddle_point(ev)
     rhs = np.zeros((K.shape[0], 1 + k))
     rhs[:, 0], rhs[:nu, 1:] = b, G
     try:
@@ -151,16 +151,6 @@ def friction_solve(system, ev, slips):
             "geometry (a contact trailing its body's centre of mass does not jam)")
     N = np.linalg.solve(S, -lam0)
     return ev.f + G @ N, N
-
-
-def _saddle(ev, nu):
-    """The index-1 saddle-point matrix ``[[M, A^T], [A, 0]]`` of the evaluation ``ev`` and its
-    right-hand side ``[f, -cb, -Bb]`` (no stabilization), as the Lagrange form solves it."""
-    A = ev.A
-    m = A.shape[0]
-    K = np.zeros((nu + m, nu + m))
-    K[:nu, :nu], K[:nu, nu:], K[nu:, :nu] = ev.M, A.T, A
-    return K, np.concatenate((ev.f, -ev.cb, -ev.Bb))
 
 
 class SlipEvaluator(WrappingEvaluator):
@@ -204,7 +194,7 @@ def slip_accelerations(sysm, ev, slips):
     friction of ``slips`` (``[(contact, mu_k, direction)]``) applied (index-1 solve, the
     exact normal forces of :func:`friction_solve`)."""
     f, _ = friction_solve(sysm, ev, slips)
-    K, b = _saddle(ev, sysm.nu)
+    K, b = saddle_point(ev)
     b[: sysm.nu] = f
     ud = np.linalg.lstsq(K, b, rcond=1e-13)[0][: sysm.nu]
     out = {}
