@@ -7,6 +7,7 @@ DOP853); its motion must be mbcomp's own (a tight DOP853 run of the same equatio
 refused, a parameter value that breaks a decision baked into the program is refused, and the
 binary exports every function of the FMI header of its version.
 """
+import copy
 import shutil
 import subprocess
 
@@ -63,6 +64,28 @@ def pendulum():
     return m
 
 
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    """``fmus(name, fmi, path)``: the FMU of ``pendulum()`` (``name="pendulum"``) or of a model
+    file's default build (``"slider_crank"``, ...), FMI ``fmi``, both kinds, exported to a file of
+    ``path``'s name and copied to ``path``; returns the export's info. Each is built once per
+    module and test process (gcc takes 2-3 s of CPU per FMU) and shared by the tests that run or
+    read it; what ``export_fmu`` does with other arguments is tested by calling it."""
+    root, built = tmp_path_factory.mktemp("fmus"), {}
+
+    def get(name, fmi, path):
+        key = (name, fmi, path.name)
+        if key not in built:
+            model = pendulum() if name == "pendulum" else load_model(f"models/{name}.py").build()
+            src = root / str(len(built)) / path.name
+            src.parent.mkdir()
+            built[key] = src, export_fmu(model, src, fmi=fmi)
+        src, info = built[key]
+        shutil.copyfile(src, path)
+        return copy.deepcopy(info)
+    return get
+
+
 def run_me(path, t_end, outputs, fmi_type="ModelExchange", **kw):
     return fmpy.simulate_fmu(str(path), fmi_type=fmi_type, stop_time=t_end, output=outputs,
                              relative_tolerance=1e-10, output_interval=t_end / 100, **kw)
@@ -85,12 +108,12 @@ CASES = [  # model file, simulated time (s), compared variable, agreement as ME,
 
 @pytest.mark.parametrize("fmi", VERSIONS)
 @pytest.mark.parametrize("name, t_end, var, agree_me, agree_cs", CASES, ids=[c[0] for c in CASES])
-def test_the_fmu_is_valid_and_moves_as_mbcomp(name, t_end, var, agree_me, agree_cs, fmi, tmp_path):
+def test_the_fmu_is_valid_and_moves_as_mbcomp(name, t_end, var, agree_me, agree_cs, fmi, tmp_path, fmus):
     """ME: FMPy's CVODE at rtol 1e-10 (measured: slider-crank 1.1e-6 rad after 10 s); CS: the
     FMU's DOP853 at the same tolerance (7e-9)."""
     model = load_model(f"models/{name}.py").build()
     path = tmp_path / f"{name}.fmu"
-    info = export_fmu(model, path, fmi=fmi)
+    info = fmus(name, fmi, path)
     assert validate_fmu(str(path)) == []
     assert var in info["states"] and info["size"] == path.stat().st_size
     ref = mbcomp.simulate(model, t_end=t_end, n_out=101, rtol=1e-11, atol=1e-13)
@@ -109,9 +132,9 @@ def test_an_fmu_of_one_kind_has_only_that_interface(fmi, tmp_path):
 
 
 @pytest.mark.parametrize("fmi", VERSIONS)
-def test_a_tuned_parameter_changes_the_motion_as_in_mbcomp(fmi, tmp_path):
+def test_a_tuned_parameter_changes_the_motion_as_in_mbcomp(fmi, tmp_path, fmus):
     path = tmp_path / "pendulum.fmu"
-    export_fmu(pendulum(), path, fmi=fmi)
+    fmus("pendulum", fmi, path)
     r = run_me(path, 3.0, ["j.phi"], start_values={"rod.r[2]": -2.0})  # a 2 m rod instead of 1 m
     ref = mbcomp.simulate(pendulum(), t_end=3.0, n_out=101, rtol=1e-11, atol=1e-13, params={"rod.r": (0, -2.0, 0)})
     assert max_diff(r, ref, "j.phi") < 1e-7
@@ -120,12 +143,12 @@ def test_a_tuned_parameter_changes_the_motion_as_in_mbcomp(fmi, tmp_path):
 
 
 @pytest.mark.parametrize("fmi", VERSIONS)
-def test_a_parameter_that_breaks_a_baked_decision_is_refused(fmi, tmp_path, capfd):
+def test_a_parameter_that_breaks_a_baked_decision_is_refused(fmi, tmp_path, capfd, fmus):
     """The hinge axis (0, 0, 1) was generated with decisions baked in (its zero components, its
     direction); reversing it would need another program: the FMU says so, with the fix, instead
     of computing nonsense."""
     path = tmp_path / "pendulum.fmu"
-    export_fmu(pendulum(), path, fmi=fmi)
+    fmus("pendulum", fmi, path)
     # FMPy's default logger prints (a logger of one's own is FMPy's "experimental" option:
     # for FMI 2.0 it outlived its test and crashed a later instantiation)
     with pytest.raises(Exception, match="ExitInitializationMode"):
@@ -135,13 +158,13 @@ def test_a_parameter_that_breaks_a_baked_decision_is_refused(fmi, tmp_path, capf
 
 
 @pytest.mark.parametrize("fmi", VERSIONS)
-def test_a_wrong_token_is_refused_and_every_function_is_exported(fmi, tmp_path):
+def test_a_wrong_token_is_refused_and_every_function_is_exported(fmi, tmp_path, fmus):
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Model
     from fmpy.fmi3 import FMU3Model
 
     path = tmp_path / "pendulum.fmu"
-    info = export_fmu(pendulum(), path, fmi=fmi)
+    info = fmus("pendulum", fmi, path)
     md = read_model_description(str(path))
     assert md.guid == info["guid"] and md.guid != "{00000000-0000-0000-0000-000000000000}"
     # the token is a hash of the model description: another pendulum, another token
@@ -192,13 +215,13 @@ def test_the_command_line_exports_and_reports(tmp_path, capsys):
     ("slider_crank", 2.0, {"rod_joint.f.x": 1e-6, "pin.f.y": 1e-6, "energy.total": 1e-8, "crank.Q.z": 1e-8}),
     ("chain_3d", 1.0, {"energy.total": 1e-9, "link2.Q.x": 1e-9, "link1.r.y": 1e-9}),
 ], ids=["slider_crank", "chain_3d"])
-def test_outputs_are_mbcomps_result_columns(name, t_end, outputs, fmi, tmp_path):
+def test_outputs_are_mbcomps_result_columns(name, t_end, outputs, fmi, tmp_path, fmus):
     """The FMU's outputs come from mbcomp's own output program (reactions from the recursive
     sweep and the multipliers, energies, body positions, orientations as quaternions): as the
     FMU moves, they are mbcomp's result columns, in Model Exchange and Co-Simulation."""
     model = load_model(f"models/{name}.py").build()
     path = tmp_path / f"{name}.fmu"
-    info = export_fmu(model, path, fmi=fmi)
+    info = fmus(name, fmi, path)
     assert set(outputs) <= set(info["outputs"]) and not set(info["outputs"]) & set(info["states"])
     ref = mbcomp.simulate(model, t_end=t_end, n_out=101, rtol=1e-11, atol=1e-13)
     for fmi_type in ("CoSimulation", "ModelExchange"):
@@ -224,12 +247,12 @@ def test_chosen_outputs_only(tmp_path):
 
 
 @pytest.mark.parametrize("fmi", VERSIONS)
-def test_units_with_si_base_exponents(fmi, tmp_path):
+def test_units_with_si_base_exponents(fmi, tmp_path, fmus):
     from fmpy import read_model_description
 
     from mbcomp.export.description import unit_exponents
 
-    export_fmu(load_model("models/slider_crank.py").build(), tmp_path / "c.fmu", fmi=fmi)
+    fmus("slider_crank", fmi, tmp_path / "c.fmu")
     md = read_model_description(str(tmp_path / "c.fmu"))
     unit = {v.name: v.unit for v in md.modelVariables}
     assert unit["crank.m"] == "kg" and unit["crank.I[2,2]"] == "kg.m2" and unit["world.g[2]"] == "m/s2"
@@ -325,29 +348,29 @@ def test_a_driven_model_carries_its_drive_law_and_effort(tmp_path):
 
 
 @pytest.mark.parametrize("fmi", VERSIONS)
-def test_co_simulation_projects_onto_the_constraints_after_every_step(fmi, tmp_path):
+def test_co_simulation_projects_onto_the_constraints_after_every_step(fmi, tmp_path, fmus):
     """A model with a loop: the FMU's Co-Simulation projects [q, u] onto the constraint manifold
     after every accepted DOP853 step (the runtime's mbrt_project over the evaluation program it
     carries), so the loop stays closed to the projection's tolerance, as mbcomp's own
     projection keeps it -- not only to the Baumgarte drift of the right-hand side."""
     model = load_model("models/four_bar.py").build()
-    path = tmp_path / "fb.fmu"
-    info = export_fmu(model, path, fmi=fmi)
+    path = tmp_path / "four_bar.fmu"
+    info = fmus("four_bar", fmi, path)
     assert info["projects"] and validate_fmu(str(path)) == []
     r = run_me(path, 1.0, ["residual.position", "residual.velocity", "crank_joint.phi"], fmi_type="CoSimulation")
     assert float(np.max(np.abs(r["residual.position"]))) < 1e-10
     assert float(np.max(np.abs(r["residual.velocity"]))) < 1e-8
     ref = mbcomp.simulate(model, t_end=1.0, n_out=101, rtol=1e-11, atol=1e-13, stabilization="projection")
     assert max_diff(r, ref, "crank_joint.phi") < 1e-8
-    assert not export_fmu(pendulum(), tmp_path / "p.fmu")["projects"]  # an open tree: nothing to project
+    assert not fmus("pendulum", "3.0", tmp_path / "p.fmu")["projects"]  # an open tree: nothing to project
 
 
-def test_state_nominals_come_from_the_models_scales(tmp_path):
+def test_state_nominals_come_from_the_models_scales(tmp_path, fmus):
     from fmpy import extract, read_model_description
     from fmpy.fmi3 import FMU3Model
 
     path = tmp_path / "c.fmu"
-    export_fmu(load_model("models/slider_crank.py").build(), path)
+    fmus("slider_crank", "3.0", path)
     md = read_model_description(str(path))
     fmu = FMU3Model(guid=md.guid, unzipDirectory=extract(str(path)), modelIdentifier=md.modelExchange.modelIdentifier)
     fmu.instantiate()
@@ -396,11 +419,11 @@ def test_model_exchange_states_are_dalemberts_with_events_that_project(fmi, tmp_
 
 
 @pytest.mark.parametrize("fmi", VERSIONS)
-def test_start_values_are_parameters(fmi, tmp_path):
+def test_start_values_are_parameters(fmi, tmp_path, fmus):
     """``start.<coordinate>``/``start.<speed>`` parameters set the start state: an open tree
     starts exactly there; a loop's start is projected onto its constraints at initialization."""
     path = tmp_path / "p.fmu"
-    export_fmu(pendulum(), path, fmi=fmi)
+    fmus("pendulum", fmi, path)
     r = run_me(path, 2.0, ["j.phi"], fmi_type="CoSimulation", start_values={"start.j.phi": 1.0, "start.j.w": -0.5})
     m = mbcomp.Model()
     w = m.add("world", World())
@@ -412,7 +435,7 @@ def test_start_values_are_parameters(fmi, tmp_path):
     m.connect(rod.frame_b, bob.frame_a)
     assert max_diff(r, mbcomp.simulate(m, t_end=2.0, n_out=101, rtol=1e-11, atol=1e-13), "j.phi") < 1e-7
     crank = tmp_path / "crank.fmu"
-    export_fmu(load_model("models/slider_crank.py").build(), crank, fmi=fmi)
+    fmus("slider_crank", fmi, crank)
     for fmi_type in ("CoSimulation", "ModelExchange"):
         r = run_me(crank, 0.5, ["crank_joint.phi", "residual.position"], fmi_type=fmi_type,
                    start_values={"start.crank_joint.phi": 1.0})
@@ -420,10 +443,10 @@ def test_start_values_are_parameters(fmi, tmp_path):
 
 
 @pytest.mark.parametrize("fmi", VERSIONS)
-def test_outputs_carry_their_declared_units(fmi, tmp_path):
+def test_outputs_carry_their_declared_units(fmi, tmp_path, fmus):
     from fmpy import read_model_description
 
-    export_fmu(load_model("models/slider_crank.py").build(), tmp_path / "c.fmu", fmi=fmi)
+    fmus("slider_crank", fmi, tmp_path / "c.fmu")
     md = read_model_description(str(tmp_path / "c.fmu"))
     unit = {v.name: v.unit for v in md.modelVariables if v.causality == "output"}
     assert unit["rod_joint.f.x"] == "kg.m/s2" and unit["rod_joint.tau.z"] == "kg.m2/s2"  # N, N m
@@ -432,10 +455,10 @@ def test_outputs_carry_their_declared_units(fmi, tmp_path):
     assert unit["residual.position"] is None  # mixed metres and radians: no unit
 
 
-def test_the_co_simulation_tolerance_is_a_parameter(tmp_path):
+def test_the_co_simulation_tolerance_is_a_parameter(tmp_path, fmus):
     """``solver.tolerance`` sets the FMU's DOP853 tolerance (and wins over the experiment's)."""
     path = tmp_path / "c.fmu"
-    export_fmu(load_model("models/slider_crank.py").build(), path)
+    fmus("slider_crank", "3.0", path)
     ref = mbcomp.simulate(load_model("models/slider_crank.py").build(), t_end=2.0, n_out=101, rtol=1e-12, atol=1e-14)
     errs = []
     for tol in (1e-4, 1e-10):
