@@ -589,8 +589,11 @@ def test_a_joint_without_mode_parameters_declares_no_modes(cls):
     assert not [n for n in RETIRED if hasattr(cls, n)], f"{cls.__name__} declares modes outside Joint.modes"
 
 
-@pytest.mark.parametrize("name, case", [(n, i) for n, cases in MODE_CASES.items() for i in range(len(cases))])
-def test_declared_modes_match_what_the_joint_does(name, case):
+MODE_JOINTS = [getattr(lib, n)(**case) for n, cases in MODE_CASES.items() for case in cases]
+
+
+@pytest.mark.parametrize("joint", MODE_JOINTS, ids=[f"{type(j).__name__}-{i % 2}" for i, j in enumerate(MODE_JOINTS)])
+def test_declared_modes_match_what_the_joint_does(joint):
     """A joint's :class:`~mbcomp.modeling.modes.Modes` says what it does: it watches events or
     holds rows; its declared ``has_force`` and ``slips`` are true exactly when some reachable
     mode applies a force or slides; an impact engages a mode that holds rows; the rows are
@@ -599,7 +602,7 @@ def test_declared_modes_match_what_the_joint_does(name, case):
     from mbcomp.modeling.events import ACTIONS, AxisRow, ContactRow, Impact
     from mbcomp.modeling.modes import Modes
 
-    joint = getattr(lib, name)(**MODE_CASES[name][case])
+    name = type(joint).__name__
     declared = joint.modes(joint.p)
     assert isinstance(declared, Modes) and isinstance(declared.start, str)
     seen = _reachable(joint, declared)
