@@ -187,6 +187,12 @@ class ConstraintRank:
     # position with step-end values ~0.1: a smaller bracket let passages go unseen)
     SIGMA_MIN = 1e-6  # a four-bar 1e-8 m from flat: 4e-5; passing exactly through flat: <= 1.6e-7
 
+    #: share of a step over which the slope of ``sigma`` at its ends is taken (dense output)
+    SLOPE_SPAN = 1e-3
+    #: parts a step is cut into to look for minima of ``sigma`` inside it (a step of an
+    #: explicit method at rtol 1e-3 spans 0.4 s, two flat positions of an N = 2 four-bar)
+    PARTS = 3
+
     def __init__(self, system, singular="stop"):
         self.system, self.singular = system, singular
         mask = system.row_mask
@@ -194,6 +200,54 @@ class ConstraintRank:
         self.sigma_min = 1.0
         self.window = StepWindow(self.BRACKET)
         self.passages = []
+        self._end = None  # (t, sigma, slope of sigma) at the last step's end
+
+    def _sigma_at(self, dense, t):
+        """``sigma`` of the state the step's ``dense`` output gives at ``t`` (s)."""
+        sysm = self.system
+        qu = np.asarray(dense(t))
+        return self.sigma(sysm.evaluate(t, sysm.normalize(qu[: sysm.nq]), qu[sysm.nq: sysm.nq + sysm.nu], masked=False))
+
+    def _inside(self, t_prev, t, rel, dense):
+        """``[(t, sigma)]``: the minima of ``sigma`` inside the step ``[t_prev, t]`` (s), located
+        along its dense output -- a flat position crossed within one step, which the step-end
+        values alone do not show. ``sigma`` is sampled at :data:`PARTS` - 1 inner points, and
+        its slopes at the step's ends (one-sided differences over :data:`SLOPE_SPAN` of the
+        step) tell a minimum next to an end."""
+        h = t - t_prev
+        if not h > 0.0:
+            return []
+        dt = self.SLOPE_SPAN * h
+        ts = np.linspace(t_prev, t, self.PARTS + 1)
+        first = self._end if self._end is not None and self._end[0] == t_prev else None
+        s0 = first[1] if first else self._sigma_at(dense, t_prev)
+        slope0 = first[2] if first else (self._sigma_at(dense, t_prev + dt) - s0) / dt
+        v = [s0] + [self._sigma_at(dense, tt) for tt in ts[1:-1]] + [rel]
+        slope1 = (rel - self._sigma_at(dense, t - dt)) / dt
+        self._end = (t, rel, slope1)
+        brackets = []
+        for j in range(len(v)):
+            before = v[j - 1] if j else v[0] - slope0 * (ts[1] - ts[0])  # the slope as a virtual neighbour
+            after = v[j + 1] if j + 1 < len(v) else v[-1] + slope1 * (ts[-1] - ts[-2])
+            if v[j] < before and v[j] < after:
+                brackets.append((ts[max(j - 1, 0)], ts[min(j + 1, len(v) - 1)]))
+        out = []
+        for a, b in brackets:
+            tm, sm = minimum(lambda tt: self._sigma_at(dense, tt), a, b, tol=time_tolerance(b))
+            if t_prev < tm < t:  # at an end it is the step window's (the three steps' ends)
+                out.append((tm, sm))
+        return out
+
+    def _passed(self, ts, smin, qu):
+        """Record (``"pass"``) or stop at (``"stop"``) a singular position at ``ts`` (s)."""
+        sysm = self.system
+        ev = sysm.evaluate(ts, sysm.normalize(qu[: sysm.nq]), qu[sysm.nq:], masked=False)
+        if self.singular == "stop":
+            raise self._singular(ts, smin, ev)
+        if self.passages and abs(self.passages[-1]["t"] - ts) <= 1e-6 * max(1.0, abs(ts)):
+            return  # the same passage, seen by the step window and inside a step
+        drop, joints = self._dependent(ev)
+        self.passages.append(dict(t=float(ts), sigma=float(smin), rank_drop=drop, joints=joints))
 
     def sigma(self, ev):
         """``sigma_r / sigma_1`` of the full ``ev.C``, ``r`` the number of kept rows (0: the
@@ -226,21 +280,20 @@ class ConstraintRank:
     def check(self, end, t_prev, dense):
         rel = self.sigma(end.ev)
         self.sigma_min = min(self.sigma_min, rel)
+        sysm = self.system
+        for ts, smin in self._inside(t_prev, end.t, rel, dense):  # flat positions crossed within this step
+            self.sigma_min = min(self.sigma_min, smin)
+            if smin < self.SIGMA_MIN:
+                self._passed(ts, smin, np.asarray(dense(ts))[: sysm.nq + sysm.nu])
         if rel < self.SIGMA_MIN and self.singular == "stop":
             raise self._singular(end.t, rel, end.ev)
         self.window.push(t_prev, end.t, {"sigma": rel}, dense)
         if self.window.dips():
-            sysm = self.system
             ts, smin = self.window.locate(lambda tt, q, u: self.sigma(sysm.evaluate(tt, q, u, masked=False)),
                                           sysm.nq, sysm.nu, sysm.normalize)
             self.sigma_min = min(self.sigma_min, smin)
             if smin < self.SIGMA_MIN:
-                qu = self.window.state_at(ts, sysm.nq, sysm.nu)
-                ev = sysm.evaluate(ts, sysm.normalize(qu[: sysm.nq]), qu[sysm.nq:], masked=False)
-                if self.singular == "stop":
-                    raise self._singular(ts, smin, ev)
-                drop, joints = self._dependent(ev)
-                self.passages.append(dict(t=float(ts), sigma=float(smin), rank_drop=drop, joints=joints))
+                self._passed(ts, smin, self.window.state_at(ts, sysm.nq, sysm.nu))
 
     def stats(self):
         out = {"min_constraint_sigma": self.sigma_min}
