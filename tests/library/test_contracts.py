@@ -621,6 +621,25 @@ def test_declared_modes_match_what_the_joint_does(joint):
         assert declared.holds_rows(mode) or not joint.tree_edge
 
 
+def test_modes_that_are_no_modes_object_are_refused_naming_the_joint():
+    """A joint whose ``modes(p)`` gives something else than a ``Modes`` (a bare start mode)
+    is a model problem naming the joint and the fix, before anything runs."""
+    class Odd(lib.Revolute):
+        """A hinge declaring its start mode where its modes belong."""
+
+        def modes(self, p):
+            return "free"
+
+    m = mbcomp.Model()
+    w = m.add("world", lib.World(g=(0, 0, 0)))
+    j = m.add("hinge", Odd(n=(0, 0, 1), phi0=0.0, w0=1.0))
+    b = m.add("disk", lib.RigidBody(m=1.0, I=np.eye(3)))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, b.frame_a)
+    with pytest.raises(mbcomp.ModelError, match=r"hinge: modes\(p\) of Odd gave 'free', not a Modes .*fix: return"):
+        mbcomp.simulate(m, t_end=0.1)
+
+
 def advanced(states, t):
     """Frame states moved for time t with their velocities (first order is enough for a
     central difference of a smooth function)."""

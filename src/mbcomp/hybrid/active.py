@@ -48,6 +48,7 @@ import numpy as np
 
 from ..errors import ModelError, Problem
 from ..modeling.events import ContactRow
+from ..modeling.modes import Modes
 
 __all__ = ["RowsInForce", "rows_in_force", "system_in_force", "SegmentStart", "segment_at", "start_modes", "mode_rows", "open_joints", "slipping_joints", "cone_joints", "without_rows",
            "without_rolling", "WrappingEvaluator", "ModeEvaluator", "mode_system", "mode_forces", "ForcesAdded",
@@ -56,10 +57,15 @@ __all__ = ["RowsInForce", "rows_in_force", "system_in_force", "SegmentStart", "s
 
 def start_modes(system):
     """``{joint: mode}`` of every joint of ``system`` that has modes (``modes(p)`` not None);
-    a ``ModelError`` for one that is driven or not a 1-DOF tree joint (no coordinate of its own)."""
+    a ``ModelError`` for one whose ``modes(p)`` is no :class:`~mbcomp.modeling.modes.Modes`, or
+    that is driven or not a 1-DOF tree joint (no coordinate of its own)."""
     out = {}
     for e in system.topology.edges:
         declared = e.comp.modes(system.P[e.name]) if e.kind == "joint" else None
+        if declared is not None and not isinstance(declared, Modes):
+            raise ModelError([Problem(e.name, f"modes(p) of {type(e.comp).__name__} gave {declared!r}, not a Modes",
+                                      "return a mbcomp.modeling.modes.Modes (its start mode, events, actions and "
+                                      "rows), or None for a joint without modes")])
         if declared is not None:
             if e.comp.tree_edge:  # a stop: its events and rows are of its own coordinate
                 _axis_index(system, e.name)
