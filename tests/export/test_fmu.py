@@ -8,6 +8,7 @@ refused, a parameter value that breaks a decision baked into the program is refu
 binary exports every function of the FMI header of its version.
 """
 import copy
+import functools
 import shutil
 import subprocess
 
@@ -86,6 +87,18 @@ def fmus(tmp_path_factory):
     return get
 
 
+@functools.lru_cache(maxsize=None)
+def _reference(name, t_end, options):
+    model = pendulum() if name == "pendulum" else load_model(f"models/{name}.py").build()
+    return mbcomp.simulate(model, t_end=t_end, n_out=101, rtol=1e-11, atol=1e-13, **dict(options))
+
+
+def reference(name, t_end, **options):
+    """mbcomp's own tight run (rtol 1e-11, 101 points) of ``pendulum()`` or a model file's default
+    build, which the FMUs must follow: one run per test process serves both FMI versions."""
+    return _reference(name, t_end, tuple(sorted(options.items())))
+
+
 def run_me(path, t_end, outputs, fmi_type="ModelExchange", **kw):
     return fmpy.simulate_fmu(str(path), fmi_type=fmi_type, stop_time=t_end, output=outputs,
                              relative_tolerance=1e-10, output_interval=t_end / 100, **kw)
@@ -111,12 +124,11 @@ CASES = [  # model file, simulated time (s), compared variable, agreement as ME,
 def test_the_fmu_is_valid_and_moves_as_mbcomp(name, t_end, var, agree_me, agree_cs, fmi, tmp_path, fmus):
     """ME: FMPy's CVODE at rtol 1e-10 (measured: slider-crank 1.1e-6 rad after 10 s); CS: the
     FMU's DOP853 at the same tolerance (7e-9)."""
-    model = load_model(f"models/{name}.py").build()
     path = tmp_path / f"{name}.fmu"
     info = fmus(name, fmi, path)
     assert validate_fmu(str(path)) == []
     assert var in info["states"] and info["size"] == path.stat().st_size
-    ref = mbcomp.simulate(model, t_end=t_end, n_out=101, rtol=1e-11, atol=1e-13)
+    ref = reference(name, t_end)
     assert max_diff(run_me(path, t_end, [var]), ref, var) < agree_me
     assert max_diff(run_me(path, t_end, [var], fmi_type="CoSimulation"), ref, var) < agree_cs
 
@@ -138,7 +150,7 @@ def test_a_tuned_parameter_changes_the_motion_as_in_mbcomp(fmi, tmp_path, fmus):
     r = run_me(path, 3.0, ["j.phi"], start_values={"rod.r[2]": -2.0})  # a 2 m rod instead of 1 m
     ref = mbcomp.simulate(pendulum(), t_end=3.0, n_out=101, rtol=1e-11, atol=1e-13, params={"rod.r": (0, -2.0, 0)})
     assert max_diff(r, ref, "j.phi") < 1e-7
-    short = mbcomp.simulate(pendulum(), t_end=3.0, n_out=101, rtol=1e-11, atol=1e-13)
+    short = reference("pendulum", 3.0)
     assert max_diff(r, short, "j.phi") > 0.1  # it is not the 1 m pendulum
 
 
@@ -219,11 +231,10 @@ def test_outputs_are_mbcomps_result_columns(name, t_end, outputs, fmi, tmp_path,
     """The FMU's outputs come from mbcomp's own output program (reactions from the recursive
     sweep and the multipliers, energies, body positions, orientations as quaternions): as the
     FMU moves, they are mbcomp's result columns, in Model Exchange and Co-Simulation."""
-    model = load_model(f"models/{name}.py").build()
     path = tmp_path / f"{name}.fmu"
     info = fmus(name, fmi, path)
     assert set(outputs) <= set(info["outputs"]) and not set(info["outputs"]) & set(info["states"])
-    ref = mbcomp.simulate(model, t_end=t_end, n_out=101, rtol=1e-11, atol=1e-13)
+    ref = reference(name, t_end)
     for fmi_type in ("CoSimulation", "ModelExchange"):
         r = run_me(path, t_end, list(outputs), fmi_type=fmi_type)
         for var, agree in outputs.items():
@@ -353,14 +364,13 @@ def test_co_simulation_projects_onto_the_constraints_after_every_step(fmi, tmp_p
     after every accepted DOP853 step (the runtime's mbrt_project over the evaluation program it
     carries), so the loop stays closed to the projection's tolerance, as mbcomp's own
     projection keeps it -- not only to the Baumgarte drift of the right-hand side."""
-    model = load_model("models/four_bar.py").build()
     path = tmp_path / "four_bar.fmu"
     info = fmus("four_bar", fmi, path)
     assert info["projects"] and validate_fmu(str(path)) == []
     r = run_me(path, 1.0, ["residual.position", "residual.velocity", "crank_joint.phi"], fmi_type="CoSimulation")
     assert float(np.max(np.abs(r["residual.position"]))) < 1e-10
     assert float(np.max(np.abs(r["residual.velocity"]))) < 1e-8
-    ref = mbcomp.simulate(model, t_end=1.0, n_out=101, rtol=1e-11, atol=1e-13, stabilization="projection")
+    ref = reference("four_bar", 1.0, stabilization="projection")
     assert max_diff(r, ref, "crank_joint.phi") < 1e-8
     assert not fmus("pendulum", "3.0", tmp_path / "p.fmu")["projects"]  # an open tree: nothing to project
 
