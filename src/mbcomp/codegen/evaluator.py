@@ -428,7 +428,13 @@ class ProgramEvaluator:
             return None
         if project is None:
             return Integrator(bound, alpha, beta)
-        mech = mech_of(self.bound or self._bound(), self.system)
+        evaluation = self.bound or self._bound()
+        if evaluation.drive_comps or evaluation.code.inputs:
+            # the evaluation program takes the drives' and inputs' values per call, set from
+            # Python: inside the C loop the projection would use those of another time (a
+            # driven Hooke shaft's outputs sat 0.2 rad off the loop, 1e9 tolerances)
+            return None
+        mech = mech_of(evaluation, self.system)
         if mech is None or not mech.moves:  # coordinates the C projection cannot move
             return None
         return Integrator(bound, alpha, beta, mech=mech, tol=project[0], accept=project[1])
