@@ -265,3 +265,19 @@ def test_a_law_with_jumps_in_time_still_gets_the_creep_hint(formulation, method)
                             atol=1e-11, max_steps=3000)
     assert r.status == "budget" and "a law with a kink or a discontinuity" in r.stats["stiffness_hint"]
     assert "laws in tq" in r.stats["stiffness_hint"] and any("kink" in str(w.message) for w in caught)
+
+
+@pytest.mark.parametrize("formulation,method", [("lagrange", "dop853"), ("dalembert", "DOP853")])
+def test_an_open_contact_is_not_called_redundant_rows(formulation, method):
+    """A ball starting in the air (its floor contact open, models/bouncing_ball.py) has the
+    free point's 3 DOF against Gruebler's 6 - 3 - 1 = 2: the excess is the open contact's row,
+    not in force -- the summary said "1 constraint rows are redundant, e.g. a planar loop".
+    A planar four-bar closed by a spatial joint still has its 3 redundant rows said."""
+    r = mbcomp.simulate(mbcomp.load_model_file("models/bouncing_ball.py").build(), t_end=0.5,
+                        formulation=formulation, method=method)
+    line = next(x for x in r.summary.splitlines() if "Gruebler" in x)
+    assert "degrees of freedom: 3 " in line and "redundant" not in line
+    assert "1 constraint row of contacts starting open is not in force" in line
+    four_bar = mbcomp.simulate(mbcomp.load_model_file("models/four_bar.py").build(), t_end=0.1,
+                               formulation=formulation, method=method)
+    assert "mobility exceeds it by 3 because 3 constraint rows are redundant" in four_bar.summary

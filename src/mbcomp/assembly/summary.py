@@ -111,6 +111,22 @@ def _dof_report(view, init):
                 redundant=list(init.dropped) if init is not None else [])
 
 
+def _excess(d, init, view):
+    """Why the mobility exceeds Gruebler's count (text after it, or ""): rows out of force at
+    the start -- a contact starting open (the rows of its joint counted, none in force) -- and
+    the rest redundant rows (e.g. a planar loop closed by a spatial joint)."""
+    if not (isinstance(d["mobility"], int) and d["mobility"] > d["gruebler"]):
+        return ""
+    excess = d["mobility"] - d["gruebler"]
+    rows = len(view.constraint_names(all_rows=True)) + int(init.nonholonomic or 0)
+    out = min(excess, max(0, rows - len(d["redundant"]) - int(d["rank"])))  # neither in force nor dropped
+    why = ([f"{out} constraint row{'s' if out > 1 else ''} of contacts starting open {'are' if out > 1 else 'is'} "
+            "not in force"] if out else [])
+    if excess > out:
+        why.append(f"{excess - out} constraint rows are redundant, e.g. a planar loop")
+    return f"; mobility exceeds it by {excess} because " + " and ".join(why)
+
+
 def _initialize(view):
     """``(init, None)``, or ``(None, why)`` when the model cannot start (first line of the error)."""
     from .initialization import initialize
@@ -147,10 +163,7 @@ def summary(system, init=None):
                                                                         if topo.gravity_source else " (no World)"))
     dof = d["mobility"] if d["mobility"] is not None else "unknown (initialization failed)"
     lines.append(f"degrees of freedom: {dof}   (Gruebler M = 6N - C - L = 6*{d['N']} - {d['C']} - {d['L']}"
-                 f" = {d['gruebler']}"
-                 + (f"; mobility exceeds it by {d['mobility'] - d['gruebler']} because "
-                    f"{d['mobility'] - d['gruebler']} constraint rows are redundant, e.g. a planar loop"
-                    if isinstance(d["mobility"], int) and d["mobility"] > d["gruebler"] else "") + ")")
+                 f" = {d['gruebler']}" + _excess(d, init, view) + ")")
     lines.append(f"coordinates ({system.nq} q, {system.nu} speeds): {', '.join(system.q_names) or 'none'}")
     tree = [e.name for e in topo.tree if e.kind == "joint" and e.dof > 0 and not e.drive]
     lines.append(f"tree joints (minimal coordinates): {', '.join(tree) or 'none'}")
