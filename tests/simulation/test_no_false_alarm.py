@@ -281,3 +281,19 @@ def test_an_open_contact_is_not_called_redundant_rows(formulation, method):
     four_bar = mbcomp.simulate(mbcomp.load_model_file("models/four_bar.py").build(), t_end=0.1,
                                formulation=formulation, method=method)
     assert "mobility exceeds it by 3 because 3 constraint rows are redundant" in four_bar.summary
+
+
+def test_fallbacks_of_a_model_without_laws_blame_no_law():
+    """Guards of the generated program failing on nearly singular matrices (a four-bar run on
+    past its flat positions: 1655 of 2435 evaluations) were blamed on "a law's branch" of a
+    model without laws; the note now names what it was. A model with a law keeps the advice
+    (tests/simulation/test_budgets_and_requests.py: a Python branch on w)."""
+    from types import SimpleNamespace
+
+    from mbcomp.simulation.driver import why_slow
+
+    run = SimpleNamespace(form=SimpleNamespace(system=mbcomp.assemble(pendulum(1.0))), t_out=np.array([0.0, 1.0]),
+                          t=1.0, stepper=SimpleNamespace(t_bound=1.0))
+    notes = why_slow(run, None, "success", dict(fallbacks=1655, nfev=2435, steps=300))
+    assert len(notes) == 1 and "1655 of 2435 evaluations left the generated program" in notes[0]
+    assert "no laws" in notes[0] and "law's branch" not in notes[0] and "singular" in notes[0]

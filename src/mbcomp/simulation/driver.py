@@ -51,7 +51,7 @@ from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check
                     output_times, system_of)
 from .rows import RowChoice
 from .stepping import Budget, BudgetSpent, KeepOutputs, Monitoring, Progress, Projection, Repartition, Run
-from .stiffness import StiffnessWatch
+from .stiffness import StiffnessWatch, system_laws
 from .stops import Terminated, interrupted_by, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
 
 __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
@@ -291,9 +291,14 @@ def why_slow(run, watch, status, stats):
     if pace:
         notes.append(pace)
     if stats.get("fallbacks", 0) > max(100, stats["nfev"] // 2):
+        laws = system_laws(run.form.system)
         notes.append(f"{stats['fallbacks']} of {stats['nfev']} evaluations left the generated program for the "
-                     "numeric path (a law's branch, if/abs/min on a state, the trace did not take) -> write the "
-                     "branch smoothly (e.g. tanh) or run with backend='numeric' (no program to leave)")
+                     + ("numeric path (a law's branch, if/abs/min on a state, the trace did not take; laws in "
+                        f"{', '.join(laws)}) -> write the branch smoothly (e.g. tanh) or run with backend='numeric' "
+                        "(no program to leave)" if laws else
+                        "numeric path: its guards met nearly singular matrices (the model has no laws to branch) "
+                        "-> the run spent its time near a singular position: look at min_constraint_sigma and the "
+                        "residual columns"))
     return notes
 
 
