@@ -297,3 +297,22 @@ def test_fallbacks_of_a_model_without_laws_blame_no_law():
     notes = why_slow(run, None, "success", dict(fallbacks=1655, nfev=2435, steps=300))
     assert len(notes) == 1 and "1655 of 2435 evaluations left the generated program" in notes[0]
     assert "no laws" in notes[0] and "law's branch" not in notes[0] and "singular" in notes[0]
+
+
+@pytest.mark.parametrize("formulation", ["lagrange", "dalembert"])
+@pytest.mark.parametrize("method", ["DOP853", "dop853"])
+def test_a_ball_bouncing_on_a_floor_runs_on_scipy_and_compiled_dop853(formulation, method):
+    """models/bouncing_ball.py on scipy's DOP853 and the compiled dop853 (a 'mass matrix is
+    singular ... carries no inertia' failure was reported on DOP853): the bounce times are
+    t0 + 2 t0 e (1 - e^k) / (1 - e), t0 = sqrt(2 h0 / g), and the impacts take the energy
+    (1 - e^2) of each landing."""
+    h0, e, m = 1.0, 0.8, 0.5
+    r = mbcomp.simulate(mbcomp.load_model_file("models/bouncing_ball.py").build(), t_end=2.5, formulation=formulation,
+                        method=method, **TOL)
+    assert r.status == "success", r.message
+    t0 = np.sqrt(2 * h0 / G)
+    k = np.arange(4)
+    impacts = [x for x in r.events if x.kind == "impact"][:4]
+    assert np.allclose([x.time for x in impacts], t0 + 2 * t0 * e * (1 - e ** k) / (1 - e), atol=1e-8)
+    assert np.allclose([x.detail["energy_loss"] for x in impacts], m * G * h0 * e ** (2 * k) * (1 - e ** 2),
+                       rtol=1e-7)
