@@ -13,6 +13,7 @@ Run::
 
     python bench/fuzz.py                      # 3,000 mechanisms, seed 0, 2 processes
     python bench/fuzz.py --n 300 --seed 7 --jobs 1 --csv fuzz.csv
+    python bench/fuzz.py --n 200 --seed 5 --jobs 1 --show inaccurate   # each "inaccurate" run, with its spec
 """
 from __future__ import annotations
 
@@ -30,7 +31,7 @@ sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
 
 def _chunk(args):
     """Outcomes of ``n`` mechanisms drawn with ``seed``: a list of ``(kind, detail, spec)``."""
-    n, seed, t_end, wall = args
+    n, seed, t_end, wall, show = args
     from hypothesis import HealthCheck, Phase, given, settings
     from hypothesis import seed as hseed
 
@@ -46,7 +47,7 @@ def _chunk(args):
     def draw(spec):
         try:
             o = run(spec, t_end=t_end, max_wall_time=wall)
-            out.append((o.kind, o.message.splitlines()[0][:160] if o.message else "", None))
+            out.append((o.kind, o.message.splitlines()[0][:400] if o.message else "", spec if o.kind in show else None))
         except Violation as exc:
             out.append(("violation", str(exc)[:400], spec))
 
@@ -62,10 +63,12 @@ def main(argv=None):
     ap.add_argument("--t-end", type=float, default=0.3, help="simulated time per mechanism, s (default 0.3)")
     ap.add_argument("--wall", type=float, default=5.0, help="wall-time budget per mechanism, s (default 5)")
     ap.add_argument("--csv", default=str(ROOT / "bench" / "fuzz.csv"), help="counts CSV (default bench/fuzz.csv)")
+    ap.add_argument("--show", nargs="*", default=[], metavar="OUTCOME",
+                    help="also print the message and spec of these outcomes, e.g. --show inaccurate")
     a = ap.parse_args(argv)
     jobs = max(1, a.jobs)
     sizes = [a.n // jobs + (k < a.n % jobs) for k in range(jobs)]
-    tasks = [(s, a.seed * 1000 + k, a.t_end, a.wall) for k, s in enumerate(sizes) if s]
+    tasks = [(s, a.seed * 1000 + k, a.t_end, a.wall, tuple(a.show)) for k, s in enumerate(sizes) if s]
     t0 = time.perf_counter()
     if jobs == 1:
         results = [_chunk(t) for t in tasks]
@@ -79,8 +82,8 @@ def main(argv=None):
     for kind, k in counts.most_common():
         print(f"  {kind:22s} {k:6d}")
     for kind, detail, spec in outcomes:
-        if kind == "violation":
-            print(f"\nVIOLATION: {detail}\n  spec = {spec!r}")
+        if kind == "violation" or kind in a.show:
+            print(f"\n{kind.upper()}: {detail}\n  spec = {spec!r}")
     with open(a.csv, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["outcome", "count"])
