@@ -12,20 +12,14 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import mbcomp
-from mbcomp.library import FixedTranslation, PointMass, Revolute, World
 from mbcomp.simulation.error_estimate import RTOL_FLOOR, TIGHTER
 
 
 def pendulum(phi0):
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j = m.add("j", Revolute(phi0=phi0, w0=0.0))
-    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", PointMass(m=1.0))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    return m
+    """The 1 m, 1 kg pendulum of tests/simulation/test_accuracy_alarm.py released from ``phi0`` (rad)."""
+    from test_accuracy_alarm import pendulum as accuracy_pendulum
+
+    return accuracy_pendulum(phi0=phi0)
 
 
 def exact(phi0, t):
