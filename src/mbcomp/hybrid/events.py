@@ -53,7 +53,7 @@ import numpy as np
 
 from ..assembly.kkt import accelerations
 from ..errors import SimulationError
-from ..modeling.events import ContactRow, Impact, SlipSpeed, Stop, Switch
+from ..modeling.events import ContactRow, End, Impact, SlipSpeed, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value, touching_at_start
 from ..solvers.compiled_rk import CompiledRK
 from ..solvers.locate import return_root, root, time_tolerance
@@ -87,7 +87,7 @@ class EventRecord:
     name : str
         The event's name (the user function's ``__name__``).
     kind : str
-        ``"impact"``, ``"engage"``, ``"release"``, ``"switch"``, ``"stop"``, ``"rest"``
+        ``"impact"``, ``"engage"``, ``"release"``, ``"switch"``, ``"end"``, ``"rest"``
         (chattering settled) or ``"user"``.
     detail : dict
         The impact's ``speed_before``/``speed_after`` (m/s or rad/s along the row),
@@ -123,7 +123,7 @@ class Cut:
         ``[q, u]`` at ``t`` before the action.
     action : object
         The component's action (:class:`~mbcomp.modeling.events.Impact`, ``Switch`` or
-        ``Stop``), or None for a user's terminal event.
+        ``End``), or None for a user's terminal event.
     turn : ndarray or None
         A plane slide's new direction (tangent coordinates) when the event only turned it.
     """
@@ -378,8 +378,8 @@ class Events(SlideEvents):
             self.slip_dirs = {**self.slip_dirs, who: cut.turn}
             self._record(t_e, who, "stop", "turn", {"mode": self.modes[who], "energy_loss": 0.0})
             return self._segment(t_e, state[:nq], state[nq:], dict(self.modes))
-        if isinstance(action, Stop):
-            self._record(t_e, who, name, "stop", {"reason": action.reason})
+        if isinstance(action, End):
+            self._record(t_e, who, name, "end", {"reason": action.reason})
             return Outcome(t_e, np.array(state, float), message=f"{who}: {action.reason} (event {name} at t={t_e:.12g} s)")
         modes = dict(self.modes)
         q, u = state[:nq], state[nq:]

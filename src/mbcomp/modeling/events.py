@@ -12,7 +12,7 @@ each mode it declares event functions of its own state (:meth:`Modes.events
   on the rows' speeds, then engages that mode when the rebound is too slow to leave (or
   ``restitution`` is 0), else stays in its mode and flies on;
 * :class:`Switch` -- change to another mode, with no jump in the speeds (a release);
-* :class:`Stop` -- end the run (status ``"success"``, the reason in the message).
+* :class:`End` -- end the run (status ``"success"``, the reason in the message).
 
 A mode holds rows (:meth:`Modes.rows <mbcomp.modeling.modes.Modes.rows>`): :class:`AxisRow` is a unilateral row on a 1-DOF joint's own coordinate,
 ``sign (s - at) = 0`` while engaged (``sign (s - at) >= 0`` is the allowed side), whose
@@ -29,9 +29,10 @@ Examples
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
-__all__ = ["Impact", "Switch", "Stop", "AxisRow", "ContactRow", "StickRow", "SlipSpeed", "ACTIONS"]
+__all__ = ["Impact", "Switch", "End", "AxisRow", "ContactRow", "StickRow", "SlipSpeed", "ACTIONS"]
 
 
 @dataclass(frozen=True)
@@ -70,12 +71,15 @@ class Switch:
 
 
 @dataclass(frozen=True)
-class Stop:
+class End:
     """End the run here (status ``"success"``), saying ``reason``.
+
+    (``Stop``, its former name, is still importable from this module, with a
+    ``DeprecationWarning``: "stop" now means only a joint's mechanical end stop.)
 
     Examples
     --------
-    >>> Stop("the door latched").reason
+    >>> End("the door latched").reason
     'the door latched'
     """
 
@@ -188,4 +192,13 @@ class StickRow(AxisRow):
 
 
 #: the actions a component may return from ``Modes.action``
-ACTIONS = (Impact, Switch, Stop)
+ACTIONS = (Impact, Switch, End)
+
+
+def __getattr__(name):
+    """``Stop``, the former name of :class:`End`, with a ``DeprecationWarning``."""
+    if name == "Stop":
+        warnings.warn("mbcomp.modeling.events.Stop is now End (a run's end; 'stop' is a joint's end stop)",
+                      DeprecationWarning, stacklevel=2)
+        return End
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -11,7 +11,7 @@ the run (:mod:`mbcomp.hybrid`) asks that object, and nothing else, about:
   speeds (:meth:`Modes.events`);
 * the *action* at an event: what the component does there, an
   :class:`~mbcomp.modeling.events.Impact`, :class:`~mbcomp.modeling.events.Switch` or
-  :class:`~mbcomp.modeling.events.Stop` (:meth:`Modes.action`);
+  :class:`~mbcomp.modeling.events.End` (:meth:`Modes.action`);
 * the unilateral *rows* a mode holds (:meth:`Modes.rows`: ``AxisRow``, ``StickRow``,
   ``ContactRow``), whether the joint's own constraint rows are in the system in a mode
   (:meth:`Modes.holds_rows`), and the mode to *rest* in when an event chatters
@@ -55,20 +55,20 @@ class Modes:
     --------
     A latch that ends the run where a hinge's angle rises through 1 rad:
 
-    >>> from mbcomp.modeling.events import Stop
+    >>> from mbcomp.modeling.events import End
     >>> from mbcomp.modeling.modes import Modes
     >>> class Latch(Modes):
     ...     def events(self, q, u, mode):
     ...         return [("latched", 1.0 - q[0], -1)]       # falls through zero at q = 1 rad
     ...     def action(self, name, mode):
-    ...         return Stop("the door latched")
+    ...         return End("the door latched")
     >>> m = Latch("open")
     >>> m.start, m.events([0.25], [2.0], "open"), m.action("latched", "open")
-    ('open', [('latched', 0.75, -1)], Stop(reason='the door latched'))
+    ('open', [('latched', 0.75, -1)], End(reason='the door latched'))
     >>> m.rows("open"), m.holds_rows("open"), m.has_force, m.slips
     ([], True, False, False)
 
-    A joint declares it from its parameters; the run then stops there:
+    A joint declares it from its parameters; the run then ends there:
 
     >>> import numpy as np, mbcomp
     >>> from mbcomp.library import World, Revolute, PointMass, FixedTranslation
@@ -116,7 +116,7 @@ class Modes:
 
     def action(self, name, mode):
         """The action at event ``name`` in ``mode``: an :class:`~mbcomp.modeling.events.Impact`,
-        :class:`~mbcomp.modeling.events.Switch` or :class:`~mbcomp.modeling.events.Stop`, or
+        :class:`~mbcomp.modeling.events.Switch` or :class:`~mbcomp.modeling.events.End`, or
         ``None`` (nothing happens). ``name`` is ``"release"`` when a row of the mode would have
         to pull, ``"break+"``/``"break-"`` when a :class:`~mbcomp.modeling.events.StickRow`'s
         push passes its limit, ``"slide"`` when a ``ContactRow``'s friction cone is left."""
