@@ -14,7 +14,7 @@ Three cases with closed-form event times (issue 22, item 6):
 * **ball**: a solid ball (m = 7 kg, r = 0.11 m, I = 2/5 m r^2) thrown along a level floor at
   v0 = 3 m/s with backspin w_b = 20 rad/s (``w0 = (0, -w_b, 0)``), Coulomb friction
   ``ContactFriction(0.3, 0.2)``, 1.5 s: it slides (``dv/dt = -mu_k g``, the slip speed
-  ``v + r w_y`` falling at ``7/2 mu_k g``) until the event ``stop`` (a ``switch`` to the
+  ``v + r w_y`` falling at ``7/2 mu_k g``) until the event ``stick`` (a ``switch`` to the
   rolling mode ``closed``) at ``t* = (v0 + r w_b) / (3.5 mu_k g) = 0.757245 s``, then rolls at
   ``(5 v0 - 2 r w_b) / 7``. The sliding motion is quadratic in t, so the error is again the
   location's, on the numeric path a sliding contact runs on (see
@@ -30,7 +30,7 @@ ball and frictional contact rolling from the start at its final rolling speed
 friction cone is watched but never left), so the run has no event and no sliding -- which
 also means it runs on the compiled path, so the ball's ratio holds the numeric path's cost
 as well as the events'. Columns: method, formulation, rtol (or h), max |t_event - t_exact|
-(s) over the case's events (impacts; the ball's ``stop`` switches), steps, f-evals,
+(s) over the case's events (impacts; the ball's ``stick`` switches), steps, f-evals,
 event-function evaluations, CPU s, and the event-free run's steps and CPU s with the ratio.
 A refused combination (the DAE solvers take no D'Alembert ODE; genalpha no rolling
 (nonholonomic) constraints) is a row saying so, and so is a combination left out of the default for its
@@ -68,11 +68,11 @@ FORMULATIONS = ["lagrange", "dalembert"]
 GENALPHA_H = {1e-3: 1e-2, 1e-6: 1e-2, 1e-9: 1e-3, 1e-12: 1e-4}
 
 
-def rotor(stops=True, e=0.8):
-    """A rotor (J = 2 about z) from 0 at 1 rad/s, between stops at +-0.5 rad if ``stops``."""
+def rotor(events=True, e=0.8):
+    """A rotor (J = 2 about z) from 0 at 1 rad/s, between stops at +-0.5 rad if ``events``."""
     m = mbcomp.Model()
     w = m.add("world", World(g=(0, 0, 0)))
-    lim = dict(limits=(-0.5, 0.5), restitution=e) if stops else {}
+    lim = dict(limits=(-0.5, 0.5), restitution=e) if events else {}
     j = m.add("hinge", Revolute(n=(0, 0, 1), phi0=0.0, w0=1.0, **lim))
     b = m.add("disk", RigidBody(m=1.0, I=np.diag([1.0, 1.0, 2.0])))
     m.connect(w.frame_b, j.frame_a)
@@ -89,11 +89,11 @@ def rotor_times(n, e=0.8):
     return np.array(out)
 
 
-def pendulum(stops=True, e=0.7, phi0=0.8):
-    """A 1 m pendulum released at ``phi0`` onto a stop at 0 rad if ``stops``."""
+def pendulum(events=True, e=0.7, phi0=0.8):
+    """A 1 m pendulum released at ``phi0`` onto a stop at 0 rad if ``events``."""
     m = mbcomp.Model()
     w = m.add("world", World(g=(0, -G, 0)))
-    lim = dict(limits=(0.0, 3.0), restitution=e) if stops else {}
+    lim = dict(limits=(0.0, 3.0), restitution=e) if events else {}
     j = m.add("hinge", Revolute(phi0=phi0, w0=0.0, **lim))
     rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
     bob = m.add("bob", PointMass(m=1.0))
@@ -119,12 +119,12 @@ def pendulum_times(n, e=0.7, phi0=0.8):
 BALL = dict(m=7.0, r=0.11, v0=3.0, w_b=20.0, mu_s=0.3, mu_k=0.2)
 
 
-def ball(stops=True):
-    """The ball thrown with backspin (:data:`BALL`, see the module notes); ``stops=False``: its
+def ball(events=True):
+    """The ball thrown with backspin (:data:`BALL`, see the module notes); ``events=False``: its
     event-free counterpart, the same ball and contact rolling from the start at the final
     rolling speed ``(5 v0 - 2 r w_b) / 7``."""
     m, r, v0, w_b = BALL["m"], BALL["r"], BALL["v0"], BALL["w_b"]
-    if not stops:
+    if not events:
         v0 = (5 * v0 - 2 * r * w_b) / 7
         w_b = -v0 / r  # rolling: w_y = v / r
     model = mbcomp.Model()
@@ -141,7 +141,7 @@ def ball(stops=True):
 
 
 def ball_times(n):
-    """The slide's end ``(v0 + r w_b) / (3.5 mu_k g)``; a further ``stop`` has no exact time
+    """The slide's end ``(v0 + r w_b) / (3.5 mu_k g)``; a further ``stick`` has no exact time
     (inf: it shows as an infinite error)."""
     t_star = (BALL["v0"] + BALL["r"] * BALL["w_b"]) / (3.5 * BALL["mu_k"] * G)
     return np.array([t_star] + [np.inf] * (n - 1))[:n]
@@ -152,14 +152,14 @@ def impacts(res):
     return [x.time for x in res.events if x.kind == "impact"]
 
 
-def stop_switches(res):
-    """Times (s) of the run's slip-to-roll switches (event ``stop``)."""
-    return [x.time for x in res.events if x.kind == "switch" and x.name == "stop"]
+def stick_switches(res):
+    """Times (s) of the run's slip-to-roll switches (event ``stick``)."""
+    return [x.time for x in res.events if x.kind == "switch" and x.name == "stick"]
 
 
-#: case: (build(stops=...), exact event times(n), t_end s, the run's event times)
+#: case: (build(events=...), exact event times(n), t_end s, the run's event times)
 CASES = {"rotor": (rotor, rotor_times, 6.0, impacts), "pendulum": (pendulum, pendulum_times, 5.0, impacts),
-         "ball": (ball, ball_times, 1.5, stop_switches)}
+         "ball": (ball, ball_times, 1.5, stick_switches)}
 
 #: combinations left out of the default for their cost (CPU s measured on one core, 2 shared),
 #: run with ``--slow``: (case, method, formulation, rtol) -> why
@@ -215,7 +215,7 @@ def row(case, method, formulation, rtol, slow=False):
     if (case, method, formulation) not in _WARM:  # the first run of a combination compiles and caches its program
         _WARM.add((case, method, formulation))
         run(build, t_end, method, formulation, 1e-3)
-        run(lambda: build(stops=False), t_end, method, formulation, 1e-3)
+        run(lambda: build(events=False), t_end, method, formulation, 1e-3)
     res, cpu, refused = run(build, t_end, method, formulation, rtol)
     out = dict(case=case, method=method, formulation=formulation,
                setting=f"h={GENALPHA_H.get(rtol, 1e-3):g}" if method == "genalpha" else f"{rtol:g}")
@@ -223,7 +223,7 @@ def row(case, method, formulation, rtol, slow=False):
         return dict(out, status="refused", message=refused[:160])
     times = located(res)
     exact = exact_times(len(times))
-    free, cpu_free, _ = run(lambda: build(stops=False), t_end, method, formulation, rtol)
+    free, cpu_free, _ = run(lambda: build(events=False), t_end, method, formulation, rtol)
     st = res.stats
     out.update(status=res.status, events=len(times),
                max_dt=float(np.max(np.abs(np.array(times) - exact))) if times else np.nan,

@@ -13,7 +13,7 @@ torque_c)``. The joint then has three modes (its :class:`StickSlipModes`, the co
 * ``"slip+"``/``"slip-"``: the kinetic friction ``F_k`` (``mu_k normal``, or ``torque_c``)
   opposes the motion, ``-F_k`` while the speed is positive, ``+F_k`` while negative (a
   constant force per mode: no sign function, no smoothing). When the speed comes to zero
-  (event ``"stop"``) the joint sticks, or, when sticking would need more than ``F_s``,
+  (event ``"stick"``) the joint sticks, or, when sticking would need more than ``F_s``,
   slips on the other way at once.
 
 The joint starts stuck when its start speed is zero, else slipping that way. The friction's
@@ -25,7 +25,7 @@ The normal force is a parameter (N), not the joint's reaction across the axis: w
 reaction the friction force would depend on the multipliers it changes (an implicit
 problem, a fixed point per evaluation, and a stick limit that moves with the load); a
 constant normal force is exact for a block on a plane or a shaft with a preloaded bearing.
-A stop and a friction on the same joint are not combined yet (one mode per joint).
+An end stop and a friction on the same joint are not combined yet (one mode per joint).
 :class:`mbcomp.library.BearingFriction` stays the regularized law (``tanh``, no events).
 """
 from dataclasses import dataclass
@@ -212,7 +212,7 @@ class StickSlipModes(Modes):
     Examples
     --------
     >>> m = StickSlipModes("slip+", static=3.0, kinetic=2.0)
-    >>> m.has_force, m.force("slip+"), m.force("stick"), m.action("stop", "slip+")
+    >>> m.has_force, m.force("slip+"), m.force("stick"), m.action("stick", "slip+")
     (True, -2.0, 0.0, Switch(mode='stick'))
     >>> m.rows("stick")
     [StickRow(name='stick', sign=1.0, at=0.0, limit=3.0)]
@@ -226,14 +226,14 @@ class StickSlipModes(Modes):
         self.static, self.kinetic = float(static), float(kinetic)
 
     def events(self, q, u, mode):
-        """``"stop"``: the slip speed (m/s or rad/s) coming to zero; none while stuck."""
+        """``"stick"``: the slip speed (m/s or rad/s) coming to zero; none while stuck."""
         if mode not in ("slip+", "slip-"):
             return []
-        return [("stop", u[0], -1 if mode == "slip+" else 1)]
+        return [("stick", u[0], -1 if mode == "slip+" else 1)]
 
     def action(self, name, mode):
-        """Slip the way the load breaks away (``"break+"``/``"break-"``), stick at a ``"stop"``."""
-        return Switch({"break+": "slip+", "break-": "slip-", "stop": "stick"}[name])
+        """Slip the way the load breaks away (``"break+"``/``"break-"``), stick at a ``"stick"``."""
+        return Switch({"break+": "slip+", "break-": "slip-", "stick": "stick"}[name])
 
     def rows(self, mode):
         """The :class:`~mbcomp.modeling.events.StickRow` holding the rate while stuck."""

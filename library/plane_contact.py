@@ -20,7 +20,7 @@ modes*), when ``unilateral=True``:
 mu_k)``, unilateral only; its :class:`SlidingContactModes`): ``"closed"`` is rolling
 (sticking), watched by the friction cone (event ``"slide"``, ``mu_s N - |F_t|`` falling
 through zero: ``"slip"``); ``"slip"`` holds the ``normal`` row only, the framework applying ``-mu_k N`` against the slip velocity
-(:meth:`~mbcomp.modeling.modes.Modes.slip_friction`), and its event ``"stop"`` (the slip
+(:meth:`~mbcomp.modeling.modes.Modes.slip_friction`), and its event ``"stick"`` (the slip
 speed coming to rest) rolls again. A contact with friction starts sliding; the run turns it
 to rolling at once where its start's slip speed is zero.
 :class:`PlaneContact` is a point or a sphere on a plane, frictionless: its one row is the
@@ -128,7 +128,7 @@ class SlidingContactModes(ContactModes):
     >>> m = SlidingContactModes(open0=False, restitution=0.0, mu_s=0.4, mu_k=0.3)
     >>> m.start, m.slips, m.rows("closed"), m.slip_friction("slip"), m.slip_friction("closed")
     ('slip', True, [ContactRow(name='normal', mu_s=0.4)], 0.3, None)
-    >>> m.action("slide", "closed"), m.action("stop", "slip")
+    >>> m.action("slide", "closed"), m.action("stick", "slip")
     (Switch(mode='slip'), Switch(mode='closed'))
     """
 
@@ -142,14 +142,14 @@ class SlidingContactModes(ContactModes):
         self.mu_s, self.mu_k = float(mu_s), float(mu_k)
 
     def events(self, q, u, mode):
-        """``"stop"`` while sliding: the slip speed (m/s) along its direction coming to rest."""
+        """``"stick"`` while sliding: the slip speed (m/s) along its direction coming to rest."""
         if mode == "slip":
-            return [("stop", SlipSpeed(), -1)]
+            return [("stick", SlipSpeed(), -1)]
         return super().events(q, u, mode)
 
     def action(self, name, mode):
-        """Slide when the cone is left (``"slide"``), roll at a ``"stop"``; else as contacts do."""
-        if name in ("slide", "stop"):
+        """Slide when the cone is left (``"slide"``), roll at a ``"stick"``; else as contacts do."""
+        if name in ("slide", "stick"):
             return Switch("slip" if name == "slide" else "closed")
         return super().action(name, mode)
 

@@ -17,7 +17,7 @@ points against the slip's direction ``e = s0 / |s0|``, and
 * the spin changes by the friction's moment about the centre, ``I dw/dt = (-r e_z) x F``:
   ``dw/dt = mu_k g (-e_y, e_x, 0) / (k r)``;
 * so the slip ``ds/dt = dv/dt - r d(w x e_z)/dt = -mu_k g (1 + 1/k) e`` keeps its direction
-  and its speed falls linearly: the slide ends (the contact's event ``stop``, a switch to
+  and its speed falls linearly: the slide ends (the contact's event ``stick``, a switch to
   its rolling mode) at ``t* = |s0| / (mu_k g (1 + 1/k))`` (``|s0| / (3.5 mu_k g)`` for a
   uniform sphere), after which the ball rolls on at the constant ``v* = v0 e_x - mu_k g t* e``
   (``5 v0 / 7`` without spin; ``(5 v0 - 2 r w_b) / 7`` with backspin).
@@ -53,7 +53,7 @@ Examples
 >>> bowling = mbcomp.load_model_file("models/bowling.py")
 >>> res = mbcomp.simulate(bowling.build(w_b=10.0), t_end=8.0, rtol=1e-10, atol=1e-12, n_out=2)
 >>> [(e.kind, e.name, e.detail["mode"]) for e in res.events]
-[('switch', 'stop', 'closed')]
+[('switch', 'stick', 'closed')]
 >>> round(res.events[0].time, 9), round((8.0 + 0.109 * 10.0) / (3.5 * 0.04 * 9.81), 9)
 (6.618610747, 6.618610747)
 >>> round(float(res["ball.v.x"][-1]), 9), round((5 * 8.0 - 2 * 0.109 * 10.0) / 7, 9)
@@ -123,7 +123,7 @@ def reference(t_end=None, m=7.0, r=0.109, inertia=0.4, mu_s=0.2, mu_k=0.04, v0=8
     dict
         ``t_end``; ``values``: ``ball.r.x``, ``ball.r.y`` (m, the centre), ``ball.v.x``,
         ``ball.v.y`` (m/s), ``ball.w.x``, ``ball.w.y`` (rad/s, world axes) at ``t_end``;
-        ``t_roll`` (s): the slide's end ``t*`` (past ``t_end`` too); ``stops``: ``[t*]`` if
+        ``t_roll`` (s): the slide's end ``t*`` (past ``t_end`` too); ``sticks``: ``[t*]`` if
         ``t* <= t_end``, else ``[]``; ``dissipated`` (J): the friction's work until ``t_end``;
         ``source``.
 
@@ -145,8 +145,8 @@ def reference(t_end=None, m=7.0, r=0.109, inertia=0.4, mu_s=0.2, mu_k=0.04, v0=8
     work = m * a * (S * t - 0.5 * a * (1.0 + 1.0 / inertia) * t * t)
     values = {"ball.r.x": p[0], "ball.r.y": p[1], "ball.v.x": v[0], "ball.v.y": v[1], "ball.w.x": w[0],
               "ball.w.y": w[1]}
-    stops = [t_star] if S > 0.0 and t_star <= t_end else []
-    return dict(t_end=t_end, values={k: float(x) for k, x in values.items()}, t_roll=t_star, stops=stops,
+    sticks = [t_star] if S > 0.0 and t_star <= t_end else []
+    return dict(t_end=t_end, values={k: float(x) for k, x in values.items()}, t_roll=t_star, sticks=sticks,
                 dissipated=float(work),
                 source=f"closed form (models/bowling.py reference: slides until {t_star:.6g} s, then rolls)")
 

@@ -2,7 +2,7 @@
 
 Checked against the model's closed form (its ``reference``, derived in the module notes):
 
-* the slide's end ``t* = |s0| / (mu_k g (1 + 1/k))`` (the contact's ``stop`` switch) to 1e-10 s
+* the slide's end ``t* = |s0| / (mu_k g (1 + 1/k))`` (the contact's ``stick`` switch) to 1e-10 s
   and the state at ``t_end`` (centre position, velocity, world spin) to 1e-9, at rtol 1e-10 for
   the throws spinning about y alone, at rtol 1e-12 with hook (see ``CASES``);
 * the energy balance (kinetic + potential + the friction's dissipated work constant) and the
@@ -28,7 +28,7 @@ G = 9.81
 # spin axis in the body's axes too), so rtol 1e-10 meets the bounds below with room (errors ~1e-13).
 # With hook the ball spins about a tilted axis: the body's axes, in which FreeMotion integrates w and
 # resolves the friction's moment, turn non-polynomially, and at rtol 1e-10 the integration's error
-# reaches the bounds (hook: 1.2e-10 s on the stop, 2.4e-9 on the state; on the oiled lane, sliding
+# reaches the bounds (hook: 1.2e-10 s on the stick, 2.4e-9 on the state; on the oiled lane, sliding
 # 7 s, 1e-9 and 3e-9), converging with rtol (hook at rtol 1e-12: 1.3e-12 s and 2.1e-11; cored: 1.5e-12
 # and 7e-12); those cases run at rtol 1e-12 against the same bounds. The dry lane ends the hook's
 # slide at 1.4 s instead of 7.0 s: a quarter of the steps (9.5 s -> 2.6 s of CPU).
@@ -56,17 +56,17 @@ def _kinetic(m, r, k, v, w):
 
 
 def test_slide_ends_at_the_closed_form_time(thrown):
-    """One event, the contact's slide-to-roll switch ``stop`` (mode ``closed``), at
-    ``reference()["stops"]`` to 1e-10 s; for the plain throw also ``2 v0 / (7 mu_k g)`` written out
+    """One event, the contact's slide-to-roll switch ``stick`` (mode ``closed``), at
+    ``reference()["sticks"]`` to 1e-10 s; for the plain throw also ``2 v0 / (7 mu_k g)`` written out
     (``reference`` against the textbook formula, not only the model against its own file)."""
     kw, t_end, res = thrown
     ref = BOWLING.reference(t_end=t_end, **kw)
     assert res.status == "success"
-    assert [(e.kind, e.component, e.name, e.detail["mode"]) for e in res.events] == [("switch", "lane", "stop",
+    assert [(e.kind, e.component, e.name, e.detail["mode"]) for e in res.events] == [("switch", "lane", "stick",
                                                                                       "closed")]
-    assert len(ref["stops"]) == 1 and abs(res.events[0].time - ref["stops"][0]) < 1e-10
+    assert len(ref["sticks"]) == 1 and abs(res.events[0].time - ref["sticks"][0]) < 1e-10
     if not kw:
-        assert abs(ref["stops"][0] - 2 * 8.0 / (7 * 0.04 * G)) < 1e-12
+        assert abs(ref["sticks"][0] - 2 * 8.0 / (7 * 0.04 * G)) < 1e-12
 
 
 def test_state_at_t_end_matches_the_closed_form(thrown):
@@ -125,11 +125,11 @@ def test_hook_bends_the_path_while_sliding_then_straight():
     assert np.ptp(res["ball.v.x"][roll]) < 1e-10 and np.ptp(res["ball.v.y"][roll]) < 1e-10
 
 
-def test_reference_at_t_end_before_the_stop_has_no_event():
-    """``reference`` at a ``t_end`` inside the slide: no stop, and a run there has none either;
+def test_reference_at_t_end_before_the_stick_has_no_event():
+    """``reference`` at a ``t_end`` inside the slide: no stick, and a run there has none either;
     the state agrees to 1e-9 (the sliding formulas alone)."""
     ref = BOWLING.reference(t_end=2.0, w_b=5.0)
-    assert ref["stops"] == [] and ref["t_roll"] > 2.0
+    assert ref["sticks"] == [] and ref["t_roll"] > 2.0
     res = mbcomp.simulate(BOWLING.build(w_b=5.0), t_end=2.0, n_out=2, **TOL)
     assert res.events == []
     for name, value in ref["values"].items():

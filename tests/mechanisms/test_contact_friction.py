@@ -59,10 +59,10 @@ def thrown(request):
 
 
 def test_thrown_ball_rolls_from_2v0_over_7_mu_g(thrown):
-    """The slide's end (the event ``stop``) at ``2 v0 / (7 mu_k g)`` to 1e-12 s (the issue asks
+    """The slide's end (the event ``stick``) at ``2 v0 / (7 mu_k g)`` to 1e-12 s (the issue asks
     1e-8 at rtol 1e-10 on two integrators: here four), then rolling at ``5 v0 / 7``."""
     t_star = 2 * 2.0 / (7 * 0.2 * G)
-    assert [(e.component, e.name, e.detail["mode"]) for e in thrown.events] == [("floor", "stop", "closed")]
+    assert [(e.component, e.name, e.detail["mode"]) for e in thrown.events] == [("floor", "stick", "closed")]
     assert abs(thrown.events[0].time - t_star) < 1e-12
     assert abs(thrown["ball.v.x"][-1] - 5 / 7 * 2.0) < 1e-12
     assert abs(thrown["ball.w.y"][-1] - 5 / 7 * 2.0 / R_BALL) < 1e-10
@@ -99,7 +99,7 @@ def test_backspin_brings_the_ball_back(w_back):
     res = mbcomp.simulate(ball_on(floor(), (0, 0, R_BALL), v0=(v0, 0, 0), w0=(0, -w_back, 0)), t_end=1.5, n_out=31,
                           **TOL)
     t_star = (v0 + R_BALL * w_back) / (3.5 * mu * G)
-    assert [e.name for e in res.events] == ["stop"]
+    assert [e.name for e in res.events] == ["stick"]
     assert abs(res.events[0].time - t_star) < 1e-12
     assert abs(res["ball.v.x"][-1] - (5 * v0 - 2 * R_BALL * w_back) / 7) < 1e-12
     assert np.max(np.abs(res["energy.balance"])) < 1e-10
@@ -119,7 +119,7 @@ def test_hoop_thrown_without_spin_rolls_at_two_thirds():
     model.connect(w.frame_b, c.frame_a)
     model.connect(c.frame_b, disk.frame_a)
     res = mbcomp.simulate(model, t_end=0.6, n_out=31, **TOL)
-    assert [e.name for e in res.events] == ["stop"]
+    assert [e.name for e in res.events] == ["stick"]
     assert abs(res.events[0].time - v0 / (3 * mu * G)) < 1e-12
     assert abs(res["disk.v.x"][-1] - 2 * v0 / 3) < 1e-12
     assert abs(res["road.F_long"][0] - mu * m * G) < 1e-9 or abs(res["road.F_long"][0] + mu * m * G) < 1e-9
@@ -277,11 +277,11 @@ def test_kinetic_friction_above_static_is_refused():
         ContactFriction(0.2, 0.3)
 
 
-def test_slide_across_an_incline_turns_and_stops_as_the_plane_ode():
+def test_slide_across_an_incline_turns_and_sticks_as_the_plane_ode():
     """A ball thrown across a 0.2 rad incline (``tan < 7/2 mu``) slides with its slip velocity
     turning downhill (``ds/dt = g_t - 7/2 mu_k g cos(alpha) s/|s|`` in the plane, the centre
     ``dv/dt = g_t - mu_k g cos(alpha) s/|s|``) until the slip dies at ``|s| = 0``, then rolls:
-    the positions agree with the plane ODE to 1e-11 m, the stop to 1e-10 s (its slip speed
+    the positions agree with the plane ODE to 1e-11 m, the stick to 1e-10 s (its slip speed
     there 0: the ``turn`` before it changed the watched direction), and on a two-point output
     grid the energy balance still closes (the dissipation is integrated on the steps)."""
     alpha, mu_k, v0 = 0.2, 0.25, 3.0
@@ -299,8 +299,8 @@ def test_slide_across_an_incline_turns_and_stops_as_the_plane_ode():
     rest.terminal = True
     ref = solve_ivp(rhs, (0, 0.6), [0, 0, 0, v0, 0, v0], method="DOP853", rtol=1e-13, atol=1e-14, events=rest,
                     dense_output=True)
-    stops = [e for e in res.events if e.name == "stop" and e.kind == "switch"]
-    assert len(stops) == 1 and abs(stops[0].time - ref.t[-1]) < 1e-9
+    sticks = [e for e in res.events if e.name == "stick" and e.kind == "switch"]
+    assert len(sticks) == 1 and abs(sticks[0].time - ref.t[-1]) < 1e-9
     slide = res.time < ref.t[-1]
     P = np.array([res[f"ball.r.{c}"] for c in "xyz"]).T[slide] - R_BALL * n
     down = np.array([np.cos(alpha), 0.0, -np.sin(alpha)])
@@ -349,7 +349,7 @@ def test_landing_without_rebound_slides_then_rolls_at_five_sevenths():
     res = mbcomp.simulate(landing(mu, 0.0), t_end=1.0, n_out=11, **TOL)
     t_hit = np.sqrt(2 * 0.5 / G)
     assert [(ev.kind, ev.name) for ev in res.events] == [("impact", "touch"), ("engage", "touch"),
-                                                         ("switch", "slide"), ("switch", "stop")]
+                                                         ("switch", "slide"), ("switch", "stick")]
     assert abs(res.events[-1].time - (t_hit + (vx - 3.5 * mu * vz) / (3.5 * mu * G))) < 1e-12
     assert abs(res["ball.v.x"][-1] - 5 / 7 * vx) < 1e-12
     assert res.status == "success" and np.max(np.abs(res["energy.balance"])) < 1e-10

@@ -2,8 +2,8 @@
 
 A block on an incline sticks for tan(alpha) <= mu_s (the friction force then equals the
 slope's pull m g sin(alpha)) and otherwise slides with a = g (sin(alpha) - mu_k cos(alpha));
-a block pushed along a floor stops at t = v0 / (mu_k g) and stays; a pull k t breaks it away
-at t = mu_s m g / k; a rotor with a Coulomb bearing spins down linearly and stops at
+a block pushed along a floor sticks at t = v0 / (mu_k g) and stays; a pull k t breaks it away
+at t = mu_s m g / k; a rotor with a Coulomb bearing spins down linearly and sticks at
 w0 J / torque_c. Event times to 1e-8 s at rtol 1e-10 on dop853 and radau5; the energy
 balance (kinetic + potential + dissipated) closes.
 """
@@ -62,16 +62,16 @@ def test_incline_slides_above_the_friction_angle(method):
 
 
 @pytest.mark.parametrize("method", METHODS)
-def test_a_pushed_block_stops_and_stays(method):
+def test_a_pushed_block_sticks_and_stays(method):
     v0, mu_k = 3.0, 0.4
     r = mbcomp.simulate(block((1, 0, 0), 0.5, mu_k, M * G, v0=v0), t_end=2.0, n_out=401, method=method, **TOL)
-    t_stop = v0 / (mu_k * G)
-    assert [e.name for e in r.events] == ["stop"]  # no chattering: it stays stuck
-    assert abs(r.events[0].time - t_stop) < 1e-8
-    s_stop = v0 ** 2 / (2 * mu_k * G)
-    s_exact = np.where(r.time < t_stop, v0 * r.time - 0.5 * mu_k * G * r.time ** 2, s_stop)
+    t_stick = v0 / (mu_k * G)
+    assert [e.name for e in r.events] == ["stick"]  # no chattering: it stays stuck
+    assert abs(r.events[0].time - t_stick) < 1e-8
+    s_stick = v0 ** 2 / (2 * mu_k * G)
+    s_exact = np.where(r.time < t_stick, v0 * r.time - 0.5 * mu_k * G * r.time ** 2, s_stick)
     assert np.max(np.abs(r["s.s"] - s_exact)) < 1e-9
-    after = r.time > t_stop
+    after = r.time > t_stick
     assert np.all(r["s.v"][after] == 0.0) and np.all(r["s.sticking"][after] == 1.0)
     assert np.max(np.abs(r["s.friction"][after])) < 1e-12  # nothing pulls: the stuck friction holds nothing
     # all the kinetic energy went into the friction
@@ -106,19 +106,19 @@ def test_a_rotor_spins_down_linearly_and_sticks(method):
     m.connect(w.frame_b, j.frame_a)
     m.connect(j.axis, rotor.flange)
     r = mbcomp.simulate(m, t_end=5.0, method=method, **TOL)
-    t_stop = w0 * J / tau_c
-    assert [e.name for e in r.events] == ["stop"] and abs(r.events[0].time - t_stop) < 1e-8
+    t_stick = w0 * J / tau_c
+    assert [e.name for e in r.events] == ["stick"] and abs(r.events[0].time - t_stick) < 1e-8
     assert np.max(np.abs(r["j.w"] - np.maximum(w0 - tau_c / J * r.time, 0.0))) < 1e-9
-    assert np.all(r["j.w"][r.time > t_stop] == 0.0)
+    assert np.all(r["j.w"][r.time > t_stick] == 0.0)
     assert r["energy.dissipated"][-1] == pytest.approx(0.5 * J * w0 ** 2, rel=1e-12)
 
 
 def test_a_stuck_block_slips_back_when_the_load_reverses():
-    """Sticking needs more than mu_s N at the stop: it slips on the other way at once."""
+    """Sticking needs more than mu_s N where the slip ends: it slips on the other way at once."""
     mu_s, k = 0.3, 20.0  # a spring pull -k s: at the turning point k s_max > mu_s m g
     r = mbcomp.simulate(block((1, 0, 0), mu_s, mu_s, M * G, v0=2.0, pull=lambda t, s, v: -k * s), t_end=1.0, **TOL)
     names = [(e.name, e.detail["mode"]) for e in r.events]
-    assert names[:2] == [("stop", "stick"), ("break-", "slip-")]
+    assert names[:2] == [("stick", "stick"), ("break-", "slip-")]
     assert r.events[0].time == r.events[1].time
     # first half cycle: s'' = -om^2 s - mu g from s = 0, v = 2: s = c (cos om t - 1) + 2/om sin om t
     om = np.sqrt(k / M)

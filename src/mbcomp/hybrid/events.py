@@ -88,7 +88,7 @@ class EventRecord:
         The event's name (the user function's ``__name__``).
     kind : str
         ``"impact"``, ``"engage"``, ``"release"``, ``"switch"``, ``"end"``, ``"rest"``
-        (chattering settled) or ``"user"``.
+        (chattering settled), ``"turn"`` (a plane slip turned its direction) or ``"user"``.
     detail : dict
         The impact's ``speed_before``/``speed_after`` (m/s or rad/s along the row),
         ``energy_loss`` (J), ``restitution``; the new ``mode``.
@@ -376,7 +376,7 @@ class Events(SlideEvents):
         nq = self.system.nq
         if cut.turn is not None:  # a plane slide turned: it slides on along the new direction
             self.slip_dirs = {**self.slip_dirs, who: cut.turn}
-            self._record(t_e, who, "stop", "turn", {"mode": self.modes[who], "energy_loss": 0.0})
+            self._record(t_e, who, name, "turn", {"mode": self.modes[who], "energy_loss": 0.0})
             return self._segment(t_e, state[:nq], state[nq:], dict(self.modes))
         if isinstance(action, End):
             self._record(t_e, who, name, "end", {"reason": action.reason})

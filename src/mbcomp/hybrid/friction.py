@@ -13,7 +13,7 @@ A joint with friction (``Prismatic(friction=SlidingFriction(...))``,
   speed (``Modes.force(mode)``: ``-F_k`` in ``"slip+"``, ``+F_k`` in ``"slip-"``),
   added to the evaluation's ``f`` by :class:`~mbcomp.hybrid.active.ForceEvaluator`
   (:func:`~mbcomp.hybrid.active.with_mode_forces`);
-  its event is the speed crossing zero (``"stop"``), whose action is ``Switch("stick")``;
+  its event is the speed crossing zero (``"stick"``), whose action is ``Switch("stick")``;
 * entering ``"stick"`` (or starting in it) the run checks at once whether the row can hold
   (:meth:`mbcomp.hybrid.events.Events`' restart): a push beyond ``limit`` breaks away
   at once, in the direction of the load.

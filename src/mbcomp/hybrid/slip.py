@@ -80,9 +80,9 @@ __all__ = ["tangent_rows", "friction_solve", "SlipEvaluator",
 
 #: m/s: a slip slower than this slides along the direction it started (or last turned) with
 V_TINY = 1e-12
-#: a slip-speed event with ``|v_t|`` above this times ``atol`` is a turn of a plane slip, not a stop
+#: a slip-speed event with ``|v_t|`` above this times ``atol`` is a turn of a plane slip, not a stick
 TURN = 1e3
-#: a slide turning this many times within SPIN_SPAN max(1, |t|) seconds is taken as stopped
+#: a slide turning this many times within SPIN_SPAN max(1, |t|) seconds is taken as sticking
 SPIN_TURNS, SPIN_SPAN = 3, 1e-6
 
 
@@ -98,7 +98,7 @@ def slip_direction(v_t, d):
     """The unit slip direction of a slide that started along ``d``: ``v_t / |v_t|`` turned
     to ``d``'s side (``sign(v_t . d)``), or ``d`` where ``|v_t| <=`` :data:`V_TINY`.
 
-    On the far side of the slide's stop (``v_t . d < 0``, where the integrator's trial
+    On the far side of its stick (``v_t . d < 0``, where the integrator's trial
     stages go before the event is located) the friction keeps pushing the way it did, as the
     mode's constant force on a 1-DOF axis does: the right-hand side stays smooth through the
     event, and its dense output locates it (a sign flip there would cost tiny steps and
@@ -409,7 +409,7 @@ class SlideEvents:
             return None
         turns = [r.time for r in self.records[-SPIN_TURNS:] if r.component == who and r.kind == "turn"]
         if len(turns) == SPIN_TURNS and t_e - turns[0] <= SPIN_SPAN * max(1.0, abs(t_e)):
-            return None  # its direction spins as it dies (stiff near |v_t| = 0): taken as stopped
+            return None  # its direction spins as it dies (stiff near |v_t| = 0): taken as sticking
         return v_t / np.linalg.norm(v_t)
 
     def _cone(self, who, mode):
@@ -450,7 +450,7 @@ class SlideEvents:
                                                                               or n in self.slip_dirs)):
                 dirs[n] = v_t / np.linalg.norm(v_t) if np.linalg.norm(v_t) > V_TINY else self.slip_dirs[n]
             else:
-                rolling = self.system.edge(n).comp.modes(self.system.P[n]).action("stop", modes[n]).mode
+                rolling = self.system.edge(n).comp.modes(self.system.P[n]).action("stick", modes[n]).mode
                 F = closed_force(self.system_now({**modes, n: rolling}), n, t, q, u)
                 size = float(np.linalg.norm(F))
                 dirs[n] = -F / size if size > 0.0 else np.eye(len(F))[0]
@@ -463,9 +463,9 @@ class SlideEvents:
     def _rolling_at_start(self, t, q, u, modes):
         """``modes`` with the contacts that start sliding (a contact with friction starts in
         its sliding mode, its speeds as given) but whose slip speed is zero (at most
-        ``atol``) rolling (``Modes.action("stop")``)."""
+        ``atol``) rolling (``Modes.action("stick")``)."""
         out = dict(modes)
         for n in slipping_joints(self.system, modes):
             if np.linalg.norm(tangent_rows(self.system, n, t, q, u)[1]) <= self.atol:
-                out[n] = self.system.edge(n).comp.modes(self.system.P[n]).action("stop", modes[n]).mode
+                out[n] = self.system.edge(n).comp.modes(self.system.P[n]).action("stick", modes[n]).mode
         return out
