@@ -44,6 +44,7 @@ OLD_PATHS = {
     "simulation.contacts": "hybrid.contacts",
     "simulation.slip": "hybrid.slip",
     "simulation.stickslip": "hybrid.friction",
+    "simulation.stops": "simulation.endings",  # "stop" is a joint's end stop only (issue 30 item 9)
     "stability": "analysis.stability",
     "workprecision": "analysis.workprecision",
 }

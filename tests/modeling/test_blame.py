@@ -34,7 +34,7 @@ def test_the_frameworks_own_numpy_failure_is_no_law():
     """A LinAlgError raised by numpy inside mbcomp's own code (no user or component code in
     between) names no law, so the driver reports it as the linear-algebra failure it is."""
     from mbcomp.assembly.manifold import solve_speeds
-    from mbcomp.simulation.stops import raised_in_a_law
+    from mbcomp.simulation.endings import raised_in_a_law
 
     try:
         solve_speeds(np.array([[np.nan, 1.0]]), np.array([1.0]), np.zeros(2))

@@ -45,7 +45,7 @@ import uuid
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 
-from ..simulation.stops import Terminated, sigterm_interrupts
+from ..simulation.endings import Terminated, sigterm_interrupts
 
 __all__ = ["dispatch", "chunks", "workers_of", "dask_client", "progress_bar", "tick", "Workers", "ChunkStopped",
            "stoppable", "stop_requested", "signal_name", "CONNECT_TIMEOUT", "STOP_GRACE", "STOP_POLL"]
@@ -80,7 +80,7 @@ class ChunkStopped(Exception):
 
 
 def signal_name(exc):
-    """``"SIGTERM"`` for :class:`~mbcomp.simulation.stops.Terminated`, the ``signal`` an
+    """``"SIGTERM"`` for :class:`~mbcomp.simulation.endings.Terminated`, the ``signal`` an
     exception carries (:class:`~mbcomp.errors.SimulationInterrupted`), else ``"SIGINT"``."""
     if isinstance(exc, Terminated):
         return "SIGTERM"
@@ -117,7 +117,7 @@ def _raise_once(signum, _frame):
 @contextmanager
 def stoppable():
     """While a task runs in a process's main thread, Ctrl-C raises ``KeyboardInterrupt`` and
-    SIGTERM :class:`~mbcomp.simulation.stops.Terminated` (the task turns them into
+    SIGTERM :class:`~mbcomp.simulation.endings.Terminated` (the task turns them into
     :class:`ChunkStopped`); the handlers before are restored after. Elsewhere (a Dask worker's
     thread) it does nothing: the task asks :func:`stop_requested` between its runs (in a
     :class:`Workers` process too: a stop asked before the handlers were in place)."""

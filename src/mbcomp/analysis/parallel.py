@@ -20,7 +20,7 @@ import os
 import pickle
 from contextlib import contextmanager
 
-from ..simulation.stops import sigterm_interrupts
+from ..simulation.endings import sigterm_interrupts
 
 __all__ = ["map_on", "executor_of", "executor_name", "running_on"]
 

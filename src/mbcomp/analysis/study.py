@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ModelError, SimulationError, SimulationInterrupted
-from ..simulation.stops import Terminated
+from ..simulation.endings import Terminated
 from .executors import ChunkStopped, dispatch, signal_name, stop_requested, stoppable
 
 __all__ = ["study", "Uniform", "Normal", "StudyResult", "StudyInterrupted", "runs_of"]

@@ -37,7 +37,7 @@ import os
 import sys
 
 from ..errors import SimulationError
-from ..simulation.stops import Terminated
+from ..simulation.endings import Terminated
 from . import bench, export, info, simulate, stability, study
 from .loader import load_model_file, parse_value
 from .messages import EXIT_SIGNAL

@@ -43,7 +43,7 @@ import sys
 
 import numpy as np
 
-from ..simulation.stops import sigterm_interrupts
+from ..simulation.endings import sigterm_interrupts
 from .loader import check_output, load_model_file, split_params, takes
 from .messages import EXIT_SIGNAL
 from .params import build_value, describe_parameters, parse_value

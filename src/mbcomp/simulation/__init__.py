@@ -2,7 +2,7 @@
 
 :mod:`.setup` checks a request and resolves the system, :mod:`.driver` steps it
 (:mod:`.stepping`: the run and its per-step hooks; :mod:`.monitors`: singular positions;
-:mod:`.stops`: how a run that stops early says why), :mod:`.postprocess` computes the
+:mod:`.endings`: how a run that ends early says why), :mod:`.postprocess` computes the
 result columns of :class:`~.result.Result`.
 """
 from .driver import ALL_METHODS, FORMULATIONS, simulate

@@ -52,7 +52,7 @@ from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check
 from .rows import RowChoice
 from .stepping import Budget, BudgetSpent, KeepOutputs, Monitoring, Progress, Projection, Repartition, Run
 from .stiffness import StiffnessWatch, system_laws
-from .stops import Terminated, interrupted_by, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
+from .endings import Terminated, interrupted_by, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
 
 __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
 

@@ -1,13 +1,13 @@
-"""How a run stops early: the messages that say why, and SIGTERM as an interruption.
+"""How a run ends early: the messages that say why, and SIGTERM as an interruption.
 
-The driver keeps the results of every accepted step whatever stops a run; these are the
+The driver keeps the results of every accepted step whatever ends a run; these are the
 words it uses. A component's law that raises is named from the exception's traceback
 (:func:`mbcomp.modeling.blame.blame`: the component, the law and its line) with the time of
 the evaluation that raised; an interruption names what interrupted.
 
 Examples
 --------
->>> from mbcomp.simulation.stops import law_failure
+>>> from mbcomp.simulation.endings import law_failure
 >>> def tau(t, phi, w):
 ...     raise ValueError("table ends at 0.3 s")
 >>> try:
