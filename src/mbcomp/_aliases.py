@@ -40,10 +40,11 @@ OLD_PATHS = {
     "symbolic": "codegen.symbolic",  # the one-file codegen, split one file per step
     "result": "simulation.result",
     "simulation.events": "hybrid.events",  # the hybrid layer left simulation/ (issue 30)
-    "simulation.modes": "hybrid.modes",
+    "simulation.modes": "hybrid.stops",
     "simulation.contacts": "hybrid.contacts",
     "simulation.slip": "hybrid.slip",
     "simulation.stickslip": "hybrid.friction",
+    "hybrid.modes": "hybrid.stops",  # rows held on a joint's own coordinate; modeling.modes keeps its name
     "simulation.stops": "simulation.endings",  # "stop" is a joint's end stop only (issue 30 item 9)
     "stability": "analysis.stability",
     "workprecision": "analysis.workprecision",

@@ -10,8 +10,8 @@ event does (an impulse, a switch of the active set, the end of the run). Bottom 
   (:func:`~.active.mode_system`), and the run's segments (:class:`~.active.SegmentStart`,
   :func:`~.active.segment_at`);
 * :mod:`.contacts` -- unilateral contacts: their rows, gaps, pushes and impacts;
-* :mod:`.modes` -- rows held on tree joints' coordinates (stops): pushes, impacts,
-  consistent states, the columns where they hold;
+* :mod:`.stops` -- rows held on tree joints' own coordinates (end stops, stuck frictions):
+  pushes, impacts, consistent states, the columns where they hold;
 * :mod:`.friction` -- Coulomb friction sticking and slipping on a 1-DOF joint's axis;
 * :mod:`.slip` -- contacts that slide: the friction along the slip, its work, its columns;
 * :mod:`.events` -- event functions detected and located on a step's dense output

@@ -13,7 +13,7 @@ earliest first:
   ``"success"`` and the message ``"event <name> at t=..."``, the event's state the last output;
 * a component's event (:meth:`mbcomp.modeling.roles.Joint.events`) gets the component's
   action (:mod:`mbcomp.modeling.events`): an impact (the impulse equations,
-  :func:`mbcomp.hybrid.modes.impact_speeds`), a switch of mode, or the end of the run;
+  :func:`mbcomp.hybrid.stops.impact_speeds`), a switch of mode, or the end of the run;
 * an engaged row's push (its multiplier) falling through zero is the component's
   ``"release"`` event.
 
@@ -23,7 +23,7 @@ for the first event in the step that acts (detect, locate); it keeps the outputs
 event from the step's dense output (:func:`~mbcomp.hybrid.outputs.keep_until`), then
 :meth:`Events.act` acts (an impulse, a switch of mode, the end of the run) and returns an
 :class:`Outcome`: the run's end, or the next segment -- the state moved onto the new active
-set's rows (:func:`~mbcomp.hybrid.modes.consistent`) and the formulation built over its
+set's rows (:func:`~mbcomp.hybrid.stops.consistent`) and the formulation built over its
 system -- from which the driver starts a new stepper. The events never touch the run.
 
 An impact whose rebound would rise less than :data:`REST_HEIGHT` times ``atol`` above the
@@ -59,7 +59,7 @@ from ..solvers.compiled_rk import CompiledRK
 from ..solvers.locate import return_root, root, time_tolerance
 from ..assembly.conservation import impulse_work
 from .active import SegmentStart, mode_rows, mode_system, slipping_joints, start_modes, with_mode_forces
-from .modes import consistent, impact_speeds, row_push, row_values
+from .stops import consistent, impact_speeds, row_push, row_values
 from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, tangent_rows, with_slip_friction
 from .friction import row_events
 

@@ -20,7 +20,7 @@ from ..assembly.outputs import output_values
 from ..hybrid.active import open_joints, rows_in_force, segment_at, without_rows
 from ..hybrid.contacts import zero_open
 from ..hybrid.friction import friction_columns
-from ..hybrid.modes import changes_dynamics, engaged_values, stop_joints, stop_units
+from ..hybrid.stops import changes_dynamics, engaged_values, stop_joints, stop_units
 from ..hybrid.slip import frictional_contacts, slip_dissipation, slip_state, sliding_values, slipping_joints
 from .accuracy import balance_alarm, between_events, energy_alarm
 
@@ -39,8 +39,8 @@ def segment_columns(series, system, segments, t, Y, system_now):  # long: one pa
     * open contacts: every column over the system without their rows
       (:func:`~mbcomp.assembly.outputs.output_values`), their force columns (N or N m) 0;
     * rows held or forces acting (an engaged stop, a stuck or slipping friction,
-      :func:`~mbcomp.hybrid.modes.changes_dynamics`): every column again from the segment's
-      system (:func:`~mbcomp.hybrid.modes.engaged_values`) and ``<joint>.stop`` (N or N m,
+      :func:`~mbcomp.hybrid.stops.changes_dynamics`): every column again from the segment's
+      system (:func:`~mbcomp.hybrid.stops.engaged_values`) and ``<joint>.stop`` (N or N m,
       the stop's push, 0 where not engaged) for every joint engaged in some segment;
     * contacts with a friction cone: ``<contact>.sticking`` and ``<contact>.slip``
       (:func:`~mbcomp.hybrid.slip.slip_state`) and, where they slide, every column again

@@ -1,4 +1,5 @@
-"""Stops in a run: the rows the modes hold, their impacts and pushes, consistent restarts.
+"""Rows held on a tree joint's own coordinate: an engaged end stop's (or a stuck friction's)
+values, pushes and impacts, and the state made consistent with a new active set.
 
 The system of an active set (:func:`~mbcomp.hybrid.active.mode_system`) holds the rows its
 modes hold (:class:`~mbcomp.modeling.events.AxisRow`: ``sign (s - at)`` on a tree joint's
