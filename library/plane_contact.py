@@ -2,8 +2,8 @@
 
 :class:`Unilateral` is the mixin that gives a contact joint (``tree_edge = False``) with a
 holonomic row ``normal`` (its gap, m, positive on the open side) its modes, a
-:class:`ContactModes` (:mod:`mbcomp.modeling.modes`, ``docs/architecture.md`` *Events and
-modes*), when ``unilateral=True``:
+:class:`ContactModes` (:mod:`mbcomp.modeling.modes`, ``docs/design/hybrid.md`` *Unilateral
+contacts*), when ``unilateral=True``:
 
 * ``"closed"``: the contact's rows (``normal`` and its rolling rows) are in the system, as a
   bilateral contact's; the framework watches the normal row's push and fires ``"release"``

@@ -20,7 +20,7 @@ earliest first:
 The run is integrated in *segments* (:func:`mbcomp.simulation.driver.integrate`), as scipy's
 ``solve_ivp`` and diffrax do: after every accepted step the driver asks :meth:`Events.check`
 for the first event in the step that acts (detect, locate); it keeps the outputs up to the
-event from the step's dense output (:func:`~mbcomp.hybrid.outputs.keep_until`), then
+event from the step's dense output (:meth:`mbcomp.simulation.stepping.Run.keep_until`), then
 :meth:`Events.act` acts (an impulse, a switch of mode, the end of the run) and returns an
 :class:`Outcome`: the run's end, or the next segment -- the state moved onto the new active
 set's rows (:func:`~mbcomp.hybrid.stops.consistent`) and the formulation built over its
