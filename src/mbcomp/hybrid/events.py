@@ -11,7 +11,7 @@ earliest first:
   ``y = [q, u]`` in ``system.q_names + system.u_names``, attributes ``terminal`` (bool or a
   count) and ``direction``) is recorded; a terminal one ends the run there with status
   ``"success"`` and the message ``"event <name> at t=..."``, the event's state the last output;
-* a component's event (:meth:`mbcomp.modeling.roles.Joint.events`) gets the component's
+* a component's event (:meth:`mbcomp.modeling.modes.Modes.events`) gets the component's
   action (:mod:`mbcomp.modeling.events`): an impact (the impulse equations,
   :func:`mbcomp.hybrid.stops.impact_speeds`), a switch of mode, or the end of the run;
 * an engaged row's push (its multiplier) falling through zero is the component's

@@ -2,7 +2,7 @@
 
 A joint with friction (``Prismatic(friction=SlidingFriction(...))``,
 ``Revolute(friction=CoulombBearing(...))``, :mod:`mbcomp.library.friction`) has modes
-``"stick"``, ``"slip+"`` and ``"slip-"`` (the mode contract of :mod:`mbcomp.modeling.events`):
+``"stick"``, ``"slip+"`` and ``"slip-"`` (its :class:`~mbcomp.modeling.modes.Modes`):
 
 * in ``"stick"`` it holds a :class:`~mbcomp.modeling.events.StickRow` (the axis' rate held at
   zero); the row's push ``lambda`` (N or N m, the friction force on the axis) is watched by
@@ -15,8 +15,8 @@ A joint with friction (``Prismatic(friction=SlidingFriction(...))``,
   (:func:`~mbcomp.hybrid.active.with_mode_forces`);
   its event is the speed crossing zero (``"stick"``), whose action is ``Switch("stick")``;
 * entering ``"stick"`` (or starting in it) the run checks at once whether the row can hold
-  (:meth:`mbcomp.hybrid.events.Events`' restart): a push beyond ``limit`` breaks away
-  at once, in the direction of the load.
+  (:meth:`mbcomp.hybrid.events.Events.start`, and each new segment): a push beyond
+  ``limit`` breaks away at once, in the direction of the load.
 
 After the run :func:`friction_columns` adds ``<joint>.friction`` (N or N m, the friction's
 force on the axis: the row's push while stuck, the kinetic force while slipping),
