@@ -57,7 +57,7 @@ class _Coulomb:
                              f"got static {s:g}, kinetic {k:g}")
         if k > s:
             raise ValueError(f"{type(self).__name__}: the kinetic friction ({k:g}) exceeds the static one ({s:g}); "
-                             "a block would stop and start again at once -> make the kinetic value <= the static")
+                             "a block would stick and slip again at once -> make the kinetic value <= the static")
 
 
 @dataclass(frozen=True)
