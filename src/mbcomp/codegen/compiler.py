@@ -101,7 +101,7 @@ class Code:
         if cc is None:
             raise CodegenError("backend='c' needs a C compiler (gcc or cc on PATH, or $CC) -> fix: install one, "
                                "or use backend='python' (no compiler needed) or backend='auto'")
-        # see "Compile policy" in docs/architecture.md: -O2 on every program, output
+        # see "Compile policy" in docs/design/generated-programs.md: -O2 on every program, output
         # expressions of one shape rolled into loops (M's O(N^2) entries), the straight-line
         # rest in functions of CHUNK statements split into translation units compiled in
         # parallel and cached one by one (the Lagrange program's build reuses what is equal)

@@ -55,7 +55,7 @@ Limits
   N = 20). The Python program costs about 20 ns per operation, so it beats the vectorized
   numeric path up to roughly 10^5 operations; the C program (a few ns per operation) beyond.
   gcc -O2 needs ~0.15-0.2 ms per straight-line statement, in parallel units, once: the
-  objects and the library are cached (see the compile policy in docs/architecture.md).
+  objects and the library are cached (see the compile policy in docs/design/generated-programs.md).
 * The result is a :class:`~mbcomp.assembly.system.MultibodySystem` whose evaluator is a
   :class:`ProgramEvaluator` (``system.backend`` is ``"python"`` or ``"c"``); its kinematics,
   reactions and energies are the numeric code, and ``evaluate_numeric`` stays available.

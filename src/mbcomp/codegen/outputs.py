@@ -151,7 +151,7 @@ class OutputProgram:
 
     def _build_c(self, prog, cache_dir):
         cc = c_compiler()
-        # the compile policy of the other programs (docs/architecture.md): -O2, outputs of one
+        # the compile policy of the other programs (docs/design/generated-programs.md): -O2, outputs of one
         # shape rolled into loops, functions of a few hundred statements in translation units
         # compiled in parallel and cached one by one; the grid loop is one more small unit
         parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", chunk, n_parts=n_units)

@@ -8,7 +8,7 @@ Translation units are compiled in parallel (as many at a time as there are proce
 each into an object file cached under a hash of its source, its flags, the compiler and the
 platform, so that a library rebuilt with one unit changed compiles that unit only; the
 objects are linked into a shared library replaced atomically (the cache may be shared by
-processes). See *Compile policy* in ``docs/architecture.md``.
+processes). See *Compile policy* in ``docs/design/generated-programs.md``.
 
 Examples
 --------

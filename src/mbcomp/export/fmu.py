@@ -1,7 +1,7 @@
 """FMI export (first stage, issue 17): FMI 3.0 and 2.0 Model Exchange and Co-Simulation of
 the Lagrange index-1 ODE.
 
-What the FMU holds (see docs/architecture.md, "FMU export"):
+What the FMU holds (see docs/design/fmu.md):
 
 * ``sources/<id>.c``: the model's generated Lagrange program ``mbcomp_fun`` (accelerations
   by the recursive algorithms, loops closed by the multipliers with Baumgarte stabilization,
@@ -29,7 +29,7 @@ What the FMU holds (see docs/architecture.md, "FMU export"):
 
 * Model Exchange states of a model with constraints: D'Alembert's coordinates and independent
   speeds, the partition chosen again (and [q, u] projected) in Event Mode when it degrades or
-  the positions drift (see docs/architecture.md, "FMU export").
+  the positions drift (see docs/design/fmu.md).
 
 * the start values of every coordinate and speed as parameters ``start.<name>``, projected
   onto the constraints at initialization when changed.
