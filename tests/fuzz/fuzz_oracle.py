@@ -52,6 +52,13 @@ RTOL, ATOL = 1e-6, 1e-8
 EPS = float(np.finfo(float).eps)
 #: the finest output grid (intervals) the energy balance is checked on
 MAX_GRID = 100_000
+#: a run whose energy strays is still right when its coordinates and speeds stay within this
+#: many of their tolerances (atol + rtol |y|) of a run 1000 times tighter: a stiff element held
+#: by a constraint (a 4.9 MN/m spring in a loop, 5.6 MN on the closure) turns a loop residual
+#: of 4.5e-11 m into 2.5e-4 J, which no energy bar on the motion's 0.024 J can tell from drift.
+#: The global error adds the local errors of every step, which the tolerance bounds one at a
+#: time: the same spring with its rest length at zero ends 26 tolerances off after 0.3 s
+MOTION_SPAN = 100.0
 _BUDGET = "max_wall_time" in inspect.signature(mbcomp.simulate).parameters
 
 
@@ -121,10 +128,28 @@ def _balance_held(res, system, rtol, atol, t_end):
     # quadrature cannot tell, so the motion itself is judged -- by a run 1000 times tighter
     ref = mbcomp.simulate(system, t_end=t_end, n_out=len(res.time), rtol=rtol * 1e-3, atol=atol * 1e-3)
     off = float(np.max(np.abs(res["energy.total"] - ref["energy.total"]))) if ref.status == "success" else np.inf
-    if off <= tol:
+    if off <= tol or (motion := _motion_off(res, system, rtol, atol, ref)) <= MOTION_SPAN:
         return True, ""
     return False, (f"driven/damped system: energy balance off by {drift:.3g} J > {tol:.3g} J at {len(res.time)} "
-                   f"points, and the energy differs from a run at rtol {rtol * 1e-3:g} by {off:.3g} J")
+                   f"points, the energy differs from a run at rtol {rtol * 1e-3:g} by {off:.3g} J and the motion by "
+                   f"{motion:.3g} tolerances")
+
+
+def _motion_off(res, system, rtol, atol, ref=None):
+    """The largest distance of ``res``'s coordinates and speeds from a run 1000 times tighter
+    (``ref``, made if not given, on the same output grid), each in units of the tolerance it
+    is held to, ``atol + rtol |y|``; infinite if that run does not reach the same end."""
+    if ref is None or len(ref.time) != len(res.time):
+        ref = mbcomp.simulate(system, t_end=float(res.time[-1]), n_out=len(res.time), rtol=rtol * 1e-3,
+                              atol=atol * 1e-3)
+    if ref.status not in ("success", "inaccurate") or len(ref.time) != len(res.time):
+        return np.inf
+    worst = 0.0
+    for name in list(system.q_names) + list(system.u_names):
+        if name in res.names and name in ref.names:
+            a, b = np.asarray(res[name], float), np.asarray(ref[name], float)
+            worst = max(worst, float(np.max(np.abs(a - b) / (atol + rtol * np.abs(b)))))
+    return worst
 
 
 def _check_success(res, system, spec, rtol, atol):
@@ -134,8 +159,9 @@ def _check_success(res, system, spec, rtol, atol):
         raise Violation(f"{res.status} with non-finite columns {bad[:6]}")
     if res.status == "success" and not nonconservative(system):
         drift, tol = _drift(res["energy.total"]), _energy_tol(res, rtol)
-        if drift > tol:
-            raise Violation(f"conservative system: energy drifted {drift:.3g} J > {tol:.3g} J with status success")
+        if drift > tol and (off := _motion_off(res, system, rtol, atol)) > MOTION_SPAN:
+            raise Violation(f"conservative system: energy drifted {drift:.3g} J > {tol:.3g} J with status success, "
+                            f"and the motion is {off:.3g} tolerances off a run 1000 times tighter")
     elif res.status == "success" and "energy.balance" in res.names:
         ok, why = _balance_held(res, system, rtol, atol, float(res.time[-1]))
         if not ok:
