@@ -211,17 +211,21 @@ class ConstraintRank:
     def _inside(self, t_prev, t, rel, dense):
         """``[(t, sigma)]``: the minima of ``sigma`` inside the step ``[t_prev, t]`` (s), located
         along its dense output -- a flat position crossed within one step, which the step-end
-        values alone do not show. ``sigma`` is sampled at :data:`PARTS` - 1 inner points, and
+        values alone do not show. Only a step with an end below :data:`BRACKET` is looked into
+        (a plain run pays nothing for it). ``sigma`` is sampled at :data:`PARTS` - 1 inner points, and
         its slopes at the step's ends (one-sided differences over :data:`SLOPE_SPAN` of the
         step) tell a minimum next to an end."""
         h = t - t_prev
         if not h > 0.0:
             return []
-        dt = self.SLOPE_SPAN * h
-        ts = np.linspace(t_prev, t, self.PARTS + 1)
         first = self._end if self._end is not None and self._end[0] == t_prev else None
         s0 = first[1] if first else self._sigma_at(dense, t_prev)
-        slope0 = first[2] if first else (self._sigma_at(dense, t_prev + dt) - s0) / dt
+        if min(s0, rel) >= self.BRACKET:  # both ends far from flat (sigma grows ~ linearly off it): nothing to see
+            self._end = (t, rel, None)  # its slope is taken if the next step needs it
+            return []
+        dt = self.SLOPE_SPAN * h
+        ts = np.linspace(t_prev, t, self.PARTS + 1)
+        slope0 = first[2] if first and first[2] is not None else (self._sigma_at(dense, t_prev + dt) - s0) / dt
         v = [s0] + [self._sigma_at(dense, tt) for tt in ts[1:-1]] + [rel]
         slope1 = (rel - self._sigma_at(dense, t - dt)) / dt
         self._end = (t, rel, slope1)
@@ -229,7 +233,7 @@ class ConstraintRank:
         for j in range(len(v)):
             before = v[j - 1] if j else v[0] - slope0 * (ts[1] - ts[0])  # the slope as a virtual neighbour
             after = v[j + 1] if j + 1 < len(v) else v[-1] + slope1 * (ts[-1] - ts[-2])
-            if v[j] < before and v[j] < after:
+            if v[j] < before and v[j] < after and v[j] < self.BRACKET:
                 brackets.append((ts[max(j - 1, 0)], ts[min(j + 1, len(v) - 1)]))
         out = []
         for a, b in brackets:
