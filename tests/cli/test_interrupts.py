@@ -124,13 +124,15 @@ def _completed(log):
 
 
 def _mid_run(entries):
-    """At least two runs finished, and every process's latest evaluation lies mid-run."""
+    """At least two runs finished, and every process still evaluating (one among the last 40
+    evaluations logged: a worker whose share is done writes no more) lies mid-run."""
     if len(_finished(entries)) < 2:
         return False
     latest = {}
     for pid, _, t in entries:
         latest[pid] = t
-    return all(0.1 * T_END < t < 0.6 * T_END for t in latest.values())  # 40 % of each run still to go
+    active = {pid for pid, _, _ in entries[-40:]}
+    return all(0.1 * T_END < latest[pid] < 0.6 * T_END for pid in active)  # 40 % of each run still to go
 
 
 def _group_alive(pgid):
