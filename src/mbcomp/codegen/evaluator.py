@@ -88,6 +88,7 @@ from ..errors import SimulationError
 from ..assembly.system import MultibodySystem
 from .compiler import Bound, Code
 from .graph import CodegenError, Fallback, Retrace
+from .jacobian import JacobianCode
 from .toolchain import c_compiler
 from .tracer import FIELDS, param_layout, trace, trace_point
 
@@ -455,6 +456,39 @@ class ProgramEvaluator:
         except (Fallback, ArithmeticError, ValueError):
             self.stats["fallbacks"] += 1
             return None
+
+    def lagrange_jac(self, t, y, alpha, beta):
+        """``d/dy`` of :meth:`lagrange_fun` (``(nq + nu, nq + nu)``) from the exact Jacobian
+        program (:class:`mbcomp.codegen.jacobian.JacobianCode`, made at first need per row
+        mask and reused by ``with_params``), or None when there is none or it does not hold at
+        ``y`` (a failed guard, a non-finite entry): the caller then differences."""
+        if self._fun_bound() is None:
+            return None
+        rm = self.system.row_mask
+        cached = self.__dict__.get("_jac")
+        if cached is None or cached[0] is not rm:
+            key = ("jac", None if rm is None or rm.all() else rm.tobytes())
+            jac = None
+            for _ in range(2):  # the cached program, else (signature or guard changed) a new one
+                code = self.funs.get(key, False)
+                if code is False:
+                    try:
+                        code = JacobianCode.build(self.system, self.backend, self.options["cache_dir"],
+                                                  self.options["max_nodes"])
+                    except CodegenError:
+                        code = None
+                    self.funs[key] = code
+                jac = code.bind(self.system) if code is not None else None
+                if jac is not None or code is None:
+                    break
+                self.funs[key] = False
+            cached = self._jac = (rm, jac)
+        if cached[1] is None:
+            return None
+        J = cached[1](t, y, alpha, beta)
+        if J is None:
+            self.stats["jac_fallbacks"] = self.stats.get("jac_fallbacks", 0) + 1
+        return J
 
     def output_grid(self, t, Y, gains):
         """The result columns at every output time in one program call

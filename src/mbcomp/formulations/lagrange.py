@@ -112,6 +112,17 @@ class LagrangeIndex1(Formulation):
         ud, _ = self.solve(ev)
         return np.concatenate((self.system.q_rate(q, u), ud))
 
+    def jac(self, t, y):
+        """``d fun / dy``: exact, from the generated Jacobian program
+        (:meth:`mbcomp.codegen.evaluator.ProgramEvaluator.lagrange_jac`) when the system runs a
+        generated right-hand side; else (the numeric backend, a state where the program does
+        not hold) by forward differences (:meth:`Formulation.jac`)."""
+        if self._one_call() is not None:
+            J = self.system.evaluator.lagrange_jac(t, np.asarray(y, dtype=float), *self._gains)
+            if J is not None:
+                return J
+        return super().jac(t, y)
+
     def _one_call(self):
         """The evaluator's one-call right-hand side (``lagrange_fun``) or None, looked up once
         per row mask: asking for the capabilities costs as much as the call itself."""

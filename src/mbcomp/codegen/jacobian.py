@@ -1,0 +1,182 @@
+"""The exact Jacobian ``d fun / d y`` of the Lagrange index-1 right-hand side, as a generated
+program (Python or C) differentiated from the traced right-hand side by
+:func:`mbcomp.codegen.tangent.tangent`.
+
+The right-hand side ``fun(t, y) = [dq/dt, du/dt]`` at ``y = [q, u]`` is traced once more
+(``program="fun"``, the system's row mask); its outputs are differentiated with respect to
+the ``q`` and ``u`` inputs in the same graph, and the ``(nq + nu)^2`` entries are printed as
+one program that checks the right-hand side's guards (a failed guard, or a non-finite entry:
+no exact Jacobian at that state, the caller differences). Parameter-only subexpressions are
+hoisted as in every program and computed once per parameter set (:meth:`JacobianCode.bind`).
+
+Examples
+--------
+>>> import numpy as np, mbcomp
+>>> from mbcomp.codegen.jacobian import JacobianCode
+>>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World())
+>>> j = m.add("j", Revolute(phi0=0.5)); rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+>>> bob = m.add("bob", PointMass(m=1.0))
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+>>> system = mbcomp.assemble(m)
+>>> jac = JacobianCode.build(system, "python").bind(system)
+>>> J = jac(0.0, np.array([0.5, 0.0]), 0.0, 0.0)      # d/dphi of du/dt = -g sin(phi): -g cos(phi)
+>>> J[0].tolist(), bool(abs(J[1, 0] + 9.81 * np.cos(0.5)) < 1e-12), abs(float(J[1, 1]))
+([0.0, 1.0], True, 0.0)
+"""
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+
+import numpy as np
+
+from .graph import CodegenError, Fallback, Retrace, no_gc
+from .printers import PY_ENV, ParamProgram, Program
+from .tangent import tangent
+from .toolchain import FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_units, n_units, unit_key
+from .tracer import param_layout, param_vector, trace
+
+__all__ = ["JacobianCode", "BoundJacobian"]
+
+
+class JacobianCode:
+    """The generated program of ``d fun / d y`` for one row mask and parameter signature
+    (shared by systems differing only in parameter values; :meth:`bind` gives the callable).
+
+    Use :meth:`build`, which returns None when the system has no such program (a singular
+    trace point, drives or external inputs evaluated in Python at every call).
+
+    Attributes
+    ----------
+    n : int
+        ``nq + nu``: the Jacobian is ``(n, n)``.
+    n_ops : int
+        Operations per call.
+    backend : {"python", "c"}
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.codegen.jacobian import JacobianCode
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> code = JacobianCode.build(mbcomp.assemble(m), "python")
+    >>> code.n, code.backend      # a free fall: J = [[0, 1], [0, 0]]
+    (2, 'python')
+    """
+
+    def __init__(self, tr, backend, cache_dir=None):
+        g = tr.graph
+        fun = tr.groups["fun"]
+        self.n = len(fun)
+        self.signature, self.layout = tr.signature, tr.layout
+        nq = len(tr.groups["qrate"])  # fun = [dq/dt (nq), du/dt (nu)]
+        ins = [g.memo.get(("in", "q", k)) for k in range(nq)] + [g.memo.get(("in", "u", k))
+                                                                  for k in range(self.n - nq)]
+        # the tracer makes every input; one that were missing would have derivative zero
+        present = [(k, x) for k, x in enumerate(ins) if x is not None]
+        J = tangent(g, fun, [x for _, x in present])
+        flat = [0.0] * (self.n * self.n)
+        for i, row in enumerate(J):
+            for (k, _), v in zip(present, row):
+                flat[i * self.n + k] = v
+        prog = Program(g, {"jac": flat}, guard_groups={"jac": list(tr.guard_groups["fun"])})
+        self.n_ops = prog.n_ops("jac")
+        self.pre = ParamProgram(prog)
+        self.backend = backend
+        if backend == "python":
+            env = dict(PY_ENV, _Fallback=Fallback, _Retrace=Retrace)
+            exec(compile(prog.python_main("jac", "jac"), "<mbcomp.codegen jacobian>", "exec"), env)
+            self.fun = env["jac"]
+        else:
+            self._build_c(prog, cache_dir)
+
+    @classmethod
+    def build(cls, system, backend, cache_dir=None, max_nodes=3_000_000):
+        """The Jacobian program of ``system`` (its current row mask), or None when there is
+        none: a singular trace point, or drives and inputs the program takes per call."""
+        with no_gc():
+            tr = trace(system, max_nodes, program="fun")
+            if "fun" not in tr.groups or tr.drives or tr.inputs:
+                return None
+            return cls(tr, backend, cache_dir)
+
+    def _build_c(self, prog, cache_dir):
+        cc = c_compiler()
+        if cc is None:
+            raise CodegenError("the C Jacobian program needs a C compiler (gcc or cc on PATH, or $CC) -> fix: "
+                               "install one, or use backend='python'")
+        parts, self.n_work = prog.c_parts("jac", "mbcomp_jac", chunk, n_parts=n_units)
+        units = [(f"jac{k}", HEADER + src, list(FLAGS)) for k, src in enumerate(parts)]
+        d = cache_directory(cache_dir)
+        key = hashlib.sha256("\0".join(unit_key(cc, src, fl) for _, src, fl in units).encode()).hexdigest()[:32]
+        lib = os.path.join(d, f"mbcomp_jac_{key}.so")
+        if not os.path.exists(lib):
+            compile_units(cc, units, lib, d)
+        self.dll = ctypes.CDLL(lib)
+        self.dll.mbcomp_jac.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 5
+        self.dll.mbcomp_jac.restype = ctypes.c_int
+
+    def bind(self, system):
+        """The callable :class:`BoundJacobian` for ``system``'s parameter values; None when
+        they change a decision baked into the program (then it must be built again)."""
+        if param_layout(system)[1] != self.signature:
+            return None
+        pv = param_vector(system, self.layout)
+        try:
+            h = self.pre.run(pv)
+        except Retrace:
+            return None
+        return BoundJacobian(self, system.nq, pv, h)
+
+
+class BoundJacobian:
+    """A :class:`JacobianCode` bound to one parameter set: ``J = jac(t, y, alpha, beta)``,
+    ``(n, n)``, or None where the program does not hold (a failed guard, a non-finite
+    entry). ``alpha``, ``beta``: the Baumgarte gains (1/s), zero for none.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.codegen.jacobian import JacobianCode
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> system = mbcomp.assemble(m)
+    >>> JacobianCode.build(system, "python").bind(system)(0.0, np.zeros(2), 0.0, 0.0).tolist()
+    [[0.0, 1.0], [0.0, 0.0]]
+    """
+
+    def __init__(self, code, nq, pv, h):
+        self.code, self.nq = code, nq
+        self.h = h
+        if code.backend == "c":
+            self.hbuf = np.array(list(h) + [0.0], float)
+            self.pbuf = np.array(list(pv) + [0.0], float)
+            self.dbuf = np.zeros(2)
+            self.ybuf = np.zeros(code.n + 1)
+            self.wbuf = np.zeros(max(code.n_work, 1))
+            self.obuf = np.zeros(code.n * code.n + 1)
+
+    def __call__(self, t, y, alpha, beta):
+        code, n, nq = self.code, self.code.n, self.nq
+        if code.backend == "python":
+            try:
+                out = code.fun(y[:nq].tolist(), y[nq:].tolist(), float(t), [alpha, beta], self.h)
+            except (Fallback, ArithmeticError, ValueError):
+                return None
+            J = np.array(out, float).reshape(n, n)
+        else:
+            self.ybuf[:n] = y
+            self.dbuf[0], self.dbuf[1] = alpha, beta
+            base = self.ybuf.ctypes.data
+            if code.dll.mbcomp_jac(base, base + 8 * nq, float(t), self.dbuf.ctypes.data, self.hbuf.ctypes.data,
+                                   self.pbuf.ctypes.data, self.wbuf.ctypes.data, self.obuf.ctypes.data):
+                return None
+            J = self.obuf[: n * n].reshape(n, n).copy()
+        return J if np.isfinite(J).all() else None
