@@ -27,15 +27,13 @@ Examples
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import os
 
 import numpy as np
 
-from .graph import CodegenError, Fallback, Retrace, no_gc
+from .graph import Fallback, Retrace, no_gc
 from .printers import PY_ENV, ParamProgram, Program
 from .tangent import tangent
-from .toolchain import FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_units, n_units, unit_key
+from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import param_layout, param_vector, trace
 
 __all__ = ["JacobianCode", "BoundJacobian"]
@@ -106,18 +104,9 @@ class JacobianCode:
             return cls(tr, backend, cache_dir)
 
     def _build_c(self, prog, cache_dir):
-        cc = c_compiler()
-        if cc is None:
-            raise CodegenError("the C Jacobian program needs a C compiler (gcc or cc on PATH, or $CC) -> fix: "
-                               "install one, or use backend='python'")
         parts, self.n_work = prog.c_parts("jac", "mbcomp_jac", chunk, n_parts=n_units)
         units = [(f"jac{k}", HEADER + src, list(FLAGS)) for k, src in enumerate(parts)]
-        d = cache_directory(cache_dir)
-        key = hashlib.sha256("\0".join(unit_key(cc, src, fl) for _, src, fl in units).encode()).hexdigest()[:32]
-        lib = os.path.join(d, f"mbcomp_jac_{key}.so")
-        if not os.path.exists(lib):
-            compile_units(cc, units, lib, d)
-        self.dll = ctypes.CDLL(lib)
+        self.dll = cached_library(units, "mbcomp_jac", cache_dir, "Jacobian program")
         self.dll.mbcomp_jac.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 5
         self.dll.mbcomp_jac.restype = ctypes.c_int
 

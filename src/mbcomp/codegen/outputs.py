@@ -27,9 +27,6 @@ Examples
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import os
-import sys
 import time
 
 import numpy as np
@@ -37,7 +34,7 @@ import numpy as np
 from ..geometry.kinematics import matrix_to_quat
 from .graph import CodegenError, Fallback, Retrace
 from .printers import PY_ENV, ParamProgram, Program
-from .toolchain import FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_units, n_units
+from .toolchain import FLAGS, HEADER, c_compiler, cached_library, chunk, n_units
 from .tracer import param_vector, trace
 
 __all__ = ["OutputProgram"]
@@ -150,7 +147,6 @@ class OutputProgram:
         return cls(tr, backend, cache_dir) if "outputs" in tr.groups else None
 
     def _build_c(self, prog, cache_dir):
-        cc = c_compiler()
         # the compile policy of the other programs (docs/design/generated-programs.md): -O2, outputs of one
         # shape rolled into loops, functions of a few hundred statements in translation units
         # compiled in parallel and cached one by one; the grid loop is one more small unit
@@ -158,22 +154,15 @@ class OutputProgram:
         # -O2 at every size: the outputs written at the end (constants, inputs) are copied from
         # static tables (printers._tail_c), so gcc's time stays linear (the 1000-link chain's
         # 180,000 operations: 24 s CPU, was 65 s with 5,000 straight-line stores in one function)
-        flags = list(FLAGS)
-        units = [(f"outputs{k}", HEADER + src, flags) for k, src in enumerate(parts)]
+        units = [(f"outputs{k}", HEADER + src, list(FLAGS)) for k, src in enumerate(parts)]
         units.append(("outputs_grid", HEADER + _GRID_DECL + _GRID_C, list(FLAGS)))
-        src = "\n".join(u[1] for u in units)
-        key = hashlib.sha256("\0".join([src, " ".join(flags), cc, sys.platform]).encode()).hexdigest()[:32]
-        d = cache_directory(cache_dir)
-        lib = os.path.join(d, f"mbcomp_out_{key}.so")
-        if not os.path.exists(lib):
-            compile_units(cc, units, lib, d)
-        self.dll = ctypes.CDLL(lib)
+        self.dll = cached_library(units, "mbcomp_out", cache_dir, "output program")
         fn = self.dll.mbcomp_outputs_grid
         L, P = ctypes.c_long, ctypes.c_void_p
         fn.argtypes = [L, P, P, L, L, P, L, P, P, P, P, L, L, P, P, P]
         fn.restype = ctypes.c_int
         self.n_work = max(n_work, 1)
-        self.source = src
+        self.source = "\n".join(u[1] for u in units)
 
     def grid(self, system, t, Y, gains):
         """The columns at every output time.

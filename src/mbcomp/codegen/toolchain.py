@@ -20,6 +20,7 @@ Examples
 """
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import os
 import shutil
@@ -31,6 +32,7 @@ import time
 from .graph import CodegenError
 
 __all__ = ["c_compiler", "cache_directory", "compile_units", "compile_objects", "object_path", "unit_key",
+           "cached_library",
            "chunk", "n_units", "FLAGS", "HEADER", "CHUNK", "LOOP_CHUNK", "SMALL", "SMALL_CHUNK", "PART"]
 
 
@@ -121,6 +123,23 @@ def compile_units(cc, units, lib, cache_dir, extra=()):
             raise CodegenError(f"the C linker failed ({cc}): {res.stderr[-2000:]} -> fix: use backend='python'")
         os.replace(out, lib)
     return done
+
+
+def cached_library(units, stem, cache_dir, what):
+    """The shared library of ``(name, source, flags)`` units, loaded (``ctypes.CDLL``): linked
+    once into ``cache_dir`` under ``<stem>_<hash of the units' keys>.so`` and reused after,
+    its units compiled as :func:`compile_units` does. ``what`` names the program in the error
+    raised when there is no C compiler."""
+    cc = c_compiler()
+    if cc is None:
+        raise CodegenError(f"the C {what} needs a C compiler (gcc or cc on PATH, or $CC) -> fix: install one, or "
+                           "use backend='python'")
+    d = cache_directory(cache_dir)
+    key = hashlib.sha256("\0".join(unit_key(cc, src, fl) for _, src, fl in units).encode()).hexdigest()[:32]
+    lib = os.path.join(d, f"{stem}_{key}.so")
+    if not os.path.exists(lib):
+        compile_units(cc, units, lib, d)
+    return ctypes.CDLL(lib)
 
 
 def object_path(cc, cache_dir, src, flags):
