@@ -45,7 +45,7 @@ from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
 from .postprocess import postprocess
 from .hybrid_columns import finish, segment_columns
-from .error_estimate import companion_tolerances, estimate
+from .error_estimate import with_estimate
 from .result import Result
 from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check_request, check_singular,
                     output_times, system_of)
@@ -191,26 +191,10 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     with input_signals({name: signal_of(name, v) for name, v in (inputs or {}).items()}):
         res = run(rtol, atol)
         if error_estimate and res.status != "interrupted":
-            rtol_c, atol_c, note = companion_tolerances(rtol, atol)
-            try:
-                companion = run(rtol_c, atol_c)
-            except KeyboardInterrupt:  # Ctrl-C during the companion: the main run is whole, keep it
-                res.stats["error_estimate_note"] = "the companion run was interrupted: no estimate"
-                raise SimulationInterrupted(res, "SIGINT", "interrupted by Ctrl-C during the error estimate's "
-                                            "companion run; the main run is complete in .result") from None
-            if companion.status == "interrupted":
-                raise SimulationInterrupted(res, interrupted_by(companion.message), "interrupted during the error "
-                                            "estimate's companion run; the main run is complete in .result")
-            estimate(res, companion, system_names(res), rtol_c, atol_c, note)
+            with_estimate(res, run, rtol, atol)
     if res.status == "interrupted":
         raise SimulationInterrupted(res, interrupted_by(res.message), res.message)
     return res
-
-
-def system_names(res):
-    """The state's column names of a result (coordinates and speeds of its system)."""
-    system = res.system
-    return [] if system is None else list(system.q_names) + list(system.u_names)
 
 
 def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha, beta,

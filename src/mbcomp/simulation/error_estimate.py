@@ -36,7 +36,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["TIGHTER", "RTOL_FLOOR", "companion_tolerances", "estimate"]
+from ..errors import SimulationInterrupted
+from .endings import interrupted_by
+
+__all__ = ["TIGHTER", "RTOL_FLOOR", "companion_tolerances", "estimate", "with_estimate"]
 
 #: the companion run's tolerances are this times the main run's
 TIGHTER = 1e-2
@@ -88,3 +91,23 @@ def estimate(res, companion, state_names, rtol_c, atol_c, note=""):
     if notes:
         res.stats["error_estimate_note"] = "; ".join(notes)
     return res
+
+
+def with_estimate(res, run, rtol, atol):
+    """``res`` with its error estimate (:func:`estimate`) from ``run(rtol_c, atol_c)``, the
+    same request at the companion's tolerances (:func:`companion_tolerances`). An interrupt
+    during the companion raises :class:`~mbcomp.errors.SimulationInterrupted` carrying
+    ``res``, which is whole."""
+    rtol_c, atol_c, note = companion_tolerances(rtol, atol)
+    why = "interrupted during the error estimate's companion run; the main run is complete in .result"
+    try:
+        companion = run(rtol_c, atol_c)
+    except KeyboardInterrupt:  # Ctrl-C outside the integration (assembly, compilation)
+        res.stats["error_estimate_note"] = "the companion run was interrupted: no estimate"
+        raise SimulationInterrupted(res, "SIGINT", why) from None
+    if companion.status == "interrupted":
+        res.stats["error_estimate_note"] = "the companion run was interrupted: no estimate"
+        raise SimulationInterrupted(res, interrupted_by(companion.message), why)
+    system = res.system
+    states = [] if system is None else list(system.q_names) + list(system.u_names)
+    return estimate(res, companion, states, rtol_c, atol_c, note)
