@@ -987,3 +987,11 @@ def test_flange_inertia_gives_a_positive_rotor(cls):
     comp = random_component(cls, _rng(cls, 0))
     J, gyro = comp.rotor(comp.p)
     assert J > 0 and isinstance(gyro, bool) and len(flange_ports(cls)) == 1
+
+
+def test_a_start_mode_that_is_no_name_is_refused_with_the_fix():
+    from mbcomp.modeling.modes import Modes
+
+    with pytest.raises(TypeError, match=r"Modes\(start=3\): a start mode is the mode's name, a string -> fix"):
+        Modes(3)
+    assert Modes("free").start == "free"

@@ -91,7 +91,9 @@ class Modes:
 
     def __init__(self, start):
         if not isinstance(start, str):
-            raise TypeError(f"a component's start mode is a string (e.g. 'free'), not {start!r}")
+            raise TypeError(f"Modes(start={start!r}): a start mode is the mode's name, a string -> fix: "
+                            f"return {type(self).__name__}('free') (or the name of the mode the joint starts in) "
+                            "from the joint's modes(p)")
         self.start = start
 
     def events(self, q, u, mode):
