@@ -68,23 +68,27 @@ def _traced_kind(kind, val):
     return None
 
 
-def param_layout(system):
+def param_layout(system, keep=()):
     """Which parameter entries are runtime inputs, and the structural signature of the rest.
 
     Returns ``(layout, signature)``: ``layout`` lists ``(path, name, index)`` of every nonzero
-    numeric parameter entry (``index`` None for scalars); ``signature`` is hashable and
-    changes when anything baked into a program changes (zero pattern, shapes, laws)."""
+    numeric parameter entry (``index`` None for scalars), and of every entry of the
+    parameters ``keep`` (``(path, name)`` pairs: zeros too, so that a program can be
+    differentiated with respect to them); ``signature`` is hashable and changes when anything
+    baked into a program changes (zero pattern, shapes, laws, kept parameters)."""
     layout, sig = [], []
+    keep = frozenset(keep)
     for path, name, kind, val in parameter_entries(system):
         if kind == "start":
             continue
         traced = _traced_kind(kind, val)
+        kept = (path, name) in keep
         if traced == "s":
-            if val != 0:
+            if val != 0 or kept:
                 layout.append((path, name, None))
-            sig.append((path, name, "s", val != 0))
+            sig.append((path, name, "s", bool(val != 0 or kept)))
         elif traced == "a":
-            nz = val != 0
+            nz = (val != 0) | kept
             layout.extend((path, name, idx) for idx in zip(*np.nonzero(nz)))
             sig.append((path, name, "a", val.shape, nz.tobytes()))
         else:
@@ -108,17 +112,17 @@ def trace_point(system):
 
 
 def _param_inputs(g, system, layout):
-    """The system's parameter values with every runtime entry a ``p`` input of ``g``."""
+    """The system's parameter values with every runtime entry (``layout``) a ``p`` input of ``g``."""
     pindex = {key: k for k, key in enumerate(layout)}
     values = {}
     for path, name, kind, val in parameter_entries(system):
         traced = _traced_kind(kind, val)
-        if traced == "s" and val != 0:
+        if traced == "s" and (path, name, None) in pindex:
             values.setdefault(path, {})[name] = g.input("p", pindex[(path, name, None)], val, state=False)
         elif traced == "a":
             arr = np.zeros(val.shape, dtype=object)
             arr[...] = 0.0
-            for idx in zip(*np.nonzero(val)):
+            for idx in (k[2] for k in layout if k[:2] == (path, name)):
                 arr[idx] = g.input("p", pindex[(path, name, idx)], val[idx], state=False)
             values.setdefault(path, {})[name] = arr
     return traced_params(system, values)
@@ -135,20 +139,20 @@ def _untraceable(exc):
     return CodegenError(f"cannot trace the model's evaluation ({type(exc).__name__}: {exc} {at}) -> fix: {_FIX}")
 
 
-def trace(system, max_nodes, program="eval", baumgarte=True):
+def trace(system, max_nodes, program="eval", baumgarte=True, keep=()):
     """See :func:`_trace`; the right-hand side (``program="fun"``) and the result columns
     (``"outputs"``) first try the drives' motion laws traced into the program (no per-call
     inputs: the C engine can step it, an exported FMU can hold it), and fall back to their
     ``(s, v, a)`` as inputs when a law cannot be traced."""
     if program in ("fun", "outputs") and drives(system):
         try:
-            return _trace(system, max_nodes, program, baumgarte, inline_drives=True)
+            return _trace(system, max_nodes, program, baumgarte, inline_drives=True, keep=keep)
         except CodegenError:
             pass  # a drive law a program cannot hold: evaluated in Python at every call
-    return _trace(system, max_nodes, program, baumgarte)
+    return _trace(system, max_nodes, program, baumgarte, keep=keep)
 
 
-def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=False):
+def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=False, keep=()):
     """Trace the evaluation and the coordinate rates of ``system`` (``program="eval"``), or
     the coordinate rates and the Lagrange right-hand side with the system's row mask
     (``program="fun"``: output group ``"fun"``, absent when the trace point is singular), or
@@ -156,6 +160,7 @@ def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=Fals
     :func:`~mbcomp.assembly.outputs.output_values` then each body's rotation matrix row by
     row, named by ``output_names`` and ``rotation_paths``; the multipliers' Baumgarte gains
     are inputs as in ``"fun"`` when ``baumgarte``; absent when the trace point is singular).
+    ``keep``: parameters ``(path, name)`` made inputs even where zero (see :func:`param_layout`).
 
     Returns a namespace: ``graph``, the output ``groups`` (``"eval"``: the :data:`FIELDS`
     flattened, ``"qrate"``), their ``guard_groups``, the fields' ``shapes``, the parameter
@@ -163,7 +168,7 @@ def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=Fals
     (:class:`~mbcomp.modeling.inputs.Input`, by slot: ``d[3 n_drives + 2 + k]``), the ``baked`` parameter names
     and ``qrate_identity`` (``dq/dt = u``). Raises :class:`CodegenError` naming the component
     whose code cannot be traced."""
-    layout, sig = param_layout(system)
+    layout, sig = param_layout(system, keep)
     t0, q0, u0 = trace_point(system)
     if program == "outputs":
         system.constraint_names()  # the rows' names (structure only), computed numerically once
