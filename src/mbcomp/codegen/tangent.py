@@ -54,7 +54,7 @@ import numpy as np
 
 from .graph import Sym
 
-__all__ = ["OPERATIONS", "tangent"]
+__all__ = ["OPERATIONS", "partials", "tangent"]
 
 #: every operation a graph node may have (``"c"``: constant, ``"in"``: input)
 OPERATIONS = ("c", "in", "+", "-", "*", "/", "neg", "pow", "abs", "cos", "sin", "tan", "asin", "acos", "atan",
@@ -82,6 +82,54 @@ def _partials(op, r, a, b, need_b):
     if op == "hypot":
         return a / r, b / r
     return (_UNARY[op](r, a),)
+
+
+def partials(graph, i, need_b=True):
+    """The local partial derivatives of node ``i`` of ``graph`` with respect to its operands,
+    built in the graph (made current while building) with the same operations as the node.
+
+    The table in the module notes; reverse accumulation (:mod:`mbcomp.codegen.adjoint`)
+    uses the same partials as :func:`tangent`, so the two modes differentiate alike.
+
+    Parameters
+    ----------
+    graph : Graph
+    i : int
+        A node that is an operation (not a constant or an input).
+    need_b : bool
+        Whether the second operand's partial is needed (``pow``: ``r log a`` is made only then).
+
+    Returns
+    -------
+    tuple
+        One partial per operand: :class:`~mbcomp.codegen.graph.Sym` of ``graph`` or numbers.
+
+    Raises
+    ------
+    ValueError
+        When node ``i`` is a constant, an input, or has an operation not in :data:`OPERATIONS`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.codegen.graph import Graph
+    >>> from mbcomp.codegen.tangent import partials
+    >>> with Graph() as g:
+    ...     x, y = g.input("q", 0, 0.5), g.input("u", 0, 2.0)
+    ...     f = np.sin(x) / y
+    >>> g.keys[f.i][0], [g.keys[j][0] for j in g.keys[f.i][1:]]     # r = a / b: a = sin(x), b = y
+    ('/', ['sin', 'in'])
+    >>> da, db = partials(g, f.i)          # d(a/b)/da = 1/b, d(a/b)/db = -r/b
+    >>> round(da.v, 12), round(db.v, 12)
+    (0.5, -0.119856384651)
+    """
+    key = graph.keys[i]
+    op = key[0]
+    if op in ("c", "in") or op not in OPERATIONS:
+        raise ValueError(f"partials: node {i} is {op!r}, not an operation this module can differentiate")
+    nodes = graph.nodes
+    with graph:
+        return _partials(op, nodes[i], nodes[key[1]], nodes[key[2]] if len(key) > 2 else None, need_b)
 
 
 _UNARY = {
