@@ -86,7 +86,8 @@ def _partials(op, r, a, b, need_b):
 
 def partials(graph, i, need_b=True):
     """The local partial derivatives of node ``i`` of ``graph`` with respect to its operands,
-    built in the graph (made current while building) with the same operations as the node.
+    built with the same operations as the node; call it with ``graph`` current (inside
+    ``with graph:``, where the new nodes go).
 
     The table in the module notes; reverse accumulation (:mod:`mbcomp.codegen.adjoint`)
     uses the same partials as :func:`tangent`, so the two modes differentiate alike.
@@ -117,9 +118,9 @@ def partials(graph, i, need_b=True):
     >>> with Graph() as g:
     ...     x, y = g.input("q", 0, 0.5), g.input("u", 0, 2.0)
     ...     f = np.sin(x) / y
+    ...     da, db = partials(g, f.i)      # d(a/b)/da = 1/b, d(a/b)/db = -r/b
     >>> g.keys[f.i][0], [g.keys[j][0] for j in g.keys[f.i][1:]]     # r = a / b: a = sin(x), b = y
     ('/', ['sin', 'in'])
-    >>> da, db = partials(g, f.i)          # d(a/b)/da = 1/b, d(a/b)/db = -r/b
     >>> round(da.v, 12), round(db.v, 12)
     (0.5, -0.119856384651)
     """
@@ -128,8 +129,7 @@ def partials(graph, i, need_b=True):
     if op in ("c", "in") or op not in OPERATIONS:
         raise ValueError(f"partials: node {i} is {op!r}, not an operation this module can differentiate")
     nodes = graph.nodes
-    with graph:
-        return _partials(op, nodes[i], nodes[key[1]], nodes[key[2]] if len(key) > 2 else None, need_b)
+    return _partials(op, nodes[i], nodes[key[1]], nodes[key[2]] if len(key) > 2 else None, need_b)
 
 
 _UNARY = {
