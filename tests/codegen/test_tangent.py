@@ -173,3 +173,20 @@ def test_the_numeric_backend_keeps_differences_and_a_generated_one_the_program()
     np.testing.assert_array_equal(J, form.system.evaluator.lagrange_jac(0.0, y, *form.output_gains()))
     # the exact Jacobian against the differences: agree to the differences' own error
     np.testing.assert_allclose(J, num.jac(0.0, y0), rtol=1e-5, atol=1e-5 * np.abs(J).max())
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_the_bound_program_returns_its_own_matrix_and_none_where_an_entry_is_not_finite(backend):
+    from mbcomp.codegen.jacobian import JacobianCode
+
+    system = mbcomp.assemble(_double_pendulum())
+    jac = JacobianCode.build(system, backend).bind(system)
+    y1, y2 = np.array([0.7, -0.4, 1.3, -0.8]), np.array([0.1, 0.2, -0.3, 0.4])
+    J1 = jac(0.0, y1, 0.0, 0.0)
+    keep = J1.copy()
+    J2 = jac(0.0, y2, 0.0, 0.0)
+    np.testing.assert_array_equal(J1, keep)  # the second call did not write into the first's matrix
+    assert np.abs(J2 - J1).max() > 0.1
+    np.testing.assert_array_equal(jac(0.0, y1, 0.0, 0.0), keep)  # the same state, the same matrix
+    # a rate of 1e160 squares to infinity in the centripetal terms: no exact Jacobian there
+    assert jac(0.0, np.array([0.7, -0.4, 1e160, -0.8]), 0.0, 0.0) is None
