@@ -1,0 +1,306 @@
+"""Reverse-mode (adjoint) differentiation of a traced :class:`~mbcomp.codegen.graph.Graph`,
+and the generated program of the vector-Jacobian products of the Lagrange index-1
+right-hand side: ``lam^T d fun / d y`` and ``lam^T d fun / d p``.
+
+:func:`reverse` builds, in the same graph and with the same :class:`~mbcomp.codegen.graph.Sym`
+operations, the nodes of ``sum_i w_i d outputs[i] / d inputs[k]`` by reverse accumulation:
+the nodes between the inputs and the outputs are visited once in reverse topological
+(index) order, each passing its adjoint times its local partials
+(:func:`mbcomp.codegen.tangent.partials`, the partials forward mode uses) to its operands.
+One sweep gives the derivatives with respect to every input at once, so the cost does not
+grow with the number of parameters (forward mode's grows with it). Weights may be input
+nodes (the adjoint ``lam`` as per-call inputs) or numbers; a derivative that is
+structurally zero stays the number ``0.0``, and comparisons are guards as for
+:func:`~mbcomp.codegen.tangent.tangent` (the program is exact within the traced branch).
+
+:class:`AdjointCode` prints the products of the right-hand side ``fun(t, y)`` (traced with
+``program="fun"``) with the weights ``lam`` as per-call inputs ``d[2:2+n]`` after the
+Baumgarte gains, or the value and gradient of one traced scalar (an objective built on a
+trace's outputs), to Python or C; parameter-only subexpressions (the partials of
+parameter-only nodes among them) are hoisted and computed once per parameter set.
+
+Examples
+--------
+>>> import numpy as np
+>>> from mbcomp.codegen.graph import Graph
+>>> from mbcomp.codegen.adjoint import reverse
+>>> with Graph() as g:
+...     x, y = g.input("q", 0, 0.5), g.input("u", 0, 2.0)
+...     lam0, lam1 = g.input("d", 0, 1.0), g.input("d", 1, 10.0)
+...     f = [np.sin(x) * y, y * y]
+>>> gx, gy = reverse(g, f, [lam0, lam1], [x, y])   # lam^T J: [lam0 y cos x, lam0 sin x + 2 lam1 y]
+>>> round(gx.v, 12), round(gy.v, 12)
+(1.755165123781, 40.479425538604)
+"""
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from .graph import Fallback, Retrace, Sym, no_gc
+from .printers import PY_ENV, ParamProgram, Program
+from .tangent import partials
+from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
+from .tracer import param_layout, param_vector, trace
+
+__all__ = ["reverse", "AdjointCode", "BoundAdjoint"]
+
+
+def _is_zero(x):
+    return type(x) is not Sym and x == 0.0
+
+
+def reverse(graph, outputs, weights, inputs):
+    """The nodes of ``sum_i weights[i] * d outputs[i] / d inputs[k]`` for every ``k``, built in
+    ``graph`` by reverse accumulation.
+
+    Parameters
+    ----------
+    graph : Graph
+        The graph the outputs were traced into (made current while building).
+    outputs : sequence of Sym or float
+        The values to differentiate (numbers have derivative zero).
+    weights : sequence of Sym or float
+        One weight per output: nodes of ``graph`` (e.g. inputs: the adjoint variables) or numbers.
+    inputs : sequence of Sym
+        Input nodes (``graph.input``) to differentiate with respect to.
+
+    Returns
+    -------
+    list
+        Per input: a :class:`~mbcomp.codegen.graph.Sym` of ``graph`` (its trace-time value in
+        ``.v``), or the number ``0.0`` when the weighted outputs do not depend on it.
+
+    Raises
+    ------
+    ValueError
+        When an entry of ``inputs`` is not an input node of ``graph``, the weights are not one
+        per output, or a node has an operation the partials do not know.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.codegen.graph import Graph
+    >>> from mbcomp.codegen.adjoint import reverse
+    >>> with Graph() as g:
+    ...     x, k, z = g.input("q", 0, 3.0), g.input("p", 0, 2.0, state=False), g.input("q", 1, 1.0)
+    ...     f = k * x ** 3 + np.exp(x / k)
+    >>> dx, dk, dz = reverse(g, [f], [1.0], [x, k, z])
+    >>> bool(abs(dx.v - (3 * 2.0 * 9.0 + np.exp(1.5) / 2.0)) < 1e-12), dz   # f does not depend on z
+    (True, 0.0)
+    """
+    keys, nodes = graph.keys, graph.nodes
+    outputs, weights = list(outputs), list(weights)
+    if len(outputs) != len(weights):
+        raise ValueError(f"reverse: {len(outputs)} outputs but {len(weights)} weights (give one weight per output)")
+    seeds = set()
+    for k, x in enumerate(inputs):
+        if type(x) is not Sym or x.i >= len(keys) or keys[x.i][0] != "in" or nodes[x.i] is not x:
+            raise ValueError(f"reverse: inputs[{k}] is not an input node of this graph (make it with Graph.input)")
+        seeds.add(x.i)
+    # the nodes on a path from an input to an output, in index (topological) order
+    seen, stack = set(), [o.i for o in outputs if type(o) is Sym]
+    while stack:
+        i = stack.pop()
+        if i in seen:
+            continue
+        seen.add(i)
+        key = keys[i]
+        if key[0] not in ("c", "in"):
+            stack.extend(key[1:])
+    depends = set()
+    for i in sorted(seen):
+        key = keys[i]
+        if i in seeds or (key[0] not in ("c", "in") and any(j in depends for j in key[1:])):
+            depends.add(i)
+    adj = {}
+    with graph:
+        for o, w in zip(outputs, weights):
+            if type(o) is Sym and o.i in depends and not _is_zero(w):
+                adj[o.i] = adj[o.i] + w if o.i in adj else w
+        for i in sorted(depends, reverse=True):
+            key = keys[i]
+            if key[0] == "in":
+                continue
+            a = adj.pop(i, None)
+            if a is None or _is_zero(a):
+                continue
+            ops = key[1:]
+            parts = partials(graph, i, len(ops) > 1 and ops[1] in depends)
+            for j, p in zip(ops, parts):
+                if j not in depends:
+                    continue
+                c = a * p
+                if _is_zero(c):
+                    continue
+                adj[j] = adj[j] + c if j in adj else c
+    return [adj.get(x.i, 0.0) for x in inputs]
+
+
+class AdjointCode:
+    """The generated program of the vector-Jacobian products of a traced right-hand side (or
+    the value and gradient of a traced scalar), for one row mask and parameter signature;
+    :meth:`bind` gives the callable.
+
+    With ``objective=None`` the program's per-call inputs are ``d = [alpha, beta, lam]``
+    (``lam``: ``n = nq + nu`` weights) and its outputs ``[lam^T dfun/dq, lam^T dfun/du,
+    lam^T dfun/dp]`` (``n + n_p`` numbers, ``p`` in the order of :attr:`layout`). Given
+    ``objective`` (a node or number of ``tr.graph``, e.g. built on ``program="outputs"``),
+    ``d = [alpha, beta]`` and the outputs are ``[value, d/dq, d/du, d/dp]`` (``1 + n + n_p``).
+
+    Parameters
+    ----------
+    tr : namespace
+        A trace (:func:`mbcomp.codegen.tracer.trace`) with group ``"fun"`` (or the group
+        ``group`` the objective was built on), without drives or inputs taken per call.
+    backend : {"python", "c"}
+    cache_dir : str, optional
+        The compiled programs' cache (C).
+    objective : Sym or float, optional
+        The scalar to differentiate instead of the right-hand side.
+    group : str
+        The trace's group whose guards the program checks (``"fun"``; ``"outputs"`` for an
+        objective on the result columns).
+
+    Attributes
+    ----------
+    n : int
+        ``nq + nu``.
+    layout : list
+        The runtime parameters ``(path, name, index)`` (:func:`~mbcomp.codegen.tracer.param_layout`).
+    n_ops : int
+        Operations per call.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.codegen.adjoint import AdjointCode
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> system = mbcomp.assemble(m)
+    >>> code = AdjointCode.build(system, "python")
+    >>> code.n, code.layout        # free fall: fun = [u, g_z], J = [[0, 1], [0, 0]]
+    (2, [('b', 'm', None), ('s', 'n', (np.int64(2),)), ('world', 'g', (np.int64(2),))])
+    >>> code.bind(system)(0.0, np.zeros(2), [0.0, 0.0, 3.0, 5.0]).tolist()  # [lam^T J, lam^T dfun/dp]
+    [0.0, 3.0, 0.0, 0.0, 5.0]
+
+    (``du/dt = g_z``: the mass cancels, the axis is normalized, ``d/dg_z = 1``.)
+    """
+
+    def __init__(self, tr, backend, cache_dir=None, objective=None, group="fun", keep=()):
+        g = tr.graph
+        self.signature, self.layout, self.keep = tr.signature, tr.layout, tuple(keep)
+        nq = len(tr.groups["qrate"])
+        nu = sum(1 for k in g.keys if k[0] == "in" and k[1] == "u")
+        self.n, self.nq = nq + nu, nq
+        ins = ([g.memo.get(("in", "q", k)) for k in range(nq)] + [g.memo.get(("in", "u", k)) for k in range(nu)]
+               + [g.memo.get(("in", "p", k)) for k in range(len(self.layout))])
+        present = [(k, x) for k, x in enumerate(ins) if x is not None]
+        if objective is None:
+            fun = tr.groups["fun"]
+            lam = [g.input("d", 2 + k, 0.3 + 0.1 * k) for k in range(self.n)]
+            outs, weights, lead = fun, lam, []
+        else:
+            outs, weights, lead = [objective], [1.0], [objective]
+        grads = reverse(g, outs, weights, [x for _, x in present])
+        flat = [0.0] * len(ins)
+        for (k, _), v in zip(present, grads):
+            flat[k] = v
+        self.n_out = len(lead) + len(flat)
+        self.scalar = objective is not None
+        prog = Program(g, {"vjp": lead + flat}, guard_groups={"vjp": list(tr.guard_groups[group])})
+        self.n_ops = prog.n_ops("vjp")
+        self.pre = ParamProgram(prog)
+        self.backend = backend
+        if backend == "python":
+            env = dict(PY_ENV, _Fallback=Fallback, _Retrace=Retrace)
+            exec(compile(prog.python_main("vjp", "vjp"), "<mbcomp.codegen adjoint>", "exec"), env)
+            self.fun = env["vjp"]
+        elif backend == "c":
+            parts, self.n_work = prog.c_parts("vjp", "mbcomp_vjp", chunk, n_parts=n_units)
+            units = [(f"vjp{k}", HEADER + src, list(FLAGS)) for k, src in enumerate(parts)]
+            self.dll = cached_library(units, "mbcomp_vjp", cache_dir, "adjoint program")
+            self.dll.mbcomp_vjp.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 5
+            self.dll.mbcomp_vjp.restype = ctypes.c_int
+        else:
+            raise ValueError(f"backend {backend!r} is unknown for the adjoint program; use 'python' or 'c'")
+
+    @classmethod
+    def build(cls, system, backend, keep=(), cache_dir=None, max_nodes=3_000_000):
+        """The vector-Jacobian program of ``system``'s Lagrange right-hand side (its current row
+        mask), or None when there is none (a singular trace point, drives or inputs the
+        program takes per call). ``keep``: parameters ``(path, name)`` made inputs even where
+        zero (:func:`~mbcomp.codegen.tracer.param_layout`), so their products are computed."""
+        with no_gc():
+            tr = trace(system, max_nodes, program="fun", keep=keep)
+            if "fun" not in tr.groups or tr.drives or tr.inputs:
+                return None
+            return cls(tr, backend, cache_dir, keep=keep)
+
+    def bind(self, system):
+        """The callable :class:`BoundAdjoint` for ``system``'s parameter values; None when they
+        change a decision baked into the program (then it must be built again)."""
+        if param_layout(system, self.keep)[1] != self.signature:
+            return None
+        pv = param_vector(system, self.layout)
+        try:
+            h = self.pre.run(pv)
+        except Retrace:
+            return None
+        return BoundAdjoint(self, pv, h)
+
+
+class BoundAdjoint:
+    """An :class:`AdjointCode` bound to one parameter set: ``out = vjp(t, y, d)`` with ``y = [q,
+    u]`` and the per-call inputs ``d`` (``[alpha, beta, lam]``, or ``[alpha, beta]`` for an
+    objective; the Baumgarte gains in 1/s): a float array (see :class:`AdjointCode`), or None
+    where the program does not hold (a failed guard, a non-finite entry).
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.codegen.adjoint import AdjointCode
+    >>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World())
+    >>> j = m.add("j", Revolute(phi0=0.5)); rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    >>> bob = m.add("bob", PointMass(m=1.0))
+    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+    >>> system = mbcomp.assemble(m)
+    >>> vjp = AdjointCode.build(system, "python").bind(system)
+    >>> out = vjp(0.0, np.array([0.5, 0.0]), [0.0, 0.0, 0.0, 1.0])   # lam = e_u: the row of du/dt
+    >>> bool(abs(out[0] + 9.81 * np.cos(0.5)) < 1e-12), float(out[1])   # d/dphi of -g sin(phi) / L
+    (True, 0.0)
+    """
+
+    def __init__(self, code, pv, h):
+        self.code, self.h = code, h
+        self.nq = code.nq
+        if code.backend == "c":
+            self.hbuf = np.array(list(h) + [0.0], float)
+            self.pbuf = np.array(list(pv) + [0.0], float)
+            self.ybuf = np.zeros(code.n + 1)
+            self.dbuf = np.zeros(2 + (0 if code.scalar else code.n) + 1)
+            self.wbuf = np.zeros(max(code.n_work, 1))
+            self.obuf = np.zeros(code.n_out + 1)
+
+    def __call__(self, t, y, d):
+        code, nq = self.code, self.nq
+        if code.backend == "python":
+            try:
+                out = code.fun(list(map(float, y[:nq])), list(map(float, y[nq:code.n])), float(t),
+                               list(map(float, d)), self.h)
+            except (Fallback, ArithmeticError, ValueError):
+                return None
+            out = np.array(out, float)
+        else:
+            self.ybuf[:code.n] = y
+            self.dbuf[:len(d)] = d
+            base = self.ybuf.ctypes.data
+            if code.dll.mbcomp_vjp(base, base + 8 * nq, float(t), self.dbuf.ctypes.data, self.hbuf.ctypes.data,
+                                   self.pbuf.ctypes.data, self.wbuf.ctypes.data, self.obuf.ctypes.data):
+                return None
+            out = self.obuf[:code.n_out].copy()
+        return out if np.isfinite(out).all() else None
