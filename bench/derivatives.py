@@ -1,0 +1,286 @@
+"""Exact derivatives (issue 31 item 7): the cost of mbcomp's ``df/dx`` per call against
+Pinocchio's ``computeABADerivatives`` and against finite differences, as ratios in one run.
+
+**Part A -- one Jacobian.** The mechanism is ``bench/peers.py``'s: ``models/n_link_pendulum.py``
+(N uniform rods on hinges about z, relative angles, its default parameters), built for mbcomp
+by ``bench/peers.py`` (:func:`mbcomp_engines`: the compiled C system ``mbcomp.simulate``
+runs) and for Pinocchio by ``bench/peers/pinocchio_pendulum.py`` (``JointModelRZ`` chain,
+whose ``q, v`` are mbcomp's ``q, u`` unchanged). mbcomp's ODE is ``y = [q, u]``,
+``fun = [u, ddq(q, u)]``, so its ``(2N, 2N)`` Jacobian is ``[[0, I], [ddq/dq, ddq/du]]``;
+Pinocchio's ``computeABADerivatives(q, v, tau=0)`` gives ``ddq/dq``, ``ddq/dv`` and
+``ddq/dtau = M^-1`` (which mbcomp's program does not compute: Pinocchio does more work
+than is compared, by an O(N^2) share of its O(N^3) total).
+
+Before anything is timed, at a generic state (every angle and rate different) the script
+asserts that mbcomp's exact Jacobian has the identity blocks exactly and that its ``ddq``
+blocks agree with Pinocchio's to :data:`AGREE` relative (max abs difference / max abs entry of
+the block); the central differences' distance from the exact matrix is reported.
+
+Timed per call (CPU, ``bench/peers.py``'s ``per_call``: median of batches, one BLAS thread):
+
+* ``pinocchio computeABADerivatives``: called from Python (with its ``(q, v, tau)`` arrays
+  made once); ``pinocchio aba``: one forward-dynamics call, for scale;
+* ``mbcomp C program``: :meth:`mbcomp.codegen.jacobian.BoundJacobian.run_c`, the generated C
+  Jacobian program through its ctypes call, no copy, no check;
+* ``mbcomp BoundJacobian``: the same plus copying the matrix out and checking it is finite
+  (the wrapper's overhead is the difference);
+* ``mbcomp LagrangeIndex1.jac``: what scipy's Radau/BDF/LSODA get (the evaluator's cached
+  program, its statistics);
+* ``mbcomp fun``: one right-hand-side call of the compiled system, for scale;
+* ``forward differences (C fun)``: :meth:`mbcomp.formulations.Formulation.jac` (the
+  differences mbcomp used before the exact program: ``2N + 1`` calls) on the compiled C
+  right-hand side; ``central differences (C fun)``: ``4N`` calls of it (:func:`central_jacobian`);
+  ``forward differences (numeric fun)``: ``Formulation.jac`` on the numeric (uncompiled) path.
+
+The build of the Jacobian program (trace + forward-mode differentiation + C compile, in a fresh
+``MBCOMP_CACHE`` so the compiler runs) is reported too: at N = 100 it dominates everything.
+
+**Part B** (forward sensitivities, adjoint gradients, whole-run differences as multiples of one
+simulation) needs ``mbcomp.simulate(..., sensitivities=...)`` and ``mbcomp.gradient``, which do
+not exist yet; it is not in this script.
+
+Writes bench/derivatives.csv (long format: table, N, who, quantity, value, note) and
+bench/derivatives.png (microseconds per call and ratio to Pinocchio vs N); both are git-ignored
+like every bench output.
+
+Run: python bench/derivatives.py [--Ns 5,10,40,100] [--quick]
+     (needs the extra: pip install -e ".[bench]"). N = 100 compiles a program of ~1.7 million
+     operations: several minutes of compiler CPU.
+"""
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # as bench/peers.py: small matrices, shared cores
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import importlib.util  # noqa: E402
+import math  # noqa: E402
+import pathlib  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parent
+
+
+def _load_peers_script():
+    """``bench/peers.py`` as a module (its name is taken by the package ``bench/peers/``)."""
+    spec = importlib.util.spec_from_file_location("bench_peers_script", HERE / "peers.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+PEERS = _load_peers_script()  # puts bench/ on sys.path: the peers package imports below
+
+from peers import pinocchio_pendulum  # noqa: E402
+from peers.cpu_clock import cpu  # noqa: E402
+
+import mbcomp  # noqa: E402
+from mbcomp.codegen.jacobian import JacobianCode  # noqa: E402
+from mbcomp.formulations import Formulation, LagrangeIndex1  # noqa: E402
+
+AGREE = 1e-8     # the ddq blocks of mbcomp and Pinocchio must agree to this, relative
+T0 = PEERS.T0
+CENTRAL_STEP = 6e-6  # ~ eps^(1/3): central differences' best step for O(1) coordinates
+
+
+def central_jacobian(fun, t, y, step=CENTRAL_STEP):
+    """``d fun / dy`` by central differences (``2 n`` calls of ``fun``), column ``j`` with the
+    step ``step * max(|y_j|, 1)``."""
+    y = np.asarray(y, float)
+    cols, yj = [], y.copy()
+    for j in range(y.size):
+        h = step * max(abs(y[j]), 1.0)
+        yj[j] = y[j] + h
+        fp = np.asarray(fun(t, yj))
+        yj[j] = y[j] - h
+        fm = np.asarray(fun(t, yj))
+        yj[j] = y[j]
+        cols.append((fp - fm) / (2.0 * h))
+    return np.column_stack(cols)
+
+
+def rel(a, b):
+    """Max abs difference of two arrays over the max abs entry of ``b``."""
+    return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
+
+
+class Chain:
+    """Everything built for one N: mbcomp's compiled system, its formulations and bound
+    Jacobian program, and Pinocchio's model (``bench/peers.py``'s builders)."""
+
+    def __init__(self, N):
+        self.N = N
+        self.notes = {}
+        with PEERS.fresh_cache() as cache:
+            model = PEERS.MOD.build(N=N, **PEERS.PHYS, phi0=PEERS.PHI0, w0=PEERS.W0)
+            engines = PEERS.mbcomp_engines(model, cache_dir=cache, notes=self.notes)
+            if "c" not in engines:
+                raise RuntimeError(f"N = {N}: no compiled C system ({self.notes.get('c', '?')}); "
+                                   "a C compiler is needed for this benchmark")
+            self.system = engines["c"].system
+            self.numeric = LagrangeIndex1(engines["numeric"].system)
+            self.form = LagrangeIndex1(self.system)
+            c0 = cpu()
+            code = JacobianCode.build(self.system, "c", cache_dir=cache)
+            self.jac = code.bind(self.system)
+            self.jac_build = cpu() - c0
+            self.n_ops = code.n_ops
+        self.peer = pinocchio_pendulum.build(N, **PEERS.PHYS)
+        self.y = PEERS.generic_state(N)
+
+    def pinocchio(self):
+        pin, p, N = self.peer.pin, self.peer, self.N
+        q, v, tau = self.y[:N].copy(), self.y[N:].copy(), np.zeros(N)
+        return lambda: pin.computeABADerivatives(p.model, p.data, q, v, tau)
+
+    def pinocchio_aba(self):
+        pin, p, N = self.peer.pin, self.peer, self.N
+        q, v, tau = self.y[:N].copy(), self.y[N:].copy(), np.zeros(N)
+        return lambda: pin.aba(p.model, p.data, q, v, tau)
+
+
+def cross_check(c, rows):
+    """Assert mbcomp's exact Jacobian is Pinocchio's (identity blocks exact, ddq blocks to
+    :data:`AGREE`); record how far the differences are from it."""
+    N, y = c.N, c.y
+    J = c.jac(T0, y, 0.0, 0.0)
+    assert J is not None, f"N = {N}: the Jacobian program does not hold at the generic state"
+    assert np.array_equal(J, c.form.jac(T0, y)), "LagrangeIndex1.jac is not the exact program's matrix"
+    assert np.array_equal(J[:N, :N], np.zeros((N, N))) and np.array_equal(J[:N, N:], np.eye(N)), \
+        f"N = {N}: d(dq/dt)/dy is not [0, I]"
+    dq, dv, _ = (np.asarray(x) for x in c.pinocchio()())
+    e_q, e_v = rel(J[N:, :N], dq), rel(J[N:, N:], dv)
+    assert e_q <= AGREE and e_v <= AGREE, \
+        f"N = {N}: mbcomp's ddq/dq, ddq/du differ from Pinocchio's by {e_q:.1e}, {e_v:.1e} > {AGREE:g}"
+    e_c = rel(central_jacobian(c.form.fun, T0, y), J)
+    e_f = rel(Formulation.jac(c.form, T0, y), J)
+    for who, v in (("ddq/dq vs pinocchio", e_q), ("ddq/du vs pinocchio", e_v),
+                   ("central differences vs exact", e_c), ("forward differences vs exact", e_f)):
+        rows.append(dict(table="agreement", N=N, who=who, quantity="rel_diff", value=v))
+    return e_q, e_v, e_c, e_f
+
+
+def timings(c, rows, batch_time):
+    """Microseconds per call of each way to get df/dx (and one rhs call, for scale)."""
+    N, y, t = c.N, c.y, T0
+    jac, form, numeric = c.jac, c.form, c.numeric
+    ways = {
+        "pinocchio computeABADerivatives": c.pinocchio(),
+        "mbcomp C program": lambda: jac.run_c(t, y, 0.0, 0.0),
+        "mbcomp BoundJacobian": lambda: jac(t, y, 0.0, 0.0),
+        "mbcomp LagrangeIndex1.jac": lambda: form.jac(t, y),
+        "forward differences (C fun)": lambda: Formulation.jac(form, t, y),
+        "central differences (C fun)": lambda: central_jacobian(form.fun, t, y),
+        "forward differences (numeric fun)": lambda: Formulation.jac(numeric, t, y),
+        "pinocchio aba (one rhs)": c.pinocchio_aba(),
+        "mbcomp fun (one rhs, C)": lambda: form.fun(t, y),
+    }
+    us = {who: 1e6 * PEERS.per_call(f, batch_time) for who, f in ways.items()}
+    us["mbcomp wrapper overhead"] = us["mbcomp BoundJacobian"] - us["mbcomp C program"]
+    base = us["pinocchio computeABADerivatives"]
+    for who, v in us.items():
+        rows.append(dict(table="per_call", N=N, who=who, quantity="us_per_call", value=v))
+        rows.append(dict(table="per_call", N=N, who=who, quantity="ratio_to_pinocchio", value=v / base))
+    rows.append(dict(table="build", N=N, who="mbcomp Jacobian program (trace + tangent + C, cold)",
+                     quantity="seconds", value=c.jac_build, note=f"{c.n_ops} operations"))
+    return us
+
+
+# ------------------------------------------------------------------------------------------
+# report
+# ------------------------------------------------------------------------------------------
+JACOBIANS = ["pinocchio computeABADerivatives", "mbcomp C program", "mbcomp BoundJacobian",
+             "mbcomp LagrangeIndex1.jac", "forward differences (C fun)", "central differences (C fun)",
+             "forward differences (numeric fun)"]
+
+
+def print_tables(rows, Ns):
+    data, _ = PEERS.pivot(rows, "per_call", "us_per_call")
+    ratio, _ = PEERS.pivot(rows, "per_call", "ratio_to_pinocchio")
+    agree, _ = PEERS.pivot(rows, "agreement", "rel_diff")
+    build, _ = PEERS.pivot(rows, "build", "seconds")
+    Ns = [N for N in Ns if N in data]
+    print("\n## df/dx per call: microseconds (ratio to Pinocchio's computeABADerivatives)\n")
+    whos = JACOBIANS + ["mbcomp wrapper overhead", "pinocchio aba (one rhs)", "mbcomp fun (one rhs, C)"]
+    body = [[w] + [f"{data[N][w]:.3g} ({ratio[N][w]:.2f}x)" for N in Ns] for w in whos]
+    print(PEERS.md_table(["way"] + [f"N = {N}" for N in Ns], body))
+    print("\n## agreement (relative max abs difference) and build\n")
+    whos = list(next(iter(agree.values())).keys()) if agree else []
+    body = [[w] + [f"{agree[N][w]:.1e}" for N in Ns] for w in whos]
+    body += [[w] + [f"{build[N][w]:.2f} s" for N in Ns] for w in (next(iter(build.values())) if build else {})]
+    print(PEERS.md_table(["quantity"] + [f"N = {N}" for N in Ns], body))
+
+
+def plot(rows, path):
+    """Two panels: microseconds per Jacobian vs N (log-log), ratio to Pinocchio vs N."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    data, _ = PEERS.pivot(rows, "per_call", "us_per_call")
+    ratio, _ = PEERS.pivot(rows, "per_call", "ratio_to_pinocchio")
+    Ns = sorted(data)
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5))
+    for ax, d, ylabel, title in ((axes[0], data, "CPU time per call [us]", "df/dx per call"),
+                                 (axes[1], ratio, "ratio to Pinocchio computeABADerivatives",
+                                  "df/dx per call, relative to Pinocchio")):
+        for w in JACOBIANS:
+            pts = [(N, d[N][w]) for N in Ns if w in d[N] and not math.isnan(d[N][w])]
+            if pts:
+                style = "-" if w.startswith("pinocchio") else ("--" if w.startswith("mbcomp") else ":")
+                ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, marker="o", label=w)
+        if d is ratio:
+            ax.axhline(1.0, color="k", lw=0.8)
+        ax.set_xticks(Ns, [str(N) for N in Ns])
+        ax.minorticks_off()
+        ax.set(xlabel="N (links)", ylabel=ylabel, title=f"N-link pendulum: {title}")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+
+
+def parse(argv):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--Ns", default="5,10,40,100", help="link counts (default 5,10,40,100)")
+    ap.add_argument("--quick", action="store_true", help="N = 5,10 and short timing batches")
+    args = ap.parse_args(argv)
+    if args.quick and args.Ns == ap.get_default("Ns"):
+        args.Ns = "5,10"
+    args.Ns = [int(x) for x in args.Ns.split(",")]
+    return args
+
+
+def main(argv=None):
+    args = parse(argv)
+    why = pinocchio_pendulum.available()
+    if why:
+        sys.exit(f"bench/derivatives.py compares with Pinocchio: {why}")
+    wall0, cpu0 = time.perf_counter(), cpu()
+    head = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True, text=True)
+    print(f"mbcomp {head.stdout.strip() or '?'}; N-link pendulum {PEERS.PHYS}; Ns {args.Ns}")
+    rows = []
+    for N in args.Ns:
+        print(f"N = {N}: building ...", flush=True)
+        c = Chain(N)
+        e_q, e_v, e_c, _ = cross_check(c, rows)
+        print(f"N = {N}: exact vs Pinocchio {max(e_q, e_v):.1e}, central differences vs exact {e_c:.1e}; timing ...",
+              flush=True)
+        timings(c, rows, 0.02 if args.quick else 0.05)
+        del c
+    print_tables(rows, args.Ns)
+    PEERS.write_csv(rows, HERE / "derivatives.csv")
+    plot(rows, HERE / "derivatives.png")
+    print(f"\nwrote {HERE / 'derivatives.csv'} and {HERE / 'derivatives.png'} "
+          f"({time.perf_counter() - wall0:.0f} s wall, {cpu() - cpu0:.0f} s CPU)")
+
+
+if __name__ == "__main__":
+    main()
