@@ -58,7 +58,8 @@ from .contacts import contact_impact, contact_pushes, contact_rows, event_value,
 from ..solvers.compiled_rk import CompiledRK
 from ..solvers.locate import return_root, root, time_tolerance
 from ..assembly.conservation import impulse_work
-from .active import SegmentStart, mode_rows, mode_system, slipping_joints, start_modes, with_mode_forces
+from .active import (SegmentStart, mode_rows, mode_system, rows_in_force, slipping_joints, start_modes,
+                     with_mode_forces)
 from .stops import consistent, impact_speeds, row_push, row_values
 from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, tangent_rows, with_slip_friction
 from .friction import row_events
@@ -394,6 +395,54 @@ class Events(SlideEvents):
         out = self._segment(t_e, q, u, modes)
         self._fresh = self._last = cut.key
         return out
+
+    # --- for the sensitivities' jumps (mbcomp.simulation.sensitivity) -------------------------
+    def event_value(self, key, t, qu):
+        """The value of event function ``key`` (a :attr:`Cut.key`) at ``(t, [q, u])`` in the
+        current modes."""
+        return float(self.values(t, np.asarray(qu, float))[key])
+
+    def reset(self, cut, qu):
+        """``[q, u]`` right after the action of ``cut`` from the state ``qu`` before it, as
+        :meth:`act` makes it (an impact's impulse map, then the state made consistent with the
+        next active set), without acting: nothing is recorded and the modes stay. The action
+        is read again from this run's parameters (a twin's restitution, :meth:`twin`)."""
+        (kind, who, name), action = cut.key, cut.action
+        nq, t = self.system.nq, float(cut.t)
+        q, u = np.asarray(qu[:nq], float), np.asarray(qu[nq:], float)
+        modes = dict(self.modes)
+        if isinstance(action, Impact):
+            action = self.system.edge(who).comp.modes(self.system.P[who]).action(name, self.modes[who])
+            u = self._impact_speeds(t, who, action, q, u)
+        elif isinstance(action, Switch):
+            modes[who] = action.mode
+        q, u = consistent(self.system_now(modes), t, q, u)
+        return np.concatenate((q, u))
+
+    def twin(self, params):
+        """Events like these (the same modes and slide directions) over a numeric copy of the
+        system with ``params`` (``{"component.param": value}``) changed: where the
+        sensitivities read the event functions and actions at perturbed parameters."""
+        other = Events(self.system.with_evaluator(None).with_params(params), self.make_form, self.user, self.rtol,
+                       self.atol)
+        other.modes, other.slip_dirs = dict(self.modes), dict(self.slip_dirs)
+        return other
+
+    def holds_rows(self):
+        """Whether the current active set holds rows or applies forces of its own (an engaged
+        stop, a stuck or slipping friction, a sliding contact): the system stepped then is not
+        the assembled one with rows only taken out."""
+        rows = rows_in_force(self.system, self.modes)
+        return bool(rows.held or rows.sliding or rows.forces)
+
+    def _impact_speeds(self, t, who, action, q, u):
+        """``u+`` of an impact of ``who`` (action ``action``) at ``(t, q, u-)``."""
+        if not self.system.edge(who).comp.tree_edge:
+            row = _contact_row(self.system, who, action.engage)
+            return contact_impact(self.system_now(), who, t, q, u, action.restitution, row,
+                                  friction=self._cone(who, action.engage))[0]
+        rows = list(mode_rows(self.system, {who: action.engage}))
+        return impact_speeds(self.system_now(), t, q, u, rows, action.restitution)[0]
 
     def _approaching(self, who, action, state, t=0.0):
         """Whether the impact's rows close (a negative speed along them) at ``state``."""

@@ -52,6 +52,7 @@ from .setup import (ALL_METHODS, check_events, check_model, check_numbers, check
 from .rows import RowChoice
 from .stepping import Budget, BudgetSpent, KeepOutputs, Monitoring, Progress, Projection, Repartition, Run
 from .stiffness import StiffnessWatch, system_laws
+from .sensitivity import Sensitivities, check_sensitivities
 from .endings import Terminated, interrupted_by, interruption, law_failure, raised_in_a_law, sigterm_interrupts, start_failure
 
 __all__ = ["simulate", "METHODS", "FORMULATIONS", "ALL_METHODS"]
@@ -70,7 +71,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
              formulation="lagrange", stabilization=None, alpha=10.0, beta=10.0, n_out=None, dt_out=None,
              max_step=np.inf, progress=False, independent=None, index=None, h=None,
              backend="auto", singular="stop", inputs=None, max_wall_time=None, max_steps=None,
-             body_momenta=False, events=None, error_estimate=False) -> Result:
+             body_momenta=False, events=None, error_estimate=False, sensitivities=None) -> Result:
     """Simulate a model: Lagrange multipliers at index 1, or D'Alembert projection to an ODE.
 
     Parameters
@@ -157,6 +158,14 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
         ``res.stats["global_error"]`` (and the column in ``"global_error_column"``). It sees
         the phase error that energy alarms cannot; it costs one more run (about 1.7x the
         first one's steps for dop853).
+    sensitivities : list of str, optional
+        Parameters to differentiate the motion with respect to: ``"component.param"``,
+        ``"component.param[i]"`` (an array's entry) or a start value (``"crank_joint.phi0"``).
+        The forward sensitivity equations are integrated with the run
+        (:mod:`mbcomp.simulation.sensitivity`: staggered on its steps, exact derivatives from
+        the generated programs, jumps at events); ``res.sensitivity(column, param)`` gives
+        ``d column / d param`` at the output times for the coordinates, speeds and every
+        column of the output program (reactions, energies, poses).
 
     Returns
     -------
@@ -180,16 +189,18 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     events = check_events(events)
     stabilization = check_singular(singular, method, stepper, formulation, stabilization)
     check_names(inputs or {})
-    def run(rtol, atol):
+    sensitivities = check_sensitivities(sensitivities)
+
+    def run(rtol, atol, sensitivities=None):
         return _simulate(model, t_start=t_start, t_end=t_end, params=params, backend=backend,
                          formulation=formulation, stepper=stepper, index=index, stabilization=stabilization,
                          alpha=alpha, beta=beta, independent=independent, method=method, singular=singular,
                          rtol=rtol, atol=atol, n_out=n_out, dt_out=dt_out, max_step=max_step, h=h,
                          progress=progress, budget=Budget(max_wall_time, max_steps) if max_wall_time or max_steps
-                         else None, body_momenta=body_momenta, events=events)
+                         else None, body_momenta=body_momenta, events=events, sensitivities=sensitivities)
 
     with input_signals({name: signal_of(name, v) for name, v in (inputs or {}).items()}):
-        res = run(rtol, atol)
+        res = run(rtol, atol, sensitivities)
         if error_estimate and res.status != "interrupted":
             with_estimate(res, run, rtol, atol)
     if res.status == "interrupted":
@@ -199,7 +210,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
 
 def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, index, stabilization, alpha, beta,
               independent, method, singular, rtol, atol, n_out, dt_out, max_step, h, progress, budget,
-              body_momenta, events=None):
+              body_momenta, events=None, sensitivities=None):
     """:func:`simulate` once the request is checked and the inputs' signals are in place."""
     system = system_of(model, params, backend)
     try:
@@ -227,12 +238,17 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
         y0 = form.initial_state(t_start, init.q, init.u)
     if watcher is not None:  # a stuck friction that cannot hold at the start breaks away there
         form, y0 = watcher.start(form, y0, t_start, init.q, init.u)
-    run = Run(form, stepwise(stepper) if watcher else stepper, output_times(t_start, t_end, n_out, dt_out), y0,
-              rtol=rtol, atol=atol, max_step=max_step, h=h)
+    run = Run(form, stepwise(stepper) if watcher or sensitivities else stepper,
+              output_times(t_start, t_end, n_out, dt_out), y0, rtol=rtol, atol=atol, max_step=max_step, h=h)
+    sens = None
+    if sensitivities:  # a step's own dense output carries them: one step at a time (stepwise)
+        sens = Sensitivities(form.system, sensitivities, t_start, run.ys[0], form.output_gains() or (0.0, 0.0),
+                             stepper.implicit, rtol, atol)
     monitors = monitors_for(system, atol, singular)
     wall0 = _time.perf_counter()
     watch = None if stepper.implicit else StiffnessWatch()
-    status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None], watcher)
+    status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None], watcher,
+                                sens)
     stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
                       index=index, rtol=rtol, atol=atol)
     message = "; ".join([message] + why_slow(run, watch, status, stats))
@@ -244,7 +260,10 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
     res = postprocess(system, form, t_done, Y, status, message, stats, init, body_momenta,
                       fix=_mode_fix(system, watcher, t_done, Y, added))
     res.units.update(added)
-    return finish(res, watcher, np.array(run.ys).reshape(len(run.ys), -1))
+    res = finish(res, watcher, np.array(run.ys).reshape(len(run.ys), -1))
+    if sens is not None:
+        res.sensitivities = sens.table(t_done, Y)
+    return res
 
 
 def _mode_fix(system, watcher, t, Y, units):
@@ -355,7 +374,7 @@ def hooks_for(run, monitors, progress):
     return hooks
 
 
-def integrate(run, monitors, progress=False, extra=(), events=None):
+def integrate(run, monitors, progress=False, extra=(), events=None, sensitivities=None):
     """Step ``run`` to its end; ``(status, message)``. Every way a run can stop early keeps
     the outputs of the accepted steps (see the module notes). ``extra`` hooks run after the
     usual ones: a :class:`~mbcomp.simulation.stepping.Budget` that runs out ends the run with
@@ -367,8 +386,15 @@ def integrate(run, monitors, progress=False, extra=(), events=None):
     are not due), the outputs up to the event are kept from its dense output, the events act
     (:meth:`~mbcomp.hybrid.events.Events.act`: an impulse, a switch of mode, the end) and the
     next segment starts over the new active set with a new stepper -- or the run ends there
-    with status ``"success"`` and the event's message."""
-    hooks = run.hooks = hooks_for(run, monitors, progress) + list(extra)
+    with status ``"success"`` and the event's message.
+
+    With ``sensitivities`` (:class:`~mbcomp.simulation.sensitivity.Sensitivities`) they are
+    integrated over every accepted step right after its outputs are kept, and jump at every
+    event's action."""
+    hooks = hooks_for(run, monitors, progress)
+    if sensitivities is not None:
+        hooks.insert(next(k for k, h in enumerate(hooks) if isinstance(h, KeepOutputs)) + 1, sensitivities)
+    hooks = run.hooks = hooks + list(extra)
     status, message = "success", "reached t_end"
     with sigterm_interrupts():
         try:
@@ -384,12 +410,15 @@ def integrate(run, monitors, progress=False, extra=(), events=None):
                         hook(run)
                     continue
                 run.keep_until(cut.t, cut.qu)  # the step's outputs up to the event
+                jump = sensitivities.before_act(run, cut, events) if sensitivities is not None else None
                 outcome = events.act(cut)
                 if outcome.ends:
                     run.end_at(outcome.t, outcome.state)
                     message = outcome.message
                 else:
                     run.begin_segment(outcome.form, outcome.t, outcome.y0)
+                if sensitivities is not None:
+                    sensitivities.after_act(run, jump, outcome, events)
         except BudgetSpent as exc:
             _keep_reached(run)
             status, message = "budget", f"{exc}; the results up to t={run.t_kept:g} s are kept"

@@ -80,6 +80,7 @@ class Result:
         self.units = dict(units or {})
         self.system = system
         self.events = []  # EventRecord(time, component, name, kind, detail): mbcomp.hybrid.events
+        self.sensitivities = None  # SensitivityTable: simulate(..., sensitivities=[...])
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -151,6 +152,37 @@ class Result:
     def names(self):
         """Every variable name, in CSV column order (after ``time``)."""
         return list(self._series)
+
+    def sensitivity(self, column, param):
+        """``d column / d param`` at the output times (column's unit per parameter's unit).
+
+        Parameters
+        ----------
+        column : str
+            A result column: a coordinate or speed (``"crank_joint.phi"``, an alias such as
+            ``"crank_angle"``), or any column of the output program (reactions
+            ``"pin.f.x"``, ``"energy.total"``, body poses and twists, joints' outputs).
+        param : str
+            A parameter named in ``simulate(..., sensitivities=[...])``.
+
+        Examples
+        --------
+        >>> import mbcomp
+        >>> from mbcomp.library import World, Prismatic, PointMass
+        >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+        >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+        >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+        >>> r = mbcomp.simulate(m, t_end=1.0, n_out=2, sensitivities=["b.m"])
+        >>> float(r.sensitivity("s.s", "b.m")[-1]), float(r.sensitivity("s.f.z", "b.m")[-1])   # free fall: none; weight m g
+        (0.0, 0.0)
+        """
+        if self.sensitivities is None:
+            raise KeyError("this run has no sensitivities -> simulate(..., sensitivities=['component.param', ...])")
+        states, aliases = [], {}
+        if self.system is not None:
+            states = list(self.system.q_names) + list(self.system.u_names)
+            aliases = self.system.topology.flat.aliases
+        return self.sensitivities.of(aliases.get(column, column), param, states)
 
     def __getitem__(self, name):
         if name == "time":

@@ -1,0 +1,492 @@
+"""Forward trajectory sensitivities ``S(t) = d[q, u](t) / dp`` integrated with a run.
+
+``simulate(model, ..., sensitivities=["rod.m", "crank_joint.phi0"])`` integrates, next to the
+states, the forward sensitivity equations of the Lagrange index-1 right-hand side
+``fun(t, y, p)``::
+
+    dS/dt = (d fun/dy) S + d fun/dp,        S(t0) = d y0 / dp
+
+with exact derivatives from the generated programs (:mod:`mbcomp.codegen.sensitivity`).
+
+**Staggered, on the run's own steps.** After every accepted step of the run, the sensitivity
+equations are integrated over that step, along the step's dense output ``y(t)``, by scipy's
+``DOP853`` (explicit runs) or ``Radau`` (implicit runs, the Jacobian ``I (x) d fun/dy``
+exact) with the run's ``rtol`` and ``atol``. Why not simultaneous (one augmented state under
+one error control)? Asking for sensitivities then changes the steps, hence the states: a run
+with sensitivities would not reproduce the run without them, and the hybrid layer's events,
+projections and repartitions would all have to carry the augmented state. Staggered, the
+states are bit-for-bit those of the same run without sensitivities, and the sensitivities
+have their own error control to the same tolerances. The price is one dense-output
+evaluation of ``y`` per sensitivity stage.
+
+**Constraints.** With Baumgarte stabilization the sensitivity equations are those of the
+stabilized right-hand side (its gains in ``fun``): the linearized constraint drift decays as
+the states' does. A run that projects (``stabilization="projection"``, D'Alembert, the DAE
+forms) integrates ``fun`` without gains and projects ``S`` after every step, and at every kept
+output, onto the tangent of the constraint manifold: ``dPhi/dq S_q + dPhi/dp = 0``,
+``d[Phid, Psi]/dy S + d[Phid, Psi]/dp = 0``, by minimum-norm corrections -- the derivative of
+the projection the run applies to the state (:mod:`mbcomp.assembly.kkt`).
+
+**The start.** ``S(t0)`` is the derivative of the consistent initial state: a start value a
+user fixed (``crank_joint.phi0=0.3``) moves its coordinate; the free coordinates and speeds
+follow by the implicit function theorem on ``Phi = 0`` and ``[Phid, Psi] = 0`` (the minimum-norm
+solution, as the initialization's Gauss-Newton); a ``Guess`` is free, so its sensitivity is zero.
+
+**Events.** At an event at ``tau`` with event function ``g`` and the state after the action
+``y+ = R(y-, p)`` (an impact's impulse map, or the identity), the sensitivities jump by the
+standard conditions of hybrid systems::
+
+    dtau/dp = -(g_y S- + g_p) / (g_y f-)
+    S+ = R_y S- + R_p + (R_y f- - f+) dtau/dp
+
+``g`` and ``R`` are the hybrid layer's own (:meth:`mbcomp.hybrid.events.Events.event_value`,
+:meth:`~mbcomp.hybrid.events.Events.reset`); their derivatives along each column ``(S-_j, e_j)``
+are central differences of the combined perturbation (states moved by ``eps S-_j``, the
+parameter by ``eps`` in a copy of the system), accurate to about ``1e-9`` relative: ``g``
+and ``R`` are evaluated numerically (not traced). A segment in which rows are held by a
+mode (a stop engaged, a ball come to rest, a stuck friction, a sliding contact) is not
+covered: the sensitivities end at its start and ``res.sensitivity`` says so.
+
+Examples
+--------
+>>> import numpy as np, mbcomp
+>>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World())
+>>> j = m.add("j", Revolute(phi0=0.1)); rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+>>> bob = m.add("bob", PointMass(m=1.0))
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+>>> r = mbcomp.simulate(m, t_end=1.0, rtol=1e-10, atol=1e-12, sensitivities=["j.phi0", "bob.m"])
+>>> s = r.sensitivity("j.phi", "j.phi0")    # small swings: phi = phi0 cos(sqrt(g/l) t)
+>>> bool(abs(s[-1] - np.cos(np.sqrt(9.81))) < 2e-3), float(np.abs(r.sensitivity("j.phi", "bob.m")).max())
+(True, 0.0)
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from ..codegen.graph import CodegenError
+from ..codegen.sensitivity import ColumnCode, SensitivityCode, parameter_ref
+from ..errors import SimulationError
+from .stepping import StepHook
+
+__all__ = ["Sensitivities", "SensitivityTable", "check_sensitivities"]
+
+#: relative step of the central differences of event functions and reset maps
+EVENT_STEP = 1e-6
+
+
+def check_sensitivities(names):
+    """The requested parameter names as a list of str (a ``ValueError`` for anything else)."""
+    if names is None:
+        return None
+    if isinstance(names, str):
+        names = [names]
+    names = list(names)
+    if not names or not all(isinstance(n, str) for n in names):
+        raise ValueError(f"sensitivities={names!r}: give a list of parameter names, e.g. ['rod.m', 'crank_joint.phi0']")
+    if len(set(names)) != len(names):
+        raise ValueError(f"sensitivities={names!r} names a parameter twice -> give each once")
+    return names
+
+
+def _backend(system):
+    return "c" if system.backend == "c" else "python"
+
+
+class Sensitivities(StepHook):
+    """The sensitivities of one run (see the module notes): a hook after every accepted step.
+
+    Parameters
+    ----------
+    system : MultibodySystem
+        The run's system, initialized.
+    names : list of str
+        Parameter names (:func:`mbcomp.codegen.sensitivity.parameter_ref`).
+    t0 : float
+        Start time (s).
+    y0 : ndarray
+        Consistent start state ``[q, u]``.
+    gains : tuple
+        ``(alpha, beta)`` (1/s) of the run's Baumgarte stabilization, ``(0, 0)`` without.
+    implicit : bool
+        Whether the run's stepper is implicit (the sensitivities are then stepped by Radau).
+    rtol, atol : float
+        The run's tolerances.
+    """
+
+    def __init__(self, system, names, t0, y0, gains, implicit, rtol, atol):
+        self.system = system
+        self.refs = [parameter_ref(system, n) for n in names]
+        self.names = [r.name for r in self.refs]
+        self.gains = tuple(float(g) for g in gains)
+        self.implicit, self.rtol, self.atol = implicit, rtol, atol
+        self.n, self.k = system.nq + system.nu, len(self.refs)
+        self._codes = {}
+        self._programmed = [j for j, r in enumerate(self.refs) if r.kind == "param"]
+        self.t = float(t0)
+        self.S = self.initial(system, t0, np.asarray(y0, float))
+        self.kept = [self.S.copy()]
+        self.kept_systems = [system]
+        self.stopped = None  # why the sensitivities end early (a held row), with the time
+        self.stats_ = dict(sensitivity_steps=0, sensitivity_evaluations=0, sensitivity_jumps=0)
+
+    # --- programs ----------------------------------------------------------------------------
+    def bound(self, system):
+        """The bound sensitivity programs of ``system`` (a segment's), built once per structure."""
+        key = id(system)
+        if key not in self._codes:
+            try:
+                code = SensitivityCode.build(system, self.names, _backend(system))
+            except CodegenError as exc:
+                raise SimulationError(str(exc)) from exc
+            self._codes[key] = (system, code.bind(system))
+        return self._codes[key][1]
+
+    def _wide(self, D):
+        """``D`` over the programs' parameters (the ``"param"`` kind) widened to every
+        requested parameter: start values' columns are zero."""
+        if D.shape[1] == self.k:
+            return D
+        out = np.zeros((D.shape[0], self.k))
+        out[:, self._programmed] = D
+        return out
+
+    def _rhs(self, system, t, y):
+        out = self.bound(system).rhs(t, y, *self.gains)
+        if out is not None:
+            out = (out[0], out[1], self._wide(out[2]))
+        if out is None:
+            raise SimulationError(f"sensitivities: the sensitivity program does not hold at t={t:.12g} s (a law's "
+                                  "branch the trace did not take, or a singular matrix) -> write the law's branch "
+                                  "smoothly (e.g. with tanh), or run without sensitivities")
+        self.stats_["sensitivity_evaluations"] += 1
+        return out
+
+    # --- the start ---------------------------------------------------------------------------
+    def initial(self, system, t0, y0):
+        """``S(t0)``: the derivative of the consistent start state (see the module notes)."""
+        nq, nu = system.nq, system.nu
+        S = np.zeros((self.n, self.k))
+        qfree, ufree = np.ones(nq, bool), np.ones(nu, bool)
+        for e in system.topology.tree:
+            if e.kind != "joint" or e.dof == 0 or e.drive:
+                continue
+            _, qf, _, uf = e.comp.start(system.P[e.name])
+            qf, uf = np.broadcast_to(qf, (e.u.stop - e.u.start,)), np.broadcast_to(uf, (e.u.stop - e.u.start,))
+            ufree[e.u] = ~uf
+            if e.q.stop - e.q.start == e.u.stop - e.u.start:
+                qfree[e.q] = ~qf
+            else:
+                qfree[e.q] = not np.any(qf)
+        for j, ref in enumerate(self.refs):
+            if ref.kind != "start":
+                continue
+            e = system.edge(ref.path)
+            if e.q.stop == e.q.start and not e.comp.tree_edge:
+                raise SimulationError(f"sensitivities: {ref.name} is a start value of {ref.path!r}, which closes a "
+                                      "loop -> take the sensitivity with respect to a tree joint's start value")
+            h = 1e-6 * max(1.0, abs(ref.value))
+            plus, minus = (e.comp.start(_with(system.P[ref.path], ref, ref.value + s * h)) for s in (1.0, -1.0))
+            dq = (np.asarray(plus[0], float) - np.asarray(minus[0], float)) / (2 * h)
+            du = (np.asarray(plus[2], float) - np.asarray(minus[2], float)) / (2 * h)
+            S[e.q, j] = np.where(qfree[e.q], 0.0, dq)  # a Guess is free: the start does not follow it
+            S[nq + e.u.start: nq + e.u.stop, j] = np.where(ufree[e.u], 0.0, du)
+        res = self._residuals(system, t0, y0)
+        if res is None or res[1][0].size == 0:
+            return S
+        m, (r, Dq, Du, Dp) = res
+        Gq, Gp = Dq[:m], Dp[:m]
+        if m:
+            rhs = Gq[:, ~qfree] @ S[:nq][~qfree] + Gp
+            S[:nq][qfree] = -np.linalg.pinv(Gq[:, qfree]) @ rhs
+        Vq, Vu, Vp = Dq[m:], Du[m:], Dp[m:]
+        if Vq.shape[0]:
+            rhs = Vq @ S[:nq] + Vu[:, ~ufree] @ S[nq:][~ufree] + Vp
+            Su = S[nq:]
+            Su[ufree] = -np.linalg.pinv(Vu[:, ufree]) @ rhs
+        return S
+
+    @staticmethod
+    def _masked(system, bound, res):
+        """``(m, (r, d/dq, d/du, d/dp))``: ``res`` (:meth:`BoundSensitivity.residuals`) with
+        only the kept holonomic rows, ``[Phi_kept, Phid_kept, Psi]``, ``m`` of them in ``Phi``."""
+        r, Dq, Du, Dp = res
+        m_all = bound.code.m
+        keep = np.ones(m_all, bool) if system.row_mask is None else np.asarray(system.row_mask, bool)
+        rows = np.concatenate((keep, keep, np.ones(r.size - 2 * m_all, bool)))
+        return int(keep.sum()), (r[rows], Dq[rows], Du[rows], Dp[rows])
+
+    def _residuals(self, system, t, y):
+        """The residuals with their derivatives (:meth:`BoundSensitivity.residuals`), the
+        parameter columns widened (:meth:`_wide`); None where the program does not hold."""
+        bound = self.bound(system)
+        res = bound.residuals(t, y)
+        if res is None:
+            return None
+        return self._masked(system, bound, (res[0], res[1], res[2], self._wide(res[3])))
+
+    # --- projection --------------------------------------------------------------------------
+    def project(self, system, t, y, S):
+        """``S`` moved onto the tangent of ``system``'s constraint manifold at ``(t, y)`` by
+        minimum-norm corrections (positions, then speeds)."""
+        res = self._residuals(system, t, y)
+        if res is None:
+            raise SimulationError(f"sensitivities: the residual program does not hold at t={t:.12g} s")
+        if res[1][0].size == 0:
+            return S
+        m, (r, Dq, Du, Dp) = res
+        nq = system.nq
+        S = S.copy()
+        if m:
+            Gq = Dq[:m]
+            S[:nq] -= np.linalg.pinv(Gq) @ (Gq @ S[:nq] + Dp[:m])
+        if Dq.shape[0] > m:
+            Vq, Vu, Vp = Dq[m:], Du[m:], Dp[m:]
+            S[nq:] -= np.linalg.pinv(Vu) @ (Vq @ S[:nq] + Vu @ S[nq:] + Vp)
+        return S
+
+    # --- stepping ----------------------------------------------------------------------------
+    def __call__(self, run):
+        self.advance(run, run.stepper.t)
+
+    def advance(self, run, t1):
+        """Integrate ``S`` from where it is to ``t1`` (s) along the run's last step's dense
+        output, and keep it at the outputs the run kept up to ``t1``."""
+        if self.stopped is not None:
+            return self.sync(run)
+        system = run.form.system
+        dense = run.dense()
+        t0 = self.t
+        if run.projects:  # the state the step started from was projected: S is projected there too
+            self.S = self.project(system, t0, np.asarray(dense(t0), float), self.S)
+        if t1 > t0:
+            sol = self._solve(system, dense, t0, t1)
+            self.S = sol(t1)
+        else:
+            def sol(tt):
+                return self.S
+        self.t = float(t1)
+        while len(self.kept) < len(run.ys) and run.t_out[len(self.kept)] <= t1 + 1e-15 * max(1.0, abs(t1)):
+            k = len(self.kept)
+            Sk = sol(run.t_out[k])
+            if run.projects:
+                Sk = self.project(system, run.t_out[k], run.ys[k], Sk)
+            self.kept.append(Sk)
+            self.kept_systems.append(system)
+
+    def _solve(self, system, dense, t0, t1):
+        from scipy.integrate import solve_ivp
+
+        n, k = self.n, self.k
+
+        def rhs(t, s):
+            y = np.asarray(dense(t), float)
+            _, J, Jp = self._rhs(system, t, y)
+            return (J @ s.reshape(n, k) + Jp).ravel()
+
+        opts = dict(rtol=self.rtol, atol=self.atol, dense_output=True, first_step=t1 - t0)
+        if self.implicit:
+            def jac(t, s):
+                _, J, _ = self._rhs(system, t, np.asarray(dense(t), float))
+                return np.kron(J, np.eye(k))
+            sol = solve_ivp(rhs, (t0, t1), self.S.ravel(), method="Radau", jac=jac, **opts)
+        else:
+            sol = solve_ivp(rhs, (t0, t1), self.S.ravel(), method="DOP853", **opts)
+        if sol.status != 0:
+            raise SimulationError(f"sensitivities: their integration failed in [{t0:.12g}, {t1:.12g}] s: "
+                                  f"{sol.message}")
+        self.stats_["sensitivity_steps"] += len(sol.t) - 1
+        return lambda tt: sol.sol(tt).reshape(n, k)
+
+    def sync(self, run):
+        """Keep ``S`` (where it is now) at outputs the run kept at its time without a step (the
+        end of an event that ends the run, a budget's last state)."""
+        while len(self.kept) < len(run.ys):
+            k = len(self.kept)
+            at_now = abs(run.t_out[k] - self.t) <= 1e-12 * max(1.0, abs(self.t))
+            self.kept.append(self.S.copy() if at_now and self.stopped is None else np.full((self.n, self.k), np.nan))
+            self.kept_systems.append(run.form.system)
+
+    # --- events ------------------------------------------------------------------------------
+    def before_act(self, run, cut, events):
+        """At an event (``cut``, the outputs up to it kept, the events not acted yet): ``S``
+        integrated to the event and the pieces of the jump that need the state before it."""
+        self.advance(run, cut.t)
+        if self.stopped is not None or cut.action is None:
+            return None
+        return _Jump(self, run, cut, events)
+
+    def after_act(self, run, jump, outcome, events):
+        """Apply the jump (:meth:`before_act`) once the events acted: ``outcome`` is the next
+        segment (or the end)."""
+        if jump is None or outcome.ends:
+            return self.sync(run)
+        new_system = outcome.form.system
+        if events.holds_rows():
+            self.stopped = (float(outcome.t), "a mode holds rows from here on (a stop engaged, a contact at rest, "
+                            "a stuck friction or a sliding contact): sensitivities through held rows are not "
+                            "computed yet")
+            self.S = np.full((self.n, self.k), np.nan)
+            return self.sync(run)
+        self.S = jump.apply(self, new_system, np.asarray(outcome.state, float))
+        self.stats_["sensitivity_jumps"] += 1
+        self.t = float(outcome.t)
+        self.sync(run)
+
+    def stats(self):
+        return dict(self.stats_)
+
+    def table(self, time, Y):
+        """The :class:`SensitivityTable` of the run's outputs at ``time`` (s), states ``Y``."""
+        n_kept = len(time)
+        while len(self.kept) < n_kept:
+            self.kept.append(np.full((self.n, self.k), np.nan))
+            self.kept_systems.append(self.kept_systems[-1])
+        return SensitivityTable(self.refs, np.asarray(time, float), np.asarray(Y, float),
+                                np.array(self.kept[:n_kept]).reshape(n_kept, self.n, self.k),
+                                self.kept_systems[:n_kept], self.gains, self.stopped)
+
+
+def _with(P, ref, value):
+    """A copy of the parameter namespace ``P`` with ``ref``'s entry set to ``value``."""
+    new = SimpleNamespace(**vars(P))
+    old = getattr(P, ref.param)
+    if ref.index is None:
+        setattr(new, ref.param, value)
+    else:
+        arr = np.array(old, float)
+        arr[ref.index] = value
+        setattr(new, ref.param, arr)
+    return new
+
+
+class _Jump:
+    """The jump of the sensitivities at one event (see the module notes)."""
+
+    def __init__(self, sens, run, cut, events):
+        self.t, self.cut = float(cut.t), cut
+        system = run.form.system
+        y_minus = np.asarray(cut.state, float)
+        self.y_minus = y_minus
+        self.f_minus = sens._rhs(system, cut.t, y_minus)[0]
+        self.events = events
+        S = sens.S
+        # the event function and the reset map along each column (S-_j, e_j) by central differences
+        self.g_dir = np.zeros(sens.k)
+        self.R_dir = np.zeros((sens.n, sens.k))
+        self.g_f = self._g_rate(events, y_minus)
+        for j, ref in enumerate(sens.refs):
+            eps = EVENT_STEP * max(abs(ref.value), 1e-2) / max(1.0, float(np.max(np.abs(S[:, j])))
+                                                               / max(1.0, float(np.max(np.abs(y_minus)))))
+            vals = []
+            for s in (1.0, -1.0):
+                twin = events if ref.kind == "start" else events.twin(
+                    {f"{ref.path}.{ref.param}": getattr(_with(system.P[ref.path], ref, ref.value + s * eps), ref.param)})
+                y = y_minus + s * eps * S[:, j]
+                vals.append((twin.event_value(cut.key, self.t, y), twin.reset(cut, y)))
+            self.g_dir[j] = (vals[0][0] - vals[1][0]) / (2 * eps)
+            self.R_dir[:, j] = (vals[0][1] - vals[1][1]) / (2 * eps)
+        self.sens = sens
+
+    def _g_rate(self, events, y):
+        """``g_y f-``: the event function's rate along the motion before the event."""
+        h = EVENT_STEP * 1e-1 * max(1.0, abs(self.t))
+        f = self.f_minus
+        gp = events.event_value(self.cut.key, self.t + h, y + h * f)
+        gm = events.event_value(self.cut.key, self.t - h, y - h * f)
+        return (gp - gm) / (2 * h)
+
+    def apply(self, sens, new_system, y_plus):
+        """``S+`` (the new segment's system ``new_system``, the state after ``y_plus``)."""
+        if abs(self.g_f) < 1e-300:
+            raise SimulationError(f"sensitivities: the event at t={self.t:.12g} s is grazing (its function's rate is "
+                                  "zero): the event time has no derivative there")
+        dtau = -self.g_dir / self.g_f  # (k,)
+        f_plus = sens._rhs(new_system, self.t, y_plus)[0]
+        h = EVENT_STEP * 1e-1 * max(1.0, abs(self.t))
+        R_f = (self.events.reset(self.cut, self.y_minus + h * self.f_minus)
+               - self.events.reset(self.cut, self.y_minus - h * self.f_minus)) / (2 * h)
+        return self.R_dir + np.outer(R_f - f_plus, dtau)
+
+
+class SensitivityTable:
+    """The sensitivities of a run's outputs (``res.sensitivities``; read them with
+    :meth:`mbcomp.simulation.result.Result.sensitivity`).
+
+    Attributes
+    ----------
+    params : list of str
+        The parameters, as named in ``simulate(..., sensitivities=...)``.
+    time : ndarray (n_out,)
+        The output times (s).
+    states : ndarray (n_out, nq + nu, n_params)
+        ``d [q, u] / dp`` at the output times (NaN after :attr:`stopped`).
+    stopped : tuple or None
+        ``(t, why)`` when the sensitivities end before the run (a mode holding rows).
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1), v0=1.0)); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> r = mbcomp.simulate(m, t_end=1.0, n_out=3, sensitivities=["s.v0", "world.g[2]"])
+    >>> r.sensitivities.states[-1].round(9).tolist()      # s = v0 t + g t^2 / 2, v = v0 + g t
+    [[1.0, 0.5], [1.0, 1.0]]
+    """
+
+    def __init__(self, refs, time, Y, states, systems, gains, stopped):
+        self.params = [r.name for r in refs]
+        self._refs = list(refs)
+        self.time, self.states, self.stopped = time, states, stopped
+        self._Y, self._systems, self._gains = Y, systems, gains
+        self._programmed = [j for j, r in enumerate(refs) if r.kind == "param"]
+        self._columns = None
+
+    def index(self, param):
+        """The position of ``param`` in :attr:`params` (a ``KeyError`` naming the ones there)."""
+        if param not in self.params:
+            raise KeyError(f"no sensitivity with respect to {param!r} was asked -> simulate(..., "
+                           f"sensitivities=[{param!r}, ...]); asked: {', '.join(self.params)}")
+        return self.params.index(param)
+
+    def of(self, column, param, state_names):
+        """``d column / d param`` at the output times (see :meth:`Result.sensitivity`)."""
+        j = self.index(param)
+        if column in state_names:
+            return self.states[:, state_names.index(column), j].copy()
+        cols = self._column_table()
+        if column not in cols:
+            raise KeyError(f"no sensitivity of column {column!r}: it is neither a coordinate or speed nor a column of "
+                           "the output program (reactions, joints' outputs, poses, twists, energies, residuals); "
+                           f"columns with sensitivities: {', '.join(list(cols)[:12])}, ...")
+        return cols[column][:, j].copy()
+
+    def _column_table(self):
+        """``{column: (n_out, n_params)}`` of every output-program column, made at first need."""
+        if self._columns is not None:
+            return self._columns
+        codes, out = {}, {}
+        n_out = len(self.time)
+        for k in range(n_out):
+            system = self._systems[k]
+            key = id(system)
+            if key not in codes:
+                try:
+                    code = ColumnCode.build(system, self.params, "c" if system.backend == "c" else "python")
+                except CodegenError as exc:
+                    raise SimulationError(f"sensitivities of the columns: {exc}") from exc
+                codes[key] = (code, code.bind(system))
+            code, call = codes[key]
+            S = self.states[k]
+            D = call(self.time[k], self._Y[k], *self._gains) if np.isfinite(S).all() else None
+            for c, name in enumerate(code.names):
+                arr = out.setdefault(name, np.full((n_out, S.shape[1]), np.nan))
+                if D is not None:
+                    arr[k] = D[c, : S.shape[0]] @ S
+                    arr[k, self._programmed] += D[c, S.shape[0]:]
+        self._columns = out
+        return out
