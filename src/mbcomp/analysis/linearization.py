@@ -47,7 +47,12 @@ from .evaluation import system_for
 from .reduced import Reduced, direction_names
 from .steady import SteadyState
 
-__all__ = ["Linearization", "linearize", "classify", "zero_tolerance"]
+__all__ = ["Linearization", "linearize", "classify", "zero_tolerance", "eigen", "DERIVATIVES"]
+
+#: how :func:`linearize` differentiates: ``"auto"`` (exact where a generated program
+#: evaluates the model, else differences), ``"exact"`` (always; an error where impossible),
+#: ``"differences"`` (central differences with Richardson extrapolation)
+DERIVATIVES = ("auto", "exact", "differences")
 
 
 def zero_tolerance(eigenvalues):
@@ -109,6 +114,10 @@ class Linearization:
     moving : list of str
         Position directions moving at constant rates (cyclic), not states.
     state : SteadyState
+    derivatives : {"exact", "differences"}
+        How ``A`` was differentiated: from the generated evaluation's tangent program
+        (exact to rounding) or by central differences with Richardson extrapolation (error
+        ~1e-11 relative).
 
     Examples
     --------
@@ -128,6 +137,7 @@ class Linearization:
     removed: list
     moving: list
     state: SteadyState = field(repr=False)
+    derivatives: str = "differences"
 
     def frequencies(self):
         """``|Im lambda|`` (rad/s) of each eigenvalue."""
@@ -155,10 +165,11 @@ class Linearization:
     def to_dict(self):
         return dict(state_names=self.state_names, A=self.A.tolist(),
                     eigenvalues=[[float(e.real), float(e.imag)] for e in self.eigenvalues],
-                    classification=self.classification, removed=self.removed, moving=self.moving)
+                    classification=self.classification, removed=self.removed, moving=self.moving,
+                    derivatives=self.derivatives)
 
 
-def linearize(model, state=None, params=None, t=None, remove_ignorable=True, backend="python"):
+def linearize(model, state=None, params=None, t=None, remove_ignorable=True, backend="python", derivatives="auto"):
     """Linearize about a steady state in independent coordinates (seed eqs. 7.9-7.14).
 
     Parameters
@@ -177,6 +188,13 @@ def linearize(model, state=None, params=None, t=None, remove_ignorable=True, bac
     backend : {"python", "numeric", "c", "auto"}
         What evaluates the model (see :func:`mbcomp.simulate`): the generated Python program
         by default (10-20x faster here than ``"numeric"``, equal to rounding).
+    derivatives : {"auto", "exact", "differences"}
+        How ``A`` is differentiated (:data:`DERIVATIVES`): ``"auto"`` uses the exact
+        derivatives of the generated evaluation (:mod:`mbcomp.codegen.eval_tangent`) whenever
+        a program evaluates the model (every backend but ``"numeric"``) and holds at the
+        state, else central differences; ``"exact"`` asks for them with any backend and raises
+        where there are none; ``"differences"`` always differences.
+        :attr:`Linearization.derivatives` says which was used.
 
     Returns
     -------
@@ -186,7 +204,8 @@ def linearize(model, state=None, params=None, t=None, remove_ignorable=True, bac
     ------
     SimulationError
         The state is not steady (names the largest acceleration), or a moving coordinate
-        is not cyclic (the motion is not an equilibrium in these coordinates).
+        is not cyclic (the motion is not an equilibrium in these coordinates), or
+        ``derivatives="exact"`` and the model has no exact derivatives at the state.
     """
     system = system_for(model, params, backend)
     state = _steady_state(system, state, t)
@@ -200,19 +219,94 @@ def linearize(model, state=None, params=None, t=None, remove_ignorable=True, bac
     uscale = max(1.0, float(np.abs(state.u).max(initial=0.0)))
     _check_steady(f0, uscale, names, moving)
     scale = np.concatenate((np.ones(red.pind.size), np.full(red.vind.size, uscale)))
-    A = red.jacobian(red.rate, red.n, scale)
-    _check_cyclic(red, A, moving)
+    exact = _exact(system, red, derivatives)
+    if exact is not None:
+        A, Am = exact
+        how = "exact"
+    else:
+        A = red.jacobian(red.rate, red.n, scale)
+        Am = None
+        how = "differences"
+    _check_cyclic(red, A, moving, Am)
     removed = _ignorable(red, A, f0, scale) if remove_ignorable and A.size else []
     keep = [j for j in range(len(names)) if j not in removed]
     A = A[np.ix_(keep, keep)]
-    if A.size:
-        lam, V = np.linalg.eig(A)
-        order = np.lexsort((-lam.imag, -lam.real))
-        lam, V = lam[order], V[:, order]
-    else:
-        lam, V = np.zeros(0, complex), np.zeros((0, 0), complex)
+    lam, V = eigen(A)
     return Linearization(A, [names[j] for j in keep], lam, V, classify(lam), [names[j] for j in removed], moving,
-                         state)
+                         state, how)
+
+
+def _exact(system, red, derivatives):
+    """``(A, A_moving)`` from the evaluation's derivative program
+    (:mod:`mbcomp.codegen.eval_tangent`), or None: asked for differences, a numeric system
+    under ``"auto"``, or no exact derivative at this state (a failed guard, a non-finite
+    entry, a singular block). Raises for ``derivatives="exact"`` when there is none."""
+    if derivatives not in DERIVATIVES:
+        raise ValueError(f"linearize: derivatives={derivatives!r} is unknown; use one of {', '.join(DERIVATIVES)}")
+    if derivatives == "differences" or (derivatives == "auto" and system.backend == "numeric"):
+        return None
+    from ..codegen import CodegenError
+    from ..codegen.eval_tangent import eval_tangent
+
+    why = None
+    try:
+        dev = eval_tangent(system, "c" if system.backend == "c" else "python")
+    except CodegenError as exc:
+        dev, why = None, str(exc)
+    out = red.exact(dev) if dev is not None else None
+    if out is None and derivatives == "exact":
+        raise SimulationError("linearize: no exact derivatives for this model at this state ("
+                              + (why or "the derivative program does not hold here: a law's branch, a non-finite "
+                                        "value or a singular block") + ") -> use derivatives='auto' or 'differences'")
+    return out
+
+
+def eigen(A):
+    """Eigenvalues (sorted by decreasing real part, then imaginary part) and unit eigenvectors
+    of the state matrix ``A``, its exact null directions deflated first.
+
+    A direction ``A`` maps to zero to rounding (singular value at most ``n eps`` of the
+    largest: a family of steady states, such as a rolling disk's steady turns) is a zero root
+    exactly; the other roots are those of ``A`` restricted to the orthogonal complement
+    ``W^T A W`` (``[V W]^T A [V W]`` is block upper triangular when ``A V = 0``). Near a
+    collision with the zero root the full eigenproblem is ill-conditioned: at a spin 1e-9
+    from the rolling disk's critical one, LAPACK moved the zero root of the 3 x 3 ``A`` to
+    +2.9e-7 1/s (an unstable root) depending on the last bit of one entry; deflated, it stays
+    0 and the colliding pair is ``+-sqrt`` of the restricted matrix's exact-to-rounding square.
+    The deflation is at the eigensolver's own backward error, so it loses nothing.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.analysis.linearization import eigen
+    >>> lam, V = eigen(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -2.0], [8.0, 4.0, 0.0]]))
+    >>> lam.tolist()          # 0 and +-sqrt(8 - 2 * 4): a triple root at zero, two of it defective
+    [0j, 0j, 0j]
+    >>> lam, V = eigen(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -2.0], [9.0, 4.0, 0.0]]))
+    >>> np.round(lam.real, 12).tolist(), lam[1] == 0   # +-sqrt(9 - 8), and the zero root exactly
+    ([1.0, 0.0, -1.0], np.True_)
+    >>> bool(np.allclose(np.array([[0, 0, 1], [0, 0, -2], [9, 4, 0]]) @ V, V * lam))
+    True
+    """
+    n = A.shape[0]
+    if not n:
+        return np.zeros(0, complex), np.zeros((0, 0), complex)
+    _, sv, Vt = np.linalg.svd(A)
+    k = int(np.count_nonzero(sv <= n * np.finfo(float).eps * sv[0]))
+    if k == 0:
+        lam, X = np.linalg.eig(A)
+    else:
+        N, W = Vt[n - k:].T, Vt[: n - k].T  # null directions, their orthogonal complement
+        mu, Y = np.linalg.eig(W.T @ A @ W) if n > k else (np.zeros(0, complex), np.zeros((0, 0), complex))
+        # an eigenvector W y of the restriction is one of A with a part N z, z = N^T A W y / mu
+        tiny = np.abs(mu) <= n * np.finfo(float).eps * sv[0]
+        Z = (N.T @ A @ W @ Y) / np.where(tiny, 1.0, mu)
+        Z[:, tiny] = 0.0
+        lam = np.concatenate((np.zeros(k, complex), mu))
+        X = np.hstack((N.astype(complex), W @ Y + N @ Z))
+        X /= np.linalg.norm(X, axis=0)
+    order = np.lexsort((-lam.imag, -lam.real))
+    return lam[order], X[:, order]
 
 
 def _steady_state(system, state, t):
@@ -243,12 +337,13 @@ def _check_steady(f0, uscale, names, moving):
     raise SimulationError(f"not a steady state: d/dt of {names[k]} is {f0[k]:.3g} (all must vanish) -> {hint}")
 
 
-def _check_cyclic(red, A, moving):
+def _check_cyclic(red, A, moving, Am=None):
     """The motion is an equilibrium only if the moving coordinates are cyclic: their values
-    must not change any rate."""
+    must not change any rate (``Am``: the rates' derivatives along them, differenced if None)."""
     if not red.moving.size:
         return
-    Am = red.jacobian(lambda y: red.rate(np.zeros(red.n), moving=y), red.moving.size, np.ones(red.moving.size))
+    if Am is None:
+        Am = red.jacobian(lambda y: red.rate(np.zeros(red.n), moving=y), red.moving.size, np.ones(red.moving.size))
     bad = np.abs(Am).max(axis=0) if Am.size else np.zeros(0)
     lim = 1e-6 * (1.0 + np.abs(A).max(initial=0.0))
     if bad.size and bad.max() > lim:

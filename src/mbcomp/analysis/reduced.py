@@ -39,7 +39,7 @@ import numpy as np
 
 from ..assembly.manifold import SingularPartition, close_positions, pivot_partition, solve_speeds
 from ..errors import SimulationError
-from ..assembly.kkt import accelerations
+from ..assembly.kkt import accelerations, saddle_matrix
 
 __all__ = ["Reduced", "direction_names", "dependent_directions", "CLOSE_ITER"]
 
@@ -194,6 +194,71 @@ class Reduced:
         u, ev = self.speeds(q, x[npos:])
         ud, _ = accelerations(ev)
         return np.concatenate((u[self.pind], ud[self.vind]))
+
+    # --- exact derivatives ---------------------------------------------------------------------
+    def exact(self, derivatives):
+        """The exact state matrix ``d rate/dx`` at ``x = 0`` and ``d rate/d moving`` (the
+        moving directions' increments), from the evaluation's derivatives; None where they
+        do not hold (the caller differences).
+
+        ``derivatives(t, q, u, a, lam)`` returns ``dR1, dR2, dG, Q`` at the state (an
+        :class:`mbcomp.codegen.eval_tangent.EvalTangent`, or None), see
+        :mod:`mbcomp.codegen.eval_tangent`. The map from ``x`` to the state is differentiated
+        by the implicit function theorem, the rates by differentiating the saddle-point
+        system::
+
+            dq_dep = -C_dep^-1 C_D dq_D                   (Phi = 0 along the dependent directions)
+            du_dep = -A_dep^-1 (dG/dq dq + A du_ind)      (the velocity rows [dPhi/dt; Psi] = 0)
+            [M A^T; A 0] [d(du/dt); d lam] = [dR1; dR2] [dq; du]
+
+        with ``dq`` in increments along the speeds (coordinates ``Q dq``). Returns
+        ``(A, A_moving)``.
+        """
+        s, nu, npos = self.s, self.s.nu, self.pind.size
+        q = self.positions(np.zeros(npos))
+        u, ev = self.speeds(q, np.zeros(self.vind.size))
+        try:
+            ud, lam = accelerations(ev)
+        except SimulationError:
+            return None
+        mask = s.row_mask
+        m_all = ev.C.shape[0] if mask is None else len(mask)
+        rows = np.concatenate((np.arange(m_all) if mask is None else np.flatnonzero(mask),
+                               m_all + np.arange(ev.B.shape[0]))).astype(int)
+        lam_all = np.zeros(m_all + ev.B.shape[0])
+        lam_all[rows] = lam
+        d = derivatives(self.t, q, u, ud, lam_all)
+        if d is None:
+            return None
+        R1, R2, G, Q = d.R1, d.R2[rows], d.G[rows], d.Q
+        A, K = ev.A, saddle_matrix(ev.M, ev.A)
+        try:
+            Cdep = np.linalg.inv(ev.C[:, self.pdep]) if self.pdep.size else None
+            Adep = np.linalg.inv(A[:, self.vdep]) if self.vdep.size else None
+        except np.linalg.LinAlgError:
+            return None
+
+        def rates(dirs, dv):
+            """Rate columns for position increments along ``dirs`` (nu, c) before closure
+            and speed changes ``dv`` (nu, c) before the dependent speeds are solved."""
+            if Cdep is not None:
+                dirs = dirs.copy()
+                dirs[self.pdep] = -Cdep @ (ev.C @ dirs)
+            X = np.vstack((Q @ dirs, dv))
+            if Adep is not None:
+                X[s.nq + self.vdep] = -Adep @ (G @ X)
+            du = X[s.nq:]
+            sol = np.linalg.solve(K, np.vstack((R1 @ X, R2 @ X)))
+            return np.vstack((du[self.pind], sol[:nu][self.vind]))
+
+        try:
+            E = np.eye(nu)
+            cols = rates(np.hstack((E[:, self.pind], np.zeros((nu, self.vind.size)))),
+                         np.hstack((np.zeros((nu, npos)), E[:, self.vind])))
+            moving = rates(E[:, self.moving], np.zeros((nu, self.moving.size)))
+        except np.linalg.LinAlgError:
+            return None
+        return cols, moving
 
     @staticmethod
     def jacobian(f, n, scale):
