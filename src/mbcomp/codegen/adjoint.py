@@ -135,7 +135,10 @@ def reverse(graph, outputs, weights, inputs):
                 if _is_zero(c):
                     continue
                 adj[j] = adj[j] + c if j in adj else c
-    return [adj.get(x.i, 0.0) for x in inputs]
+    out = [adj.get(x.i, 0.0) for x in inputs]
+    # a derivative that is a constant node is given as its number (the printers take constant
+    # outputs as numbers: a constant node among them would be hoisted and never computed)
+    return [v.v if type(v) is Sym and keys[v.i][0] == "c" else v for v in out]
 
 
 class AdjointCode:
@@ -145,7 +148,7 @@ class AdjointCode:
 
     With ``objective=None`` the program's per-call inputs are ``d = [alpha, beta, lam]``
     (``lam``: ``n = nq + nu`` weights) and its outputs ``[lam^T dfun/dq, lam^T dfun/du,
-    lam^T dfun/dp]`` (``n + n_p`` numbers, ``p`` in the order of :attr:`layout`). Given
+    lam^T dfun/dp]`` (``n + n_p`` numbers, ``p`` the entries :attr:`wrt`). Given
     ``objective`` (a node or number of ``tr.graph``, e.g. built on ``program="outputs"``),
     ``d = [alpha, beta]`` and the outputs are ``[value, d/dq, d/du, d/dp]`` (``1 + n + n_p``).
 
@@ -162,6 +165,10 @@ class AdjointCode:
     group : str
         The trace's group whose guards the program checks (``"fun"``; ``"outputs"`` for an
         objective on the result columns).
+    keep : sequence of (path, name)
+        The parameters the trace kept as inputs where zero (checked again by :meth:`bind`).
+    wrt : sequence of (path, name, index), optional
+        The runtime parameters to differentiate with respect to (default: all of :attr:`layout`).
 
     Attributes
     ----------
@@ -169,6 +176,8 @@ class AdjointCode:
         ``nq + nu``.
     layout : list
         The runtime parameters ``(path, name, index)`` (:func:`~mbcomp.codegen.tracer.param_layout`).
+    wrt : list
+        Those the program differentiates with respect to, in the order of its outputs.
     n_ops : int
         Operations per call.
 
@@ -190,20 +199,27 @@ class AdjointCode:
     (``du/dt = g_z``: the mass cancels, the axis is normalized, ``d/dg_z = 1``.)
     """
 
-    def __init__(self, tr, backend, cache_dir=None, objective=None, group="fun", keep=()):
+    def __init__(self, tr, backend, cache_dir=None, objective=None, group="fun", keep=(), wrt=None):
         g = tr.graph
         self.signature, self.layout, self.keep = tr.signature, tr.layout, tuple(keep)
+        self.wrt = list(self.layout) if wrt is None else [tuple(w) for w in wrt]
+        for w in self.wrt:
+            if w not in self.layout:
+                raise ValueError(f"adjoint program: {w[0]}.{w[1]}{'' if w[2] is None else list(w[2])} is not a "
+                                 "runtime parameter of the program (a zero entry? give it in keep=)")
         nq = len(tr.groups["qrate"])
         nu = sum(1 for k in g.keys if k[0] == "in" and k[1] == "u")
         self.n, self.nq = nq + nu, nq
         ins = ([g.memo.get(("in", "q", k)) for k in range(nq)] + [g.memo.get(("in", "u", k)) for k in range(nu)]
-               + [g.memo.get(("in", "p", k)) for k in range(len(self.layout))])
+               + [g.memo.get(("in", "p", self.layout.index(w))) for w in self.wrt])
         present = [(k, x) for k, x in enumerate(ins) if x is not None]
         if objective is None:
             fun = tr.groups["fun"]
             lam = [g.input("d", 2 + k, 0.3 + 0.1 * k) for k in range(self.n)]
             outs, weights, lead = fun, lam, []
         else:
+            if type(objective) is Sym and g.keys[objective.i][0] == "c":
+                objective = objective.v
             outs, weights, lead = [objective], [1.0], [objective]
         grads = reverse(g, outs, weights, [x for _, x in present])
         flat = [0.0] * len(ins)
@@ -229,16 +245,18 @@ class AdjointCode:
             raise ValueError(f"backend {backend!r} is unknown for the adjoint program; use 'python' or 'c'")
 
     @classmethod
-    def build(cls, system, backend, keep=(), cache_dir=None, max_nodes=3_000_000):
+    def build(cls, system, backend, keep=(), cache_dir=None, max_nodes=3_000_000, wrt=None):
         """The vector-Jacobian program of ``system``'s Lagrange right-hand side (its current row
         mask), or None when there is none (a singular trace point, drives or inputs the
         program takes per call). ``keep``: parameters ``(path, name)`` made inputs even where
-        zero (:func:`~mbcomp.codegen.tracer.param_layout`), so their products are computed."""
+        zero (:func:`~mbcomp.codegen.tracer.param_layout`), so their products are computed;
+        ``wrt``: the entries ``(path, name, index)`` of the layout to differentiate with
+        respect to, in the order of the outputs (default: every runtime parameter)."""
         with no_gc():
             tr = trace(system, max_nodes, program="fun", keep=keep)
             if "fun" not in tr.groups or tr.drives or tr.inputs:
                 return None
-            return cls(tr, backend, cache_dir, keep=keep)
+            return cls(tr, backend, cache_dir, keep=keep, wrt=wrt)
 
     def bind(self, system):
         """The callable :class:`BoundAdjoint` for ``system``'s parameter values; None when they

@@ -1,0 +1,132 @@
+"""Adjoint gradients of an objective of a run (issue 31 item 3): :func:`mbcomp.gradient`.
+
+Checks: on a pendulum and on the slider-crank (a closed loop, an objective with a reaction
+column in its integral) the gradient equals central differences of whole tight runs of
+:func:`mbcomp.simulate` (the integral by Simpson's rule on a fine output grid) to 1e-6
+relative, start values and a loop length included; a parameter the objective does not depend
+on has gradient exactly zero; checkpointing gives the gradient of the run kept whole; an
+objective given as a Python function gives the text's; a model with modes, a parameter that is
+not one and a reduction in the objective are refused naming them.
+"""
+import numpy as np
+import pytest
+from scipy.integrate import simpson
+
+import mbcomp
+from conftest import load_model
+from mbcomp.codegen.toolchain import c_compiler
+from mbcomp.errors import ModelError
+from mbcomp.library import FixedTranslation, PointMass, Revolute, World
+
+slider_crank = load_model("models/slider_crank.py")
+BACKEND = "c" if c_compiler() else "python"
+TIGHT = dict(rtol=1e-12, atol=1e-14)
+
+
+def pendulum(g=9.81, L=1.0, phi0=0.5, w0=0.4, m=1.0, second=False, m2=0.5, limits=None):
+    """A point mass on a 1 m rod; ``second``: another pendulum on its own hinge (no coupling)."""
+    mdl = mbcomp.Model()
+    w = mdl.add("world", World(g=(0, -g, 0)))
+    j = mdl.add("j", Revolute(n=(0, 0, 1), phi0=phi0, w0=w0, limits=limits))
+    rod = mdl.add("rod", FixedTranslation(r=(0, -L, 0)))
+    bob = mdl.add("bob", PointMass(m=m))
+    mdl.connect(w.frame_b, j.frame_a); mdl.connect(j.frame_b, rod.frame_a); mdl.connect(rod.frame_b, bob.frame_a)
+    if second:
+        j2 = mdl.add("j2", Revolute(n=(0, 0, 1), phi0=-0.3))
+        rod2 = mdl.add("rod2", FixedTranslation(r=(0, -0.7, 0)))
+        bob2 = mdl.add("bob2", PointMass(m=m2))
+        mdl.connect(w.frame_b, j2.frame_a); mdl.connect(j2.frame_b, rod2.frame_a)
+        mdl.connect(rod2.frame_b, bob2.frame_a)
+    return mdl
+
+
+def run_objective(model, t_end, terminal, integrand):
+    """``terminal(res)`` at t_end plus the integral of ``integrand(res)`` (Simpson, 4001 points)."""
+    res = mbcomp.simulate(model, t_end=t_end, n_out=4001, **TIGHT)
+    assert res.status == "success"
+    return terminal(res)[-1] + simpson(integrand(res), x=res.time)
+
+
+def central(build, key, base, h, t_end, terminal, integrand):
+    plus = run_objective(build(**{key: base + h}), t_end, terminal, integrand)
+    minus = run_objective(build(**{key: base - h}), t_end, terminal, integrand)
+    return (plus - minus) / (2 * h)
+
+
+def test_pendulum_gradient_is_central_differences_of_whole_runs():
+    obj = {"terminal": "j.phi", "integral": "j.w**2 + 0.1 * j.phi"}
+    params = ["world.g[1]", "rod.r[1]", "j.phi0", "j.w0"]
+    gr = mbcomp.gradient(pendulum(), obj, params, t_end=1.5, backend=BACKEND, **TIGHT)
+    term, integ = (lambda r: r["j.phi"]), (lambda r: r["j.w"] ** 2 + 0.1 * r["j.phi"])
+    assert gr.value == pytest.approx(run_objective(pendulum(), 1.5, term, integ), rel=1e-9)
+    # world.g[1] = -g and rod.r[1] = -L: the derivatives with respect to g and L change sign
+    want = [-central(pendulum, "g", 9.81, 1e-4, 1.5, term, integ),
+            -central(pendulum, "L", 1.0, 1e-5, 1.5, term, integ),
+            central(pendulum, "phi0", 0.5, 1e-5, 1.5, term, integ),
+            central(pendulum, "w0", 0.4, 1e-5, 1.5, term, integ)]
+    np.testing.assert_allclose(gr.gradient, want, rtol=1e-6)
+    assert gr["j.phi0"] == gr.gradient[2]
+
+
+def run_with(build, t_end, terminal, integrand, **params):
+    """:func:`run_objective` of ``build()`` with runtime parameter values ``params``."""
+    res = mbcomp.simulate(build(), t_end=t_end, n_out=4001, params=params, **TIGHT)
+    assert res.status == "success"
+    return terminal(res)[-1] + simpson(integrand(res), x=res.time)
+
+
+def test_slider_crank_gradient_is_central_differences_of_whole_runs():
+    # a closed loop: the crank length moves the start state too (the loop is closed again)
+    obj = {"terminal": "crank_angle**2 + slider_position", "integral": "0.01 * crank_joint.w**2 + 1e-3 * rod_joint.f.x"}
+    params = ["crank_joint.phi0", "crank_joint.w0", "rod.m", "slider.m", "crank_tip.r[0]"]
+    gr = mbcomp.gradient(slider_crank.build(), obj, params, t_end=1.0, backend=BACKEND, **TIGHT)
+    term = lambda r: r["crank_angle"] ** 2 + r["slider_position"]  # noqa: E731
+    integ = lambda r: 0.01 * r["crank_joint.w"] ** 2 + 1e-3 * r["rod_joint.f.x"]  # noqa: E731
+    assert gr.value == pytest.approx(run_objective(slider_crank.build(), 1.0, term, integ), rel=1e-9)
+    want = [central(slider_crank.build, "phi0", 0.3, 1e-5, 1.0, term, integ),
+            central(slider_crank.build, "w0", 6.0, 1e-5, 1.0, term, integ)]
+    h = 1e-5
+    for name, base in (("rod.m", 2.0), ("slider.m", 0.5), ("crank_tip.r", np.array([0.2, 0.0, 0.0]))):
+        step = np.array([h, 0, 0]) if np.ndim(base) else h
+        want.append((run_with(slider_crank.build, 1.0, term, integ, **{name: base + step})
+                     - run_with(slider_crank.build, 1.0, term, integ, **{name: base - step})) / (2 * h))
+    np.testing.assert_allclose(gr.gradient, want, rtol=1e-6)
+
+
+def test_a_parameter_the_objective_does_not_depend_on_has_gradient_exactly_zero():
+    gr = mbcomp.gradient(pendulum(second=True), {"terminal": "j.phi", "integral": "j.w**2"},
+                         ["bob2.m", "rod2.r[1]", "j2.phi0", "bob.m", "world.g[1]"], t_end=1.0, backend=BACKEND)
+    assert gr["bob2.m"] == 0.0 and gr["rod2.r[1]"] == 0.0 and gr["j2.phi0"] == 0.0
+    assert gr["world.g[1]"] != 0.0
+
+
+def test_checkpointing_gives_the_gradient_of_the_run_kept_whole():
+    obj = {"terminal": "crank_angle**2", "integral": "slider_joint.v**2"}
+    params = ["rod.m", "crank_joint.w0", "rod_tip.r[0]"]
+    whole = mbcomp.gradient(slider_crank.build(), obj, params, t_end=1.0, backend=BACKEND, **TIGHT)
+    parts = mbcomp.gradient(slider_crank.build(), obj, params, t_end=1.0, backend=BACKEND, checkpoints=5, **TIGHT)
+    np.testing.assert_allclose(parts.gradient, whole.gradient, rtol=1e-8)
+    assert parts.value == pytest.approx(whole.value, rel=1e-10)
+    assert parts.stats["backward_nfev"] > whole.stats["backward_nfev"]  # the segments were integrated again
+
+
+def test_an_objective_written_as_a_function_is_the_texts():
+    text = {"terminal": "sqrt(abs(j.phi)) * time", "integral": "j.w**2 * bob.v.x"}
+    fn = {"terminal": lambda t, c: np.sqrt(abs(c["j.phi"])) * t, "integral": lambda t, c: c["j.w"] ** 2 * c["bob.v.x"]}
+    a = mbcomp.gradient(pendulum(), text, ["bob.m", "j.w0"], t_end=0.7, backend="python")
+    b = mbcomp.gradient(pendulum(), fn, ["bob.m", "j.w0"], t_end=0.7, backend="python")
+    np.testing.assert_allclose(b.gradient, a.gradient, rtol=1e-14)
+
+
+def test_refusals_name_the_component_parameter_or_function():
+    stop = pendulum(limits=(-1.0, 1.0))
+    with pytest.raises(ModelError, match=r"j: Revolute has modes.*forward sensitivities"):
+        mbcomp.gradient(stop, {"terminal": "j.phi"}, ["bob.m"], backend="python")
+    with pytest.raises(ModelError, match=r"bob\.mass: the model has no such parameter \(similar: bob\.m"):
+        mbcomp.gradient(pendulum(), {"terminal": "j.phi"}, ["bob.mass"], backend="python")
+    with pytest.raises(ModelError, match=r"rod\.r: is an array of shape \(3,\).*rod\.r\[0\]"):
+        mbcomp.gradient(pendulum(), {"terminal": "j.phi"}, ["rod.r"], backend="python")
+    with pytest.raises(ValueError, match=r"max\(\).*not a function of one time"):
+        mbcomp.gradient(pendulum(), {"terminal": "max(j.phi)"}, ["bob.m"], backend="python")
+    with pytest.raises(ValueError, match=r"no column 'j.phj'; similar: j.phi"):
+        mbcomp.gradient(pendulum(), {"integral": "j.phj"}, ["bob.m"], backend="python")
