@@ -35,7 +35,7 @@ __all__ = [
     "ModelError", "InitializationError", "SimulationError",
     "Box", "Cylinder", "Sphere", "Mesh", "Helix", "Rod", "Grid",
     "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",
-    "load_model_file", "load_model", "export_fmu", "Input", "study", "Uniform", "Normal",
+    "load_model_file", "load_model", "export_fmu", "Input", "study", "Uniform", "Normal", "gradient",
 ]
 
 
@@ -61,6 +61,9 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name == "export_fmu":  # the model as an FMI FMU (needs a C compiler)
         from .export import export_fmu
         return export_fmu
+    if name == "gradient":  # adjoint gradients of an objective of a run
+        from .analysis.gradient import gradient
+        return gradient
     if name in ("linearize", "steady_states", "sweep", "study", "Uniform", "Normal"):  # analyses, studies
         from . import analysis
         return getattr(analysis, name)
