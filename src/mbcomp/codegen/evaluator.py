@@ -87,6 +87,7 @@ import numpy as np
 from ..errors import SimulationError
 from ..assembly.system import MultibodySystem
 from .compiler import Bound, Code
+from .dae_jacobian import bound_program
 from .graph import CodegenError, Fallback, Retrace
 from .jacobian import JacobianCode
 from .toolchain import c_compiler
@@ -489,6 +490,12 @@ class ProgramEvaluator:
         if J is None:
             self.stats["jac_fallbacks"] = self.stats.get("jac_fallbacks", 0) + 1
         return J
+
+    def dae_jacobian(self, form):
+        """The exact Jacobian program of a multiplier DAE form bound to this system, or None
+        (:func:`mbcomp.codegen.dae_jacobian.bound_program`; its code reused by ``with_params``)."""
+        o = self.options
+        return bound_program(self.system, self.funs, form, self.backend, o["cache_dir"], o["max_nodes"])
 
     def output_grid(self, t, Y, gains):
         """The result columns at every output time in one program call

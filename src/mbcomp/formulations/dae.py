@@ -68,6 +68,24 @@ class _Multipliers(Formulation):
         ev = system.evaluate(0.0, system.default_q(), np.zeros(system.nu))  # row counts only
         self.mh, self.mn = ev.Phi.size, ev.Psi.size  # holonomic and nonholonomic rows (independent ones)
         self.m = self.mh + self.mn
+        self.njac_exact = self.njac_differences = 0  # Jacobians from the exact program, by differences
+
+    def run_stats(self):
+        """``jac_exact`` and ``jac_differences``: the Jacobians (iteration matrices for
+        :class:`Mechanical`) made by the exact program and by differences (none asked: {})."""
+        if not (self.njac_exact or self.njac_differences):
+            return {}
+        return {"jac_exact": self.njac_exact, "jac_differences": self.njac_differences}
+
+    def _exact_program(self, name):
+        """The bound exact Jacobian program ``name`` of the system (looked up once per row
+        mask), or None: a numeric evaluator, or an evaluation that cannot be differentiated."""
+        mask = self.system.row_mask
+        cached = self.__dict__.get("_exact_prog")
+        if cached is None or cached[0] is not mask:
+            make = getattr(self.system.evaluator, "dae_jacobian", None)
+            cached = self._exact_prog = (mask, make(name) if make is not None else None)
+        return cached[1]
 
     def solve(self, ev, stabilize=True):
         """Accelerations ``du/dt`` and multipliers at an evaluation (index-1 solve)."""
@@ -148,10 +166,32 @@ class _SemiExplicit(_Multipliers):
         self.nfev += nfev - 1  # the caller counted one
         return F, J
 
+    #: the form's name for the exact Jacobian program (:mod:`mbcomp.codegen.dae_jacobian`)
+    _exact_form = None
+
+    @property
+    def exact_jac(self):
+        """Whether :meth:`jac` has an exact Jacobian program (the system runs a generated
+        evaluation that could be differentiated); at a state where it does not hold (a
+        failed guard, a non-finite entry) :meth:`jac` still differences."""
+        return self._exact_program(self._exact_form) is not None
+
     def jac(self, t, y):
-        """``d fun / d y`` (n, n): forward differences over ``q``, ``u`` (and GGL's ``eta``), the
-        linear ``a`` and ``lam`` columns exactly from ``M`` and ``A``."""
+        """``d fun / d y`` (n, n): exact, from the generated Jacobian program
+        (:meth:`mbcomp.codegen.evaluator.ProgramEvaluator.dae_jacobian`) when the system runs
+        a generated evaluation; else (the numeric backend, a state where the program does not
+        hold) forward differences over ``q``, ``u`` (and GGL's ``eta``) with the linear ``a``
+        and ``lam`` columns exactly from ``M`` and ``A``. :meth:`run_stats` counts which."""
         y = np.asarray(y, float)
+        if not np.isfinite(y).all():
+            raise SimulationError(f"the state became non-finite at t={t:g} (the integration diverged)")
+        prog = self._exact_program(self._exact_form)
+        if prog is not None:
+            J = prog(t, y, self._c_gains())
+            if J is not None:
+                self.njac_exact += 1
+                return J
+        self.njac_differences += 1
         self._check_finite(t, y)
         r = self._c_call(t, y, jac=True)
         if r is not None:
@@ -198,6 +238,7 @@ class Index3(_SemiExplicit):
                                      np.full(self.mh, 3), np.full(self.mn, 2)))
 
     _c_form = 3
+    _exact_form = "index3"
 
     def fun(self, t, y):
         """``[dq/dt, du/dt, f - M a - A^T lam, -Phi, -Psi]``; ``E`` keeps the first two."""
@@ -248,6 +289,7 @@ class GGL(_SemiExplicit):
         return list(range(self.nq + self.nu)) + list(range(self.n - self.mh, self.n))
 
     _c_form = 2
+    _exact_form = "ggl"
 
     def fun(self, t, y):
         """``[H(q)(u - C^T eta), du/dt, f - M a - A^T lam, -dPhi/dt, -Psi, -Phi]``."""
@@ -308,6 +350,7 @@ class Index1(_SemiExplicit):
         return ia, il
 
     _c_form = 1
+    _exact_form = "index1"
 
     def _c_gains(self):
         return (self.alpha, self.beta) if self.stabilization == "baumgarte" else None
@@ -375,6 +418,20 @@ class Mechanical(_Multipliers):
             raise SimulationError(f"the state became non-finite at t={t:g} (the integration diverged)")
         ev = self.system.evaluate(t, q, u)
         return ev.M, ev.f, ev.Phi, ev.C
+
+    def tangents(self, t, q, u, udot, lam):
+        """``(K, Ct)``, ``(nu, nu)`` each, exact from the generated program: ``K = d(M udot +
+        C^T lam - f)/dq`` through :meth:`increment` (N per unit speed-space increment) and
+        ``Ct = -df/du`` (N s), for the generalized-alpha iteration matrix; None where there is
+        no program (numeric backend) or it does not hold at ``(q, u)`` (then the stepper
+        differences :meth:`dynamics`). Counted in :meth:`run_stats`."""
+        prog = self._exact_program("mechanical")
+        KC = prog.mechanical(t, q, u, udot, lam) if prog is not None else None
+        if KC is None:
+            self.njac_differences += 1
+        else:
+            self.njac_exact += 1
+        return KC
 
     def increment(self, q, dq):
         """``q`` moved by ``dq`` given in speed space (quaternions stay unit)."""

@@ -29,7 +29,9 @@ Newton matrix ``O(1)`` as ``h -> 0``; in the unknowns ``(udot, lam)`` it reads
 which is the classical matrix ``[[M beta' + C_t gamma' + K_t, C^T], [C, 0]]`` in the position
 increment, with its first column block divided and its last row block multiplied by
 ``beta'`` (``gamma' = gamma/(beta h)``). ``K_t = d(M udot + C^T lam - f)/dq`` (through
-``increment``) and ``C_t = -df/du`` come from forward differences of ``problem.dynamics``.
+``increment``) and ``C_t = -df/du`` come from ``problem.tangents(t, q, u, udot, lam)`` when
+the problem has it and it returns them (exact, from a generated program), else from forward
+differences of ``problem.dynamics``.
 
 Parameters follow from the spectral radius at infinity ``rho_inf`` (Chung & Hulbert):
 ``alpha_m = (2 rho_inf - 1)/(rho_inf + 1)``, ``alpha_f = rho_inf/(rho_inf + 1)``,
@@ -339,11 +341,10 @@ class GeneralizedAlpha(Stepper):
     def _where(self, t, h):
         return f"at t={t:.10g} (h={h:.6g})"
 
-    def _factor(self, t, h, q, u, udot, lam):
-        """Evaluate, equilibrate and LU-factorize the scaled iteration matrix at ``(q, u)``."""
-        nu, m = self.nu, self.m
-        self.stats["njev"] += 1
-        M, f, Phi, C = self._dyn(t, q, u)
+    def _difference_tangents(self, t, q, u, udot, lam, M, f, C):
+        """``(K, Ct)`` by forward differences of ``dynamics``: the problem has no exact
+        ``tangents(t, q, u, udot, lam)`` or it returned None here."""
+        nu = self.nu
         r0 = M @ udot + C.T @ lam - f
         K = np.empty((nu, nu))
         Ct = np.empty((nu, nu))
@@ -359,6 +360,19 @@ class GeneralizedAlpha(Stepper):
             uj[j] += du
             _, fj, _, _ = self._dyn(t, q, uj)
             Ct[:, j] = -(fj - f) / du
+        return K, Ct
+
+    def _factor(self, t, h, q, u, udot, lam):
+        """Evaluate, equilibrate and LU-factorize the scaled iteration matrix at ``(q, u)``."""
+        nu, m = self.nu, self.m
+        self.stats["njev"] += 1
+        M, f, Phi, C = self._dyn(t, q, u)
+        exact = getattr(self.prob, "tangents", None)
+        KC = exact(t, q, u, udot, lam) if exact is not None else None
+        if KC is not None:
+            K, Ct = (np.asarray(x, float).reshape(nu, nu) for x in KC)
+        else:
+            K, Ct = self._difference_tangents(t, q, u, udot, lam, M, f, C)
         bp, gb = self._coeffs(h)
         A = np.zeros((nu + m, nu + m))
         A[:nu, :nu] = M + gb * Ct + K / bp

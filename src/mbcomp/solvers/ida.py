@@ -12,6 +12,10 @@ Dense output is the cubic Hermite interpolant through the two step ends and thei
 derivatives (IDA returns ``dy/dt``), accurate to ``O(h^4)``: enough for output grids, while
 the step ends themselves carry IDA's full accuracy.
 
+The iteration matrix ``cj E - d fun/dy`` is built from the problem's ``jac`` when the problem
+says it is exact (``problem.exact_jac``: the DAE forms over a generated program, see
+:mod:`mbcomp.codegen.dae_jacobian`); otherwise IDA makes it by its own difference quotients.
+
 Examples
 --------
 >>> import numpy as np
@@ -79,6 +83,8 @@ class IDA(Stepper):
         atol_v[idx >= 2] = 1e20  # leave index-2 variables out of the error test
         self._opts = dict(rtol=float(rtol), atol=atol_v, algebraic_idx=np.flatnonzero(E == 0.0).tolist() or None,
                           max_order=int(max_order), max_num_steps=100000)
+        if getattr(problem, "exact_jac", False):  # else SUNDIALS' own difference quotients
+            self._opts["jacfn"] = self._jac
         if first_step:
             self._opts["first_step"] = float(first_step)
         if np.isfinite(max_step):
@@ -115,6 +121,18 @@ class IDA(Stepper):
             return
         self.stats["nfev"] += 1
         res[:] = self._E * yp - F
+
+    def _jac(self, t, y, yp, res, cj, JJ):
+        """IDA's iteration matrix ``d res/dy + cj d res/dyp = cj E - d fun/dy`` from the
+        problem's (exact) ``jac``."""
+        try:
+            J = self.prob.jac(t, np.array(y))
+        except BaseException as exc:  # noqa: BLE001 - re-raised by _step, as for the residual
+            self._fail = self._fail or exc
+            JJ[:, :] = np.nan
+            return
+        JJ[:, :] = -J
+        JJ[np.diag_indices_from(JJ)] += cj * self._E
 
     def _derivative(self, t, y):
         """``dy/dt`` at a consistent ``y``: ``fun`` on differential rows; algebraic variables
