@@ -293,9 +293,9 @@ class _Bound:
             self.dbuf, self.ybuf = np.zeros(2), np.zeros(n + 1)
             self.wbuf, self.obuf = np.zeros(max(printed.n_work, 1)), np.zeros(printed.n_out + 1)
 
-    def call(self, t, y, alpha, beta):
+    def call(self, t, y, alpha, beta, finite=True):
         """The program's flat output at ``(t, y = [q, u])`` with the per-call inputs ``alpha``,
-        ``beta``; None where a guard fails or a value is not finite."""
+        ``beta``; None where a guard fails or (``finite``) a value is not finite."""
         printed, n, nq = self.printed, self.n, self.nq
         if printed.backend == "python":
             try:
@@ -311,7 +311,7 @@ class _Bound:
                             self.pbuf.ctypes.data, self.wbuf.ctypes.data, self.obuf.ctypes.data):
                 return None
             out = self.obuf[: printed.n_out].copy()
-        return out if np.isfinite(out).all() else None
+        return out if not finite or np.isfinite(out).all() else None
 
 
 class BoundSensitivity:
@@ -415,7 +415,9 @@ class ColumnCode:
             return cls(tr, refs, backend, system.nq + system.nu, cache_dir)
 
     def bind(self, system):
-        """``D = f(t, y, alpha, beta)``: ``(n_columns, nq + nu + n_params)`` or None."""
+        """``D = f(t, y, alpha, beta)``: ``(n_columns, nq + nu + n_params)`` (NaN in the rows of
+        columns without a derivative there, e.g. a residual's norm at zero) or None where a
+        guard fails."""
         keep = {(r.path, r.param) for r in self.params}
         layout, sig = param_layout(system, keep)
         if sig != self.signature:
@@ -423,7 +425,7 @@ class ColumnCode:
         bound = _Bound(self.printed, self.n, self.nq, param_vector(system, layout))
         width = self.n + len(self.params)
 
-        def call(t, y, alpha, beta):
-            out = bound.call(t, y, alpha, beta)
+        def call(t, y, alpha, beta):  # a column may have no derivative (a residual's norm at 0): NaN there
+            out = bound.call(t, y, alpha, beta, finite=False)
             return None if out is None else out.reshape(len(self.names), width)
         return call

@@ -1,0 +1,199 @@
+"""Forward trajectory sensitivities (``simulate(..., sensitivities=[...])``, issue 31 item 2).
+
+Checked against closed forms (a pendulum's small swings, free fall), against central
+differences of whole tight runs, and by Taylor tests: the first-order remainder
+``|y(p + h) - y(p) - h S|`` of a run perturbed by ``h`` falls as ``h^2`` over three decades
+-- for an open chain, a closed loop in both formulations, a nonholonomic rolling disk, and
+through events (a bouncing ball's impacts, a pendulum hitting a joint stop).
+"""
+import numpy as np
+import pytest
+
+import mbcomp
+from mbcomp.library import FixedTranslation, PointMass, Revolute, World
+
+SLIDER = mbcomp.load_model_file("models/slider_crank.py").build
+BALL = mbcomp.load_model_file("models/bouncing_ball.py").build
+DISK = mbcomp.load_model_file("models/rolling_disk.py").build
+TIGHT = dict(rtol=1e-12, atol=1e-14)
+
+
+def pendulum(phi0=0.6, L=1.0, m=1.0, limits=None, e=0.7):
+    model = mbcomp.Model()
+    w = model.add("world", World(g=(0, -9.81, 0)))
+    j = model.add("j", Revolute(phi0=phi0, limits=limits, restitution=e))
+    rod = model.add("rod", FixedTranslation(r=(0, -L, 0)))
+    bob = model.add("bob", PointMass(m=m))
+    model.connect(w.frame_b, j.frame_a)
+    model.connect(j.frame_b, rod.frame_a)
+    model.connect(rod.frame_b, bob.frame_a)
+    return model
+
+
+def _value(model, name):
+    path, rest = name.split(".", 1)
+    param, _, idx = rest.partition("[")
+    val = getattr(mbcomp.assemble(model).P[path], param)
+    return val, tuple(int(k) for k in idx.rstrip("]").split(",")) if idx else None
+
+
+def _params(model, name, delta):
+    """``params=`` of a run with parameter ``name`` moved by ``delta``."""
+    val, idx = _value(model, name)
+    path_param = name.split("[")[0]
+    if idx is None:
+        return {path_param: float(val) + delta}
+    arr = np.array(val, float)
+    arr[idx] += delta
+    return {path_param: arr}
+
+
+def _taylor(build, name, columns, t_end, steps, margin=0.0, **kw):
+    """The first-order remainders over ``steps``, at the outputs more than ``margin`` (s) away
+    from the base run's events (between an event's time and its moved time the perturbed run
+    is on the other side of the event: there the difference is the jump, not a Taylor
+    remainder)."""
+    base = mbcomp.simulate(build(), t_end=t_end, sensitivities=[name], **TIGHT, **kw)
+    assert base.status == "success", base.message
+    away = np.ones(len(base.time), bool)
+    for e in base.events:
+        away &= np.abs(base.time - e.time) > margin
+    out = []
+    for h in steps:
+        moved = mbcomp.simulate(build(), t_end=t_end, params=_params(build(), name, h), **TIGHT, **kw)
+        assert moved.status == "success" and len(moved.time) == len(base.time)
+        out.append(max(np.max(np.abs(moved[c] - base[c] - h * base.sensitivity(c, name))[away]) for c in columns))
+    return np.array(out)
+
+
+def _falls_as_h2(r):
+    ratios = r[:-1] / r[1:]
+    assert np.all((ratios > 60) & (ratios < 170)), (r, ratios)
+
+
+def test_small_swings_match_the_closed_form():
+    """phi = phi0 cos(w t), w = sqrt(g/L): d phi/d phi0 = cos(w t), d phi/dL = phi0 sin(w t) w t / (2L)
+    to first order in phi0 (0.01 rad: nonlinear terms ~ phi0^2 / 16)."""
+    res = mbcomp.simulate(pendulum(phi0=0.01), t_end=2.0, sensitivities=["j.phi0", "rod.r[1]"], **TIGHT)
+    w, t = np.sqrt(9.81), res.time
+    np.testing.assert_allclose(res.sensitivity("j.phi", "j.phi0"), np.cos(w * t), atol=2e-4)
+    # L = -r[1]: d/dr[1] = -d/dL
+    np.testing.assert_allclose(res.sensitivity("j.phi", "rod.r[1]"), -0.01 * np.sin(w * t) * w * t / 2.0, atol=2e-5)
+
+
+def test_free_fall_is_exact_and_mass_has_exactly_zero_sensitivity():
+    model = mbcomp.Model()
+    w = model.add("world", World(g=(0, 0, -9.81)))
+    from mbcomp.library import Prismatic
+    s = model.add("s", Prismatic(n=(0, 0, 1), s0=0.0, v0=1.5))
+    b = model.add("b", PointMass(m=2.0))
+    model.connect(w.frame_b, s.frame_a)
+    model.connect(s.frame_b, b.frame_a)
+    res = mbcomp.simulate(model, t_end=1.0, sensitivities=["s.v0", "world.g[2]", "b.m"], rtol=1e-10, atol=1e-12)
+    t = res.time
+    np.testing.assert_allclose(res.sensitivity("s.s", "s.v0"), t, atol=1e-12)
+    np.testing.assert_allclose(res.sensitivity("s.s", "world.g[2]"), t ** 2 / 2, atol=1e-12)
+    np.testing.assert_allclose(res.sensitivity("s.v", "world.g[2]"), t, atol=1e-12)
+    assert np.all(res.sensitivity("s.s", "b.m") == 0.0) and np.all(res.sensitivity("s.v", "b.m") == 0.0)
+    # the support force m g depends on the mass: d f_z / d m = -g_z ... with its sign as the column has it
+    fz = res["s.f.z"] if "s.f.z" in res.names else None
+    if fz is not None:
+        np.testing.assert_allclose(res.sensitivity("s.f.z", "b.m"), fz / 2.0, atol=1e-9)
+
+
+def test_asking_for_sensitivities_leaves_the_states_unchanged():
+    """Staggered: the run with sensitivities steps exactly as the same (stepwise) run without."""
+    a = mbcomp.simulate(SLIDER(), t_end=0.5, method="DOP853", sensitivities=["rod.m"])
+    b = mbcomp.simulate(SLIDER(), t_end=0.5, method="DOP853")
+    for c in ("crank_angle", "slider_position", "pin.f.x"):
+        np.testing.assert_array_equal(a[c], b[c])
+
+
+def test_slider_crank_rod_mass_matches_central_differences_at_default_tolerances():
+    """The issue's check: ``sensitivities=["rod.m"]`` at the default tolerances is within 1e-6
+    relative of a central difference of two tight runs."""
+    res = mbcomp.simulate(SLIDER(), t_end=1, sensitivities=["rod.m"])
+    h = 1e-4
+    up = mbcomp.simulate(SLIDER(), t_end=1, params={"rod.m": 2.0 + h}, rtol=1e-13, atol=1e-15)
+    down = mbcomp.simulate(SLIDER(), t_end=1, params={"rod.m": 2.0 - h}, rtol=1e-13, atol=1e-15)
+    fd = (up["crank_angle"] - down["crank_angle"]) / (2 * h)
+    s = res.sensitivity("crank_angle", "rod.m")
+    assert np.max(np.abs(s - fd)) <= 1e-6 * np.max(np.abs(fd))
+
+
+@pytest.mark.parametrize("kw", [dict(), dict(formulation="dalembert"), dict(stabilization="projection"),
+                                dict(method="Radau")], ids=["lagrange", "dalembert", "projection", "radau"])
+def test_slider_crank_columns_match_central_differences(kw):
+    """Coordinates, speeds, a reaction and the energy, for a mass and a start value, in both
+    formulations; a Guess start value (the rod's) leaves no trace."""
+    names = ["rod.m"] if kw.get("method") == "Radau" else ["rod.m", "crank_joint.phi0", "rod_tip.r[0]"]  # Radau: slow
+    res = mbcomp.simulate(SLIDER(), t_end=0.6, n_out=61, sensitivities=names, rtol=1e-10, atol=1e-12, **kw)
+    for name in names:
+        h = 1e-5
+        up, down = (mbcomp.simulate(SLIDER(), t_end=0.6, n_out=61, params=_params(SLIDER(), name, s * h), **TIGHT, **kw)
+                    for s in (1, -1))
+        for c in ("crank_angle", "slider_joint.v", "pin.f.x", "energy.kinetic"):
+            fd = (up[c] - down[c]) / (2 * h)
+            assert np.max(np.abs(res.sensitivity(c, name) - fd)) <= 2e-6 * np.max(np.abs(fd)), (name, c)
+
+
+def test_taylor_open_chain():
+    chain = mbcomp.load_model_file("models/n_link_pendulum.py").build
+    for name in ("joint1.phi0", "link2.m"):
+        _falls_as_h2(_taylor(lambda: chain(N=3), name, ["joint1.phi", "joint3.w"], 1.0, [1e-2, 1e-3, 1e-4, 1e-5]))
+
+
+@pytest.mark.parametrize("formulation", ["lagrange", "dalembert"])
+def test_taylor_closed_loop(formulation):
+    _falls_as_h2(_taylor(SLIDER, "rod.m", ["crank_angle", "slider_joint.v"], 0.6, [1e-1, 1e-2, 1e-3, 1e-4],
+                         formulation=formulation))
+
+
+def test_taylor_rolling_disk_nonholonomic():
+    _falls_as_h2(_taylor(lambda: DISK(lean0=0.05, spin=5.0), "disk.m", ["lean.phi", "heading.w", "x.s"], 1.0,
+                         [1e-1, 1e-2, 1e-3, 1e-4]))
+
+
+def test_taylor_through_a_bouncing_balls_impacts():
+    """Two impacts in 1.2 s; the drop height moves the impact times, restitution the rebounds."""
+    for name in ("free.r0[2]", "ground.restitution"):
+        _falls_as_h2(_taylor(BALL, name, ["free.r.z", "free.v.z"], 1.2, [1e-2, 1e-3, 1e-4, 1e-5], margin=0.02))
+
+
+def test_taylor_through_a_joint_stop():
+    build = lambda: pendulum(limits=(-0.3, 1.0))  # noqa: E731
+    for name in ("j.restitution", "j.limits[0]", "rod.r[1]"):
+        _falls_as_h2(_taylor(build, name, ["j.phi", "j.w"], 2.0, [1e-2, 1e-3, 1e-4, 1e-5], margin=0.02))
+
+
+def test_a_parameter_the_motion_does_not_use_has_exactly_zero_sensitivity_through_an_impact():
+    """The stop's upper limit is never reached: it is in no right-hand side and no acting
+    event, so its sensitivity is exactly zero, through the impact at the lower one too."""
+    res = mbcomp.simulate(pendulum(limits=(-0.3, 1.0)), t_end=2.0, sensitivities=["j.limits[1]", "j.limits[0]"],
+                          rtol=1e-10, atol=1e-12)
+    assert [e.kind for e in res.events] == ["impact"]
+    for c in ("j.phi", "j.w", "energy.total"):
+        assert np.all(res.sensitivity(c, "j.limits[1]") == 0.0)
+    assert np.max(np.abs(res.sensitivity("j.phi", "j.limits[0]"))) > 0.1  # the lower one moves the motion
+
+
+def test_bouncing_ball_mass_drops_out_through_impacts():
+    """A falling ball's motion does not depend on its mass; the program computes m g / m, so
+    the sensitivity is zero to rounding (the impact's jump differences the reset map)."""
+    res = mbcomp.simulate(BALL(), t_end=1.2, sensitivities=["ball.m"], rtol=1e-10, atol=1e-12)
+    assert len(res.events) == 2
+    assert np.max(np.abs(res.sensitivity("free.r.z", "ball.m"))) < 1e-8
+
+
+def test_bad_names_are_clear_errors():
+    with pytest.raises(ValueError, match="no component 'rodd'"):
+        mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=["rodd.m"])
+    with pytest.raises(ValueError, match="has no parameter 'mass'"):
+        mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=["rod.mass"])
+    with pytest.raises(ValueError, match=r"name one entry, e.g. 'rod.I\[0, 0\]'"):
+        mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=["rod.I"])
+    res = mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=["rod.m"])
+    with pytest.raises(KeyError, match="no sensitivity with respect to 'slider.m'"):
+        res.sensitivity("crank_angle", "slider.m")
+    with pytest.raises(KeyError, match="has no sensitivities"):
+        mbcomp.simulate(SLIDER(), t_end=0.1).sensitivity("crank_angle", "rod.m")
