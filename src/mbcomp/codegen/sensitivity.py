@@ -138,6 +138,20 @@ def parameter_ref(system, name):
     return ParameterRef(str(name), path, param, index, kind, float(v))
 
 
+def _jacobian(g, outputs, ins):
+    """The flat ``d outputs / d ins`` (row major) built in ``g``; an input that is None (not
+    made by the tracer) has derivative zero."""
+    present = [(k, x) for k, x in enumerate(ins) if x is not None]
+    J = tangent(g, outputs, [x for _, x in present])
+    flat = []
+    for row in J:
+        full = [0.0] * len(ins)
+        for (k, _), v in zip(present, row):
+            full[k] = v
+        flat.extend(full)
+    return flat
+
+
 class SensitivityCode:
     """The sensitivity programs of one system structure and set of parameters (see the module
     notes); :meth:`bind` gives the callables for a system's parameter values.
@@ -187,21 +201,9 @@ class SensitivityCode:
         ins += [g.memo.get(("in", "p", index[p.key])) for p in self.params]
         return ins
 
-    @staticmethod
-    def _jacobian(g, outputs, ins):
-        present = [(k, x) for k, x in enumerate(ins) if x is not None]
-        J = tangent(g, outputs, [x for _, x in present])
-        flat = []
-        for row in J:
-            full = [0.0] * len(ins)
-            for (k, _), v in zip(present, row):
-                full[k] = v
-            flat.extend(full)
-        return flat
-
     def _rhs_program(self, tr):
         g, fun = tr.graph, list(tr.groups["fun"])
-        flat = self._jacobian(g, fun, self._inputs(g, tr.layout))
+        flat = _jacobian(g, fun, self._inputs(g, tr.layout))
         out = fun + flat
         return Program(g, {"rhs": out}, guard_groups={"rhs": list(tr.guard_groups["fun"])}), len(out)
 
@@ -214,7 +216,7 @@ class SensitivityCode:
             start += size
             sizes[name] = size
         res = list(fields["Phi"]) + list(fields["Phid"]) + list(fields["Psi"])
-        flat = self._jacobian(g, res, self._inputs(g, tr.layout))
+        flat = _jacobian(g, res, self._inputs(g, tr.layout))
         out = res + flat
         prog = Program(g, {"res": out}, guard_groups={"res": list(tr.guard_groups["eval"])})
         return (prog, len(out)), sizes["Phi"], sizes["Psi"]
@@ -399,7 +401,7 @@ class ColumnCode:
                                                                       for k in range(self.n - self.nq)]
         index = {key: k for k, key in enumerate(tr.layout)}
         ins += [g.memo.get(("in", "p", index[p.key])) for p in self.params]
-        flat = SensitivityCode._jacobian(g, values, ins)
+        flat = _jacobian(g, values, ins)
         prog = Program(g, {"cols": flat}, guard_groups={"cols": list(tr.guard_groups["outputs"])})
         self.printed = _Printed(prog, "cols", len(flat), backend, cache_dir)
 

@@ -47,8 +47,6 @@ Examples
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from ..assembly.kkt import accelerations
@@ -60,6 +58,7 @@ from ..solvers.locate import return_root, root, time_tolerance
 from ..assembly.conservation import impulse_work
 from .active import (SegmentStart, mode_rows, mode_system, rows_in_force, slipping_joints, start_modes,
                      with_mode_forces)
+from .outcomes import Cut, EventRecord, Outcome
 from .stops import consistent, impact_speeds, row_push, row_values
 from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, tangent_rows, with_slip_friction
 from .friction import row_events
@@ -73,93 +72,6 @@ REST_HEIGHT = 10.0
 CHATTER = 30
 #: this many events of one component within BURST_SPAN max(1, |t|) seconds are chattering (an error naming it)
 BURST, BURST_SPAN = 60, 1e-9
-
-
-@dataclass(frozen=True)
-class EventRecord:
-    """One event of a run.
-
-    Attributes
-    ----------
-    time : float
-        s.
-    component : str
-        The component's path, or ``"user"``.
-    name : str
-        The event's name (the user function's ``__name__``).
-    kind : str
-        ``"impact"``, ``"engage"``, ``"release"``, ``"switch"``, ``"end"``, ``"rest"``
-        (chattering settled), ``"turn"`` (a plane slip turned its direction) or ``"user"``.
-    detail : dict
-        The impact's ``speed_before``/``speed_after`` (m/s or rad/s along the row),
-        ``energy_loss`` (J), ``restitution``; the new ``mode``.
-
-    Examples
-    --------
-    >>> EventRecord(0.5, "hinge", "lo", "impact", {"energy_loss": 1.0}).kind
-    'impact'
-    """
-
-    time: float
-    component: str
-    name: str
-    kind: str
-    detail: dict = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class Cut:
-    """An event that acts, located in the last accepted step (:meth:`Events.check`).
-
-    Attributes
-    ----------
-    t : float
-        The event's time (s); the step is cut there.
-    qu : callable
-        ``qu(t) -> [q, u]``: the step's dense output (the outputs up to ``t`` come from it).
-    key : tuple
-        The event function's key: ``("user", index, name)``, ``("joint", joint, event)`` or
-        ``("release", joint, row)``.
-    state : ndarray
-        ``[q, u]`` at ``t`` before the action.
-    action : object
-        The component's action (:class:`~mbcomp.modeling.events.Impact`, ``Switch`` or
-        ``End``), or None for a user's terminal event.
-    turn : ndarray or None
-        A plane slide's new direction (tangent coordinates) when the event only turned it.
-    """
-
-    t: float
-    qu: object
-    key: tuple
-    state: np.ndarray
-    action: object = None
-    turn: object = None
-
-
-@dataclass(frozen=True)
-class Outcome:
-    """What an event did to the run (:meth:`Events.act`): the run ends at ``t`` (``form`` is
-    None; ``state`` its last output, ``message`` why), or a new segment starts at ``t`` (s)
-    with ``form`` over the new active set from its state ``y0``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> Outcome(0.5, np.zeros(2), message="event ground at t=0.5 s").ends
-    True
-    """
-
-    t: float
-    state: np.ndarray
-    form: object = None
-    y0: object = None
-    message: str = ""
-
-    @property
-    def ends(self):
-        """Whether the run ends at :attr:`t`."""
-        return self.form is None
 
 
 def stepwise(stepper_class):

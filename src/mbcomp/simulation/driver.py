@@ -357,12 +357,15 @@ def run_stats(run, monitors, init, seconds, **request):
     return stats
 
 
-def hooks_for(run, monitors, progress):
-    """The hooks of a run, in order: monitors (if any), outputs, projection (if the
+def hooks_for(run, monitors, progress, sensitivities=None):
+    """The hooks of a run, in order: monitors (if any), outputs, the sensitivities (if asked:
+    they read the step's dense output before a projection moves its end), projection (if the
     formulation projects), the choice of kept constraint rows (if rows were dropped:
     :class:`mbcomp.simulation.rows.RowChoice`), repartition, progress bar (if asked)."""
     hooks = [Monitoring(monitors)] if monitors else []
     hooks.append(KeepOutputs())
+    if sensitivities is not None:
+        hooks.append(sensitivities)
     if run.projects:
         hooks.append(Projection())
     mask = run.form.system.row_mask
@@ -391,10 +394,7 @@ def integrate(run, monitors, progress=False, extra=(), events=None, sensitivitie
     With ``sensitivities`` (:class:`~mbcomp.simulation.sensitivity.Sensitivities`) they are
     integrated over every accepted step right after its outputs are kept, and jump at every
     event's action."""
-    hooks = hooks_for(run, monitors, progress)
-    if sensitivities is not None:
-        hooks.insert(next(k for k, h in enumerate(hooks) if isinstance(h, KeepOutputs)) + 1, sensitivities)
-    hooks = run.hooks = hooks + list(extra)
+    hooks = run.hooks = hooks_for(run, monitors, progress, sensitivities) + list(extra)
     status, message = "success", "reached t_end"
     with sigterm_interrupts():
         try:

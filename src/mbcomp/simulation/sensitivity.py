@@ -153,7 +153,9 @@ class Sensitivities(StepHook):
         out[:, self._programmed] = D
         return out
 
-    def _rhs(self, system, t, y):
+    def rhs_at(self, system, t, y):
+        """``(fun, d fun/dy, d fun/dp)`` of ``system`` at ``(t, y)`` with the run's gains, every
+        requested parameter a column; a ``SimulationError`` where the program does not hold."""
         out = self.bound(system).rhs(t, y, *self.gains)
         if out is not None:
             out = (out[0], out[1], self._wide(out[2]))
@@ -283,13 +285,13 @@ class Sensitivities(StepHook):
 
         def rhs(t, s):
             y = np.asarray(dense(t), float)
-            _, J, Jp = self._rhs(system, t, y)
+            _, J, Jp = self.rhs_at(system, t, y)
             return (J @ s.reshape(n, k) + Jp).ravel()
 
         opts = dict(rtol=self.rtol, atol=self.atol, dense_output=True, first_step=t1 - t0)
         if self.implicit:
             def jac(t, s):
-                _, J, _ = self._rhs(system, t, np.asarray(dense(t), float))
+                _, J, _ = self.rhs_at(system, t, np.asarray(dense(t), float))
                 return np.kron(J, np.eye(k))
             sol = solve_ivp(rhs, (t0, t1), self.S.ravel(), method="Radau", jac=jac, **opts)
         else:
@@ -370,7 +372,7 @@ class _Jump:
         system = run.form.system
         y_minus = np.asarray(cut.state, float)
         self.y_minus = y_minus
-        self.f_minus = sens._rhs(system, cut.t, y_minus)[0]
+        self.f_minus = sens.rhs_at(system, cut.t, y_minus)[0]
         self.events = events
         S = sens.S
         # the event function and the reset map along each column (S-_j, e_j) by central differences
@@ -404,7 +406,7 @@ class _Jump:
             raise SimulationError(f"sensitivities: the event at t={self.t:.12g} s is grazing (its function's rate is "
                                   "zero): the event time has no derivative there")
         dtau = -self.g_dir / self.g_f  # (k,)
-        f_plus = sens._rhs(new_system, self.t, y_plus)[0]
+        f_plus = sens.rhs_at(new_system, self.t, y_plus)[0]
         h = EVENT_STEP * 1e-1 * max(1.0, abs(self.t))
         R_f = (self.events.reset(self.cut, self.y_minus + h * self.f_minus)
                - self.events.reset(self.cut, self.y_minus - h * self.f_minus)) / (2 * h)
