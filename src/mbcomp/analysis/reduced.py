@@ -49,6 +49,10 @@ __all__ = ["Reduced", "direction_names", "dependent_directions", "CLOSE_ITER"]
 CLOSE_ITER = 30
 
 
+class _NoExact(Exception):
+    """A derivative program does not hold at the state (a failed guard, a non-finite value)."""
+
+
 def direction_names(system):
     """Names of the ``nu`` position-increment directions (one per speed).
 
@@ -201,20 +205,23 @@ class Reduced:
         moving directions' increments), from the evaluation's derivatives; None where they
         do not hold (the caller differences).
 
-        ``derivatives(t, q, u, a, lam)`` returns ``dR1, dR2, dG, Q`` at the state (an
-        :class:`mbcomp.codegen.eval_tangent.EvalTangent`, or None), see
-        :mod:`mbcomp.codegen.eval_tangent`. The map from ``x`` to the state is differentiated
-        by the implicit function theorem, the rates by differentiating the saddle-point
-        system::
+        ``derivatives`` is a :class:`mbcomp.codegen.eval_tangent.BoundEvalTangent`:
+        ``jvp(t, q, u, a, lam, dq, du)`` gives the derivatives of the balance ``R1 = f - M a -
+        A^T lam``, the acceleration rows ``R2 = -[c_b; B_b] - A a`` and the velocity rows ``G =
+        [dPhi/dt; Psi]`` along a direction, ``Q(q)`` how the coordinates move along the speeds.
+        The map from ``x`` to the state is differentiated by the implicit function theorem,
+        the rates by differentiating the saddle-point system (``a``, ``lam``: its solution at
+        the state)::
 
             dq_dep = -C_dep^-1 C_D dq_D                   (Phi = 0 along the dependent directions)
-            du_dep = -A_dep^-1 (dG/dq dq + A du_ind)      (the velocity rows [dPhi/dt; Psi] = 0)
-            [M A^T; A 0] [d(du/dt); d lam] = [dR1; dR2] [dq; du]
+            du_dep = -A_dep^-1 dG(dq, du_ind)             (the velocity rows [dPhi/dt; Psi] = 0)
+            [M A^T; A 0] [d(du/dt); d lam] = [dR1; dR2](dq, du)
 
-        with ``dq`` in increments along the speeds (coordinates ``Q dq``). Returns
+        with ``dq`` in increments along the speeds (coordinates ``Q dq``): two
+        Jacobian-vector products per state (one where no speed is dependent). Returns
         ``(A, A_moving)``.
         """
-        s, nu, npos = self.s, self.s.nu, self.pind.size
+        s, nu, nq, npos = self.s, self.s.nu, self.s.nq, self.pind.size
         q = self.positions(np.zeros(npos))
         u, ev = self.speeds(q, np.zeros(self.vind.size))
         try:
@@ -227,10 +234,9 @@ class Reduced:
                                m_all + np.arange(ev.B.shape[0]))).astype(int)
         lam_all = np.zeros(m_all + ev.B.shape[0])
         lam_all[rows] = lam
-        d = derivatives(self.t, q, u, ud, lam_all)
-        if d is None:
+        Q = derivatives.Q(q)
+        if Q is None:
             return None
-        R1, R2, G, Q = d.R1, d.R2[rows], d.G[rows], d.Q
         A, K = ev.A, saddle_matrix(ev.M, ev.A)
         try:
             Cdep = np.linalg.inv(ev.C[:, self.pdep]) if self.pdep.size else None
@@ -238,27 +244,33 @@ class Reduced:
         except np.linalg.LinAlgError:
             return None
 
-        def rates(dirs, dv):
-            """Rate columns for position increments along ``dirs`` (nu, c) before closure
-            and speed changes ``dv`` (nu, c) before the dependent speeds are solved."""
+        def column(d, dv):
+            """The rates' derivative for the position increment ``d`` (nu) before closure and
+            the speed change ``dv`` (nu) before the dependent speeds are solved."""
             if Cdep is not None:
-                dirs = dirs.copy()
-                dirs[self.pdep] = -Cdep @ (ev.C @ dirs)
-            X = np.vstack((Q @ dirs, dv))
-            if Adep is not None:
-                X[s.nq + self.vdep] = -Adep @ (G @ X)
-            du = X[s.nq:]
-            sol = np.linalg.solve(K, np.vstack((R1 @ X, R2 @ X)))
-            return np.vstack((du[self.pind], sol[:nu][self.vind]))
+                d = d.copy()
+                d[self.pdep] = -Cdep @ (ev.C @ d)
+            dq = Q @ d
+            out = derivatives.jvp(self.t, q, u, ud, lam_all, dq, dv)
+            if out is not None and Adep is not None:
+                dv = dv.copy()
+                dv[self.vdep] = -Adep @ out[2][rows]
+                out = derivatives.jvp(self.t, q, u, ud, lam_all, dq, dv)
+            if out is None:
+                raise _NoExact
+            return dv, np.concatenate((out[0], out[1][rows]))
 
+        E, zero = np.eye(nu), np.zeros(nu)
         try:
-            E = np.eye(nu)
-            cols = rates(np.hstack((E[:, self.pind], np.zeros((nu, self.vind.size)))),
-                         np.hstack((np.zeros((nu, npos)), E[:, self.vind])))
-            moving = rates(E[:, self.moving], np.zeros((nu, self.moving.size)))
-        except np.linalg.LinAlgError:
+            cols = [column(E[j], zero) for j in self.pind] + [column(zero, E[j]) for j in self.vind]
+            moving = [column(E[j], zero) for j in self.moving]
+            rhs = np.column_stack([c[1] for c in cols + moving]) if cols or moving else np.zeros((K.shape[0], 0))
+            dud = np.linalg.solve(K, rhs)[:nu] if rhs.size else rhs[:nu]
+        except (_NoExact, np.linalg.LinAlgError):
             return None
-        return cols, moving
+        du = np.column_stack([c[0] for c in cols + moving]) if cols or moving else np.zeros((nu, 0))
+        out = np.vstack((du[self.pind], dud[self.vind]))
+        return out[:, : len(cols)], out[:, len(cols):]
 
     @staticmethod
     def jacobian(f, n, scale):
