@@ -130,3 +130,30 @@ def test_refusals_name_the_component_parameter_or_function():
         mbcomp.gradient(pendulum(), {"terminal": "max(j.phi)"}, ["bob.m"], backend="python")
     with pytest.raises(ValueError, match=r"no column 'j.phj'; similar: j.phi"):
         mbcomp.gradient(pendulum(), {"integral": "j.phj"}, ["bob.m"], backend="python")
+
+
+@pytest.mark.parametrize("which", ["pendulum", "slider_crank"])
+def test_forward_sensitivities_and_the_adjoint_agree_to_1e_8(which):
+    # issue 31 item 6: the same derivative by two independent routes (forward: simulate's
+    # sensitivity equations; reverse: the adjoint's backward run)
+    if which == "pendulum":
+        build, params, cols = pendulum, ["bob.m", "world.g[1]", "rod.r[1]", "j.phi0", "j.w0"], ["j.phi", "j.w"]
+    else:
+        build = slider_crank.build
+        params, cols = ["rod.m", "crank_joint.phi0", "crank_joint.w0", "crank_tip.r[0]"], ["crank_angle", "slider_joint.v"]
+    res = mbcomp.simulate(build(), t_end=1.0, sensitivities=params, **TIGHT)
+    gr = mbcomp.gradient(build(), {"terminal": f"{cols[0]} + 0.5 * {cols[1]}"}, params, t_end=1.0, backend=BACKEND,
+                         **TIGHT)
+    fwd = [res.sensitivity(cols[0], p)[-1] + 0.5 * res.sensitivity(cols[1], p)[-1] for p in params]
+    np.testing.assert_allclose(gr.gradient, fwd, rtol=1e-8, atol=1e-8 * np.abs(fwd).max())
+
+
+@pytest.mark.skipif(c_compiler() is None, reason="no C compiler")
+def test_the_c_runs_give_the_gradient_of_the_scipy_runs():
+    obj = {"terminal": "crank_angle**2", "integral": "0.1 * slider_joint.v**2 + 1e-3 * pin.f.y"}
+    params = ["rod.m", "crank_joint.w0", "crank_tip.r[0]", "world.g[1]"]
+    c = mbcomp.gradient(slider_crank.build(), obj, params, t_end=1.0, backend="c", **TIGHT)
+    py = mbcomp.gradient(slider_crank.build(), obj, params, t_end=1.0, backend="python", **TIGHT)
+    assert c.stats["engine"].startswith("C") and py.stats["engine"].startswith("scipy")
+    np.testing.assert_allclose(c.gradient, py.gradient, rtol=1e-8)
+    assert c.value == pytest.approx(py.value, rel=1e-10)

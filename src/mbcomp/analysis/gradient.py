@@ -187,15 +187,18 @@ def gradient(model, objective, params, *, t_end=1.0, t_start=0.0, values=None, r
     checkpoints = int(checkpoints)
     if checkpoints < 1:
         raise ValueError(f"checkpoints={checkpoints}: give at least 1 segment")
-    pb = _programs(model, objective, params, values, t_start, alpha, beta, backend, cache_dir)
+    pb = _programs(model, objective, params, values, t_start, alpha, beta, backend, cache_dir, method)
     stats = {"checkpoints": checkpoints, "setup": _time.perf_counter() - clock0}
-    clock = _time.perf_counter()
     grid = np.linspace(t_start, t_end, checkpoints + 1)
-    starts, whole, stats["forward_nfev"], stats["forward_steps"] = _forward(pb, grid, method, rtol, atol)
-    stats["forward"] = _time.perf_counter() - clock
-    clock = _time.perf_counter()
-    value, lam0, mu = _backward(pb, grid, starts, whole, method, rtol, atol, stats)
-    stats["backward"] = _time.perf_counter() - clock
+    if pb.engine is not None:
+        value, lam0, mu = _c_runs(pb, grid, rtol, atol, stats, cache_dir)
+    else:
+        clock = _time.perf_counter()
+        starts, whole, stats["forward_nfev"], stats["forward_steps"] = _forward(pb, grid, method, rtol, atol)
+        stats["forward"] = _time.perf_counter() - clock
+        clock = _time.perf_counter()
+        value, lam0, mu = _backward(pb, grid, starts, whole, method, rtol, atol, stats)
+        stats.update(backward=_time.perf_counter() - clock, engine=f"scipy {method}")
     clock = _time.perf_counter()
     grad = np.zeros(len(pb.specs))
     runs = 0
@@ -209,7 +212,7 @@ def gradient(model, objective, params, *, t_end=1.0, t_start=0.0, values=None, r
     return Gradient(float(value), grad, [str(p) for p in params], stats)
 
 
-def _programs(model, objective, params, values, t_start, alpha, beta, backend, cache_dir):
+def _programs(model, objective, params, values, t_start, alpha, beta, backend, cache_dir, method):
     """The run's system, start state, right-hand side and the adjoint and objective programs."""
     from ..assembly.initialization import initialize
     from ..codegen import c_compiler
@@ -226,7 +229,10 @@ def _programs(model, objective, params, values, t_start, alpha, beta, backend, c
     system = system_of(model, values, backend)
     _refuse_modes(system)
     numeric = system.with_evaluator(None)
-    specs = [_param_spec(numeric, name) for name in params]
+    from ..codegen.tracing import parameter_entries
+
+    entries = {(p, n): (kind, val) for p, n, kind, val in parameter_entries(numeric)}
+    specs = [_param_spec(entries, name) for name in params]
     keep = sorted({(s["path"], s["name"]) for s in specs if s["kind"] == "number"})
     wrt = [s["key"] for s in specs if s["kind"] == "number"]
     init = initialize(system, t_start)
@@ -249,8 +255,9 @@ def _programs(model, objective, params, values, t_start, alpha, beta, backend, c
     if vjp is None or any(b is None for b in parts.values()):
         raise ModelError([Problem("model", "a parameter value changes a decision the programs were traced with",
                                   "report this: the programs are traced with the run's own values")])
+    engine = form.compiled_integrator() if backend == "c" and method == "DOP853" else None
     return SimpleNamespace(
-        system=system, numeric=numeric, specs=specs, wrt=wrt, fun=form.fun, vjp=vjp, parts=parts,
+        system=system, numeric=numeric, specs=specs, wrt=wrt, fun=form.fun, vjp=vjp, parts=parts, engine=engine,
         y0=np.asarray(form.initial_state(t_start, init.q, init.u), float), gains=np.array([alpha, beta], float),
         moves_all=init.row_mask is not None and init.row_mask.size > 0 or bool(system.nonholonomic))
 
@@ -265,6 +272,64 @@ def _forward(pb, grid, method, rtol, atol):
         starts.append(sol.y[:, -1].copy())
         whole = sol.sol
     return starts, whole, nfev, nsteps
+
+
+#: Chebyshev nodes per forward step at which the C path keeps the state for the backward run
+#: (a polynomial of degree 9 through the 7th-order dense output of DOP853 over about one step)
+NODES = 10
+
+
+def _c_runs(pb, grid, rtol, atol, stats, cache_dir):
+    """The C path: both runs in the runtime's DOP853. Forward, segment by segment, the
+    checkpoints and each segment's steps; backward, from the last segment: the segment again
+    from its checkpoint with the state kept at :data:`NODES` Chebyshev nodes of each of as
+    many equal sub-segments as it took steps, then ``[lam, mu, J]`` back over it
+    (:class:`~mbcomp.codegen.adjoint.AdjointIntegrator`). ``(J, lam(t0), mu(t0))``."""
+    from ..codegen.adjoint import AdjointIntegrator, chebyshev_nodes
+    from ..errors import SimulationError
+
+    clock = _time.perf_counter()
+    eng, n, P = pb.engine, pb.y0.size, len(pb.wrt)
+    starts, steps, nfev = [pb.y0], [], 0
+    for k in range(len(grid) - 1):
+        out = _engine_run(eng, grid[k], starts[-1], grid[k + 1], np.array([grid[k + 1]]), rtol, atol)
+        starts.append(out.Y[-1].copy())
+        steps.append(max(1, out.naccept))
+        nfev += out.nfev
+    stats.update(forward_nfev=nfev, forward_steps=sum(steps), forward=_time.perf_counter() - clock)
+    clock = _time.perf_counter()
+    adj = AdjointIntegrator(pb.vjp, pb.parts.get("integral"), pb.gains, cache_dir)
+    value, z = 0.0, np.zeros(n + P + 1)
+    if "terminal" in pb.parts:
+        out = _call(pb.parts["terminal"], grid[-1], starts[-1], pb.gains, "the objective's terminal part")
+        value, z[:n], z[n:n + P] = out[0], out[1:1 + n], out[1 + n:]
+    x, _ = chebyshev_nodes(NODES)
+    renfev = 0
+    for k in reversed(range(len(grid) - 1)):
+        S, L = steps[k], (grid[k + 1] - grid[k]) / steps[k]
+        times = np.minimum(grid[k] + (np.arange(S)[:, None] + x[None, :]) * L, grid[k + 1]).ravel()
+        t_out, where = np.unique(times, return_inverse=True)
+        out = _engine_run(eng, grid[k], starts[k], grid[k + 1], t_out, rtol, atol)
+        renfev += out.nfev
+        try:
+            z = adj.integrate(grid[k], grid[k + 1], out.Y[where].reshape(S, NODES, n), z, rtol, atol)
+        except ArithmeticError as exc:
+            raise SimulationError(f"the adjoint's backward run failed: {exc} -> fix: gradients need a smooth run; "
+                                  "shorten it or move it away from that state") from exc
+    stats.update(recompute_nfev=renfev, backward_nfev=adj.nfev, backward_steps=adj.naccept,
+                 backward=_time.perf_counter() - clock, engine="C DOP853 (runtime)")
+    return value + z[n + P], z[:n], z[n:n + P]
+
+
+def _engine_run(eng, t0, y0, t1, t_out, rtol, atol):
+    from ..codegen.engine import STATUS
+    from ..errors import SimulationError
+
+    out = eng.integrate(8, t0, y0, t1, t_out, rtol, atol)
+    if out.status != 0 or len(out.Y) != len(t_out):
+        raise SimulationError(f"the forward run stopped at t = {out.t_last:.6g} s ({STATUS.get(out.status, '?')}: "
+                              f"{out.message}) -> fix: gradients need a smooth run that the C engine steps through")
+    return out
 
 
 def _backward(pb, grid, starts, whole, method, rtol, atol, stats):
@@ -439,18 +504,16 @@ def _binary(op, a, b):
     return a ** b
 
 
-def _param_spec(system, text):
+def _param_spec(entries, text):
     """What a parameter name means: ``{"kind": "number" | "start", "path", "name", "index",
-    "key", "value"}``; a ``ModelError`` naming it and the fix otherwise."""
-    from ..codegen.tracing import parameter_entries
-
+    "key", "value"}`` (``entries``: ``{(path, name): (kind, value)}`` of the system's
+    parameters); a ``ModelError`` naming it and the fix otherwise."""
     m = _NAME.match(str(text))
     if m is None:
         raise ModelError([Problem(str(text), "is not a parameter name",
                                   "write component.param, component.param[i] for an array entry, or a start value "
                                   "such as joint.phi0")])
     path, name, idx = m.group(1), m.group(2), m.group(3)
-    entries = {(p, n): (kind, val) for p, n, kind, val in parameter_entries(system)}
     if (path, name) not in entries:
         close = difflib.get_close_matches(f"{path}.{name}", [f"{p}.{n}" for p, n in entries], n=4, cutoff=0.6)
         raise ModelError([Problem(str(text), "the model has no such parameter"

@@ -44,7 +44,7 @@ from .tangent import partials
 from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import param_layout, param_vector, trace
 
-__all__ = ["reverse", "AdjointCode", "BoundAdjoint"]
+__all__ = ["reverse", "AdjointCode", "BoundAdjoint", "AdjointIntegrator", "chebyshev_nodes", "ADJOINT_GLUE"]
 
 
 def _is_zero(x):
@@ -322,3 +322,205 @@ class BoundAdjoint:
                 return None
             out = self.obuf[:code.n_out].copy()
         return out if np.isfinite(out).all() else None
+
+
+#: the adjoint's right-hand side in C, for the runtime's integrators (``mbrt_dop853``): the
+#: state ``y(t)`` interpolated from its values at Chebyshev nodes of each sub-segment of a
+#: forward stretch (barycentric formula), then one call of the vector-Jacobian program and
+#: one of the objective's integrand program (through function pointers: the glue is the same
+#: for every model). Time runs backwards: ``t = t_hi - s``.
+ADJOINT_GLUE = r"""
+#include <string.h>
+typedef int (*mbcomp_prog)(const double *restrict q, const double *restrict u, double t, const double *restrict d,
+                           const double *restrict h, const double *restrict p, double *restrict w,
+                           double *restrict out);
+typedef struct {
+    mbcomp_prog vjp; const double *vh, *vp; double *vw;  /* lam^T df/d(y, p) and its hoisted, params, work */
+    mbcomp_prog obj; const double *oh, *op; double *ow;  /* the integrand's [g, dg/dy, dg/dp] or NULL  */
+    int nq, n, np;                  /* coordinates, state size, parameters                          */
+    double t_lo, t_hi;              /* the stretch                                                   */
+    int nseg, nnode;                /* equal sub-segments, Chebyshev nodes in each                   */
+    const double *Y;                /* nseg * nnode * n: y at the nodes                              */
+    const double *x, *bw;           /* the nodes in [0, 1] and their barycentric weights             */
+    double *y, *d, *vout, *oout;    /* scratch: n, 2 + n (gains, lam), n + np, 1 + n + np           */
+    int failed;                     /* 1: the adjoint program's guard, 2: the integrand's           */
+} mbcomp_adj_ctx;
+
+int mbcomp_adj_rhs(void *c, double s, const double *z, double *dz)
+{
+    mbcomp_adj_ctx *x = (mbcomp_adj_ctx *)c;
+    const int n = x->n, m = x->n + x->np;
+    const double t = x->t_hi - s, len = (x->t_hi - x->t_lo) / x->nseg;
+    double r = (t - x->t_lo) / len;
+    int k = (int)floor(r);
+    if (k < 0) k = 0;
+    if (k >= x->nseg) k = x->nseg - 1;
+    const double xi = r - k;
+    const double *Yk = x->Y + (size_t)k * x->nnode * n;
+    int hit = -1;
+    for (int j = 0; j < x->nnode; j++)
+        if (xi == x->x[j]) hit = j;
+    if (hit >= 0) {
+        memcpy(x->y, Yk + (size_t)hit * n, sizeof(double) * (size_t)n);
+    } else {
+        double sum = 0.0;
+        for (int i = 0; i < n; i++) x->y[i] = 0.0;
+        for (int j = 0; j < x->nnode; j++) {
+            const double cj = x->bw[j] / (xi - x->x[j]);
+            const double *Yj = Yk + (size_t)j * n;
+            sum += cj;
+            for (int i = 0; i < n; i++) x->y[i] += cj * Yj[i];
+        }
+        for (int i = 0; i < n; i++) x->y[i] /= sum;
+    }
+    memcpy(x->d + 2, z, sizeof(double) * (size_t)n);
+    if (x->vjp(x->y, x->y + x->nq, t, x->d, x->vh, x->vp, x->vw, x->vout)) { x->failed = 1; return 1; }
+    for (int i = 0; i < m; i++) dz[i] = x->vout[i];   /* dlam/ds = +(df/dy^T lam + dg/dy^T), s = t_hi - t */
+    dz[m] = 0.0;
+    if (x->obj != NULL) {
+        if (x->obj(x->y, x->y + x->nq, t, x->d, x->oh, x->op, x->ow, x->oout)) { x->failed = 2; return 1; }
+        for (int i = 0; i < m; i++) dz[i] += x->oout[1 + i];
+        dz[m] = x->oout[0];
+    }
+    for (int i = 0; i <= m; i++)
+        if (!isfinite(dz[i])) { x->failed = 3; return 1; }
+    return 0;
+}
+"""
+
+
+class _AdjCtx(ctypes.Structure):
+    _fields_ = ([("vjp", ctypes.c_void_p), ("vh", ctypes.c_void_p), ("vp", ctypes.c_void_p), ("vw", ctypes.c_void_p),
+                 ("obj", ctypes.c_void_p), ("oh", ctypes.c_void_p), ("op", ctypes.c_void_p), ("ow", ctypes.c_void_p),
+                 ("nq", ctypes.c_int), ("n", ctypes.c_int), ("np", ctypes.c_int),
+                 ("t_lo", ctypes.c_double), ("t_hi", ctypes.c_double), ("nseg", ctypes.c_int), ("nnode", ctypes.c_int)]
+                + [(k, ctypes.c_void_p) for k in ("Y", "x", "bw", "y", "d", "vout", "oout")]
+                + [("failed", ctypes.c_int)])
+
+
+class _Stats(ctypes.Structure):
+    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
+                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
+                ("message", ctypes.c_char * 200)]
+
+
+def chebyshev_nodes(k):
+    """``k`` Chebyshev points of the second kind on ``[0, 1]`` (ends included) and their
+    barycentric weights: the polynomial through values there is well conditioned at any degree.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.codegen.adjoint import chebyshev_nodes
+    >>> x, w = chebyshev_nodes(5)
+    >>> x.round(6).tolist(), w.tolist()
+    ([0.0, 0.146447, 0.5, 0.853553, 1.0], [0.5, -1.0, 1.0, -1.0, 0.5])
+    """
+    j = np.arange(k)
+    x = 0.5 - 0.5 * np.cos(np.pi * j / (k - 1))
+    w = (-1.0) ** j
+    w[0] *= 0.5
+    w[-1] *= 0.5
+    return x, w
+
+
+class AdjointIntegrator:
+    """The adjoint ``[lam, mu, J]`` integrated backwards over a stretch of a run in C: the
+    runtime's DOP853 (:mod:`mbcomp.codegen.runtime`) over :data:`ADJOINT_GLUE`, which calls
+    the bound vector-Jacobian program and the objective's integrand program in C.
+
+    Parameters
+    ----------
+    vjp : BoundAdjoint
+        The right-hand side's products (a C program, ``d = [alpha, beta, lam]``).
+    integrand : BoundAdjoint or None
+        The integrand's value and gradient (a C program on the same parameters ``wrt``).
+    gains : (float, float)
+        The Baumgarte gains (1/s).
+    cache_dir : str, optional
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.codegen import c_compiler
+    >>> from mbcomp.codegen.adjoint import AdjointCode, AdjointIntegrator, chebyshev_nodes
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> system = mbcomp.assemble(m)
+    >>> if c_compiler():      # lam(T) = (1, 0) on the position: lam(0) = (1, T), mu_gz = T^2 / 2
+    ...     code = AdjointCode.build(system, "c", wrt=[("world", "g", (2,))])
+    ...     adj = AdjointIntegrator(code.bind(system), None, (0.0, 0.0))
+    ...     x, _ = chebyshev_nodes(8)
+    ...     Y = np.zeros((1, 8, 2))             # the state does not matter here (linear)
+    ...     z = adj.integrate(0.0, 2.0, Y, np.array([1.0, 0.0, 0.0, 0.0]), 1e-10, 1e-12)
+    ...     print(np.round(z, 9).tolist())
+    ... else:
+    ...     print([1.0, 2.0, 2.0, 0.0])
+    [1.0, 2.0, 2.0, 0.0]
+    """
+
+    def __init__(self, vjp, integrand, gains, cache_dir=None):
+        from .engine import runtime_library
+        from .toolchain import c_compiler, cache_directory
+
+        if vjp.code.backend != "c" or (integrand is not None and integrand.code.backend != "c"):
+            raise ValueError("AdjointIntegrator needs the C programs (backend='c')")
+        self.vjp, self.integrand = vjp, integrand
+        self.n, self.nq, self.np = vjp.code.n, vjp.nq, len(vjp.code.wrt)
+        d = cache_directory(cache_dir)
+        self.rt = runtime_library(c_compiler(), d)
+        self.rt.mbrt_dop853_work_size.argtypes = [ctypes.c_int]
+        self.rt.mbrt_dop853_work_size.restype = ctypes.c_size_t
+        self.rt.mbrt_dop853.restype = ctypes.c_int
+        vp, i, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
+        self.rt.mbrt_dop853.argtypes = [vp, vp, vp, i, dbl, vp, dbl, dbl, vp, dbl, dbl, ctypes.c_long, vp, i, vp, vp,
+                                        vp, vp]
+        self.glue = cached_library([("adjglue", HEADER + ADJOINT_GLUE, list(FLAGS))], "mbcomp_adjglue", cache_dir,
+                                   "adjoint integrator")
+        self.rhs = ctypes.cast(self.glue.mbcomp_adj_rhs, ctypes.c_void_p).value
+        n, m = self.n, self.n + self.np
+        self.y, self.d = np.zeros(n + 1), np.zeros(2 + n + 1)
+        self.d[:2] = gains
+        self.vout, self.oout = np.zeros(m + 1), np.zeros(m + 2)
+        self.work = np.zeros(int(self.rt.mbrt_dop853_work_size(m + 1)))
+        self.stats = _Stats()
+        self.ctx = _AdjCtx(ctypes.cast(vjp.code.dll.mbcomp_vjp, ctypes.c_void_p).value, vjp.hbuf.ctypes.data,
+                           vjp.pbuf.ctypes.data, vjp.wbuf.ctypes.data,
+                           None if integrand is None else ctypes.cast(integrand.code.dll.mbcomp_vjp,
+                                                                      ctypes.c_void_p).value,
+                           None if integrand is None else integrand.hbuf.ctypes.data,
+                           None if integrand is None else integrand.pbuf.ctypes.data,
+                           None if integrand is None else integrand.wbuf.ctypes.data,
+                           self.nq, n, self.np, 0.0, 0.0, 0, 0, None, None, None, self.y.ctypes.data,
+                           self.d.ctypes.data, self.vout.ctypes.data, self.oout.ctypes.data, 0)
+        self.nfev = self.naccept = 0
+
+    def integrate(self, t_lo, t_hi, Y, z, rtol, atol):
+        """``[lam, mu, J]`` at ``t_lo`` from their values ``z`` at ``t_hi``, with the state
+        ``Y[k, j]`` at the Chebyshev nodes ``j`` (:func:`chebyshev_nodes`) of the ``k``-th of
+        equal sub-segments of ``[t_lo, t_hi]``. Raises ``ArithmeticError`` naming the program
+        that did not hold (a failed guard, a non-finite value) or the integrator's failure."""
+        Y = np.ascontiguousarray(Y, float)
+        nseg, nnode = Y.shape[0], Y.shape[1]
+        x, bw = chebyshev_nodes(nnode)
+        c = self.ctx
+        c.t_lo, c.t_hi, c.nseg, c.nnode = float(t_lo), float(t_hi), nseg, nnode
+        c.Y, c.x, c.bw, c.failed = Y.ctypes.data, x.ctypes.data, bw.ctypes.data, 0
+        z0 = np.ascontiguousarray(z, float)
+        atol_v = np.full(z0.size, float(atol))
+        out = np.zeros(z0.size)
+        n_written = ctypes.c_int(0)
+        status = self.rt.mbrt_dop853(self.rhs, None, ctypes.byref(c), z0.size, 0.0, z0.ctypes.data,
+                                     float(t_hi - t_lo), float(rtol), atol_v.ctypes.data, 0.0, 0.0, 0,
+                                     np.array([t_hi - t_lo]).ctypes.data, 1, out.ctypes.data, ctypes.byref(n_written),
+                                     self.work.ctypes.data, ctypes.byref(self.stats))
+        self.nfev += self.stats.nfev
+        self.naccept += self.stats.naccept
+        if status != 0 or n_written.value != 1:
+            what = {1: "the adjoint program", 2: "the objective's integrand program",
+                    3: "the adjoint (a non-finite value)"}.get(c.failed, "the integrator")
+            raise ArithmeticError(f"{what} failed at t = {t_hi - self.stats.t:.6g} s: "
+                                  f"{self.stats.message.decode(errors='replace')}")
+        return out
