@@ -154,6 +154,22 @@ def test_taylor_rolling_disk_nonholonomic():
                          [1e-1, 1e-2, 1e-3, 1e-4]))
 
 
+@pytest.mark.parametrize("formulation", ["lagrange", "dalembert"])
+def test_taylor_library_rolling_disk_with_a_quaternion(formulation):
+    """The library's RollingDisk (a free motion with a quaternion, a rolling contact): the
+    D'Alembert run normalizes the quaternion, so S_Q is kept on the sphere's tangent."""
+    from mbcomp.library import RollingDisk
+
+    def build():
+        m = mbcomp.Model()
+        w = m.add("world", World(g=(0, 0, -9.81)))
+        d = m.add("disk", RollingDisk(r=0.3, m=2.0, lean0=0.2, spin_rate0=8.0, heading_rate0=1.0))
+        m.connect(w.frame_b, d.plane)
+        return m
+    _falls_as_h2(_taylor(build, "disk.wheel.m", ["disk.free.r.x", "disk.free.w.z", "disk.free.Q.x"], 1.0,
+                         [1e-1, 1e-2, 1e-3, 1e-4], formulation=formulation, n_out=21))
+
+
 def test_taylor_through_a_bouncing_balls_impacts():
     """Two impacts in 1.2 s; the drop height moves the impact times, restitution the rebounds."""
     for name in ("free.r0[2]", "ground.restitution"):

@@ -233,6 +233,8 @@ class Sensitivities(StepHook):
     def project(self, system, t, y, S):
         """``S`` moved onto the tangent of ``system``'s constraint manifold at ``(t, y)`` by
         minimum-norm corrections (positions, then speeds)."""
+        if system.nq != system.nu:  # quaternions: the run normalizes them, S_Q goes onto the sphere's tangent
+            S = _normalized(system, y, S)
         res = self._residuals(system, t, y)
         if res is None:
             raise SimulationError(f"sensitivities: the residual program does not hold at t={t:.12g} s")
@@ -349,6 +351,24 @@ class Sensitivities(StepHook):
         return SensitivityTable(self.refs, np.asarray(time, float), np.asarray(Y, float),
                                 np.array(self.kept[:n_kept]).reshape(n_kept, self.n, self.k),
                                 self.kept_systems[:n_kept], self.gains, self.stopped)
+
+
+def _normalized(system, y, S):
+    """``S`` with the coordinates' columns moved by the derivative of the quaternions'
+    normalization at ``y`` (``I - Q Q^T`` on each unit quaternion), by central differences of
+    :meth:`~mbcomp.assembly.system.MultibodySystem.normalize` (exact to rounding: the map is
+    the projection onto the sphere, its second derivative vanishes along the tangent)."""
+    nq = system.nq
+    q = np.asarray(y[:nq], float)
+    S = S.copy()
+    for j in range(S.shape[1]):
+        d = S[:nq, j]
+        size = float(np.max(np.abs(d)))
+        if size == 0.0:
+            continue
+        eps = 1e-7 / size
+        S[:nq, j] = (system.normalize(q + eps * d) - system.normalize(q - eps * d)) / (2 * eps)
+    return S
 
 
 def _with(P, ref, value):
