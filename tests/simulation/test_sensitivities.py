@@ -31,8 +31,8 @@ def pendulum(phi0=0.6, L=1.0, m=1.0, limits=None, e=0.7):
 
 
 def _value(model, name):
-    path, rest = name.split(".", 1)
-    param, _, idx = rest.partition("[")
+    head, _, idx = name.partition("[")
+    path, param = head.rsplit(".", 1)
     val = getattr(mbcomp.assemble(model).P[path], param)
     return val, tuple(int(k) for k in idx.rstrip("]").split(",")) if idx else None
 
