@@ -36,6 +36,7 @@ __all__ = [
     "Box", "Cylinder", "Sphere", "Mesh", "Helix", "Rod", "Grid",
     "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",
     "load_model_file", "load_model", "export_fmu", "Input", "study", "Uniform", "Normal", "gradient",
+    "fit",
 ]
 
 
@@ -64,6 +65,9 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name == "gradient":  # adjoint gradients of an objective of a run
         from .analysis.gradient import gradient
         return gradient
+    if name == "fit":  # parameter identification: least squares with the exact sensitivities
+        from .analysis.fit import fit
+        return fit
     if name in ("linearize", "steady_states", "sweep", "study", "Uniform", "Normal"):  # analyses, studies
         from . import analysis
         return getattr(analysis, name)

@@ -1,5 +1,5 @@
 """Command line: ``mbcomp simulate MODEL.py``, ``mbcomp info MODEL.py``, ``mbcomp bench MODEL.py``,
-``mbcomp stability MODEL.py`` and ``mbcomp study MODEL.py``.
+``mbcomp stability MODEL.py``, ``mbcomp study MODEL.py`` and ``mbcomp fit MODEL.py --data meas.csv``.
 
 A model file defines ``build(**params) -> Model`` and may set ``SIMULATION = dict(t_end=...,
 rtol=..., atol=..., method=..., stabilization=..., formulation=...)`` as defaults. ``-p name=value`` passes
@@ -7,7 +7,8 @@ rtol=..., atol=..., method=..., stabilization=..., formulation=...)`` as default
 has one (``-p spring.c=200``: nothing is re-derived).
 
 One module per command (:mod:`~mbcomp.cli.simulate`, :mod:`~mbcomp.cli.info`,
-:mod:`~mbcomp.cli.bench`, :mod:`~mbcomp.cli.stability` with :mod:`~mbcomp.cli.sweep`, :mod:`~mbcomp.cli.study`), sharing
+:mod:`~mbcomp.cli.bench`, :mod:`~mbcomp.cli.stability` with :mod:`~mbcomp.cli.sweep`, :mod:`~mbcomp.cli.study`,
+:mod:`~mbcomp.cli.fit`), sharing
 :mod:`~mbcomp.cli.loader` (the model file, ``-p``, output paths); this module holds the parser
 and :func:`main`.
 
@@ -38,7 +39,7 @@ import sys
 
 from ..errors import SimulationError
 from ..simulation.endings import Terminated
-from . import bench, export, info, simulate, stability, study
+from . import bench, export, fit, info, simulate, stability, study
 from .loader import load_model_file, parse_value
 from .messages import EXIT_SIGNAL
 from .sweep import parse_sweep
@@ -62,7 +63,7 @@ def make_parser():
     """The ``mbcomp`` argument parser: one sub-command per command module."""
     ap = argparse.ArgumentParser(prog="mbcomp", description="Modelica-style multibody modelling and simulation")
     sub = ap.add_subparsers(dest="command", required=True)
-    for command in (simulate, bench, info, stability, study, export):
+    for command in (simulate, bench, info, stability, study, export, fit):
         command.add_parser(sub, _common)
     return ap
 
