@@ -15,6 +15,9 @@ back on the constraint manifold: positions by Newton along the dependent directi
 rounding (``exact=True``: the linearization's central differences divide by ``h ~ 1e-4``),
 dependent speeds by one exact solve of the velocity rows. Its rates come from the full
 saddle-point system (index-1 Lagrange), so multiplier terms are kept exactly.
+:meth:`Reduced.jacobian` differences that map; :meth:`Reduced.exact` differentiates it
+exactly from the evaluation's derivative program (the implicit function theorem on the
+rows, the saddle-point system differentiated).
 
 Examples
 --------
@@ -219,7 +222,23 @@ class Reduced:
 
         with ``dq`` in increments along the speeds (coordinates ``Q dq``): two
         Jacobian-vector products per state (one where no speed is dependent). Returns
-        ``(A, A_moving)``.
+        ``(A, A_moving)`` (1/s, 1/s^2: rates per state unit).
+
+        Examples
+        --------
+        >>> import mbcomp, numpy as np
+        >>> from mbcomp.analysis.reduced import Reduced
+        >>> from mbcomp.assembly.initialization import initialize
+        >>> from mbcomp.codegen.eval_tangent import eval_tangent
+        >>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+        >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
+        >>> hinge = m.add("hinge", Revolute(n=(0, 0, 1), phi0=0.0, w0=0.0))
+        >>> rod = m.add("rod", FixedTranslation(r=(0, -0.5, 0))); bob = m.add("bob", PointMass(m=1.0))
+        >>> m.connect(w.frame_b, hinge.frame_a); m.connect(hinge.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+        >>> s = mbcomp.assemble(m); init = initialize(s)
+        >>> A, _ = Reduced(s, 0.0, init.q, init.u).exact(eval_tangent(s))
+        >>> A.tolist()                  # [[0, 1], [-g/l, 0]]
+        [[0.0, 1.0], [-19.62, 0.0]]
         """
         s, nu, nq, npos = self.s, self.s.nu, self.s.nq, self.pind.size
         q = self.positions(np.zeros(npos))

@@ -354,8 +354,8 @@ class BoundEvalTangent:
         return None if out is None else out.reshape(code.nq, code.nu)
 
 
-#: topology -> {(signature, backend): EvalTangentCode}: systems differing only in parameter
-#: values (``with_params``) share their topology and so the program
+#: topology -> {(signature, backend, velocity rows held): EvalTangentCode}: systems differing
+#: only in parameter values (``with_params``) share their topology and so the program
 _CODES = weakref.WeakKeyDictionary()
 
 
@@ -395,7 +395,8 @@ def eval_tangent(system, backend="python", cache_dir=None, max_nodes=3_000_000):
     True
     """
     codes = _CODES.setdefault(system.topology, {})
-    key = (param_layout(system)[1], backend)
+    # a hybrid run's rows in force share the topology but hold other velocity rows
+    key = (param_layout(system)[1], backend, tuple(e.name for e in system.nonholonomic))
     code = codes.get(key)
     if code is not None:
         bound = code.bind(system)
