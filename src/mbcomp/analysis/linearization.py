@@ -165,8 +165,12 @@ class Linearization:
         return "\n".join(lines)
 
     def report(self):
+        """Text: the states, the classification, how ``A`` was differentiated, the moving
+        and removed directions, then :meth:`modes`."""
         head = [f"linearization: {len(self.state_names)} states ({', '.join(self.state_names)})",
-                f"classification: {self.classification}"]
+                f"classification: {self.classification}",
+                "derivatives: " + ("exact (the evaluation's tangent program)" if self.derivatives == "exact"
+                                   else "central differences with Richardson extrapolation")]
         if self.moving:
             head.append(f"moving at constant rates (cyclic, not states): {', '.join(self.moving)}")
         if self.removed:
