@@ -26,7 +26,7 @@ Prints a table with the ratios sympy/mbcomp, writes ``bench/stability.csv`` and
 ``bench/stability.png`` (left: time to the boundary, log scale; right: the bicycle's real parts
 against speed from both tools on one axis).
 
-Run: python bench/stability.py [--no-sympy] [--only disk|bicycle]
+Run: python bench/stability.py [--no-sympy] [--only disk|bicycle] [--derivatives exact|differences]
 """
 import os
 
@@ -84,18 +84,20 @@ def timed(fn, *args, **kw):
 # ------------------------------------------------------------------------------------------
 # mbcomp
 # ------------------------------------------------------------------------------------------
-def mbcomp_case(name):
-    """``dict`` of timings, boundary values and a 101-point root locus for one problem."""
+def mbcomp_case(name, derivatives="auto"):
+    """``dict`` of timings, boundary values and a 101-point root locus for one problem
+    (``derivatives``: as for :func:`mbcomp.linearize`)."""
     if name == "disk":
         mod, par, grid, probe = mbcomp.load_model_file(ROOT / "models/rolling_disk.py"), "spin", (1.0, 5.0), 6.0
         build = lambda x: mod.build(spin=x)  # noqa: E731
     else:
         mod, par, grid, probe = mbcomp.load_model_file(ROOT / "models/bicycle.py"), "v", (0.0, 10.0), 5.0
         build = lambda x: mod.build(v=x)  # noqa: E731
-    first_lin, t_first = timed(lambda: mbcomp.linearize(build(probe)))
+    lin = lambda model: mbcomp.linearize(model, derivatives=derivatives)  # noqa: E731
+    first_lin, t_first = timed(lambda: lin(build(probe)))
     values = np.linspace(*grid, 101)
-    locus, t_locus = timed(lambda: [mbcomp.linearize(build(x)).eigenvalues for x in values])
-    sw, t_sweep = timed(mbcomp.sweep, build, par, np.linspace(*grid, 11))
+    locus, t_locus = timed(lambda: [lin(build(x)).eigenvalues for x in values])
+    sw, t_sweep = timed(mbcomp.sweep, build, par, np.linspace(*grid, 11), analyze=lin)
     return dict(tool="mbcomp", first=t_first, per_point=t_locus / len(values), boundary=t_sweep,
                 changes=[c["value"] for c in sw.changes], values=values,
                 max_real=np.array([e.real.max() for e in locus]), eig_probe=first_lin.eigenvalues)
@@ -140,12 +142,14 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--no-sympy", action="store_true", help="mbcomp only")
     ap.add_argument("--only", choices=("disk", "bicycle"), help="one problem")
+    ap.add_argument("--derivatives", choices=("auto", "exact", "differences"), default="auto",
+                    help="how mbcomp.linearize differentiates (default: exact where a program exists)")
     args = ap.parse_args(argv)
     names = [args.only] if args.only else ["disk", "bicycle"]
 
     rows, runs = [], {}
     for name in names:
-        tools = [mbcomp_case(name)]
+        tools = [mbcomp_case(name, args.derivatives)]
         if not args.no_sympy:
             tools.append(sympy_case(name))
         runs[name] = tools
