@@ -182,6 +182,29 @@ def test_taylor_through_a_joint_stop():
         _falls_as_h2(_taylor(build, name, ["j.phi", "j.w"], 2.0, [1e-2, 1e-3, 1e-4, 1e-5], margin=0.02))
 
 
+def pressed_pendulum(L=1.0, m=1.0, lim=0.2):
+    """Falls onto its lower stop (restitution 0: it engages and is held, gravity pressing it
+    there) until a torque growing as 1 N m/s * t lifts it off (the push crosses zero: release)."""
+    from mbcomp.library import Torque
+
+    model = pendulum(phi0=0.6, L=L, m=m, limits=(lim, 1.5), e=0.0)
+    motor = model.add("motor", Torque(tau=lambda t, phi, w: 1.0 * t))
+    model.connect(motor.flange_b, model["j"].axis)
+    return model
+
+
+@pytest.mark.parametrize("formulation", ["lagrange", "dalembert"])
+def test_taylor_through_engage_hold_and_release(formulation):
+    """Impact with restitution 0, a held segment (its rows are the hybrid layer's: the
+    segment's right-hand side is differenced), and the release where the push crosses zero."""
+    base = mbcomp.simulate(pressed_pendulum(), t_end=3.0, n_out=61, sensitivities=["bob.m"], formulation=formulation,
+                           **TIGHT)
+    assert [e.kind for e in base.events] == ["impact", "engage", "release"], base.events
+    for name in ("bob.m", "rod.r[1]", "j.limits[0]"):
+        _falls_as_h2(_taylor(pressed_pendulum, name, ["j.phi", "j.w"], 3.0, [1e-2, 1e-3, 1e-4, 1e-5], margin=0.05,
+                             formulation=formulation, n_out=61))
+
+
 def test_a_parameter_the_motion_does_not_use_has_exactly_zero_sensitivity_through_an_impact():
     """The stop's upper limit is never reached: it is in no right-hand side and no acting
     event, so its sensitivity is exactly zero, through the impact at the lower one too."""

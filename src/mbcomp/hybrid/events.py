@@ -314,21 +314,19 @@ class Events(SlideEvents):
         current modes."""
         return float(self.values(t, np.asarray(qu, float))[key])
 
-    def reset(self, cut, qu):
+    def reset(self, cut, qu, before, after):
         """``[q, u]`` right after the action of ``cut`` from the state ``qu`` before it, as
-        :meth:`act` makes it (an impact's impulse map, then the state made consistent with the
-        next active set), without acting: nothing is recorded and the modes stay. The action
-        is read again from this run's parameters (a twin's restitution, :meth:`twin`)."""
+        :meth:`act` made it: an impact's impulse map over the system of the active set
+        ``before`` (the action read again from this run's parameters: a twin's restitution,
+        :meth:`twin`), then the state made consistent with the active set ``after``. Nothing is
+        recorded and the modes stay."""
         (kind, who, name), action = cut.key, cut.action
         nq, t = self.system.nq, float(cut.t)
         q, u = np.asarray(qu[:nq], float), np.asarray(qu[nq:], float)
-        modes = dict(self.modes)
         if isinstance(action, Impact):
-            action = self.system.edge(who).comp.modes(self.system.P[who]).action(name, self.modes[who])
-            u = self._impact_speeds(t, who, action, q, u)
-        elif isinstance(action, Switch):
-            modes[who] = action.mode
-        q, u = consistent(self.system_now(modes), t, q, u)
+            action = self.system.edge(who).comp.modes(self.system.P[who]).action(name, before[who])
+            u = self._impact_speeds(t, who, action, q, u, before)
+        q, u = consistent(self.system_now(after), t, q, u)
         return np.concatenate((q, u))
 
     def twin(self, params):
@@ -347,14 +345,16 @@ class Events(SlideEvents):
         rows = rows_in_force(self.system, self.modes)
         return bool(rows.held or rows.sliding or rows.forces)
 
-    def _impact_speeds(self, t, who, action, q, u):
-        """``u+`` of an impact of ``who`` (action ``action``) at ``(t, q, u-)``."""
+    def _impact_speeds(self, t, who, action, q, u, modes):
+        """``u+`` of an impact of ``who`` (action ``action``) at ``(t, q, u-)`` in the active set
+        ``modes`` before it."""
+        before = self.system_now(modes)
         if not self.system.edge(who).comp.tree_edge:
             row = _contact_row(self.system, who, action.engage)
-            return contact_impact(self.system_now(), who, t, q, u, action.restitution, row,
+            return contact_impact(before, who, t, q, u, action.restitution, row,
                                   friction=self._cone(who, action.engage))[0]
         rows = list(mode_rows(self.system, {who: action.engage}))
-        return impact_speeds(self.system_now(), t, q, u, rows, action.restitution)[0]
+        return impact_speeds(before, t, q, u, rows, action.restitution)[0]
 
     def _approaching(self, who, action, state, t=0.0):
         """Whether the impact's rows close (a negative speed along them) at ``state``."""

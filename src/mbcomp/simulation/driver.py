@@ -243,7 +243,7 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
     sens = None
     if sensitivities:  # a step's own dense output carries them: one step at a time (stepwise)
         sens = Sensitivities(form.system, sensitivities, t_start, run.ys[0], form.output_gains() or (0.0, 0.0),
-                             stepper.implicit, rtol, atol)
+                             stepper.implicit, rtol, atol, events=watcher)
     monitors = monitors_for(system, atol, singular)
     wall0 = _time.perf_counter()
     watch = None if stepper.implicit else StiffnessWatch()

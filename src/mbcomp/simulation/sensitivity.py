@@ -68,6 +68,7 @@ import numpy as np
 
 from ..codegen.graph import CodegenError
 from ..codegen.sensitivity import ColumnCode, SensitivityCode, parameter_ref
+from ..assembly.kkt import project_state, solve_kkt
 from ..errors import SimulationError
 from .stepping import StepHook
 
@@ -75,6 +76,9 @@ __all__ = ["Sensitivities", "SensitivityTable", "check_sensitivities"]
 
 #: relative step of the central differences of event functions and reset maps
 EVENT_STEP = 1e-6
+#: relative step of the central differences of a held segment's right-hand side (about the
+#: cube root of the rounding error: truncation and rounding both near 1e-11 relative)
+HELD_STEP = 6e-6
 
 
 def check_sensitivities(names):
@@ -116,20 +120,25 @@ class Sensitivities(StepHook):
         The run's tolerances.
     """
 
-    def __init__(self, system, names, t0, y0, gains, implicit, rtol, atol):
+    def __init__(self, system, names, t0, y0, gains, implicit, rtol, atol, events=None):
         self.system = system
         self.refs = [parameter_ref(system, n) for n in names]
         self.names = [r.name for r in self.refs]
         self.gains = tuple(float(g) for g in gains)
         self.implicit, self.rtol, self.atol = implicit, rtol, atol
         self.n, self.k = system.nq + system.nu, len(self.refs)
-        self._codes = {}
+        self._codes, self._held = {}, {}
         self._programmed = [j for j, r in enumerate(self.refs) if r.kind == "param"]
         self.t = float(t0)
-        self.S = self.initial(system, t0, np.asarray(y0, float))
+        self.stopped = None  # why the sensitivities end early, with the time
+        if events is not None and events.holds_rows():
+            self.stopped = (float(t0), "the run starts in a mode that holds rows (an engaged stop, a stuck "
+                            "friction, a sliding contact): the sensitivities of such a start are not computed")
+            self.S = np.full((self.n, self.k), np.nan)
+        else:
+            self.S = self.initial(system, t0, np.asarray(y0, float))
         self.kept = [self.S.copy()]
         self.kept_systems = [system]
-        self.stopped = None  # why the sensitivities end early (a held row), with the time
         self.stats_ = dict(sensitivity_steps=0, sensitivity_evaluations=0, sensitivity_jumps=0)
 
     # --- programs ----------------------------------------------------------------------------
@@ -153,9 +162,44 @@ class Sensitivities(StepHook):
         out[:, self._programmed] = D
         return out
 
+    def hold(self, system, events):
+        """Differentiate ``system`` (a segment whose modes hold rows or apply forces: the rows
+        and forces are the hybrid layer's, not in a traced program) by central differences of
+        its index-1 right-hand side, the parameters moved in twins of the system over the same
+        modes (:meth:`mbcomp.hybrid.events.Events.twin`)."""
+        twins = []
+        for ref in self.refs:
+            if ref.kind == "start":
+                twins.append(None)
+                continue
+            eps = HELD_STEP * max(abs(ref.value), 1e-2)
+            twins.append((events.twin(_moved(system, ref, ref.value + eps)).system_now(),
+                          events.twin(_moved(system, ref, ref.value - eps)).system_now(), eps))
+        self._held[id(system)] = (system, twins)
+
+    def _held_rhs(self, held, t, y):
+        system, twins = held
+        f = _index1(system, t, y, self.gains)
+        J = np.empty((self.n, self.n))
+        for i in range(self.n):
+            h = HELD_STEP * max(1.0, abs(y[i]))
+            e = np.zeros(self.n)
+            e[i] = h
+            J[:, i] = (_index1(system, t, y + e, self.gains) - _index1(system, t, y - e, self.gains)) / (2 * h)
+        Jp = np.zeros((self.n, self.k))
+        for j, twin in enumerate(twins):
+            if twin is not None:
+                plus, minus, eps = twin
+                Jp[:, j] = (_index1(plus, t, y, self.gains) - _index1(minus, t, y, self.gains)) / (2 * eps)
+        self.stats_["sensitivity_held_evaluations"] = self.stats_.get("sensitivity_held_evaluations", 0) + 1
+        return f, J, Jp
+
     def rhs_at(self, system, t, y):
         """``(fun, d fun/dy, d fun/dp)`` of ``system`` at ``(t, y)`` with the run's gains, every
         requested parameter a column; a ``SimulationError`` where the program does not hold."""
+        held = self._held.get(id(system))
+        if held is not None:
+            return self._held_rhs(held, t, y)
         out = self.bound(system).rhs(t, y, *self.gains)
         if out is not None:
             out = (out[0], out[1], self._wide(out[2]))
@@ -233,6 +277,9 @@ class Sensitivities(StepHook):
     def project(self, system, t, y, S):
         """``S`` moved onto the tangent of ``system``'s constraint manifold at ``(t, y)`` by
         minimum-norm corrections (positions, then speeds)."""
+        held = self._held.get(id(system))
+        if held is not None:
+            return _projected_by_differences(held, t, y, S)
         if system.nq != system.nu:  # quaternions: the run normalizes them, S_Q goes onto the sphere's tangent
             S = _normalized(system, y, S)
         res = self._residuals(system, t, y)
@@ -328,12 +375,8 @@ class Sensitivities(StepHook):
         if jump is None or outcome.ends:
             return self.sync(run)
         new_system = outcome.form.system
-        if events.holds_rows():
-            self.stopped = (float(outcome.t), "a mode holds rows from here on (a stop engaged, a contact at rest, "
-                            "a stuck friction or a sliding contact): sensitivities through held rows are not "
-                            "computed yet")
-            self.S = np.full((self.n, self.k), np.nan)
-            return self.sync(run)
+        if events.holds_rows() and id(new_system) not in self._held:
+            self.hold(new_system, events)
         self.S = jump.apply(self, new_system, np.asarray(outcome.state, float))
         self.stats_["sensitivity_jumps"] += 1
         self.t = float(outcome.t)
@@ -350,7 +393,35 @@ class Sensitivities(StepHook):
             self.kept_systems.append(self.kept_systems[-1])
         return SensitivityTable(self.refs, np.asarray(time, float), np.asarray(Y, float),
                                 np.array(self.kept[:n_kept]).reshape(n_kept, self.n, self.k),
-                                self.kept_systems[:n_kept], self.gains, self.stopped)
+                                self.kept_systems[:n_kept], self.gains, self.stopped, set(self._held))
+
+
+def _index1(system, t, y, gains):
+    """``[dq/dt, du/dt]`` of the index-1 form of ``system`` (its evaluator: held rows and mode
+    forces included) with the Baumgarte ``gains`` (1/s): what the run integrates there."""
+    nq = system.nq
+    q, u = y[:nq], y[nq:]
+    ev = system.evaluate(t, q, u)
+    alpha, beta = gains
+    rhs = np.concatenate((-ev.cb - 2.0 * alpha * ev.Phid - beta ** 2 * ev.Phi, -ev.Bb - alpha * ev.Psi))
+    ud, _ = solve_kkt(ev.M, ev.f, ev.A, rhs, t)
+    return np.concatenate((system.q_rate(q, u), ud))
+
+
+def _projected_by_differences(held, t, y, S):
+    """``S`` through the derivative of the run's projection (:func:`mbcomp.assembly.kkt.project_state`)
+    of a held segment's system, by central differences along each column ``(S_j, e_j)``: the
+    state moved by ``eps S_j``, the parameter by ``eps`` (in the twins)."""
+    system, twins = held
+    out = np.empty_like(S)
+    for j in range(S.shape[1]):
+        if twins[j] is None:  # a start value: the projection does not depend on it
+            plus = minus = system
+            eps = HELD_STEP / max(1.0, float(np.max(np.abs(S[:, j]))))
+        else:
+            plus, minus, eps = twins[j]
+        out[:, j] = (project_state(plus, t, y + eps * S[:, j]) - project_state(minus, t, y - eps * S[:, j])) / (2 * eps)
+    return out
 
 
 def _normalized(system, y, S):
@@ -385,35 +456,33 @@ def _with(P, ref, value):
 
 
 class _Jump:
-    """The jump of the sensitivities at one event (see the module notes)."""
+    """The jump of the sensitivities at one event (see the module notes): made before the
+    events act (the event function's pieces need the state and the modes before), applied
+    after (the reset map needs the modes after)."""
 
     def __init__(self, sens, run, cut, events):
-        self.t, self.cut = float(cut.t), cut
+        self.t, self.cut, self.events = float(cut.t), cut, events
         system = run.form.system
-        y_minus = np.asarray(cut.state, float)
-        self.y_minus = y_minus
+        self.y_minus = y_minus = np.asarray(cut.state, float)
         self.f_minus = sens.rhs_at(system, cut.t, y_minus)[0]
-        self.events = events
-        S = sens.S
-        # the event function and the reset map along each column (S-_j, e_j) by central differences
-        self.g_dir = np.zeros(sens.k)
-        self.R_dir = np.zeros((sens.n, sens.k))
+        self.before = dict(events.modes)
+        self.S = S = sens.S.copy()
         self.g_f = self._g_rate(events, y_minus)
+        # the event function along each column (S-_j, e_j) by central differences; the parameter
+        # moved in a numeric twin of the system
+        self.eps, self.values, self.g_dir = [], [], np.zeros(sens.k)
         for j, ref in enumerate(sens.refs):
             eps = EVENT_STEP * max(abs(ref.value), 1e-2) / max(1.0, float(np.max(np.abs(S[:, j])))
                                                                / max(1.0, float(np.max(np.abs(y_minus)))))
-            vals = []
-            for s in (1.0, -1.0):
-                twin = events if ref.kind == "start" else events.twin(
-                    {f"{ref.path}.{ref.param}": getattr(_with(system.P[ref.path], ref, ref.value + s * eps), ref.param)})
-                y = y_minus + s * eps * S[:, j]
-                vals.append((twin.event_value(cut.key, self.t, y), twin.reset(cut, y)))
-            self.g_dir[j] = (vals[0][0] - vals[1][0]) / (2 * eps)
-            self.R_dir[:, j] = (vals[0][1] - vals[1][1]) / (2 * eps)
-        self.sens = sens
+            values = [None if ref.kind == "start" else _moved(system, ref, ref.value + s * eps) for s in (1.0, -1.0)]
+            g = [(events if v is None else events.twin(v)).event_value(cut.key, self.t, y_minus + s * eps * S[:, j])
+                 for v, s in zip(values, (1.0, -1.0))]
+            self.eps.append(eps)
+            self.values.append(values)
+            self.g_dir[j] = (g[0] - g[1]) / (2 * eps)
 
     def _g_rate(self, events, y):
-        """``g_y f-``: the event function's rate along the motion before the event."""
+        """``g_y f- + g_t``: the event function's rate along the motion before the event."""
         h = EVENT_STEP * 1e-1 * max(1.0, abs(self.t))
         f = self.f_minus
         gp = events.event_value(self.cut.key, self.t + h, y + h * f)
@@ -421,16 +490,30 @@ class _Jump:
         return (gp - gm) / (2 * h)
 
     def apply(self, sens, new_system, y_plus):
-        """``S+`` (the new segment's system ``new_system``, the state after ``y_plus``)."""
+        """``S+`` once the events acted (their modes now the ones after; ``new_system`` the new
+        segment's system, ``y_plus`` the state after)."""
         if abs(self.g_f) < 1e-300:
             raise SimulationError(f"sensitivities: the event at t={self.t:.12g} s is grazing (its function's rate is "
                                   "zero): the event time has no derivative there")
+        events, before, after = self.events, self.before, dict(self.events.modes)
+        R_dir = np.zeros((sens.n, sens.k))
+        for j, (eps, values) in enumerate(zip(self.eps, self.values)):
+            R = [(events if v is None else events.twin(v)).reset(self.cut, self.y_minus + s * eps * self.S[:, j],
+                                                                   before, after)
+                 for v, s in zip(values, (1.0, -1.0))]
+            R_dir[:, j] = (R[0] - R[1]) / (2 * eps)
         dtau = -self.g_dir / self.g_f  # (k,)
         f_plus = sens.rhs_at(new_system, self.t, y_plus)[0]
         h = EVENT_STEP * 1e-1 * max(1.0, abs(self.t))
-        R_f = (self.events.reset(self.cut, self.y_minus + h * self.f_minus)
-               - self.events.reset(self.cut, self.y_minus - h * self.f_minus)) / (2 * h)
-        return self.R_dir + np.outer(R_f - f_plus, dtau)
+        R_f = (events.reset(self.cut, self.y_minus + h * self.f_minus, before, after)
+               - events.reset(self.cut, self.y_minus - h * self.f_minus, before, after)) / (2 * h)
+        return R_dir + np.outer(R_f - f_plus, dtau)
+
+
+def _moved(system, ref, value):
+    """``{"component.param": value}`` of ``system`` with ``ref``'s entry at ``value`` (the whole
+    array for an array's entry), for :meth:`mbcomp.hybrid.events.Events.twin`."""
+    return {f"{ref.path}.{ref.param}": getattr(_with(system.P[ref.path], ref, value), ref.param)}
 
 
 class SensitivityTable:
@@ -446,7 +529,11 @@ class SensitivityTable:
     states : ndarray (n_out, nq + nu, n_params)
         ``d [q, u] / dp`` at the output times (NaN after :attr:`stopped`).
     stopped : tuple or None
-        ``(t, why)`` when the sensitivities end before the run (a mode holding rows).
+        ``(t, why)`` when the sensitivities end before the run (a start in a mode holding rows).
+
+    The columns other than coordinates and speeds (reactions, energies, ...) have no
+    sensitivity (NaN) in a segment whose modes hold rows (an engaged stop, a stuck friction):
+    their program does not hold those rows.
 
     Examples
     --------
@@ -460,12 +547,13 @@ class SensitivityTable:
     [[1.0, 0.5], [1.0, 1.0]]
     """
 
-    def __init__(self, refs, time, Y, states, systems, gains, stopped):
+    def __init__(self, refs, time, Y, states, systems, gains, stopped, held=()):
         self.params = [r.name for r in refs]
         self._refs = list(refs)
         self.time, self.states, self.stopped = time, states, stopped
         self._Y, self._systems, self._gains = Y, systems, gains
         self._programmed = [j for j, r in enumerate(refs) if r.kind == "param"]
+        self._held = set(held)  # segments whose held rows no column program has: NaN there
         self._columns = None
 
     def index(self, param):
@@ -504,7 +592,7 @@ class SensitivityTable:
                 codes[key] = (code, code.bind(system))
             code, call = codes[key]
             S = self.states[k]
-            D = call(self.time[k], self._Y[k], *self._gains) if np.isfinite(S).all() else None
+            D = call(self.time[k], self._Y[k], *self._gains) if np.isfinite(S).all() and key not in self._held else None
             for c, name in enumerate(code.names):
                 arr = out.setdefault(name, np.full((n_out, S.shape[1]), np.nan))
                 if D is not None:
