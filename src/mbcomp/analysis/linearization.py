@@ -222,6 +222,8 @@ def linearize(model, state=None, params=None, t=None, remove_ignorable=True, bac
         is not cyclic (the motion is not an equilibrium in these coordinates), or
         ``derivatives="exact"`` and the model has no exact derivatives at the state.
     """
+    if derivatives not in DERIVATIVES:
+        raise ValueError(f"linearize: derivatives={derivatives!r} is unknown; use one of {', '.join(DERIVATIVES)}")
     system = system_for(model, params, backend)
     state = _steady_state(system, state, t)
     if system.row_mask is None:
@@ -256,8 +258,6 @@ def _exact(system, red, derivatives):
     (:mod:`mbcomp.codegen.eval_tangent`), or None: asked for differences, a numeric system
     under ``"auto"``, or no exact derivative at this state (a failed guard, a non-finite
     entry, a singular block). Raises for ``derivatives="exact"`` when there is none."""
-    if derivatives not in DERIVATIVES:
-        raise ValueError(f"linearize: derivatives={derivatives!r} is unknown; use one of {', '.join(DERIVATIVES)}")
     if derivatives == "differences" or (derivatives == "auto" and system.backend == "numeric"):
         return None
     from ..codegen import CodegenError

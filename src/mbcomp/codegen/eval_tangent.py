@@ -16,7 +16,7 @@ made again (:func:`_replayed`) with every ``q_k`` replaced by ``q_k + eps dq_k``
 ``u_k`` by ``u_k + eps du_k``, and :func:`~mbcomp.codegen.tangent.tangent` differentiates it
 with respect to ``eps`` alone -- one forward sweep, about three times the evaluation's
 operations, instead of the whole Jacobian (``nq + nu`` directions at once: at N = 40 links
-410,000 operations and 5.5 s to build, against 16,300 and 0.26 s). Contracting ``M a`` and
+410,000 operations and 5.5 s for the first linearization, against 16,300 and 0.26 s). Contracting ``M a`` and
 ``C^T lam`` inside the program keeps it small as well: the derivative of the mass matrix
 itself is never formed. With ``a, lam`` the solution of the saddle-point system at the
 state, the derivative of that solution follows from one solve with the saddle-point matrix
