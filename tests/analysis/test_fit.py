@@ -94,6 +94,20 @@ def test_irregular_times_are_served_by_a_spline_as_accurate_as_exact_outputs(mod
     assert not ls.exact_times and ls.n_out >= 2001
 
 
+def test_a_parameter_the_angle_does_not_see_has_an_infinite_standard_error(model, clean):
+    # the crank's inertia about its own x axis plays no part in the plane motion: its
+    # sensitivity is exactly zero and J^T J singular; the other parameter keeps a finite error
+    names = ["damper.d", "crank.I[0, 0]"]
+    ls = LeastSquares(model, clean, names)
+    r, J = ls.evaluate([0.04, 1e-6])
+    assert np.all(J[:, 1] == 0.0) and np.max(np.abs(J[:, 0])) > 1.0
+    f = mbcomp.fit(model, clean, {"damper.d": 0.04, "crank.I[0, 0]": 1e-6}, bounds={"crank.I[0, 0]": (0, 0.1)},
+                   solver_options={"max_nfev": 8})
+    assert np.isinf(f.std_errors[1]) and np.isfinite(f.std_errors[0])
+    assert "cannot determine crank.I[0, 0]" in f.message
+    assert abs(f["damper.d"] / 0.05 - 1) < 1e-6
+
+
 def test_command_line_fits_from_a_csv(model, tmp_path):
     data = ex.measurements(model, t_end=1.0, points=41, noise=0.0)
     csv = tmp_path / "meas.csv"

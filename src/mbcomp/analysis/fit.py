@@ -619,6 +619,6 @@ def fit(model, data, params, *, columns=None, bounds=None, weights=None, time=TI
         with np.errstate(divide="ignore", invalid="ignore"):
             residual[c] = np.where(w > 0, r[k:k + n] / np.where(w > 0, w, 1.0), np.nan)
         k += n
-    message = opt.message + (f"; {note}" if note else "")
+    message = opt.message.rstrip(".") + (f"; {note}" if note else "")
     return FitResult(problem.names, np.array(opt.x), std, x0, cov, residual, float(0.5 * r @ r), problem.runs,
                      int(opt.status), message, opt)
