@@ -35,15 +35,22 @@ Timed per call (CPU, ``bench/peers.py``'s ``per_call``: median of batches, one B
 The build of the Jacobian program (trace + forward-mode differentiation + C compile, in a fresh
 ``MBCOMP_CACHE`` so the compiler runs) is reported too: at N = 100 it dominates everything.
 
-**Part B** (forward sensitivities, adjoint gradients, whole-run differences as multiples of one
-simulation) needs ``mbcomp.simulate(..., sensitivities=...)`` and ``mbcomp.gradient``, which do
-not exist yet; it is not in this script.
+**Part B -- derivatives of whole runs** (:func:`part_b_sensitivities`, :func:`part_b_gradient`,
+:func:`part_b_differences`): the same chain from its start state for ``B_T_END`` s at
+``mbcomp.simulate``'s default tolerances, CPU time as multiples of one ``mbcomp.simulate`` of
+the same run (from the Model, compiled library in the cache): forward-sensitivity runs
+(``simulate(..., sensitivities=[...])``) with 1 and 10 parameters on ``--sens-N`` links (their
+accuracy against a run at rtol 1e-12 is reported), the adjoint gradient (``mbcomp.gradient``) of
+the last joint's angle with respect to 100 parameters on ``--grad-N`` links (checked against
+central differences of tight runs), and central differences of whole runs at the accuracy the
+sensitivities reach (the loosest run tolerance that gets there; two runs per parameter).
+Parameters: every link's mass and every joint's start angle.
 
 Writes bench/derivatives.csv (long format: table, N, who, quantity, value, note) and
 bench/derivatives.png (microseconds per call and ratio to Pinocchio vs N); both are git-ignored
 like every bench output.
 
-Run: python bench/derivatives.py [--Ns 5,10,40,100] [--quick]
+Run: python bench/derivatives.py [--Ns 5,10,40,100] [--quick] [--sens-N 10] [--grad-N 50] [--skip-b]
      (needs the extra: pip install -e ".[bench]"). N = 100 compiles a program of ~1.7 million
      operations: several minutes of compiler CPU.
 """
@@ -192,6 +199,160 @@ def timings(c, rows, batch_time):
     return us
 
 
+# ==========================================================================================
+# Part B: derivatives of whole runs, as multiples of one simulation
+# ==========================================================================================
+# The same chain from its start state (bench/peers.py's model defaults), t_end = B_T_END,
+# at mbcomp.simulate's default tolerances: one run, a forward-sensitivity run with 1 and 10
+# parameters (mbcomp.simulate(..., sensitivities=[...])), an adjoint gradient with 100
+# parameters (mbcomp.gradient) and central differences of whole runs at the accuracy the
+# sensitivities reach. The parameters are every link's mass and every joint's start angle
+# (``link<k>.m``, ``joint<k>.phi0``, in that alternation); the quantity differentiated is the
+# last joint's angle at t_end.
+B_T_END = 1.0
+B_RTOL, B_ATOL = 1e-8, 1e-10   # mbcomp.simulate's defaults
+B_CHECK = 1e-5  # derivatives of runs at these tolerances must be this close to tight references
+
+
+def b_model(N):
+    """The chain of part B (bench/peers.py's model and defaults)."""
+    return PEERS.MOD.build(N=N, **PEERS.PHYS, phi0=PEERS.PHI0, w0=PEERS.W0)
+
+
+def b_params(N, count):
+    """``count`` parameters of the N-link chain: ``link1.m, joint1.phi0, link2.m, ...``."""
+    names = [n for k in range(1, N + 1) for n in (f"link{k}.m", f"joint{k}.phi0")]
+    if count > len(names):
+        raise ValueError(f"the {N}-link chain has {len(names)} such parameters, not {count}: give N >= {count // 2}")
+    return names[:count]
+
+
+def b_value(N, param):
+    """The model's value of a parameter of :func:`b_params` (bench/peers.py's defaults)."""
+    comp, name = param.rsplit(".", 1)
+    k = int(comp.lstrip("linkjoint")) - 1
+    if name == "m":
+        return float(PEERS.PHYS["m"])
+    return float(np.broadcast_to(np.asarray(PEERS.PHI0, float), (N,))[k])
+
+
+def timed(f, repeats=3):
+    """``(result, CPU seconds)``: the median of ``repeats`` calls when one takes under 1 s."""
+    c0 = cpu()
+    out = f()
+    times = [cpu() - c0]
+    while times[0] < 1.0 and len(times) < repeats:
+        c0 = cpu()
+        f()
+        times.append(cpu() - c0)
+    return out, float(np.median(times))
+
+
+def one_run(model, rtol=B_RTOL, atol=B_ATOL, **kw):
+    """``mbcomp.simulate`` of the part-B run (the C engine: the library is in the cache after
+    the first call); fails loudly."""
+    res = mbcomp.simulate(model, t_end=B_T_END, rtol=rtol, atol=atol, n_out=2, **kw)
+    if res.status != "success":
+        raise RuntimeError(f"part B: the run failed: {res.status}: {res.message}")
+    return res
+
+
+def part_b_sensitivities(N, counts, rows):
+    """Forward-sensitivity runs with ``counts`` parameters as multiples of one simulation, and
+    their accuracy against a tight one (rtol 1e-12)."""
+    model = b_model(N)
+    one_run(model)  # compile (cache) outside the timing
+    _, t_sim = timed(lambda: one_run(model))
+    col = f"joint{N}.phi"
+    out = {"simulation": t_sim}
+    for P in counts:
+        params = b_params(N, P)
+        res, t = timed(lambda: one_run(model, sensitivities=params))
+        out[P] = (t, res)
+        rows.append(dict(table="part_b", N=N, who=f"forward sensitivities, {P} parameter(s)", quantity="seconds",
+                         value=t))
+        rows.append(dict(table="part_b", N=N, who=f"forward sensitivities, {P} parameter(s)",
+                         quantity="multiple_of_one_simulation", value=t / t_sim))
+    rows.append(dict(table="part_b", N=N, who="one simulation", quantity="seconds", value=t_sim))
+    tight = one_run(model, rtol=1e-12, atol=1e-14, sensitivities=b_params(N, max(counts)))
+    worst = 0.0
+    for P in counts:
+        res = out[P][1]
+        for p in b_params(N, P):
+            ref = tight.sensitivity(col, p)[-1]
+            worst = max(worst, abs(res.sensitivity(col, p)[-1] - ref) / max(abs(ref), 1e-300))
+    rows.append(dict(table="part_b", N=N, who="forward sensitivities vs rtol 1e-12", quantity="rel_err",
+                     value=worst))
+    assert worst <= B_CHECK, f"part B: the forward sensitivities are {worst:.1e} from a tight run's (> {B_CHECK:g})"
+    return t_sim, worst, tight
+
+
+def part_b_gradient(N, P, rows):
+    """The adjoint gradient of the last joint's angle at t_end with respect to ``P``
+    parameters as a multiple of one simulation at the gradient's tolerances; checked against
+    central differences of two tight runs for the first two parameters."""
+    model = b_model(N)
+    params = b_params(N, P)
+    objective = {"terminal": f"joint{N}.phi"}
+    rtol, atol = B_RTOL, B_ATOL
+    one_run(model, rtol=rtol, atol=atol)
+    _, t_sim = timed(lambda: one_run(model, rtol=rtol, atol=atol))
+    gr, t = timed(lambda: mbcomp.gradient(model, objective, params, t_end=B_T_END, rtol=rtol, atol=atol))
+    col = f"joint{N}.phi"
+    worst = 0.0
+    for k, p in enumerate(params[:2]):
+        fd = run_difference(N, p, col, 1e-12, 1e-5)
+        worst = max(worst, abs(gr.gradient[k] - fd) / max(abs(fd), 1e-300))
+    assert worst <= B_CHECK, f"part B: the adjoint gradient is {worst:.1e} from central differences (> {B_CHECK:g})"
+    for who, q, v in (("one simulation", "seconds", t_sim), (f"adjoint gradient, {P} parameters", "seconds", t),
+                      (f"adjoint gradient, {P} parameters", "multiple_of_one_simulation", t / t_sim),
+                      ("adjoint gradient vs central differences (rtol 1e-12)", "rel_err", worst)):
+        rows.append(dict(table="part_b", N=N, who=who, quantity=q, value=v))
+    return t_sim, t, worst
+
+
+def part_b_differences(N, target, tight, counts, t_sim, rows):
+    """Central differences of whole runs at the accuracy the forward sensitivities reach:
+    the loosest run tolerance (decades from 1e-8, step ``rtol^(1/3)`` relative) at which the
+    differences of the first two parameters are within ``target`` of the tight sensitivities
+    (``tight``: a run with sensitivities at rtol 1e-12); their cost per parameter is two such
+    runs, reported for ``counts`` parameters as multiples of one simulation (``t_sim``)."""
+    col = f"joint{N}.phi"
+    params = b_params(N, 2)
+    refs = [tight.sensitivity(col, p)[-1] for p in params]
+    for e in range(8, 14):
+        rtol = 10.0 ** -e
+        errs = [abs(run_difference(N, p, col, rtol, rtol ** (1 / 3)) - r) / max(abs(r), 1e-300)
+                for p, r in zip(params, refs)]
+        if max(errs) <= target:
+            break
+    else:
+        rows.append(dict(table="part_b", N=N, who="central differences of runs", quantity="rtol", value=math.nan,
+                         note=f"not within {target:.1e} at any rtol down to 1e-13"))
+        return None
+    model = b_model(N)
+    _, t_run = timed(lambda: one_run(model, rtol=rtol, atol=rtol / 100))
+    rows.append(dict(table="part_b", N=N, who="central differences of runs", quantity="rtol", value=rtol,
+                     note=f"error {max(errs):.1e} <= {target:.1e}"))
+    for P in counts:
+        rows.append(dict(table="part_b", N=N, who=f"central differences of runs, {P} parameter(s)",
+                         quantity="multiple_of_one_simulation", value=2 * P * t_run / t_sim,
+                         note=f"2 x {P} runs at rtol {rtol:g}, {t_run:.3g} s each"))
+    return rtol, max(errs), t_run
+
+
+def run_difference(N, param, column, rtol, step):
+    """``d column(t_end) / d param`` by central differences of two whole runs at ``rtol``
+    (atol ``rtol / 100``), the parameter moved by ``step`` relative (absolute for a zero)."""
+    value = b_value(N, param)
+    h = step * max(abs(value), 1.0)
+    ends = []
+    for sign in (1.0, -1.0):
+        res = one_run(b_model(N), rtol=rtol, atol=rtol / 100, params={param: value + sign * h})
+        ends.append(res[column][-1])
+    return (ends[0] - ends[1]) / (2.0 * h)
+
+
 # ------------------------------------------------------------------------------------------
 # report
 # ------------------------------------------------------------------------------------------
@@ -247,14 +408,38 @@ def plot(rows, path):
     fig.savefig(path, dpi=100)
 
 
+def part_b(args, rows):
+    """Part B (see the module's docstring): sensitivities, gradient, differences of runs."""
+    counts = (1, 10) if 2 * args.sens_N >= 10 else (1, 2 * args.sens_N)
+    P = min(100, 2 * args.grad_N)
+    print(f"part B: forward sensitivities on {args.sens_N} links ...", flush=True)
+    t_sim, err, tight = part_b_sensitivities(args.sens_N, counts, rows)
+    print(f"part B: central differences of runs to {err:.1e} ...", flush=True)
+    part_b_differences(args.sens_N, err, tight, counts + ((P,) if P not in counts else ()), t_sim, rows)
+    print(f"part B: adjoint gradient, {P} parameters on {args.grad_N} links ...", flush=True)
+    part_b_gradient(args.grad_N, P, rows)
+
+
+def print_part_b(rows):
+    body = [[r["N"], r["who"], r["quantity"], f"{r['value']:.3g}", r.get("note", "")]
+            for r in rows if r["table"] == "part_b"]
+    if body:
+        print(f"\n## part B: whole runs of {B_T_END:g} s (multiples of one mbcomp.simulate of the same run)\n")
+        print(PEERS.md_table(["N", "what", "quantity", "value", "note"], body))
+
+
 def parse(argv):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--Ns", default="5,10,40,100", help="link counts (default 5,10,40,100)")
-    ap.add_argument("--quick", action="store_true", help="N = 5,10 and short timing batches")
+    ap.add_argument("--quick", action="store_true", help="N = 5,10, short timing batches, part B on 4 and 5 links")
+    ap.add_argument("--sens-N", type=int, default=10, help="links of part B's forward-sensitivity runs (default 10)")
+    ap.add_argument("--grad-N", type=int, default=50, help="links of part B's 100-parameter gradient (default 50)")
+    ap.add_argument("--skip-b", action="store_true", help="part A only")
     args = ap.parse_args(argv)
     if args.quick and args.Ns == ap.get_default("Ns"):
         args.Ns = "5,10"
-    args.Ns = [int(x) for x in args.Ns.split(",")]
+        args.sens_N, args.grad_N = 4, 5
+    args.Ns = [int(x) for x in args.Ns.split(",") if x.strip()]
     return args
 
 
@@ -275,7 +460,10 @@ def main(argv=None):
               flush=True)
         timings(c, rows, 0.02 if args.quick else 0.05)
         del c
+    if not args.skip_b:
+        part_b(args, rows)
     print_tables(rows, args.Ns)
+    print_part_b(rows)
     PEERS.write_csv(rows, HERE / "derivatives.csv")
     plot(rows, HERE / "derivatives.png")
     print(f"\nwrote {HERE / 'derivatives.csv'} and {HERE / 'derivatives.png'} "
