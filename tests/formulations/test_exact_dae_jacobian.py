@@ -20,6 +20,7 @@ from mbcomp.assembly.initialization import initialize
 from mbcomp.codegen import compile_system
 from mbcomp.codegen.dae_jacobian import DAEJacobianCode
 from mbcomp.codegen.toolchain import c_compiler
+from mbcomp.formulations import DAlembert
 from mbcomp.formulations.dae import GGL, Index1, Index3, Mechanical
 from mbcomp.library import FixedTranslation, PointMass, Revolute, World
 
@@ -189,7 +190,8 @@ def test_no_exact_matrix_where_an_entry_is_not_finite():
 
 
 RUNS = [("radau5", 1, {}), ("radau5", 2, {}), ("radau5", 3, {}), ("ida", 1, {}), ("ida", 2, {}),
-        ("genalpha", 3, {"h": 5e-4})]
+        ("genalpha", 3, {"h": 5e-4}), ("BDF", None, {"formulation": "dalembert"}),
+        ("Radau", None, {"formulation": "dalembert"})]
 COLUMNS = ("crank_joint.phi", "slider_joint.s", "crank_joint.w")
 
 
@@ -199,7 +201,7 @@ def reference():
     return mbcomp.simulate(slider_crank.build(), t_end=1.0, rtol=1e-12, atol=1e-14, n_out=11)
 
 
-@pytest.mark.parametrize("method, index, kw", RUNS, ids=[f"{m}-{i}" for m, i, _ in RUNS])
+@pytest.mark.parametrize("method, index, kw", RUNS, ids=[f"{m}-{i or 'dalembert'}" for m, i, _ in RUNS])
 def test_runs_with_exact_matrices_are_as_accurate_as_runs_with_differenced_ones(method, index, kw, reference):
     """The Newton matrix changes the iteration, not the equations: against the exact motion,
     the run with exact matrices is as accurate as the run with differenced ones (numeric
@@ -216,3 +218,32 @@ def test_runs_with_exact_matrices_are_as_accurate_as_runs_with_differenced_ones(
         assert e_exact <= 3.0 * e_diff + 1e-7, (col, e_exact, e_diff)
         if method == "genalpha":  # fixed steps: the same discrete equations, solved to the same tolerance
             np.testing.assert_allclose(exact[col], diff[col], rtol=1e-7, atol=1e-7)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("which", ["slider_crank", "andrews"])
+def test_taylor_dalembert_jacobian_through_the_dependent_speeds(which, backend):
+    """D'Alembert's ``d fun / d[q, v]`` (chain rule through the speeds the loop determines):
+    the central-difference error falls as ``h^2``, and the matrix is the one ``jac`` gives."""
+    build = slider_crank.build if which == "slider_crank" else load_model("models/andrews.py").build
+    s = compile_system(mbcomp.assemble(build()), backend)
+    init = initialize(s)
+    form = DAlembert(s)
+    y = form.initial_state(0.0, init.q, init.u)
+    y = y + 0.01 * np.sin(np.arange(y.size) + 0.3)  # off the loop: the dependent speeds move with q
+    J = form.jac(0.0, y)
+    assert form.run_stats()["jac_exact"] == 1 and form.run_stats()["jac_differences"] == 0
+    d = np.random.default_rng(11).standard_normal(y.size)
+    hs = [1e-2, 1e-3, 1e-4, 1e-5]
+    err = [np.abs((form.fun(0.0, y + h * d) - form.fun(0.0, y - h * d)) / (2 * h) - J @ d).max() for h in hs]
+    rates = np.log10(np.array(err[:-1]) / np.array(err[1:]))
+    assert np.all(rates > 1.9) and np.all(rates < 2.1), (err, rates)
+
+
+def test_dalembert_on_the_numeric_backend_differences():
+    s = mbcomp.assemble(slider_crank.build())
+    init = initialize(s)
+    form = DAlembert(s)
+    y = form.initial_state(0.0, init.q, init.u)
+    np.testing.assert_array_equal(form.jac(0.0, y), form.difference_columns(0.0, y, range(y.size)))
+    assert form.run_stats()["jac_differences"] == 1 and form.run_stats()["jac_exact"] == 0

@@ -19,6 +19,8 @@ form           program output
 ``"mechanical"`` ``K = d(M udot + C^T lam - f)/dq H(q)`` and ``Ct = -df/du`` (``nu x nu``
                each): the tangent stiffness and damping of the generalized-alpha matrix,
                ``H = d(dq/dt)/du`` mapping a speed-space increment to the coordinates
+``"dalembert"`` ``G = d[dPhi/dt; Psi]/dq`` (``m x nq``) at ``(q, u)``: with the implicit
+               function theorem, how D'Alembert's dependent speeds move with ``q``
 =============  =========================================================================
 
 ``A = [C; B]`` with the holonomic rows of the row mask. A failed guard or a non-finite entry
@@ -54,7 +56,7 @@ from .tracer import FIELDS, param_layout, param_vector, trace
 __all__ = ["DAE_JACOBIAN_FORMS", "DAEJacobianCode", "BoundDAEJacobian", "bound_program"]
 
 #: the forms a program can be made for (see the module docstring)
-DAE_JACOBIAN_FORMS = ("index1", "ggl", "index3", "mechanical")
+DAE_JACOBIAN_FORMS = ("index1", "ggl", "index3", "mechanical", "dalembert")
 
 
 def _fields(tr):
@@ -183,7 +185,12 @@ class DAEJacobianCode:
             C = np.array([F["C"][r] for r in rows], dtype=object).reshape(mh, nu)
             A = np.vstack((C, F["B"].reshape(self.mn, nu))) if self.mn else C
             qrate = list(tr.groups["qrate"])
-            if form == "mechanical":
+            if form == "dalembert":
+                rates = [F["Phid"][r] for r in rows] + list(F["Psi"])
+                flat = [x for row in self._columns(tangent(g, rates, [x for x in qs if x is not None]), qs, nq)
+                        for x in row]
+                self.n = nq
+            elif form == "mechanical":
                 ud = [new(k, 0.2 + 0.01 * k) for k in range(nu)]
                 lam = [new(k, 0.3 - 0.01 * k) for k in range(mh)]
                 r = [_dot(F["M"][i], ud) + _dot(C[:, i], lam) - F["f"][i] for i in range(nu)]
@@ -328,7 +335,8 @@ class BoundDAEJacobian:
     """A :class:`DAEJacobianCode` bound to one parameter set.
 
     ``J = jac(t, y, gains=None)`` for the semi-explicit forms: ``(n, n)`` ``d fun / d y``;
-    ``(K, Ct) = jac.mechanical(t, q, u, udot, lam)`` for ``"mechanical"``. Either is None
+    ``(K, Ct) = jac.mechanical(t, q, u, udot, lam)`` for ``"mechanical"``; ``G =
+    jac.dalembert(t, q, u)`` for ``"dalembert"``. Each is None
     where the program does not hold (a failed guard, a non-finite entry). ``gains``: the
     Baumgarte ``(alpha, beta)`` (1/s) of the index-1 form, None for none.
 
@@ -387,13 +395,22 @@ class BoundDAEJacobian:
 
     def __call__(self, t, y, gains=None):
         code = self.code
-        if code.form == "mechanical":
-            raise ValueError("this is the generalized-alpha program: call .mechanical(t, q, u, udot, lam)")
+        if code.form in ("mechanical", "dalembert"):
+            raise ValueError(f"this is the {code.form!r} program: call .{code.form}(...)")
         y = np.asarray(y, float)
         nq, nu = code.nq, code.nu
         self._per_call(t, y[nq + nu:], gains)
         out = self._run(t, y[:nq], y[nq:nq + nu])
         return None if out is None else out.reshape(code.n, code.n)
+
+    def dalembert(self, t, q, u):
+        """``G = d[dPhi/dt; Psi]/dq`` (m, nq) at ``(t, q, u)`` (see the module docstring), or None."""
+        code = self.code
+        if code.form != "dalembert":
+            raise ValueError(f"this is the {code.form!r} program")
+        self._per_call(t, np.zeros(0), None)
+        out = self._run(t, np.asarray(q, float), np.asarray(u, float))
+        return None if out is None else out.reshape(code.mh + code.mn, code.nq)
 
     def mechanical(self, t, q, u, udot, lam):
         """``(K, Ct)``, ``(nu, nu)`` each (see the module docstring), or None."""

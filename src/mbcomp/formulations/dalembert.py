@@ -212,6 +212,57 @@ class DAlembert(Formulation):
         ud = self.accelerations(ev)
         return np.concatenate((self.system.q_rate(q, u), ud[self.ind]))
 
+    #: Jacobians :meth:`jac` made exactly and by differences (class defaults; counted per instance)
+    njac_exact = njac_differences = 0
+
+    def jac(self, t, y):
+        """``d fun / dy`` at ``y = [q, v]``: exact where the system runs generated programs,
+        else (numeric backend, a state where a program does not hold) forward differences
+        (:meth:`Formulation.jac`).
+
+        The exact one by the chain rule through the dependent speeds: D'Alembert's
+        accelerations are the index-1 multiplier form's without Baumgarte terms (both solve
+        ``M du/dt + A^T lam = f``, ``A du/dt = -bias``), so ``d[dq/dt; du/dt]/d[q, u]`` is the
+        Lagrange Jacobian program's at zero gains; the speeds ``u(q, v)`` solve
+        ``g = [dPhi/dt; Psi](q, u) = 0`` with ``u_ind = v``, so by the implicit function theorem
+        ``du/dv = N`` and ``du_dep/dq = -A_d^-1 dg/dq`` (``dg/dq`` from the evaluator's
+        ``dae_jacobian("dalembert")`` program)."""
+        y = np.asarray(y, float)
+        J = self._exact_jac(t, y)
+        if J is not None:
+            self.njac_exact += 1
+            return J
+        self.njac_differences += 1
+        return super().jac(t, y)
+
+    def _exact_jac(self, t, y):
+        evaluator = self.system.evaluator
+        lagrange_jac = getattr(evaluator, "lagrange_jac", None)
+        rates = getattr(evaluator, "dae_jacobian", None)
+        if lagrange_jac is None or rates is None or not np.isfinite(y).all():
+            return None
+        nq, nu, dep, ind = self.nq, self.nu, self.dep, self.ind
+        q, v = y[:nq], y[nq:]
+        u, ev = self.speeds(t, q, v)
+        JL = lagrange_jac(t, np.concatenate((q, u)), 0.0, 0.0)
+        if JL is None:
+            return None
+        du_dq = np.zeros((nu, nq))
+        du_dv = np.zeros((nu, ind.size))
+        du_dv[ind, np.arange(ind.size)] = 1.0
+        if dep.size:
+            prog = rates("dalembert")
+            G = prog.dalembert(t, q, u) if prog is not None else None
+            if G is None:
+                return None
+            A = ev.A
+            lu = sla.lu_factor(A[:, dep], check_finite=False)
+            du_dq[dep] = -sla.lu_solve(lu, G, check_finite=False)
+            du_dv[dep] = -sla.lu_solve(lu, A[:, ind], check_finite=False)
+        rows = np.concatenate((np.arange(nq), nq + ind))
+        Jq, Ju = JL[rows, :nq], JL[rows, nq:]
+        return np.hstack((Jq + Ju @ du_dq, Ju @ du_dv))
+
     # --- manifold ----------------------------------------------------------------------------
     @property
     def projects(self):
@@ -274,6 +325,10 @@ class DAlembert(Formulation):
         return np.concatenate((q, u[self.ind]))
 
     def run_stats(self):
-        """``repartitions`` (how often the independent speeds were re-chosen) and the
-        ``independent_speeds`` at the end (names)."""
-        return dict(repartitions=self.repartitions, independent_speeds=[self.system.u_names[i] for i in self.ind])
+        """``repartitions`` (how often the independent speeds were re-chosen), the
+        ``independent_speeds`` at the end (names), and when Jacobians were asked for
+        ``jac_exact`` and ``jac_differences`` (see :meth:`jac`)."""
+        out = dict(repartitions=self.repartitions, independent_speeds=[self.system.u_names[i] for i in self.ind])
+        if self.njac_exact or self.njac_differences:
+            out.update(jac_exact=self.njac_exact, jac_differences=self.njac_differences)
+        return out
