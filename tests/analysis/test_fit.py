@@ -171,3 +171,13 @@ def test_bad_names_and_bounds_are_errors_with_the_fix(model, clean):
         mbcomp.fit(model, clean, {"rod.I[2, 2]": 0.2})
     with pytest.raises(TypeError, match="call it"):
         mbcomp.fit(ex.build, clean, ["rod.m"])
+
+
+def test_an_array_held_in_values_has_its_fitted_entry_start_there(model, clean):
+    held = np.diag([0.07, 0.07, 0.05])
+    ls = LeastSquares(model, clean, ["rod.I[2, 2]"], values={"rod.I": held})
+    assert ls.start_values().tolist() == [0.05]
+    r, J = ls.evaluate([0.06])                           # the held array with its entry replaced: the truth
+    assert np.max(np.abs(r)) < 1e-8
+    with pytest.raises(ValueError, match="'rod.m' is both fitted and held fixed"):
+        LeastSquares(model, clean, ["rod.m"], values={"rod.m": 2.0})
