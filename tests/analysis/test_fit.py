@@ -135,6 +135,8 @@ def test_command_line_bad_input(tmp_path, capsys):
     assert "no parameter to fit" in capsys.readouterr().err
     assert main(["fit", model, "--data", str(csv), "--param", "rod.m", "--bounds", "rod.m=1"]) == 2
     assert "NAME=LO:HI" in capsys.readouterr().err
+    assert main(["fit", model, "--data", str(csv), "--param", "m_rod"]) == 2
+    assert "a build() argument cannot be fitted" in capsys.readouterr().err
 
 
 def test_bad_data_errors_name_the_column_and_the_fix(model, clean):

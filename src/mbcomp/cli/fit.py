@@ -112,6 +112,10 @@ def cmd_fit(args):
     if not fitted:
         raise ValueError("mbcomp fit: no parameter to fit -> name them with --param, e.g. --param rod.m "
                          "(--param NAME=VALUE sets a value, as in every command)")
+    plain = [p for p in fitted if "." not in p]
+    if plain:
+        raise ValueError(f"--param {plain[0]}: a build() argument cannot be fitted (build() runs once) -> fit the "
+                         "component parameter it sets, e.g. --param rod.m")
     bounds, weights = parse_bounds(args.bounds), _weights(args.weight) or None  # cheap checks first
     data = read_csv(args.data)
     given = argparse.Namespace(**{**vars(args), "param": [p for p in args.param if "=" in p]})
@@ -136,9 +140,13 @@ def cmd_fit(args):
 
 
 def add_parser(sub, common):
-    """The ``fit`` sub-command on the argparse ``sub``-parsers."""
+    """The ``fit`` sub-command on the argparse ``sub``-parsers (``common``'s model file and ``-p``
+    with ``-p NAME`` alone naming a parameter to fit)."""
     s = sub.add_parser("fit", help="fit parameters to measured time series (least squares, exact sensitivities)")
-    common(s)
+    s.add_argument("model", help="model file defining build(**params) -> Model")
+    s.add_argument("-p", "--param", action="append", metavar="NAME[=VALUE]",  # common()'s -p, plus NAME alone
+                   help="NAME: a parameter to fit (component.param or an entry, 'rod.I[2, 2]'); NAME=VALUE: a "
+                   "build() argument or component value, for a fitted parameter its start (repeatable)")
     s.add_argument("--data", required=True, metavar="FILE.csv", help="measurements: a time column and result columns")
     s.add_argument("--column", action="append", metavar="NAME", help="a data column to fit (default: all but time)")
     s.add_argument("--bounds", action="append", metavar="NAME=LO:HI", help="bounds of a fitted parameter")
