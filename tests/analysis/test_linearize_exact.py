@@ -127,10 +127,11 @@ def close_pairs(a, b):
 
 @pytest.mark.parametrize("v", [0.0, 3.0, 5.0, 8.0])
 def test_bicycle_within_1e_13_of_the_exact_benchmark(v):
-    """Measured (exact path): eigenvalues 1.6e-14 .. 1.6e-13 absolute, at most 8e-15 of the
-    largest |lambda|; A within 1.2e-14 of its largest entry. That is the rounding of the
-    model's own evaluation (a float64 evaluation of the exact benchmark matrices' A has
-    eigenvalues 1e-15 .. 9e-15 off): the remaining error is not the derivatives'."""
+    """The issue's criterion: every eigenvalue within 1e-13 (1/s) of the exact one, and A
+    within 1e-13 of its largest entry. Measured (exact path): eigenvalues 4.6e-15 .. 1.1e-14
+    absolute, A 2.4e-15 .. 6.9e-15 -- the rounding of float64 itself (the exact benchmark's A
+    rounded to float64 has eigenvalues 4e-16 .. 9e-15 off). The differences reach 2.4e-13 at
+    8 m/s; the generated program's values at the state, instead of the jet recursion's, 1.6e-13."""
     lin = mbcomp.linearize(BICYCLE.build(v=v))
     assert lin.derivatives == "exact" and "derivatives: exact" in lin.report()
     assert sorted(lin.state_names) == sorted(BICYCLE_STATES)
@@ -138,7 +139,7 @@ def test_bicycle_within_1e_13_of_the_exact_benchmark(v):
     idx = [lin.state_names.index(n) for n in BICYCLE_STATES]
     A = lin.A[np.ix_(idx, idx)]
     assert np.abs(A - A_ref).max() <= 1e-13 * np.abs(A_ref).max()
-    assert close_pairs(lin.eigenvalues, lam_ref) <= 1e-13 * np.abs(lam_ref).max()
+    assert close_pairs(lin.eigenvalues, lam_ref) <= 1e-13
 
 
 @pytest.mark.parametrize("N", [2, 10])
@@ -147,7 +148,7 @@ def test_n_four_bar_closed_loops_give_the_exact_reduction(N):
     parallelograms is the one-degree-of-freedom ``J theta'' = -g cos(theta) m L ((N+1)/2 + N)``,
     ``J = m L^2 ((N+1)/3 + N)``: the roots are ``+-sqrt(g ((N+1)/2 + N) / (L ((N+1)/3 + N)))``.
     N loops written with 3-D hinges, their out-of-plane rows redundant (masked). Measured:
-    exact 1.3e-16 (N = 2), 1.3e-14 (N = 10); differences 2.5e-14, 2.3e-11."""
+    exact 3.9e-16 (N = 2), 2.1e-14 (N = 10); differences 2.5e-14, 2.3e-11."""
     mdl = N_FOUR_BAR.build(N=N, w0=0.0)
     w = math.sqrt(G * ((N + 1) / 2 + N) / ((N + 1) / 3 + N))
     lin = mbcomp.linearize(mdl)
