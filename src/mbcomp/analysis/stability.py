@@ -18,7 +18,11 @@ gathers the analysis done by :mod:`~mbcomp.analysis.steady` (steady states),
   the dependent positions, the velocity constraints solved for the dependent speeds) and its
   accelerations come from the full saddle-point system, so the multiplier terms of holonomic
   and nonholonomic constraints are in ``A`` exactly (no null-space shortcut that would drop
-  them). Derivatives are central differences with Richardson extrapolation (error ~1e-11).
+  them). Derivatives are exact where a generated program evaluates the model (the tangent
+  program of the traced evaluation, :mod:`mbcomp.codegen.eval_tangent`: the manifold map by
+  the implicit function theorem, the saddle-point solution differentiated), else central
+  differences with Richardson extrapolation (error ~1e-11); ``Linearization.derivatives``
+  says which.
   States that influence nothing (zero columns of ``A``: ignorable coordinates such as a
   bicycle's position and heading, conserved speeds) are removed and named; each removes one
   zero root.
