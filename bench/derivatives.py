@@ -1,15 +1,20 @@
 """Exact derivatives (issue 31 item 7): the cost of mbcomp's ``df/dx`` per call against
 Pinocchio's ``computeABADerivatives`` and against finite differences, as ratios in one run.
 
-**Part A -- one Jacobian.** The mechanism is ``bench/peers.py``'s: ``models/n_link_pendulum.py``
-(N uniform rods on hinges about z, relative angles, its default parameters), built for mbcomp
-by ``bench/peers.py`` (:func:`mbcomp_engines`: the compiled C system ``mbcomp.simulate``
-runs) and for Pinocchio by ``bench/peers/pinocchio_pendulum.py`` (``JointModelRZ`` chain,
-whose ``q, v`` are mbcomp's ``q, u`` unchanged). mbcomp's ODE is ``y = [q, u]``,
-``fun = [u, ddq(q, u)]``, so its ``(2N, 2N)`` Jacobian is ``[[0, I], [ddq/dq, ddq/du]]``;
-Pinocchio's ``computeABADerivatives(q, v, tau=0)`` gives ``ddq/dq``, ``ddq/dv`` and
-``ddq/dtau = M^-1`` (which mbcomp's program does not compute: Pinocchio does more work
-than is compared, by an O(N^2) share of its O(N^3) total).
+**Part A -- one Jacobian.** Two mechanisms (:data:`MECHANISMS`), each built the same way
+for mbcomp (:func:`mbcomp_engines` of ``bench/peers.py``: the compiled C system
+``mbcomp.simulate`` runs) and for Pinocchio, both in the joints' relative angles and rates, so
+mbcomp's ``y = [q, u]`` is Pinocchio's ``(q, v)`` unchanged:
+
+* ``planar``: ``bench/peers.py``'s ``models/n_link_pendulum.py`` (N uniform rods on hinges
+  about z, its default parameters) and ``bench/peers/pinocchio_pendulum.py`` (``JointModelRZ``);
+* ``3d``: ``bench/peers/chain3d.py``, N boxes on hinges about x, y, z in turn (spatial motion,
+  full 3-D inertias; ``JointModelRX/RY/RZ``).
+
+mbcomp's ODE is ``fun = [u, ddq(q, u)]``, so its ``(2N, 2N)`` Jacobian is
+``[[0, I], [ddq/dq, ddq/du]]``; Pinocchio's ``computeABADerivatives(q, v, tau=0)`` gives
+``ddq/dq``, ``ddq/dv`` and ``ddq/dtau = M^-1`` (which mbcomp's program does not compute:
+Pinocchio does more work than is compared, an O(N^2) share of its O(N^3) total).
 
 Before anything is timed, at a generic state (every angle and rate different) the script
 asserts that mbcomp's exact Jacobian has the identity blocks exactly and that its ``ddq``
@@ -47,10 +52,10 @@ sensitivities reach (the loosest run tolerance that gets there; two runs per par
 Parameters: every link's mass and every joint's start angle.
 
 Writes bench/derivatives.csv (long format: table, N, who, quantity, value, note) and
-bench/derivatives.png (microseconds per call and ratio to Pinocchio vs N); both are git-ignored
+bench/derivatives.png (per mechanism: microseconds per call and ratio to Pinocchio vs N); both are git-ignored
 like every bench output.
 
-Run: python bench/derivatives.py [--Ns 5,10,40,100] [--quick] [--sens-N 10] [--grad-N 50] [--skip-b]
+Run: python bench/derivatives.py [--Ns 5,10,40,100] [--Ns-3d 5,10] [--quick] [--sens-N 10] [--grad-N 50] [--skip-b]
      (needs the extra: pip install -e ".[bench]"). N = 100 compiles a program of ~1.7 million
      operations: several minutes of compiler CPU.
 """
@@ -84,7 +89,7 @@ def _load_peers_script():
 
 PEERS = _load_peers_script()  # puts bench/ on sys.path: the peers package imports below
 
-from peers import pinocchio_pendulum  # noqa: E402
+from peers import chain3d, pinocchio_pendulum  # noqa: E402
 from peers.cpu_clock import cpu  # noqa: E402
 
 import mbcomp  # noqa: E402
@@ -117,15 +122,25 @@ def rel(a, b):
     return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
 
 
-class Chain:
-    """Everything built for one N: mbcomp's compiled system, its formulations and bound
-    Jacobian program, and Pinocchio's model (``bench/peers.py``'s builders)."""
+#: the mechanisms compared: name -> (mbcomp Model of N links, Pinocchio peer of N links)
+MECHANISMS = {
+    "planar": (lambda N: PEERS.MOD.build(N=N, **PEERS.PHYS, phi0=PEERS.PHI0, w0=PEERS.W0),
+               lambda N: pinocchio_pendulum.build(N, **PEERS.PHYS)),
+    "3d": (chain3d.build_model, chain3d.build),
+}
 
-    def __init__(self, N):
-        self.N = N
+
+class Chain:
+    """Everything built for one mechanism and N: mbcomp's compiled system, its formulations
+    and bound Jacobian program, and Pinocchio's model (the builders of ``bench/peers.py`` and
+    ``bench/peers/``: :data:`MECHANISMS`)."""
+
+    def __init__(self, mech, N):
+        self.mech, self.N = mech, N
         self.notes = {}
+        make_model, make_peer = MECHANISMS[mech]
         with PEERS.fresh_cache() as cache:
-            model = PEERS.MOD.build(N=N, **PEERS.PHYS, phi0=PEERS.PHI0, w0=PEERS.W0)
+            model = make_model(N)
             engines = PEERS.mbcomp_engines(model, cache_dir=cache, notes=self.notes)
             if "c" not in engines:
                 raise RuntimeError(f"N = {N}: no compiled C system ({self.notes.get('c', '?')}); "
@@ -138,7 +153,7 @@ class Chain:
             self.jac = code.bind(self.system)
             self.jac_build = cpu() - c0
             self.n_ops = code.n_ops
-        self.peer = pinocchio_pendulum.build(N, **PEERS.PHYS)
+        self.peer = make_peer(N)
         self.y = PEERS.generic_state(N)
 
     def pinocchio(self):
@@ -169,7 +184,7 @@ def cross_check(c, rows):
     e_f = rel(Formulation.jac(c.form, T0, y), J)
     for who, v in (("ddq/dq vs pinocchio", e_q), ("ddq/du vs pinocchio", e_v),
                    ("central differences vs exact", e_c), ("forward differences vs exact", e_f)):
-        rows.append(dict(table="agreement", N=N, who=who, quantity="rel_diff", value=v))
+        rows.append(dict(table=f"agreement {c.mech}", N=N, who=who, quantity="rel_diff", value=v))
     return e_q, e_v, e_c, e_f
 
 
@@ -192,9 +207,9 @@ def timings(c, rows, batch_time):
     us["mbcomp wrapper overhead"] = us["mbcomp BoundJacobian"] - us["mbcomp C program"]
     base = us["pinocchio computeABADerivatives"]
     for who, v in us.items():
-        rows.append(dict(table="per_call", N=N, who=who, quantity="us_per_call", value=v))
-        rows.append(dict(table="per_call", N=N, who=who, quantity="ratio_to_pinocchio", value=v / base))
-    rows.append(dict(table="build", N=N, who="mbcomp Jacobian program (trace + tangent + C, cold)",
+        rows.append(dict(table=f"per_call {c.mech}", N=N, who=who, quantity="us_per_call", value=v))
+        rows.append(dict(table=f"per_call {c.mech}", N=N, who=who, quantity="ratio_to_pinocchio", value=v / base))
+    rows.append(dict(table=f"build {c.mech}", N=N, who="mbcomp Jacobian program (trace + tangent + C, cold)",
                      quantity="seconds", value=c.jac_build, note=f"{c.n_ops} operations"))
     return us
 
@@ -361,49 +376,59 @@ JACOBIANS = ["pinocchio computeABADerivatives", "mbcomp C program", "mbcomp Boun
              "forward differences (numeric fun)"]
 
 
-def print_tables(rows, Ns):
-    data, _ = PEERS.pivot(rows, "per_call", "us_per_call")
-    ratio, _ = PEERS.pivot(rows, "per_call", "ratio_to_pinocchio")
-    agree, _ = PEERS.pivot(rows, "agreement", "rel_diff")
-    build, _ = PEERS.pivot(rows, "build", "seconds")
-    Ns = [N for N in Ns if N in data]
-    print("\n## df/dx per call: microseconds (ratio to Pinocchio's computeABADerivatives)\n")
-    whos = JACOBIANS + ["mbcomp wrapper overhead", "pinocchio aba (one rhs)", "mbcomp fun (one rhs, C)"]
-    body = [[w] + [f"{data[N][w]:.3g} ({ratio[N][w]:.2f}x)" for N in Ns] for w in whos]
-    print(PEERS.md_table(["way"] + [f"N = {N}" for N in Ns], body))
-    print("\n## agreement (relative max abs difference) and build\n")
-    whos = list(next(iter(agree.values())).keys()) if agree else []
-    body = [[w] + [f"{agree[N][w]:.1e}" for N in Ns] for w in whos]
-    body += [[w] + [f"{build[N][w]:.2f} s" for N in Ns] for w in (next(iter(build.values())) if build else {})]
-    print(PEERS.md_table(["quantity"] + [f"N = {N}" for N in Ns], body))
+TITLES = {"planar": "planar N-link pendulum", "3d": "3-D chain (axes x, y, z in turn)"}
 
 
-def plot(rows, path):
-    """Two panels: microseconds per Jacobian vs N (log-log), ratio to Pinocchio vs N."""
+def print_tables(rows, runs):
+    for mech, Ns in runs.items():
+        data, _ = PEERS.pivot(rows, f"per_call {mech}", "us_per_call")
+        ratio, _ = PEERS.pivot(rows, f"per_call {mech}", "ratio_to_pinocchio")
+        agree, _ = PEERS.pivot(rows, f"agreement {mech}", "rel_diff")
+        build, _ = PEERS.pivot(rows, f"build {mech}", "seconds")
+        Ns = [N for N in Ns if N in data]
+        if not Ns:
+            continue
+        print(f"\n## {TITLES[mech]}: df/dx per call, microseconds (ratio to Pinocchio's computeABADerivatives)\n")
+        whos = JACOBIANS + ["mbcomp wrapper overhead", "pinocchio aba (one rhs)", "mbcomp fun (one rhs, C)"]
+        body = [[w] + [f"{data[N][w]:.3g} ({ratio[N][w]:.2f}x)" for N in Ns] for w in whos]
+        print(PEERS.md_table(["way"] + [f"N = {N}" for N in Ns], body))
+        print(f"\n## {TITLES[mech]}: agreement (relative max abs difference) and build\n")
+        whos = list(agree[Ns[0]].keys())
+        body = [[w] + [f"{agree[N][w]:.1e}" for N in Ns] for w in whos]
+        body += [[w] + [f"{build[N][w]:.2f} s" for N in Ns] for w in build[Ns[0]]]
+        ops = {r["N"]: r["note"] for r in rows if r["table"] == f"build {mech}"}
+        body.append(["Jacobian program size"] + [ops.get(N, "") for N in Ns])
+        print(PEERS.md_table(["quantity"] + [f"N = {N}" for N in Ns], body))
+
+
+def plot(rows, path, mechs):
+    """Per mechanism: microseconds per Jacobian vs N (log-log), ratio to Pinocchio vs N."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    data, _ = PEERS.pivot(rows, "per_call", "us_per_call")
-    ratio, _ = PEERS.pivot(rows, "per_call", "ratio_to_pinocchio")
-    Ns = sorted(data)
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5))
-    for ax, d, ylabel, title in ((axes[0], data, "CPU time per call [us]", "df/dx per call"),
-                                 (axes[1], ratio, "ratio to Pinocchio computeABADerivatives",
-                                  "df/dx per call, relative to Pinocchio")):
-        for w in JACOBIANS:
-            pts = [(N, d[N][w]) for N in Ns if w in d[N] and not math.isnan(d[N][w])]
-            if pts:
-                style = "-" if w.startswith("pinocchio") else ("--" if w.startswith("mbcomp") else ":")
-                ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, marker="o", label=w)
-        if d is ratio:
-            ax.axhline(1.0, color="k", lw=0.8)
-        ax.set_xticks(Ns, [str(N) for N in Ns])
-        ax.minorticks_off()
-        ax.set(xlabel="N (links)", ylabel=ylabel, title=f"N-link pendulum: {title}")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+    mechs = [m for m in mechs if PEERS.pivot(rows, f"per_call {m}", "us_per_call")[0]]
+    fig, axes = plt.subplots(max(len(mechs), 1), 2, figsize=(13, 5 * max(len(mechs), 1)), squeeze=False)
+    for row, mech in zip(axes, mechs):
+        data, _ = PEERS.pivot(rows, f"per_call {mech}", "us_per_call")
+        ratio, _ = PEERS.pivot(rows, f"per_call {mech}", "ratio_to_pinocchio")
+        Ns = sorted(data)
+        for ax, d, ylabel, title in ((row[0], data, "CPU time per call [us]", "df/dx per call"),
+                                     (row[1], ratio, "ratio to Pinocchio computeABADerivatives",
+                                      "df/dx per call, relative to Pinocchio")):
+            for w in JACOBIANS:
+                pts = [(N, d[N][w]) for N in Ns if w in d[N] and not math.isnan(d[N][w])]
+                if pts:
+                    style = "-" if w.startswith("pinocchio") else ("--" if w.startswith("mbcomp") else ":")
+                    ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, marker="o", label=w)
+            if d is ratio:
+                ax.axhline(1.0, color="k", lw=0.8)
+            ax.set_xticks(Ns, [str(N) for N in Ns])
+            ax.minorticks_off()
+            ax.set(xlabel="N (links)", ylabel=ylabel, title=f"{TITLES[mech]}: {title}")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
 
@@ -430,7 +455,9 @@ def print_part_b(rows):
 
 def parse(argv):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--Ns", default="5,10,40,100", help="link counts (default 5,10,40,100)")
+    ap.add_argument("--Ns", default="5,10,40,100", help="link counts of the planar chain (default 5,10,40,100)")
+    ap.add_argument("--Ns-3d", default="5,10", help="link counts of the 3-D chain (default 5,10; its Jacobian "
+                    "program has ~1.2 million operations at 40 links: minutes of compiler)")
     ap.add_argument("--quick", action="store_true", help="N = 5,10, short timing batches, part B on 4 and 5 links")
     ap.add_argument("--sens-N", type=int, default=10, help="links of part B's forward-sensitivity runs (default 10)")
     ap.add_argument("--grad-N", type=int, default=50, help="links of part B's 100-parameter gradient (default 50)")
@@ -438,8 +465,10 @@ def parse(argv):
     args = ap.parse_args(argv)
     if args.quick and args.Ns == ap.get_default("Ns"):
         args.Ns = "5,10"
+        args.Ns_3d = "5"
         args.sens_N, args.grad_N = 4, 5
     args.Ns = [int(x) for x in args.Ns.split(",") if x.strip()]
+    args.Ns_3d = [int(x) for x in args.Ns_3d.split(",") if x.strip()]
     return args
 
 
@@ -450,22 +479,24 @@ def main(argv=None):
         sys.exit(f"bench/derivatives.py compares with Pinocchio: {why}")
     wall0, cpu0 = time.perf_counter(), cpu()
     head = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True, text=True)
-    print(f"mbcomp {head.stdout.strip() or '?'}; N-link pendulum {PEERS.PHYS}; Ns {args.Ns}")
+    runs = {"planar": args.Ns, "3d": args.Ns_3d}
+    print(f"mbcomp {head.stdout.strip() or '?'}; N-link pendulum {PEERS.PHYS}; Ns {runs}")
     rows = []
-    for N in args.Ns:
-        print(f"N = {N}: building ...", flush=True)
-        c = Chain(N)
-        e_q, e_v, e_c, _ = cross_check(c, rows)
-        print(f"N = {N}: exact vs Pinocchio {max(e_q, e_v):.1e}, central differences vs exact {e_c:.1e}; timing ...",
-              flush=True)
-        timings(c, rows, 0.02 if args.quick else 0.05)
-        del c
+    for mech, Ns in runs.items():
+        for N in Ns:
+            print(f"{mech}, N = {N}: building ...", flush=True)
+            c = Chain(mech, N)
+            e_q, e_v, e_c, _ = cross_check(c, rows)
+            print(f"{mech}, N = {N}: exact vs Pinocchio {max(e_q, e_v):.1e}, central differences vs exact "
+                  f"{e_c:.1e}; timing ...", flush=True)
+            timings(c, rows, 0.02 if args.quick else 0.05)
+            del c
     if not args.skip_b:
         part_b(args, rows)
-    print_tables(rows, args.Ns)
+    print_tables(rows, runs)
     print_part_b(rows)
     PEERS.write_csv(rows, HERE / "derivatives.csv")
-    plot(rows, HERE / "derivatives.png")
+    plot(rows, HERE / "derivatives.png", list(runs))
     print(f"\nwrote {HERE / 'derivatives.csv'} and {HERE / 'derivatives.png'} "
           f"({time.perf_counter() - wall0:.0f} s wall, {cpu() - cpu0:.0f} s CPU)")
 
