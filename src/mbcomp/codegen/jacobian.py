@@ -129,6 +129,9 @@ class BoundJacobian:
     ``(n, n)``, or None where the program does not hold (a failed guard, a non-finite
     entry). ``alpha``, ``beta``: the Baumgarte gains (1/s), zero for none.
 
+    With the C backend, :meth:`run_c` runs the program alone into :attr:`out` (the ``(n, n)``
+    view of the output buffer; ``addresses`` are the buffers' addresses, taken once).
+
     Examples
     --------
     >>> import numpy as np, mbcomp
