@@ -54,7 +54,9 @@ def test_recovers_three_parameters_from_noisy_angles_within_1_percent(model):
     assert np.all(f.std_errors / TRUE < 0.01) and np.all(f.std_errors > 0)
     rms = np.sqrt(np.mean(f.residual["crank_angle"] ** 2))
     assert 0.8 * noise < rms < 1.2 * noise                               # the model explains all but the noise
-    assert f.runs == f.optimizer.nfev and f.runs < 30                    # one run per residual, Jacobian reused
+    # one run per residual (the Jacobian reused), and one more when the optimizer's last trial was
+    # rejected: the standard errors are taken at the accepted values
+    assert f.optimizer.nfev <= f.runs <= f.optimizer.nfev + 1 and f.runs < 30
     assert np.isclose(f.cost, 0.5 * np.sum(f.residual["crank_angle"] ** 2))
 
 

@@ -48,7 +48,8 @@ from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import FIELDS, param_layout, param_vector, trace
 from .tracing import parameter_entries
 
-__all__ = ["ParameterRef", "parameter_ref", "SensitivityCode", "BoundSensitivity", "ColumnCode"]
+__all__ = ["ParameterRef", "parameter_ref", "SensitivityCode", "BoundSensitivity", "ColumnCode", "SensitivityIntegrator",
+           "SENSITIVITY_GLUE"]
 
 _NAME = re.compile(r"^\s*([A-Za-z_][\w.]*)\.([A-Za-z_]\w*)\s*(?:\[\s*([0-9,\s]+)\])?\s*$")
 
@@ -294,6 +295,9 @@ class _Bound:
             self.pbuf = np.array(list(pv) + [0.0], float)
             self.dbuf, self.ybuf = np.zeros(2), np.zeros(n + 1)
             self.wbuf, self.obuf = np.zeros(max(printed.n_work, 1)), np.zeros(printed.n_out + 1)
+            base = self.ybuf.ctypes.data  # the buffers live as long as this object: their addresses once
+            self.args = (base, base + 8 * nq, self.dbuf.ctypes.data, self.hbuf.ctypes.data, self.pbuf.ctypes.data,
+                         self.wbuf.ctypes.data, self.obuf.ctypes.data)
 
     def call(self, t, y, alpha, beta, finite=True):
         """The program's flat output at ``(t, y = [q, u])`` with the per-call inputs ``alpha``,
@@ -308,9 +312,8 @@ class _Bound:
         else:
             self.ybuf[:n] = y
             self.dbuf[0], self.dbuf[1] = alpha, beta
-            base = self.ybuf.ctypes.data
-            if printed.cfun(base, base + 8 * nq, float(t), self.dbuf.ctypes.data, self.hbuf.ctypes.data,
-                            self.pbuf.ctypes.data, self.wbuf.ctypes.data, self.obuf.ctypes.data):
+            a = self.args
+            if printed.cfun(a[0], a[1], float(t), a[2], a[3], a[4], a[5], a[6]):
                 return None
             out = self.obuf[: printed.n_out].copy()
         return out if not finite or np.isfinite(out).all() else None
@@ -431,3 +434,143 @@ class ColumnCode:
             out = bound.call(t, y, alpha, beta, finite=False)
             return None if out is None else out.reshape(len(self.names), width)
         return call
+
+
+#: the simultaneous right-hand side ``[f; f_y S + f_p]`` in C, for the runtime's DOP853: one
+#: call of the sensitivity program (``fun, d fun/dy, d fun/dp``) per evaluation, then the
+#: product with ``S`` (row major, ``n x k``); ``pcol[j]`` is parameter ``j``'s column of
+#: ``d fun/dp`` (-1 for a start value: no column).
+SENSITIVITY_GLUE = r"""
+#include <stddef.h>
+#include <math.h>
+typedef int (*mbcomp_prog)(const double *restrict q, const double *restrict u, double t, const double *restrict d,
+                           const double *restrict h, const double *restrict p, double *restrict w,
+                           double *restrict out);
+typedef struct {
+    mbcomp_prog rhs; const double *h, *p, *d; double *w, *out;   /* the program, its inputs and scratch */
+    int nq, n, k, kp;               /* coordinates, states, parameters, parameters with a column  */
+    const int *pcol;                /* k: the column of each parameter in d fun/dp, or -1         */
+    int failed;                     /* 1: the program's guard, 2: a non-finite value              */
+} mbcomp_sens_ctx;
+
+int mbcomp_sens_rhs(void *c, double t, const double *z, double *dz)
+{
+    mbcomp_sens_ctx *x = (mbcomp_sens_ctx *)c;
+    const int n = x->n, k = x->k, w = x->n + x->kp;
+    if (x->rhs(z, z + x->nq, t, x->d, x->h, x->p, x->w, x->out)) { x->failed = 1; return 1; }
+    const double *f = x->out, *D = x->out + n;
+    for (int i = 0; i < n; i++) dz[i] = f[i];
+    const double *S = z + n;
+    double *dS = dz + n;
+    for (int i = 0; i < n; i++) {
+        const double *Di = D + (size_t)i * w;
+        for (int j = 0; j < k; j++) {
+            double s = x->pcol[j] >= 0 ? Di[n + x->pcol[j]] : 0.0;
+            for (int l = 0; l < n; l++) s += Di[l] * S[(size_t)l * k + j];
+            dS[(size_t)i * k + j] = s;
+        }
+    }
+    for (int i = 0; i < n * (k + 1); i++)
+        if (!isfinite(dz[i])) { x->failed = 2; return 1; }
+    return 0;
+}
+"""
+
+
+class _SensCtx(ctypes.Structure):
+    _fields_ = ([("rhs", ctypes.c_void_p), ("h", ctypes.c_void_p), ("p", ctypes.c_void_p), ("d", ctypes.c_void_p),
+                 ("w", ctypes.c_void_p), ("out", ctypes.c_void_p), ("nq", ctypes.c_int), ("n", ctypes.c_int),
+                 ("k", ctypes.c_int), ("kp", ctypes.c_int), ("pcol", ctypes.c_void_p), ("failed", ctypes.c_int)])
+
+
+class _Stats(ctypes.Structure):
+    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
+                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
+                ("message", ctypes.c_char * 200)]
+
+
+class SensitivityIntegrator:
+    """The states and their sensitivities ``[y, S]`` integrated together in C: the runtime's
+    DOP853 (:mod:`mbcomp.codegen.runtime`) over :data:`SENSITIVITY_GLUE`, which calls a bound C
+    sensitivity program (:class:`BoundSensitivity`) at every evaluation -- one C call for a
+    whole run, error control over ``y`` and ``S`` alike.
+
+    Parameters
+    ----------
+    bound : BoundSensitivity
+        Bound C programs.
+    columns : list of int
+        For each requested parameter, its column in ``d fun/dp`` (the programs' parameters),
+        or -1 for a start value.
+    gains : (float, float)
+        The Baumgarte gains (1/s), zero for none.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.codegen import c_compiler
+    >>> from mbcomp.codegen.sensitivity import SensitivityCode, SensitivityIntegrator
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> system = mbcomp.assemble(m)
+    >>> if c_compiler():   # s = g t^2 / 2: d s / d g_z = t^2 / 2 = 2 at t = 2 s
+    ...     sens = SensitivityIntegrator(SensitivityCode.build(system, ["world.g[2]"], "c").bind(system), [0], (0, 0))
+    ...     Y, S = sens.integrate(np.array([0.0, 2.0]), np.zeros(2), np.zeros((2, 1)), 1e-10, 1e-12)
+    ...     print(S[-1].ravel().round(9).tolist())
+    ... else:
+    ...     print([2.0, 2.0])
+    [2.0, 2.0]
+    """
+
+    def __init__(self, bound, columns, gains, cache_dir=None):
+        from .engine import runtime_library
+        from .toolchain import c_compiler, cache_directory
+
+        code = bound.code
+        rhs = bound.bound["rhs"]
+        if code.backend != "c":
+            raise ValueError("SensitivityIntegrator needs the C programs (backend='c')")
+        self.n, self.nq, self.k = code.n, code.nq, len(columns)
+        self.rt = runtime_library(c_compiler(), cache_directory(cache_dir))
+        self.rt.mbrt_dop853_work_size.argtypes = [ctypes.c_int]
+        self.rt.mbrt_dop853_work_size.restype = ctypes.c_size_t
+        self.rt.mbrt_dop853.restype = ctypes.c_int
+        vp, i, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
+        self.rt.mbrt_dop853.argtypes = [vp, vp, vp, i, dbl, vp, dbl, dbl, vp, dbl, dbl, ctypes.c_long, vp, i, vp, vp,
+                                        vp, vp]
+        self.glue = cached_library([("sensglue", HEADER + SENSITIVITY_GLUE, list(FLAGS))], "mbcomp_sensglue",
+                                   cache_dir, "sensitivity integrator")
+        self.fn = ctypes.cast(self.glue.mbcomp_sens_rhs, ctypes.c_void_p).value
+        self.d = np.array([float(gains[0]), float(gains[1]), 0.0])
+        self.pcol = np.array(list(columns) + [0], dtype=np.intc)
+        self.bound = rhs  # its buffers must live as long as the context points at them
+        size = self.n * (self.k + 1)
+        self.work = np.zeros(int(self.rt.mbrt_dop853_work_size(size)))
+        self.stats = _Stats()
+        self.ctx = _SensCtx(ctypes.cast(rhs.printed.cfun, ctypes.c_void_p).value, rhs.hbuf.ctypes.data,
+                            rhs.pbuf.ctypes.data, self.d.ctypes.data, rhs.wbuf.ctypes.data, rhs.obuf.ctypes.data,
+                            self.nq, self.n, self.k, len(code.params), self.pcol.ctypes.data, 0)
+
+    def integrate(self, t_out, y0, S0, rtol, atol, max_steps=0):
+        """``(Y, S)`` at the times ``t_out`` (s; the first is the start) from ``y0``, ``S0``;
+        ``(n_out, n)`` and ``(n_out, n, k)``. Raises ``ArithmeticError`` saying what failed
+        (a guard of the program, a non-finite value, the integrator) and where."""
+        t_out = np.ascontiguousarray(t_out, float)
+        z0 = np.concatenate((np.asarray(y0, float), np.asarray(S0, float).ravel()))
+        size = z0.size
+        atol_v = np.full(size, float(atol))
+        out = np.zeros((len(t_out), size))
+        written = ctypes.c_int(0)
+        self.ctx.failed = 0
+        status = self.rt.mbrt_dop853(self.fn, None, ctypes.byref(self.ctx), size, float(t_out[0]), z0.ctypes.data,
+                                     float(t_out[-1]), float(rtol), atol_v.ctypes.data, 0.0, 0.0, int(max_steps),
+                                     t_out.ctypes.data, len(t_out), out.ctypes.data, ctypes.byref(written),
+                                     self.work.ctypes.data, ctypes.byref(self.stats))
+        if status != 0 or written.value != len(t_out):
+            what = {1: "the sensitivity program (a guard: a law's branch the trace did not take)",
+                    2: "the sensitivities (a non-finite value)"}.get(self.ctx.failed, "the integrator")
+            raise ArithmeticError(f"{what} failed at t = {self.stats.t:.6g} s: "
+                                  f"{self.stats.message.decode(errors='replace')}")
+        return out[:, :self.n], out[:, self.n:].reshape(len(t_out), self.n, self.k)

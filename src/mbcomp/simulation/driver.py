@@ -238,17 +238,21 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
         y0 = form.initial_state(t_start, init.q, init.u)
     if watcher is not None:  # a stuck friction that cannot hold at the start breaks away there
         form, y0 = watcher.start(form, y0, t_start, init.q, init.u)
-    run = Run(form, stepwise(stepper) if watcher or sensitivities else stepper,
+    after = bool(sensitivities) and Sensitivities.after_the_run(form, watcher, stepper)
+    stepped = bool(sensitivities) and not after  # a step's dense output carries them: one step at a time
+    run = Run(form, stepwise(stepper) if watcher or stepped else stepper,
               output_times(t_start, t_end, n_out, dt_out), y0, rtol=rtol, atol=atol, max_step=max_step, h=h)
     sens = None
-    if sensitivities:  # a step's own dense output carries them: one step at a time (stepwise)
+    if sensitivities:
         sens = Sensitivities(form.system, sensitivities, t_start, run.ys[0], form.output_gains() or (0.0, 0.0),
                              stepper.implicit, rtol, atol, events=watcher)
     monitors = monitors_for(system, atol, singular)
     wall0 = _time.perf_counter()
     watch = None if stepper.implicit else StiffnessWatch()
     status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None], watcher,
-                                sens)
+                                None if after else sens)
+    if after:
+        sens.integrate_after(run)
     stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
                       index=index, rtol=rtol, atol=atol)
     message = "; ".join([message] + why_slow(run, watch, status, stats))

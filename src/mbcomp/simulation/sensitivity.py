@@ -8,16 +8,18 @@ states, the forward sensitivity equations of the Lagrange index-1 right-hand sid
 
 with exact derivatives from the generated programs (:mod:`mbcomp.codegen.sensitivity`).
 
-**Staggered, on the run's own steps.** After every accepted step of the run, the sensitivity
-equations are integrated over that step, along the step's dense output ``y(t)``, by scipy's
-``DOP853`` (explicit runs) or ``Radau`` (implicit runs, the Jacobian ``I (x) d fun/dy``
-exact) with the run's ``rtol`` and ``atol``. Why not simultaneous (one augmented state under
-one error control)? Asking for sensitivities then changes the steps, hence the states: a run
-with sensitivities would not reproduce the run without them, and the hybrid layer's events,
-projections and repartitions would all have to carry the augmented state. Staggered, the
-states are bit-for-bit those of the same run without sensitivities, and the sensitivities
-have their own error control to the same tolerances. The price is one dense-output
-evaluation of ``y`` per sensitivity stage.
+**Two paths.** A smooth run (no events, not projected, an explicit method, a C program) is
+integrated as usual, then ``[y, S]`` together from the start in one C call
+(:class:`~mbcomp.codegen.sensitivity.SensitivityIntegrator`: the runtime's DOP853, error
+control over both at the run's tolerances; the run's own states are kept). Every other run
+is *staggered*: after every accepted step the sensitivity equations are integrated over
+that step, along the step's dense output ``y(t)``, by scipy's ``DOP853`` (explicit runs) or
+``Radau`` (implicit runs, the Jacobian ``I (x) d fun/dy`` exact) with the run's ``rtol`` and
+``atol``, and jumped at its events. Why not simultaneous there: the augmented state would
+change the steps, and the hybrid layer's events, projections and repartitions would all have
+to carry it; staggered, the states are bit for bit those of the same run without
+sensitivities. The price: one dense-output evaluation of ``y`` per sensitivity stage, in
+Python.
 
 **Constraints.** With Baumgarte stabilization the sensitivity equations are those of the
 stabilized right-hand side (its gains in ``fun``): the linearized constraint drift decays as
@@ -144,6 +146,46 @@ class Sensitivities(StepHook):
         self.kept = [self.S.copy()]
         self.kept_systems = [system]
         self.stats_ = dict(sensitivity_steps=0, sensitivity_evaluations=0, sensitivity_jumps=0)
+
+    # --- smooth runs: one C call after the run -----------------------------------------------
+    @staticmethod
+    def after_the_run(form, events, stepper):
+        """Whether a run's sensitivities are integrated after it, simultaneously with a copy of
+        its states in one C call (:class:`~mbcomp.codegen.sensitivity.SensitivityIntegrator`):
+        a smooth run (no events), not projected, by an explicit method, on a C program. Else
+        they are stepped with the run (staggered, a step hook)."""
+        return (events is None and not form.projects and not stepper.implicit and form.system.backend == "c"
+                and "lagrange_fun" in form.system.evaluator.capabilities)
+
+    def integrate_after(self, run):
+        """``S`` at every output the run kept, by the simultaneous C integration of ``[y, S]``
+        from the run's start (see :meth:`after_the_run`); the run's own states are kept as they
+        are, and the largest difference of the copy from them is in ``stats`` (both are within
+        the tolerances). A failure there (a law's branch the program did not trace) ends the
+        sensitivities at that time (:attr:`stopped`)."""
+        from ..codegen.sensitivity import SensitivityIntegrator
+
+        n_kept = len(run.ys)
+        self.stats_["sensitivity_method"] = "simultaneous, C (DOP853 over [y, S])"
+        if n_kept < 2:
+            return
+        cols, c = [], 0
+        for ref in self.refs:
+            cols.append(c if ref.kind == "param" else -1)
+            c += ref.kind == "param"
+        integ = SensitivityIntegrator(self.bound(self.system), cols, self.gains)
+        t = np.asarray(run.t_out[:n_kept], float)
+        try:
+            Y, S = integ.integrate(t, run.ys[0], self.S, self.rtol, self.atol)
+        except ArithmeticError as exc:
+            self.stopped = (float(integ.stats.t), f"sensitivities: {exc}")
+            self.kept = [self.kept[0]] + [np.full((self.n, self.k), np.nan)] * (n_kept - 1)
+            self.kept_systems = [self.system] * n_kept
+            return
+        self.kept, self.kept_systems = list(S), [self.system] * n_kept
+        self.t, self.S = float(t[-1]), S[-1]
+        self.stats_.update(sensitivity_steps=int(integ.stats.naccept), sensitivity_evaluations=int(integ.stats.nfev),
+                           sensitivity_state_difference=float(np.max(np.abs(Y - np.asarray(run.ys[:n_kept])))))
 
     # --- programs ----------------------------------------------------------------------------
     def bound(self, system):
