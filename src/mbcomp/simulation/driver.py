@@ -255,6 +255,8 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
         sens.integrate_after(run)
     stats = run_stats(run, monitors, init, _time.perf_counter() - wall0, method=method, formulation=formulation,
                       index=index, rtol=rtol, atol=atol)
+    if after:  # not a hook: its figures are added here
+        stats.update(sens.stats())
     message = "; ".join([message] + why_slow(run, watch, status, stats))
     t_done = run.t_out[: len(run.ys)]
     if watcher is not None:
@@ -267,6 +269,8 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
     res = finish(res, watcher, np.array(run.ys).reshape(len(run.ys), -1))
     if sens is not None:
         res.sensitivities = sens.table(t_done, Y)
+        if sens.stopped is not None:  # the states stand; the sensitivities after that time do not
+            res.message += f"; the sensitivities end at t={sens.stopped[0]:.9g} s (NaN after): {sens.stopped[1]}"
     return res
 
 
