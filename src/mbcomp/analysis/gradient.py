@@ -2,8 +2,9 @@
 about two runs: the continuous adjoint over the generated programs (:func:`gradient`).
 
 The objective of a run from ``t0`` to ``T`` is ``J = phi(T, y(T)) + integral_t0^T g(t, y) dt``
-over the Lagrange index-1 state ``y = [q, u]`` (``dy/dt = f(t, y, p)``, Baumgarte gains as in
-:func:`mbcomp.simulate`); ``phi`` and ``g`` are written over the run's result columns
+over the Lagrange index-1 state ``y = [q, u]`` (``dy/dt = f(t, y, p)`` with Baumgarte gains:
+the run :func:`mbcomp.simulate` makes by default; projection and the other formulations are
+not differentiated here); ``phi`` and ``g`` are written over the run's result columns
 (coordinates, speeds, their rates, reactions, energies, aliases, ``time``) in the study
 metrics' expression language (:mod:`mbcomp.analysis.metrics`, pointwise: numbers, columns,
 ``+ - * / **``, ``abs``, ``sqrt``) or as Python functions ``f(t, c)`` of the time and the
