@@ -158,3 +158,34 @@ def test_the_c_runs_give_the_gradient_of_the_scipy_runs():
     assert c.stats["engine"].startswith("C") and py.stats["engine"].startswith("scipy")
     np.testing.assert_allclose(c.gradient, py.gradient, rtol=1e-8)
     assert c.value == pytest.approx(py.value, rel=1e-10)
+
+
+chain_3d = load_model("models/chain_3d.py")
+rolling_disk = load_model("models/rolling_disk.py")
+
+
+@pytest.mark.parametrize("which", ["chain_3d", "rolling_disk"])
+def test_quaternion_coordinates_and_rolling_contact(which):
+    # ball joints (quaternions: nq != nu, dq/dt not u) and a rolling disk (velocity rows; its
+    # radius moves the consistent start): the gradient against central differences of runs
+    if which == "chain_3d":
+        build, objective = (lambda: chain_3d.build(N=3)), "joint3.w.x + joint2.Q.y"
+        cols = lambda r: r["joint3.w.x"][-1] + r["joint2.Q.y"][-1]  # noqa: E731
+        cases = [("link2.m", "link2.m", None), ("tip1.r[1]", "tip1.r", (1,)), ("joint1.w0[2]", "joint1.w0", (2,))]
+    else:
+        build, objective = rolling_disk.build, "lean.phi + x.s"
+        cols = lambda r: r["lean.phi"][-1] + r["x.s"][-1]  # noqa: E731
+        cases = [("contact.r", "contact.r", None), ("spin.w0", "spin.w0", None), ("lean.w0", "lean.w0", None)]
+    gr = mbcomp.gradient(build(), {"terminal": objective}, [c[0] for c in cases], t_end=0.5, backend=BACKEND, **TIGHT)
+    P = mbcomp.assemble(build()).P
+    want = []
+    for _, name, idx in cases:
+        path, attr = name.rsplit(".", 1)
+        base, h = getattr(P[path], attr), 1e-5
+        vals = []
+        for s in (1, -1):
+            v = base + s * h if idx is None else np.where(np.arange(np.size(base)) == idx[0], base + s * h, base)
+            res = mbcomp.simulate(build(), t_end=0.5, params={name: v}, **TIGHT)
+            vals.append(cols(res))
+        want.append((vals[0] - vals[1]) / (2 * h))
+    np.testing.assert_allclose(gr.gradient, want, rtol=1e-6)

@@ -523,11 +523,17 @@ def _param_spec(entries, text):
     kind, val = entries[(path, name)]
     index = tuple(int(k) for k in idx.split(",") if k.strip()) if idx else None
     if kind == "start":
-        if index is not None or not isinstance(val, (float, np.floating)):
-            raise ModelError([Problem(str(text), f"start value {val!r} is not a fixed number (a Guess or None: the "
-                                      "start state does not follow it)",
-                                      f"fix it with a number, e.g. {path}.{name}=0.3")])
-        return {"kind": "start", "path": path, "name": name, "index": None, "key": None, "value": float(val)}
+        if isinstance(val, (float, np.floating)) and index is None:
+            return {"kind": "start", "path": path, "name": name, "index": None, "key": None, "value": float(val)}
+        if isinstance(val, np.ndarray) and val.dtype.kind == "f" and index is not None and len(index) == val.ndim \
+                and all(0 <= k < n for k, n in zip(index, val.shape)):
+            return {"kind": "start", "path": path, "name": name, "index": index, "key": None,
+                    "value": float(val[index])}
+        if isinstance(val, np.ndarray) and val.dtype.kind == "f":
+            raise ModelError([Problem(str(text), f"is a start value of shape {val.shape}",
+                                      f"give one entry, e.g. {path}.{name}[{', '.join('0' for _ in val.shape)}]")])
+        raise ModelError([Problem(str(text), f"start value {val!r} is not a fixed number (a Guess or None: the "
+                                  "start state does not follow it)", f"fix it with a number, e.g. {path}.{name}=0.3")])
     if isinstance(val, (float, np.floating)) and index is None:
         return {"kind": "number", "path": path, "name": name, "index": None, "key": (path, name, None),
                 "value": float(val)}
