@@ -218,6 +218,7 @@ def _programs(model, objective, params, values, t_start, alpha, beta, backend, c
     from ..assembly.initialization import initialize
     from ..codegen import c_compiler
     from ..codegen.adjoint import AdjointCode
+    from ..codegen.graph import no_gc
     from ..codegen.tracer import trace
     from ..formulations import LagrangeIndex1
     from ..simulation.setup import system_of
@@ -238,20 +239,29 @@ def _programs(model, objective, params, values, t_start, alpha, beta, backend, c
     wrt = [s["key"] for s in specs if s["kind"] == "number"]
     init = initialize(system, t_start)
     form = LagrangeIndex1(system, alpha=alpha, beta=beta)
-    code = AdjointCode.build(system, backend, keep=keep, cache_dir=cache_dir, wrt=wrt)
-    if code is None:
+    with no_gc():
+        tr = trace(system, 3_000_000, program="fun", keep=keep)
+    if "fun" not in tr.groups or tr.drives or tr.inputs:
         raise ModelError([Problem("model", "has no generated right-hand side to differentiate (drives or inputs "
                                   "evaluated in Python at every call, or a singular start)",
                                   "give the drives' motion laws with numpy functions, or difference whole runs")])
-    tr = trace(system, 3_000_000, program="outputs", keep=keep)
-    if "outputs" not in tr.groups:
-        raise ModelError([Problem("model", "the result columns cannot be traced at the start (a singular position)",
-                                  "start the run away from the singular position")])
-    parts = {}
+    code = AdjointCode(tr, backend, cache_dir, keep=keep, wrt=wrt)
+    parts, outputs = {}, None
     for which, f in (("terminal", terminal), ("integral", running)):
-        if f is not None:
-            parts[which] = AdjointCode(tr, backend, cache_dir, objective=_objective_node(tr, system, f, which),
-                                       group="outputs", keep=keep, wrt=wrt).bind(system)
+        if f is None:
+            continue
+        try:  # on the right-hand side's trace when the objective reads states and time only
+            node, on, group = _objective_node(tr, _state_columns(tr, system), f, which), tr, "fun"
+        except _NoColumn:  # other columns: the output program's trace
+            if outputs is None:
+                with no_gc():
+                    outputs = trace(system, 3_000_000, program="outputs", keep=keep)
+                if "outputs" not in outputs.groups:
+                    raise ModelError([Problem("model", "the result columns cannot be traced at the start (a singular "
+                                              "position)", "start the run away from the singular position")])
+            node, on, group = _objective_node(outputs, _output_columns(outputs, system), f, which), outputs, "outputs"
+        parts[which] = AdjointCode(on, backend, cache_dir, objective=node, group=group, keep=keep,
+                                   wrt=wrt).bind(system)
     vjp = code.bind(system)
     if vjp is None or any(b is None for b in parts.values()):
         raise ModelError([Problem("model", "a parameter value changes a decision the programs were traced with",
@@ -430,6 +440,10 @@ def _check_pointwise(node, text):
         _check_pointwise(node[3], text)
 
 
+class _NoColumn(ValueError):
+    """An objective names a column the trace at hand does not have."""
+
+
 class _Columns:
     """The traced result columns by name (and the model's aliases); a missing one names the similar."""
 
@@ -440,9 +454,9 @@ class _Columns:
         if name in self.cols:
             return self.cols[name]
         close = difflib.get_close_matches(name, list(self.cols), n=4, cutoff=0.6)
-        raise ValueError(f"objective {self.what}: the run has no column {name!r}"
-                         + (f"; similar: {', '.join(close)}" if close else "")
-                         + " -> fix: use a coordinate, speed, rate, reaction or energy column, an alias, or time")
+        raise _NoColumn(f"objective {self.what}: the run has no column {name!r}"
+                        + (f"; similar: {', '.join(close)}" if close else "")
+                        + " -> fix: use a coordinate, speed, rate, reaction or energy column, an alias, or time")
 
     def __contains__(self, name):
         return name in self.cols
@@ -451,20 +465,36 @@ class _Columns:
         return self.cols.keys()
 
 
-def _objective_node(tr, system, f, which):
-    """The objective part ``f`` (Metric or callable) as a node of the outputs trace's graph."""
-    g = tr.graph
-    names = tr.output_names
-    cols = dict(zip(names, tr.groups["outputs"][:len(names)]))
+def _with_aliases(cols, system):
     for alias, var in system.topology.flat.aliases.items():
         if var in cols:
             cols[alias] = cols[var]
+    return cols
+
+
+def _state_columns(tr, system):
+    """The coordinates and speeds of a right-hand side's trace: its ``q`` and ``u`` inputs."""
+    g = tr.graph
+    cols = {name: g.memo[("in", "q", k)] for k, name in enumerate(system.q_names) if ("in", "q", k) in g.memo}
+    cols.update({name: g.memo[("in", "u", k)] for k, name in enumerate(system.u_names) if ("in", "u", k) in g.memo})
+    return _with_aliases(cols, system)
+
+
+def _output_columns(tr, system):
+    """The result columns of an output program's trace."""
+    names = tr.output_names
+    return _with_aliases(dict(zip(names, tr.groups["outputs"][:len(names)])), system)
+
+
+def _objective_node(tr, cols, f, which):
+    """The objective part ``f`` (Metric or callable) as a node of the trace's graph, over the
+    columns ``cols`` (name -> node) and ``time``."""
+    g = tr.graph
     t = g.memo.get(("in", "t", 0))
     with g:
         if t is None:
             t = g.input("t", 0, 0.0)
-        cols["time"] = t
-        columns = _Columns(cols, f"{which} part")
+        columns = _Columns(dict(cols, time=t), f"{which} part")
         if isinstance(f, Metric):
             node = _pointwise(f.tree, columns)
         else:
