@@ -189,3 +189,14 @@ def test_quaternion_coordinates_and_rolling_contact(which):
             vals.append(cols(res))
         want.append((vals[0] - vals[1]) / (2 * h))
     np.testing.assert_allclose(gr.gradient, want, rtol=1e-6)
+
+
+def test_runtime_values_are_the_runs():
+    # values= sets the run's parameters as simulate's params= does: a pendulum under 5 m/s^2
+    a = mbcomp.gradient(pendulum(), {"terminal": "j.phi"}, ["j.phi0", "rod.r[1]"], t_end=1.0, backend=BACKEND,
+                        values={"world.g": [0.0, -5.0, 0.0]})
+    b = mbcomp.gradient(pendulum(g=5.0), {"terminal": "j.phi"}, ["j.phi0", "rod.r[1]"], t_end=1.0, backend=BACKEND)
+    np.testing.assert_allclose(a.gradient, b.gradient, rtol=1e-12)
+    assert a.value == pytest.approx(b.value, rel=1e-12)
+    c = mbcomp.gradient(pendulum(), {"terminal": "j.phi"}, ["j.phi0", "rod.r[1]"], t_end=1.0, backend=BACKEND)
+    assert abs(c.value - a.value) > 1e-3  # the values did change the run

@@ -140,7 +140,9 @@ def gradient(model, objective, params, *, t_end=1.0, t_start=0.0, values=None, r
     alpha, beta : float
         Baumgarte gains (1/s), as :func:`mbcomp.simulate`'s.
     method : str
-        ``solve_ivp``'s explicit method for both runs (``"DOP853"``, ``"RK45"``).
+        The explicit method of both runs: ``"DOP853"`` (default) runs them in C, in the
+        runtime's DOP853, when the system has the C engine (``stats["engine"]`` says which);
+        otherwise, and for any other ``solve_ivp`` method (``"RK45"``), scipy's ``solve_ivp``.
     checkpoints : int
         Segments of the forward run whose start states are kept; each is integrated again in
         the backward pass (memory: one segment's dense output). 1 (default): the forward
