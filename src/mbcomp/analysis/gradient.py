@@ -208,7 +208,7 @@ def gradient(model, objective, params, *, t_end=1.0, t_start=0.0, values=None, r
     for i, s in enumerate(pb.specs):
         if s["kind"] == "number":
             grad[i] = mu[pb.wrt.index(s["key"])]
-        if s["kind"] == "start" or pb.moves_all:
+        if s["kind"] == "start" or s["key"] in pb.moves_start:
             grad[i] += lam0 @ _start_derivative(pb.numeric, s, t_start)
             runs += 2
     stats.update(initial_runs=runs, initial=_time.perf_counter() - clock, total=_time.perf_counter() - clock0)
@@ -272,7 +272,41 @@ def _programs(model, objective, params, values, t_start, alpha, beta, backend, c
     return SimpleNamespace(
         system=system, numeric=numeric, specs=specs, wrt=wrt, fun=form.fun, vjp=vjp, parts=parts, engine=engine,
         y0=np.asarray(form.initial_state(t_start, init.q, init.u), float), gains=np.array([alpha, beta], float),
-        moves_all=init.row_mask is not None and init.row_mask.size > 0 or bool(system.nonholonomic))
+        moves_start=_moving_start(system, init, keep, wrt))
+
+
+def _moving_start(system, init, keep, wrt):
+    """The parameters of ``wrt`` that may move the consistent start state: on a tree none (only
+    start values do); with constraint rows those the rows ``[Phi, dPhi/dt, Psi]`` depend on in
+    the traced evaluation (lengths, axes; not masses or inertias, which the initialization
+    never reads)."""
+    from ..codegen.graph import no_gc
+    from ..codegen.tracer import trace
+
+    if not ((init.row_mask is not None and init.row_mask.size > 0) or system.nonholonomic):
+        return set()
+    with no_gc():
+        tr = trace(system, 3_000_000, program="eval", keep=keep)
+    g, flat, at, rows = tr.graph, tr.groups["eval"], 0, []
+    for name, shape in tr.shapes.items():
+        size = int(np.prod(shape))
+        if name in ("Phi", "Phid", "Psi"):
+            rows.extend(flat[at:at + size])
+        at += size
+    found, seen = set(), set()
+    stack = [o.i for o in rows if hasattr(o, "__mbcomp_traced__")]
+    while stack:
+        i = stack.pop()
+        if i in seen:
+            continue
+        seen.add(i)
+        key = g.keys[i]
+        if key[0] == "in":
+            if key[1] == "p":
+                found.add(tuple(tr.layout[key[2]]))
+        elif key[0] != "c":
+            stack.extend(key[1:])
+    return {w for w in wrt if w in found}
 
 
 def _forward(pb, grid, method, rtol, atol):
