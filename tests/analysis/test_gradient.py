@@ -141,7 +141,8 @@ def test_forward_sensitivities_and_the_adjoint_agree_to_1e_8(which):
         build, params, cols = pendulum, ["bob.m", "world.g[1]", "rod.r[1]", "j.phi0", "j.w0"], ["j.phi", "j.w"]
     else:
         build = slider_crank.build
-        params, cols = ["rod.m", "crank_joint.phi0", "crank_joint.w0", "crank_tip.r[0]"], ["crank_angle", "slider_joint.v"]
+        params = ["rod.m", "crank_joint.phi0", "crank_joint.w0", "crank_tip.r[0]"]
+        cols = ["crank_angle", "slider_joint.v"]
     res = mbcomp.simulate(build(), t_end=1.0, sensitivities=params, **TIGHT)
     gr = mbcomp.gradient(build(), {"terminal": f"{cols[0]} + 0.5 * {cols[1]}"}, params, t_end=1.0, backend=BACKEND,
                          **TIGHT)
