@@ -53,10 +53,16 @@ from .tangent import tangent
 from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import FIELDS, param_layout, param_vector, trace
 
-__all__ = ["DAE_JACOBIAN_FORMS", "DAEJacobianCode", "BoundDAEJacobian", "bound_program"]
+__all__ = ["DAE_JACOBIAN_FORMS", "MAX_SPEEDS", "DAEJacobianCode", "BoundDAEJacobian", "bound_program"]
 
 #: the forms a program can be made for (see the module docstring)
 DAE_JACOBIAN_FORMS = ("index1", "ggl", "index3", "mechanical", "dalembert")
+
+#: above this many speeds :func:`bound_program` makes no program (the forms difference): the
+#: derivative of the dense ``M a`` with respect to ``q`` grows as ``nu^3``. A pendulum chain
+#: (index 3): nu = 10 10k operations, 2.6 s to trace and compile cold; nu = 20 62k, 11 s;
+#: nu = 40 416k, 17 s to trace alone. (``"dalembert"``, ``d[dPhi/dt; Psi]/dq``, has no cap.)
+MAX_SPEEDS = 24
 
 
 def _fields(tr):
@@ -83,7 +89,8 @@ def _dot(row, vec):
 def bound_program(system, codes, form, backend, cache_dir=None, max_nodes=3_000_000):
     """The :class:`BoundDAEJacobian` of ``form`` for ``system`` (its row mask and parameter
     values), its code taken from or put into ``codes`` (a dict shared by systems differing
-    only in parameter values); None when the evaluation cannot be traced.
+    only in parameter values); None when the evaluation cannot be traced or the system has
+    more than :data:`MAX_SPEEDS` speeds (but for ``"dalembert"``).
 
     Parameters
     ----------
@@ -109,6 +116,8 @@ def bound_program(system, codes, form, backend, cache_dir=None, max_nodes=3_000_
     >>> bound_program(system.with_params({"b.m": 3.0}), codes, "index3", "python").code is jac.code   # reused
     True
     """
+    if system.nu > MAX_SPEEDS and form != "dalembert":
+        return None
     rm = system.row_mask
     key = ("dae_jac", form, None if rm is None or rm.all() else rm.tobytes())
     for _ in range(2):  # the cached program, else (signature or guard changed) a new one

@@ -120,19 +120,14 @@ D_ERR = _COEF["d"]
 P_DENSE = _COEF["P"]
 
 NEWTON_MAXITER = 7  # RADAU5's NIT
-#: Reuse the Jacobian when Newton contracts faster than this (RADAU5's THET; it suggests 1e-3
-#: for cheap Jacobians, 0.1 for costly ones). A Jacobian here costs nq + nu evaluations (finite
-#: differences), a Newton iteration 3, and a stale Jacobian slows Newton, costs rejections and
-#: shrinks steps. bench/radau_reuse.py, rtol 1e-8, fun evaluations at 1e-3 / 0.01 / 0.03 / 0.1:
-#: 4-link chain (index 1) 30.3k / 22.7k / 23.9k / 29.4k with 1634 / 391 / 148 / 54 Jacobians;
-#: four-bar near its flat position (index 3) 12.4k / 12.0k / 10.8k / 11.2k; slider-crank
-#: (index 3, 3 s) 25.0k / 23.3k / 21.9k / 23.8k, (index 1) 40.5k / 37.4k / 35.2k / 41.9k. At 0.1
-#: rejections double or triple; the errors stay as they were. With the exact Jacobian programs
-#: (codegen/dae_jacobian.py) a Jacobian costs about 3 evaluations (Andrews, C: 10 us against 3 us
-#: for fun, 8 us for the differenced one), but a fresh Jacobian also means two fresh LU
-#: factorizations; 0.01 / 0.003 / 0.001 against 0.03 (bench/stiff_jacobians.py's models, rtol
-#: 1e-6) gave 1-8 % fewer evaluations at index 3 and up to 6x more Jacobians and 60 % more time
-#: at index 1 (10-link spring chain): no setting wins everywhere, so it stays.
+#: Reuse the Jacobian when Newton contracts faster than this (RADAU5's THET: 1e-3 for cheap
+#: Jacobians, 0.1 for costly ones). A differenced Jacobian costs nq + nu evaluations, a Newton
+#: iteration 3. bench/radau_reuse.py, rtol 1e-8, evaluations at 1e-3 / 0.01 / 0.03 / 0.1: 4-link
+#: chain (index 1) 30.3k / 22.7k / 23.9k / 29.4k (1634 / 391 / 148 / 54 Jacobians); four-bar near
+#: flat (index 3) 12.4k / 12.0k / 10.8k / 11.2k; slider-crank (3 s) index 3 25.0k / 23.3k / 21.9k
+#: / 23.8k, index 1 40.5k / 37.4k / 35.2k / 41.9k; at 0.1 rejections double or triple. Exact
+#: Jacobians (codegen/dae_jacobian.py, ~3 evaluations each; bench/stiff_jacobians.py) at 1e-3-0.01:
+#: 1-8 % fewer evaluations at index 3, up to 6x the Jacobians, 60 % more time at index 1: it stays.
 THETA_JAC = 0.03
 SAFETY = 0.9
 FAC_MAX = 8.0  # largest step increase
