@@ -12,7 +12,7 @@ graph three groups of values are formed, with per-call inputs ``a`` (nu accelera
 * ``G = [dPhi/dt; Psi]`` (m + k): the velocity rows' residuals.
 
 Their derivative along one direction ``(dq, du)`` is a Jacobian-vector product: the graph is
-made again (:func:`_replayed`) with every ``q_k`` replaced by ``q_k + eps dq_k`` and every
+made again (:func:`mbcomp.codegen.replay.replay`) with every ``q_k`` replaced by ``q_k + eps dq_k`` and every
 ``u_k`` by ``u_k + eps du_k``, and :func:`~mbcomp.codegen.tangent.tangent` differentiates it
 with respect to ``eps`` alone -- one forward sweep, about three times the evaluation's
 operations, instead of the whole Jacobian (``nq + nu`` directions at once: at N = 40 links
@@ -51,8 +51,9 @@ import weakref
 
 import numpy as np
 
-from .graph import Fallback, Graph, Retrace, Sym, no_gc
+from .graph import Fallback, Retrace, no_gc
 from .printers import PY_ENV, ParamProgram, Program
+from .replay import replay
 from .tangent import tangent
 from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import FIELDS, param_layout, param_vector, trace
@@ -82,69 +83,6 @@ def _dot(coeffs, xs):
             continue
         s = s + c * x
     return s
-
-
-#: the graph's functions by the :class:`~mbcomp.codegen.graph.Sym` method that makes them
-_METHOD = {"cos": "cos", "sin": "sin", "tan": "tan", "asin": "arcsin", "acos": "arccos", "atan": "arctan",
-           "sqrt": "sqrt", "exp": "exp", "log": "log", "sinh": "sinh", "cosh": "cosh", "tanh": "tanh",
-           "atan2": "arctan2", "hypot": "hypot"}
-
-
-def _apply(g, op, args):
-    """Node ``op(args)`` made again in the current graph ``g`` (operands Sym or numbers)."""
-    a = args[0]
-    if op == "+":
-        return a + args[1]
-    if op == "-":
-        return a - args[1]
-    if op == "*":
-        return a * args[1]
-    if op == "/":
-        return a / args[1]
-    if op == "pow":
-        return a ** args[1]
-    if op == "neg":
-        return -a
-    if op == "abs":
-        return abs(a)
-    if op not in _METHOD:
-        raise ValueError(f"eval_tangent: the graph has an operation {op!r} this module cannot replay")
-    a = a if type(a) is Sym else g.const(a)
-    return getattr(a, _METHOD[op])(*args[1:])
-
-
-def _replayed(g, outputs, shift):
-    """``outputs`` of graph ``g`` (and its guards) made again in a new graph whose state inputs
-    are moved along a direction: ``shift(g2)`` returns ``(moved, eps)``, ``moved[(kind, k)]``
-    the function taking the new input node to its replacement (``q_k + eps dq_k``).
-    Differentiated with respect to ``eps`` alone, the outputs give a Jacobian-vector product:
-    one forward sweep for one direction instead of one per input. Returns ``(g2, outputs2, eps)``."""
-    keys, nodes = g.keys, g.nodes
-    seen, stack = set(), [o.i for o in outputs if type(o) is Sym] + [j for gd in g.guards for j in gd[1:3]]
-    while stack:
-        i = stack.pop()
-        if i in seen:
-            continue
-        seen.add(i)
-        if keys[i][0] not in ("c", "in"):
-            stack.extend(keys[i][1:])
-    g2 = Graph(g.max_nodes)
-    new = {}
-    with g2:
-        moved, eps = shift(g2)
-        for i in sorted(seen):
-            key = keys[i]
-            if key[0] == "c":
-                new[i] = float(key[1])
-            elif key[0] == "in":
-                x = g2.memo.get(key) or g2.input(key[1], key[2], nodes[i].v, state=nodes[i].s)
-                new[i] = moved[key[1:]](x) if key[1:] in moved else x
-            else:
-                new[i] = _apply(g2, key[0], [new[j] for j in key[1:]])
-        for op, ai, bi, res in g.guards:
-            a, b = (new[j] if type(new[j]) is Sym else g2.const(new[j]) for j in (ai, bi))
-            g2.guard(op, a, b, res)
-    return g2, [new[o.i] if type(o) is Sym else o for o in outputs], eps
 
 
 class EvalTangentCode:
@@ -212,7 +150,7 @@ class EvalTangentCode:
                     moved[(kind, j)] = lambda x, c=g2.input("d", off + j, 0.0): x + eps * c
             return moved, eps
 
-        g2, outs, eps = _replayed(g, R1 + R2 + G, shift)
+        g2, outs, eps = replay(g, R1 + R2 + G, shift)
         J = tangent(g2, outs, [eps])
         prog = Program(g2, {"jvp": [row[0] for row in J]}, guard_groups={"jvp": list(g2.guards)})
         self.n_out = nu + 2 * (m + k)
