@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import ctypes
 import re
+import weakref
 from dataclasses import dataclass
 from numbers import Real
 
@@ -43,6 +44,7 @@ import numpy as np
 
 from .graph import CodegenError, Fallback, Retrace, no_gc
 from .printers import PY_ENV, ParamProgram, Program
+from .replay import replay
 from .tangent import tangent
 from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import FIELDS, param_layout, param_vector, trace
@@ -50,6 +52,9 @@ from .tracing import parameter_entries
 
 __all__ = ["ParameterRef", "parameter_ref", "SensitivityCode", "BoundSensitivity", "ColumnCode", "SensitivityIntegrator",
            "SENSITIVITY_GLUE"]
+
+#: the programs of each structure, per topology (:meth:`SensitivityCode.cached`)
+_CACHE = weakref.WeakKeyDictionary()
 
 _NAME = re.compile(r"^\s*([A-Za-z_][\w.]*)\.([A-Za-z_]\w*)\s*(?:\[\s*([0-9,\s]+)\])?\s*$")
 
@@ -182,18 +187,30 @@ class SensitivityCode:
     (2, ['world.g[2]'])
     """
 
-    def __init__(self, fun_tr, eval_tr, params, backend, cache_dir=None):
-        self.params = list(params)
-        self.backend = backend
+    def __init__(self, fun_tr, eval_tr, directions, backend, cache_dir=None):
+        self.directions = list(directions)  # every requested parameter: a direction of the jvp program
+        self.params = [r for r in directions if r.kind == "param"]
+        self.backend, self.cache_dir = backend, cache_dir
         self.signature, self.layout = fun_tr.signature, fun_tr.layout
         self.n = len(fun_tr.groups["fun"])
         self.nq = len(fun_tr.groups["qrate"])
         self.nu = self.n - self.nq
-        self.rhs_prog = self._rhs_program(fun_tr)
-        self.res_prog, self.m, self.mv = self._residual_program(eval_tr)
-        self.programs = {}
-        for key, (prog, n_out) in (("rhs", self.rhs_prog), ("res", self.res_prog)):
-            self.programs[key] = _Printed(prog, key, n_out, backend, cache_dir)
+        self._fun_tr, self._eval_tr = fun_tr, eval_tr
+        shapes = eval_tr.shapes
+        self.m, self.mv = int(np.prod(shapes["Phi"])), int(np.prod(shapes["Psi"]))
+        self._printed = {}
+
+    def program(self, key):
+        """The printed program ``key``, made at first need: ``"jvp"`` (``fun`` and
+        ``f_y S + f_p`` for the ``k`` directions ``S`` given per call), ``"jac"`` (``fun``,
+        ``d fun/dy``, ``d fun/dp``: for implicit methods), ``"res"`` (the residuals and their
+        derivatives)."""
+        if key not in self._printed:
+            make = {"jvp": self._jvp_program, "jac": self._jac_program, "res": self._residual_program}[key]
+            with no_gc():
+                prog, n_out, n_d = make()
+            self._printed[key] = _Printed(prog, key, n_out, n_d, self.backend, self.cache_dir)
+        return self._printed[key]
 
     def _inputs(self, g, layout):
         ins = [g.memo.get(("in", "q", k)) for k in range(self.nq)] + [g.memo.get(("in", "u", k))
@@ -202,25 +219,52 @@ class SensitivityCode:
         ins += [g.memo.get(("in", "p", index[p.key])) for p in self.params]
         return ins
 
-    def _rhs_program(self, tr):
+    def _jac_program(self):
+        tr = self._fun_tr
         g, fun = tr.graph, list(tr.groups["fun"])
-        flat = _jacobian(g, fun, self._inputs(g, tr.layout))
-        out = fun + flat
-        return Program(g, {"rhs": out}, guard_groups={"rhs": list(tr.guard_groups["fun"])}), len(out)
+        out = fun + _jacobian(g, fun, self._inputs(g, tr.layout))
+        return Program(g, {"jac": out}, guard_groups={"jac": list(tr.guard_groups["fun"])}), len(out), 2
 
-    def _residual_program(self, tr):
+    def _jvp_program(self):
+        """``[fun, (f_y S + f_p)]`` with the ``n x k`` directions ``S`` per-call inputs
+        (``d[2:2 + n k]``, row major; ``d[2 + n k:]`` the ``k`` step inputs, zero): the traced
+        right-hand side replayed with ``y -> y + S eps`` and each parameter ``p_j -> p_j + eps_j``
+        (:func:`mbcomp.codegen.replay.replay`), differentiated with respect to ``eps`` alone --
+        ``k`` forward sweeps, not ``n + k`` (a 50-link chain's full Jacobian program is 100
+        sweeps)."""
+        tr = self._fun_tr
+        n, nq, k = self.n, self.nq, len(self.directions)
+        index = {key: r for r, key in enumerate(tr.layout)}
+
+        def shift(g2):
+            eps = [g2.input("d", 2 + n * k + j, 0.0) for j in range(k)]
+            S = [[g2.input("d", 2 + i * k + j, 0.0) for j in range(k)] for i in range(n)]
+            moved = {}
+            for i in range(n):
+                kind, pos = ("q", i) if i < nq else ("u", i - nq)
+                moved[(kind, pos)] = lambda x, row=S[i]: x + sum(e * c for e, c in zip(eps, row))
+            for j, ref in enumerate(self.directions):
+                if ref.kind == "param":
+                    moved[("p", index[ref.key])] = lambda x, e=eps[j]: x + e
+            return moved, eps
+
+        g2, outs, eps = replay(tr.graph, list(tr.groups["fun"]), shift)
+        D = tangent(g2, outs, eps)
+        out = list(outs) + [v for row in D for v in row]
+        prog = Program(g2, {"jvp": out}, guard_groups={"jvp": list(g2.guards)})
+        return prog, len(out), 2 + n * k + k
+
+    def _residual_program(self):
+        tr = self._eval_tr
         g, shapes = tr.graph, tr.shapes
-        fields, start, sizes = {}, 0, {}
+        fields, start = {}, 0
         for name in FIELDS:
             size = int(np.prod(shapes[name]))
             fields[name] = tr.groups["eval"][start: start + size]
             start += size
-            sizes[name] = size
         res = list(fields["Phi"]) + list(fields["Phid"]) + list(fields["Psi"])
-        flat = _jacobian(g, res, self._inputs(g, tr.layout))
-        out = res + flat
-        prog = Program(g, {"res": out}, guard_groups={"res": list(tr.guard_groups["eval"])})
-        return (prog, len(out)), sizes["Phi"], sizes["Psi"]
+        out = res + _jacobian(g, res, self._inputs(g, tr.layout))
+        return Program(g, {"res": out}, guard_groups={"res": list(tr.guard_groups["eval"])}), len(out), 2
 
     @classmethod
     def build(cls, system, names, backend, cache_dir=None, max_nodes=3_000_000):
@@ -234,7 +278,8 @@ class SensitivityCode:
             external inputs are evaluated in Python at every call, when the trace point is
             singular, or when a component turns one of the parameters into a plain number.
         """
-        refs = [r for r in (parameter_ref(system, n) for n in names) if r.kind == "param"]
+        directions = [parameter_ref(system, n) for n in names]
+        refs = [r for r in directions if r.kind == "param"]
         keep = {(r.path, r.param) for r in refs}
         with no_gc():
             fun_tr = trace(system, max_nodes, program="fun", keep=keep)
@@ -252,7 +297,20 @@ class SensitivityCode:
                                    "(float(), int(), a comparison that picks a branch) -> it cannot be "
                                    "differentiated; write the component's law with the parameter as a value")
             eval_tr = trace(system, max_nodes, program="eval", keep=keep)
-            return cls(fun_tr, eval_tr, refs, backend, cache_dir)
+            return cls(fun_tr, eval_tr, directions, backend, cache_dir)
+
+    @classmethod
+    def cached(cls, system, names, backend):
+        """:meth:`build`, once per process for a structure: systems sharing a topology, row
+        mask, parameter signature (zero pattern, laws) and requested parameters share their
+        programs (a fit's runs at other parameter values trace nothing again)."""
+        keep = {(r.path, r.param) for r in (parameter_ref(system, n) for n in names) if r.kind == "param"}
+        mask = None if system.row_mask is None else np.asarray(system.row_mask, bool).tobytes()
+        key = (param_layout(system, keep)[1], tuple(names), backend, mask)
+        per_topology = _CACHE.setdefault(system.topology, {})
+        if key not in per_topology:
+            per_topology[key] = cls.build(system, names, backend)
+        return per_topology[key]
 
     def bind(self, system):
         """The callables :class:`BoundSensitivity` for ``system``'s parameter values (its
@@ -266,10 +324,11 @@ class SensitivityCode:
 
 
 class _Printed:
-    """One printed program (``rhs`` or ``res``) in Python or C."""
+    """One printed program (``jvp``, ``jac``, ``res`` or ``cols``) in Python or C, taking
+    ``n_d`` per-call inputs ``d``."""
 
-    def __init__(self, prog, key, n_out, backend, cache_dir):
-        self.key, self.n_out, self.backend = key, n_out, backend
+    def __init__(self, prog, key, n_out, n_d, backend, cache_dir):
+        self.key, self.n_out, self.n_d, self.backend = key, n_out, n_d, backend
         self.pre = ParamProgram(prog)
         if backend == "python":
             env = dict(PY_ENV, _Fallback=Fallback, _Retrace=Retrace)
@@ -285,33 +344,38 @@ class _Printed:
 
 
 class _Bound:
-    """One :class:`_Printed` program bound to a parameter vector ``pv``: ``call(t, y, d)``."""
+    """One :class:`_Printed` program bound to a parameter vector ``pv``: :meth:`call`."""
 
     def __init__(self, printed, n, nq, pv):
         self.printed, self.n, self.nq = printed, n, nq
         self.h = printed.pre.run(pv)
+        self.d = np.zeros(printed.n_d + 1)
         if printed.backend == "c":
             self.hbuf = np.array(list(self.h) + [0.0], float)
             self.pbuf = np.array(list(pv) + [0.0], float)
-            self.dbuf, self.ybuf = np.zeros(2), np.zeros(n + 1)
+            self.ybuf = np.zeros(n + 1)
             self.wbuf, self.obuf = np.zeros(max(printed.n_work, 1)), np.zeros(printed.n_out + 1)
             base = self.ybuf.ctypes.data  # the buffers live as long as this object: their addresses once
-            self.args = (base, base + 8 * nq, self.dbuf.ctypes.data, self.hbuf.ctypes.data, self.pbuf.ctypes.data,
+            self.args = (base, base + 8 * nq, self.d.ctypes.data, self.hbuf.ctypes.data, self.pbuf.ctypes.data,
                          self.wbuf.ctypes.data, self.obuf.ctypes.data)
 
-    def call(self, t, y, alpha, beta, finite=True):
+    def call(self, t, y, alpha, beta, extra=None, finite=True):
         """The program's flat output at ``(t, y = [q, u])`` with the per-call inputs ``alpha``,
-        ``beta``; None where a guard fails or (``finite``) a value is not finite."""
+        ``beta`` and then ``extra``; None where a guard fails or (``finite``) a value is not
+        finite."""
         printed, n, nq = self.printed, self.n, self.nq
+        self.d[0], self.d[1] = alpha, beta
+        if extra is not None:
+            self.d[2:2 + len(extra)] = extra
         if printed.backend == "python":
             try:
-                out = printed.fun(list(map(float, y[:nq])), list(map(float, y[nq:n])), float(t), [alpha, beta], self.h)
+                out = printed.fun(list(map(float, y[:nq])), list(map(float, y[nq:n])), float(t),
+                                  self.d[:printed.n_d].tolist(), self.h)
             except (Fallback, ArithmeticError, ValueError):
                 return None
             out = np.array(out, float)
         else:
             self.ybuf[:n] = y
-            self.dbuf[0], self.dbuf[1] = alpha, beta
             a = self.args
             if printed.cfun(a[0], a[1], float(t), a[2], a[3], a[4], a[5], a[6]):
                 return None
@@ -341,22 +405,40 @@ class BoundSensitivity:
     """
 
     def __init__(self, code, pv):
-        self.code = code
-        self.bound = {key: _Bound(printed, code.n, code.nq, pv) for key, printed in code.programs.items()}
+        self.code, self.pv = code, pv
+        self.bound = {}
 
-    def _call(self, key, t, y, alpha, beta):
-        return self.bound[key].call(t, y, alpha, beta)
+    def program(self, key):
+        """The bound program ``key`` (:meth:`SensitivityCode.program`), made at first need."""
+        if key not in self.bound:
+            self.bound[key] = _Bound(self.code.program(key), self.code.n, self.code.nq, self.pv)
+        return self.bound[key]
+
+    def _call(self, key, t, y, alpha, beta, extra=None):
+        return self.program(key).call(t, y, alpha, beta, extra)
 
     def rhs(self, t, y, alpha, beta):
         """``(fun (n,), d fun/dy (n, n), d fun/dp (n, np))`` at ``(t, y = [q, u])`` with the
-        Baumgarte gains ``alpha``, ``beta`` (1/s, zero for none), or None."""
-        out = self._call("rhs", t, y, alpha, beta)
+        Baumgarte gains ``alpha``, ``beta`` (1/s, zero for none), or None (the ``"jac"``
+        program: every direction; for implicit methods)."""
+        out = self._call("jac", t, y, alpha, beta)
         if out is None:
             return None
         n, k = self.code.n, len(self.code.params)
         f = out[:n]
         D = out[n:].reshape(n, n + k)
         return f, D[:, :n], D[:, n:]
+
+    def jvp(self, t, y, S, alpha, beta):
+        """``(fun (n,), f_y S + f_p (n, k))`` at ``(t, y)`` for the ``k`` requested parameters'
+        columns ``S`` (``(n, k)``; a start value's column has no ``f_p``), or None (the ``"jvp"``
+        program: ``k`` forward sweeps)."""
+        n, k = self.code.n, len(self.code.directions)
+        extra = np.concatenate((np.asarray(S, float).ravel(), np.zeros(k)))
+        out = self._call("jvp", t, y, alpha, beta, extra)
+        if out is None:
+            return None
+        return out[:n], out[n:].reshape(n, k)
 
     def residuals(self, t, y):
         """``(r, dr/dq, dr/du, dr/dp)`` of ``r = [Phi (all rows), Phid, Psi]`` at ``(t, y)``, or
@@ -406,7 +488,7 @@ class ColumnCode:
         ins += [g.memo.get(("in", "p", index[p.key])) for p in self.params]
         flat = _jacobian(g, values, ins)
         prog = Program(g, {"cols": flat}, guard_groups={"cols": list(tr.guard_groups["outputs"])})
-        self.printed = _Printed(prog, "cols", len(flat), backend, cache_dir)
+        self.printed = _Printed(prog, "cols", len(flat), 2, backend, cache_dir)
 
     @classmethod
     def build(cls, system, names, backend, cache_dir=None, max_nodes=3_000_000):
@@ -436,51 +518,41 @@ class ColumnCode:
         return call
 
 
-#: the simultaneous right-hand side ``[f; f_y S + f_p]`` in C, for the runtime's DOP853: one
-#: call of the sensitivity program (``fun, d fun/dy, d fun/dp``) per evaluation, then the
-#: product with ``S`` (row major, ``n x k``); ``pcol[j]`` is parameter ``j``'s column of
-#: ``d fun/dp`` (-1 for a start value: no column).
+#: the simultaneous right-hand side ``[f; f_y S + f_p]`` in C, for the runtime's DOP853: the
+#: current ``S`` (row major, ``n x k``) copied into the jvp program's per-call inputs, one call
+#: of it (``fun`` and the ``k`` directional derivatives), its output the derivative.
 SENSITIVITY_GLUE = r"""
 #include <stddef.h>
+#include <string.h>
 #include <math.h>
 typedef int (*mbcomp_prog)(const double *restrict q, const double *restrict u, double t, const double *restrict d,
                            const double *restrict h, const double *restrict p, double *restrict w,
                            double *restrict out);
 typedef struct {
-    mbcomp_prog rhs; const double *h, *p, *d; double *w, *out;   /* the program, its inputs and scratch */
-    int nq, n, k, kp;               /* coordinates, states, parameters, parameters with a column  */
-    const int *pcol;                /* k: the column of each parameter in d fun/dp, or -1         */
-    int failed;                     /* 1: the program's guard, 2: a non-finite value              */
+    mbcomp_prog jvp; const double *h, *p; double *d, *w, *out;   /* the program, its inputs and scratch   */
+    int nq, n, k;                   /* coordinates, states, parameters (directions)                   */
+    int failed;                     /* 1: the program's guard, 2: a non-finite value                  */
 } mbcomp_sens_ctx;
 
 int mbcomp_sens_rhs(void *c, double t, const double *z, double *dz)
 {
     mbcomp_sens_ctx *x = (mbcomp_sens_ctx *)c;
-    const int n = x->n, k = x->k, w = x->n + x->kp;
-    if (x->rhs(z, z + x->nq, t, x->d, x->h, x->p, x->w, x->out)) { x->failed = 1; return 1; }
-    const double *f = x->out, *D = x->out + n;
-    for (int i = 0; i < n; i++) dz[i] = f[i];
-    const double *S = z + n;
-    double *dS = dz + n;
-    for (int i = 0; i < n; i++) {
-        const double *Di = D + (size_t)i * w;
-        for (int j = 0; j < k; j++) {
-            double s = x->pcol[j] >= 0 ? Di[n + x->pcol[j]] : 0.0;
-            for (int l = 0; l < n; l++) s += Di[l] * S[(size_t)l * k + j];
-            dS[(size_t)i * k + j] = s;
-        }
-    }
-    for (int i = 0; i < n * (k + 1); i++)
+    const size_t size = (size_t)x->n * (size_t)(x->k + 1);
+    memcpy(x->d + 2, z + x->n, sizeof(double) * (size_t)x->n * (size_t)x->k);  /* S: the directions */
+    if (x->jvp(z, z + x->nq, t, x->d, x->h, x->p, x->w, x->out)) { x->failed = 1; return 1; }
+    for (size_t i = 0; i < size; i++) {
+        dz[i] = x->out[i];
         if (!isfinite(dz[i])) { x->failed = 2; return 1; }
+    }
     return 0;
 }
 """
 
 
 class _SensCtx(ctypes.Structure):
-    _fields_ = ([("rhs", ctypes.c_void_p), ("h", ctypes.c_void_p), ("p", ctypes.c_void_p), ("d", ctypes.c_void_p),
+    _fields_ = ([("jvp", ctypes.c_void_p), ("h", ctypes.c_void_p), ("p", ctypes.c_void_p), ("d", ctypes.c_void_p),
                  ("w", ctypes.c_void_p), ("out", ctypes.c_void_p), ("nq", ctypes.c_int), ("n", ctypes.c_int),
-                 ("k", ctypes.c_int), ("kp", ctypes.c_int), ("pcol", ctypes.c_void_p), ("failed", ctypes.c_int)])
+                 ("k", ctypes.c_int), ("failed", ctypes.c_int)])
 
 
 class _Stats(ctypes.Structure):
@@ -498,10 +570,7 @@ class SensitivityIntegrator:
     Parameters
     ----------
     bound : BoundSensitivity
-        Bound C programs.
-    columns : list of int
-        For each requested parameter, its column in ``d fun/dp`` (the programs' parameters),
-        or -1 for a start value.
+        Bound C programs (its ``"jvp"`` program is called).
     gains : (float, float)
         The Baumgarte gains (1/s), zero for none.
 
@@ -516,7 +585,7 @@ class SensitivityIntegrator:
     >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
     >>> system = mbcomp.assemble(m)
     >>> if c_compiler():   # s = g t^2 / 2: d s / d g_z = t^2 / 2 = 2 at t = 2 s
-    ...     sens = SensitivityIntegrator(SensitivityCode.build(system, ["world.g[2]"], "c").bind(system), [0], (0, 0))
+    ...     sens = SensitivityIntegrator(SensitivityCode.build(system, ["world.g[2]"], "c").bind(system), (0, 0))
     ...     Y, S = sens.integrate(np.array([0.0, 2.0]), np.zeros(2), np.zeros((2, 1)), 1e-10, 1e-12)
     ...     print(S[-1].ravel().round(9).tolist())
     ... else:
@@ -524,15 +593,15 @@ class SensitivityIntegrator:
     [2.0, 2.0]
     """
 
-    def __init__(self, bound, columns, gains, cache_dir=None):
+    def __init__(self, bound, gains, cache_dir=None):
         from .engine import runtime_library
         from .toolchain import c_compiler, cache_directory
 
         code = bound.code
-        rhs = bound.bound["rhs"]
         if code.backend != "c":
             raise ValueError("SensitivityIntegrator needs the C programs (backend='c')")
-        self.n, self.nq, self.k = code.n, code.nq, len(columns)
+        jvp = bound.program("jvp")
+        self.n, self.nq, self.k = code.n, code.nq, len(code.directions)
         self.rt = runtime_library(c_compiler(), cache_directory(cache_dir))
         self.rt.mbrt_dop853_work_size.argtypes = [ctypes.c_int]
         self.rt.mbrt_dop853_work_size.restype = ctypes.c_size_t
@@ -543,15 +612,15 @@ class SensitivityIntegrator:
         self.glue = cached_library([("sensglue", HEADER + SENSITIVITY_GLUE, list(FLAGS))], "mbcomp_sensglue",
                                    cache_dir, "sensitivity integrator")
         self.fn = ctypes.cast(self.glue.mbcomp_sens_rhs, ctypes.c_void_p).value
-        self.d = np.array([float(gains[0]), float(gains[1]), 0.0])
-        self.pcol = np.array(list(columns) + [0], dtype=np.intc)
-        self.bound = rhs  # its buffers must live as long as the context points at them
+        jvp.d[:] = 0.0
+        jvp.d[0], jvp.d[1] = float(gains[0]), float(gains[1])
+        self.bound = jvp  # its buffers must live as long as the context points at them
         size = self.n * (self.k + 1)
         self.work = np.zeros(int(self.rt.mbrt_dop853_work_size(size)))
         self.stats = _Stats()
-        self.ctx = _SensCtx(ctypes.cast(rhs.printed.cfun, ctypes.c_void_p).value, rhs.hbuf.ctypes.data,
-                            rhs.pbuf.ctypes.data, self.d.ctypes.data, rhs.wbuf.ctypes.data, rhs.obuf.ctypes.data,
-                            self.nq, self.n, self.k, len(code.params), self.pcol.ctypes.data, 0)
+        self.ctx = _SensCtx(ctypes.cast(jvp.printed.cfun, ctypes.c_void_p).value, jvp.hbuf.ctypes.data,
+                            jvp.pbuf.ctypes.data, jvp.d.ctypes.data, jvp.wbuf.ctypes.data, jvp.obuf.ctypes.data,
+                            self.nq, self.n, self.k, 0)
 
     def integrate(self, t_out, y0, S0, rtol, atol, max_steps=0):
         """``(Y, S)`` at the times ``t_out`` (s; the first is the start) from ``y0``, ``S0``;

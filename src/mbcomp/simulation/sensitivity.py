@@ -170,11 +170,7 @@ class Sensitivities(StepHook):
         self.stats_["sensitivity_method"] = "simultaneous, C (DOP853 over [y, S])"
         if n_kept < 2:
             return
-        cols, c = [], 0
-        for ref in self.refs:
-            cols.append(c if ref.kind == "param" else -1)
-            c += ref.kind == "param"
-        integ = SensitivityIntegrator(self.bound(self.system), cols, self.gains)
+        integ = SensitivityIntegrator(self.bound(self.system), self.gains)
         t = np.asarray(run.t_out[:n_kept], float)
         try:
             Y, S = integ.integrate(t, run.ys[0], self.S, self.rtol, self.atol)
@@ -194,7 +190,7 @@ class Sensitivities(StepHook):
         key = id(system)
         if key not in self._codes:
             try:
-                code = SensitivityCode.build(system, self.names, _backend(system))
+                code = SensitivityCode.cached(system, self.names, _backend(system))
             except CodegenError as exc:
                 raise SimulationError(str(exc)) from exc
             self._codes[key] = (system, code.bind(system))
@@ -241,6 +237,24 @@ class Sensitivities(StepHook):
         self.stats_["sensitivity_held_evaluations"] = self.stats_.get("sensitivity_held_evaluations", 0) + 1
         return f, J, Jp
 
+    _NOT_HELD = ("sensitivities: the sensitivity program does not hold at t={t:.12g} s (a law's branch the trace "
+                 "did not take, or a singular matrix) -> write the law's branch smoothly (e.g. with tanh), or run "
+                 "without sensitivities")
+
+    def derivative(self, system, t, y, S):
+        """``(fun, f_y S + f_p)`` of ``system`` at ``(t, y)`` for the columns ``S`` (``(n, k)``)
+        with the run's gains: the ``jvp`` program's ``k`` forward sweeps (a held segment:
+        differences); a ``SimulationError`` where the program does not hold."""
+        held = self._held.get(id(system))
+        if held is not None:
+            f, J, Jp = self._held_rhs(held, t, y)
+            return f, J @ S + Jp
+        out = self.bound(system).jvp(t, y, S, *self.gains)
+        if out is None:
+            raise SimulationError(self._NOT_HELD.format(t=t))
+        self.stats_["sensitivity_evaluations"] += 1
+        return out
+
     def rhs_at(self, system, t, y):
         """``(fun, d fun/dy, d fun/dp)`` of ``system`` at ``(t, y)`` with the run's gains, every
         requested parameter a column; a ``SimulationError`` where the program does not hold."""
@@ -251,10 +265,7 @@ class Sensitivities(StepHook):
         if out is not None:
             out = (out[0], out[1], self._wide(out[2]))
         if out is None:
-            raise SimulationError(f"sensitivities: the sensitivity program does not hold at t={t:.12g} s (a law's "
-                                  "branch the trace did not take, or a singular matrix) -> write the law's branch "
-                                  "smoothly (e.g. with tanh), or run without sensitivities")
-        self.stats_["sensitivity_evaluations"] += 1
+            raise SimulationError(self._NOT_HELD.format(t=t))
         return out
 
     # --- the start ---------------------------------------------------------------------------
@@ -380,9 +391,7 @@ class Sensitivities(StepHook):
         n, k = self.n, self.k
 
         def rhs(t, s):
-            y = np.asarray(dense(t), float)
-            _, J, Jp = self.rhs_at(system, t, y)
-            return (J @ s.reshape(n, k) + Jp).ravel()
+            return self.derivative(system, t, np.asarray(dense(t), float), s.reshape(n, k))[1].ravel()
 
         rtol, atol = self.rtol, self.atol
         if id(system) in self._held:  # a differenced right-hand side: finer control only chases its rounding
@@ -514,7 +523,7 @@ class _Jump:
         self.t, self.cut, self.events = float(cut.t), cut, events
         system = run.form.system
         self.y_minus = y_minus = np.asarray(cut.state, float)
-        self.f_minus = sens.rhs_at(system, cut.t, y_minus)[0]
+        self.f_minus = sens.derivative(system, cut.t, y_minus, sens.S)[0]
         self.before = dict(events.modes)
         self.S = S = sens.S.copy()
         self.g_f = self._g_rate(events, y_minus)
@@ -553,7 +562,7 @@ class _Jump:
                  for v, s in zip(values, (1.0, -1.0))]
             R_dir[:, j] = (R[0] - R[1]) / (2 * eps)
         dtau = -self.g_dir / self.g_f  # (k,)
-        f_plus = sens.rhs_at(new_system, self.t, y_plus)[0]
+        f_plus = sens.derivative(new_system, self.t, y_plus, self.S)[0]
         h = EVENT_STEP * 1e-1 * max(1.0, abs(self.t))
         R_f = (events.reset(self.cut, self.y_minus + h * self.f_minus, before, after)
                - events.reset(self.cut, self.y_minus - h * self.f_minus, before, after)) / (2 * h)
