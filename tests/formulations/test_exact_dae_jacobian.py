@@ -216,8 +216,9 @@ def test_runs_with_exact_matrices_are_as_accurate_as_runs_with_differenced_ones(
         e_exact = np.abs(exact[col] - reference[col]).max()
         e_diff = np.abs(diff[col] - reference[col]).max()
         assert e_exact <= 3.0 * e_diff + 1e-7, (col, e_exact, e_diff)
-        if method == "genalpha":  # fixed steps: the same discrete equations, solved to the same tolerance
-            np.testing.assert_allclose(exact[col], diff[col], rtol=1e-7, atol=1e-7)
+        if method == "genalpha":  # fixed steps: the same discrete equations, solved to Newton's tolerance,
+            # so the two runs differ by far less than the method's own error
+            assert np.abs(exact[col] - diff[col]).max() <= 0.01 * e_diff, (col, e_diff)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
