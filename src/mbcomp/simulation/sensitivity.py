@@ -170,12 +170,13 @@ class Sensitivities(StepHook):
         self.stats_["sensitivity_method"] = "simultaneous, C (DOP853 over [y, S])"
         if n_kept < 2:
             return
-        integ = SensitivityIntegrator(self.bound(self.system), self.gains)
         t = np.asarray(run.t_out[:n_kept], float)
         try:
+            integ = SensitivityIntegrator(self.bound(self.system), self.gains)
             Y, S = integ.integrate(t, run.ys[0], self.S, self.rtol, self.atol)
-        except ArithmeticError as exc:
-            self.stopped = (float(integ.stats.t), f"sensitivities: {exc}")
+        except (ArithmeticError, SimulationError) as exc:  # the run stands: its sensitivities end
+            at = float(integ.stats.t) if isinstance(exc, ArithmeticError) else float(t[0])
+            self.stopped = (at, f"sensitivities: {exc}")
             self.kept = [self.kept[0]] + [np.full((self.n, self.k), np.nan)] * (n_kept - 1)
             self.kept_systems = [self.system] * n_kept
             return
