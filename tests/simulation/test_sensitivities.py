@@ -284,3 +284,27 @@ def test_sensitivities_stay_tangent_to_the_constraint_manifold(kw):
         drift = Dq @ S[:3] + Du @ S[3:] + Dp_full
         worst = max(worst, np.abs(drift[rows]).max())
     assert worst < (1e-12 if kw else 1e-7), worst  # measured 3.6e-15 projected, 2.7e-9 with Baumgarte
+
+
+@pytest.mark.parametrize("kw", [dict(), dict(formulation="dalembert", method="Radau")], ids=["c-after", "staggered"])
+def test_a_law_branch_the_program_did_not_trace_ends_the_sensitivities_not_the_run(kw):
+    """A torque switching on at 0.5 s (np.where on t: the program traced one branch): the run
+    goes on and succeeds, its states those of the same run without sensitivities; the
+    sensitivities are exact up to the switch, NaN after, and the message and
+    ``res.sensitivities.stopped`` say where and why."""
+    from mbcomp.library import Torque
+
+    def build():
+        model = pendulum(phi0=0.6)
+        motor = model.add("motor", Torque(tau=lambda t, phi, w: np.where(t < 0.5, 0.0, 1.0)))
+        model.connect(motor.flange_b, model["j"].axis)
+        return model
+    res = mbcomp.simulate(build(), t_end=1.0, sensitivities=["bob.m", "rod.r[1]"], rtol=1e-10, atol=1e-12, **kw)
+    plain = mbcomp.simulate(build(), t_end=1.0, rtol=1e-10, atol=1e-12, **kw)
+    assert res.status == "success" and np.array_equal(res["j.phi"], plain["j.phi"])
+    t_stop, why = res.sensitivities.stopped
+    assert 0.3 < t_stop <= 0.5 and "branch" in why and "the sensitivities end at" in res.message
+    s = res.sensitivity("j.phi", "rod.r[1]")
+    before, after = res.time <= t_stop, res.time > 0.5
+    assert np.isfinite(s[before]).all() and np.isnan(s[after]).all()
+    assert np.all(res.sensitivity("j.phi", "bob.m")[before] == 0.0)  # a point mass's swing: no mass in it

@@ -625,7 +625,8 @@ class SensitivityIntegrator:
     def integrate(self, t_out, y0, S0, rtol, atol, max_steps=0):
         """``(Y, S)`` at the times ``t_out`` (s; the first is the start) from ``y0``, ``S0``;
         ``(n_out, n)`` and ``(n_out, n, k)``. Raises ``ArithmeticError`` saying what failed
-        (a guard of the program, a non-finite value, the integrator) and where."""
+        (a guard of the program, a non-finite value, the integrator) and where; its
+        ``written`` holds ``(Y, S)`` at the outputs reached before."""
         t_out = np.ascontiguousarray(t_out, float)
         z0 = np.concatenate((np.asarray(y0, float), np.asarray(S0, float).ravel()))
         size = z0.size
@@ -640,6 +641,9 @@ class SensitivityIntegrator:
         if status != 0 or written.value != len(t_out):
             what = {1: "the sensitivity program (a guard: a law's branch the trace did not take)",
                     2: "the sensitivities (a non-finite value)"}.get(self.ctx.failed, "the integrator")
-            raise ArithmeticError(f"{what} failed at t = {self.stats.t:.6g} s: "
+            exc = ArithmeticError(f"{what} failed at t = {self.stats.t:.6g} s: "
                                   f"{self.stats.message.decode(errors='replace')}")
+            done = max(0, min(written.value, len(t_out)))
+            exc.written = (out[:done, :self.n], out[:done, self.n:].reshape(done, self.n, self.k))
+            raise exc
         return out[:, :self.n], out[:, self.n:].reshape(len(t_out), self.n, self.k)

@@ -175,9 +175,10 @@ class Sensitivities(StepHook):
             integ = SensitivityIntegrator(self.bound(self.system), self.gains)
             Y, S = integ.integrate(t, run.ys[0], self.S, self.rtol, self.atol)
         except (ArithmeticError, SimulationError) as exc:  # the run stands: its sensitivities end
-            at = float(integ.stats.t) if isinstance(exc, ArithmeticError) else float(t[0])
-            self.stopped = (at, f"sensitivities: {exc}")
-            self.kept = [self.kept[0]] + [np.full((self.n, self.k), np.nan)] * (n_kept - 1)
+            reached = list(exc.written[1]) if isinstance(exc, ArithmeticError) else []
+            reached = reached or [self.kept[0]]
+            self.stopped = (float(t[len(reached) - 1]), f"sensitivities: {exc}")
+            self.kept = reached + [np.full((self.n, self.k), np.nan)] * (n_kept - len(reached))
             self.kept_systems = [self.system] * n_kept
             return
         self.kept, self.kept_systems = list(S), [self.system] * n_kept
@@ -359,7 +360,20 @@ class Sensitivities(StepHook):
 
     # --- stepping ----------------------------------------------------------------------------
     def __call__(self, run):
-        self.advance(run, run.stepper.t)
+        self.guarded(run, self.advance, run, run.stepper.t)
+
+    def guarded(self, run, step, *args):
+        """``step(*args)``; where the sensitivities cannot go on (their program does not hold:
+        a law's branch the trace did not take) they end there -- NaN from then on, the reason
+        in :attr:`stopped` and the run's message -- and the run goes on."""
+        if self.stopped is not None:
+            return self.sync(run)
+        try:
+            return step(*args)
+        except SimulationError as exc:
+            self.stopped = (float(self.t), str(exc))
+            self.S = np.full((self.n, self.k), np.nan)
+            return self.sync(run)
 
     def advance(self, run, t1):
         """Integrate ``S`` from where it is to ``t1`` (s) along the run's last step's dense
@@ -424,23 +438,26 @@ class Sensitivities(StepHook):
     def before_act(self, run, cut, events):
         """At an event (``cut``, the outputs up to it kept, the events not acted yet): ``S``
         integrated to the event and the pieces of the jump that need the state before it."""
-        self.advance(run, cut.t)
+        self.guarded(run, self.advance, run, cut.t)
         if self.stopped is not None or cut.action is None:
             return None
-        return _Jump(self, run, cut, events)
+        return self.guarded(run, _Jump, self, run, cut, events)
 
     def after_act(self, run, jump, outcome, events):
         """Apply the jump (:meth:`before_act`) once the events acted: ``outcome`` is the next
         segment (or the end)."""
-        if jump is None or outcome.ends:
+        if jump is None or outcome.ends or self.stopped is not None:
             return self.sync(run)
-        new_system = outcome.form.system
-        if events.holds_rows() and id(new_system) not in self._held:
-            self.hold(new_system, events)
-        self.S = jump.apply(self, new_system, np.asarray(outcome.state, float))
-        self.stats_["sensitivity_jumps"] += 1
-        self.t = float(outcome.t)
-        self.sync(run)
+
+        def jumped():
+            new_system = outcome.form.system
+            if events.holds_rows() and id(new_system) not in self._held:
+                self.hold(new_system, events)
+            self.S = jump.apply(self, new_system, np.asarray(outcome.state, float))
+            self.stats_["sensitivity_jumps"] += 1
+            self.t = float(outcome.t)
+            self.sync(run)
+        self.guarded(run, jumped)
 
     def stats(self):
         return dict(self.stats_)
