@@ -10,7 +10,7 @@ with exact derivatives from the generated programs (:mod:`mbcomp.codegen.sensiti
 
 **Two paths.** A smooth run (no events, not projected, an explicit method, a C program) is
 integrated as usual, then ``[y, S]`` together from the start in one C call
-(:class:`~mbcomp.codegen.sensitivity.SensitivityIntegrator`: the runtime's DOP853, error
+(:class:`~mbcomp.codegen.sensitivity_engine.SensitivityIntegrator`: the runtime's DOP853, error
 control over both at the run's tolerances; the run's own states are kept). Every other run
 is *staggered*: after every accepted step the sensitivity equations are integrated over
 that step, along the step's dense output ``y(t)``, by scipy's ``DOP853`` (explicit runs) or
@@ -70,6 +70,7 @@ import numpy as np
 
 from ..codegen.graph import CodegenError
 from ..codegen.sensitivity import SensitivityCode, parameter_ref
+from ..codegen.sensitivity_engine import SensitivityIntegrator
 from ..assembly.kkt import project_state, solve_kkt
 from ..errors import SimulationError
 from .sensitivity_table import SensitivityTable
@@ -152,7 +153,7 @@ class Sensitivities(StepHook):
     @staticmethod
     def after_the_run(form, events, stepper):
         """Whether a run's sensitivities are integrated after it, simultaneously with a copy of
-        its states in one C call (:class:`~mbcomp.codegen.sensitivity.SensitivityIntegrator`):
+        its states in one C call (:class:`~mbcomp.codegen.sensitivity_engine.SensitivityIntegrator`):
         a smooth run (no events), not projected, by an explicit method, on a C program. Else
         they are stepped with the run (staggered, a step hook)."""
         return (events is None and not form.projects and not stepper.implicit and form.system.backend == "c"
@@ -164,8 +165,6 @@ class Sensitivities(StepHook):
         are, and the largest difference of the copy from them is in ``stats`` (both are within
         the tolerances). A failure there (a law's branch the program did not trace) ends the
         sensitivities at that time (:attr:`stopped`)."""
-        from ..codegen.sensitivity import SensitivityIntegrator
-
         n_kept = len(run.ys)
         self.stats_["sensitivity_method"] = "simultaneous, C (DOP853 over [y, S])"
         if n_kept < 2:
