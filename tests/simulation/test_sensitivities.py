@@ -308,3 +308,18 @@ def test_a_law_branch_the_program_did_not_trace_ends_the_sensitivities_not_the_r
     before, after = res.time <= t_stop, res.time > 0.5
     assert np.isfinite(s[before]).all() and np.isnan(s[after]).all()
     assert np.all(res.sensitivity("j.phi", "bob.m")[before] == 0.0)  # a point mass's swing: no mass in it
+
+
+def test_a_result_with_sensitivities_pickles():
+    """Studies and users pickle results: the sensitivities' arrays go along; a column read
+    before pickling stays readable, one not read says how to get it."""
+    import pickle
+
+    res = mbcomp.simulate(SLIDER(), t_end=0.2, sensitivities=["rod.m"])
+    reaction = res.sensitivity("pin.f.x", "rod.m")
+    back = pickle.loads(pickle.dumps(res))
+    np.testing.assert_array_equal(back.sensitivity("crank_angle", "rod.m"), res.sensitivity("crank_angle", "rod.m"))
+    np.testing.assert_array_equal(back.sensitivity("pin.f.x", "rod.m"), reaction)
+    fresh = pickle.loads(pickle.dumps(mbcomp.simulate(SLIDER(), t_end=0.2, sensitivities=["rod.m"])))
+    with pytest.raises(KeyError, match="pickled before"):
+        fresh.sensitivity("pin.f.x", "rod.m")

@@ -178,11 +178,7 @@ class Result:
         """
         if self.sensitivities is None:
             raise KeyError("this run has no sensitivities -> simulate(..., sensitivities=['component.param', ...])")
-        states, aliases = [], {}
-        if self.system is not None:
-            states = list(self.system.q_names) + list(self.system.u_names)
-            aliases = self.system.topology.flat.aliases
-        return self.sensitivities.of(aliases.get(column, column), param, states)
+        return self.sensitivities.of(column, param)
 
     def __getitem__(self, name):
         if name == "time":

@@ -469,7 +469,9 @@ class Sensitivities(StepHook):
             self.kept_systems.append(self.kept_systems[-1])
         return SensitivityTable(self.refs, np.asarray(time, float), np.asarray(Y, float),
                                 np.array(self.kept[:n_kept]).reshape(n_kept, self.n, self.k),
-                                self.kept_systems[:n_kept], self.gains, self.stopped, set(self._held))
+                                self.kept_systems[:n_kept], self.gains, self.stopped, set(self._held),
+                                list(self.system.q_names) + list(self.system.u_names),
+                                self.system.topology.flat.aliases)
 
 
 def _index1(system, t, y, gains):

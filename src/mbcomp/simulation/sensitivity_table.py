@@ -55,7 +55,7 @@ class SensitivityTable:
     [[1.0, 0.5], [1.0, 1.0]]
     """
 
-    def __init__(self, refs, time, Y, states, systems, gains, stopped, held=()):
+    def __init__(self, refs, time, Y, states, systems, gains, stopped, held=(), state_names=(), aliases=None):
         self.params = [r.name for r in refs]
         self._refs = list(refs)
         self.time, self.states, self.stopped = time, states, stopped
@@ -63,6 +63,13 @@ class SensitivityTable:
         self._programmed = [j for j, r in enumerate(refs) if r.kind == "param"]
         self._held = set(held)  # segments whose held rows no column program has: NaN there
         self._columns = None
+        self.state_names = list(state_names)  # q_names + u_names: the rows of states
+        self._aliases = dict(aliases or {})
+
+    def __getstate__(self):  # the segments' systems (compiled programs) do not pickle; the arrays do
+        state = dict(self.__dict__)
+        state["_systems"] = None
+        return state
 
     def index(self, param):
         """The position of ``param`` in :attr:`params` (a ``KeyError`` naming the ones there)."""
@@ -71,9 +78,10 @@ class SensitivityTable:
                            f"sensitivities=[{param!r}, ...]); asked: {', '.join(self.params)}")
         return self.params.index(param)
 
-    def of(self, column, param, state_names):
+    def of(self, column, param):
         """``d column / d param`` at the output times (see :meth:`Result.sensitivity`)."""
         j = self.index(param)
+        column, state_names = self._aliases.get(column, column), self.state_names
         if column in state_names:
             return self.states[:, state_names.index(column), j].copy()
         cols = self._column_table()
@@ -87,6 +95,10 @@ class SensitivityTable:
         """``{column: (n_out, n_params)}`` of every output-program column, made at first need."""
         if self._columns is not None:
             return self._columns
+        if self._systems is None:
+            raise KeyError("this result was pickled before the sensitivities of its other columns were read: only "
+                           "the coordinates' and speeds' are kept -> read res.sensitivity(column, param) before "
+                           "pickling, or simulate again")
         codes, out = {}, {}
         n_out = len(self.time)
         for k in range(n_out):
