@@ -40,7 +40,7 @@ import numpy as np
 
 from .graph import Fallback, Retrace, Sym, no_gc
 from .printers import PY_ENV, ParamProgram, Program
-from .tangent import partials
+from .tangent import cone, partials
 from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import param_layout, param_vector, trace
 
@@ -100,17 +100,8 @@ def reverse(graph, outputs, weights, inputs):
             raise ValueError(f"reverse: inputs[{k}] is not an input node of this graph (make it with Graph.input)")
         seeds.add(x.i)
     # the nodes on a path from an input to an output, in index (topological) order
-    seen, stack = set(), [o.i for o in outputs if type(o) is Sym]
-    while stack:
-        i = stack.pop()
-        if i in seen:
-            continue
-        seen.add(i)
-        key = keys[i]
-        if key[0] not in ("c", "in"):
-            stack.extend(key[1:])
     depends = set()
-    for i in sorted(seen):
+    for i in cone(keys, [o.i for o in outputs if type(o) is Sym]):
         key = keys[i]
         if i in seeds or (key[0] not in ("c", "in") and any(j in depends for j in key[1:])):
             depends.add(i)
@@ -398,12 +389,6 @@ class _AdjCtx(ctypes.Structure):
                 + [("failed", ctypes.c_int)])
 
 
-class _Stats(ctypes.Structure):
-    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
-                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
-                ("message", ctypes.c_char * 200)]
-
-
 def chebyshev_nodes(k):
     """``k`` Chebyshev points of the second kind on ``[0, 1]`` (ends included) and their
     barycentric weights: the polynomial through values there is well conditioned at any degree.
@@ -462,7 +447,7 @@ class AdjointIntegrator:
     """
 
     def __init__(self, vjp, integrand, gains, cache_dir=None):
-        from .engine import runtime_library
+        from .engine import RuntimeStats, runtime_library
         from .toolchain import c_compiler, cache_directory
 
         if vjp.code.backend != "c" or (integrand is not None and integrand.code.backend != "c"):
@@ -471,12 +456,6 @@ class AdjointIntegrator:
         self.n, self.nq, self.np = vjp.code.n, vjp.nq, len(vjp.code.wrt)
         d = cache_directory(cache_dir)
         self.rt = runtime_library(c_compiler(), d)
-        self.rt.mbrt_dop853_work_size.argtypes = [ctypes.c_int]
-        self.rt.mbrt_dop853_work_size.restype = ctypes.c_size_t
-        self.rt.mbrt_dop853.restype = ctypes.c_int
-        vp, i, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
-        self.rt.mbrt_dop853.argtypes = [vp, vp, vp, i, dbl, vp, dbl, dbl, vp, dbl, dbl, ctypes.c_long, vp, i, vp, vp,
-                                        vp, vp]
         self.glue = cached_library([("adjglue", HEADER + ADJOINT_GLUE, list(FLAGS))], "mbcomp_adjglue", cache_dir,
                                    "adjoint integrator")
         self.rhs = ctypes.cast(self.glue.mbcomp_adj_rhs, ctypes.c_void_p).value
@@ -485,7 +464,7 @@ class AdjointIntegrator:
         self.d[:2] = gains
         self.vout, self.oout = np.zeros(m + 1), np.zeros(m + 2)
         self.work = np.zeros(int(self.rt.mbrt_dop853_work_size(m + 1)))
-        self.stats = _Stats()
+        self.stats = RuntimeStats()
         self.ctx = _AdjCtx(ctypes.cast(vjp.code.dll.mbcomp_vjp, ctypes.c_void_p).value, vjp.hbuf.ctypes.data,
                            vjp.pbuf.ctypes.data, vjp.wbuf.ctypes.data,
                            None if integrand is None else ctypes.cast(integrand.code.dll.mbcomp_vjp,

@@ -219,6 +219,10 @@ def runtime_library(cc, cache_dir):
     dll.mbrt_dae_size.restype = i
     dll.mbrt_dae_work_size.argtypes = [vp, i]
     dll.mbrt_dae_work_size.restype = ctypes.c_size_t
+    dll.mbrt_dop853_work_size.argtypes = [i]  # the integrator alone, over a C glue's right-hand side
+    dll.mbrt_dop853_work_size.restype = ctypes.c_size_t
+    dll.mbrt_dop853.argtypes = [vp, vp, vp, i, d, vp, d, d, vp, d, d, ctypes.c_long, vp, i, vp, vp, vp, vp]
+    dll.mbrt_dop853.restype = i
     _LIBRARIES[lib] = dll
     return dll
 
@@ -511,7 +515,10 @@ class _Ctx(ctypes.Structure):
                 ("proj_iter", ctypes.c_int), ("declined", ctypes.c_int), ("nproj", ctypes.c_long)]
 
 
-class _Stats(ctypes.Structure):
+class RuntimeStats(ctypes.Structure):
+    """The runtime integrators' ``mbrt_stats`` (``mbrt.h``): evaluations, steps, accepted and
+    rejected steps, the status, the time reached (s) and a one-sentence message."""
+
     _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
                 ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
                 ("message", ctypes.c_char * 200)]
@@ -548,7 +555,7 @@ class Integrator:
                         bound.wbuf.ctypes.data, self.y_last.ctypes.data, 0.0, 0.0,
                         mech.ptr if mech is not None else None,
                         mech.work.ctypes.data if mech is not None else None, tol, accept, PROJECT_MAX_ITER, 0, 0)
-        self.stats = _Stats()
+        self.stats = RuntimeStats()
 
     @property
     def projects(self):

@@ -26,6 +26,7 @@ Examples
 from __future__ import annotations
 
 from .graph import Graph, Sym
+from .tangent import cone
 
 __all__ = ["replay"]
 
@@ -66,19 +67,12 @@ def replay(g, outputs, shift):
     Differentiated with respect to ``eps`` alone, the outputs give a Jacobian-vector product:
     one forward sweep for one direction instead of one per input. Returns ``(g2, outputs2, eps)``."""
     keys, nodes = g.keys, g.nodes
-    seen, stack = set(), [o.i for o in outputs if type(o) is Sym] + [j for gd in g.guards for j in gd[1:3]]
-    while stack:
-        i = stack.pop()
-        if i in seen:
-            continue
-        seen.add(i)
-        if keys[i][0] not in ("c", "in"):
-            stack.extend(keys[i][1:])
+    seen = cone(keys, [o.i for o in outputs if type(o) is Sym] + [j for gd in g.guards for j in gd[1:3]])
     g2 = Graph(g.max_nodes)
     new = {}
     with g2:
         moved, eps = shift(g2)
-        for i in sorted(seen):
+        for i in seen:
             key = keys[i]
             if key[0] == "c":
                 new[i] = float(key[1])

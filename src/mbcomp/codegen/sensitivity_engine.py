@@ -9,7 +9,7 @@ import ctypes
 
 import numpy as np
 
-from .engine import runtime_library
+from .engine import RuntimeStats, runtime_library
 from .toolchain import FLAGS, HEADER, c_compiler, cache_directory, cached_library
 
 __all__ = ["SensitivityIntegrator", "SENSITIVITY_GLUE"]
@@ -52,12 +52,6 @@ class _SensCtx(ctypes.Structure):
                  ("k", ctypes.c_int), ("failed", ctypes.c_int)])
 
 
-class _Stats(ctypes.Structure):
-    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
-                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
-                ("message", ctypes.c_char * 200)]
-
-
 class SensitivityIntegrator:
     """The states and their sensitivities ``[y, S]`` integrated together in C: the runtime's
     DOP853 (:mod:`mbcomp.codegen.runtime`) over :data:`SENSITIVITY_GLUE`, which calls a bound C
@@ -98,12 +92,6 @@ class SensitivityIntegrator:
         jvp = bound.program("jvp")
         self.n, self.nq, self.k = code.n, code.nq, len(code.directions)
         self.rt = runtime_library(c_compiler(), cache_directory(cache_dir))
-        self.rt.mbrt_dop853_work_size.argtypes = [ctypes.c_int]
-        self.rt.mbrt_dop853_work_size.restype = ctypes.c_size_t
-        self.rt.mbrt_dop853.restype = ctypes.c_int
-        vp, i, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
-        self.rt.mbrt_dop853.argtypes = [vp, vp, vp, i, dbl, vp, dbl, dbl, vp, dbl, dbl, ctypes.c_long, vp, i, vp, vp,
-                                        vp, vp]
         self.glue = cached_library([("sensglue", HEADER + SENSITIVITY_GLUE, list(FLAGS))], "mbcomp_sensglue",
                                    cache_dir, "sensitivity integrator")
         self.fn = ctypes.cast(self.glue.mbcomp_sens_rhs, ctypes.c_void_p).value
@@ -112,7 +100,7 @@ class SensitivityIntegrator:
         self.bound = jvp  # its buffers must live as long as the context points at them
         size = self.n * (self.k + 1)
         self.work = np.zeros(int(self.rt.mbrt_dop853_work_size(size)))
-        self.stats = _Stats()
+        self.stats = RuntimeStats()
         self.ctx = _SensCtx(ctypes.cast(jvp.printed.cfun, ctypes.c_void_p).value, jvp.hbuf.ctypes.data,
                             jvp.pbuf.ctypes.data, jvp.d.ctypes.data, jvp.wbuf.ctypes.data, jvp.obuf.ctypes.data,
                             self.nq, self.n, self.k, 0)

@@ -54,7 +54,7 @@ import numpy as np
 
 from .graph import Sym
 
-__all__ = ["OPERATIONS", "partials", "tangent"]
+__all__ = ["OPERATIONS", "cone", "partials", "tangent"]
 
 #: every operation a graph node may have (``"c"``: constant, ``"in"``: input)
 OPERATIONS = ("c", "in", "+", "-", "*", "/", "neg", "pow", "abs", "cos", "sin", "tan", "asin", "acos", "atan",
@@ -149,9 +149,21 @@ _UNARY = {
 }
 
 
-def _cone(keys, outputs):
-    """Indices of the nodes the ``outputs`` depend on, in topological (index) order."""
-    seen, stack = set(), [o.i for o in outputs if type(o) is Sym]
+def cone(keys, roots):
+    """Indices of the nodes the nodes ``roots`` (indices) depend on, themselves included, in
+    topological (index) order; ``keys`` is the graph's ``keys``.
+
+    Examples
+    --------
+    >>> from mbcomp.codegen.graph import Graph
+    >>> from mbcomp.codegen.tangent import cone
+    >>> with Graph() as g:
+    ...     x, y = g.input("q", 0, 1.0), g.input("q", 1, 2.0)
+    ...     f, other = x * x, y + 1.0
+    >>> cone(g.keys, [f.i]) == sorted({x.i, f.i})
+    True
+    """
+    seen, stack = set(), list(roots)
     while stack:
         i = stack.pop()
         if i in seen:
@@ -208,7 +220,7 @@ def tangent(graph, outputs, inputs):
         seed[x.i] = k
     outputs = list(outputs)
     with graph:
-        deriv = _forward(keys, nodes, _cone(keys, outputs), seed, len(inputs),
+        deriv = _forward(keys, nodes, cone(keys, [o.i for o in outputs if type(o) is Sym]), seed, len(inputs),
                          {o.i for o in outputs if type(o) is Sym})
         J = []
         for o in outputs:
