@@ -323,3 +323,30 @@ def test_a_result_with_sensitivities_pickles():
     fresh = pickle.loads(pickle.dumps(mbcomp.simulate(SLIDER(), t_end=0.2, sensitivities=["rod.m"])))
     with pytest.raises(KeyError, match="pickled before"):
         fresh.sensitivity("pin.f.x", "rod.m")
+
+
+@pytest.mark.parametrize("method", ["dop853", "radau5"])
+def test_a_rotor_slipping_to_a_stick_matches_the_closed_form(method):
+    """A rotor (inertia J) spinning down under Coulomb friction tau_c from w0, starting in its
+    slip mode (a mode force) and sticking at t* = w0 J / tau_c (a held row): phi = w0 t -
+    tau_c t^2 / (2 J) before, w0^2 J / (2 tau_c) after -- so d phi/dJ = tau_c t^2 / (2 J^2) then
+    w0^2 / (2 tau_c), and d phi/d w0 = t then w0 J / tau_c."""
+    from mbcomp.library import Inertia
+    from mbcomp.library.friction import CoulombBearing
+
+    J, w0, tau_c = 0.5, 10.0, 1.5
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, -9.81)))
+    j = m.add("j", Revolute(n=(0, 0, 1), phi0=0.0, w0=w0, friction=CoulombBearing(2.0, tau_c)))
+    rotor = m.add("rotor", Inertia(J=J))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.axis, rotor.flange)
+    res = mbcomp.simulate(m, t_end=5.0, method=method, rtol=1e-10, atol=1e-12, sensitivities=["rotor.J", "j.w0"])
+    assert [e.name for e in res.events] == ["stick"] and res.sensitivities.stopped is None
+    t, t_stick = res.time, w0 * J / tau_c
+    slip, stuck = t < t_stick - 1e-3, t > t_stick + 1e-3
+    dJ, dw0 = res.sensitivity("j.phi", "rotor.J"), res.sensitivity("j.phi", "j.w0")
+    np.testing.assert_allclose(dJ[slip], tau_c * t[slip] ** 2 / (2 * J ** 2), rtol=1e-8, atol=1e-9)
+    np.testing.assert_allclose(dw0[slip], t[slip], rtol=1e-8, atol=1e-9)
+    np.testing.assert_allclose(dJ[stuck], w0 ** 2 / (2 * tau_c), rtol=1e-8)
+    np.testing.assert_allclose(dw0[stuck], w0 * J / tau_c, rtol=1e-8)

@@ -139,12 +139,10 @@ class Sensitivities(StepHook):
         self._programmed = [j for j, r in enumerate(self.refs) if r.kind == "param"]
         self.t = float(t0)
         self.stopped = None  # why the sensitivities end early, with the time
-        if events is not None and events.holds_rows():
-            self.stopped = (float(t0), "the run starts in a mode that holds rows (an engaged stop, a stuck "
-                            "friction, a sliding contact): the sensitivities of such a start are not computed")
-            self.S = np.full((self.n, self.k), np.nan)
-        else:
-            self.S = self.initial(system, t0, np.asarray(y0, float))
+        self.S = self.initial(system, t0, np.asarray(y0, float))
+        if events is not None and events.holds_rows():  # a start in a mode that holds rows or applies forces
+            self.hold(system, events)
+            self.S = _projected_by_differences(self._held[id(system)], t0, np.asarray(y0, float), self.S)
         self.kept = [self.S.copy()]
         self.kept_systems = [system]
         self.stats_ = dict(sensitivity_steps=0, sensitivity_evaluations=0, sensitivity_jumps=0)

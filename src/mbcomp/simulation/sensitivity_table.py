@@ -37,7 +37,8 @@ class SensitivityTable:
     states : ndarray (n_out, nq + nu, n_params)
         ``d [q, u] / dp`` at the output times (NaN after :attr:`stopped`).
     stopped : tuple or None
-        ``(t, why)`` when the sensitivities end before the run (a start in a mode holding rows).
+        ``(t, why)`` when the sensitivities end before the run (a program that stops holding:
+        a law's branch the trace did not take).
 
     The columns other than coordinates and speeds (reactions, energies, ...) have no
     sensitivity (NaN) in a segment whose modes hold rows (an engaged stop, a stuck friction):
