@@ -188,7 +188,7 @@ class DAEJacobianCode:
             gains = (g.input("d", 3 * len(tr.drives), 10.0), g.input("d", 3 * len(tr.drives) + 1, 10.0))
             slots = iter(range(self.base, self.base + 2 * nu + 2 * m))
 
-            def new(k, v):  # the next per-call slot after the model's own (k: for the reader)
+            def new(v):  # an input in the next per-call slot after the model's own (v: trace-time value)
                 return g.input("d", next(slots), v)
 
             C = np.array([F["C"][r] for r in rows], dtype=object).reshape(mh, nu)
@@ -200,8 +200,8 @@ class DAEJacobianCode:
                         for x in row]
                 self.n = nq
             elif form == "mechanical":
-                ud = [new(k, 0.2 + 0.01 * k) for k in range(nu)]
-                lam = [new(k, 0.3 - 0.01 * k) for k in range(mh)]
+                ud = [new(0.2 + 0.01 * k) for k in range(nu)]
+                lam = [new(0.3 - 0.01 * k) for k in range(mh)]
                 r = [_dot(F["M"][i], ud) + _dot(C[:, i], lam) - F["f"][i] for i in range(nu)]
                 H = self._rates(g, qrate, us, tr.qrate_identity)
                 Rq = tangent(g, r, [x for x in qs if x is not None])
@@ -211,9 +211,9 @@ class DAEJacobianCode:
                 flat = [x for row in K for x in row] + [-x for row in Fu for x in row]
                 self.n = nq + nu
             else:
-                a = [new(k, 0.2 + 0.01 * k) for k in range(nu)]
-                lam = [new(k, 0.3 - 0.01 * k) for k in range(m)]
-                eta = [new(k, 0.01 * (k + 1)) for k in range(mh)] if form == "ggl" else []
+                a = [new(0.2 + 0.01 * k) for k in range(nu)]
+                lam = [new(0.3 - 0.01 * k) for k in range(m)]
+                eta = [new(0.01 * (k + 1)) for k in range(mh)] if form == "ggl" else []
                 dyn = [F["f"][i] - _dot(F["M"][i], a) - _dot(A[:, i], lam) for i in range(nu)]
                 Phi = [F["Phi"][r] for r in rows]
                 Phid = [F["Phid"][r] for r in rows]
