@@ -443,15 +443,16 @@ class Sensitivities(StepHook):
     def after_act(self, run, jump, outcome, events):
         """Apply the jump (:meth:`before_act`) once the events acted: ``outcome`` is the next
         segment (or the end)."""
-        if jump is None or outcome.ends or self.stopped is not None:
+        if outcome.ends or self.stopped is not None:
             return self.sync(run)
 
         def jumped():
-            new_system = outcome.form.system
+            new_system = outcome.form.system  # every new segment: its rows and forces decide how it is differentiated
             if events.holds_rows() and id(new_system) not in self._held:
                 self.hold(new_system, events)
-            self.S = jump.apply(self, new_system, np.asarray(outcome.state, float))
-            self.stats_["sensitivity_jumps"] += 1
+            if jump is not None:  # None: no action (a slide turning its direction), the state goes on
+                self.S = jump.apply(self, new_system, np.asarray(outcome.state, float))
+                self.stats_["sensitivity_jumps"] += 1
             self.t = float(outcome.t)
             self.sync(run)
         self.guarded(run, jumped)
