@@ -33,27 +33,36 @@ def double_pendulum(params=None):
     return m
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_double_pendulum_parameter_derivatives_are_sympy_exact(backend):
+@pytest.fixture(scope="module")
+def sympy_parameter_jacobian():
+    """``d fun/dp`` of the double pendulum at one state, sympy-exact: the equations with the
+    parameters as symbols, the state put in first (the solve is then in the parameters only)."""
     m1, m2, L2, g = sp.symbols("m1 m2 L2 g", positive=True)
     eqs = mbcomp.equations(double_pendulum(), params={"b1.m": m1, "b2.m": m2, "r2.r": [0, -L2, 0],
                                                       "world.g": [0, -g, 0]}, simplify=False)
-    q, u = sp.Matrix(eqs.q), sp.Matrix(eqs.u)
-    rhs = sp.Matrix.vstack(u, eqs.M.LUsolve(eqs.f))
-    Jp = rhs.jacobian(sp.Matrix([m1, m2, L2, g]))
-    Jy = rhs.jacobian(sp.Matrix.vstack(q, u))
     y = np.array([0.7, -0.4, 1.3, -0.8])
-    at = dict(zip(list(q) + list(u), [sp.Rational(repr(float(v))) for v in y]))
-    at.update({m1: sp.Rational(3, 2), m2: sp.Rational(1, 2), L2: sp.Rational(7, 10), g: sp.Rational(981, 100)})
-    ref_p = np.array(Jp.subs(at).evalf(30), dtype=float)
-    ref_y = np.array(Jy.subs(at).evalf(30), dtype=float)
+    at = dict(zip(list(eqs.q) + list(eqs.u), [sp.Rational(repr(float(v))) for v in y]))
+    udot = eqs.M.subs(at).LUsolve(eqs.f.subs(at))
+    rhs = sp.Matrix.vstack(sp.Matrix([at[u] for u in eqs.u]), udot)
+    Jp = rhs.jacobian(sp.Matrix([m1, m2, L2, g]))
+    values = {m1: sp.Rational(3, 2), m2: sp.Rational(1, 2), L2: sp.Rational(7, 10), g: sp.Rational(981, 100)}
+    return y, np.array(Jp.subs(values).evalf(30), dtype=float)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_double_pendulum_parameter_derivatives_are_sympy_exact(backend, sympy_parameter_jacobian):
+    y, ref = sympy_parameter_jacobian
     system = mbcomp.assemble(double_pendulum())
     # r2.r[1] = -L2: its column is minus the L2 one; g_y = -g likewise
     code = SensitivityCode.build(system, ["b1.m", "b2.m", "r2.r[1]", "world.g[1]"], backend)
     f, J, P = code.bind(system).rhs(0.0, y, 0.0, 0.0)
-    want = ref_p * np.array([1.0, 1.0, -1.0, -1.0])
+    want = ref * np.array([1.0, 1.0, -1.0, -1.0])
     np.testing.assert_allclose(P, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
-    np.testing.assert_allclose(J, ref_y, rtol=1e-12, atol=1e-12 * np.abs(ref_y).max())
+    # the jvp program (what runs use): f_y S + f_p along random columns, against the full matrices
+    S = np.random.default_rng(0).standard_normal((4, 4))
+    f2, D = code.bind(system).jvp(0.0, y, S, 0.0, 0.0)
+    np.testing.assert_allclose(f2, f, rtol=1e-14, atol=1e-14)
+    np.testing.assert_allclose(D, J @ S + P, rtol=1e-12, atol=1e-12 * np.abs(D).max())
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
