@@ -51,7 +51,7 @@ central differences of tight runs), and central differences of whole runs at the
 sensitivities reach (the loosest run tolerance that gets there; two runs per parameter).
 Parameters: every link's mass and every joint's start angle.
 
-Measured (2026-11-28, shared 2-core VM; see the commit messages for the runs): the planar
+Measured (2026-11-28, default run, shared 2-core VM under load): the planar
 chain's exact Jacobian costs 0.9x Pinocchio at N = 5 and 10 (the C program alone 0.65x,
 0.8x), 2.8x at N = 40 and 7-26x at N = 100 (1.5-7.5 ms between runs: its 1.76 million
 straight-line operations are 19 MB of machine code, fetched from memory at every call, so
