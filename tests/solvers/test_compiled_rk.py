@@ -58,7 +58,7 @@ def test_the_c_projection_is_the_python_projection_after_every_step(path):
     the same steps to the same states (1e-12), every accepted step projected."""
     import ctypes
 
-    from mbcomp.codegen.engine import _Stats
+    from mbcomp.codegen.engine import RuntimeStats
 
     s, form, y0 = _projection_form(path)
     eng = form.compiled_integrator()
@@ -88,7 +88,7 @@ def test_the_c_projection_is_the_python_projection_after_every_step(path):
     dll.mbrt_dop853.argtypes = [rhs_t, step_t, vp, i, d, vp, d, d, vp, d, d, ctypes.c_long, vp, i, vp, vp, vp, vp]
     dll.mbrt_dop853.restype = i
     f, g = rhs_t(rhs), step_t(step)
-    Y, nw, st = np.zeros((len(t_out), n)), ctypes.c_int(), _Stats()
+    Y, nw, st = np.zeros((len(t_out), n)), ctypes.c_int(), RuntimeStats()
     work, atol = np.zeros(int(dll.mbcomp_work_size(8, n))), np.full(n, 1e-8)
     rc = dll.mbrt_dop853(f, g, None, n, 0.0, y0.ctypes.data, 0.5, 1e-6, atol.ctypes.data, 0.0, 0.0, 0,
                          t_out.ctypes.data, len(t_out), Y.ctypes.data, ctypes.byref(nw), work.ctypes.data,
