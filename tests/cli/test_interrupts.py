@@ -124,9 +124,11 @@ def _completed(log):
 
 
 def _mid_run(entries):
-    """At least two runs finished, and every process still evaluating (one among the last 40
-    evaluations logged: a worker whose share is done writes no more) lies mid-run."""
-    if len(_finished(entries)) < 2:
+    """At least two runs finished, at least two not started (a Dask worker finishes the run it
+    is in after the signal: with every run started, all may finish -- CI saw 8 of 8), and every
+    process still evaluating (one among the last 40 evaluations logged: a worker whose share is
+    done writes no more) lies mid-run."""
+    if len(_finished(entries)) < 2 or len({k for _, k, _ in entries}) > len(KS) - 2:
         return False
     latest = {}
     for pid, _, t in entries:
