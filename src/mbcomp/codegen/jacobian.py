@@ -37,7 +37,17 @@ from .tangent import tangent
 from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import param_layout, param_vector, trace
 
-__all__ = ["JacobianCode", "BoundJacobian"]
+__all__ = ["JacobianCode", "BoundJacobian", "MAX_SPEEDS"]
+
+
+#: above this many speeds no exact Jacobian program is made (the callers difference): forward
+#: mode over ``nq + nu`` inputs costs O(N^2) straight-line operations on a chain, so the program
+#: and its compile grow fast while forward differences of the O(N) compiled right-hand side do
+#: not (``bench/derivatives.py``, planar chain, per call against Pinocchio's
+#: computeABADerivatives: N = 10 0.8x, exact 4x faster than differences; N = 40 2.7x, 5x faster
+#: than differences but 21 s to build cold; N = 100 26x, 4x slower than differences, 144 s to
+#: build). The same bound as the DAE forms' (:data:`mbcomp.codegen.dae_jacobian.MAX_SPEEDS`).
+MAX_SPEEDS = 24
 
 
 class JacobianCode:
@@ -97,7 +107,10 @@ class JacobianCode:
     @classmethod
     def build(cls, system, backend, cache_dir=None, max_nodes=3_000_000):
         """The Jacobian program of ``system`` (its current row mask), or None when there is
-        none: a singular trace point, or drives and inputs the program takes per call."""
+        none: more than :data:`MAX_SPEEDS` speeds, a singular trace point, or drives and
+        inputs the program takes per call."""
+        if system.nu > MAX_SPEEDS:
+            return None
         with no_gc():
             tr = trace(system, max_nodes, program="fun")
             if "fun" not in tr.groups or tr.drives or tr.inputs:

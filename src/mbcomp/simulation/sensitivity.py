@@ -76,7 +76,7 @@ from ..errors import SimulationError
 from .sensitivity_table import SensitivityTable
 from .stepping import StepHook
 
-__all__ = ["Sensitivities", "check_sensitivities"]
+__all__ = ["Sensitivities", "check_sensitivities", "initial_sensitivities"]
 
 #: relative step of the central differences of event functions and reset maps
 EVENT_STEP = 1e-6
@@ -101,6 +101,28 @@ def check_sensitivities(names):
     if len(set(names)) != len(names):
         raise ValueError(f"sensitivities={names!r} names a parameter twice -> give each once")
     return names
+
+
+def initial_sensitivities(system, names, t0, y0):
+    """``S(t0) = d y0 / dp``: the derivative of the consistent start state ``y0 = [q, u]`` of
+    the initialized ``system`` with respect to the parameters ``names`` (see the module notes:
+    fixed start values move their coordinates, the free ones follow the rows; exact, from the
+    residual program, no second initialization).
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.assembly.initialization import initialize
+    >>> from mbcomp.simulation.sensitivity import initial_sensitivities
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1), s0=1.0, v0=2.0)); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> system = mbcomp.assemble(m); init = initialize(system)
+    >>> initial_sensitivities(system, ["s.v0", "b.m"], 0.0, np.array([1.0, 2.0])).tolist()
+    [[0.0, 0.0], [1.0, 0.0]]
+    """
+    return Sensitivities(system, names, t0, y0, (0.0, 0.0), False, 1e-8, 1e-10).S
 
 
 def _backend(system):
@@ -254,18 +276,26 @@ class Sensitivities(StepHook):
         self.stats_["sensitivity_evaluations"] += 1
         return out
 
-    def rhs_at(self, system, t, y):
-        """``(fun, d fun/dy, d fun/dp)`` of ``system`` at ``(t, y)`` with the run's gains, every
-        requested parameter a column; a ``SimulationError`` where the program does not hold."""
+    def state_jacobian(self, system, t, y):
+        """``d fun/dy`` of ``system`` at ``(t, y)`` (what an implicit method's Newton matrix
+        needs): from ``ceil(n/k) + 1`` calls of the jvp program along unit columns (exact, and
+        no program of the whole Jacobian, whose size grows as N^2 on a chain); a held segment's
+        by differences."""
         held = self._held.get(id(system))
         if held is not None:
-            return self._held_rhs(held, t, y)
-        out = self.bound(system).rhs(t, y, *self.gains)
-        if out is not None:
-            out = (out[0], out[1], self._wide(out[2]))
-        if out is None:
-            raise SimulationError(self._NOT_HELD.format(t=t))
-        return out
+            return self._held_rhs(held, t, y)[1]
+        n, k = self.n, self.k
+        base = self.derivative(system, t, y, np.zeros((n, k)))[1]  # f_p (start values: 0)
+        J = np.empty((n, n))
+        for first in range(0, n, k):
+            cols = range(first, min(first + k, n))
+            E = np.zeros((n, k))
+            for j, c in enumerate(cols):
+                E[c, j] = 1.0
+            D = self.derivative(system, t, y, E)[1] - base
+            for j, c in enumerate(cols):
+                J[:, c] = D[:, j]
+        return J
 
     # --- the start ---------------------------------------------------------------------------
     def initial(self, system, t0, y0):
@@ -291,11 +321,16 @@ class Sensitivities(StepHook):
                 raise SimulationError(f"sensitivities: {ref.name} is a start value of {ref.path!r}, which closes a "
                                       "loop -> take the sensitivity with respect to a tree joint's start value")
             h = 1e-6 * max(1.0, abs(ref.value))
-            plus, minus = (e.comp.start(_with(system.P[ref.path], ref, ref.value + s * h)) for s in (1.0, -1.0))
-            dq = (np.asarray(plus[0], float) - np.asarray(minus[0], float)) / (2 * h)
-            du = (np.asarray(plus[2], float) - np.asarray(minus[2], float)) / (2 * h)
+            up, down = ref.value + h, ref.value - h
+            step = up - down  # the step between the two representable values: exact for a linear start
+            plus, minus = (e.comp.start(_with(system.P[ref.path], ref, v)) for v in (up, down))
+            dq = (np.asarray(plus[0], float) - np.asarray(minus[0], float)) / step
+            du = (np.asarray(plus[2], float) - np.asarray(minus[2], float)) / step
             S[e.q, j] = np.where(qfree[e.q], 0.0, dq)  # a Guess is free: the start does not follow it
             S[nq + e.u.start: nq + e.u.stop, j] = np.where(ufree[e.u], 0.0, du)
+        ev = system.evaluate(t0, y0[:nq], y0[nq:], masked=False)
+        if ev.Phi.size == 0 and ev.Psi.size == 0:  # no rows: nothing follows (and no residual program)
+            return S
         res = self._residuals(system, t0, y0)
         if res is None or res[1][0].size == 0:
             return S
@@ -411,8 +446,7 @@ class Sensitivities(StepHook):
         opts = dict(rtol=rtol, atol=atol, dense_output=True, first_step=t1 - t0)
         if self.implicit:
             def jac(t, s):
-                _, J, _ = self.rhs_at(system, t, np.asarray(dense(t), float))
-                return np.kron(J, np.eye(k))
+                return np.kron(self.state_jacobian(system, t, np.asarray(dense(t), float)), np.eye(k))
             sol = solve_ivp(rhs, (t0, t1), self.S.ravel(), method="Radau", jac=jac, **opts)
         else:
             sol = solve_ivp(rhs, (t0, t1), self.S.ravel(), method="DOP853", **opts)
