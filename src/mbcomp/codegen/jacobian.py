@@ -105,11 +105,11 @@ class JacobianCode:
             self._build_c(prog, cache_dir)
 
     @classmethod
-    def build(cls, system, backend, cache_dir=None, max_nodes=3_000_000):
+    def build(cls, system, backend, cache_dir=None, max_nodes=3_000_000, max_speeds=MAX_SPEEDS):
         """The Jacobian program of ``system`` (its current row mask), or None when there is
-        none: more than :data:`MAX_SPEEDS` speeds, a singular trace point, or drives and
-        inputs the program takes per call."""
-        if system.nu > MAX_SPEEDS:
+        none: more than ``max_speeds`` speeds (default :data:`MAX_SPEEDS`; None: no bound), a
+        singular trace point, or drives and inputs the program takes per call."""
+        if max_speeds is not None and system.nu > max_speeds:
             return None
         with no_gc():
             tr = trace(system, max_nodes, program="fun")
