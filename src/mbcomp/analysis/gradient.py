@@ -63,6 +63,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..errors import ModelError, Problem
+from ..simulation.sensitivity import initial_sensitivities
 from .gradient_start import StartTerm, start_derivative
 from .metrics import FUNCTIONS, Metric
 
@@ -208,12 +209,17 @@ def gradient(model, objective, params, *, t_end=1.0, t_start=0.0, values=None, r
     grad = np.zeros(len(pb.specs))
     runs = 0
     exact = pb.start.contributions(lam0) if pb.start.exact else {}
+    starts = [i for i, s in enumerate(pb.specs) if s["kind"] == "start"]
+    if starts:  # start values move y0: its derivative from the residual program, all at once
+        S0 = initial_sensitivities(pb.system, [str(params[i]) for i in starts], t_start, pb.y0)
+        for j, i in enumerate(starts):
+            grad[i] += lam0 @ S0[:, j]
     for i, s in enumerate(pb.specs):
         if s["kind"] == "number":
             grad[i] = mu[pb.wrt.index(s["key"])] + exact.get(s["key"], 0.0)
-        if s["kind"] == "start" or (s["key"] in pb.start.moving and not pb.start.exact):
-            grad[i] += lam0 @ start_derivative(pb.numeric, s, t_start)
-            runs += 2
+            if s["key"] in pb.start.moving and not pb.start.exact:
+                grad[i] += lam0 @ start_derivative(pb.numeric, s, t_start)
+                runs += 2
     stats.update(initial_runs=runs, initial=_time.perf_counter() - clock, total=_time.perf_counter() - clock0)
     return Gradient(float(value), grad, [str(p) for p in params], stats)
 
