@@ -27,8 +27,8 @@ columns ``c[name]`` that can be traced (numpy functions and plain arithmetic).
    objective's gradient from its own program (the objective traced on the result columns'
    program and differentiated the same way). With one segment (the default) the forward
    run's dense output is kept and nothing is integrated twice.
-3. ``dJ/dp = mu(t0) + lam(t0)^T dy0/dp``: a start value (``joint.phi0``) moves ``y0`` (a
-   central difference of the initialization, closed to ~1e-16); on a closed loop or with
+3. ``dJ/dp = mu(t0) + lam(t0)^T dy0/dp``: a start value (``joint.phi0``) moves ``y0`` (its
+   exact derivative, :func:`mbcomp.simulation.sensitivity.initial_sensitivities`); on a closed loop or with
    velocity rows so do the parameters the constraint rows depend on, and their share is one
    more reverse sweep, of the rows (:class:`~mbcomp.analysis.gradient_start.StartTerm`: the
    implicit function theorem in adjoint form); masses and inertias never move ``y0``.
