@@ -39,9 +39,10 @@ import ctypes
 import numpy as np
 
 from .graph import Fallback, Retrace, Sym, no_gc
-from .printers import PY_ENV, ParamProgram, Program
+from .printers import Program
+from .loaded import LoadedProgram
 from .tangent import cone, partials
-from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
+from .toolchain import FLAGS, HEADER, cached_library
 from .tracer import param_layout, param_vector, trace
 
 __all__ = ["reverse", "AdjointCode", "BoundAdjoint", "AdjointIntegrator", "chebyshev_nodes", "ADJOINT_GLUE"]
@@ -219,21 +220,11 @@ class AdjointCode:
         self.n_out = len(lead) + len(flat)
         self.scalar = objective is not None
         prog = Program(g, {"vjp": lead + flat}, guard_groups={"vjp": list(tr.guard_groups[group])})
-        self.n_ops = prog.n_ops("vjp")
-        self.pre = ParamProgram(prog)
         self.backend = backend
-        if backend == "python":
-            env = dict(PY_ENV, _Fallback=Fallback, _Retrace=Retrace)
-            exec(compile(prog.python_main("vjp", "vjp"), "<mbcomp.codegen adjoint>", "exec"), env)
-            self.fun = env["vjp"]
-        elif backend == "c":
-            parts, self.n_work = prog.c_parts("vjp", "mbcomp_vjp", chunk, n_parts=n_units)
-            units = [(f"vjp{k}", HEADER + src, list(FLAGS)) for k, src in enumerate(parts)]
-            self.dll = cached_library(units, "mbcomp_vjp", cache_dir, "adjoint program")
-            self.dll.mbcomp_vjp.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 5
-            self.dll.mbcomp_vjp.restype = ctypes.c_int
-        else:
+        if backend not in ("python", "c"):
             raise ValueError(f"backend {backend!r} is unknown for the adjoint program; use 'python' or 'c'")
+        self.loaded = LoadedProgram(prog, "vjp", "mbcomp_vjp", backend, cache_dir, "adjoint program")
+        self.pre, self.n_ops, self.n_work = self.loaded.pre, self.loaded.n_ops, self.loaded.n_work
 
     @classmethod
     def build(cls, system, backend, keep=(), cache_dir=None, max_nodes=3_000_000, wrt=None):
@@ -299,7 +290,7 @@ class BoundAdjoint:
         code, nq = self.code, self.nq
         if code.backend == "python":
             try:
-                out = code.fun(list(map(float, y[:nq])), list(map(float, y[nq:code.n])), float(t),
+                out = code.loaded.fun(list(map(float, y[:nq])), list(map(float, y[nq:code.n])), float(t),
                                list(map(float, d)), self.h)
             except (Fallback, ArithmeticError, ValueError):
                 return None
@@ -308,7 +299,7 @@ class BoundAdjoint:
             self.ybuf[:code.n] = y
             self.dbuf[:len(d)] = d
             base = self.ybuf.ctypes.data
-            if code.dll.mbcomp_vjp(base, base + 8 * nq, float(t), self.dbuf.ctypes.data, self.hbuf.ctypes.data,
+            if code.loaded.cfun(base, base + 8 * nq, float(t), self.dbuf.ctypes.data, self.hbuf.ctypes.data,
                                    self.pbuf.ctypes.data, self.wbuf.ctypes.data, self.obuf.ctypes.data):
                 return None
             out = self.obuf[:code.n_out].copy()
@@ -465,9 +456,9 @@ class AdjointIntegrator:
         self.vout, self.oout = np.zeros(m + 1), np.zeros(m + 2)
         self.work = np.zeros(int(self.rt.mbrt_dop853_work_size(m + 1)))
         self.stats = RuntimeStats()
-        self.ctx = _AdjCtx(ctypes.cast(vjp.code.dll.mbcomp_vjp, ctypes.c_void_p).value, vjp.hbuf.ctypes.data,
+        self.ctx = _AdjCtx(ctypes.cast(vjp.code.loaded.cfun, ctypes.c_void_p).value, vjp.hbuf.ctypes.data,
                            vjp.pbuf.ctypes.data, vjp.wbuf.ctypes.data,
-                           None if integrand is None else ctypes.cast(integrand.code.dll.mbcomp_vjp,
+                           None if integrand is None else ctypes.cast(integrand.code.loaded.cfun,
                                                                       ctypes.c_void_p).value,
                            None if integrand is None else integrand.hbuf.ctypes.data,
                            None if integrand is None else integrand.pbuf.ctypes.data,

@@ -48,9 +48,9 @@ import ctypes
 import numpy as np
 
 from .graph import CodegenError, Fallback, Retrace, no_gc
-from .printers import PY_ENV, ParamProgram, Program
+from .printers import Program
+from .loaded import LoadedProgram
 from .tangent import tangent
-from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import FIELDS, param_layout, param_vector, trace
 
 __all__ = ["DAE_JACOBIAN_FORMS", "MAX_SPEEDS", "DAEJacobianCode", "BoundDAEJacobian", "bound_program"]
@@ -239,14 +239,8 @@ class DAEJacobianCode:
         self.n_out = len(flat)
         guards = list(tr.guard_groups["eval"]) + list(tr.guard_groups["qrate"])
         prog = Program(g, {"jac": flat}, guard_groups={"jac": guards})
-        self.n_ops = prog.n_ops("jac")
-        self.pre = ParamProgram(prog)
-        if backend == "python":
-            env = dict(PY_ENV, _Fallback=Fallback, _Retrace=Retrace)
-            exec(compile(prog.python_main("jac", "jac"), "<mbcomp.codegen dae_jacobian>", "exec"), env)
-            self.fun = env["jac"]
-        else:
-            self._build_c(prog, cache_dir)
+        self.loaded = LoadedProgram(prog, "jac", "mbcomp_dae_jac", backend, cache_dir, "DAE Jacobian program")
+        self.pre, self.n_ops, self.n_work = self.loaded.pre, self.loaded.n_ops, self.loaded.n_work
 
     @staticmethod
     def _columns(J, ins, n):
@@ -305,13 +299,6 @@ class DAEJacobianCode:
             tr = trace(system, max_nodes)
             mask = system.row_mask
             return cls(tr, None if mask is None or mask.all() else mask, form, backend, cache_dir)
-
-    def _build_c(self, prog, cache_dir):
-        parts, self.n_work = prog.c_parts("jac", "mbcomp_dae_jac", chunk, n_parts=n_units)
-        units = [(f"daejac{k}", HEADER + src, list(FLAGS)) for k, src in enumerate(parts)]
-        self.dll = cached_library(units, "mbcomp_dae_jac", cache_dir, "DAE Jacobian program")
-        self.dll.mbcomp_dae_jac.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 5
-        self.dll.mbcomp_dae_jac.restype = ctypes.c_int
 
     def bind(self, system):
         """The callable :class:`BoundDAEJacobian` for ``system``'s parameter values; None when
@@ -388,14 +375,14 @@ class BoundDAEJacobian:
         code = self.code
         if code.backend == "python":
             try:
-                out = code.fun(q.tolist(), u.tolist(), float(t), self.d.tolist(), self.h)
+                out = code.loaded.fun(q.tolist(), u.tolist(), float(t), self.d.tolist(), self.h)
             except (Fallback, ArithmeticError, ValueError):
                 return None
             out = np.array(out, float)
         else:
             self.qbuf[: q.size] = q
             self.ubuf[: u.size] = u
-            if code.dll.mbcomp_dae_jac(self.qbuf.ctypes.data, self.ubuf.ctypes.data, float(t), self.d.ctypes.data,
+            if code.loaded.cfun(self.qbuf.ctypes.data, self.ubuf.ctypes.data, float(t), self.d.ctypes.data,
                                        self.hbuf.ctypes.data, self.pbuf.ctypes.data, self.wbuf.ctypes.data,
                                        self.obuf.ctypes.data):
                 return None

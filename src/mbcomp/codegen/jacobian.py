@@ -32,9 +32,9 @@ import math
 import numpy as np
 
 from .graph import Fallback, Retrace, no_gc
-from .printers import PY_ENV, ParamProgram, Program
+from .printers import Program
+from .loaded import LoadedProgram
 from .tangent import tangent
-from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import param_layout, param_vector, trace
 
 __all__ = ["JacobianCode", "BoundJacobian", "MAX_SPEEDS"]
@@ -94,15 +94,9 @@ class JacobianCode:
             for (k, _), v in zip(present, row):
                 flat[i * self.n + k] = v
         prog = Program(g, {"jac": flat}, guard_groups={"jac": list(tr.guard_groups["fun"])})
-        self.n_ops = prog.n_ops("jac")
-        self.pre = ParamProgram(prog)
         self.backend = backend
-        if backend == "python":
-            env = dict(PY_ENV, _Fallback=Fallback, _Retrace=Retrace)
-            exec(compile(prog.python_main("jac", "jac"), "<mbcomp.codegen jacobian>", "exec"), env)
-            self.fun = env["jac"]
-        else:
-            self._build_c(prog, cache_dir)
+        self.loaded = LoadedProgram(prog, "jac", "mbcomp_jac", backend, cache_dir, "Jacobian program")
+        self.pre, self.n_ops, self.n_work = self.loaded.pre, self.loaded.n_ops, self.loaded.n_work
 
     @classmethod
     def build(cls, system, backend, cache_dir=None, max_nodes=3_000_000, max_speeds=MAX_SPEEDS):
@@ -116,13 +110,6 @@ class JacobianCode:
             if "fun" not in tr.groups or tr.drives or tr.inputs:
                 return None
             return cls(tr, backend, cache_dir)
-
-    def _build_c(self, prog, cache_dir):
-        parts, self.n_work = prog.c_parts("jac", "mbcomp_jac", chunk, n_parts=n_units)
-        units = [(f"jac{k}", HEADER + src, list(FLAGS)) for k, src in enumerate(parts)]
-        self.dll = cached_library(units, "mbcomp_jac", cache_dir, "Jacobian program")
-        self.dll.mbcomp_jac.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 5
-        self.dll.mbcomp_jac.restype = ctypes.c_int
 
     def bind(self, system):
         """The callable :class:`BoundJacobian` for ``system``'s parameter values; None when
@@ -203,13 +190,13 @@ class BoundJacobian:
         d[0] = alpha
         d[1] = beta
         a = self.addresses
-        return self.code.dll.mbcomp_jac(a[0], a[1], float(t), a[2], a[3], a[4], a[5], a[6])
+        return self.code.loaded.cfun(a[0], a[1], float(t), a[2], a[3], a[4], a[5], a[6])
 
     def __call__(self, t, y, alpha, beta):
         code, n, nq = self.code, self.code.n, self.nq
         if code.backend == "python":
             try:
-                out = code.fun(y[:nq].tolist(), y[nq:].tolist(), float(t), [alpha, beta], self.h)
+                out = code.loaded.fun(y[:nq].tolist(), y[nq:].tolist(), float(t), [alpha, beta], self.h)
             except (Fallback, ArithmeticError, ValueError):
                 return None
             J = np.array(out, float).reshape(n, n)

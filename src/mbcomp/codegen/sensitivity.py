@@ -42,11 +42,11 @@ from numbers import Real
 
 import numpy as np
 
-from .graph import CodegenError, Fallback, Retrace, no_gc
-from .printers import PY_ENV, ParamProgram, Program
+from .graph import CodegenError, Fallback, no_gc
+from .printers import Program
+from .loaded import LoadedProgram
 from .replay import replay
 from .tangent import tangent
-from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import FIELDS, param_layout, param_vector, trace
 from .tracing import parameter_entries
 
@@ -322,24 +322,13 @@ class SensitivityCode:
         return BoundSensitivity(self, pv)
 
 
-class _Printed:
-    """One printed program (``jvp``, ``jac``, ``res`` or ``cols``) in Python or C, taking
-    ``n_d`` per-call inputs ``d``."""
+class _Printed(LoadedProgram):
+    """One loaded program (``jvp``, ``jac``, ``res`` or ``cols``) taking ``n_d`` per-call
+    inputs ``d`` and writing ``n_out`` values."""
 
     def __init__(self, prog, key, n_out, n_d, backend, cache_dir):
-        self.key, self.n_out, self.n_d, self.backend = key, n_out, n_d, backend
-        self.pre = ParamProgram(prog)
-        if backend == "python":
-            env = dict(PY_ENV, _Fallback=Fallback, _Retrace=Retrace)
-            exec(compile(prog.python_main(key, key), f"<mbcomp.codegen sensitivity {key}>", "exec"), env)
-            self.fun = env[key]
-        else:
-            parts, self.n_work = prog.c_parts(key, f"mbcomp_sens_{key}", chunk, n_parts=n_units)
-            units = [(f"sens_{key}{k}", HEADER + src, list(FLAGS)) for k, src in enumerate(parts)]
-            self.dll = cached_library(units, f"mbcomp_sens_{key}", cache_dir, "sensitivity program")
-            self.cfun = getattr(self.dll, f"mbcomp_sens_{key}")
-            self.cfun.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 5
-            self.cfun.restype = ctypes.c_int
+        super().__init__(prog, key, f"mbcomp_sens_{key}", backend, cache_dir, "sensitivity program")
+        self.key, self.n_out, self.n_d = key, n_out, n_d
 
 
 class _Bound:
