@@ -109,3 +109,27 @@ def moving_frame(R0, r0, w, v, alpha, acc):
         return FrameJet(A @ B @ R0, r0 + v * t + acc * t * t / 2, w + Aal * t, v + acc * t, z, z,
                         Aal + t * np.cross(w, Aal), acc.copy())
     return at
+
+
+def double_pendulum():
+    """Two point masses (1.5 kg, 0.5 kg) on rods of 1 m and 0.7 m, hinges about z, released
+    from 0.7 and -0.4 rad at 1.3 and -0.8 rad/s, gravity -9.81 y: the small model the
+    derivative programs are checked against sympy on (joints ``j1``, ``j2``, rods ``r1``,
+    ``r2``, masses ``b1``, ``b2``)."""
+    from mbcomp.library import FixedTranslation, PointMass, Revolute, World
+
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j1 = m.add("j1", Revolute(n=(0, 0, 1), phi0=0.7, w0=1.3))
+    r1 = m.add("r1", FixedTranslation(r=(0, -1.0, 0)))
+    b1 = m.add("b1", PointMass(m=1.5))
+    j2 = m.add("j2", Revolute(n=(0, 0, 1), phi0=-0.4, w0=-0.8))
+    r2 = m.add("r2", FixedTranslation(r=(0, -0.7, 0)))
+    b2 = m.add("b2", PointMass(m=0.5))
+    m.connect(w.frame_b, j1.frame_a)
+    m.connect(j1.frame_b, r1.frame_a)
+    m.connect(r1.frame_b, b1.frame_a)
+    m.connect(r1.frame_b, j2.frame_a)
+    m.connect(j2.frame_b, r2.frame_a)
+    m.connect(r2.frame_b, b2.frame_a)
+    return m

@@ -7,6 +7,7 @@ import pytest
 import sympy as sp
 
 import mbcomp
+from conftest import double_pendulum
 from mbcomp.assembly.initialization import initialize
 from mbcomp.codegen import c_compiler
 from mbcomp.codegen.sensitivity import ColumnCode, SensitivityCode, parameter_ref
@@ -15,22 +16,6 @@ from mbcomp.library import FixedTranslation, PointMass, Revolute, World
 BACKENDS = ["python"] + (["c"] if c_compiler() else [])
 
 
-def double_pendulum(params=None):
-    m = mbcomp.Model()
-    w = m.add("world", World(g=(0, -9.81, 0)))
-    j1 = m.add("j1", Revolute(n=(0, 0, 1), phi0=0.7, w0=1.3))
-    r1 = m.add("r1", FixedTranslation(r=(0, -1.0, 0)))
-    b1 = m.add("b1", PointMass(m=1.5))
-    j2 = m.add("j2", Revolute(n=(0, 0, 1), phi0=-0.4, w0=-0.8))
-    r2 = m.add("r2", FixedTranslation(r=(0, -0.7, 0)))
-    b2 = m.add("b2", PointMass(m=0.5))
-    m.connect(w.frame_b, j1.frame_a)
-    m.connect(j1.frame_b, r1.frame_a)
-    m.connect(r1.frame_b, b1.frame_a)
-    m.connect(r1.frame_b, j2.frame_a)
-    m.connect(j2.frame_b, r2.frame_a)
-    m.connect(r2.frame_b, b2.frame_a)
-    return m
 
 
 @pytest.fixture(scope="module")

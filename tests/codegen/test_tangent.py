@@ -13,6 +13,7 @@ import pytest
 import sympy as sp
 
 import mbcomp
+from conftest import double_pendulum
 from conftest import load_model
 from mbcomp.assembly.initialization import initialize
 from mbcomp.codegen import compile_system
@@ -100,22 +101,6 @@ def test_inputs_must_be_input_nodes():
         tangent(g, [y], [y])
 
 
-def _double_pendulum():
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j1 = m.add("j1", Revolute(n=(0, 0, 1), phi0=0.7, w0=1.3))
-    r1 = m.add("r1", FixedTranslation(r=(0, -1.0, 0)))
-    b1 = m.add("b1", PointMass(m=1.5))
-    j2 = m.add("j2", Revolute(n=(0, 0, 1), phi0=-0.4, w0=-0.8))
-    r2 = m.add("r2", FixedTranslation(r=(0, -0.7, 0)))
-    b2 = m.add("b2", PointMass(m=0.5))
-    m.connect(w.frame_b, j1.frame_a)
-    m.connect(j1.frame_b, r1.frame_a)
-    m.connect(r1.frame_b, b1.frame_a)
-    m.connect(r1.frame_b, j2.frame_a)
-    m.connect(j2.frame_b, r2.frame_a)
-    m.connect(r2.frame_b, b2.frame_a)
-    return m
 
 
 def _form(model, backend):
@@ -127,7 +112,7 @@ def _form(model, backend):
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_double_pendulum_jacobian_is_sympy_exact(backend):
-    model = _double_pendulum()
+    model = double_pendulum()
     eqs = mbcomp.equations(model)
     q, u = sp.Matrix(eqs.q), sp.Matrix(eqs.u)
     rhs = sp.Matrix.vstack(u, eqs.M.LUsolve(eqs.f))
@@ -152,7 +137,7 @@ def _taylor_errors(form, y, hs):
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("which", ["pendulum", "slider_crank"])
 def test_taylor_the_central_difference_error_falls_as_h_squared(which, backend):
-    model = _double_pendulum() if which == "pendulum" else slider_crank.build()
+    model = double_pendulum() if which == "pendulum" else slider_crank.build()
     form, y = _form(model, backend)
     y = y + 0.05 * np.sin(np.arange(y.size) + 1.0)  # off the constraint manifold: Baumgarte terms act
     hs = [1e-2, 1e-3, 1e-4, 1e-5]  # three decades in the asymptotic range, above rounding
@@ -179,7 +164,7 @@ def test_the_numeric_backend_keeps_differences_and_a_generated_one_the_program()
 def test_the_bound_program_returns_its_own_matrix_and_none_where_an_entry_is_not_finite(backend):
     from mbcomp.codegen.jacobian import JacobianCode
 
-    system = mbcomp.assemble(_double_pendulum())
+    system = mbcomp.assemble(double_pendulum())
     jac = JacobianCode.build(system, backend).bind(system)
     y1, y2 = np.array([0.7, -0.4, 1.3, -0.8]), np.array([0.1, 0.2, -0.3, 0.4])
     J1 = jac(0.0, y1, 0.0, 0.0)

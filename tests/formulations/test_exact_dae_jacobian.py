@@ -15,6 +15,7 @@ import pytest
 import sympy as sp
 
 import mbcomp
+from conftest import double_pendulum
 from conftest import load_model
 from mbcomp.assembly.initialization import initialize
 from mbcomp.codegen import compile_system
@@ -30,25 +31,9 @@ BACKENDS = ["python", pytest.param("c", marks=pytest.mark.skipif(c_compiler() is
 FORMS = {"index1": Index1, "ggl": GGL, "index3": Index3}
 
 
-def _double_pendulum():
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j1 = m.add("j1", Revolute(n=(0, 0, 1), phi0=0.7, w0=1.3))
-    r1 = m.add("r1", FixedTranslation(r=(0, -1.0, 0)))
-    b1 = m.add("b1", PointMass(m=1.5))
-    j2 = m.add("j2", Revolute(n=(0, 0, 1), phi0=-0.4, w0=-0.8))
-    r2 = m.add("r2", FixedTranslation(r=(0, -0.7, 0)))
-    b2 = m.add("b2", PointMass(m=0.5))
-    m.connect(w.frame_b, j1.frame_a)
-    m.connect(j1.frame_b, r1.frame_a)
-    m.connect(r1.frame_b, b1.frame_a)
-    m.connect(r1.frame_b, j2.frame_a)
-    m.connect(j2.frame_b, r2.frame_a)
-    m.connect(r2.frame_b, b2.frame_a)
-    return m
 
 
-MODELS = {"double_pendulum": _double_pendulum, "slider_crank": slider_crank.build}
+MODELS = {"double_pendulum": double_pendulum, "slider_crank": slider_crank.build}
 
 
 def _form(build, name, backend):
@@ -181,7 +166,7 @@ def test_the_numeric_backend_differences_and_counts_it():
 
 
 def test_no_exact_matrix_where_an_entry_is_not_finite():
-    s = mbcomp.assemble(_double_pendulum())
+    s = mbcomp.assemble(double_pendulum())
     jac = DAEJacobianCode.build(s, "index3", "python").bind(s)
     y = np.array([0.7, -0.4, 1.3, -0.8, 0.1, 0.2])
     assert np.isfinite(jac(0.0, y)).all()
