@@ -52,10 +52,10 @@ import weakref
 import numpy as np
 
 from .graph import Fallback, Retrace, no_gc
-from .printers import PY_ENV, ParamProgram, Program
+from .printers import Program
+from .loaded import LoadedProgram
 from .replay import replay
 from .tangent import tangent
-from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 from .tracer import FIELDS, param_layout, param_vector, trace
 
 __all__ = ["EvalTangentCode", "BoundEvalTangent", "eval_tangent"]
@@ -155,15 +155,12 @@ class EvalTangentCode:
         prog = Program(g2, {"jvp": [row[0] for row in J]}, guard_groups={"jvp": list(g2.guards)})
         self.n_out = nu + 2 * (m + k)
         self.n_ops = prog.n_ops("jvp")
-        self.pre, self.qpre = ParamProgram(prog), ParamProgram(qprog)
         self.backend = backend
-        if backend == "python":
-            env = dict(PY_ENV, _Fallback=Fallback, _Retrace=Retrace)
-            exec(compile(prog.python_main("jvp", "jvp") + "\n\n" + qprog.python_main("Q", "qjac"),
-                         "<mbcomp.codegen eval_tangent>", "exec"), env)
-            self.fun, self.qfun = env["jvp"], env["qjac"]
-        else:
-            self._build_c(prog, qprog, cache_dir)
+        jvp, qjac = (LoadedProgram(p, group, fname, backend, cache_dir, "evaluation-derivative program")
+                     for p, group, fname in ((prog, "jvp", "mbcomp_jvp"), (qprog, "Q", "mbcomp_qjac")))
+        self.pre, self.qpre = jvp.pre, qjac.pre
+        self.n_work = max(1, jvp.n_work, qjac.n_work)
+        self.fun, self.qfun = (jvp.fun, qjac.fun) if backend == "python" else (jvp.cfun, qjac.cfun)
 
     @classmethod
     def build(cls, system, backend="python", cache_dir=None, max_nodes=3_000_000):
@@ -175,18 +172,6 @@ class EvalTangentCode:
         with no_gc():
             tr = trace(system, max_nodes, program="eval")
             return cls(tr, system.nq, system.nu, backend, cache_dir)
-
-    def _build_c(self, prog, qprog, cache_dir):
-        units, self.n_work = [], 1
-        for p, group, fname in ((prog, "jvp", "mbcomp_jvp"), (qprog, "Q", "mbcomp_qjac")):
-            parts, n_work = p.c_parts(group, fname, chunk, n_parts=n_units)
-            self.n_work = max(self.n_work, n_work)
-            units += [(f"{group}{j}", HEADER + src, list(FLAGS)) for j, src in enumerate(parts)]
-        self.dll = cached_library(units, "mbcomp_jvp", cache_dir, "evaluation-derivative program")
-        for fn in (self.dll.mbcomp_jvp, self.dll.mbcomp_qjac):
-            fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 5
-            fn.restype = ctypes.c_int
-        self.fun, self.qfun = self.dll.mbcomp_jvp, self.dll.mbcomp_qjac
 
     def bind(self, system):
         """The callable :class:`BoundEvalTangent` for ``system``'s parameter values; None when
