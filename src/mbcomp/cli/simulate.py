@@ -69,12 +69,16 @@ def cmd_simulate(args):
     mod, model, runtime = load(args, defaults="SIMULATE_PARAMS")
     opts = dict(getattr(mod, "SIMULATION", {}))
     opts.update({key: getattr(args, key) for key in OPTIONS if getattr(args, key) is not None})
+    if args.sensitivity:
+        opts["sensitivities"] = list(args.sensitivity)
     stopped = None
     try:
         res = simulate(model, params=runtime, progress=not args.quiet, **opts)
     except SimulationInterrupted as exc:  # Ctrl-C or SIGTERM: the results up to the last accepted step
         res, stopped = exc.result, exc.signal
     _report(res)
+    if args.sensitivity:
+        _sensitivity_columns(res)
     if args.out:
         res.to_csv(args.out, units=args.csv_units)
         print(f"wrote {args.out} ({len(res.names) + 1} columns, {len(res.time)} rows)")
@@ -93,6 +97,20 @@ def cmd_simulate(args):
             return EXIT_USAGE
         print(f"wrote {args.animate}")
     return _stopped_early(res, args, stopped)
+
+
+def _sensitivity_columns(res):
+    """Add ``d(<coordinate or speed>)/d(<param>)`` columns for every requested parameter (what
+    ``--out`` then writes) and say so; a note where the sensitivities ended early."""
+    table = res.sensitivities
+    if table is None:
+        return
+    for param in table.params:
+        for name in table.state_names:
+            res.set_column(f"d({name})/d({param})", res.sensitivity(name, param))
+    print(f"sensitivities with respect to {', '.join(table.params)}: {len(table.params) * len(table.state_names)} "
+          "columns d(<coordinate or speed>)/d(<parameter>)" + (f" (they end at t = {table.stopped[0]:.6g} s: "
+                                                               f"{table.stopped[1]})" if table.stopped else ""))
 
 
 def _look_options(args):
@@ -223,6 +241,10 @@ def add_parser(sub, common):
     s.add_argument("--error-estimate", dest="error_estimate", action="store_true", default=None,
                    help="also run at 100x tighter tolerances on the same outputs and print the difference: the "
                         "global error (phase error included, which no energy alarm sees)")
+    s.add_argument("--sensitivity", action="append", metavar="PARAM",
+                   help="differentiate the motion with respect to PARAM (component.param, component.param[i] or a "
+                        "start value such as crank_joint.phi0; repeatable): --out gets d(<coordinate or speed>)/"
+                        "d(PARAM) columns (mbcomp.simulate(..., sensitivities=[...]))")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=cmd_simulate)
     return s
