@@ -8,7 +8,9 @@ hooks in order (:func:`mbcomp.simulation.driver.hooks_for` makes them), each a :
 1. :class:`Monitoring` -- the run monitors (:mod:`mbcomp.simulation.monitors`), before the
    step's outputs are kept;
 2. :class:`KeepOutputs` -- interpolate the step's outputs from its dense output (projected
-   when the formulation projects);
+   when the formulation projects); then, in a run with sensitivities stepped with it,
+   :class:`~mbcomp.simulation.sensitivity.Sensitivities` (they read the step's dense output
+   before a projection moves its end);
 3. :class:`Projection` -- move the state back onto the constraint manifold; the stepper
    continues from it or restarts (:meth:`mbcomp.solvers.base.Stepper.reset_state`);
 4. :class:`~mbcomp.simulation.rows.RowChoice` -- when the kept constraint rows lose rank
