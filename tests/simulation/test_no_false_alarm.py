@@ -22,15 +22,14 @@ RUNS = [("lagrange", "dop853"), ("lagrange", "radau5"), ("dalembert", "dop853"),
 M_BLOCK, M_CART, MU_S, MU_K = 2.0, 1.0, 0.3, 0.25
 
 
-def carried_block(law="t**3"):
-    """A cart (``M_CART``) on a driven prismatic joint (``s = t^3``, so ``a = 6 t``) carrying a
-    block (``M_BLOCK``) on a prismatic joint along the same axis with Coulomb friction (normal
-    force ``M_BLOCK g``)."""
+def cart_and_block(law, block_joint):
+    """A cart (``M_CART``) on a prismatic joint along x driven at ``s = law`` carrying a block
+    (``M_BLOCK``) on ``block_joint`` (a prismatic joint along the same axis); gravity -z."""
     m = mbcomp.Model()
     w = m.add("world", World(g=(0, 0, -G)))
     a = m.add("a", Prismatic(n=(1, 0, 0)))
     cart = m.add("cart", PointMass(m=M_CART))
-    s = m.add("s", Prismatic(n=(1, 0, 0), friction=SlidingFriction(MU_S, MU_K, normal=M_BLOCK * G)))
+    s = m.add("s", block_joint)
     b = m.add("b", PointMass(m=M_BLOCK))
     d = m.add("drive", PrescribedMotion(s=law))
     m.connect(w.frame_b, a.frame_a)
@@ -39,6 +38,12 @@ def carried_block(law="t**3"):
     m.connect(a.frame_b, s.frame_a)
     m.connect(s.frame_b, b.frame_a)
     return m
+
+
+def carried_block(law="t**3"):
+    """The cart driven at ``s = t^3`` (so ``a = 6 t``) carrying the block on a joint with
+    Coulomb friction (normal force ``M_BLOCK g``)."""
+    return cart_and_block(law, Prismatic(n=(1, 0, 0), friction=SlidingFriction(MU_S, MU_K, normal=M_BLOCK * G)))
 
 
 @pytest.mark.parametrize("formulation,method", RUNS)
@@ -70,21 +75,9 @@ A_CART, E_STOP, LO = 4.0, 0.5, -0.1
 
 
 def cart_with_stop():
-    """A cart (1 kg) driven at ``s = A t^2 / 2`` carrying a block (``M_BLOCK``) free on a
+    """The cart (``M_CART``) driven at ``s = A t^2 / 2`` carrying a block (``M_BLOCK``) free on a
     prismatic joint along the drive, between stops at +-0.1 m with restitution ``E_STOP``."""
-    m = mbcomp.Model()
-    w = m.add("world", World(g=(0, 0, -G)))
-    a = m.add("a", Prismatic(n=(1, 0, 0)))
-    cart = m.add("cart", PointMass(m=M_CART))
-    s = m.add("s", Prismatic(n=(1, 0, 0), limits=(LO, -LO), restitution=E_STOP))
-    b = m.add("b", PointMass(m=M_BLOCK))
-    d = m.add("drive", PrescribedMotion(s=f"{A_CART / 2}*t**2"))
-    m.connect(w.frame_b, a.frame_a)
-    m.connect(a.axis, d.flange_b)
-    m.connect(a.frame_b, cart.frame_a)
-    m.connect(a.frame_b, s.frame_a)
-    m.connect(s.frame_b, b.frame_a)
-    return m
+    return cart_and_block(f"{A_CART / 2}*t**2", Prismatic(n=(1, 0, 0), limits=(LO, -LO), restitution=E_STOP))
 
 
 @pytest.mark.parametrize("formulation,method", RUNS)
