@@ -196,7 +196,7 @@ class DAEJacobianCode:
             qrate = list(tr.groups["qrate"])
             if form == "dalembert":
                 rates = [F["Phid"][r] for r in rows] + list(F["Psi"])
-                flat = [x for row in self._columns(tangent(g, rates, [x for x in qs if x is not None]), qs, nq)
+                flat = [x for row in tangent(g, rates, qs)
                         for x in row]
                 self.n = nq
             elif form == "mechanical":
@@ -204,10 +204,9 @@ class DAEJacobianCode:
                 lam = [new(0.3 - 0.01 * k) for k in range(mh)]
                 r = [_dot(F["M"][i], ud) + _dot(C[:, i], lam) - F["f"][i] for i in range(nu)]
                 H = self._rates(g, qrate, us, tr.qrate_identity)
-                Rq = tangent(g, r, [x for x in qs if x is not None])
-                Rq = self._columns(Rq, qs, nq)
+                Rq = tangent(g, r, qs)
                 K = [[_dot(Rq[i], [H[k][j] for k in range(nq)]) for j in range(nu)] for i in range(nu)]
-                Fu = self._columns(tangent(g, list(F["f"]), [x for x in us if x is not None]), us, nu)
+                Fu = tangent(g, list(F["f"]), us)
                 flat = [x for row in K for x in row] + [-x for row in Fu for x in row]
                 self.n = nq + nu
             else:
@@ -234,33 +233,19 @@ class DAEJacobianCode:
                 res = qrate + a + dyn + cons
                 ins = qs + us + a + lam + eta
                 self.n = len(ins)
-                present = [x for x in ins if x is not None]
-                flat = [x for row in self._columns(tangent(g, res, present), ins, self.n) for x in row]
+                flat = [x for row in tangent(g, res, ins) for x in row]
         self.n_out = len(flat)
         guards = list(tr.guard_groups["eval"]) + list(tr.guard_groups["qrate"])
         prog = Program(g, {"jac": flat}, guard_groups={"jac": guards})
         self.loaded = LoadedProgram(prog, "jac", "mbcomp_dae_jac", backend, cache_dir, "DAE Jacobian program")
         self.pre, self.n_ops, self.n_work = self.loaded.pre, self.loaded.n_ops, self.loaded.n_work
 
-    @staticmethod
-    def _columns(J, ins, n):
-        """The rows of ``J`` (made over the inputs present) spread over all ``n`` inputs (a
-        missing input has derivative zero)."""
-        where = [k for k, x in enumerate(ins) if x is not None]
-        out = []
-        for row in J:
-            full = [0.0] * n
-            for k, v in zip(where, row):
-                full[k] = v
-            out.append(full)
-        return out
-
     def _rates(self, g, qrate, us, identity):
         """``H = d(dq/dt)/du`` (nq, nu): the coordinate rates are linear in the speeds."""
         nq, nu = len(qrate), len(us)
         if identity:
             return [[1.0 if i == j else 0.0 for j in range(nu)] for i in range(nq)]
-        return self._columns(tangent(g, qrate, [x for x in us if x is not None]), us, nu)
+        return tangent(g, qrate, us)  # a missing input (None): derivative zero
 
     @classmethod
     def build(cls, system, form, backend, cache_dir=None, max_nodes=3_000_000):

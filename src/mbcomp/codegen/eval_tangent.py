@@ -131,13 +131,8 @@ class EvalTangentCode:
             R2 = [-bias[r] - _dot(rows[r], a) for r in range(m + k)]
             G = list(F["Phid"]) + list(F["Psi"])
         # Q = d qrate/du: small (per joint), the whole Jacobian in the traced graph
-        uin = [(j, g.memo.get(("in", "u", j))) for j in range(nu)]
-        uin = [(j, x) for j, x in uin if x is not None]  # a missing input: derivative zero
-        JQ = tangent(g, list(tr.groups["qrate"]), [x for _, x in uin])
-        fq = [0.0] * (nq * nu)
-        for i, row in enumerate(JQ):
-            for (j, _), v in zip(uin, row):
-                fq[i * nu + j] = v
+        us = [g.memo.get(("in", "u", j)) for j in range(nu)]  # a missing input (None): derivative zero
+        fq = [v for row in tangent(g, list(tr.groups["qrate"]), us) for v in row]
         qprog = Program(g, {"Q": fq}, guard_groups={"Q": list(tr.guard_groups["qrate"])})
         # the balance, the acceleration rows and the velocity rows along one direction
         self.d0 = d0 = base + nu + m + k

@@ -86,13 +86,8 @@ class JacobianCode:
         nq = len(tr.groups["qrate"])  # fun = [dq/dt (nq), du/dt (nu)]
         ins = [g.memo.get(("in", "q", k)) for k in range(nq)] + [g.memo.get(("in", "u", k))
                                                                   for k in range(self.n - nq)]
-        # the tracer makes every input; one that were missing would have derivative zero
-        present = [(k, x) for k, x in enumerate(ins) if x is not None]
-        J = tangent(g, fun, [x for _, x in present])
-        flat = [0.0] * (self.n * self.n)
-        for i, row in enumerate(J):
-            for (k, _), v in zip(present, row):
-                flat[i * self.n + k] = v
+        # the tracer makes every input; one that were missing (None) has derivative zero
+        flat = [v for row in tangent(g, fun, ins) for v in row]
         prog = Program(g, {"jac": flat}, guard_groups={"jac": list(tr.guard_groups["fun"])})
         self.backend = backend
         self.loaded = LoadedProgram(prog, "jac", "mbcomp_jac", backend, cache_dir, "Jacobian program")

@@ -146,15 +146,7 @@ def parameter_ref(system, name):
 def _jacobian(g, outputs, ins):
     """The flat ``d outputs / d ins`` (row major) built in ``g``; an input that is None (not
     made by the tracer) has derivative zero."""
-    present = [(k, x) for k, x in enumerate(ins) if x is not None]
-    J = tangent(g, outputs, [x for _, x in present])
-    flat = []
-    for row in J:
-        full = [0.0] * len(ins)
-        for (k, _), v in zip(present, row):
-            full[k] = v
-        flat.extend(full)
-    return flat
+    return [v for row in tangent(g, outputs, ins) for v in row]
 
 
 class SensitivityCode:

@@ -184,8 +184,9 @@ def tangent(graph, outputs, inputs):
         The graph the outputs were traced into (made current while building).
     outputs : sequence of Sym or float
         The values to differentiate (numbers have derivative zero).
-    inputs : sequence of Sym
-        Input nodes (``graph.input``) to differentiate with respect to.
+    inputs : sequence of Sym or None
+        Input nodes (``graph.input``) to differentiate with respect to; None for an input the
+        tracer did not make (``graph.memo.get(...)``): its column is zero.
 
     Returns
     -------
@@ -211,10 +212,14 @@ def tangent(graph, outputs, inputs):
     >>> (d,), = tangent(g, [f], [x])
     >>> bool(abs(d.v - (3 * 2.0 * 9.0 + np.exp(1.5) / 2.0)) < 1e-12)
     True
+    >>> tangent(g, [f], [g.memo.get(("in", "u", 0)), x])[0][0]    # no input u: its column is zero
+    0.0
     """
     keys, nodes = graph.keys, graph.nodes
     seed = {}
     for k, x in enumerate(inputs):
+        if x is None:
+            continue
         if type(x) is not Sym or x.i >= len(keys) or keys[x.i][0] != "in" or nodes[x.i] is not x:
             raise ValueError(f"tangent: inputs[{k}] is not an input node of this graph (make it with Graph.input)")
         seed[x.i] = k
