@@ -165,6 +165,17 @@ class Result:
         param : str
             A parameter named in ``simulate(..., sensitivities=[...])``.
 
+        Returns
+        -------
+        ndarray (n_out,)
+            The derivative at each output time; NaN after ``res.sensitivities.stopped``.
+
+        Raises
+        ------
+        KeyError
+            The run was made without ``sensitivities=``, ``param`` was not asked, or
+            ``column`` has no sensitivity (the message names what there is).
+
         Examples
         --------
         >>> import mbcomp
@@ -173,8 +184,9 @@ class Result:
         >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
         >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
         >>> r = mbcomp.simulate(m, t_end=1.0, n_out=2, sensitivities=["b.m"])
-        >>> float(r.sensitivity("s.s", "b.m")[-1]), float(r.sensitivity("s.f.z", "b.m")[-1])   # free fall: none; weight m g
-        (0.0, 0.0)
+        >>> # free fall: the motion has no mass in it; V = -m g.r, so dV/dm = V/m
+        >>> float(r.sensitivity("s.s", "b.m")[-1]), round(float(r.sensitivity("energy.potential", "b.m")[-1]), 5)
+        (0.0, -48.11805)
         """
         if self.sensitivities is None:
             raise KeyError("this run has no sensitivities -> simulate(..., sensitivities=['component.param', ...])")
