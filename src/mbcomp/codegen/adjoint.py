@@ -41,7 +41,7 @@ import numpy as np
 from .graph import Fallback, Retrace, Sym, no_gc
 from .printers import Program
 from .loaded import LoadedProgram
-from .tangent import cone, partials
+from .tangent import cone, input_positions, partials
 from .toolchain import FLAGS, HEADER, cached_library
 from .tracer import param_layout, param_vector, trace
 
@@ -64,8 +64,9 @@ def reverse(graph, outputs, weights, inputs):
         The values to differentiate (numbers have derivative zero).
     weights : sequence of Sym or float
         One weight per output: nodes of ``graph`` (e.g. inputs: the adjoint variables) or numbers.
-    inputs : sequence of Sym
-        Input nodes (``graph.input``) to differentiate with respect to.
+    inputs : sequence of Sym or None
+        Input nodes (``graph.input``) to differentiate with respect to; None for an input the
+        tracer did not make (its derivative is zero).
 
     Returns
     -------
@@ -91,15 +92,11 @@ def reverse(graph, outputs, weights, inputs):
     >>> bool(abs(dx.v - (3 * 2.0 * 9.0 + np.exp(1.5) / 2.0)) < 1e-12), dz   # f does not depend on z
     (True, 0.0)
     """
-    keys, nodes = graph.keys, graph.nodes
+    keys = graph.keys
     outputs, weights = list(outputs), list(weights)
     if len(outputs) != len(weights):
         raise ValueError(f"reverse: {len(outputs)} outputs but {len(weights)} weights (give one weight per output)")
-    seeds = set()
-    for k, x in enumerate(inputs):
-        if type(x) is not Sym or x.i >= len(keys) or keys[x.i][0] != "in" or nodes[x.i] is not x:
-            raise ValueError(f"reverse: inputs[{k}] is not an input node of this graph (make it with Graph.input)")
-        seeds.add(x.i)
+    seeds = set(input_positions(graph, inputs, "reverse"))
     # the nodes on a path from an input to an output, in index (topological) order
     depends = set()
     for i in cone(keys, [o.i for o in outputs if type(o) is Sym]):
@@ -127,7 +124,7 @@ def reverse(graph, outputs, weights, inputs):
                 if _is_zero(c):
                     continue
                 adj[j] = adj[j] + c if j in adj else c
-    out = [adj.get(x.i, 0.0) for x in inputs]
+    out = [0.0 if x is None else adj.get(x.i, 0.0) for x in inputs]
     # a derivative that is a constant node is given as its number (the printers take constant
     # outputs as numbers: a constant node among them would be hoisted and never computed)
     return [v.v if type(v) is Sym and keys[v.i][0] == "c" else v for v in out]
@@ -204,7 +201,6 @@ class AdjointCode:
         self.n, self.nq = nq + nu, nq
         ins = ([g.memo.get(("in", "q", k)) for k in range(nq)] + [g.memo.get(("in", "u", k)) for k in range(nu)]
                + [g.memo.get(("in", "p", self.layout.index(w))) for w in self.wrt])
-        present = [(k, x) for k, x in enumerate(ins) if x is not None]
         if objective is None:
             fun = tr.groups["fun"]
             lam = [g.input("d", 2 + k, 0.3 + 0.1 * k) for k in range(self.n)]
@@ -213,10 +209,7 @@ class AdjointCode:
             if type(objective) is Sym and g.keys[objective.i][0] == "c":
                 objective = objective.v
             outs, weights, lead = [objective], [1.0], [objective]
-        grads = reverse(g, outs, weights, [x for _, x in present])
-        flat = [0.0] * len(ins)
-        for (k, _), v in zip(present, grads):
-            flat[k] = v
+        flat = reverse(g, outs, weights, ins)
         self.n_out = len(lead) + len(flat)
         self.scalar = objective is not None
         prog = Program(g, {"vjp": lead + flat}, guard_groups={"vjp": list(tr.guard_groups[group])})

@@ -54,7 +54,7 @@ import numpy as np
 
 from .graph import Sym
 
-__all__ = ["OPERATIONS", "cone", "partials", "tangent"]
+__all__ = ["OPERATIONS", "cone", "input_positions", "partials", "tangent"]
 
 #: every operation a graph node may have (``"c"``: constant, ``"in"``: input)
 OPERATIONS = ("c", "in", "+", "-", "*", "/", "neg", "pow", "abs", "cos", "sin", "tan", "asin", "acos", "atan",
@@ -175,6 +175,35 @@ def cone(keys, roots):
     return sorted(seen)
 
 
+def input_positions(graph, inputs, who):
+    """``{node index: position in inputs}`` of the input nodes ``inputs`` of ``graph`` (None
+    entries, inputs the tracer did not make, are left out); the check both differentiation
+    modes make of what they differentiate with respect to.
+
+    Raises
+    ------
+    ValueError
+        Naming ``who`` and the entry that is not an input node of ``graph``.
+
+    Examples
+    --------
+    >>> from mbcomp.codegen.graph import Graph
+    >>> from mbcomp.codegen.tangent import input_positions
+    >>> with Graph() as g:
+    ...     x, y = g.input("q", 0, 1.0), g.input("u", 0, 2.0)
+    >>> input_positions(g, [y, None, x], "example") == {y.i: 0, x.i: 2}
+    True
+    """
+    keys, nodes, out = graph.keys, graph.nodes, {}
+    for k, x in enumerate(inputs):
+        if x is None:
+            continue
+        if type(x) is not Sym or x.i >= len(keys) or keys[x.i][0] != "in" or nodes[x.i] is not x:
+            raise ValueError(f"{who}: inputs[{k}] is not an input node of this graph (make it with Graph.input)")
+        out[x.i] = k
+    return out
+
+
 def tangent(graph, outputs, inputs):
     """The nodes of ``d outputs / d inputs``, built in ``graph`` by forward-mode differentiation.
 
@@ -216,13 +245,7 @@ def tangent(graph, outputs, inputs):
     0.0
     """
     keys, nodes = graph.keys, graph.nodes
-    seed = {}
-    for k, x in enumerate(inputs):
-        if x is None:
-            continue
-        if type(x) is not Sym or x.i >= len(keys) or keys[x.i][0] != "in" or nodes[x.i] is not x:
-            raise ValueError(f"tangent: inputs[{k}] is not an input node of this graph (make it with Graph.input)")
-        seed[x.i] = k
+    seed = input_positions(graph, inputs, "tangent")
     outputs = list(outputs)
     with graph:
         deriv = _forward(keys, nodes, cone(keys, [o.i for o in outputs if type(o) is Sym]), seed, len(inputs),
