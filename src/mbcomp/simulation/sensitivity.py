@@ -90,7 +90,15 @@ HELD_RTOL = 1e-9
 
 
 def check_sensitivities(names):
-    """The requested parameter names as a list of str (a ``ValueError`` for anything else)."""
+    """The requested parameter names as a list of str (a ``ValueError`` for anything else:
+    not a str or a list of str, empty, or a name given twice); None stays None.
+
+    Examples
+    --------
+    >>> from mbcomp.simulation.sensitivity import check_sensitivities
+    >>> check_sensitivities("rod.m"), check_sensitivities(("rod.m", "crank_joint.phi0"))
+    (['rod.m'], ['rod.m', 'crank_joint.phi0'])
+    """
     if names is None:
         return None
     if isinstance(names, str):
@@ -148,6 +156,22 @@ class Sensitivities(StepHook):
         Whether the run's stepper is implicit (the sensitivities are then stepped by Radau).
     rtol, atol : float
         The run's tolerances.
+    events : Events, optional
+        The run's hybrid events (:class:`mbcomp.hybrid.events.Events`), if it has any.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.assembly.initialization import initialize
+    >>> from mbcomp.simulation.sensitivity import Sensitivities
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1), v0=2.0)); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> system = mbcomp.assemble(m); init = initialize(system)
+    >>> sens = Sensitivities(system, ["world.g[2]"], 0.0, np.array([0.0, 2.0]), (0.0, 0.0), False, 1e-8, 1e-10)
+    >>> sens.derivative(system, 0.0, np.array([0.0, 2.0]), sens.S)[1].tolist()   # d/dg_z [v, g_z] at S = 0
+    [[0.0], [1.0]]
     """
 
     def __init__(self, system, names, t0, y0, gains, implicit, rtol, atol, events=None):
@@ -258,7 +282,7 @@ class Sensitivities(StepHook):
         self.stats_["sensitivity_held_evaluations"] = self.stats_.get("sensitivity_held_evaluations", 0) + 1
         return f, J, Jp
 
-    _NOT_HELD = ("sensitivities: the sensitivity program does not hold at t={t:.12g} s (a law's branch the trace "
+    _NOT_HELD = ("sensitivities: the {program} program does not hold at t={t:.12g} s (a law's branch the trace "
                  "did not take, or a singular matrix) -> write the law's branch smoothly (e.g. with tanh), or run "
                  "without sensitivities")
 
@@ -272,7 +296,7 @@ class Sensitivities(StepHook):
             return f, J @ S + Jp
         out = self.bound(system).jvp(t, y, S, *self.gains)
         if out is None:
-            raise SimulationError(self._NOT_HELD.format(t=t))
+            raise SimulationError(self._NOT_HELD.format(program="sensitivity", t=t))
         self.stats_["sensitivity_evaluations"] += 1
         return out
 
@@ -376,7 +400,7 @@ class Sensitivities(StepHook):
             S = _normalized(system, y, S)
         res = self._residuals(system, t, y)
         if res is None:
-            raise SimulationError(f"sensitivities: the residual program does not hold at t={t:.12g} s")
+            raise SimulationError(self._NOT_HELD.format(program="constraint residuals' sensitivity", t=t))
         if res[1][0].size == 0:
             return S
         m, (r, Dq, Du, Dp) = res
@@ -452,7 +476,8 @@ class Sensitivities(StepHook):
             sol = solve_ivp(rhs, (t0, t1), self.S.ravel(), method="DOP853", **opts)
         if sol.status != 0:
             raise SimulationError(f"sensitivities: their integration failed in [{t0:.12g}, {t1:.12g}] s: "
-                                  f"{sol.message}")
+                                  f"{sol.message} -> loosen rtol/atol (the sensitivities use the run's), or run "
+                                  "without sensitivities")
         self.stats_["sensitivity_steps"] += len(sol.t) - 1
         return lambda tt: sol.sol(tt).reshape(n, k)
 
@@ -605,7 +630,8 @@ class _Jump:
         segment's system, ``y_plus`` the state after)."""
         if abs(self.g_f) < 1e-300:
             raise SimulationError(f"sensitivities: the event at t={self.t:.12g} s is grazing (its function's rate is "
-                                  "zero): the event time has no derivative there")
+                                  "zero): the event time has no derivative there -> move the start or the parameters "
+                                  "off the grazing motion (a touch without crossing), or end the run before it")
         events, before, after = self.events, self.before, dict(self.events.modes)
         R_dir = np.zeros((sens.n, sens.k))
         for j, (eps, values) in enumerate(zip(self.eps, self.values)):
