@@ -6,7 +6,9 @@ column in its integral) the gradient equals central differences of whole tight r
 relative, start values and a loop length included; a parameter the objective does not depend
 on has gradient exactly zero; checkpointing gives the gradient of the run kept whole; an
 objective given as a Python function gives the text's; a model with modes, a parameter that is
-not one and a reduction in the objective are refused naming them.
+not one and a reduction in the objective are refused naming them; the start's share
+``lam^T dy0/dp`` of a loop length is the same by its three routes (reverse sweep, forward
+implicit function theorem, differenced initialization).
 """
 import numpy as np
 import pytest
@@ -131,6 +133,33 @@ def test_refusals_name_the_component_parameter_or_function():
         mbcomp.gradient(pendulum(), {"terminal": "max(j.phi)"}, ["bob.m"], backend="python")
     with pytest.raises(ValueError, match=r"no column 'j.phj'; similar: j.phi"):
         mbcomp.gradient(pendulum(), {"integral": "j.phj"}, ["bob.m"], backend="python")
+
+
+def test_the_start_terms_three_routes_agree_on_a_closed_loop():
+    # lam^T dy0/dp for the loop lengths of the slider-crank: the reverse sweep of the rows
+    # (StartTerm, what gradient() uses here), the forward implicit function theorem
+    # (initial_sensitivities) and the differenced initialization (start_derivative, the fallback
+    # for quaternions and fixed cut starts, exercised by no gradient() test)
+    from mbcomp.analysis.gradient_start import StartTerm, start_derivative
+    from mbcomp.assembly.initialization import initialize
+    from mbcomp.simulation.sensitivity import initial_sensitivities
+
+    system = mbcomp.assemble(slider_crank.build())
+    init = initialize(system, 0.0)
+    keys = [("crank_tip", "r", (0,)), ("crank_tip", "r", (1,)), ("rod_tip", "r", (0,)), ("rod", "m", None)]
+    term = StartTerm(system, init, [("crank_tip", "r"), ("rod_tip", "r"), ("rod", "m")], keys, 0.0)
+    assert term.exact and term.moving == set(keys[:3])  # a mass never moves the start
+    y0 = np.concatenate((init.q, init.u))
+    lam = np.random.default_rng(0).standard_normal(y0.size)
+    got = term.contributions(lam)
+    for path, name, index in keys[:3]:
+        value = float(getattr(system.P[path], name)[index])
+        forward = lam @ initial_sensitivities(system, [f"{path}.{name}[{index[0]}]"], 0.0, y0)[:, 0]
+        spec = {"path": path, "name": name, "index": index, "value": value}
+        differenced = lam @ start_derivative(system.with_evaluator(None), spec, 0.0)
+        assert abs(got[(path, name, index)]) > 0.1  # the length does move the start
+        assert got[(path, name, index)] == pytest.approx(forward, rel=1e-12)
+        assert differenced == pytest.approx(forward, rel=1e-8)  # central difference: h^2 ~ 1e-10
 
 
 @pytest.mark.parametrize("which", ["pendulum", "slider_crank"])
