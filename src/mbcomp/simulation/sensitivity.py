@@ -162,13 +162,10 @@ class Sensitivities(StepHook):
     Examples
     --------
     >>> import numpy as np, mbcomp
-    >>> from mbcomp.assembly.initialization import initialize
-    >>> from mbcomp.simulation.sensitivity import Sensitivities
     >>> from mbcomp.library import World, Prismatic, PointMass
     >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
     >>> s = m.add("s", Prismatic(n=(0, 0, 1), v0=2.0)); b = m.add("b", PointMass(m=2.0))
-    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
-    >>> system = mbcomp.assemble(m); init = initialize(system)
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a); system = mbcomp.assemble(m)
     >>> sens = Sensitivities(system, ["world.g[2]"], 0.0, np.array([0.0, 2.0]), (0.0, 0.0), False, 1e-8, 1e-10)
     >>> sens.derivative(system, 0.0, np.array([0.0, 2.0]), sens.S)[1].tolist()   # d/dg_z [v, g_z] at S = 0
     [[0.0], [1.0]]
@@ -433,9 +430,7 @@ class Sensitivities(StepHook):
 
     def advance(self, run, t1):
         """Integrate ``S`` from where it is to ``t1`` (s) along the run's last step's dense
-        output, and keep it at the outputs the run kept up to ``t1``."""
-        if self.stopped is not None:
-            return self.sync(run)
+        output, and keep it at the outputs the run kept up to ``t1`` (called through :meth:`guarded`)."""
         system = run.form.system
         dense = run.dense()
         t0 = self.t
