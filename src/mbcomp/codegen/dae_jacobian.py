@@ -53,7 +53,8 @@ from .loaded import LoadedProgram
 from .tangent import tangent
 from .tracer import FIELDS, param_layout, param_vector, trace
 
-__all__ = ["DAE_JACOBIAN_FORMS", "MAX_SPEEDS", "DAEJacobianCode", "BoundDAEJacobian", "bound_program"]
+__all__ = ["DAE_JACOBIAN_FORMS", "MAX_SPEEDS", "DAEJacobianCode", "BoundDAEJacobian", "bound_program",
+           "dot", "evaluation_fields"]
 
 #: the forms a program can be made for (see the module docstring)
 DAE_JACOBIAN_FORMS = ("index1", "ggl", "index3", "mechanical", "dalembert")
@@ -65,8 +66,24 @@ DAE_JACOBIAN_FORMS = ("index1", "ggl", "index3", "mechanical", "dalembert")
 MAX_SPEEDS = 24
 
 
-def _fields(tr):
-    """The traced evaluation's fields as object arrays of its output nodes (and numbers)."""
+def evaluation_fields(tr):
+    """``{name: object array}``: the fields of a traced evaluation (:func:`~mbcomp.codegen.tracer.trace`
+    with ``program="eval"``, every name of :data:`~mbcomp.codegen.tracer.FIELDS`) as arrays of
+    its output nodes (and numbers), in the fields' shapes.
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.codegen.dae_jacobian import evaluation_fields
+    >>> from mbcomp.codegen.tracer import trace
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> F = evaluation_fields(trace(mbcomp.assemble(m), 10**5))
+    >>> F["M"].shape, float(F["M"][0, 0].v), F["Phi"].shape      # the mass (kg); no rows
+    ((1, 1), 2.0, (0,))
+    """
     outs, off, fields = tr.groups["eval"], 0, {}
     for name in FIELDS:
         shape = tr.shapes[name]
@@ -78,11 +95,25 @@ def _fields(tr):
     return fields
 
 
-def _dot(row, vec):
-    """``sum row[k] vec[k]`` on graph values (a zero entry adds no node)."""
+def dot(coeffs, xs):
+    """``sum_j coeffs[j] xs[j]`` on graph values (Sym or numbers), skipping the coefficients
+    that are exactly the number zero (no node for a structural zero).
+
+    Examples
+    --------
+    >>> from mbcomp.codegen.graph import Graph
+    >>> from mbcomp.codegen.dae_jacobian import dot
+    >>> with Graph() as g:
+    ...     x, y = g.input("q", 0, 2.0), g.input("q", 1, 5.0)
+    ...     s = dot([3.0, 0.0], [x, y])
+    >>> float(s.v), len(g)          # 3 x: one product node, none for 0 y
+    (6.0, 4)
+    """
     s = 0.0
-    for a, b in zip(row, vec):
-        s = s + a * b
+    for c, x in zip(coeffs, xs):
+        if type(c) is float and c == 0.0:
+            continue
+        s = s + c * x
     return s
 
 
@@ -175,7 +206,7 @@ class DAEJacobianCode:
         g = tr.graph
         self.form, self.backend = form, backend
         self.signature, self.layout, self.drives, self.inputs = tr.signature, tr.layout, tr.drives, tr.inputs
-        F = _fields(tr)
+        F = evaluation_fields(tr)
         nq, nu = len(tr.groups["qrate"]), F["M"].shape[0] if F["M"].ndim == 2 else 0
         rows = np.flatnonzero(mask) if mask is not None else np.arange(F["Phi"].size)
         self.nq, self.nu = nq, nu
@@ -202,10 +233,10 @@ class DAEJacobianCode:
             elif form == "mechanical":
                 ud = [new(0.2 + 0.01 * k) for k in range(nu)]
                 lam = [new(0.3 - 0.01 * k) for k in range(mh)]
-                r = [_dot(F["M"][i], ud) + _dot(C[:, i], lam) - F["f"][i] for i in range(nu)]
+                r = [dot(F["M"][i], ud) + dot(C[:, i], lam) - F["f"][i] for i in range(nu)]
                 H = self._rates(g, qrate, us, tr.qrate_identity)
                 Rq = tangent(g, r, qs)
-                K = [[_dot(Rq[i], [H[k][j] for k in range(nq)]) for j in range(nu)] for i in range(nu)]
+                K = [[dot(Rq[i], [H[k][j] for k in range(nq)]) for j in range(nu)] for i in range(nu)]
                 Fu = tangent(g, list(F["f"]), us)
                 flat = [x for row in K for x in row] + [-x for row in Fu for x in row]
                 self.n = nq + nu
@@ -213,14 +244,14 @@ class DAEJacobianCode:
                 a = [new(0.2 + 0.01 * k) for k in range(nu)]
                 lam = [new(0.3 - 0.01 * k) for k in range(m)]
                 eta = [new(0.01 * (k + 1)) for k in range(mh)] if form == "ggl" else []
-                dyn = [F["f"][i] - _dot(F["M"][i], a) - _dot(A[:, i], lam) for i in range(nu)]
+                dyn = [F["f"][i] - dot(F["M"][i], a) - dot(A[:, i], lam) for i in range(nu)]
                 Phi = [F["Phi"][r] for r in rows]
                 Phid = [F["Phid"][r] for r in rows]
                 Psi = list(F["Psi"])
                 if form == "ggl" and mh:
                     H = self._rates(g, qrate, us, tr.qrate_identity)
-                    w = [us[j] - _dot(C[:, j], eta) for j in range(nu)]
-                    qrate = [_dot(H[i], w) for i in range(nq)]
+                    w = [us[j] - dot(C[:, j], eta) for j in range(nu)]
+                    qrate = [dot(H[i], w) for i in range(nq)]
                 if form == "index3":
                     cons = [-x for x in Phi] + [-x for x in Psi]
                 elif form == "ggl":
@@ -229,7 +260,7 @@ class DAEJacobianCode:
                     alpha, beta = gains
                     bias = [F["cb"][r] + 2.0 * alpha * F["Phid"][r] + beta * beta * F["Phi"][r] for r in rows]
                     bias += [F["Bb"][k] + alpha * F["Psi"][k] for k in range(self.mn)]
-                    cons = [-(_dot(A[k], a) + bias[k]) for k in range(m)]
+                    cons = [-(dot(A[k], a) + bias[k]) for k in range(m)]
                 res = qrate + a + dyn + cons
                 ins = qs + us + a + lam + eta
                 self.n = len(ins)

@@ -51,38 +51,15 @@ import weakref
 
 import numpy as np
 
+from .dae_jacobian import dot, evaluation_fields
 from .graph import Fallback, Retrace, no_gc
 from .printers import Program
 from .loaded import LoadedProgram
 from .replay import replay
 from .tangent import tangent
-from .tracer import FIELDS, param_layout, param_vector, trace
+from .tracer import param_layout, param_vector, trace
 
 __all__ = ["EvalTangentCode", "BoundEvalTangent", "eval_tangent"]
-
-
-def _fields(tr):
-    """``{name: object array}`` of the traced evaluation's fields."""
-    out, off = {}, 0
-    flat = tr.groups["eval"]
-    for name in FIELDS:
-        shape = tr.shapes[name]
-        n = int(np.prod(shape, dtype=int))
-        arr = np.empty(n, dtype=object)
-        arr[:] = flat[off: off + n]
-        out[name] = arr.reshape(shape)
-        off += n
-    return out
-
-
-def _dot(coeffs, xs):
-    """``sum_j coeffs[j] xs[j]``, skipping exact zeros (no node for a structural zero)."""
-    s = 0.0
-    for c, x in zip(coeffs, xs):
-        if type(c) is float and c == 0.0:
-            continue
-        s = s + c * x
-    return s
 
 
 class EvalTangentCode:
@@ -114,7 +91,7 @@ class EvalTangentCode:
 
     def __init__(self, tr, nq, nu, backend, cache_dir=None):
         g = tr.graph
-        F = _fields(tr)
+        F = evaluation_fields(tr)
         self.nq, self.nu = nq, nu
         self.m, self.k = m, k = F["C"].shape[0], F["B"].shape[0]
         self.signature, self.layout, self.drives, self.inputs = tr.signature, tr.layout, tr.drives, tr.inputs
@@ -126,9 +103,9 @@ class EvalTangentCode:
             lam = [g.input("d", base + nu + j, 1.0) for j in range(m + k)]
             rows = (np.vstack((F["C"], F["B"])) if k else F["C"]).reshape(m + k, nu)
             M, f = F["M"].reshape(nu, nu), F["f"]
-            R1 = [f[i] - _dot(M[i], a) - _dot(rows[:, i], lam) for i in range(nu)]
+            R1 = [f[i] - dot(M[i], a) - dot(rows[:, i], lam) for i in range(nu)]
             bias = list(F["cb"]) + list(F["Bb"])
-            R2 = [-bias[r] - _dot(rows[r], a) for r in range(m + k)]
+            R2 = [-bias[r] - dot(rows[r], a) for r in range(m + k)]
             G = list(F["Phid"]) + list(F["Psi"])
         # Q = d qrate/du: small (per joint), the whole Jacobian in the traced graph
         us = [g.memo.get(("in", "u", j)) for j in range(nu)]  # a missing input (None): derivative zero

@@ -42,12 +42,13 @@ from numbers import Real
 
 import numpy as np
 
+from .dae_jacobian import evaluation_fields
 from .graph import CodegenError, Fallback, no_gc
 from .printers import Program
 from .loaded import LoadedProgram
 from .replay import replay
 from .tangent import tangent
-from .tracer import FIELDS, param_layout, param_vector, trace
+from .tracer import param_layout, param_vector, trace
 from .tracing import parameter_entries
 
 __all__ = ["ParameterRef", "parameter_ref", "SensitivityCode", "BoundSensitivity", "ColumnCode"]
@@ -247,12 +248,7 @@ class SensitivityCode:
 
     def _residual_program(self):
         tr = self._eval_tr
-        g, shapes = tr.graph, tr.shapes
-        fields, start = {}, 0
-        for name in FIELDS:
-            size = int(np.prod(shapes[name]))
-            fields[name] = tr.groups["eval"][start: start + size]
-            start += size
+        g, fields = tr.graph, evaluation_fields(tr)
         res = list(fields["Phi"]) + list(fields["Phid"]) + list(fields["Psi"])
         out = res + _jacobian(g, res, self._inputs(g, tr.layout))
         return Program(g, {"res": out}, guard_groups={"res": list(tr.guard_groups["eval"])}), len(out), 2
