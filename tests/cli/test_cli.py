@@ -91,5 +91,8 @@ def test_simulate_writes_sensitivity_columns(tmp_path, capsys):
             for d in (1e-5, -1e-5)]
     fd = (runs[0] - runs[1]) / 2e-5
     assert np.max(np.abs(s - fd)) < 1e-6 * np.max(np.abs(fd))
-    assert "d(slider_joint.v)/d(crank_joint.phi0)" in header
+    api = mbcomp.simulate(build(), t_end=0.5, rtol=1e-10, atol=1e-12, sensitivities=["rod.m", "crank_joint.phi0"])
+    for col, param in (("crank_joint.phi", "rod.m"), ("slider_joint.v", "crank_joint.phi0")):  # CSV: 12 digits
+        np.testing.assert_allclose(data[:, header.index(f"d({col})/d({param})")], api.sensitivity(col, param),
+                                   rtol=1e-11, atol=0)
     assert "sensitivities with respect to rod.m, crank_joint.phi0: 12 columns" in capsys.readouterr().out
