@@ -105,13 +105,15 @@ def _log(path):
     return entries, marker
 
 
+def _latest(entries):
+    """Each process's last logged evaluation: ``{pid: (k, t)}``."""
+    return {pid: (k, t) for pid, k, t in entries}
+
+
 def _finished(entries):
     """The runs a process had left for another run: finished, their rows made (a law called
     at t_end is no proof: a rejected step may have tried it)."""
-    latest = {}
-    for pid, k, _ in entries:
-        latest[pid] = k
-    return {k for _, k, _ in entries} - set(latest.values())
+    return {k for _, k, _ in entries} - {k for k, _ in _latest(entries).values()}
 
 
 def _completed(log):
@@ -130,11 +132,9 @@ def _mid_run(entries):
     done writes no more) lies mid-run."""
     if len(_finished(entries)) < 2 or len({k for _, k, _ in entries}) > len(KS) - 2:
         return False
-    latest = {}
-    for pid, _, t in entries:
-        latest[pid] = t
+    latest = _latest(entries)
     active = {pid for pid, _, _ in entries[-40:]}
-    return all(0.1 * T_END < latest[pid] < 0.6 * T_END for pid in active)  # 40 % of each run still to go
+    return all(0.1 * T_END < latest[pid][1] < 0.6 * T_END for pid in active)  # 40 % of each run still to go
 
 
 def _group_alive(pgid):
