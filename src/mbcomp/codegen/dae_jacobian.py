@@ -47,9 +47,9 @@ import ctypes
 
 import numpy as np
 
-from .graph import CodegenError, Fallback, Retrace, no_gc
+from .graph import Fallback, Retrace, no_gc
 from .printers import Program
-from .loaded import LoadedProgram
+from .loaded import LoadedProgram, bind_cached
 from .tangent import tangent
 from .tracer import FIELDS, param_layout, param_vector, trace
 
@@ -151,21 +151,7 @@ def bound_program(system, codes, form, backend, cache_dir=None, max_nodes=3_000_
         return None
     rm = system.row_mask
     key = ("dae_jac", form, None if rm is None or rm.all() else rm.tobytes())
-    for _ in range(2):  # the cached program, else (signature or guard changed) a new one
-        code = codes.get(key, False)
-        if code is False:
-            try:
-                code = DAEJacobianCode.build(system, form, backend, cache_dir, max_nodes)
-            except CodegenError:
-                code = None
-            codes[key] = code
-        if code is None:
-            return None
-        jac = code.bind(system)
-        if jac is not None:
-            return jac
-        codes[key] = False
-    return None
+    return bind_cached(codes, key, lambda: DAEJacobianCode.build(system, form, backend, cache_dir, max_nodes), system)
 
 
 class DAEJacobianCode:

@@ -90,6 +90,7 @@ from .compiler import Bound, Code
 from .dae_jacobian import bound_program
 from .graph import CodegenError, Fallback, Retrace
 from .jacobian import JacobianCode
+from .loaded import bind_cached
 from .toolchain import c_compiler
 from .tracer import FIELDS, param_layout, trace, trace_point
 
@@ -469,20 +470,9 @@ class ProgramEvaluator:
         cached = self.__dict__.get("_jac")
         if cached is None or cached[0] is not rm:
             key = ("jac", None if rm is None or rm.all() else rm.tobytes())
-            jac = None
-            for _ in range(2):  # the cached program, else (signature or guard changed) a new one
-                code = self.funs.get(key, False)
-                if code is False:
-                    try:
-                        code = JacobianCode.build(self.system, self.backend, self.options["cache_dir"],
-                                                  self.options["max_nodes"])
-                    except CodegenError:
-                        code = None
-                    self.funs[key] = code
-                jac = code.bind(self.system) if code is not None else None
-                if jac is not None or code is None:
-                    break
-                self.funs[key] = False
+            o = self.options
+            jac = bind_cached(self.funs, key, lambda: JacobianCode.build(self.system, self.backend, o["cache_dir"],
+                                                                         o["max_nodes"]), self.system)
             cached = self._jac = (rm, jac)
         if cached[1] is None:
             return None

@@ -24,11 +24,11 @@ from __future__ import annotations
 
 import ctypes
 
-from .graph import Fallback, Retrace
+from .graph import CodegenError, Fallback, Retrace
 from .printers import PY_ENV, ParamProgram
 from .toolchain import FLAGS, HEADER, cached_library, chunk, n_units
 
-__all__ = ["LoadedProgram", "PROGRAM_ARGTYPES"]
+__all__ = ["LoadedProgram", "PROGRAM_ARGTYPES", "bind_cached"]
 
 #: the ctypes argument types of every generated program: ``q, u, t, d, h, p, w, out``
 PROGRAM_ARGTYPES = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double] + [ctypes.c_void_p] * 5
@@ -80,3 +80,39 @@ class LoadedProgram:
             self.cfun = getattr(self.dll, fname)
             self.cfun.argtypes = PROGRAM_ARGTYPES
             self.cfun.restype = ctypes.c_int
+
+
+def bind_cached(codes, key, build, system):
+    """``code.bind(system)`` with the code taken from ``codes[key]`` or made by ``build()`` and
+    put there (a dict shared by systems differing only in parameter values): made again once
+    when the cached code does not bind (the parameters changed a decision baked into it). None
+    when ``build()`` gives None or raises :class:`~mbcomp.codegen.graph.CodegenError` (remembered:
+    not tried again), or a fresh code does not bind either.
+
+    Examples
+    --------
+    >>> from mbcomp.codegen.loaded import bind_cached
+    >>> class Code:                     # binds to systems (here: numbers) below its limit
+    ...     def __init__(self, limit): self.limit = limit
+    ...     def bind(self, system): return (self, system) if system < self.limit else None
+    >>> codes = {}
+    >>> bind_cached(codes, "k", lambda: Code(10), 3)[1], codes["k"].limit
+    (3, 10)
+    >>> bind_cached(codes, "k", lambda: Code(100), 50)[0].limit     # no longer binds: made again
+    100
+    """
+    for _ in range(2):
+        code = codes.get(key, False)
+        if code is False:
+            try:
+                code = build()
+            except CodegenError:
+                code = None
+            codes[key] = code
+        if code is None:
+            return None
+        bound = code.bind(system)
+        if bound is not None:
+            return bound
+        codes[key] = False
+    return None
