@@ -89,7 +89,8 @@ class SensitivityTable:
         if column not in cols:
             raise KeyError(f"no sensitivity of column {column!r}: it is neither a coordinate or speed nor a column of "
                            "the output program (reactions, joints' outputs, poses, twists, energies, residuals); "
-                           f"columns with sensitivities: {', '.join(list(cols)[:12])}, ...")
+                           f"columns with sensitivities: {', '.join(list(cols)[:12])}"
+                           + (", ..." if len(cols) > 12 else ""))
         return cols[column][:, j].copy()
 
     def _column_table(self):
