@@ -256,6 +256,8 @@ def test_bad_names_are_clear_errors():
     res = mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=["rod.m"])
     with pytest.raises(KeyError, match="no sensitivity with respect to 'slider.m'"):
         res.sensitivity("crank_angle", "slider.m")
+    with pytest.raises(KeyError, match="no sensitivity of column 'crank_angel'(.|\n)*crank_joint.phi"):
+        res.sensitivity("crank_angel", "rod.m")
     with pytest.raises(KeyError, match="has no sensitivities"):
         mbcomp.simulate(SLIDER(), t_end=0.1).sensitivity("crank_angle", "rod.m")
 
