@@ -8,7 +8,8 @@ on has gradient exactly zero; checkpointing gives the gradient of the run kept w
 objective given as a Python function gives the text's; a model with modes, a parameter that is
 not one and a reduction in the objective are refused naming them; the start's share
 ``lam^T dy0/dp`` of a loop length is the same by its three routes (reverse sweep, forward
-implicit function theorem, differenced initialization).
+implicit function theorem, differenced initialization), and on a loop of ball joints
+(quaternions, where only the differenced initialization applies) the gradient is that of runs.
 """
 import numpy as np
 import pytest
@@ -139,7 +140,7 @@ def test_the_start_terms_three_routes_agree_on_a_closed_loop():
     # lam^T dy0/dp for the loop lengths of the slider-crank: the reverse sweep of the rows
     # (StartTerm, what gradient() uses here), the forward implicit function theorem
     # (initial_sensitivities) and the differenced initialization (start_derivative, the fallback
-    # for quaternions and fixed cut starts, exercised by no gradient() test)
+    # for quaternions and fixed cut starts, here checked on a planar loop)
     from mbcomp.analysis.gradient_start import StartTerm, start_derivative
     from mbcomp.assembly.initialization import initialize
     from mbcomp.simulation.sensitivity import initial_sensitivities
@@ -218,6 +219,41 @@ def test_quaternion_coordinates_and_rolling_contact(which):
             res = mbcomp.simulate(build(), t_end=0.5, params={name: v}, **TIGHT)
             vals.append(cols(res))
         want.append((vals[0] - vals[1]) / (2 * h))
+    np.testing.assert_allclose(gr.gradient, want, rtol=1e-6)
+
+
+def ball_loop():
+    """Two links on ball joints (quaternions: nq 8, nu 6) whose tip is held at a fixed point by a
+    third ball joint (the cut): 3 DOF, every start free, the loop closed at the start."""
+    from mbcomp.library import RigidBody, Spherical
+
+    mdl = mbcomp.Model()
+    w = mdl.add("world", World(g=(0, -9.81, 0)))
+    j1, l1 = mdl.add("j1", Spherical()), mdl.add("l1", FixedTranslation(r=(0, -0.5, 0)))
+    b1 = mdl.add("b1", RigidBody(m=1.0, r_cm=(0, -0.25, 0), I=np.diag([0.02, 0.001, 0.02])))
+    j2, l2 = mdl.add("j2", Spherical()), mdl.add("l2", FixedTranslation(r=(0.5, 0, 0)))
+    b2 = mdl.add("b2", RigidBody(m=1.0, r_cm=(0.25, 0, 0), I=np.diag([0.001, 0.02, 0.02])))
+    anchor, cut = mdl.add("anchor", FixedTranslation(r=(0.45, -0.45, 0.1))), mdl.add("cut", Spherical())
+    for a, b in [(w.frame_b, j1.frame_a), (j1.frame_b, l1.frame_a), (j1.frame_b, b1.frame_a),
+                 (l1.frame_b, j2.frame_a), (j2.frame_b, l2.frame_a), (j2.frame_b, b2.frame_a),
+                 (w.frame_b, anchor.frame_a), (l2.frame_b, cut.frame_a), (anchor.frame_b, cut.frame_b)]:
+        mdl.connect(a, b)
+    return mdl
+
+
+def test_a_quaternion_loop_differences_its_start_and_matches_whole_runs():
+    # nq != nu with rows: the start's share is the differenced initialization (start_derivative,
+    # two initializations per loop length), not the reverse sweep; the gradient is that of runs
+    gr = mbcomp.gradient(ball_loop(), {"terminal": "j2.w.x"}, ["l2.r[0]", "anchor.r[2]"], t_end=0.5,
+                         backend=BACKEND, **TIGHT)
+    assert gr.stats["initial_runs"] == 4
+    want = []
+    for name, base, step in (("l2.r", [0.5, 0, 0], [1e-5, 0, 0]), ("anchor.r", [0.45, -0.45, 0.1], [0, 0, 1e-5])):
+        base, step = np.array(base), np.array(step)
+        ends = [mbcomp.simulate(ball_loop(), t_end=0.5, params={name: base + s * step}, **TIGHT)["j2.w.x"][-1]
+                for s in (1, -1)]
+        want.append((ends[0] - ends[1]) / 2e-5)
+    assert np.all(np.abs(want) > 0.1)  # both lengths move the objective
     np.testing.assert_allclose(gr.gradient, want, rtol=1e-6)
 
 
