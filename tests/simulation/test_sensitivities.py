@@ -253,6 +253,10 @@ def test_bad_names_are_clear_errors():
         mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=["rod.mass"])
     with pytest.raises(ValueError, match=r"name one entry, e.g. 'rod.I\[0, 0\]'"):
         mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=["rod.I"])
+    with pytest.raises(ValueError, match="names a parameter twice -> give each once"):
+        mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=["rod.m", "rod.m"])
+    with pytest.raises(ValueError, match="give a list of parameter names, e.g."):
+        mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=[])
     res = mbcomp.simulate(SLIDER(), t_end=0.1, sensitivities=["rod.m"])
     with pytest.raises(KeyError, match="no sensitivity with respect to 'slider.m'"):
         res.sensitivity("crank_angle", "slider.m")
