@@ -193,6 +193,11 @@ def start_derivative(numeric, spec, t0):
     so the difference is exact to its truncation error, ~h^2) of the numeric system ``numeric``
     for the parameter ``spec`` (``{"path", "name", "index", "value"}``) at ``t0`` (s).
 
+    It is what :class:`StartTerm` cannot cover, and :func:`mbcomp.simulation.sensitivity.initial_sensitivities`
+    is no substitute there: on a loop of ball joints (quaternion coordinates) its minimum-norm
+    step in ``q`` is not the initialization's, and its ``dy0/dp`` was 10-20 % off this one
+    (``tests/analysis/test_gradient.py``, the ball-joint loop, checks the gradient against runs).
+
     Examples
     --------
     >>> import numpy as np, mbcomp
