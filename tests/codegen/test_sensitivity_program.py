@@ -11,11 +11,9 @@ from conftest import double_pendulum
 from mbcomp.assembly.initialization import initialize
 from mbcomp.codegen import c_compiler
 from mbcomp.codegen.sensitivity import ColumnCode, SensitivityCode, parameter_ref
-from mbcomp.library import FixedTranslation, PointMass, Revolute, World
+from mbcomp.library import PointMass, World
 
 BACKENDS = ["python"] + (["c"] if c_compiler() else [])
-
-
 
 
 @pytest.fixture(scope="module")

@@ -22,7 +22,6 @@ from mbcomp.codegen.printers import python_source, PY_ENV
 from mbcomp.codegen.tangent import OPERATIONS, tangent
 from mbcomp.codegen.toolchain import c_compiler
 from mbcomp.formulations import LagrangeIndex1
-from mbcomp.library import FixedTranslation, PointMass, Revolute, World
 
 slider_crank = load_model("models/slider_crank.py")
 BACKENDS = ["python", pytest.param("c", marks=pytest.mark.skipif(c_compiler() is None, reason="no C compiler"))]
@@ -101,6 +100,16 @@ def test_inputs_must_be_input_nodes():
         tangent(g, [y], [y])
 
 
+def test_an_input_given_as_none_has_a_zero_column_and_moves_no_other():
+    """``graph.memo.get`` gives None for an input the tracer did not make: its column is zero."""
+    with Graph() as g:
+        x, y = g.input("q", 0, 0.5), g.input("u", 0, 2.0)
+        f = [np.sin(x) * y, y * y]
+    full = tangent(g, f, [x, y])
+    J = tangent(g, f, [x, None, y])
+    assert [row[1] for row in J] == [0.0, 0.0]
+    assert [[getattr(v, "v", v) for v in (row[0], row[2])] for row in J] == \
+        [[getattr(v, "v", v) for v in row] for row in full]
 
 
 def _form(model, backend):
