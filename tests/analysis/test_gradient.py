@@ -257,6 +257,17 @@ def test_a_quaternion_loop_differences_its_start_and_matches_whole_runs():
     np.testing.assert_allclose(gr.gradient, want, rtol=1e-6)
 
 
+def test_a_start_that_cannot_follow_a_parameter_names_it_and_the_fix():
+    # the bicycle's fixed free-body start over-specifies the rear wheel's loop once its radius moves
+    from mbcomp.analysis.gradient_start import start_derivative
+    from mbcomp.errors import InitializationError
+
+    system = mbcomp.assemble(load_model("models/bicycle.py").build()).with_evaluator(None)
+    spec = {"path": "rear_contact", "name": "r", "index": None, "value": float(system.P["rear_contact"].r)}
+    with pytest.raises(InitializationError, match=r"rear_contact\.r: moves the consistent start.*Guess"):
+        start_derivative(system, spec, 0.0)
+
+
 def test_runtime_values_are_the_runs():
     # values= sets the run's parameters as simulate's params= does: a pendulum under 5 m/s^2
     a = mbcomp.gradient(pendulum(), {"terminal": "j.phi"}, ["j.phi0", "rod.r[1]"], t_end=1.0, backend=BACKEND,

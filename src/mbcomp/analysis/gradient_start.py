@@ -24,7 +24,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import InitializationError, ModelError, Problem
 
 __all__ = ["StartTerm", "start_derivative", "reached_params", "free_start"]
 
@@ -227,7 +227,14 @@ def start_derivative(numeric, spec, t0):
             P = dict(numeric.P)
             P[spec["path"]] = SimpleNamespace(**{**vars(numeric.P[spec["path"]]), spec["name"]: v})
             sys2 = numeric.variant(P=P)
-        init = initialize(sys2, t0)
+        try:
+            init = initialize(sys2, t0)
+        except InitializationError as exc:
+            label = f"{spec['path']}.{spec['name']}" + ("" if spec["index"] is None else str(list(spec["index"])))
+            raise InitializationError(list(exc.problems) + [Problem(
+                label, "moves the consistent start, whose derivative is a central difference of the initialization; "
+                f"at {label} = {spec['value']:.6g} {'+' if s > 0 else '-'} {h:.1g} the start cannot be made consistent",
+                "wrap the start values the loop over-specifies in Guess(...), or leave this parameter out")]) from exc
         ys.append(np.concatenate((init.q, init.u)))
     return (ys[0] - ys[1]) / (2 * h)
 
