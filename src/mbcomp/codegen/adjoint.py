@@ -189,6 +189,8 @@ class AdjointCode:
     """
 
     def __init__(self, tr, backend, cache_dir=None, objective=None, group="fun", keep=(), wrt=None):
+        if backend not in ("python", "c"):  # before the reverse sweep (LoadedProgram checks only after it)
+            raise ValueError(f"backend {backend!r} is unknown for the adjoint program; use 'python' or 'c'")
         g = tr.graph
         self.signature, self.layout, self.keep = tr.signature, tr.layout, tuple(keep)
         self.wrt = list(self.layout) if wrt is None else [tuple(w) for w in wrt]
@@ -214,8 +216,6 @@ class AdjointCode:
         self.scalar = objective is not None
         prog = Program(g, {"vjp": lead + flat}, guard_groups={"vjp": list(tr.guard_groups[group])})
         self.backend = backend
-        if backend not in ("python", "c"):
-            raise ValueError(f"backend {backend!r} is unknown for the adjoint program; use 'python' or 'c'")
         self.loaded = LoadedProgram(prog, "vjp", "mbcomp_vjp", backend, cache_dir, "adjoint program")
         self.pre, self.n_ops, self.n_work = self.loaded.pre, self.loaded.n_ops, self.loaded.n_work
 

@@ -405,7 +405,8 @@ class BoundDAEJacobian:
         """``G = d[dPhi/dt; Psi]/dq`` (m, nq) at ``(t, q, u)`` (see the module docstring), or None."""
         code = self.code
         if code.form != "dalembert":
-            raise ValueError(f"this is the {code.form!r} program")
+            raise ValueError(f"this is the {code.form!r} program: call "
+                             + (".mechanical(t, q, u, udot, lam)" if code.form == "mechanical" else "it with (t, y)"))
         self._per_call(t, np.zeros(0), None)
         out = self._run(t, np.asarray(q, float), np.asarray(u, float))
         return None if out is None else out.reshape(code.mh + code.mn, code.nq)

@@ -48,7 +48,12 @@ class LoadedProgram:
     cache_dir : str or None
         Where the compiled library is cached (None: the default cache).
     what : str
-        What the program is, for the compiler's error message ("Jacobian program").
+        What the program is, for the error messages ("Jacobian program").
+
+    Raises
+    ------
+    ValueError
+        When ``backend`` is neither ``"python"`` nor ``"c"`` (before any compile).
 
     Attributes
     ----------
@@ -65,6 +70,8 @@ class LoadedProgram:
     """
 
     def __init__(self, prog, group, fname, backend, cache_dir, what):
+        if backend not in ("python", "c"):
+            raise ValueError(f"{what}: backend {backend!r} is unknown; use 'python' or 'c'")
         self.backend, self.fname = backend, fname
         self.pre = ParamProgram(prog)
         self.n_ops = prog.n_ops(group)

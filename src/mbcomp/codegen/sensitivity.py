@@ -474,7 +474,9 @@ class ColumnCode:
         with no_gc():
             tr = trace(system, max_nodes, program="outputs", baumgarte=True, keep=keep)
             if "outputs" not in tr.groups:
-                raise CodegenError("sensitivities of the columns: the output program is singular at the trace point")
+                raise CodegenError("sensitivities of the columns: the output program is singular at the trace point "
+                                   "(the start position with generic speeds) -> start the mechanism away from a "
+                                   "singular position")
             return cls(tr, refs, backend, system.nq + system.nu, cache_dir)
 
     def bind(self, system):
