@@ -325,7 +325,7 @@ class Events(SlideEvents):
         q, u = np.asarray(qu[:nq], float), np.asarray(qu[nq:], float)
         if isinstance(action, Impact):
             action = self.system.edge(who).comp.modes(self.system.P[who]).action(name, before[who])
-            u = self._impact_speeds(t, who, action, q, u, before)
+            u = self._impact_map(t, who, action, q, u, before)[0]
         q, u = consistent(self.system_now(after), t, q, u)
         return np.concatenate((q, u))
 
@@ -345,16 +345,22 @@ class Events(SlideEvents):
         rows = rows_in_force(self.system, self.modes)
         return bool(rows.held or rows.sliding or rows.forces)
 
-    def _impact_speeds(self, t, who, action, q, u, modes):
-        """``u+`` of an impact of ``who`` (action ``action``) at ``(t, q, u-)`` in the active set
-        ``modes`` before it."""
+    def _impact_map(self, t, who, action, q, u, modes):
+        """``(u+, kinetic energy lost (J), normal speed after (m/s) or None)`` of an impact of
+        ``who`` (action ``action``) at ``(t, q, u-)`` over the system of the active set ``modes``
+        before it (its rows hold through the impact): a contact touching down on its own rows
+        (:func:`~mbcomp.hybrid.contacts.contact_impact`; the speed after is its normal row's),
+        a joint on the rows of its engaged mode (:func:`~mbcomp.hybrid.stops.impact_speeds`;
+        None). The one impulse map of :meth:`act` and of :meth:`reset`."""
         before = self.system_now(modes)
         if not self.system.edge(who).comp.tree_edge:
             row = _contact_row(self.system, who, action.engage)
-            return contact_impact(before, who, t, q, u, action.restitution, row,
-                                  friction=self._cone(who, action.engage))[0]
+            u_plus, _, loss, after = contact_impact(before, who, t, q, u, action.restitution, row,
+                                                    friction=self._cone(who, action.engage))
+            return u_plus, loss, after
         rows = list(mode_rows(self.system, {who: action.engage}))
-        return impact_speeds(before, t, q, u, rows, action.restitution)[0]
+        u_plus, _, loss = impact_speeds(before, t, q, u, rows, action.restitution)
+        return u_plus, loss, None
 
     def _approaching(self, who, action, state, t=0.0):
         """Whether the impact's rows close (a negative speed along them) at ``state``."""
@@ -382,19 +388,16 @@ class Events(SlideEvents):
     def _impact(self, t, who, name, action, q, u):
         """``(u+, mode to settle in or None)`` of an impact of ``who`` at event ``name``."""
         sysm, p = self.system, self.system.P[who]
+        u_plus, loss, after0 = self._impact_map(t, who, action, q, u, self.modes)
         if not sysm.edge(who).comp.tree_edge:  # a contact touching down: its own rows
             row = _contact_row(sysm, who, action.engage)
-            speed = [contact_rows(sysm, who, t, q, u, row).speed]
-            u_plus, _, loss, after0 = contact_impact(self.system_now(), who, t, q, u, action.restitution, row,
-                                                     friction=self._cone(who, action.engage))
-            after = [after0]
+            speed, after = [contact_rows(sysm, who, t, q, u, row).speed], [after0]
 
             def rests():
                 return self._contact_rests(t, q, u_plus, who, row, after0)
         else:
-            rows = [r for r in mode_rows(sysm, {who: action.engage})]
+            rows = list(mode_rows(sysm, {who: action.engage}))
             _, speed, _ = row_values(sysm, rows, q, u)
-            u_plus, _, loss = impact_speeds(self.system_now(), t, q, u, rows, action.restitution)
             _, after, _ = row_values(sysm, rows, q, u_plus)
 
             def rests():
