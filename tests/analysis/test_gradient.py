@@ -16,6 +16,7 @@ import pytest
 from scipy.integrate import simpson
 
 import mbcomp
+from conftest import ball_loop
 from conftest import load_model
 from mbcomp.codegen.toolchain import c_compiler
 from mbcomp.errors import ModelError
@@ -222,23 +223,6 @@ def test_quaternion_coordinates_and_rolling_contact(which):
     np.testing.assert_allclose(gr.gradient, want, rtol=1e-6)
 
 
-def ball_loop():
-    """Two links on ball joints (quaternions: nq 8, nu 6) whose tip is held at a fixed point by a
-    third ball joint (the cut): 3 DOF, every start free, the loop closed at the start."""
-    from mbcomp.library import RigidBody, Spherical
-
-    mdl = mbcomp.Model()
-    w = mdl.add("world", World(g=(0, -9.81, 0)))
-    j1, l1 = mdl.add("j1", Spherical()), mdl.add("l1", FixedTranslation(r=(0, -0.5, 0)))
-    b1 = mdl.add("b1", RigidBody(m=1.0, r_cm=(0, -0.25, 0), I=np.diag([0.02, 0.001, 0.02])))
-    j2, l2 = mdl.add("j2", Spherical()), mdl.add("l2", FixedTranslation(r=(0.5, 0, 0)))
-    b2 = mdl.add("b2", RigidBody(m=1.0, r_cm=(0.25, 0, 0), I=np.diag([0.001, 0.02, 0.02])))
-    anchor, cut = mdl.add("anchor", FixedTranslation(r=(0.45, -0.45, 0.1))), mdl.add("cut", Spherical())
-    for a, b in [(w.frame_b, j1.frame_a), (j1.frame_b, l1.frame_a), (j1.frame_b, b1.frame_a),
-                 (l1.frame_b, j2.frame_a), (j2.frame_b, l2.frame_a), (j2.frame_b, b2.frame_a),
-                 (w.frame_b, anchor.frame_a), (l2.frame_b, cut.frame_a), (anchor.frame_b, cut.frame_b)]:
-        mdl.connect(a, b)
-    return mdl
 
 
 def test_a_quaternion_loop_differences_its_start_and_matches_whole_runs():

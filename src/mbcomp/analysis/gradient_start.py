@@ -20,11 +20,9 @@ Examples
 """
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 
-from ..errors import InitializationError, ModelError, Problem
+from ..simulation.sensitivity import differenced_start
 
 __all__ = ["StartTerm", "start_derivative", "reached_params", "free_start"]
 
@@ -193,10 +191,8 @@ def start_derivative(numeric, spec, t0):
     so the difference is exact to its truncation error, ~h^2) of the numeric system ``numeric``
     for the parameter ``spec`` (``{"path", "name", "index", "value"}``) at ``t0`` (s).
 
-    It is what :class:`StartTerm` cannot cover, and :func:`mbcomp.simulation.sensitivity.initial_sensitivities`
-    is no substitute there: on a loop of ball joints (quaternion coordinates) its minimum-norm
-    step in ``q`` is not the initialization's, and its ``dy0/dp`` was 10-20 % off this one
-    (``tests/analysis/test_gradient.py``, the ball-joint loop, checks the gradient against runs).
+    It is what :class:`StartTerm` cannot cover (:func:`mbcomp.simulation.sensitivity.differenced_start`,
+    which the sensitivities use too where the start is not determined by its rows).
 
     Examples
     --------
@@ -211,31 +207,6 @@ def start_derivative(numeric, spec, t0):
     >>> np.round(start_derivative(mbcomp.assemble(m), spec, 0.0), 9).tolist()
     [1.0, 0.0]
     """
-    from ..assembly.initialization import initialize
-
-    h = 1e-5 * max(1.0, abs(spec["value"]))
-    ys = []
-    for s in (1.0, -1.0):
-        v = spec["value"] + s * h
-        if spec["index"] is not None:
-            arr = np.array(getattr(numeric.P[spec["path"]], spec["name"]), float)
-            arr[spec["index"]] = v
-            v = arr
-        try:
-            sys2 = numeric.with_params({f"{spec['path']}.{spec['name']}": v})
-        except ModelError:  # an inertia at its triangle inequality: the values as they are, unchecked
-            P = dict(numeric.P)
-            P[spec["path"]] = SimpleNamespace(**{**vars(numeric.P[spec["path"]]), spec["name"]: v})
-            sys2 = numeric.variant(P=P)
-        try:
-            init = initialize(sys2, t0)
-        except InitializationError as exc:
-            label = f"{spec['path']}.{spec['name']}" + ("" if spec["index"] is None else str(list(spec["index"])))
-            raise InitializationError(list(exc.problems) + [Problem(
-                label, "moves the consistent start, whose derivative is a central difference of the initialization; "
-                f"at {label} = {spec['value']:.6g} {'+' if s > 0 else '-'} {h:.1g} the start cannot be made consistent",
-                "wrap the start values the loop over-specifies in Guess(...), or leave this parameter out")]) from exc
-        ys.append(np.concatenate((init.q, init.u)))
-    return (ys[0] - ys[1]) / (2 * h)
+    return differenced_start(numeric, spec["path"], spec["name"], spec["index"], spec["value"], t0)
 
 
