@@ -21,15 +21,17 @@ def rod_inertia(m, L):
     return np.diag([1e-6 * Iz, Iz, Iz])
 
 
-def build(crank_length=0.2, rod_length=0.6, m_crank=1.0, m_rod=2.0, m_slider=0.5, phi0=0.3, w0=6.0):
-    """Slider-crank with crank angle ``phi0`` (rad) and rate ``w0`` (rad/s) fixed at the start."""
+def build(crank_length=0.2, rod_length=0.6, m_crank=1.0, m_rod=2.0, m_slider=0.5, phi0=0.3, w0=6.0,
+          inertia=rod_inertia):
+    """Slider-crank with crank angle ``phi0`` (rad) and rate ``w0`` (rad/s) fixed at the start;
+    ``inertia(m, L)`` gives each link's inertia (kg m^2, frame axes, default :func:`rod_inertia`)."""
     m = Model()
     world = m.add("world", World(g=(0.0, -9.81, 0.0)))
     crank_joint = m.add("crank_joint", Revolute(n=(0, 0, 1), phi0=phi0, w0=w0))
-    crank = m.add("crank", RigidBody(m=m_crank, r_cm=(crank_length / 2, 0, 0), I=rod_inertia(m_crank, crank_length)))
+    crank = m.add("crank", RigidBody(m=m_crank, r_cm=(crank_length / 2, 0, 0), I=inertia(m_crank, crank_length)))
     crank_tip = m.add("crank_tip", FixedTranslation(r=(crank_length, 0, 0)))
     rod_joint = m.add("rod_joint", Revolute(n=(0, 0, 1), phi0=Guess(-0.1)))
-    rod = m.add("rod", RigidBody(m=m_rod, r_cm=(rod_length / 2, 0, 0), I=rod_inertia(m_rod, rod_length)))
+    rod = m.add("rod", RigidBody(m=m_rod, r_cm=(rod_length / 2, 0, 0), I=inertia(m_rod, rod_length)))
     rod_tip = m.add("rod_tip", FixedTranslation(r=(rod_length, 0, 0)))
     slider_joint = m.add("slider_joint", Prismatic(n=(1, 0, 0), s0=Guess(crank_length + rod_length)))
     slider = m.add("slider", RigidBody(m=m_slider))
