@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..simulation.sensitivity import differenced_start
+from ..simulation.sensitivity_start import differenced_start, free_start as start_freedom
 
 __all__ = ["StartTerm", "start_derivative", "reached_params", "free_start"]
 
@@ -172,17 +172,7 @@ def reached_params(g, rows, layout):
 def free_start(system):
     """Masks ``(qfree, ufree)`` of the coordinates and speeds the initialization may move (those
     without a fixed start value); see the module's example."""
-    qfree, ufree = np.ones(system.nq, bool), np.ones(system.nu, bool)
-    for e in system.topology.tree:
-        if e.kind != "joint" or e.dof == 0 or e.drive:
-            continue
-        _, qf, _, uf = e.comp.start(system.P[e.name])
-        nu = e.u.stop - e.u.start
-        ufree[e.u] = ~np.broadcast_to(np.asarray(uf, bool), (nu,))
-        if e.q.stop - e.q.start == nu:
-            qfree[e.q] = ~np.broadcast_to(np.asarray(qf, bool), (nu,))
-        else:
-            qfree[e.q] = not np.any(qf)
+    qfree, ufree, _ = start_freedom(system)
     return qfree, ufree
 
 
@@ -191,7 +181,7 @@ def start_derivative(numeric, spec, t0):
     so the difference is exact to its truncation error, ~h^2) of the numeric system ``numeric``
     for the parameter ``spec`` (``{"path", "name", "index", "value"}``) at ``t0`` (s).
 
-    It is what :class:`StartTerm` cannot cover (:func:`mbcomp.simulation.sensitivity.differenced_start`,
+    It is what :class:`StartTerm` cannot cover (:func:`mbcomp.simulation.sensitivity_start.differenced_start`,
     which the sensitivities use too where the start is not determined by its rows).
 
     Examples

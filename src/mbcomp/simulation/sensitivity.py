@@ -64,21 +64,20 @@ Examples
 """
 from __future__ import annotations
 
-from types import SimpleNamespace
 
 import numpy as np
 
 from ..codegen.graph import CodegenError
 from ..codegen.sensitivity import SensitivityCode, parameter_ref
 from ..codegen.sensitivity_engine import SensitivityIntegrator
-from ..assembly.initialization import initialize
 from ..assembly.kkt import project_state, solve_kkt
-from ..errors import InitializationError, ModelError, Problem, SimulationError
+from ..errors import SimulationError
+from .sensitivity_start import differenced_start, free_start, rate_map
 from .sensitivity_events import Jump, moved_params, with_value
 from .sensitivity_table import SensitivityTable
 from .stepping import StepHook
 
-__all__ = ["Sensitivities", "check_sensitivities", "initial_sensitivities", "differenced_start"]
+__all__ = ["Sensitivities", "check_sensitivities", "initial_sensitivities"]
 
 #: relative step of the central differences of a held segment's right-hand side (about the
 #: cube root of the rounding error: truncation and rounding both near 1e-11 relative)
@@ -323,18 +322,7 @@ class Sensitivities(StepHook):
         """``S(t0)``: the derivative of the consistent start state (see the module notes)."""
         nq, nu = system.nq, system.nu
         S = np.zeros((self.n, self.k))
-        qfree, ufree = np.ones(nq, bool), np.ones(nu, bool)
-        moves = np.ones(nu, bool)  # the directions (speed slots) initialization moves the positions along
-        for e in system.topology.tree:
-            if e.kind != "joint" or e.dof == 0 or e.drive:
-                continue
-            _, qf, _, uf = e.comp.start(system.P[e.name])
-            qf, uf = np.broadcast_to(qf, (e.u.stop - e.u.start,)), np.broadcast_to(uf, (e.u.stop - e.u.start,))
-            ufree[e.u], moves[e.u] = ~uf, ~qf
-            if e.q.stop - e.q.start == e.u.stop - e.u.start:
-                qfree[e.q] = ~qf
-            else:
-                qfree[e.q] = not np.any(qf)
+        qfree, ufree, moves = free_start(system)
         for j, ref in enumerate(self.refs):
             if ref.kind != "start":
                 continue
@@ -358,7 +346,7 @@ class Sensitivities(StepHook):
             return S
         m, (r, Dq, Du, Dp) = res
         Gq, Gp = Dq[:m], Dp[:m]
-        Q = _rate_map(system, y0[:nq])
+        Q = rate_map(system, y0[:nq])
         Vq, Vu, Vp = Dq[m:], Du[m:], Dp[m:]
         if (np.linalg.matrix_rank(Gq @ Q[:, moves]) < moves.sum() if m else False) or (
                 Vq.shape[0] and np.linalg.matrix_rank(Vu[:, ufree]) < ufree.sum()):
@@ -413,7 +401,7 @@ class Sensitivities(StepHook):
         nq = system.nq
         S = S.copy()
         if m:  # minimum norm along the speeds' directions, as the run's projection
-            Gq, Q = Dq[:m], _rate_map(system, y[:nq])
+            Gq, Q = Dq[:m], rate_map(system, y[:nq])
             S[:nq] -= Q @ (np.linalg.pinv(Gq @ Q) @ (Gq @ S[:nq] + Dp[:m]))
         if Dq.shape[0] > m:
             Vq, Vu, Vp = Dq[m:], Du[m:], Dp[m:]
@@ -562,61 +550,6 @@ def _projected_by_differences(held, t, y, S):
             plus, minus, eps = twins[j]
         out[:, j] = (project_state(plus, t, y + eps * S[:, j]) - project_state(minus, t, y - eps * S[:, j])) / (2 * eps)
     return out
-
-
-def differenced_start(numeric, path, name, index, value, t0):
-    """``dy0/dp`` by a central difference of the consistent initialization of the numeric
-    system ``numeric`` for the parameter ``path.name[index]`` (``index`` None for a scalar) at
-    its ``value``: what the start of a run moved to ``value +- h`` is (the initialization closes
-    the start to round-off, so the difference is exact to its truncation error, ~1e-10). Used
-    where the start's rows do not determine the free coordinates or speeds (a loop of ball
-    joints: which consistent start is reached depends on the initialization's steps from the
-    guesses, so no formula at the start point gives its derivative).
-
-    Examples
-    --------
-    >>> import numpy as np, mbcomp
-    >>> from mbcomp.simulation.sensitivity import differenced_start
-    >>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
-    >>> m = mbcomp.Model(); w = m.add("world", World())
-    >>> j = m.add("j", Revolute(phi0=0.5)); rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    >>> bob = m.add("bob", PointMass(m=1.0))
-    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
-    >>> np.round(differenced_start(mbcomp.assemble(m), "j", "phi0", None, 0.5, 0.0), 9).tolist()
-    [1.0, 0.0]
-    """
-    h = 1e-5 * max(1.0, abs(value))
-    ys = []
-    for s in (1.0, -1.0):
-        v = value + s * h
-        if index is not None:
-            arr = np.array(getattr(numeric.P[path], name), float)
-            arr[index] = v
-            v = arr
-        try:
-            sys2 = numeric.with_params({f"{path}.{name}": v})
-        except ModelError:  # an inertia at its triangle inequality: the values as they are, unchecked
-            P = dict(numeric.P)
-            P[path] = SimpleNamespace(**{**vars(numeric.P[path]), name: v})
-            sys2 = numeric.variant(P=P)
-        try:
-            init = initialize(sys2, t0)
-        except InitializationError as exc:
-            label = f"{path}.{name}" + ("" if index is None else str(list(index)))
-            raise InitializationError(list(exc.problems) + [Problem(
-                label, "moves the consistent start, whose derivative is a central difference of the initialization; "
-                f"at {label} = {value:.6g} {'+' if s > 0 else '-'} {h:.1g} the start cannot be made consistent",
-                "wrap the start values the loop over-specifies in Guess(...), or leave this parameter out")]) from exc
-        ys.append(np.concatenate((init.q, init.u)))
-    return (ys[0] - ys[1]) / (2 * h)
-
-
-def _rate_map(system, q):
-    """``Q = d(dq/dt)/du`` at ``q`` (``(nq, nu)``): how the coordinates move along each speed
-    (the identity but for quaternions); ``dq/dt`` is linear in ``u``."""
-    if system.nq == system.nu:
-        return np.eye(system.nu)
-    return np.column_stack([system.q_rate(q, e) for e in np.eye(system.nu)])
 
 
 def _normalized(system, y, S):
