@@ -104,7 +104,7 @@ from peers import chain3d, pinocchio_pendulum  # noqa: E402
 from peers.cpu_clock import cpu  # noqa: E402
 
 import mbcomp  # noqa: E402
-from mbcomp.codegen.jacobian import JacobianCode  # noqa: E402
+from mbcomp.codegen.jacobian import MAX_SPEEDS as JACOBIAN_MAX_SPEEDS, JacobianCode  # noqa: E402
 from mbcomp.formulations import Formulation, LagrangeIndex1  # noqa: E402
 
 AGREE = 1e-8     # the ddq blocks of mbcomp and Pinocchio must agree to this, relative
@@ -184,7 +184,8 @@ def cross_check(c, rows):
     N, y = c.N, c.y
     J = c.jac(T0, y, 0.0, 0.0)
     assert J is not None, f"N = {N}: the Jacobian program does not hold at the generic state"
-    assert np.array_equal(J, c.form.jac(T0, y)), "LagrangeIndex1.jac is not the exact program's matrix"
+    if c.system.nu <= JACOBIAN_MAX_SPEEDS:  # above it LagrangeIndex1.jac differences by design
+        assert np.array_equal(J, c.form.jac(T0, y)), "LagrangeIndex1.jac is not the exact program's matrix"
     assert np.array_equal(J[:N, :N], np.zeros((N, N))) and np.array_equal(J[:N, N:], np.eye(N)), \
         f"N = {N}: d(dq/dt)/dy is not [0, I]"
     dq, dv, _ = (np.asarray(x) for x in c.pinocchio()())

@@ -125,8 +125,8 @@ def reverse(graph, outputs, weights, inputs):
                     continue
                 adj[j] = adj[j] + c if j in adj else c
     out = [0.0 if x is None else adj.get(x.i, 0.0) for x in inputs]
-    # a derivative that is a constant node is given as its number (the printers take constant
-    # outputs as numbers: a constant node among them would be hoisted and never computed)
+    # a derivative that is a constant node is given as its number: a literal in the program
+    # rather than a hoisted value
     return [v.v if type(v) is Sym and keys[v.i][0] == "c" else v for v in out]
 
 

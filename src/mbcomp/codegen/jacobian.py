@@ -1,13 +1,14 @@
 """The exact Jacobian ``d fun / d y`` of the Lagrange index-1 right-hand side, as a generated
-program (Python or C) differentiated from the traced right-hand side by
-:func:`mbcomp.codegen.tangent.tangent`.
+program differentiated from the traced right-hand side.
 
 The right-hand side ``fun(t, y) = [dq/dt, du/dt]`` at ``y = [q, u]`` is traced once more
-(``program="fun"``, the system's row mask); its outputs are differentiated with respect to
-the ``q`` and ``u`` inputs in the same graph, and the ``(nq + nu)^2`` entries are printed as
-one program that checks the right-hand side's guards (a failed guard, or a non-finite entry:
-no exact Jacobian at that state, the caller differences). Parameter-only subexpressions are
-hoisted as in every program and computed once per parameter set (:meth:`JacobianCode.bind`).
+(``program="fun"``, the system's row mask) and its outputs differentiated with respect to the
+``q`` and ``u`` inputs: in C as loops over the directions
+(:class:`~mbcomp.codegen.direction_loops.TangentLoops`: the coordinates and the speeds are two
+blocks), in Python by the scalar forward mode (:func:`mbcomp.codegen.tangent.tangent`). Either
+program checks the right-hand side's guards (a failed guard, or a non-finite entry: no exact
+Jacobian at that state, the caller differences). Parameter-only subexpressions are hoisted as
+in every program and computed once per parameter set (:meth:`JacobianCode.bind`).
 
 Examples
 --------
@@ -31,6 +32,7 @@ import math
 
 import numpy as np
 
+from .direction_loops import TangentLoops
 from .graph import Fallback, Retrace, no_gc
 from .printers import Program
 from .loaded import LoadedProgram
@@ -40,14 +42,15 @@ from .tracer import param_layout, param_vector, trace
 __all__ = ["JacobianCode", "BoundJacobian", "MAX_SPEEDS"]
 
 
-#: above this many speeds no exact Jacobian program is made (the callers difference): forward
-#: mode over ``nq + nu`` inputs costs O(N^2) straight-line operations on a chain, so the program
-#: and its compile grow fast while forward differences of the O(N) compiled right-hand side do
-#: not (``bench/derivatives.py``, planar chain, per call against Pinocchio's
-#: computeABADerivatives: N = 10 0.8x, exact 4x faster than differences; N = 40 2.7x, 5x faster
-#: than differences but 21 s to build cold; N = 100 26x, 4x slower than differences, 144 s to
-#: build). The same bound as the DAE forms' (:data:`mbcomp.codegen.dae_jacobian.MAX_SPEEDS`).
-MAX_SPEEDS = 24
+#: above this many speeds no exact Jacobian program is made while a run asks for one (the
+#: callers difference): a cost policy on the cold build, not on the call. The C program
+#: (loops over directions, :mod:`mbcomp.codegen.direction_loops`) costs 0.5-0.6x Pinocchio's
+#: computeABADerivatives per call on a planar chain at every N measured (5 to 100) and 29x less
+#: than forward differences at N = 40, but its first build takes about 5 s at N = 40 and 12-30 s
+#: at N = 100 (once per structure; the disk cache keeps it). ``JacobianCode.build(...,
+#: max_speeds=None)`` builds it at any size. The DAE forms' bound
+#: (:data:`mbcomp.codegen.dae_jacobian.MAX_SPEEDS`) is separate: their programs are scalar.
+MAX_SPEEDS = 40
 
 
 class JacobianCode:
@@ -87,10 +90,14 @@ class JacobianCode:
         ins = [g.memo.get(("in", "q", k)) for k in range(nq)] + [g.memo.get(("in", "u", k))
                                                                   for k in range(self.n - nq)]
         # the tracer makes every input; one that were missing (None) has derivative zero
-        flat = [v for row in tangent(g, fun, ins) for v in row]
-        prog = Program(g, {"jac": flat}, guard_groups={"jac": list(tr.guard_groups["fun"])})
         self.backend = backend
-        self.loaded = LoadedProgram(prog, "jac", "mbcomp_jac", backend, cache_dir, "Jacobian program")
+        if backend == "c":  # loops over the directions (codegen/direction_loops.py)
+            self.loaded = TangentLoops(g, fun, ins, [(0, nq), (nq, self.n)], tr.guard_groups["fun"], "mbcomp_jac",
+                                       cache_dir, "Jacobian program")
+        else:
+            flat = [v for row in tangent(g, fun, ins) for v in row]
+            prog = Program(g, {"jac": flat}, guard_groups={"jac": list(tr.guard_groups["fun"])})
+            self.loaded = LoadedProgram(prog, "jac", "mbcomp_jac", backend, cache_dir, "Jacobian program")
         self.pre, self.n_ops, self.n_work = self.loaded.pre, self.loaded.n_ops, self.loaded.n_work
 
     @classmethod

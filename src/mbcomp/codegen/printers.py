@@ -37,7 +37,7 @@ from .graph import Retrace, Sym
 from .ieee import COMPARE, INF, call_or_nan, div, power
 from .rolling import ROLL_MIN, rolled as _rolled
 
-__all__ = ["PY_ENV", "Program", "ParamProgram", "python_source"]
+__all__ = ["PY_ENV", "Program", "ParamProgram", "python_source", "LOCAL_MACRO", "SIGNATURE"]
 
 _PY_UNARY = {"cos": "_cos", "sin": "_sin", "tan": "_tan", "asin": "_asin", "acos": "_acos", "atan": "_atan",
              "sqrt": "_sqrt", "exp": "_exp", "log": "_log", "sinh": "_sinh", "cosh": "_cosh", "tanh": "_tanh",
@@ -418,16 +418,16 @@ class Program:
                     cond = f"{name(ai, c)} {op} {name(bi, c)}"
                     body.append(f"    if ({'!' if res else ''}({cond})) return 1;")
             funcs.append((len(ch), f"{fname}_{c}",
-                          f"{linkage} {fname}_{c}({_SIG})\n{{\n" + "\n".join(body) + "\n    return 0;\n}\n"))
+                          f"{linkage} {fname}_{c}({SIGNATURE})\n{{\n" + "\n".join(body) + "\n    return 0;\n}\n"))
         for r, lp in enumerate(loops):
-            funcs.append((lp.weight, f"{fname}_r{r}", lp.source(f"{fname}_r{r}", linkage, _SIG, _c_expr)))
+            funcs.append((lp.weight, f"{fname}_r{r}", lp.source(f"{fname}_r{r}", linkage, SIGNATURE, _c_expr)))
         tail_lines = _tail_c([(k, self._out_name(o, 'c')) for k, o in tail])
         for gd in guards.get(-1, ()):
             op, ai, bi, res = gd
             cond = f"{self._name(ai, 'c', True)} {op} {self._name(bi, 'c', True)}"
             tail_lines.append(f"    if ({'!' if res else ''}({cond})) return 1;")
         calls = "\n".join(f"    if ({fn}(q, u, t, d, h, p, w, out)) return 1;" for _, fn, _ in funcs)
-        entry = f"int {fname}({_SIG})\n{{\n{calls}\n" + "\n".join(tail_lines) + "\n    return 0;\n}\n"
+        entry = f"int {fname}({SIGNATURE})\n{{\n{calls}\n" + "\n".join(tail_lines) + "\n    return 0;\n}\n"
         return _units(funcs, entry, n_parts, linkage), len(slot)
 
     def _out_places(self, group, nodes, rolled):
@@ -490,7 +490,7 @@ def _tail_c(pairs):
     return lines
 
 
-_SIG = ("const double *restrict q, const double *restrict u, double t, const double *restrict d, "
+SIGNATURE = ("const double *restrict q, const double *restrict u, double t, const double *restrict d, "
         "const double *restrict h, const double *restrict p, double *restrict w, double *restrict out")
 
 
@@ -525,9 +525,9 @@ def _units(funcs, entry, n_parts, linkage):
     for wt, fn, src in funcs:
         bins[min(n_parts - 1, acc * n_parts // total)].append(src)
         acc += wt
-    decl = "\n".join(f"{linkage} {fn}({_SIG});" for _, fn, _ in funcs)
-    parts = [_LOCAL + "\n".join(b) for b in bins[:-1]]
-    parts.append(_LOCAL + decl + "\n\n" + "\n".join(bins[-1]) + "\n" + entry)
+    decl = "\n".join(f"{linkage} {fn}({SIGNATURE});" for _, fn, _ in funcs)
+    parts = [LOCAL_MACRO + "\n".join(b) for b in bins[:-1]]
+    parts.append(LOCAL_MACRO + decl + "\n\n" + "\n".join(bins[-1]) + "\n" + entry)
     return parts
 
 
@@ -551,7 +551,7 @@ def _reach(starts, A, B, allowed, expand):
     return mark
 
 
-_LOCAL = ("#ifndef MBCOMP_LOCAL\n#if defined(__GNUC__)\n#define MBCOMP_LOCAL __attribute__((visibility(\"hidden\")))\n"
+LOCAL_MACRO = ("#ifndef MBCOMP_LOCAL\n#if defined(__GNUC__)\n#define MBCOMP_LOCAL __attribute__((visibility(\"hidden\")))\n"
           "#else\n#define MBCOMP_LOCAL\n#endif\n#endif\n")
 
 
@@ -574,7 +574,9 @@ class ParamProgram:
         self.guards = prog.param_guards
         self.hoisted = prog.hoisted
         self.shadow = [g.nodes[i].v for i in prog.hoisted]
-        used = {j for _, k in self.order for j in k[1:]} | {j for gd in self.guards for j in gd[1:3]}
+        # an output may itself be a constant node (a derivative's coefficient): hoisted, so read here
+        used = ({j for _, k in self.order for j in k[1:]} | {j for gd in self.guards for j in gd[1:3]}
+                | set(prog.hoisted))
         self.consts = {j: keys[j][1] for j in used if keys[j][0] == "c"}
 
     def __len__(self):
