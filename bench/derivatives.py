@@ -51,24 +51,21 @@ central differences of tight runs), and central differences of whole runs at the
 sensitivities reach (the loosest run tolerance that gets there; two runs per parameter).
 Parameters: every link's mass and every joint's start angle.
 
-Measured (2026-11-28, default run, shared 2-core VM under load): the planar
-chain's exact Jacobian costs 0.9x Pinocchio at N = 5 and 10 (the C program alone 0.65x,
-0.8x), 2.8x at N = 40 and 7-26x at N = 100 (1.5-7.5 ms between runs: its 1.76 million
-straight-line operations are 19 MB of machine code, fetched from memory at every call, so
-the time follows the machine's load; forward differences of the O(N) right-hand side, 1.9 ms,
-are then faster, if 1e-5 wrong). Pinocchio's algorithm has the same O(N^2) count of scalar
-operations up to N ~ 40 but spends it in loops (spatial algebra, Eigen's vectorized products);
-the traced program differentiates the world-frame articulated inertias direction by
-direction, half of its operations. The 3-D chain's program is 4x the planar one's (3.4x
-Pinocchio at N = 10).
+Measured (2026-11-28, session 4, idle 2-core VM, the program printed as loops over directions,
+``mbcomp.codegen.direction_loops``): planar chain, the C program 0.58x / 0.46x / 0.47x / 0.68x
+Pinocchio at N = 5 / 10 / 40 / 100 (the bound callable 0.82x..0.71x; ``LagrangeIndex1.jac``
+0.93-1.0x at N = 5, 0.67x, 0.64x, and forward differences at N = 100, above
+``jacobian.MAX_SPEEDS``), cold builds 0.7 / 2.1 / 9.7 / 23 s. The straight-line scalar program
+it replaced was 0.66x / 0.78x / 2.53x / 6.68x and built in 0.35 / 1.16 / 20 / 133 s. The 3-D
+chain: 1.09x / 1.23x / 4.5x at N = 5 / 10 / 40 (why: ``docs/design/derivatives.md``).
 
 Writes bench/derivatives.csv (long format: table, N, who, quantity, value, note) and
 bench/derivatives.png (per mechanism: microseconds per call and ratio to Pinocchio vs N); both are git-ignored
 like every bench output.
 
 Run: python bench/derivatives.py [--Ns 5,10,40,100] [--Ns-3d 5,10] [--quick] [--sens-N 10] [--grad-N 50] [--skip-b]
-     (needs the extra: pip install -e ".[bench]"). N = 100 compiles a program of ~1.7 million
-     operations: several minutes of compiler CPU.
+     (needs the extra: pip install -e ".[bench]"). About 2.5 minutes; the N = 100 and 3-D N = 40
+     programs take 20-45 s of compiler each.
 """
 import os
 

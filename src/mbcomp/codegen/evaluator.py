@@ -464,6 +464,19 @@ class ProgramEvaluator:
         program (:class:`mbcomp.codegen.jacobian.JacobianCode`, made at first need per row
         mask and reused by ``with_params``), or None when there is none or it does not hold at
         ``y`` (a failed guard, a non-finite entry): the caller then differences."""
+        jac = self.lagrange_jacobian()
+        if jac is None:
+            return None
+        J = jac(t, y, alpha, beta)
+        if J is None:
+            self.count_jac_fallback()
+        return J
+
+    def lagrange_jacobian(self):
+        """The bound exact Jacobian program for the current row mask
+        (:class:`mbcomp.codegen.jacobian.BoundJacobian`: ``jac(t, y, alpha, beta)`` -> matrix or
+        None), or None when there is none; what :meth:`lagrange_jac` calls, for callers that
+        keep it per row mask (one Python layer less per call)."""
         if self._fun_bound() is None:
             return None
         rm = self.system.row_mask
@@ -474,12 +487,12 @@ class ProgramEvaluator:
             jac = bind_cached(self.funs, key, lambda: JacobianCode.build(self.system, self.backend, o["cache_dir"],
                                                                          o["max_nodes"]), self.system)
             cached = self._jac = (rm, jac)
-        if cached[1] is None:
-            return None
-        J = cached[1](t, y, alpha, beta)
-        if J is None:
-            self.stats["jac_fallbacks"] = self.stats.get("jac_fallbacks", 0) + 1
-        return J
+        return cached[1]
+
+    def count_jac_fallback(self):
+        """Count a state where the exact Jacobian program did not hold (the stats'
+        ``jac_fallbacks``)."""
+        self.stats["jac_fallbacks"] = self.stats.get("jac_fallbacks", 0) + 1
 
     def dae_jacobian(self, form):
         """The exact Jacobian program of a multiplier DAE form bound to this system, or None

@@ -203,7 +203,13 @@ class BoundJacobian:
                 return None
             J = np.array(out, float).reshape(n, n)
             return J if np.isfinite(J).all() else None
-        if self.run_c(t, y, alpha, beta):
+        # run_c inlined: one Python call less (a tenth of the whole at N = 5)
+        self.ybuf[:n] = y
+        d = self.dbuf
+        d[0] = alpha
+        d[1] = beta
+        a = self.addresses
+        if code.loaded.cfun(a[0], a[1], float(t), a[2], a[3], a[4], a[5], a[6]):
             return None
         # one dot product is finite exactly when every entry is (a NaN or an infinity spreads;
         # an overflow of finite entries is rare and then settled by the full check)

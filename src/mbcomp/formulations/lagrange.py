@@ -114,14 +114,26 @@ class LagrangeIndex1(Formulation):
 
     def jac(self, t, y):
         """``d fun / dy``: exact, from the generated Jacobian program
-        (:meth:`mbcomp.codegen.evaluator.ProgramEvaluator.lagrange_jac`) when the system runs a
+        (:meth:`mbcomp.codegen.evaluator.ProgramEvaluator.lagrange_jacobian`, kept per row mask) when the system runs a
         generated right-hand side; else (the numeric backend, a state where the program does
         not hold) by forward differences (:meth:`Formulation.jac`)."""
-        if self._one_call() is not None:
-            J = self.system.evaluator.lagrange_jac(t, np.asarray(y, dtype=float), *self._gains)
+        jac = self._exact_jacobian()
+        if jac is not None:
+            J = jac(t, np.asarray(y, dtype=float), *self._gains)
             if J is not None:
                 return J
+            self.system.evaluator.count_jac_fallback()
         return super().jac(t, y)
+
+    def _exact_jacobian(self):
+        """The evaluator's bound Jacobian program (``lagrange_jacobian``) or None, looked up
+        once per row mask as :meth:`_one_call` (the lookup costs a quarter of the call at N = 5)."""
+        mask = self.system.row_mask
+        cached = self.__dict__.get("_jacobian_for")
+        if cached is None or cached[0] is not mask:
+            jac = self.system.evaluator.lagrange_jacobian() if self._one_call() is not None else None
+            cached = self._jacobian_for = (mask, jac)
+        return cached[1]
 
     def _one_call(self):
         """The evaluator's one-call right-hand side (``lagrange_fun``) or None, looked up once
