@@ -36,7 +36,7 @@ __all__ = [
     "Box", "Cylinder", "Sphere", "Mesh", "Helix", "Rod", "Grid",
     "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",
     "load_model_file", "load_model", "export_fmu", "Input", "study", "Uniform", "Normal", "gradient",
-    "fit",
+    "fit", "batch",
 ]
 
 
@@ -65,6 +65,9 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name == "gradient":  # adjoint gradients of an objective of a run
         from .analysis.gradient import gradient
         return gradient
+    if name == "batch":  # many parameter sets in one compiled call
+        from .analysis.batch import batch
+        return batch
     if name == "fit":  # parameter identification: least squares with the exact sensitivities
         from .analysis.fit import fit
         return fit

@@ -1,0 +1,437 @@
+"""Batches: many parameter sets and start states of one model in one compiled call.
+
+:func:`batch` runs every row of a table of parameter values (``"rod.m"``, ``"crank_joint.phi0"``:
+masses, lengths, start values alike) through the path :func:`mbcomp.simulate` takes for a
+smooth model -- consistent initialization in Python, then the Lagrange program integrated by
+the C engine -- except that the integrations of all runs are one C call
+(:func:`mbcomp.codegen.batch.run_batch`), on POSIX threads with the GIL released, each run
+with its own error control and the stretches ``simulate`` makes, so each run gives the numbers
+``simulate`` gives (the tests hold them to 1e-12). Python prepares the next block of runs
+(initialization, the parameter program) while C integrates the previous one. The requested
+output columns come from the output program (:mod:`mbcomp.codegen.outputs`) over each run's
+grid.
+
+What a batch does not do, and says so: models with events (stops, contacts, friction modes),
+external inputs, drives whose law is not traced, ``stabilization="projection"`` and methods
+other than ``dop853``/``dopri5`` are refused before anything runs (use :func:`mbcomp.study`,
+which runs :func:`mbcomp.simulate` per run); the accuracy alarms of ``simulate``'s
+post-processing (``"inaccurate"``) and its run monitors are not evaluated; columns only the
+post-processing makes (energy balance, momenta, model output functions) are not offered. A run
+whose program guard fails (a law's other branch, a singular solve) is finished by
+:func:`mbcomp.simulate` (``fallback=True``, listed in ``stats["simulate_reruns"]``), as
+``simulate`` itself would go on on its Python path there; a run that fails otherwise keeps
+what it reached (NaN after) with its status and message, and the other runs are kept.
+
+Examples
+--------
+>>> import numpy as np, mbcomp
+>>> from mbcomp.codegen import c_compiler
+>>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+>>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
+>>> j = m.add("j", Revolute(n=(0, 0, 1), phi0=0.1)); rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+>>> bob = m.add("bob", PointMass(m=1.0))
+>>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+>>> if c_compiler():
+...     b = mbcomp.batch(m, {"j.phi0": [0.01, 0.02], "rod.r": [(0, -1.0, 0), (0, -4.0, 0)]}, t_end=2.006,
+...                      n_out=3, outputs=["j.f.y"], threads=2)
+...     # small swings: the period is 2 pi sqrt(L / g), 2.006 s for 1 m, twice that for 4 m
+...     print(b.status.tolist(), np.round(b["j.phi"][:, -1], 3).tolist(), b["j.f.y"].shape)
+... else:
+...     print(['success', 'success'], [0.01, -0.02], (2, 3))
+['success', 'success'] [0.01, -0.02] (2, 3)
+"""
+from __future__ import annotations
+
+import concurrent.futures
+import difflib
+import time
+
+import numpy as np
+
+from ..assembly.outputs import output_values
+from ..errors import InitializationError, ModelError, SimulationError
+from ..formulations import build
+from ..geometry.kinematics import matrix_to_quat
+from ..hybrid.active import start_modes
+from ..hybrid.contacts import initialize_in_modes
+from ..simulation.setup import check_model, check_numbers, output_times, system_of
+from ..solvers import STEPPERS
+from .batch_result import BatchResult, STATUS_OF
+
+__all__ = ["batch", "BatchResult", "BLOCK"]
+
+#: runs per C call: Python prepares the next block while C integrates this one
+BLOCK = 64
+#: the methods a batch integrates (the C engine's)
+METHODS = {"dop853": 8, "dopri5": 5}
+
+
+def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol=1e-10, n_out=None, dt_out=None,
+          method="dop853", stabilization=None, alpha=10.0, beta=10.0, max_step=np.inf, max_steps=None,
+          threads=None, fallback=True, block=BLOCK, cache_dir=None):
+    """Run a model once per row of ``table``, all integrations in one compiled call.
+
+    Parameters
+    ----------
+    model : Model or MultibodySystem
+        A smooth model (no events, no external inputs; see the module notes).
+    table : dict or pandas.DataFrame
+        ``{"component.parameter": values}``, one value per run (a vector parameter such as
+        ``"rod.r"`` one vector per run); start values (``"joint.phi0"``, ``"joint.w0"``) are
+        parameters like any other and go through consistent initialization per run.
+    t_end, t_start : float
+        Time span of every run (s).
+    outputs : list of str or "all", optional
+        Result columns besides the states (reactions, poses, energies, joints' outputs,
+        aliases) from the output program; ``"all"`` for every column it has.
+    rtol, atol, n_out, dt_out, method, stabilization, alpha, beta, max_step
+        As for :func:`mbcomp.simulate` (``method`` ``"dop853"`` or ``"dopri5"``;
+        ``stabilization`` ``"baumgarte"`` (default) or ``"none"``).
+    max_steps : int, optional
+        Attempted steps per run at most; a run that needs more ends with status ``"budget"``.
+    threads : int, optional
+        Threads integrating runs at once (default: this machine's cores).
+    fallback : bool
+        Finish a run whose program guard fails with :func:`mbcomp.simulate` (default); else
+        report it ``"failed"``.
+    block : int
+        Runs per C call.
+    cache_dir : str, optional
+        Where compiled programs are cached.
+
+    Returns
+    -------
+    BatchResult
+        ``res["joint1.phi"]`` is ``(n_runs, n_out)``; ``res.status``, ``res.message`` per run.
+    """
+    t0 = time.perf_counter()
+    check_model(model)
+    if method not in METHODS:
+        raise ValueError(f"method={method!r}: a batch integrates with the C engine's 'dop853' or 'dopri5' -> use one "
+                         "of them, or mbcomp.study(...) to run simulate per run with any method")
+    stabilization = "baumgarte" if stabilization is None else stabilization
+    if stabilization not in ("baumgarte", "none"):
+        raise ValueError(f"stabilization={stabilization!r}: a batch runs 'baumgarte' or 'none' (the projection after "
+                         "every step needs a second program per thread) -> use mbcomp.study(..., stabilization="
+                         f"{stabilization!r})")
+    check_numbers(t_start=t_start, t_end=t_end, rtol=rtol, atol=atol, alpha=alpha, beta=beta, n_out=n_out,
+                  dt_out=dt_out, max_step=max_step, h=None, max_wall_time=None, max_steps=max_steps)
+    if not t_end > t_start:
+        raise ValueError(f"t_end ({t_end}) must be greater than t_start ({t_start})")
+    from ..codegen import c_compiler
+
+    if c_compiler() is None:
+        raise RuntimeError("mbcomp.batch needs a C compiler (gcc or cc on PATH, or $CC) -> install one, or use "
+                           "mbcomp.study(...) (simulate per run)")
+    system = system_of(model, None, "c")
+    if system.backend != "c":
+        raise ValueError("the model's laws cannot be traced into a C program (see the warning above), so a batch "
+                         "cannot run it -> use mbcomp.study(...) (simulate per run on the numeric path)")
+    values, n_runs = _table(system, table)
+    _refuse_events(system)
+    request = dict(t_start=float(t_start), t_end=float(t_end), rtol=float(rtol), atol=atol, method=method,
+                   stabilization=stabilization, alpha=float(alpha), beta=float(beta), n_out=n_out, dt_out=dt_out,
+                   max_step=max_step)
+    runner = _Runner(system, request, values, n_runs, outputs, max_steps, threads, cache_dir)
+    runner.run(max(1, int(block)))
+    res = runner.result()
+    if fallback:
+        _rerun(res, model, system, values, request)
+    res.stats["wall_time"] = time.perf_counter() - t0
+    return res
+
+
+def _table(system, table):
+    """``({name: per-run values}, n_runs)`` from a dict or DataFrame; a ``ValueError`` naming an
+    unknown component or parameter (with the close names), a value of the wrong shape, or
+    columns of unequal lengths."""
+    if hasattr(table, "columns") and hasattr(table, "to_dict") and not isinstance(table, dict):
+        table = {str(c): list(table[c]) for c in table.columns}
+    if not isinstance(table, dict) or not table:
+        raise TypeError(f"table must be a dict (or DataFrame) of 'component.parameter' -> one value per run, not "
+                        f"{table!r:.60}")
+    params = {c: vars(ns) for c, ns in system.P.items()}
+    out, lengths = {}, {}
+    for name, col in table.items():
+        comp, _, par = str(name).rpartition(".")
+        if comp not in params:
+            close = difflib.get_close_matches(comp or name, list(params), n=3)
+            raise ValueError(f"table column {name!r}: no component {comp or name!r} in the model"
+                             + (f" (did you mean {', '.join(close)}?)" if close else "")
+                             + " -> name parameters '<component>.<parameter>', e.g. 'link1.m'; build() arguments "
+                             "change the structure: use mbcomp.study(build, ...) for those")
+        if par not in params[comp]:
+            raise ValueError(f"table column {name!r}: component {comp!r} has no parameter {par!r}; its parameters: "
+                             f"{', '.join(sorted(params[comp]))}")
+        default = params[comp][par]
+        if callable(default) or isinstance(default, str):
+            raise ValueError(f"table column {name!r}: {par!r} is a law or text, not a number; a batch changes "
+                             "numbers only (a law changes the program) -> use mbcomp.study(...)")
+        shape = np.shape(default)
+        try:
+            vals = [np.asarray(v, float) for v in col]
+        except (TypeError, ValueError):
+            raise ValueError(f"table column {name!r}: values must be numbers (shape {shape})") from None
+        bad = [i for i, v in enumerate(vals) if v.shape != shape or not np.isfinite(v).all()]
+        if bad:
+            raise ValueError(f"table column {name!r}, run {bad[0]}: {col[bad[0]]!r} is not a finite value of shape "
+                             f"{shape} (the parameter's default is {default!r})")
+        out[name], lengths[name] = [float(v) if not shape else v for v in vals], len(vals)
+    if len(set(lengths.values())) != 1:
+        raise ValueError(f"table columns have different lengths: {lengths} -> give one value per run in every column")
+    n = next(iter(lengths.values()))
+    if n < 1:
+        raise ValueError("table has no runs (its columns are empty)")
+    return out, n
+
+
+def _refuse_events(system):
+    """A ``ValueError`` for what the C batch cannot run: joints with modes (events), external
+    inputs; each with the fix."""
+    modes = start_modes(system)
+    if modes:
+        raise ValueError(f"a batch runs smooth models only: {', '.join(sorted(modes))} have modes (stops, contacts or "
+                         "friction: events change the equations during a run) -> use mbcomp.study(model, grid, ...), "
+                         "which runs mbcomp.simulate per run")
+    inputs = getattr(system.topology.flat, "inputs", None)
+    if inputs:
+        raise ValueError(f"a batch cannot run a model with external inputs ({', '.join(map(str, inputs))}): they are "
+                         "Python functions of time -> use mbcomp.simulate(..., inputs=...) per run or mbcomp.study")
+
+
+class _Runner:
+    """The runs of one batch: prepared in Python block by block, integrated in C (the next
+    block prepared while C integrates), their output columns computed as each block ends."""
+
+    def __init__(self, system, request, values, n_runs, outputs, max_steps, threads, cache_dir):
+        import os
+
+        self.system, self.req, self.values, self.n_runs = system, request, values, n_runs
+        self.outputs, self.max_steps = outputs, int(max_steps or 0)
+        self.threads = int(threads or os.cpu_count() or 1)
+        self.cache_dir = cache_dir
+        self.T = output_times(request["t_start"], request["t_end"], request["n_out"], request["dt_out"])
+        self.n = system.nq + system.nu
+        self.Y = np.full((n_runs, len(self.T), self.n), np.nan)
+        self.status = np.array(["error"] * n_runs, dtype=object)
+        self.message = [""] * n_runs
+        self.t_reached = np.full(n_runs, request["t_start"])
+        self.counts = np.zeros((n_runs, 5), np.int_)
+        self.groups = {}  # row-mask key -> (code, gains, output program or None)
+        self.columns = None  # name -> (n_runs, n_t), made when the first output program is
+        self.wanted = None
+        self.times = dict(setup_time=0.0, integrate_time=0.0, outputs_time=0.0)
+        self.stop = np.zeros(1, np.intc)
+
+    def params_of(self, i):
+        return {name: col[i] for name, col in self.values.items()}
+
+    # --- Python: a run's start ----------------------------------------------------------------
+    def prepare(self, i):
+        """``(key, h, p, y0, system, form)`` of run ``i``, or None (its status says why)."""
+        req = self.req
+        try:
+            s = self.system.with_params(self.params_of(i))
+            init = initialize_in_modes(s, req["t_start"])
+            form = build("lagrange", "ode", s, stabilization=req["stabilization"], alpha=req["alpha"],
+                         beta=req["beta"], method=req["method"], max_index=STEPPERS[req["method"]].max_index)
+            y0 = np.asarray(form.full(req["t_start"], form.initial_state(req["t_start"], init.q, init.u)), float)
+        except (InitializationError, ModelError, SimulationError, ValueError, ArithmeticError,
+                np.linalg.LinAlgError) as exc:
+            self.message[i] = f"{type(exc).__name__}: {exc}"
+            return None
+        rm = s.row_mask
+        key = None if rm is None or rm.all() else rm.tobytes()
+        hp = self._hoisted(key, s, form)
+        if hp is None:
+            self.message[i] = ("the C engine cannot run this parameter set (it changes a decision baked into the "
+                               "program, which was traced again without an engine) -> simulate it")
+            return None
+        return (hp[0], hp[1], hp[2], y0, s, form)
+
+    def _hoisted(self, key, s, form):
+        """``(group key, h, p)`` for run system ``s``: the program's hoisted values and parameter
+        vector; a set of values whose structure differs from the group's gets its own group."""
+        from ..codegen.graph import Retrace
+        from ..codegen.tracer import param_layout, param_vector
+
+        group = self.groups.get(key)
+        if group is not None:
+            code = group[0]
+            if param_layout(s)[1] == code.signature:
+                try:
+                    pv = param_vector(s, code.layout)
+                    return key, np.array(list(code.pre.run(pv)) + [0.0]), np.array(list(pv) + [0.0])
+                except Retrace:
+                    pass
+        integ = form.compiled_integrator()
+        if integ is None:
+            if not self.groups:
+                raise ValueError("the C engine cannot integrate this model (a drive law or input needs Python per "
+                                 "call, or the program has no Lagrange right-hand side) -> use mbcomp.study(...) "
+                                 "(simulate per run)")
+            return None
+        bound = integ.bound
+        gkey = key if group is None else (key, id(bound.code))
+        if gkey not in self.groups:
+            self.groups[gkey] = (bound.code, tuple(integ.d), self._output_program(s, form))
+        return gkey, bound.hbuf.copy(), bound.pbuf.copy()
+
+    def _output_program(self, s, form):
+        """The output program of a group (None without requested outputs)."""
+        if not self.outputs:
+            return None
+        from ..codegen.outputs import OutputProgram
+
+        prog = OutputProgram.build(s, "c", baumgarte=form.output_gains() is not None, cache_dir=self.cache_dir)
+        if prog is None:
+            raise ValueError("the output program cannot be traced at this model's trace point -> ask for the "
+                             "states only (outputs=None), or use mbcomp.study(...)")
+        self._check_outputs(s, prog)
+        return prog
+
+    def _check_outputs(self, s, prog):
+        have = list(prog.names) + [f"{p}.Q.{a}" for p in prog.rotation_paths for a in "wxyz"]
+        aliases = dict(s.topology.flat.aliases)
+        wanted = have if self.outputs == "all" else list(self.outputs)
+        states = set(s.q_names) | set(s.u_names)
+        for name in wanted:
+            real = aliases.get(name, name)
+            if real not in have and real not in states:
+                close = difflib.get_close_matches(name, have + list(aliases), n=5)
+                raise ValueError(f"outputs: no column {name!r} in the output program"
+                                 + (f" (similar: {', '.join(close)})" if close else "")
+                                 + "; columns made only by simulate's post-processing (energy balance, momenta, "
+                                 "model output functions) are not in a batch -> use mbcomp.simulate or study")
+        if self.wanted is None:
+            self.wanted = [(n, aliases.get(n, n)) for n in wanted if aliases.get(n, n) not in states]
+            self.columns = {n: np.full((self.n_runs, len(self.T)), np.nan) for n, _ in self.wanted}
+
+    # --- the pipeline ---------------------------------------------------------------------------
+    def run(self, block):
+        """Every run, block by block: block ``k + 1`` is prepared while C integrates block ``k``."""
+        pool = concurrent.futures.ThreadPoolExecutor(1)
+        pending = None
+        try:
+            for start in range(0, self.n_runs, block):
+                t0 = time.perf_counter()
+                prepared = [(i, self.prepare(i)) for i in range(start, min(start + block, self.n_runs))]
+                self.times["setup_time"] += time.perf_counter() - t0
+                job = pool.submit(self._integrate, [(i, p) for i, p in prepared if p is not None])
+                if pending is not None:
+                    self._finish(*pending)
+                pending = (job, prepared)
+            if pending is not None:
+                self._finish(*pending)
+        except BaseException:  # Ctrl-C or an error: the C runs stop at their next stretch
+            self.stop[0] = 1
+            raise
+        finally:
+            pool.shutdown(wait=True)
+
+    def _integrate(self, ready):
+        """The C call(s) of one block (one per group of equal programs); in a worker thread."""
+        from ..codegen.batch import run_batch
+
+        t0 = time.perf_counter()
+        req, out = self.req, {}
+        by_group = {}
+        for i, p in ready:
+            by_group.setdefault(p[0], []).append((i, p))
+        for gkey, runs in by_group.items():
+            code, gains, _ = self.groups[gkey]
+            H = np.array([p[1] for _, p in runs])
+            P = np.array([p[2] for _, p in runs])
+            Y0 = np.array([p[3] for _, p in runs])
+            hmax = req["max_step"] if np.isfinite(req["max_step"]) else 0.0
+            out[gkey] = ([i for i, _ in runs], run_batch(
+                code, METHODS[req["method"]], H, P, Y0, self.T, req["rtol"], req["atol"], gains=gains, hmax=hmax,
+                max_steps=self.max_steps, threads=self.threads, stop=self.stop, cache_dir=self.cache_dir))
+        return out, time.perf_counter() - t0
+
+    def _finish(self, job, prepared):
+        """Store a finished block: states, statuses, counters, then its output columns."""
+        out, seconds = job.result()
+        self.times["integrate_time"] += seconds
+        for gkey, (idx, r) in out.items():
+            self.Y[idx] = r.Y
+            self.t_reached[idx] = r.t_reached
+            self.counts[idx] = r.counts
+            for k, i in enumerate(idx):
+                code = int(r.status[k])
+                self.status[i] = STATUS_OF[code]
+                self.message[i] = "reached t_end" if code == 0 else (
+                    f"the integrator {self.req['method']} stopped at t={r.t_reached[k]:.9g} s: {r.messages[k]} "
+                    f"({_why(code)})")
+        if self.columns is not None:
+            t0 = time.perf_counter()
+            for i, p in prepared:
+                if p is not None:
+                    self._outputs(i, p)
+            self.times["outputs_time"] += time.perf_counter() - t0
+
+    def _outputs(self, i, p):
+        """Run ``i``'s requested columns over the output times it reached (the output program;
+        a point where its guard fails by the numeric route)."""
+        gkey, _, _, _, s, form = p
+        prog = self.groups[gkey][2]
+        reached = int(np.isfinite(self.Y[i]).all(axis=1).sum())
+        if prog is None or reached == 0:
+            return
+        T, Y, gains = self.T[:reached], self.Y[i, :reached], form.output_gains()
+        names, V, quats, ok = prog.grid(s, T, Y, gains)
+        col = {n: V[j] for j, n in enumerate(names)}
+        col.update({f"{path}.Q.{a}": Q[:, j] for path, Q in quats.items() for j, a in enumerate("wxyz")})
+        for k in np.flatnonzero(~ok):
+            try:
+                vals, rots = output_values(s, T[k], Y[k, :s.nq], Y[k, s.nq:], *(gains or (0.0, 0.0)),
+                                           baumgarte=gains is not None)
+            except Exception as exc:  # noqa: BLE001 - a singular point: its columns stay NaN, said once
+                self.message[i] += f"; output columns at t={T[k]:g} s could not be computed ({type(exc).__name__})"
+                continue
+            for name, v in vals.items():
+                if name in col:
+                    col[name][k] = v
+            for path, R in rots.items():
+                Q = matrix_to_quat(R)
+                for j, a in enumerate("wxyz"):
+                    if f"{path}.Q.{a}" in col:
+                        col[f"{path}.Q.{a}"][k] = Q[j]
+        for name, real in self.wanted:
+            self.columns[name][i, :reached] = col[real]
+
+    def result(self):
+        """The :class:`BatchResult`."""
+        names = list(self.system.q_names) + list(self.system.u_names)
+        cols = {n: np.ascontiguousarray(self.Y[:, :, j]) for j, n in enumerate(names)}
+        aliases = dict(self.system.topology.flat.aliases)
+        for alias, var in aliases.items():
+            if var in cols and (self.outputs == "all" or alias in (self.outputs or ())):
+                cols[alias] = cols[var]
+        cols.update(self.columns or {})
+        c = self.counts
+        stats = dict(runs=self.n_runs, failed=int(sum(s != "success" for s in self.status)), threads=self.threads,
+                     method=self.req["method"], rtol=self.req["rtol"], atol=self.req["atol"], nfev=c[:, 0].copy(),
+                     nsteps=c[:, 2].copy(), nreject=c[:, 3].copy(), c_calls=c[:, 4].copy(), simulate_reruns=[],
+                     **self.times)
+        return BatchResult(self.T, cols, self.status, self.message, self.values, self.t_reached, stats)
+
+
+def _why(code):
+    from ..codegen.batch import STATUS
+
+    return STATUS.get(code, "unknown")
+
+
+def _rerun(res, model, system, values, req):
+    """Finish with :func:`mbcomp.simulate` each run whose program guard failed in C (``simulate``
+    goes on on its Python path there): its states and columns replace the batch's."""
+    from ..simulation.driver import simulate
+
+    for i in [i for i, m in enumerate(res.message) if "a guard of the program failed" in m]:
+        params = {name: col[i] for name, col in values.items()}
+        r = simulate(system, t_end=req["t_end"], t_start=req["t_start"], params=params, method=req["method"],
+                     rtol=req["rtol"], atol=req["atol"], stabilization=req["stabilization"], alpha=req["alpha"],
+                     beta=req["beta"], n_out=req["n_out"], dt_out=req["dt_out"], max_step=req["max_step"])
+        res.replace_run(i, r, f"run by simulate after the C program's guard failed ({res.message[i]}): {r.message}")
+        res.stats["simulate_reruns"].append(i)
