@@ -74,12 +74,12 @@ def test_a_collapsing_step_size_is_a_failure_naming_method_and_time():
 
 
 def test_every_method_is_one_registry_entry_with_declared_capabilities():
-    assert ALL_METHODS == tuple(STEPPERS) == ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA", "dop853", "dopri5",
-                                               "radau5", "ida", "genalpha")
+    assert ALL_METHODS == tuple(STEPPERS) == ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA", "auto", "dop853",
+                                               "dopri5", "radau5", "ida", "genalpha")
     multistep = {name for name, cls in STEPPERS.items() if not cls.one_step}
     assert multistep == {"BDF", "LSODA", "ida"}
-    assert {name for name, cls in STEPPERS.items() if cls.problem == "ode"} == set(SCIPY_STEPPERS) | {"dop853", "dopri5"}
-    assert {name for name, cls in STEPPERS.items() if cls.needs_outputs} == {"dop853", "dopri5"}
+    assert {name for name, cls in STEPPERS.items() if cls.problem == "ode"} == set(SCIPY_STEPPERS) | {"auto", "dop853", "dopri5"}
+    assert {name for name, cls in STEPPERS.items() if cls.needs_outputs} == {"auto", "dop853", "dopri5"}
 
 
 def test_projection_with_bdf_rarely_restarts_and_keeps_the_loop_closed():

@@ -79,6 +79,8 @@ typedef struct {
     int proj_iter;           /* Newton steps at most                              */
     int declined;            /* mbrt_project's status that stopped the stretch    */
     long nproj;              /* projections made                                  */
+    int stiff_steps;         /* > 0: stop with MBRT_STIFF after that many steps held by
+                                stability (the runtime's *_stiff calls); 0: no test   */
 } mbcomp_ctx;
 
 static int mbcomp_rhs(void *c, double t, const double *y, double *dy)
@@ -144,16 +146,17 @@ int mbcomp_integrate(int order, mbcomp_ctx *ctx, double t0, const double *y0, do
         return MBRT_BAD_ARGUMENT;
     }
     if (order == 8)
-        return mbrt_dop853(mbcomp_rhs, mbcomp_on_step, ctx, ctx->n, t0, y0, t_end, rtol, atol, h0, hmax, max_steps,
-                           t_out, n_out, y_out, n_written, work, stats);
-    return mbrt_dopri5(mbcomp_rhs, mbcomp_on_step, ctx, ctx->n, t0, y0, t_end, rtol, atol, h0, hmax, max_steps,
-                       t_out, n_out, y_out, n_written, work, stats);
+        return mbrt_dop853_stiff(mbcomp_rhs, mbcomp_on_step, ctx, ctx->n, t0, y0, t_end, rtol, atol, h0, hmax,
+                                 max_steps, t_out, n_out, y_out, n_written, work, stats, ctx->stiff_steps);
+    return mbrt_dopri5_stiff(mbcomp_rhs, mbcomp_on_step, ctx, ctx->n, t0, y0, t_end, rtol, atol, h0, hmax,
+                             max_steps, t_out, n_out, y_out, n_written, work, stats, ctx->stiff_steps);
 }
 """
 
 #: the runtime's status codes (``mbrt.h``)
 STATUS = {0: "reached t_end", 1: "a guard of the program failed", 2: "step size too small",
-          3: "too many steps", 4: "non-finite state", 5: "stopped", 6: "bad argument"}
+          3: "too many steps", 4: "non-finite state", 5: "stopped", 6: "bad argument",
+          7: "the problem became stiff"}
 _FLAGS = ["-O2", "-fPIC", "-fno-fast-math", f"-I{RUNTIME_DIR}"]
 
 
@@ -512,7 +515,8 @@ class _Ctx(ctypes.Structure):
                 ("p", ctypes.c_void_p), ("w", ctypes.c_void_p), ("y_last", ctypes.c_void_p),
                 ("t_last", ctypes.c_double), ("h_last", ctypes.c_double), ("mech", ctypes.c_void_p),
                 ("mech_work", ctypes.c_void_p), ("proj_tol", ctypes.c_double), ("proj_accept", ctypes.c_double),
-                ("proj_iter", ctypes.c_int), ("declined", ctypes.c_int), ("nproj", ctypes.c_long)]
+                ("proj_iter", ctypes.c_int), ("declined", ctypes.c_int), ("nproj", ctypes.c_long),
+                ("stiff_steps", ctypes.c_int)]
 
 
 class RuntimeStats(ctypes.Structure):
@@ -568,9 +572,11 @@ class Integrator:
             w = self.work[order] = np.zeros(int(self.bound.code.dll.mbcomp_work_size(order, self.n)))
         return w
 
-    def integrate(self, order, t0, y0, t_end, t_out, rtol, atol, h0=0.0, hmax=0.0, max_steps=0):
+    def integrate(self, order, t0, y0, t_end, t_out, rtol, atol, h0=0.0, hmax=0.0, max_steps=0, stiff_steps=0):
         """Integrate ``[q, u]`` from ``(t0, y0)`` to ``t_end`` by DOPRI5 (``order`` 5) or
-        DOP853 (8); returns a namespace: ``status`` (:data:`STATUS`), ``message``, ``Y``
+        DOP853 (8); ``stiff_steps > 0``: stop with status 7 at the step where Hairer's
+        stiffness test (``mbrt.h``, ``mbrt_dop853_stiff``) held for that many steps. Returns a
+        namespace: ``status`` (:data:`STATUS`), ``message``, ``Y``
         (the states at the ``t_out`` reached, from the dense output of the unprojected
         steps), ``t_last``, ``y_last``, ``h_last`` (the last accepted step, projected),
         ``nfev``, ``naccept``, ``nreject``, ``projections`` and ``declined`` (the
@@ -582,6 +588,7 @@ class Integrator:
         Y = np.zeros((len(t_out), self.n))
         nw = ctypes.c_int(0)
         st = self.stats
+        self.ctx.stiff_steps = int(stiff_steps)
         status = self.fn(order, ctypes.byref(self.ctx), ctypes.c_double(t0), y0.ctypes.data, ctypes.c_double(t_end),
                          ctypes.c_double(rtol), atol_v.ctypes.data, ctypes.c_double(h0), ctypes.c_double(hmax),
                          ctypes.c_long(max_steps), t_out.ctypes.data, len(t_out), Y.ctypes.data, ctypes.byref(nw),

@@ -67,7 +67,7 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rtol=1e-8, atol=1e-10,
+def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="auto", rtol=1e-8, atol=1e-10,
              formulation="lagrange", stabilization=None, alpha=10.0, beta=10.0, n_out=None, dt_out=None,
              max_step=np.inf, progress=False, independent=None, index=None, h=None,
              backend="auto", singular="stop", inputs=None, max_wall_time=None, max_steps=None,
@@ -82,7 +82,10 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="dop853", rto
     params : dict, optional
         Runtime parameter values ``{"component.param": value}`` (nothing is re-derived).
     method : str
-        ``"dop853"`` (default) or ``"dopri5"``: Dormand-Prince 8(5,3) / 5(4) run in C over
+        ``"auto"`` (default): ``"dop853"`` until the C integrator finds the problem stiff
+        (Hairer's test: 15 accepted steps held by the method's stability, not its accuracy),
+        then scipy's ``LSODA`` with the exact Jacobian from that step on (``stats["stiff_from"]``
+        says when); ``"dop853"`` or ``"dopri5"``: Dormand-Prince 8(5,3) / 5(4) run in C over
         the compiled right-hand side (the whole stretch between outputs is one C call;
         scipy's ``DOP853``/``RK45`` over the Python right-hand side when there is no C
         program), a ``scipy.integrate.solve_ivp`` method name (ODE forms: Lagrange at index

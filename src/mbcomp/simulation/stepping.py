@@ -218,7 +218,11 @@ class Run:
         total = {}
         for s in self.steppers:
             for key, val in s.stats.items():
-                total[key] = total.get(key, 0) + int(val)
+                if key != "stiff_from":
+                    total[key] = total.get(key, 0) + int(val)
+        stiff = [s.stats["stiff_from"] for s in self.steppers if "stiff_from" in s.stats]
+        if stiff:  # the time (s) from which the "auto" method went on by its stiff method
+            out["stiff_from"] = min(stiff)
         out["restarts"] += total.get("restarts", 0)
         if "stretches" in total:  # a compiled stepper: one driver step is a stretch of its own steps
             out["steps"] += total["nsteps"] - total["stretches"] - total.get("python_steps", 0)

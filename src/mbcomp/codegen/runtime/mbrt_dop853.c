@@ -173,6 +173,16 @@ static int trial(mbrt_rk_state *S, double *err)
             S->t_fail = S->t + h;
             return rc;
         }
+        /* stiffness estimate (Hairer's dop853): stage 12 is at t+h too, at the
+         * argument still in ys */
+        const double *ys = S->s + 14 * (size_t)n;
+        double num = 0.0, den2 = 0.0;
+        for (int i = 0; i < n; ++i) {
+            double a = S->f1[i] - K[11][i], b = S->y1[i] - ys[i];
+            num += a * a;
+            den2 += b * b;
+        }
+        S->hlamb = (den2 > 0.0) ? fabs(h) * sqrt(num / den2) : 0.0;
     }
     return 0;
 }
@@ -219,7 +229,7 @@ static void dense_eval(const mbrt_rk_state *S, double theta, double *out)
 /* Hairer's dop853 defaults: FAC1 = 0.333, FAC2 = 6, BETA = 0 (no PI part),
  * SAFE = 0.9; step factor err^(1/8). */
 static const mbrt_rk_method DOP853 = {
-    "DOP853", 8, 8.0, 0.333, 6.0, 0.0, 0.9, NSCRATCH, trial, dense_prepare, dense_eval,
+    "DOP853", 8, 8.0, 0.333, 6.0, 0.0, 0.9, NSCRATCH, 6.1, trial, dense_prepare, dense_eval,
 };
 
 size_t mbrt_dop853_work_size(int n)
@@ -233,5 +243,14 @@ int mbrt_dop853(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n, double t0
                 int *n_written, double *work, mbrt_stats *stats)
 {
     return mbrt_rk_integrate(&DOP853, f, on_step, ctx, n, t0, y0, t_end, rtol, atol, h0, hmax,
-                             max_steps, t_out, n_out, y_out, n_written, work, stats);
+                             max_steps, t_out, n_out, y_out, n_written, work, stats, 0);
+}
+
+int mbrt_dop853_stiff(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n, double t0,
+                      const double *y0, double t_end, double rtol, const double *atol, double h0,
+                      double hmax, long max_steps, const double *t_out, int n_out, double *y_out,
+                      int *n_written, double *work, mbrt_stats *stats, int stiff_steps)
+{
+    return mbrt_rk_integrate(&DOP853, f, on_step, ctx, n, t0, y0, t_end, rtol, atol, h0, hmax,
+                             max_steps, t_out, n_out, y_out, n_written, work, stats, stiff_steps);
 }

@@ -93,6 +93,15 @@ static int trial(mbrt_rk_state *S, double *err)
         sum += e * e;
     }
     *err = sqrt(sum / n);
+    /* stiffness estimate (Hairer's dopri5): stage 6 is at t+h too, at the argument
+     * still in ys */
+    double num = 0.0, den2 = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double a = S->f1[i] - K[5][i], b = S->y1[i] - ys[i];
+        num += a * a;
+        den2 += b * b;
+    }
+    S->hlamb = (den2 > 0.0) ? fabs(h) * sqrt(num / den2) : 0.0;
     return 0;
 }
 
@@ -135,7 +144,7 @@ static void dense_eval(const mbrt_rk_state *S, double theta, double *out)
 /* Hairer's dopri5 defaults: FAC1 = 0.2, FAC2 = 10, BETA = 0.04, SAFE = 0.9;
  * the error estimate is O(h^5), so the step factor uses 1/q = 1/5. */
 static const mbrt_rk_method DOPRI5 = {
-    "DOPRI5", 5, 5.0, 0.2, 10.0, 0.04, 0.9, NSCRATCH, trial, dense_prepare, dense_eval,
+    "DOPRI5", 5, 5.0, 0.2, 10.0, 0.04, 0.9, NSCRATCH, 3.25, trial, dense_prepare, dense_eval,
 };
 
 size_t mbrt_dopri5_work_size(int n)
@@ -149,5 +158,14 @@ int mbrt_dopri5(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n, double t0
                 int *n_written, double *work, mbrt_stats *stats)
 {
     return mbrt_rk_integrate(&DOPRI5, f, on_step, ctx, n, t0, y0, t_end, rtol, atol, h0, hmax,
-                             max_steps, t_out, n_out, y_out, n_written, work, stats);
+                             max_steps, t_out, n_out, y_out, n_written, work, stats, 0);
+}
+
+int mbrt_dopri5_stiff(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n, double t0,
+                      const double *y0, double t_end, double rtol, const double *atol, double h0,
+                      double hmax, long max_steps, const double *t_out, int n_out, double *y_out,
+                      int *n_written, double *work, mbrt_stats *stats, int stiff_steps)
+{
+    return mbrt_rk_integrate(&DOPRI5, f, on_step, ctx, n, t0, y0, t_end, rtol, atol, h0, hmax,
+                             max_steps, t_out, n_out, y_out, n_written, work, stats, stiff_steps);
 }

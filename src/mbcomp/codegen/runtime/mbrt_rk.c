@@ -161,7 +161,8 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
                       void *ctx, int n, double t0, const double *y0, double t_end,
                       double rtol, const double *atol, double h0, double hmax,
                       long max_steps, const double *t_out, int n_out,
-                      double *y_out, int *n_written, double *work, mbrt_stats *stats)
+                      double *y_out, int *n_written, double *work, mbrt_stats *stats,
+                      int stiff_steps)
 {
     mbrt_stats local;
     mbrt_stats *st = stats ? stats : &local;
@@ -188,6 +189,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
     double *ysave = work + 4 * (size_t)n;
     S.s = work + 5 * (size_t)n;
     S.nfev = 0;
+    S.hlamb = 0.0;
     S.t = t0;
     S.h = 0.0;
     S.t_fail = t0;
@@ -238,6 +240,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
     const double expo = 1.0 / M->err_order - 0.75 * M->beta;
     double facold = 1e-4;
     int reject = 0, last_nonfinite = 0;
+    int stiff_run = 0, calm_run = 0; /* Hairer's IASTI, NONSTI */
     double t = t0;
     for (;;) {
         if (st->nstep >= max_steps) {
@@ -352,6 +355,19 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
             finish(st, MBRT_OK, t, "%s: reached t_end=%.17g in %ld steps.", M->name, t,
                    st->naccept);
             goto done;
+        }
+        if (stiff_steps > 0) { /* Hairer's stiffness test on the accepted step */
+            if (S.hlamb > M->stiff_limit) {
+                calm_run = 0;
+                if (++stiff_run >= stiff_steps) {
+                    finish(st, MBRT_STIFF, t,
+                           "%s: the problem became stiff at t=%.17g (|h lambda| = %.3g above %.3g "
+                           "for %d steps).", M->name, t, S.hlamb, M->stiff_limit, stiff_run);
+                    goto done;
+                }
+            } else if (++calm_run >= 6) {
+                stiff_run = 0;
+            }
         }
         if (fabs(hnew) > hmax)
             hnew = hmax;

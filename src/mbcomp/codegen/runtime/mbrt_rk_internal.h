@@ -29,6 +29,8 @@ typedef struct {
     double *y1, *f1;  /* proposed state at t + h and f(t + h, y1)          */
     double *s;        /* method scratch (scratch_per_n * n doubles)        */
     long nfev;        /* rhs evaluations so far                            */
+    double hlamb;     /* |h| times the estimated largest |eigenvalue| of df/dy along
+                         the accepted step (Hairer's stiffness test; 0: none) */
     double t_fail;    /* time argument of an rhs call that returned nonzero */
 } mbrt_rk_state;
 
@@ -41,6 +43,7 @@ typedef struct {
     double beta;          /* PI ("Lund") stabilisation exponent (BETA)     */
     double safe;          /* safety factor (SAFE)                          */
     int scratch_per_n;    /* method scratch, in units of n doubles         */
+    double stiff_limit;   /* hlamb above this is a step held by stability  */
 
     /* Attempts the step (S->t, S->h) from S->y, S->f0 = f(t, y).  Writes
      * S->y1 and *err (the scaled RMS error estimate; accept iff <= 1).  If
@@ -92,7 +95,8 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
                       void *ctx, int n, double t0, const double *y0, double t_end,
                       double rtol, const double *atol, double h0, double hmax,
                       long max_steps, const double *t_out, int n_out,
-                      double *y_out, int *n_written, double *work, mbrt_stats *stats);
+                      double *y_out, int *n_written, double *work, mbrt_stats *stats,
+                      int stiff_steps);
 
 /* Doubles of work needed by method M for n equations (0 if n <= 0). */
 size_t mbrt_rk_work_size(const mbrt_rk_method *M, int n);

@@ -1,0 +1,74 @@
+"""The default method finds stiffness in C and goes on by a stiff method (issue 32 item 4).
+
+``method="auto"`` (simulate's default) is DOP853 in C with Hairer's stiffness test; where the
+test fires (15 accepted steps held by stability) the run goes on by LSODA with the exact
+Jacobian (Radau where the formulation projects). Checks: on a chain whose bobs slide on
+damped stiff springs (eigenvalues near -1e5 1/s against the pendulum's few 1/s) it switches
+early, needs a small fraction of DOP853's evaluations and agrees with a tight reference to
+its tolerance; on a pendulum that is not stiff it never switches and is bit for bit the
+``dop853`` run.
+"""
+import numpy as np
+import pytest
+
+import mbcomp
+from conftest import load_model
+from mbcomp.codegen.toolchain import c_compiler
+from mbcomp.library import FixedTranslation, PointMass, Prismatic, Revolute, Spring, TranslationalSpringDamper, World
+
+pytestmark = pytest.mark.skipif(c_compiler() is None, reason="no C compiler: no C engine to test")
+
+pendulum = load_model("models/n_link_pendulum.py")
+
+
+def damped_spring_chain(N=2, c=1e6, d=1e5, m=1.0, L=0.5):
+    """N links on hinges, each bob sliding on its link against a spring ``c`` (N/m) with a
+    damper ``d`` (N s/m): modes near ``-c/d`` = -10 1/s and ``-d/m`` = -1e5 1/s (stiff)."""
+    mod = mbcomp.Model()
+    w = mod.add("world", World(g=(0, -9.81, 0)))
+    prev = w.frame_b
+    for k in range(N):
+        j = mod.add(f"j{k}", Revolute(n=(0, 0, 1), phi0=0.6 if k == 0 else 0.1 * k))
+        rod = mod.add(f"rod{k}", FixedTranslation(r=(L, 0, 0)))
+        s = mod.add(f"s{k}", Prismatic(n=(1, 0, 0), s0=1e-3))
+        bob = mod.add(f"bob{k}", PointMass(m=m))
+        sp = mod.add(f"k{k}", TranslationalSpringDamper(c=c, d=d))
+        mod.connect(prev, j.frame_a)
+        mod.connect(j.frame_b, rod.frame_a)
+        mod.connect(rod.frame_b, s.frame_a)
+        mod.connect(s.frame_b, bob.frame_a)
+        mod.connect(s.support, sp.flange_a)
+        mod.connect(s.axis, sp.flange_b)
+        prev = s.frame_b
+    tie = mod.add("tie", Spring(c=100.0, s_unstretched=0.5))
+    mod.connect(prev, tie.frame_a)
+    mod.connect(w.frame_b, tie.frame_b)
+    return mod
+
+
+def test_the_default_switches_on_a_stiff_chain_and_stays_accurate():
+    model = damped_spring_chain()
+    opts = dict(t_end=0.5, n_out=11, rtol=1e-6, atol=1e-8)
+    auto = mbcomp.simulate(model, **opts)
+    plain = mbcomp.simulate(model, method="dop853", **opts)
+    ref = mbcomp.simulate(model, method="Radau", t_end=0.5, n_out=11, rtol=1e-11, atol=1e-13)
+    assert auto.status == plain.status == "success"
+    # the test fires within the first milliseconds (the stiff modes decay at 1e5 1/s at once)
+    assert 0.0 < auto.stats["stiff_from"] < 0.01
+    assert "stiff_from" not in plain.stats
+    assert auto.stats["nfev"] < plain.stats["nfev"] / 20, (auto.stats["nfev"], plain.stats["nfev"])
+    for k in range(2):
+        col = f"j{k}.phi"
+        # LSODA's error at rtol 1e-6 over 0.5 s: a few 1e-5 rad (the reference is 1e-9 good)
+        np.testing.assert_allclose(auto[col], ref[col], atol=1e-4, rtol=0)
+        np.testing.assert_allclose(plain[col], ref[col], atol=1e-6, rtol=0)
+
+
+def test_the_default_never_switches_on_a_pendulum_and_equals_dop853():
+    model = pendulum.build(5)
+    auto = mbcomp.simulate(model, t_end=3.0, n_out=31)
+    plain = mbcomp.simulate(model, t_end=3.0, n_out=31, method="dop853")
+    assert "stiff_from" not in auto.stats
+    for k in range(1, 6):
+        np.testing.assert_array_equal(auto[f"joint{k}.phi"], plain[f"joint{k}.phi"])
+    assert auto.stats["nfev"] == plain.stats["nfev"]
