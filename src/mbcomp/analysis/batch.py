@@ -217,6 +217,7 @@ class _Runner:
         self.message = [""] * n_runs
         self.t_reached = np.full(n_runs, request["t_start"])
         self.counts = np.zeros((n_runs, 5), np.int_)
+        self.c_status = np.full(n_runs, -1)  # the batch runner's code per run (-1: not integrated)
         self.groups = {}  # row-mask key -> (code, gains, output program or None)
         self.columns = None  # name -> (n_runs, n_t), made when the first output program is
         self.wanted = None
@@ -241,7 +242,10 @@ class _Runner:
             self.message[i] = f"{type(exc).__name__}: {exc}"
             return None
         rm = s.row_mask
-        key = None if rm is None or rm.all() else rm.tobytes()
+        # what decides the program besides the row mask: which table entries are exactly zero
+        # (the zero pattern is baked; see mbcomp.codegen.tracer.param_layout)
+        zeros = tuple((np.asarray(col[i]) != 0).tobytes() for col in self.values.values())
+        key = (None if rm is None or rm.all() else rm.tobytes(), zeros)
         hp = self._hoisted(key, s, form)
         if hp is None:
             self.message[i] = ("the C engine cannot run this parameter set (it changes a decision baked into the "
@@ -251,19 +255,21 @@ class _Runner:
 
     def _hoisted(self, key, s, form):
         """``(group key, h, p)`` for run system ``s``: the program's hoisted values and parameter
-        vector; a set of values whose structure differs from the group's gets its own group."""
+        vector. Runs of one group share the row mask and the table's zero pattern, hence the
+        program's structure (its signature) with the group's first run, whose program the
+        engine itself gave (:meth:`~mbcomp.formulations.LagrangeIndex1.compiled_integrator`);
+        a parameter guard failing (``Retrace``) makes the engine trace another program."""
         from ..codegen.graph import Retrace
-        from ..codegen.tracer import param_layout, param_vector
+        from ..codegen.tracer import param_vector
 
         group = self.groups.get(key)
         if group is not None:
             code = group[0]
-            if param_layout(s)[1] == code.signature:
-                try:
-                    pv = param_vector(s, code.layout)
-                    return key, np.array(list(code.pre.run(pv)) + [0.0]), np.array(list(pv) + [0.0])
-                except Retrace:
-                    pass
+            try:
+                pv = param_vector(s, code.layout)
+                return key, np.array(list(code.pre.run(pv)) + [0.0]), np.array(pv + [0.0])
+            except Retrace:
+                pass
         integ = form.compiled_integrator()
         if integ is None:
             if not self.groups:
@@ -358,7 +364,7 @@ class _Runner:
             self.t_reached[idx] = r.t_reached
             self.counts[idx] = r.counts
             for k, i in enumerate(idx):
-                code = int(r.status[k])
+                code = self.c_status[i] = int(r.status[k])
                 self.status[i] = STATUS_OF[code]
                 self.message[i] = "reached t_end" if code == 0 else (
                     f"the integrator {self.req['method']} stopped at t={r.t_reached[k]:.9g} s: {r.messages[k]} "
@@ -412,7 +418,7 @@ class _Runner:
         c = self.counts
         stats = dict(runs=self.n_runs, failed=int(sum(s != "success" for s in self.status)), threads=self.threads,
                      method=self.req["method"], rtol=self.req["rtol"], atol=self.req["atol"], nfev=c[:, 0].copy(),
-                     nsteps=c[:, 2].copy(), nreject=c[:, 3].copy(), c_calls=c[:, 4].copy(), simulate_reruns=[],
+                     nsteps=c[:, 2].copy(), nreject=c[:, 3].copy(), c_calls=c[:, 4].copy(), c_status=self.c_status.copy(), simulate_reruns=[],
                      **self.times)
         return BatchResult(self.T, cols, self.status, self.message, self.values, self.t_reached, stats)
 
@@ -428,7 +434,7 @@ def _rerun(res, model, system, values, req):
     goes on on its Python path there): its states and columns replace the batch's."""
     from ..simulation.driver import simulate
 
-    for i in [i for i, m in enumerate(res.message) if "a guard of the program failed" in m]:
+    for i in np.flatnonzero(res.stats["c_status"] == 1):
         params = {name: col[i] for name, col in values.items()}
         r = simulate(system, t_end=req["t_end"], t_start=req["t_start"], params=params, method=req["method"],
                      rtol=req["rtol"], atol=req["atol"], stabilization=req["stabilization"], alpha=req["alpha"],

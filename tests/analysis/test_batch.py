@@ -1,0 +1,140 @@
+"""mbcomp.batch: many parameter sets in one compiled call, each run what simulate gives.
+
+Every run of a batch is held to :func:`mbcomp.simulate` with the same parameters to 1e-12
+(states and output columns), on the 5-link pendulum (an open chain, chaotic: any difference in
+the steps would grow) and the slider-crank (a closed loop: consistent initialization per run).
+A failed run is reported with its reason and the others are kept; threads give the numbers one
+thread gives; bad input is refused naming the column and the fix."""
+import numpy as np
+import pytest
+
+import mbcomp
+from mbcomp.codegen.toolchain import c_compiler
+from conftest import load_model
+
+pytestmark = pytest.mark.skipif(c_compiler() is None, reason="a batch needs a C compiler")
+
+PENDULUM = load_model("models/n_link_pendulum.py").build
+SLIDER = load_model("models/slider_crank.py").build
+REQUEST = dict(t_end=2.0, rtol=1e-8, atol=1e-10, n_out=121)
+
+
+def close_to_simulate(model, table, outputs, **request):
+    """Each run of the batch against simulate of its parameters; the worst differences per column."""
+    b = mbcomp.batch(model, table, outputs=outputs, threads=2, **request)
+    assert list(b.status) == ["success"] * len(b)
+    worst = {}
+    for i in range(len(b)):
+        r = mbcomp.simulate(model, params={k: v[i] for k, v in table.items()}, **request)
+        assert r.status == "success"
+        np.testing.assert_array_equal(b.time, r.time)
+        for name in b.names:
+            scale = max(1.0, float(np.max(np.abs(r[name]))))
+            worst[name] = max(worst.get(name, 0.0), float(np.max(np.abs(b[name][i] - r[name]))) / scale)
+    return b, worst
+
+
+def test_pendulum_runs_equal_simulate_run_by_run():
+    model = PENDULUM(N=5)
+    table = {"joint1.phi0": [0.2, 0.9, -0.4, 1.3], "joint3.w0": [0.0, 1.0, -2.0, 0.5], "link2.m": [1.0, 0.5, 2.0, 1.5],
+             "tip1.r": [(0.0, -0.5, 0.0), (0.0, -0.7, 0.0), (0.0, -0.3, 0.0), (0.0, -0.5, 0.0)]}
+    outputs = ["joint1.f.y", "link5.r.x", "link5.Q.w", "energy.kinetic", "phi3"]
+    b, worst = close_to_simulate(model, table, outputs, **REQUEST)
+    assert set(outputs) <= set(b.names) and b["joint1.phi"].shape == (4, 121)
+    assert max(worst.values()) <= 1e-12, worst
+    # the runs differ (the table reached the runs): the swings after 2 s are not one swing
+    assert np.ptp(b["joint1.phi"][:, -1]) > 0.1
+
+
+def test_slider_crank_runs_equal_simulate_run_by_run():
+    table = {"crank_joint.phi0": [0.3, 1.0, 2.5], "crank_joint.w0": [6.0, 2.0, -4.0], "rod.m": [2.0, 1.0, 3.5]}
+    b, worst = close_to_simulate(SLIDER(), table, ["pin.f.y", "rod.r.x", "crank_angle", "residual.position"],
+                                 **REQUEST)
+    assert max(worst.values()) <= 1e-12, worst
+    # each start went through consistent initialization: the loop closed at every start
+    assert np.all(np.abs(b["residual.position"][:, 0]) < 1e-9)
+    assert np.allclose(b["crank_joint.phi"][:, 0], table["crank_joint.phi0"], atol=1e-12)
+
+
+def test_threads_give_the_numbers_one_thread_gives():
+    rng = np.random.default_rng(7)
+    table = {"joint1.phi0": rng.uniform(-1, 1, 24), "joint2.phi0": rng.uniform(-1, 1, 24)}
+    one = mbcomp.batch(PENDULUM(N=3), table, t_end=1.0, threads=1, block=5)
+    two = mbcomp.batch(PENDULUM(N=3), table, t_end=1.0, threads=2, block=7)
+    for name in one.names:
+        np.testing.assert_array_equal(one[name], two[name])
+    np.testing.assert_array_equal(one.stats["nfev"], two.stats["nfev"])
+
+
+def test_a_failed_run_says_which_and_why_and_the_others_stand():
+    # a crank longer than the rod: the rod stands vertical at the dead centre and the rows lose rank
+    table = {"crank_tip.r": [(0.2, 0, 0), (0.6, 0, 0), (0.2, 0, 0)], "crank_joint.w0": [6.0, 6.0, 5.0]}
+    alone = mbcomp.batch(SLIDER(), table, t_end=1.0, n_out=11, fallback=False)
+    assert list(alone.status) == ["success", "failed", "success"]
+    assert "guard of the program failed" in alone.message[1] and 0.3 < alone.t_reached[1] < 0.6
+    reached = alone.time <= alone.t_reached[1]
+    assert np.isfinite(alone["slider_joint.s"][1, reached]).all() and np.isnan(alone["slider_joint.s"][1, ~reached]).all()
+    ok = mbcomp.batch(SLIDER(), {k: [v[0], v[2]] for k, v in table.items()}, t_end=1.0, n_out=11)
+    np.testing.assert_array_equal(alone["slider_joint.s"][[0, 2]], ok["slider_joint.s"])
+    # with the fallback, simulate finishes that run: it names the singular position, as simulate does
+    fell = mbcomp.batch(SLIDER(), table, t_end=1.0, n_out=11)
+    r = mbcomp.simulate(SLIDER(), t_end=1.0, n_out=11, params={"crank_tip.r": (0.6, 0, 0)})
+    assert fell.stats["simulate_reruns"] == [1] and fell.status[1] == r.status == "failed"
+    assert "singular position" in fell.message[1]
+    n = len(r.time)
+    np.testing.assert_allclose(fell["slider_joint.s"][1, :n], r["slider_joint.s"], rtol=0, atol=1e-12)
+
+
+def test_a_step_budget_ends_only_the_runs_that_need_more():
+    table = {"crank_joint.w0": [1.0, 20.0, 2.0]}
+    free = mbcomp.batch(SLIDER(), table, t_end=2.0, n_out=21)
+    steps = free.stats["nsteps"] + free.stats["nreject"]
+    budget = int((steps[0] + steps[1]) // 2)
+    assert steps[1] > budget >= max(steps[0], steps[2])
+    capped = mbcomp.batch(SLIDER(), table, t_end=2.0, n_out=21, max_steps=budget)
+    assert list(capped.status) == ["success", "budget", "success"] and "max_steps" in capped.message[1]
+    for i in (0, 2):
+        np.testing.assert_array_equal(capped["slider_joint.s"][i], free["slider_joint.s"][i])
+    kept = np.isfinite(capped["slider_joint.s"][1])
+    assert 0 < kept.sum() < 21
+    np.testing.assert_array_equal(capped["slider_joint.s"][1, kept], free["slider_joint.s"][1, kept])
+
+
+def test_a_run_that_cannot_start_is_an_error_row():
+    table = {"link3.m": [1.0, 0.0], "link3.I": [np.diag([0.02, 0.0, 0.02]), np.zeros((3, 3))]}
+    b = mbcomp.batch(PENDULUM(N=3), table, t_end=0.5, n_out=5)
+    assert list(b.status) == ["success", "error"] and "massless" in b.message[1] and "joint3" in b.message[1]
+    assert np.isnan(b["joint3.phi"][1]).all() and np.isfinite(b["joint3.phi"][0]).all()
+
+
+@pytest.mark.parametrize("table, words", [
+    ({"jiont1.phi0": [0.1]}, ["jiont1", "joint1"]),
+    ({"joint1.ph0": [0.1]}, ["joint1", "ph0", "phi0"]),
+    ({"tip1.r": [0.5]}, ["tip1.r", "shape"]),
+    ({"joint1.phi0": [0.1, 0.2], "link1.m": [1.0]}, ["different lengths"]),
+    ({"joint1.phi0": [float("nan")]}, ["joint1.phi0", "finite"]),
+    ({"N": [3]}, ["study"]),
+])
+def test_bad_tables_are_refused_naming_the_column(table, words):
+    with pytest.raises(ValueError) as err:
+        mbcomp.batch(PENDULUM(N=2), table, t_end=0.1)
+    assert all(w in str(err.value) for w in words), str(err.value)
+
+
+def test_what_a_batch_cannot_run_is_refused_with_the_fix():
+    from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("j", Revolute(n=(0, 0, 1), phi0=0.5, limits=(-1.0, 1.0)))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    m.connect(w.frame_b, j.frame_a), m.connect(j.frame_b, rod.frame_a), m.connect(rod.frame_b, bob.frame_a)
+    with pytest.raises(ValueError, match=r"j have modes.*mbcomp.study"):
+        mbcomp.batch(m, {"bob.m": [1.0]}, t_end=0.1)
+    with pytest.raises(ValueError, match="dop853"):
+        mbcomp.batch(PENDULUM(N=2), {"link1.m": [1.0]}, method="radau5")
+    with pytest.raises(ValueError, match="projection"):
+        mbcomp.batch(PENDULUM(N=2), {"link1.m": [1.0]}, stabilization="projection")
+    with pytest.raises(ValueError, match=r"no column 'joint1.fy'.*joint1.f.y"):
+        mbcomp.batch(PENDULUM(N=2), {"link1.m": [1.0]}, outputs=["joint1.fy"])
