@@ -230,6 +230,13 @@ class Bound:
             raise Fallback
         return self.qdbuf[: code.nq].copy()
 
+    def c_pointers(self):
+        """The arguments of the C ``mbcomp_fun`` over this binding's buffers, ``(q, u, t, d, h,
+        p, w, out)`` with ``t`` = 0 (the state last given to :meth:`run_fun`): the bare C call
+        a benchmark compares the Python callers with."""
+        _, _, pd, ph, pp, pw, _, _, py = self.ptrs
+        return (*self.fun_args, 0.0, pd, ph, pp, pw, py)
+
     def run_fun(self, t, y, alpha, beta):
         """``dy/dt`` of the Lagrange index-1 form at ``y = [q, u]`` with Baumgarte gains
         ``alpha``, ``beta`` (1/s; zero for none); raises Fallback when a guard fails."""

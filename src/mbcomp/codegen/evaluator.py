@@ -80,6 +80,7 @@ Examples
 """
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -91,7 +92,8 @@ from .dae_jacobian import bound_program
 from .graph import CodegenError, Fallback, Retrace
 from .jacobian import JacobianCode
 from .loaded import bind_cached
-from .toolchain import c_compiler
+from .structure_key import STRUCTURES
+from .toolchain import FLAGS, c_compiler
 from .tracer import FIELDS, param_layout, trace, trace_point
 
 __all__ = ["compile_system", "ProgramEvaluator", "CompiledEvaluation"]
@@ -204,7 +206,7 @@ class ProgramEvaluator:
     """
 
     def __init__(self, system, backend="python", *, cache_dir=None, verify=True, max_nodes=3_000_000, code=None,
-                 fun_codes=None, lazy=False, checked=False):
+                 fun_codes=None, lazy=False, checked=False, reuse=False):
         if backend == "auto":
             backend = "c" if c_compiler() else "python"
         if backend not in ("python", "c"):
@@ -213,34 +215,60 @@ class ProgramEvaluator:
         self.options = dict(cache_dir=cache_dir, verify=verify, max_nodes=max_nodes, lazy=lazy)
         self.bound = None
         self.numeric_calls = 0  # evaluations answered numerically while the program is not made (lazy)
+        self._signature = None
+        self.stats = dict(backend=backend, traces=0, fallbacks=0)
+        if reuse and fun_codes is None:
+            # the programs of a system of the same structure (codegen/structure_key.py): a model
+            # rebuilt with other parameter or start values is not traced or printed again
+            where = cache_dir or os.environ.get("MBCOMP_CACHE")
+            fun_codes, hit = STRUCTURES.entry(system, backend, (max_nodes, where, c_compiler(), FLAGS), self.signature)
+            hit = hit and fun_codes.get("checked", False)
+            self.stats["structure_cache"] = "hit" if hit else "miss"
+            # a lazy evaluator takes the evaluation program only after LAZY_EVALUATIONS
+            # numeric ones (from the cache then, by _bound), as a cold one: the same values
+            code, checked = (None if lazy else fun_codes.get("eval"), True) if hit else (None, checked)
         # row mask -> Code of the Lagrange program (or None), and the output programs: one dict
-        # shared by every rebound copy (with_params), so that runs with other parameter values
-        # reuse what any of them traced (a study traced three programs per run before)
+        # shared by every rebound copy (with_params) and every system of this structure, so that
+        # runs with other parameter values reuse what any of them traced (a study traced three
+        # programs per run before)
         self.funs = fun_codes if fun_codes is not None else {}
         self._fun = None  # (row mask key, Bound or None, the mask object)
-        self.stats = dict(backend=backend, traces=0, fallbacks=0)
         if code is not None:
             self.stats["traces"] = code.traces
-            if param_layout(system)[1] == code.signature:
-                try:
-                    self.bound = Bound(code, system)
-                    self._record(code)
-                except Retrace:
-                    self.bound = None
+            self._bind_eval(code)
             return  # otherwise traced again lazily at the first evaluation
         if lazy:
             # the evaluation program (O(N^2): the dense M) is made only when evaluations are
             # asked for often (LAZY_EVALUATIONS); the right-hand side is traced now, so a law
             # that cannot be traced is reported before the run, as without laziness (not again
-            # for a rebound copy: its structure was checked)
+            # for a rebound copy or a structure seen before: its structure was checked)
             if checked:
                 return
             if system.topology.cut and system.row_mask is None:
                 trace(system, max_nodes, program="fun")  # a check: the program needs the row mask
             else:
                 self._fun_bound()
+            self.funs["checked"] = True
             return
         self._build()
+        self.funs["checked"] = True
+
+    @property
+    def signature(self):
+        """The parameter signature of this evaluator's system (:func:`mbcomp.codegen.tracer.param_layout`),
+        computed once."""
+        if self._signature is None:
+            self._signature = param_layout(self.system)[1]
+        return self._signature
+
+    def _bind_eval(self, code):
+        """Bind the evaluation program ``code`` to this system when it holds for its parameters."""
+        if self.signature == code.signature:
+            try:
+                self.bound = Bound(code, self.system)
+                self._record(code)
+            except Retrace:
+                self.bound = None
 
     def rebind(self, system, laws=False):
         """This evaluator's program for ``system`` (other parameter values): reused unless the
@@ -264,6 +292,7 @@ class ProgramEvaluator:
         self._record(code)
         if o["verify"]:
             self._verify()
+        self.funs["eval"] = code
         return self.bound
 
     def _record(self, code):
@@ -403,7 +432,7 @@ class ProgramEvaluator:
         system, o = self.system, self.options
         code = self.funs.get(key)
         bound = None
-        if code is not None and param_layout(system)[1] == code.signature:
+        if code is not None and self.signature == code.signature:
             try:
                 bound = Bound(code, system)
             except Retrace:
@@ -459,6 +488,29 @@ class ProgramEvaluator:
             self.stats["fallbacks"] += 1
             return None
 
+    def structure_memo(self):
+        """A dict shared by every system of this structure (the copies of ``with_params``, and
+        with ``reuse`` every system the structure cache matched): for what the post-processing
+        derives from the structure alone (the columns' units)."""
+        return self.funs.setdefault("memo", {})
+
+    def lagrange_bound(self):
+        """The bound Lagrange program for the current row mask
+        (:class:`mbcomp.codegen.compiler.Bound`), or None when there is none."""
+        return self._fun_bound()
+
+    def lagrange_thin(self, alpha, beta):
+        """:meth:`lagrange_fun` for the current row mask and gains ``alpha``, ``beta`` (1/s) as
+        one C call from Python (:func:`mbcomp.codegen.thin.thin_fun`: ``fun(t, y)`` -> ``dy/dt``,
+        or None where it does not hold -- then :meth:`lagrange_fun` says why), or None when
+        there is none (a Python program, per-call inputs, no extension on this machine)."""
+        bound = self._fun_bound()
+        if bound is None:
+            return None
+        from .thin import thin_fun
+
+        return thin_fun(bound, alpha, beta, self.options["cache_dir"])
+
     def lagrange_jac(self, t, y, alpha, beta):
         """``d/dy`` of :meth:`lagrange_fun` (``(nq + nu, nq + nu)``) from the exact Jacobian
         program (:class:`mbcomp.codegen.jacobian.JacobianCode`, made at first need per row
@@ -504,17 +556,17 @@ class ProgramEvaluator:
         """The result columns at every output time in one program call
         (:meth:`mbcomp.codegen.outputs.OutputProgram.grid`: ``(names, values, quaternions, ok)``),
         or None when there is no such program (fewer than :data:`OUTPUT_GRID_MIN` points, where
-        compiling costs more than the numeric route; a law that cannot be traced; a singular
-        trace point). ``gains``: the multipliers' Baumgarte gains (1/s) or None. The program is
+        compiling costs more than the numeric route, unless a run of this structure made it
+        already; a law that cannot be traced; a singular trace point). ``gains``: the multipliers' Baumgarte gains (1/s) or None. The program is
         made at first need per row mask and kind of gains, and reused by ``with_params``."""
-        if len(t) < OUTPUT_GRID_MIN:
-            return None
         from .outputs import OutputProgram
 
         rm = self.system.row_mask
         key = ("outputs", None if rm is None or rm.all() else rm.tobytes(), gains is not None)
         prog = self.funs.get(key, False)
-        if prog is not False and prog is not None and param_layout(self.system)[1] != prog.signature:
+        if len(t) < OUTPUT_GRID_MIN and not prog:  # a small grid takes the program only when made already
+            return None
+        if prog is not False and prog is not None and self.signature != prog.signature:
             prog = False
         for _ in range(2):
             if prog is False:
@@ -528,6 +580,7 @@ class ProgramEvaluator:
                     self.stats.update(n_ops_outputs=prog.n_ops, outputs_compile_time=prog.compile_time)
             if prog is None:
                 return None
+            self.stats["n_ops_outputs"] = prog.n_ops
             try:
                 return prog.grid(self.system, t, Y, gains)
             except Retrace:  # these parameter values change a decision baked into the program
@@ -536,7 +589,11 @@ class ProgramEvaluator:
 
     def _bound(self):
         if self.bound is None:
-            self._build()
+            code = self.funs.get("eval")  # made by a system of this structure meanwhile
+            if code is not None:
+                self._bind_eval(code)
+            if self.bound is None:
+                self._build()
         return self.bound
 
     # --- the evaluator interface ----------------------------------------------------------------
@@ -588,7 +645,8 @@ class ProgramEvaluator:
         return self._bound().code.source
 
 
-def compile_system(system, backend="python", *, cache_dir=None, verify=True, max_nodes=3_000_000, lazy=False):
+def compile_system(system, backend="python", *, cache_dir=None, verify=True, max_nodes=3_000_000, lazy=False,
+                   reuse=False):
     """Trace an assembled system once and return it evaluated by the generated program.
 
     Parameters
@@ -608,6 +666,11 @@ def compile_system(system, backend="python", *, cache_dir=None, verify=True, max
     lazy : bool
         Make the Lagrange right-hand side program now and the evaluation program only when
         evaluations are asked for often (:data:`LAZY_EVALUATIONS`; what ``simulate`` does).
+    reuse : bool
+        Take the programs of a system of the same structure compiled before in this process
+        (:mod:`mbcomp.codegen.structure_key`: only parameter or start values differ) instead
+        of tracing and printing them again; what ``simulate`` does. ``stats["structure_cache"]``
+        says ``"hit"`` or ``"miss"``.
 
     Returns
     -------
@@ -632,4 +695,4 @@ def compile_system(system, backend="python", *, cache_dir=None, verify=True, max
     if not isinstance(system, MultibodySystem):
         raise TypeError(f"compile_system needs an assembled system (mbcomp.assemble(model)), not {type(system).__name__}")
     return system.with_evaluator(lambda s: ProgramEvaluator(s, backend, cache_dir=cache_dir, verify=verify,
-                                                            max_nodes=max_nodes, lazy=lazy))
+                                                            max_nodes=max_nodes, lazy=lazy, reuse=reuse))

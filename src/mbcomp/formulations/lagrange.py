@@ -98,8 +98,28 @@ class LagrangeIndex1(Formulation):
         return solve_kkt(ev.M, ev.f, ev.A, np.concatenate((rhs, rhs_nh)), ev.t,
                          pass_rank=self.PASS_RANK if self.singular == "pass" else None)
 
+    #: (row mask, the one-C-call right-hand side or None) -- see :meth:`fun`
+    _thin_for = (None, None)
+
     def fun(self, t, y):
-        """``dy/dt`` for ``y = [q, u]``."""
+        """``dy/dt`` for ``y = [q, u]``.
+
+        A generated C program is called in one C call from here (the evaluator's
+        ``lagrange_thin``, kept per row mask: it checks ``y`` and the result for finiteness
+        in C); where that does not hold (a guard, a non-finite value) or there is none, the
+        full path below decides and says why."""
+        thin = self._thin_for
+        if thin[0] is self.system.row_mask and thin[1] is not None:
+            dy = thin[1](t, y)
+            if dy is not None:
+                self.nfev += 1
+                self.nlu += 1
+                return dy
+        return self._full_fun(t, y)
+
+    def _full_fun(self, t, y):
+        """:meth:`fun` without the thin call: the finiteness check, the evaluator's one-call
+        right-hand side (``lagrange_fun``), else the dense solve."""
         self._check_finite(t, y)
         fast = self._one_call()
         if fast is not None:  # the whole right-hand side in one program call
@@ -145,6 +165,8 @@ class LagrangeIndex1(Formulation):
             fast = evaluator.lagrange_fun if "lagrange_fun" in evaluator.capabilities else None
             self._gains = (self.alpha, self.beta) if self.stabilization == "baumgarte" else (0.0, 0.0)
             cached = self._one_call_for = (mask, fast)
+            thin = getattr(evaluator, "lagrange_thin", None) if fast is not None else None
+            self._thin_for = (mask, thin(*self._gains) if thin is not None else None)
         return cached[1]
 
     def output_gains(self):

@@ -261,7 +261,15 @@ def _derived(system, t, series):
 
 def _units(system, series):
     """``{column: unit}`` of the columns in ``series`` whose unit is declared (an alias has
-    its variable's)."""
-    units = column_units(system)
+    its variable's). The table of the structure's columns is made once per structure (the
+    evaluator's ``structure_memo``: a third of the post-processing of a short run)."""
+    memo = getattr(system.evaluator, "structure_memo", None)
+    memo = memo() if memo is not None else None
+    units = memo.get("column_units") if memo is not None else None
+    if units is None:
+        units = column_units(system)
+        if memo is not None:
+            memo["column_units"] = units
+    units = dict(units)
     units.update({a: units[v] for a, v in system.topology.flat.aliases.items() if v in units})
     return {name: units[name] for name in series if name in units}

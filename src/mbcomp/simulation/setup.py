@@ -125,11 +125,11 @@ def system_of(model, params, backend):
         from ..codegen import compile_system
 
         if backend != "auto":
-            return compile_system(system, backend, lazy=True)
+            return compile_system(system, backend, lazy=True, reuse=True)
         from ..codegen import CodegenError
 
         try:
-            return compile_system(system, backend, lazy=True)
+            return compile_system(system, backend, lazy=True, reuse=True)
         except CodegenError as exc:  # a law that cannot be traced: the numeric path, said once
             import warnings
 
