@@ -73,7 +73,8 @@ def test_a_failed_run_says_which_and_why_and_the_others_stand():
     assert list(alone.status) == ["success", "failed", "success"]
     assert "guard of the program failed" in alone.message[1] and 0.3 < alone.t_reached[1] < 0.6
     reached = alone.time <= alone.t_reached[1]
-    assert np.isfinite(alone["slider_joint.s"][1, reached]).all() and np.isnan(alone["slider_joint.s"][1, ~reached]).all()
+    s = alone["slider_joint.s"][1]
+    assert np.isfinite(s[reached]).all() and np.isnan(s[~reached]).all()
     ok = mbcomp.batch(SLIDER(), {k: [v[0], v[2]] for k, v in table.items()}, t_end=1.0, n_out=11)
     np.testing.assert_array_equal(alone["slider_joint.s"][[0, 2]], ok["slider_joint.s"])
     # with the fallback, simulate finishes that run: it names the singular position, as simulate does
@@ -138,3 +139,45 @@ def test_what_a_batch_cannot_run_is_refused_with_the_fix():
         mbcomp.batch(PENDULUM(N=2), {"link1.m": [1.0]}, stabilization="projection")
     with pytest.raises(ValueError, match=r"no column 'joint1.fy'.*joint1.f.y"):
         mbcomp.batch(PENDULUM(N=2), {"link1.m": [1.0]}, outputs=["joint1.fy"])
+
+
+CRANK = str(load_model("models/slider_crank.py").__file__)
+
+
+def peak_pin(res):
+    return float(np.abs(res["pin.f.y"]).max())
+
+
+def crank_length(length=0.2):
+    return SLIDER(crank_length=length)
+
+
+def test_a_batch_study_gives_the_serial_table():
+    grid = {"length": [0.2, 0.25], "crank_joint.w0": [2.0, 6.0, 9.0], "rod.m": [1.5, 2.0]}
+    metrics = {"peak": peak_pin, "final": lambda r: r["slider_joint.s"][-1]}
+    serial = mbcomp.study(crank_length, grid, t_end=0.5, metrics=metrics)
+    batched = mbcomp.study(crank_length, grid, t_end=0.5, metrics=metrics, executor="batch", keep="outputs",
+                           outputs=["pin.f.y"])
+    assert batched.stats["executor"] == "batch" and list(batched["status"]) == ["success"] * 12
+    assert batched.runs == serial.runs   # two structures (build arguments), each one batch, rows in grid order
+    for name in metrics:
+        np.testing.assert_allclose(batched[name], serial[name], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(np.abs(batched.results[5]["pin.f.y"]).max(), batched["peak"][5], rtol=1e-15)
+    with pytest.raises(ValueError, match="keep=all"):
+        mbcomp.study(crank_length, grid, t_end=0.5, executor="batch", keep="all")
+
+
+def test_a_dask_study_runs_a_batch_per_worker():
+    distributed = pytest.importorskip("distributed")
+    lc = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                                  host="127.0.0.1")
+    client = distributed.Client(lc)
+    try:
+        grid = {"crank_joint.w0": np.linspace(2.0, 10.0, 9).tolist()}
+        serial = mbcomp.study(CRANK, grid, t_end=0.5, metrics={"peak": peak_pin})
+        on_dask = mbcomp.study(CRANK, grid, t_end=0.5, metrics={"peak": peak_pin}, executor=client, batch=True)
+    finally:
+        client.close()
+        lc.close()
+    assert on_dask.stats["executor"] == "dask" and list(on_dask["status"]) == ["success"] * 9
+    np.testing.assert_allclose(on_dask["peak"], serial["peak"], rtol=1e-12, atol=0)

@@ -75,10 +75,12 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
     ----------
     model : Model or MultibodySystem
         A smooth model (no events, no external inputs; see the module notes).
-    table : dict or pandas.DataFrame
+    table : dict, pandas.DataFrame or list of dict
         ``{"component.parameter": values}``, one value per run (a vector parameter such as
         ``"rod.r"`` one vector per run); start values (``"joint.phi0"``, ``"joint.w0"``) are
-        parameters like any other and go through consistent initialization per run.
+        parameters like any other and go through consistent initialization per run. Or the
+        runs themselves, ``[{"component.parameter": value}, ...]`` (every run naming the same
+        parameters; empty dicts: runs of the model as it is).
     t_end, t_start : float
         Time span of every run (s).
     outputs : list of str or "all", optional
@@ -136,7 +138,7 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
     runner.run(max(1, int(block)))
     res = runner.result()
     if fallback:
-        _rerun(res, model, system, values, request)
+        _rerun(res, system, values, request)
     res.stats["wall_time"] = time.perf_counter() - t0
     return res
 
@@ -147,6 +149,13 @@ def _table(system, table):
     columns of unequal lengths."""
     if hasattr(table, "columns") and hasattr(table, "to_dict") and not isinstance(table, dict):
         table = {str(c): list(table[c]) for c in table.columns}
+    if isinstance(table, (list, tuple)) and all(isinstance(r, dict) for r in table):  # one dict per run
+        keys = {tuple(sorted(r)) for r in table}
+        if len(keys) > 1:
+            raise ValueError(f"table given as runs: every run must name the same parameters, not {sorted(keys)}")
+        if not table or not next(iter(keys)):
+            return {}, len(table)
+        table = {k: [r[k] for r in table] for k in table[0]}
     if not isinstance(table, dict) or not table:
         raise TypeError(f"table must be a dict (or DataFrame) of 'component.parameter' -> one value per run, not "
                         f"{table!r:.60}")
@@ -418,7 +427,8 @@ class _Runner:
         c = self.counts
         stats = dict(runs=self.n_runs, failed=int(sum(s != "success" for s in self.status)), threads=self.threads,
                      method=self.req["method"], rtol=self.req["rtol"], atol=self.req["atol"], nfev=c[:, 0].copy(),
-                     nsteps=c[:, 2].copy(), nreject=c[:, 3].copy(), c_calls=c[:, 4].copy(), c_status=self.c_status.copy(), simulate_reruns=[],
+                     nsteps=c[:, 2].copy(), nreject=c[:, 3].copy(), c_calls=c[:, 4].copy(),
+                     c_status=self.c_status.copy(), simulate_reruns=[],
                      **self.times)
         return BatchResult(self.T, cols, self.status, self.message, self.values, self.t_reached, stats)
 
@@ -429,7 +439,7 @@ def _why(code):
     return STATUS.get(code, "unknown")
 
 
-def _rerun(res, model, system, values, req):
+def _rerun(res, system, values, req):
     """Finish with :func:`mbcomp.simulate` each run whose program guard failed in C (``simulate``
     goes on on its Python path there): its states and columns replace the batch's."""
     from ..simulation.driver import simulate

@@ -6,6 +6,8 @@ same ``build()`` arguments share chunks, and sends each chunk to the task it is 
 :func:`~mbcomp.analysis.study.run_chunk`; this module knows nothing of studies):
 
 * ``executor=None``: in this process, one chunk after the other;
+* ``"batch"``: in this process, every item in one chunk (a study's task then runs them as one
+  :func:`mbcomp.batch`: one compiled call, threads);
 * any :class:`concurrent.futures.Executor` (a ``ProcessPoolExecutor``): one task per chunk;
   the recipe is pickled with each task (a path or a module-level ``build`` function; a
   model holding lambdas cannot be pickled -- the error says what to pass instead);
@@ -214,7 +216,7 @@ def dispatch(executor, task, shared, items, args=(), chunk=None, progress=False)
 
     Parameters
     ----------
-    executor : None, concurrent.futures.Executor, "dask", "tcp://host:port" or dask Client
+    executor : None, "batch", concurrent.futures.Executor, "dask", "tcp://host:port" or dask Client
         Where the tasks run (module notes).
     task : callable
         ``task(shared, part, *args) -> [(index, row, kept), ...]`` for a part, a list of
@@ -240,6 +242,9 @@ def dispatch(executor, task, shared, items, args=(), chunk=None, progress=False)
         items finished before it: the tasks not started are cancelled, a process pool of
         :class:`Workers` is told to stop its running tasks, which hand back what they finished).
     """
+    kind = None
+    if executor == "batch":  # this process, every item in one task (which runs them as one mbcomp.batch)
+        executor, chunk, kind = None, max(1, len(items)), "batch"
     client, close = dask_client(executor)
     target = client if client is not None else executor
     n = workers_of(target)
@@ -271,7 +276,7 @@ def dispatch(executor, task, shared, items, args=(), chunk=None, progress=False)
         if close is not None:
             close()
     done.sort(key=lambda x: x[0])
-    kind = "serial" if target is None else ("dask" if client is not None else type(executor).__name__)
+    kind = kind or ("serial" if target is None else ("dask" if client is not None else type(executor).__name__))
     return done, dict(executor=kind, chunks=len(parts), workers=n, interrupted=stopped)
 
 

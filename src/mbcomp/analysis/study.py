@@ -248,6 +248,69 @@ def _one(recipe, run, t_end, metrics, outputs, keep, options):
     return row, kept
 
 
+#: simulate options a batch honours (:func:`mbcomp.batch`); others need ``simulate`` per run
+BATCH_OPTIONS = ("t_start", "rtol", "atol", "n_out", "dt_out", "method", "stabilization", "alpha", "beta",
+                 "max_step", "max_steps", "backend")
+
+
+def run_batch_chunk(recipe, chunk, t_end, metrics, outputs, keep, options):
+    """Rows ``(index, row, kept)`` of the runs ``chunk`` as :func:`mbcomp.batch` calls, one per
+    set of ``build()`` arguments (and of parameter names): the runs of a structure integrate
+    in one C call. Metrics read each run as a :class:`~mbcomp.analysis.batch_result.RunView`
+    (``r["column"]``, ``r.time``, ``r.status``); ``cpu_time`` is the batch's wall time per run.
+    A batch that cannot start (a model it cannot run) gives every run of it an ``"error"`` row."""
+    from .batch import batch
+
+    unknown = sorted(set(options) - set(BATCH_OPTIONS))
+    if unknown or keep == "all":
+        raise ValueError(f"a batch study cannot honour {', '.join(unknown) or 'keep=all'} (a batch returns arrays, "
+                         "not Results, and runs simulate's default path only) -> use executor=None, a process pool "
+                         "or 'dask' without batch")
+    groups = {}
+    for index, run in chunk:
+        key = (tuple(sorted((k, v) for k, v in run.items() if "." not in k)), tuple(sorted(k for k in run if "." in k)))
+        groups.setdefault(key, []).append((index, run))
+    rows = []
+    for (build_args, names), part in groups.items():
+        opts = {k: v for k, v in options.items() if k != "backend"}
+        wall = time.perf_counter()
+        try:
+            system = prepared(recipe, dict(build_args), options.get("backend", "auto"))
+            res = batch(system, [{n: run[n] for n in names} for _, run in part], t_end=t_end,
+                        outputs="all" if metrics or keep else None, threads=1 if _in_worker() else None, **opts)
+        except (ModelError, SimulationError, ValueError, TypeError) as exc:
+            err = {name: math.nan for name in metrics}
+            rows += [(i, dict(err, status="error", message=f"{type(exc).__name__}: {exc}", cpu_time=0.0), None)
+                     for i, _ in part]
+            continue
+        share = (time.perf_counter() - wall) / len(part)
+        for k, (index, _) in enumerate(part):
+            rows.append((index,) + _batch_row(res.run(k), metrics, outputs, keep, share))
+    return rows
+
+
+def _in_worker():
+    """Whether this runs in a study's worker (another process, or a Dask worker's thread): a batch
+    there keeps to one thread, the executor spreading the work over the cores."""
+    import multiprocessing
+    import threading
+
+    return multiprocessing.parent_process() is not None or threading.current_thread() is not threading.main_thread()
+
+
+def _batch_row(view, metrics, outputs, keep, cpu):
+    """``(row, kept)`` of one run of a batch (see :func:`_one`)."""
+    row, message = {name: math.nan for name in metrics}, view.message
+    for name, fn in metrics.items():
+        try:
+            row[name] = float(fn(view))
+        except Exception as exc:  # noqa: BLE001 - a user's metric: reported in its row
+            message += f"; metric {name!r} failed ({type(exc).__name__}: {exc})"
+    kept = {"time": view.time, **{n: view[n] for n in outputs if n in view}} if keep == "outputs" else None
+    row.update(status=view.status, message=message, cpu_time=cpu)
+    return row, kept
+
+
 # --- the result -------------------------------------------------------------------------------
 class StudyResult:
     """The table of a study: one row per run, in the order of the runs.
@@ -317,7 +380,7 @@ def _cell(v):
 
 # --- the study ----------------------------------------------------------------------------------
 def study(model_or_build, grid, *, t_end=1.0, metrics=None, outputs=(), keep=None, executor=None, samples=None,
-          seed=None, chunk=None, progress=False, **simulate_options):
+          seed=None, chunk=None, progress=False, batch=False, **simulate_options):
     """Run a model over a grid or a Monte Carlo sample; one row per run.
 
     Parameters
@@ -338,10 +401,16 @@ def study(model_or_build, grid, *, t_end=1.0, metrics=None, outputs=(), keep=Non
     keep : {None, "outputs", "all"}
         What of each run comes back besides its row: nothing, the ``outputs`` columns, or the
         whole :class:`~mbcomp.simulation.result.Result`.
-    executor : None, concurrent.futures.Executor, "dask", "tcp://host:port" or dask Client
-        Where the runs go (:mod:`mbcomp.analysis.executors`).
+    executor : None, "batch", concurrent.futures.Executor, "dask", "tcp://host:port" or dask Client
+        Where the runs go (:mod:`mbcomp.analysis.executors`); ``"batch"``: in this process, the
+        runs of each structure as one :func:`mbcomp.batch` (one compiled call, threads).
     chunk : int, optional
         Runs per task (default: about four tasks per worker).
+    batch : bool
+        Each task's runs as one :func:`mbcomp.batch` on its worker (one thread each), e.g. a
+        batch per Dask worker. A batch runs smooth models on ``simulate``'s default path
+        (``dop853``/``dopri5``, no events or inputs) and hands metrics a
+        :class:`~mbcomp.analysis.batch_result.RunView`; ``keep="all"`` is refused.
     progress : bool
         A progress bar counting finished runs.
     **simulate_options
@@ -372,7 +441,8 @@ def study(model_or_build, grid, *, t_end=1.0, metrics=None, outputs=(), keep=Non
     params = list(dict.fromkeys(k for r in runs for k in r))
     wall = time.perf_counter()
     args = (t_end, metrics, list(outputs), keep, simulate_options)
-    done, info = dispatch(executor, run_chunk, recipe, runs, args, chunk, progress)
+    task = run_batch_chunk if batch or executor == "batch" else run_chunk
+    done, info = dispatch(executor, task, recipe, runs, args, chunk, progress)
     stopped = info.pop("interrupted")
     finished = [runs[i] for i, _, _ in done]
     rows = [dict(runs[i], **row) for i, row, _ in done]
