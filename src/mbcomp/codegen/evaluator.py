@@ -85,7 +85,6 @@ import time
 
 import numpy as np
 
-from ..errors import SimulationError
 from ..assembly.system import MultibodySystem
 from .compiler import Bound, Code
 from .dae_jacobian import bound_program
@@ -94,7 +93,8 @@ from .jacobian import JacobianCode
 from .loaded import bind_cached
 from .structure_key import STRUCTURES
 from .toolchain import FLAGS, c_compiler
-from .tracer import FIELDS, param_layout, trace, trace_point
+from .tracer import param_layout, trace
+from .verify import verify_evaluation, verify_fun
 
 __all__ = ["compile_system", "ProgramEvaluator", "CompiledEvaluation"]
 
@@ -303,59 +303,11 @@ class ProgramEvaluator:
 
     def _verify(self):
         """The program against the numeric evaluation at the trace point."""
-        system = self.system
-        t, q, u = trace_point(system)
-        num = system.evaluate_numeric(t, q, u, masked=False)
-        try:
-            flat = self.bound.run(t, q, u)
-        except Fallback:
-            return  # a state guard rejects the trace point itself (e.g. a piecewise law at zero)
-        code = self.bound.code
-        for name in FIELDS:
-            a, b, shape = code.slices[name]
-            ref = np.asarray(getattr(num, name), float)
-            err = np.max(np.abs(flat[a:b].reshape(shape) - ref), initial=0.0)
-            if not err <= 1e-9 * (1.0 + np.max(np.abs(ref), initial=0.0)):
-                raise CodegenError(f"internal error: the generated program differs from the numeric evaluation in "
-                                   f"{name} by {err:.3g}; please report this model (use the numeric path meanwhile)")
-        qd = self.bound.run_qrate(q, u)
-        if not np.allclose(qd, system.q_rate_numeric(q, u), rtol=1e-9, atol=1e-12):
-            raise CodegenError("internal error: the generated coordinate rates differ from the numeric ones")
-
+        verify_evaluation(self.bound, self.system)
 
     def _verify_fun(self, bound):
         """The Lagrange program against the numeric dense solve at the trace point."""
-        from ..formulations.lagrange import LagrangeIndex1
-
-        system = self.system
-        t, q, u = trace_point(system)
-        y = np.concatenate((q, u))
-        try:
-            dy = bound.run_fun(t, y, 10.0, 10.0)
-        except Fallback:
-            return
-        form = LagrangeIndex1(system.with_evaluator(None), alpha=10.0, beta=10.0)
-        try:
-            ref = form.fun(t, y)
-        except SimulationError:  # a singular mass matrix: initialization names the massless motion
-            return
-        ev = form.system.evaluate(t, q, u)
-        w = np.linalg.eigvalsh(ev.M)
-        if w.size and not w[0] > 1e-8 * w[-1]:  # both solves lose the digits the check compares
-            return
-        C = ev.A
-        if C.size:  # rows dependent at this (inconsistent) point: the two solves may differ, neither is wrong
-            sv = np.linalg.svd(C, compute_uv=False)
-            if len(sv) < C.shape[0] or sv[-1] <= 1e-8 * sv[0]:
-                return
-        # the accelerations come out of forces that may nearly cancel (a stiff spring held by a
-        # loop: 5.6 MN against the closure): both solves carry rounding of the forces' own size,
-        # M^-1 f, not of the small result
-        pushed = np.linalg.solve(ev.M, ev.f) if ev.M.size else np.zeros(0)
-        err = np.max(np.abs(dy - ref), initial=0.0)
-        if not err <= 1e-8 * (1.0 + np.max(np.abs(ref), initial=0.0) + np.max(np.abs(pushed), initial=0.0)):
-            raise CodegenError(f"internal error: the generated right-hand side differs from the dense Lagrange solve "
-                               f"by {err:.3g}; please report this model (use the numeric path meanwhile)")
+        verify_fun(bound, self.system)
 
     @property
     def capabilities(self):
