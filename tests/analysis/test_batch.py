@@ -181,3 +181,14 @@ def test_a_dask_study_runs_a_batch_per_worker():
         lc.close()
     assert on_dask.stats["executor"] == "dask" and list(on_dask["status"]) == ["success"] * 9
     np.testing.assert_allclose(on_dask["peak"], serial["peak"], rtol=1e-12, atol=0)
+
+
+def test_initialization_by_the_program_starts_equal_to_rounding():
+    table = {"crank_joint.phi0": [0.3, 1.0, 2.5, 4.0], "crank_joint.w0": [6.0, 2.0, -4.0, 1.0]}
+    exact = mbcomp.batch(SLIDER(), table, **REQUEST)
+    fast = mbcomp.batch(SLIDER(), table, initialization="program", **REQUEST)
+    for name in ("crank_joint.phi", "slider_joint.s", "pin.phi", "crank_joint.w", "slider_joint.v", "pin.w"):
+        np.testing.assert_allclose(fast[name][:, 0], exact[name][:, 0], rtol=0, atol=1e-13)   # the closed starts
+        np.testing.assert_allclose(fast[name], exact[name], rtol=0, atol=1e-6)    # then within the tolerances
+    with pytest.raises(ValueError, match="initialization"):
+        mbcomp.batch(SLIDER(), table, initialization="numeric")
