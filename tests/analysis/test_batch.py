@@ -192,3 +192,26 @@ def test_initialization_by_the_program_starts_equal_to_rounding():
         np.testing.assert_allclose(fast[name], exact[name], rtol=0, atol=1e-6)    # then within the tolerances
     with pytest.raises(ValueError, match="initialization"):
         mbcomp.batch(SLIDER(), table, initialization="numeric")
+
+
+def test_ctrl_c_stops_every_run_and_keeps_what_finished():
+    import _thread
+    import threading
+
+    rng = np.random.default_rng(3)
+    table = {"joint1.phi0": rng.uniform(-1, 1, 400)}
+    model = PENDULUM(N=3)
+    mbcomp.batch(model, {"joint1.phi0": [0.1]}, t_end=0.1)   # compiled before the clock starts
+    timer = threading.Timer(0.3, _thread.interrupt_main)
+    timer.start()
+    with pytest.raises(mbcomp.errors.SimulationInterrupted) as err:
+        mbcomp.batch(model, table, t_end=10.0, threads=2, block=16)
+    timer.cancel()
+    res = err.value.result
+    done = [i for i, s in enumerate(res.status) if s == "success"]
+    assert err.value.signal == "SIGINT" and 0 < len(done) < 400
+    assert set(res.status) <= {"success", "interrupted"}
+    late = [i for i, s in enumerate(res.status) if s == "interrupted"]
+    assert all(np.isnan(res["joint1.phi"][i, -1]) for i in late)
+    again = mbcomp.batch(model, {"joint1.phi0": table["joint1.phi0"][done[-3:]]}, t_end=10.0)
+    np.testing.assert_array_equal(again["joint1.phi"], res["joint1.phi"][done[-3:]])

@@ -49,11 +49,12 @@ import time
 import numpy as np
 
 from ..assembly.outputs import output_values
-from ..errors import InitializationError, ModelError, SimulationError
+from ..errors import InitializationError, ModelError, SimulationError, SimulationInterrupted
 from ..formulations import build
 from ..geometry.kinematics import matrix_to_quat
 from ..hybrid.active import start_modes
 from ..hybrid.contacts import initialize_in_modes
+from ..simulation.endings import Terminated, sigterm_interrupts
 from ..simulation.setup import check_model, check_numbers, output_times, system_of
 from ..solvers import STEPPERS
 from .batch_result import BatchResult, STATUS_OF
@@ -149,12 +150,30 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
                    stabilization=stabilization, alpha=float(alpha), beta=float(beta), n_out=n_out, dt_out=dt_out,
                    max_step=max_step)
     runner = _Runner(system, request, values, n_runs, outputs, max_steps, threads, cache_dir)
-    runner.run(max(1, int(block)))
+    _interruptible(runner, max(1, int(block)))
     res = runner.result()
     if fallback:
         _rerun(res, system, values, request)
     res.stats["wall_time"] = time.perf_counter() - t0
     return res
+
+
+def _interruptible(runner, block):
+    """``runner.run(block)``; Ctrl-C or SIGTERM stop every run at its next stretch and raise
+    :class:`~mbcomp.errors.SimulationInterrupted` carrying the :class:`BatchResult` of what
+    finished (the runs stopped or never started are ``"interrupted"``)."""
+    try:
+        with sigterm_interrupts():
+            runner.run(block)
+    except (KeyboardInterrupt, Terminated) as exc:
+        sig = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
+        for i in np.flatnonzero(runner.c_status == -1):
+            if not runner.message[i]:  # not started (a run that could not start keeps its error)
+                runner.status[i], runner.message[i] = "interrupted", f"not run: the batch was interrupted by {sig}"
+        res = runner.result()
+        done = int(sum(s == "success" for s in res.status))
+        raise SimulationInterrupted(res, sig, f"batch interrupted by {sig}: {done} of {len(res)} runs finished "
+                                              "(their results are in .result)") from None
 
 
 def _table(system, table):

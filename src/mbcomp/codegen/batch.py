@@ -44,7 +44,6 @@ Examples
 from __future__ import annotations
 
 import ctypes
-import os
 import re
 from types import SimpleNamespace
 
@@ -343,8 +342,3 @@ def run_batch(code, order, H, P, Y0, T, rtol, atol, *, gains=(0.0, 0.0), hmax=0.
     raw = msgs.raw
     messages = [raw[200 * i: 200 * (i + 1)].split(b"\0", 1)[0].decode(errors="replace") for i in range(runs)]
     return SimpleNamespace(Y=Y, status=status, n_done=n_done, t_reached=t_reached, counts=counts, messages=messages)
-
-
-def default_threads():
-    """This machine's cores (``os.cpu_count()``)."""
-    return os.cpu_count() or 1
