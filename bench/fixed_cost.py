@@ -10,8 +10,8 @@ Two tables, ratios in one run (the machine is shared: medians of repeats):
 2. *One call*: ``LagrangeIndex1.fun(t, y)`` as scipy calls it (the formulation of a compiled
    system) against Pinocchio's ``aba`` called from Python and the peer's whole ``rhs``
    (``[u, aba]``, ``bench/peers/pinocchio_pendulum.py``), and the program's bare C call through
-   ctypes (``mbcomp_fun`` with its buffers: the floor a Python caller pays), us per call,
-   best of 5 batches.
+   ctypes (``mbcomp_fun`` with its buffers) and in a C loop (the function alone: what Python
+   adds is ``fun`` minus that), us per call, best of 5 batches.
 
 Run: ``python bench/fixed_cost.py`` (``--sizes 5 100 1000`` for the fixed cost; the first
 run of a size compiles its program: minutes at N = 1000 with a cold compile cache).
@@ -75,6 +75,38 @@ def fixed_cost(mod, N, repeats, phases=False):
     return total, parts, res.system.stats.get("structure_cache")
 
 
+_LOOP_C = r"""
+typedef int (*prog_t)(const double *, const double *, double, const double *, const double *,
+                      const double *, double *, double *);
+int loop(prog_t f, long n, const double *q, const double *u, const double *d, const double *h,
+         const double *p, double *w, double *out) {
+    int rc = 0;
+    for (long k = 0; k < n; k++)
+        rc |= f(q, u, 1e-9 * (double)k, d, h, p, w, out);
+    return rc;
+}
+"""
+
+
+def c_loop():
+    """A C loop calling a generated program ``n`` times (ctypes), to time the C function alone."""
+    import ctypes
+    import subprocess
+    import tempfile
+
+    from mbcomp.codegen import c_compiler
+
+    tmp = tempfile.mkdtemp()
+    src, lib = os.path.join(tmp, "loop.c"), os.path.join(tmp, "loop.so")
+    with open(src, "w") as fh:
+        fh.write(_LOOP_C)
+    subprocess.run([c_compiler(), "-O2", "-shared", "-fPIC", src, "-o", lib], check=True)
+    fn = ctypes.CDLL(lib).loop
+    fn.argtypes = [ctypes.c_void_p, ctypes.c_long] + [ctypes.c_void_p] * 7
+    fn.restype = ctypes.c_int
+    return fn
+
+
 def best_per_call(f, number):
     return min(timeit.repeat(f, number=number, repeat=5)) / number
 
@@ -92,6 +124,12 @@ def one_call(mod, N, peer_module):
     cfun = bound.code.dll.mbcomp_fun
     bound.run_fun(0.0, y, 10.0, 10.0)  # the gains and y in its buffers
     out["c"] = best_per_call(lambda: cfun(*ptrs), number)
+    import ctypes
+
+    loop, addr = c_loop(), ctypes.cast(cfun, ctypes.c_void_p).value
+    q, u, _, d, h, p, w, o = ptrs
+    reps = 200000
+    out["c_alone"] = min(timeit.repeat(lambda: loop(addr, reps, q, u, d, h, p, w, o), number=1, repeat=5)) / reps
     thin = system.evaluator.lagrange_thin(10.0, 10.0)
     out["thin"] = best_per_call(lambda: thin(0.0, y), number) if thin is not None else np.nan
     if peer_module is not None:
@@ -131,13 +169,15 @@ def main():
         return
     print()
     print("one right-hand-side call, us (best of 5 batches); ratios to pinocchio's aba from Python")
-    print(f"{'N':>4} {'fun':>7} {'thin':>7} {'C':>7} {'fun-C':>7} {'aba':>7} {'rhs':>7} {'fun/aba':>8} "
+    print("  fun: LagrangeIndex1.fun as scipy calls it; thin: its C call alone; ctypes: mbcomp_fun through ctypes;")
+    print("  C: mbcomp_fun in a C loop (the function alone); fun-C: what Python adds; aba/rhs: pinocchio from Python")
+    print(f"{'N':>4} {'fun':>7} {'thin':>7} {'ctypes':>7} {'C':>7} {'fun-C':>7} {'aba':>7} {'rhs':>7} {'fun/aba':>8} "
           f"{'fun/rhs':>8} {'|fun-rhs|':>10}")
     for N in args.calls:
         r = one_call(mod, N, peer_module)
         aba, rhs = r.get("aba", np.nan), r.get("rhs", np.nan)
-        print(f"{N:>4} {1e6 * r['fun']:>7.2f} {1e6 * r['thin']:>7.2f} {1e6 * r['c']:>7.2f} "
-              f"{1e6 * (r['fun'] - r['c']):>7.2f} {1e6 * aba:>7.2f} {1e6 * rhs:>7.2f} {r['fun'] / aba:>8.2f} "
+        print(f"{N:>4} {1e6 * r['fun']:>7.2f} {1e6 * r['thin']:>7.2f} {1e6 * r['c']:>7.2f} {1e6 * r['c_alone']:>7.2f} "
+              f"{1e6 * (r['fun'] - r['c_alone']):>7.2f} {1e6 * aba:>7.2f} {1e6 * rhs:>7.2f} {r['fun'] / aba:>8.2f} "
               f"{r['fun'] / rhs:>8.2f} {r.get('agree', np.nan):>10.2g}")
 
 

@@ -91,8 +91,8 @@ from .dae_jacobian import bound_program
 from .graph import CodegenError, Fallback, Retrace
 from .jacobian import JacobianCode
 from .loaded import bind_cached
-from .structure_key import STRUCTURES
-from .toolchain import FLAGS, c_compiler
+from .structure_key import STRUCTURES, compiler
+from .toolchain import FLAGS
 from .tracer import param_layout, trace
 from .verify import verify_evaluation, verify_fun
 
@@ -208,7 +208,7 @@ class ProgramEvaluator:
     def __init__(self, system, backend="python", *, cache_dir=None, verify=True, max_nodes=3_000_000, code=None,
                  fun_codes=None, lazy=False, checked=False, reuse=False):
         if backend == "auto":
-            backend = "c" if c_compiler() else "python"
+            backend = "c" if compiler() else "python"
         if backend not in ("python", "c"):
             raise ValueError(f"backend {backend!r} is unknown; use 'python', 'c' or 'auto'")
         self.system, self.backend = system, backend
@@ -221,7 +221,7 @@ class ProgramEvaluator:
             # the programs of a system of the same structure (codegen/structure_key.py): a model
             # rebuilt with other parameter or start values is not traced or printed again
             where = cache_dir or os.environ.get("MBCOMP_CACHE")
-            fun_codes, hit = STRUCTURES.entry(system, backend, (max_nodes, where, c_compiler(), FLAGS), self.signature)
+            fun_codes, hit = STRUCTURES.entry(system, backend, (max_nodes, where, compiler(), FLAGS), self.signature)
             hit = hit and fun_codes.get("checked", False)
             self.stats["structure_cache"] = "hit" if hit else "miss"
             # a lazy evaluator takes the evaluation program only after LAZY_EVALUATIONS
@@ -321,7 +321,7 @@ class ProgramEvaluator:
         one capability and makes only what that one needs."""
         # the D'Alembert and DAE calls need a compiler only: say so without making the
         # evaluation program (O(N^2)), which the Lagrange path never needs
-        caps = {"outputs"} | ({"dalembert_fun", "dae_fun"} if self.backend == "c" and c_compiler() else set())
+        caps = {"outputs"} | ({"dalembert_fun", "dae_fun"} if self.backend == "c" and compiler() else set())
         bound = self._fun_bound()
         if bound is not None:
             caps.update(("lagrange_fun", "c_integrate") if bound.code.has_engine else ("lagrange_fun",))
