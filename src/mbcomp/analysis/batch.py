@@ -260,7 +260,7 @@ class _Runner:
         self.t_reached = np.full(n_runs, request["t_start"])
         self.counts = np.zeros((n_runs, 5), np.int_)
         self.c_status = np.full(n_runs, -1)  # the batch runner's code per run (-1: not integrated)
-        self.groups = {}  # row-mask key -> (code, gains, output program or None)
+        self.groups = {}  # (row mask, table's zero pattern) -> (code, gains, output program or None)
         self.columns = None  # name -> (n_runs, n_t), made when the first output program is
         self.wanted = None
         self.times = dict(setup_time=0.0, integrate_time=0.0, outputs_time=0.0)
@@ -279,9 +279,11 @@ class _Runner:
             form = build("lagrange", "ode", s, stabilization=req["stabilization"], alpha=req["alpha"],
                          beta=req["beta"], method=req["method"], max_index=STEPPERS[req["method"]].max_index)
             y0 = np.asarray(form.full(req["t_start"], form.initial_state(req["t_start"], init.q, init.u)), float)
-        except (InitializationError, ModelError, SimulationError, ValueError, ArithmeticError,
-                np.linalg.LinAlgError) as exc:
+        except (InitializationError, ModelError, SimulationError) as exc:
             self.message[i] = f"{type(exc).__name__}: {exc}"
+            return None
+        except Exception as exc:  # noqa: BLE001 - a law raising at the start: this run's error row, named
+            self.message[i] = f"the run could not start: {type(exc).__name__}: {exc}"
             return None
         rm = s.row_mask
         # what decides the program besides the row mask: which table entries are exactly zero
