@@ -2,7 +2,7 @@
 
 Two tables, ratios in one run (the machine is shared: medians of repeats):
 
-1. *Warm fixed cost*: ``simulate(build(N), t_end=1e-9, n_out=2)`` of the N-link pendulum
+1. *Warm fixed cost*: ``simulate(build(N), t_end=1e-9, n_out=2)`` (``--n-out``) of the N-link pendulum
    (``models/n_link_pendulum.py``) on a model built anew each time (the structure cache of
    ``codegen/structure_key.py`` is warm, the compile cache too), wall ms, median of
    ``--repeats``; with the time of its phases (``--phases``: system, initialization,
@@ -41,9 +41,9 @@ def pendulum_module():
     return mod
 
 
-def fixed_cost(mod, N, repeats, phases=False):
+def fixed_cost(mod, N, repeats, phases=False, n_out=2):
     """Median wall seconds of a warm ``simulate`` of a freshly built model, and its phases."""
-    mbcomp.simulate(mod.build(N), t_end=1e-9, n_out=2)  # cold: trace, print, compile
+    mbcomp.simulate(mod.build(N), t_end=1e-9, n_out=n_out)  # cold: trace, print, compile
     import mbcomp.simulation.driver as driver
 
     spent = {}
@@ -65,7 +65,7 @@ def fixed_cost(mod, N, repeats, phases=False):
             spent.clear()
             model = mod.build(N)
             t0 = time.perf_counter()
-            res = mbcomp.simulate(model, t_end=1e-9, n_out=2)
+            res = mbcomp.simulate(model, t_end=1e-9, n_out=n_out)
             runs.append((time.perf_counter() - t0, dict(spent)))
     finally:
         for name, f in originals.items():
@@ -149,6 +149,8 @@ def main():
     ap.add_argument("--calls", type=int, nargs="*", default=[5, 10, 20, 40])
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--phases", action="store_true", help="also time the phases of simulate")
+    ap.add_argument("--n-out", type=int, default=2, help="output points (>= 100: the output program, made by the "
+                    "first run, post-processes the warm ones)")
     args = ap.parse_args()
     mod = pendulum_module()
     try:
@@ -158,10 +160,10 @@ def main():
     except ImportError:
         peer_module = None
 
-    print("warm fixed cost of simulate(build(N), t_end=1e-9, n_out=2), ms (median of %d)" % args.repeats)
+    print(f"warm fixed cost of simulate(build(N), t_end=1e-9, n_out={args.n_out}), ms (median of {args.repeats})")
     print(f"{'N':>6} {'total':>9} {'system':>8} {'init':>8} {'post':>8} {'rest':>8}  structure cache")
     for N in args.sizes:
-        total, parts, hit = fixed_cost(mod, N, args.repeats, args.phases)
+        total, parts, hit = fixed_cost(mod, N, args.repeats, args.phases, args.n_out)
         cols = [parts.get(k, np.nan) for k in ("system_of", "initialize_in_modes", "postprocess")]
         rest = total - sum(cols) if args.phases else np.nan
         print(f"{N:>6} {1e3 * total:>9.2f} " + " ".join(f"{1e3 * c:>8.2f}" for c in cols + [rest]) + f"  {hit}")

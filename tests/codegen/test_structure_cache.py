@@ -131,3 +131,48 @@ def test_a_drive_number_given_as_a_runtime_parameter_is_not_the_baked_one():
     system = compile_system(mbcomp.assemble(double_pendulum(drive="0.3*sin(2*t)")), "c", lazy=True)
     res = mbcomp.simulate(system, t_end=0.3, n_out=7, params={"d.s": "0.5*sin(2*t)"})
     assert np.max(np.abs(res["j1.phi"] - 0.5 * np.sin(2 * res.time))) <= 1e-9
+
+
+K = 0.5
+
+
+def global_law(t, phi, w):
+    return -K * w
+
+
+def test_a_law_reading_a_changed_global_is_traced_again():
+    """A law's global is traced into the program as a constant: changing it is a new structure."""
+    global K
+    K = 0.5
+    cold(double_pendulum(tau=global_law))
+    K = 3.0
+    try:
+        warm = run(double_pendulum(tau=global_law))
+        assert reused(warm) == "miss"
+        ref = cold(double_pendulum(tau=global_law))
+        assert np.max(np.abs(states(warm) - states(ref))) <= 1e-12
+        again = run(double_pendulum(tau=global_law, m2=2.0))   # the same K: reused
+        assert reused(again) == "hit"
+    finally:
+        K = 0.5
+
+
+def test_a_callable_object_is_keyed_by_its_state():
+    class Damping:
+        def __init__(self, c):
+            self.c = c
+
+        def __call__(self, t, phi, w):
+            return -self.c * w
+
+    a, b = Damping(0.5), Damping(2.0)
+    ka = structure_key(mbcomp.assemble(double_pendulum(tau=a)), "python")[0]
+    kb = structure_key(mbcomp.assemble(double_pendulum(tau=b)), "python")[0]
+    assert ka != kb
+    import functools
+
+    def lin(c, t, phi, w):
+        return -c * w
+    kp = structure_key(mbcomp.assemble(double_pendulum(tau=functools.partial(lin, 0.5))), "python")[0]
+    kq = structure_key(mbcomp.assemble(double_pendulum(tau=functools.partial(lin, 2.0))), "python")[0]
+    assert kp != kq  # a partial's arguments are not in its __dict__: keyed by identity

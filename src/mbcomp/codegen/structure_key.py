@@ -11,7 +11,9 @@ part of it. :func:`structure_key` gathers that everything:
 * the connections (in order: the spanning tree follows it), the bodies marked free;
 * the parameter signature of :func:`~mbcomp.codegen.tracer.param_layout` (which entries are
   zero, the shapes, the laws) and every non-numeric parameter value (a law, a surface, an
-  input) by value where it is plain data, else by identity;
+  input) by value where it is plain data, else by identity; a law written as a Python
+  function by identity *and* by the values of its defaults, its closure and the globals it
+  reads (they are traced into the program as constants);
 * the drives' parameters *by value*, numbers too: a drive's law is traced into the
   right-hand side with its numbers as constants;
 * the nonholonomic rows, the backend, the node limit, the compiler and its flags.
@@ -44,6 +46,7 @@ from __future__ import annotations
 from collections import OrderedDict
 
 import os
+import types
 
 import numpy as np
 
@@ -81,24 +84,61 @@ def compiler():
     return _COMPILERS[key]
 
 
+_HEAPTYPE = 1 << 9  # Py_TPFLAGS_HEAPTYPE: a class defined in Python
+
+
+def _plain_class(cls):
+    """Whether instances of ``cls`` keep their whole state in ``__dict__`` (every class of its
+    MRO but ``object`` defined in Python, no ``__slots__``)."""
+    return all(c.__flags__ & _HEAPTYPE and "__slots__" not in vars(c) for c in cls.__mro__[:-1])
+
+
+def _code_names(code, out):
+    """The global names a code object (and the code nested in it) reads."""
+    out.update(code.co_names)
+    for c in code.co_consts:
+        if isinstance(c, types.CodeType):
+            _code_names(c, out)
+    return out
+
+
+def _function(f, refs, depth):
+    """A Python function: itself, its defaults, its closure's values and the globals it reads
+    (a law reading ``K`` traces ``K``'s value into the program as a constant)."""
+    refs.append(f)
+    g = f.__globals__
+    names = sorted(n for n in _code_names(f.__code__, set()) if n in g)
+    cells = []
+    for c in f.__closure__ or ():
+        try:
+            cells.append(_fingerprint(c.cell_contents, refs, depth + 1))
+        except ValueError:  # an empty cell
+            cells.append(("empty",))
+    return ("fn", f, _fingerprint(f.__defaults__, refs, depth + 1), _fingerprint(f.__kwdefaults__, refs, depth + 1),
+            tuple(cells), tuple((n, _fingerprint(g[n], refs, depth + 1)) for n in names))
+
+
 def _fingerprint(v, refs, depth=0):
     """A hashable value equal for two values a program cannot tell apart; objects it cannot
     see into by identity (``v`` appended to ``refs`` to keep it alive)."""
     if isinstance(v, _PLAIN):
         return (type(v).__name__, v.item() if isinstance(v, np.generic) else v)
     if depth < _DEPTH:
-        if isinstance(v, (tuple, list)):
+        if type(v) in (tuple, list):
             return (type(v).__name__,) + tuple(_fingerprint(x, refs, depth + 1) for x in v)
-        if isinstance(v, np.ndarray) and v.dtype != object:
+        if type(v) is np.ndarray and v.dtype != object:
             return ("nd", v.dtype.str, v.shape, v.tobytes())
         if type(v) is dict:
             return ("dict",) + tuple((_fingerprint(k, refs, depth + 1), _fingerprint(x, refs, depth + 1))
                                      for k, x in v.items())
-        if isinstance(v, (set, frozenset)):
+        if type(v) in (set, frozenset):
             return ("set",) + tuple(sorted((_fingerprint(x, refs, depth + 1) for x in v), key=repr))
-        # plain data: an object of a Python class whose state is its __dict__ alone
-        if (not callable(v) and hasattr(v, "__dict__") and not hasattr(type(v), "__slots__")
-                and type(v).__module__ not in ("builtins",)):
+        if isinstance(v, types.FunctionType):
+            return _function(v, refs, depth)
+        if isinstance(v, types.MethodType):
+            return ("method", _fingerprint(v.__func__, refs, depth + 1), _fingerprint(v.__self__, refs, depth + 1))
+        # plain data (a surface, an input, a callable object): a Python class whose state is its __dict__
+        if not isinstance(v, (type, types.ModuleType)) and hasattr(v, "__dict__") and _plain_class(type(v)):
             return ("obj", type(v)) + tuple((k, _fingerprint(x, refs, depth + 1))
                                             for k, x in sorted(vars(v).items()))
     try:
