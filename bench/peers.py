@@ -1,4 +1,4 @@
-"""mbcomp against Pinocchio, MuJoCo and sympy/pydy on the N-link planar pendulum, as ratios.
+"""mbcomp against Pinocchio, MuJoCo, sympy/pydy and Exudyn (N-link pendulum and more), as ratios.
 
 The mechanism is ``models/n_link_pendulum.py`` (N uniform rods of mass ``m``, length ``L``
 on hinges about z, relative joint angles, gravity along -y) with its default parameters; each
@@ -32,6 +32,23 @@ compiler's child processes, ``bench/peers/cpu_clock.py``), medians:
    measurable: from N = 10 on the 10 s motion of the curled chain is chaotic (5e-4 at N = 10,
    1e2 at N = 20), so the end-to-end table has N = 2 and 5 (``--t-end`` for a shorter run).
 
+5. **three starts** (``--cases starts``, :mod:`peers.starts`): the same end to end from three
+   start states (the model's curled chain, a low irregular swing, a thrown chain) at N = 5 and
+   20 (``--starts-Ns``), over the longest of 10, 5, 2, 1, 0.5 s the chain's chaos leaves
+   measurable: Pinocchio + scipy LSODA / DOP853, MuJoCo + scipy DOP853, **MuJoCo + C DOP853**
+   (``peers/mujoco_dop853.c``: ``mj_forward`` inside mbcomp's own C DOP853, linked against the
+   wheel's libmujoco: no Python per call, the strongest construct a MuJoCo user can build), and
+   mbcomp's default call warm and cold;
+6. **stiff** (``peers/stiff_chain.py``): bobs on damped stiff springs, Pinocchio + scipy LSODA /
+   Radau against the default call (``auto``: DOP853 in C, LSODA once the C integrator finds the
+   problem stiff); **events** (``peers/stop_pendulum.py``): a pendulum onto a rigid stop,
+   Pinocchio in a hand-written ``solve_ivp`` event loop against the default call; **andrews**:
+   ``bench/andrews.py``'s pydy Cython + DOP853 against the default call; **exudyn**
+   (``peers/exudyn_peers.py``): Exudyn's kinematic tree under its DOPRI5 (pendulum, N = 5) and
+   its redundant-coordinate slider-crank under generalized-alpha (``peers/cases.py``);
+7. **targets**: issue 32 item 8's targets, each with its ratio and met / NOT met
+   (``peers/report.py``), then the other ratios of the run (cold cache, stiff, events, Exudyn).
+
 Pinocchio is not built above 400 links (``pinocchio_pendulum.MAX_LINKS``: its ``Data`` of a
 serial chain grows like N^3 in memory; N = 1000 was killed out of memory); pydy only where its
 derivation is predicted under 60 s; mbcomp's code generation only where predicted under
@@ -41,8 +58,9 @@ Writes bench/peers.csv (long format: table, N, who, method, quantity, value, not
 bench/peers.png (one call, build and end to end vs N); both are git-ignored like every bench
 output.
 
-Run: python bench/peers.py [--quick] [--Ns 2,5,10,20,40,100,1000] [--skip pydy,mujoco]
-     [--e2e-Ns 2,5,10,20] [--budget 30] [--methods dop853,...|all]
+Run: python bench/peers.py [--quick] [--cases onecall,e2e,starts,stiff,events,andrews,exudyn]
+     [--Ns 2,5,10,20,40,100,1000] [--skip pydy,mujoco] [--e2e-Ns 2,5,10,20] [--starts-Ns 5,20]
+     [--budget 30] [--methods dop853,...|all]
      (needs the extra: pip install -e ".[bench]"). The default run takes about 10 min of CPU.
 """
 import os
@@ -58,11 +76,8 @@ import csv  # noqa: E402
 import inspect  # noqa: E402
 import math  # noqa: E402
 import pathlib  # noqa: E402
-import shutil  # noqa: E402
-import signal  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
-import tempfile  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from dataclasses import dataclass, field  # noqa: E402
@@ -79,6 +94,8 @@ from mbcomp.formulations import LagrangeIndex1  # noqa: E402
 from mbcomp.initialization import initialize  # noqa: E402
 from peers import mujoco_pendulum, pinocchio_pendulum, pydy_pendulum  # noqa: E402
 from peers.cpu_clock import cpu  # noqa: E402
+from peers.report import md_table, num  # noqa: E402
+from peers.timing import Try, batch_seconds, fresh_cache, per_call, sweep  # noqa: E402
 
 MODEL_FILE = ROOT / "models" / "n_link_pendulum.py"
 PEERS = {"pinocchio": pinocchio_pendulum, "mujoco": mujoco_pendulum, "pydy": pydy_pendulum}
@@ -129,25 +146,6 @@ class Engine:
 
     def simulate(self, **kwargs):
         return mbcomp.simulate(self.system, **{**self.simulate_kwargs, **kwargs})
-
-
-class fresh_cache:
-    """Context: a new empty ``MBCOMP_CACHE`` directory (so the C compiler really runs), removed
-    on exit; ``mbcomp.simulate``'s own compilations use it too."""
-
-    def __enter__(self):
-        self.old = os.environ.get("MBCOMP_CACHE")
-        self.path = tempfile.mkdtemp(prefix="mbcomp-peers-")
-        os.environ["MBCOMP_CACHE"] = self.path
-        return self.path
-
-    def __exit__(self, *exc):
-        if self.old is None:
-            os.environ.pop("MBCOMP_CACHE", None)
-        else:
-            os.environ["MBCOMP_CACHE"] = self.old
-        shutil.rmtree(self.path, True)
-        return False
 
 
 def mbcomp_engines(model_or_system, *, cache_dir=None, codegen=True, c=True, max_nodes=3_000_000,
@@ -220,80 +218,6 @@ def mbcomp_engines(model_or_system, *, cache_dir=None, codegen=True, c=True, max
             warm = batch_seconds(lambda: program("c", cache_dir=cache_dir))
         out["c"] = Engine(fun, cs, base + s, warm_seconds=base + warm)
     return out
-
-
-# ------------------------------------------------------------------------------------------
-# timing
-# ------------------------------------------------------------------------------------------
-def per_call(f, batch_time=0.05, repeats=5):
-    """CPU seconds per call of ``f()``: median over ``repeats`` batches of about ``batch_time``."""
-    c0 = cpu()
-    f()
-    first = cpu() - c0
-    if first > 0.2:  # a slow call: a few single calls are enough
-        times = [first]
-        for _ in range(2):
-            c0 = time.process_time()
-            f()
-            times.append(time.process_time() - c0)
-        return float(np.median(times))
-    n = 1
-    while True:
-        c0 = time.process_time()
-        for _ in range(n):
-            f()
-        dt = time.process_time() - c0
-        if dt >= batch_time or n >= 1 << 18:
-            break
-        n *= 2
-    times = [dt / n]
-    for _ in range(repeats - 1):
-        c0 = time.process_time()
-        for _ in range(n):
-            f()
-        times.append((time.process_time() - c0) / n)
-    return float(np.median(times))
-
-
-def batch_seconds(f, batch_time=0.05, repeats=3):
-    """CPU seconds per call of a short ``f()`` (a build of microseconds), compiler processes
-    included: the median of ``repeats`` batches of about ``batch_time``. One call is not
-    timed alone: under load this VM's process clock stalls for up to ms and then catches up,
-    and single sub-millisecond builds read as exactly 0."""
-    times = []
-    for _ in range(repeats):
-        n, c0 = 0, cpu()
-        while True:
-            f()
-            n += 1
-            dt = cpu() - c0
-            if dt >= batch_time or n >= 1000:
-                break
-        times.append(dt / n)
-    return float(np.median(times))
-
-
-class OverBudget(BaseException):
-    """A run used more CPU than allowed (a BaseException: no ``except Exception`` keeps it)."""
-
-
-class cpu_budget:
-    """Context: raise :class:`OverBudget` after ``seconds`` of CPU time (SIGPROF timer)."""
-
-    def __init__(self, seconds):
-        self.seconds = seconds
-
-    def __enter__(self):
-        def handler(signum, frame):
-            raise OverBudget()
-
-        self.old = signal.signal(signal.SIGPROF, handler)
-        signal.setitimer(signal.ITIMER_PROF, self.seconds)
-
-    def __exit__(self, *exc):
-        signal.setitimer(signal.ITIMER_PROF, 0)
-        signal.signal(signal.SIGPROF, self.old)
-        return False
 
 
 # ------------------------------------------------------------------------------------------
@@ -434,16 +358,6 @@ def one_call(b, agreed, rows, batch_time):
 # ------------------------------------------------------------------------------------------
 # 4. end to end
 # ------------------------------------------------------------------------------------------
-@dataclass
-class Try:
-    setting: float
-    cpu_s: float = math.nan
-    err: float = math.nan
-    nfev: float = math.nan
-    fail: str = ""
-    note: str = ""
-
-
 def run_peer(rhs, method, tol, y0, grid, ref):
     count = [0]
 
@@ -492,37 +406,6 @@ def run_default(N, setting, grid, ref):
     t = Try(setting, cpu_s, float(np.max(np.abs(Y - ref))), res.stats.get("nfev", math.nan))
     t.note = f"method {res.stats.get('method')}, backend {res.stats.get('backend')}" + (f"; warned: {said}" if said else "")
     return t
-
-
-def sweep(run, start, budget, stop=26):
-    """Tighten the setting 10^(-k/2), k = start.. until the error is within TARGET.
-
-    Returns ``(passing Try or None, note, k)``; a passing run under 1 s is timed three times
-    (median). Gives up when a run exceeds ``budget`` CPU s,
-    fails, or when the last two runs extrapolate (cost ~ error^-p) to more than 3 budgets."""
-    tries = []
-    for k in range(start, stop + 1):
-        s = 10 ** (-k / 2)
-        try:
-            with cpu_budget(budget):
-                t = run(s)
-        except OverBudget:
-            return None, f"over the {budget:g} s budget at setting {s:.0e}", k
-        if t.fail:
-            return None, f"failed at setting {s:.0e}: {t.fail}", k
-        tries.append(t)
-        if t.err <= TARGET:
-            if t.cpu_s < 1.0:  # a short run: the median of three
-                t.cpu_s = float(np.median([t.cpu_s] + [run(s).cpu_s for _ in range(2)]))
-            return t, "", k
-        if len(tries) >= 2:
-            a, z = tries[-2], tries[-1]
-            if z.err < a.err and z.cpu_s > a.cpu_s > 0:
-                p = math.log(z.cpu_s / a.cpu_s) / math.log(a.err / z.err)
-                need = z.cpu_s * (z.err / TARGET) ** p
-                if need > 3 * budget:
-                    return None, f"error {z.err:.0e} at setting {s:.0e}; 1e-8 extrapolates to ~{need:.2g} s", k
-    return None, f"error {tries[-1].err:.0e} at the tightest setting", stop
 
 
 MBCOMP_METHODS = ("dop853", "dopri5", "RK45", "DOP853", "LSODA", "Radau", "BDF", "radau5", "ida", "RK23", "genalpha")
@@ -623,16 +506,6 @@ def end_to_end(b, agreed, speed, args, rows):
 # ------------------------------------------------------------------------------------------
 # report
 # ------------------------------------------------------------------------------------------
-def _num(v, fmt):
-    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
-
-
-def md_table(header, body):
-    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---:" if i else "---" for i in range(len(header))) + "|"]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in body]
-    return "\n".join(lines)
-
-
 def pivot(rows, table, quantity):
     """{N: {who: value}} and the who's in first-seen order."""
     out, whos = {}, []
@@ -702,7 +575,7 @@ def print_tables(rows, notes, e2e):
             continue
         c = cols(whos)
         print(f"\n### {title}\n")
-        print(md_table(["N"] + c, [[N] + [_num(data[N].get(w), fmt) for w in c] for N in sorted(data)]))
+        print(md_table(["N"] + c, [[N] + [num(data[N].get(w), fmt) for w in c] for N in sorted(data)]))
         print(f"\n- = not built or not timed (reason under Notes); Pinocchio is not built above "
               f"{pinocchio_pendulum.MAX_LINKS} links: its Data for a serial chain grows like N^3 in memory")
     for N, (runs, base) in sorted(e2e.items()):
@@ -717,8 +590,8 @@ def print_tables(rows, notes, e2e):
                 body.append([r["who"], r["method"], "-", "-", "-", "-", "-", r["note"]])
                 continue
             setting = f"h={t.setting:.0e}" if r["method"] == "genalpha" else f"{t.setting:.0e}"
-            body.append([r["who"], r["method"], setting, f"{t.err:.1e}", _num(float(t.nfev), ".0f"), f"{t.cpu_s:.3f}",
-                         _num(t.cpu_s / base if base else None, ".3g"), r["note"]])
+            body.append([r["who"], r["method"], setting, f"{t.err:.1e}", num(float(t.nfev), ".0f"), f"{t.cpu_s:.3f}",
+                         num(t.cpu_s / base if base else None, ".3g"), r["note"]])
         print(md_table(["who", "method", "rtol=atol", "max err", "nfev", "CPU s", "ratio", "note"], body))
     if e2e:
         print(f"\n### End to end summary: {T_END:g} s to max state error <= {TARGET:g}, CPU s (cheapest passing run; "
@@ -741,14 +614,16 @@ def write_csv(rows, path):
             w.writerow({k: r.get(k, "") for k in keys})
 
 
-def plot(rows, e2e, path):
-    """Three panels: one call vs N, build vs N (log-log), end to end per N (bars)."""
+def plot(rows, e2e, path, starts=None):
+    """Four panels: one call vs N, build vs N (log-log), end to end per N from the model's start
+    (bars), end to end from the three starts per N (bars)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 3, figsize=(17, 5.2))
+    fig, axes = plt.subplots(1, 4, figsize=(22, 5.2))
+    plot_starts(axes[3], starts or {})
     for ax, table, q, ylabel, title in (
             (axes[0], "one_call", "us_per_call", "CPU time per rhs call [us]", "one forward-dynamics call"),
             (axes[1], "build", "seconds", "CPU time [s]", "build (+ generate + compile)")):
@@ -765,7 +640,8 @@ def plot(rows, e2e, path):
         ax.minorticks_off()
         ax.set(xlabel="N (links)", ylabel=ylabel, title=f"N-link pendulum: {title}")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        if whos:
+            ax.legend(fontsize=7)
     ax = axes[2]
     measured = [(N, runs, base) for N, (runs, base) in sorted(e2e.items()) if runs]
     labels = ("pinocchio", "mujoco", "pydy", "mbcomp default call", "mbcomp best")
@@ -793,15 +669,54 @@ def plot(rows, e2e, path):
     fig.savefig(path, dpi=100)
 
 
+def plot_starts(ax, starts):
+    """Bars: CPU s of Pinocchio + LSODA, MuJoCo + C DOP853 and mbcomp's default call (warm,
+    cold) for each (N, start)."""
+    from peers.report import cheapest
+
+    keys = sorted(starts, key=lambda k: (k[1], k[0]))
+    series = (("Pinocchio + LSODA", lambda r: r["who"] == "pinocchio" and r["method"] == "LSODA"),
+              ("MuJoCo + C DOP853", lambda r: r["who"] == "mujoco + C DOP853"),
+              ("mbcomp default call", lambda r: r["who"] == "mbcomp default call"),
+              ("mbcomp default call, cold cache", lambda r: r["who"] == "mbcomp default call (cold cache)"))
+    width = 0.8 / len(series)
+    for i, (lab, pred) in enumerate(series):
+        xs, ys = [], []
+        for j, key in enumerate(keys):
+            r = cheapest(starts[key][1], pred)
+            if r is not None:
+                xs.append(j + (i - (len(series) - 1) / 2) * width)
+                ys.append(r["t"].cpu_s)
+        if xs:
+            ax.bar(xs, ys, width, label=lab)
+    ax.set_xticks(range(len(keys)), [f"N={N}\n{s}\n{starts[(s, N)][0].get('t_end') or '-'} s" for s, N in keys],
+                  fontsize=7)
+    ax.set_yscale("log")
+    ax.set(ylabel="CPU time [s]", title="end to end from three starts, to 1e-8")
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    if keys:
+        ax.legend(fontsize=7)
+    else:
+        ax.text(0.5, 0.5, "starts not run", ha="center", va="center", transform=ax.transAxes)
+
+
 # ------------------------------------------------------------------------------------------
+CASES = ("onecall", "e2e", "starts", "stiff", "events", "andrews", "exudyn")
+
+
 def parse(argv):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", default=",".join(CASES), help="comma-separated parts to run: onecall (cross-check, "
+                    "one call, build tables over --Ns), e2e (end to end from the model's start, every method), starts "
+                    "(end to end from three starts at --starts-Ns: the targets), stiff, events, andrews, exudyn "
+                    f"(default all: {','.join(CASES)})")
     ap.add_argument("--Ns", default="2,5,10,20,40,100,1000", help="link counts of the one-call and build tables")
     ap.add_argument("--quick", action="store_true", help="N = 2,5,10,20; end to end at N = 5 with dop853, DOP853, "
                     "LSODA; budget 5 s")
     ap.add_argument("--skip", default="", help="comma-separated: pinocchio, mujoco, pydy, cython (pydy with "
                     "lambdify), python (mbcomp code generation), c (mbcomp's C backend), e2e")
     ap.add_argument("--e2e-Ns", default=None, help="end-to-end sizes (default the --Ns up to 20; --quick: 5)")
+    ap.add_argument("--starts-Ns", default="5,20", help="sizes of the three-starts end to end (the targets' N)")
     ap.add_argument("--budget", type=float, default=None, help="CPU s allowed per end-to-end run (default 30, quick 5)")
     ap.add_argument("--methods", default=None, help="mbcomp.simulate methods of 'mbcomp best' (default "
                     f"{','.join(DEFAULT_METHODS)}; 'all': {','.join(MBCOMP_METHODS)}; --quick: dop853,DOP853,LSODA)")
@@ -809,16 +724,21 @@ def parse(argv):
                     "so not measurable to 1e-8, from N = 10 on)")
     ap.add_argument("--codegen-limit", type=float, default=60.0, help="skip mbcomp code generation predicted over this (s)")
     args = ap.parse_args(argv)
+    args.cases = [c.strip() for c in args.cases.split(",") if c.strip()]
+    unknown = set(args.cases) - set(CASES)
+    if unknown:
+        ap.error(f"unknown --cases {sorted(unknown)}: choose from {','.join(CASES)}")
     args.skip = {s.strip() for s in args.skip.split(",") if s.strip()}
     if args.quick and args.Ns == ap.get_default("Ns"):
         args.Ns = "2,5,10,20"
-    args.Ns = [int(x) for x in args.Ns.split(",")]
+    args.Ns = [int(x) for x in args.Ns.split(",")] if "onecall" in args.cases else []
     if args.e2e_Ns is None:
         args.e2e_Ns = [5] if args.quick else sorted(N for N in args.Ns if N <= 20)
     else:
         args.e2e_Ns = [int(x) for x in args.e2e_Ns.split(",") if x]
-    if "e2e" in args.skip:
+    if "e2e" in args.skip or "e2e" not in args.cases:
         args.e2e_Ns = []
+    args.starts_Ns = [int(x) for x in args.starts_Ns.split(",") if x] if "starts" in args.cases else []
     args.budget = args.budget or (5.0 if args.quick else 30.0)
     quick_methods = "dop853,DOP853,LSODA"  # the default (the C engine) and the two the peers run
     methods = args.methods or (quick_methods if args.quick else ",".join(DEFAULT_METHODS))
@@ -826,15 +746,9 @@ def parse(argv):
     return args
 
 
-def main(argv=None):
-    global T_END
-    args = parse(argv)
-    T_END = args.t_end
-    wall0, cpu0 = time.perf_counter(), cpu()
-    head = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True, text=True)
-    print(f"mbcomp {head.stdout.strip() or '?'}; N-link pendulum {PHYS}, start angles {PHI0}, rates {W0}; "
-          f"Ns {args.Ns}, end to end at {args.e2e_Ns}, mbcomp methods {args.methods}")
-    rows, notes, e2e, state = [], {}, {}, {}
+def per_n_tables(args, rows, notes, e2e):
+    """Cross-check, one call, build and end to end (the model's start) for every N."""
+    state = {}
     for N in sorted(set(args.Ns) | set(args.e2e_Ns)):
         print(f"N = {N}: building ...", flush=True)
         with fresh_cache() as cache:  # cold: the compiler runs for this N's programs
@@ -850,9 +764,94 @@ def main(argv=None):
                 print(f"N = {N}: end to end ...", flush=True)
                 e2e[N] = end_to_end(b, agreed, speed, args, rows)
             del b
+
+
+def case_rows(table, head, case_rows_, rows, N=""):
+    """A case's rows into the CSV's long format."""
+    for r in case_rows_:
+        t = r["t"]
+        common = dict(table=table, N=N, who=r["who"], method=r["method"], note=r["note"])
+        if t is None:
+            rows.append(dict(common, quantity="cpu_s", value=math.nan))
+            continue
+        for q, v in (("setting", t.setting), ("max_err", t.err), ("nfev", t.nfev), ("cpu_s", t.cpu_s)):
+            rows.append(dict(common, quantity=q, value=v))
+
+
+def run_cases(args, rows):
+    """The three-starts end to end and the stiff, event, Andrews and Exudyn cases:
+    ``(starts, andrews, others)`` as :func:`peers.report.targets` takes them."""
+    from peers import cases, starts as starts_mod
+
+    starts, andrews, others = {}, None, {}
+    for N in args.starts_Ns:
+        for start in starts_mod.STARTS:
+            print(f"starts: N = {N}, {start} ...", flush=True)
+            head, rs = starts_mod.run_case(MOD, PHYS, N, start, args.budget)
+            starts[(start, N)] = (head, rs)
+            case_rows(f"starts {start}", head, rs, rows, N)
+    for name in ("stiff", "events", "andrews", "exudyn"):
+        if name not in args.cases:
+            continue
+        print(f"{name} ...", flush=True)
+        head, rs = getattr(cases, name)(args.budget)
+        case_rows(name, head, rs, rows)
+        if name == "andrews":
+            andrews = (head, rs)
+        else:
+            others[name] = (head, rs)
+    return starts, andrews, others
+
+
+def print_cases(starts, andrews, others):
+    from peers.report import TARGETS_DOC, case_table, targets
+
+    lsoda = lambda r: r["who"] == "pinocchio" and r["method"] == "LSODA"  # noqa: E731
+    for (start, N), (head, rs) in sorted(starts.items(), key=lambda kv: (kv[0][1], kv[0][0])):
+        if head.get("t_end") is None:
+            print(f"\n### Start '{start}', N = {N}: {head.get('note', '')}")
+            continue
+        print(case_table(f"End to end from the start '{start}', N = {N}: {head['t_end']:g} s to max state error "
+                         f"<= 1e-8 on 101 points (reference {head['ref']}, moves {head['quality']:.0e} vs 1e-12)",
+                         rs, lsoda))
+    for head, rs, base in ((andrews or (None, None)) + (lambda r: r["who"].startswith("sympy"),),
+                           *((h, r, None) for h, r in others.values())):
+        if head is None:
+            continue
+        if base is None:
+            base = {"stiff": lsoda, "events": lambda r: r["who"].startswith("pinocchio")}.get(head["case"])
+        print(case_table(f"{head['case']}: {head['what']}" + (f" -- {head['note']}" if head.get("note") else ""),
+                         rs, base))
+    body, info = targets(starts, andrews, others)
+    print(f"\n### Targets (issue 32 item 8: {TARGETS_DOC}); ratio = CPU time of mbcomp's default call "
+          "(warm cache) / the peer's cheapest passing run, same run\n")
+    print(md_table(["target", "case", "ratio", "limit", "met", "CPU s (mbcomp / peer) or why not"], body)
+          if body else "(no target case run: --cases starts,andrews)")
+    if info:
+        print("\n### Other ratios of this run (item 8 sets no number for them)\n")
+        print(md_table(["ratio", "case", "value", "limit", "met", "CPU s (mbcomp / peer) or why not"], info))
+    return body
+
+
+def main(argv=None):
+    global T_END
+    args = parse(argv)
+    T_END = args.t_end
+    wall0, cpu0 = time.perf_counter(), cpu()
+    head = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True, text=True)
+    print(f"mbcomp {head.stdout.strip() or '?'}; cases {args.cases}; N-link pendulum {PHYS}, model start angles "
+          f"{PHI0}, rates {W0}; Ns {args.Ns}, end to end at {args.e2e_Ns}, starts at {args.starts_Ns}, mbcomp methods "
+          f"{args.methods}")
+    rows, notes, e2e = [], {}, {}
+    per_n_tables(args, rows, notes, e2e)
+    starts, andrews, others = run_cases(args, rows)
     print_tables(rows, notes, e2e)
+    body = print_cases(starts, andrews, others)
+    for r in body:
+        rows.append(dict(table="targets", who=r[0], method=r[1], quantity="ratio", value=float(r[2]) if r[2] != "-"
+                         else math.nan, note=f"{r[3]} {r[4]}"))
     write_csv(rows, HERE / "peers.csv")
-    plot(rows, e2e, HERE / "peers.png")
+    plot(rows, e2e, HERE / "peers.png", starts)
     print(f"\nwrote {HERE / 'peers.csv'} and {HERE / 'peers.png'} ({time.perf_counter() - wall0:.0f} s wall, "
           f"{cpu() - cpu0:.0f} s CPU)")
 
