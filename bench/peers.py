@@ -45,7 +45,11 @@ compiler's child processes, ``bench/peers/cpu_clock.py``), medians:
    Pinocchio in a hand-written ``solve_ivp`` event loop against the default call; **andrews**:
    ``bench/andrews.py``'s pydy Cython + DOP853 against the default call; **exudyn**
    (``peers/exudyn_peers.py``): Exudyn's kinematic tree under its DOPRI5 (pendulum, N = 5) and
-   its redundant-coordinate slider-crank under generalized-alpha (``peers/cases.py``);
+   its redundant-coordinate slider-crank under generalized-alpha; **chain3d**: end to end on
+   ``peers/chain3d.py``'s 3-D chain at N = 5 and 10 against Pinocchio + LSODA / DOP853 and
+   MuJoCo + C DOP853 (``peers/chain3d_mujoco.py``; all in ``peers/cases.py``). A floating
+   base is not here: its quaternion (nq != nv) needs each peer's own configuration
+   integration, left to the per-call comparison of ``bench/chain3d.py``;
 7. **targets**: issue 32 item 8's targets, each with its ratio and met / NOT met
    (``peers/report.py``), then the other ratios of the run (cold cache, stiff, events, Exudyn).
 
@@ -58,7 +62,7 @@ Writes bench/peers.csv (long format: table, N, who, method, quantity, value, not
 bench/peers.png (one call, build and end to end vs N); both are git-ignored like every bench
 output.
 
-Run: python bench/peers.py [--quick] [--cases onecall,e2e,starts,stiff,events,andrews,exudyn]
+Run: python bench/peers.py [--quick] [--cases onecall,e2e,starts,stiff,events,andrews,exudyn,chain3d]
      [--Ns 2,5,10,20,40,100,1000] [--skip pydy,mujoco] [--e2e-Ns 2,5,10,20] [--starts-Ns 5,20]
      [--budget 30] [--methods dop853,...|all]
      (needs the extra: pip install -e ".[bench]"). The default run takes about 10 min of CPU.
@@ -701,14 +705,14 @@ def plot_starts(ax, starts):
 
 
 # ------------------------------------------------------------------------------------------
-CASES = ("onecall", "e2e", "starts", "stiff", "events", "andrews", "exudyn")
+CASES = ("onecall", "e2e", "starts", "stiff", "events", "andrews", "exudyn", "chain3d")
 
 
 def parse(argv):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", default=",".join(CASES), help="comma-separated parts to run: onecall (cross-check, "
                     "one call, build tables over --Ns), e2e (end to end from the model's start, every method), starts "
-                    "(end to end from three starts at --starts-Ns: the targets), stiff, events, andrews, exudyn "
+                    "(end to end from three starts at --starts-Ns: the targets), stiff, events, andrews, exudyn, chain3d "
                     f"(default all: {','.join(CASES)})")
     ap.add_argument("--Ns", default="2,5,10,20,40,100,1000", help="link counts of the one-call and build tables")
     ap.add_argument("--quick", action="store_true", help="N = 2,5,10,20; end to end at N = 5 with dop853, DOP853, "
@@ -790,7 +794,7 @@ def run_cases(args, rows):
             head, rs = starts_mod.run_case(MOD, PHYS, N, start, args.budget)
             starts[(start, N)] = (head, rs)
             case_rows(f"starts {start}", head, rs, rows, N)
-    for name in ("stiff", "events", "andrews", "exudyn"):
+    for name in ("stiff", "events", "andrews", "exudyn", "chain3d"):
         if name not in args.cases:
             continue
         print(f"{name} ...", flush=True)

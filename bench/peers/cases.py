@@ -1,4 +1,4 @@
-"""The stiff, event and Andrews cases of ``bench/peers.py``: each a function returning the
+"""The stiff, event, Andrews, Exudyn and 3-D chain cases of ``bench/peers.py``: each a function returning the
 rows of one table (``who``, ``method``, ``t``: a :class:`~peers.timing.Try` or None, ``note``)
 and a header dict (what is measured, to which error).
 
@@ -13,6 +13,12 @@ and a header dict (what is measured, to which error).
 * :func:`andrews`: Andrews' squeezer to 1e-6 relative angle error at 0.03 s, by
   ``bench/andrews.py``'s own runners and sweep: sympy Kane + pydy's Cython rhs in scipy's
   DOP853 against mbcomp's default call from the Model (warm, and cold).
+
+* :func:`exudyn`: Exudyn's kinematic tree under its DOPRI5 (pendulum N = 5, curled, 10 s, 1e-8
+  at t_end) and its redundant-coordinate slider-crank under generalized-alpha (10 s, 1e-4 at
+  t_end; step counts swept) against the default call on the same measure.
+* :func:`chain3d`: ``chain3d``'s 3-D chain at N = 5 and 10 (the starts' measure and reference,
+  :mod:`peers.starts`) against Pinocchio + LSODA / DOP853 and MuJoCo + C DOP853.
 
 Tolerances: rtol = atol = 10^(-k/2) swept to the target (Andrews: atol = rtol/100, as
 ``bench/andrews.py``); CPU seconds, medians of three for short runs.
@@ -30,7 +36,7 @@ from . import stiff_chain, stop_pendulum
 from .cpu_clock import cpu
 from .timing import Try, fresh_cache, sweep
 
-__all__ = ["stiff", "events", "andrews"]
+__all__ = ["stiff", "events", "andrews", "exudyn", "chain3d"]
 
 BENCH = pathlib.Path(__file__).resolve().parent.parent
 TARGET = 1e-8
@@ -345,4 +351,64 @@ def exudyn(budget, log=print):
     ref_who, rows = _exudyn_pendulum(budget, log)
     head["what"] += f"; pendulum reference {ref_who}"
     rows += _exudyn_slider_crank(budget, log)
+    return head, rows
+
+
+# ------------------------------------------------------------------------------------------
+def chain3d(budget, log=print, Ns=(5, 10)):
+    """End to end on ``peers/chain3d.py``'s 3-D chain (hinges about x, y, z in turn, every joint
+    at 0.3 rad, at rest) to 1e-8 on 101 points: Pinocchio + scipy LSODA / DOP853, MuJoCo + C
+    DOP853 and the default call, warm and cold. ``(header, rows)``."""
+    import mbcomp
+    from mbcomp.formulations import LagrangeIndex1
+    from mbcomp.initialization import initialize
+
+    from . import chain3d as c3, chain3d_mujoco, mujoco_dop853, starts
+
+    head = dict(case="chain3d", what="3-D chain (hinges about x, y, z in turn; all at 0.3 rad, at rest), max state "
+                f"error <= {TARGET:g} on 101 points over the longest of {starts.T_ENDS} s measurable")
+    why = c3.available()
+    if why:
+        head["note"] = why
+        return head, []
+    rows = []
+    for N in Ns:
+        y0 = np.concatenate((np.full(N, 0.3), np.zeros(N)))
+        build = lambda N=N: c3.build_model(N, phi0=0.3, w0=0.0)  # noqa: E731
+        pin = c3.build(N)
+        construct = (mujoco_dop853.build_from_mjcf(chain3d_mujoco.mjcf(N)) if mujoco_dop853.available() is None
+                     else None)
+        system = mbcomp.assemble(build())
+        initialize(system, 0.0)
+        yc = y0 + np.linspace(0.05, 0.4, 2 * N)
+        mine = np.asarray(LagrangeIndex1(system).fun(0.0, yc))[N:]
+        peers = {}
+        for who, rhs in (("pinocchio", pin.rhs), ("mujoco + C DOP853", construct and construct.rhs)):
+            if rhs is None:
+                continue
+            d = float(np.max(np.abs(np.asarray(rhs(0.0, yc))[N:] - mine)) / np.max(np.abs(mine)))
+            if d <= TARGET:
+                peers[who] = rhs
+            else:
+                rows.append(dict(who=f"{who}, N = {N}", method="-", t=None, note=f"du/dt differs by {d:.1e}: not timed"))
+        t_end, grid, ref, qual, ref_who = starts.reference(pin.rhs, construct if "mujoco + C DOP853" in peers else None,
+                                                           y0, N)
+        if t_end is None:
+            rows.append(dict(who=f"all, N = {N}", method="-", t=None, note=f"not measurable (reference moves {qual:.0e})"))
+            continue
+        log(f"  chain3d N = {N}: {t_end:g} s (reference {ref_who}, moves {qual:.0e} vs 1e-12)")
+        for method in ("LSODA", "DOP853"):
+            if "pinocchio" in peers:
+                t, note, _ = sweep(starts.peer_run(pin.rhs, method, y0, grid, ref), 12, budget)
+                rows.append(dict(who=f"pinocchio, N = {N}", method=method, t=t, note=note))
+                _log_row(log, rows[-1]["who"], method, t, note)
+        if "mujoco + C DOP853" in peers:
+            t, note, _ = sweep(starts.construct_run(construct, y0, grid, ref), 12, budget)
+            rows.append(dict(who=f"mujoco + C DOP853, N = {N}", method="dop853", t=t, note=note))
+            _log_row(log, rows[-1]["who"], "dop853", t, note)
+        run = starts.default_run(build, N, t_end, grid, ref)
+        for r in _default_rows(run, 12, budget, log, warm_up=lambda: run(1e-3)):
+            r["who"] = r["who"].replace("mbcomp default call", f"mbcomp default call, N = {N}")
+            rows.append(r)
+        head[f"t_end_{N}"] = t_end
     return head, rows

@@ -103,6 +103,15 @@ def targets(starts, andrews, others):
                 _ratio(rows, dflt, peer), None)
             add(info, "events: default, cold cache / Pinocchio + event loop", "pendulum on a stop",
                 _ratio(rows, cold, peer), None)
+        elif case == "chain3d":
+            for key in sorted(k for k in head if k.startswith("t_end_")):
+                N = int(key[6:])
+                where = f"3-D chain N = {N}, {head[key]:g} s"
+                mine = _is(f"mbcomp default call, N = {N}")
+                add(info, "3-D: default / Pinocchio + LSODA", where, _ratio(rows, mine, _is(f"pinocchio, N = {N}", "LSODA")),
+                    None)
+                add(info, "3-D: default / MuJoCo + C DOP853", where, _ratio(rows, mine, _is(f"mujoco + C DOP853, N = {N}")),
+                    None)
         elif case == "exudyn":
             add(info, "default / Exudyn DOPRI5 (pendulum N = 5)", "pendulum N = 5, curled, 10 s",
                 _ratio(rows, lambda r: r["who"] == "mbcomp default call, pendulum N = 5",

@@ -30,7 +30,7 @@ from . import mujoco_dop853, mujoco_pendulum, pinocchio_pendulum
 from .cpu_clock import cpu
 from .timing import Try, fresh_cache, sweep
 
-__all__ = ["STARTS", "start_state", "run_case", "T_ENDS"]
+__all__ = ["STARTS", "start_state", "run_case", "T_ENDS", "peer_run", "construct_run", "default_run", "reference"]
 
 STARTS = ("curled", "low swing", "thrown")
 T_ENDS = (10.0, 5.0, 2.0, 1.0, 0.5)
@@ -51,7 +51,7 @@ def start_state(name, N):
     raise ValueError(f"unknown start {name!r}: one of {STARTS}")
 
 
-def _peer_run(rhs, method, y0, grid, ref):
+def peer_run(rhs, method, y0, grid, ref):
     def run(tol):
         count = [0]
 
@@ -68,7 +68,7 @@ def _peer_run(rhs, method, y0, grid, ref):
     return run
 
 
-def _construct_run(c, y0, grid, ref):
+def construct_run(c, y0, grid, ref):
     def run(tol):
         c0 = time.process_time()
         try:
@@ -79,7 +79,7 @@ def _construct_run(c, y0, grid, ref):
     return run
 
 
-def _default_run(build, N, t_end, grid, ref):
+def default_run(build, N, t_end, grid, ref):
     names = [f"joint{k + 1}.phi" for k in range(N)] + [f"joint{k + 1}.w" for k in range(N)]
 
     def run(tol):
@@ -99,8 +99,10 @@ def _default_run(build, N, t_end, grid, ref):
     return run
 
 
-def _reference(rhs_ref, construct, y0, N):
-    """``(t_end, ref, quality, who)``: the longest measurable simulated time."""
+def reference(rhs_ref, construct, y0, N):
+    """``(t_end, grid, ref, quality, who)``: the longest of :data:`T_ENDS` over which the
+    reference (``construct`` at rtol 1e-13, or ``rhs_ref`` in scipy's DOP853) moves by at most
+    ``TARGET / 10`` against the same at 1e-12; ``t_end`` None when none does."""
     for t_end in T_ENDS:
         grid = np.linspace(0.0, t_end, N_OUT)
         if construct is not None:
@@ -147,7 +149,7 @@ def run_case(model_module, phys, N, start, budget, log=print):
         else:
             log(f"  {who}: du/dt differs from mbcomp by {d:.1e} > {AGREE:g}: not timed")
     rows = []
-    t_end, grid, ref, qual, ref_who = _reference(pin.rhs if pin else None,
+    t_end, grid, ref, qual, ref_who = reference(pin.rhs if pin else None,
                                                   construct if "mujoco + C DOP853" in peers else None, y0, N)
     head = dict(start=start, N=N, t_end=t_end, ref=ref_who, quality=qual)
     if t_end is None:
@@ -162,15 +164,15 @@ def run_case(model_module, phys, N, start, budget, log=print):
 
     for who, method in (("pinocchio", "LSODA"), ("pinocchio", "DOP853"), ("mujoco", "DOP853")):
         if who in peers:
-            t, note, _ = sweep(_peer_run(peers[who], method, y0, grid, ref), 12, budget)
+            t, note, _ = sweep(peer_run(peers[who], method, y0, grid, ref), 12, budget)
             record(who, method, t, note)
     if construct is not None and "mujoco + C DOP853" in peers:
-        t, note, _ = sweep(_construct_run(construct, y0, grid, ref), 12, budget)
+        t, note, _ = sweep(construct_run(construct, y0, grid, ref), 12, budget)
         record("mujoco + C DOP853", "dop853", t, note)
     else:
         record("mujoco + C DOP853", "dop853", None, why_c or "disagrees with mbcomp: not timed")
     with fresh_cache():
-        run = _default_run(build, N, t_end, grid, ref)
+        run = default_run(build, N, t_end, grid, ref)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             mbcomp.simulate(build(), t_end=0.01, n_out=N_OUT)  # fill the cache (the output program too)
