@@ -27,8 +27,13 @@
    is the largest deviation of the crank and pin angles from a batch at rtol 1e-12 (first 20
    runs).
 
-The machine has 2 cores shared with other work: the numbers move from run to run; the ratios
-come from the same process and minute.
+Timing: the machine has 2 cores shared with other work, whose load changes by the minute, so the
+batch and the simulate calls are interleaved: each of ``--repeat`` rounds times the batch on all
+runs, then ``simulate`` on every ``repeat``-th run (scaled to all runs); the table gives medians
+and the median of the per-round ratios, in wall time and in CPU time of this process (all its
+threads: a batch's CPU time counts both cores' work, so the CPU ratio is the work saved and the
+wall ratio adds the threads' overlap). MuJoCo is timed after, its ratio against the batch's
+median.
 
 Run: python bench/batch.py [--runs 1000] [--repeat 3] [--t-end 10]
 """
@@ -68,28 +73,39 @@ def slider_table(runs):
             "rod.m": rng.uniform(1.5, 2.5, runs)}
 
 
-def time_batch(model, table, t_end, repeat, **kw):
-    """(median wall s, the last BatchResult)."""
-    mbcomp.batch(model, {k: v[:2] for k, v in table.items()}, t_end=t_end, **TOL, **kw)  # compile / load once
-    walls, res = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        res = mbcomp.batch(model, table, t_end=t_end, **TOL, **kw)
-        walls.append(time.perf_counter() - t0)
-    return float(np.median(walls)), res
-
-
-def time_simulate(model, table, t_end, batch_res, names):
-    """(wall s of one simulate call per run, largest state difference from the batch on SAMPLE runs)."""
+def interleaved(model, table, t_end, rounds, names, variants=(("batch", {}),)):
+    """Timings under a shared machine's changing load: each round times every batch variant on
+    all runs, then ``simulate`` on every ``rounds``-th run (scaled to all runs). Returns
+    ``{method: (median wall s, median cpu s, median per-round wall ratio to the first batch,
+    the same for cpu)}``, the last result of each variant, and the largest state difference
+    between simulate and the first variant on the runs simulated of the first SAMPLE."""
     runs = len(next(iter(table.values())))
+    for _, kw in variants:  # compile / load once
+        mbcomp.batch(model, {k: v[:2] for k, v in table.items()}, t_end=t_end, **TOL, **kw)
     mbcomp.simulate(model, t_end=t_end, params={k: v[0] for k, v in table.items()}, **TOL)
-    diff = 0.0
-    t0 = time.perf_counter()
-    for i in range(runs):
-        r = mbcomp.simulate(model, t_end=t_end, params={k: v[i] for k, v in table.items()}, **TOL)
-        if i < SAMPLE:
-            diff = max(diff, max(float(np.max(np.abs(r[n] - batch_res[n][i]))) for n in names))
-    return time.perf_counter() - t0, diff
+    times, results, diff = {}, {}, 0.0
+    for r in range(rounds):
+        for name, kw in variants:
+            w0, c0 = time.perf_counter(), time.process_time()
+            results[name] = mbcomp.batch(model, table, t_end=t_end, **TOL, **kw)
+            times.setdefault(name, []).append((time.perf_counter() - w0, time.process_time() - c0))
+        w0, c0 = time.perf_counter(), time.process_time()
+        mine = range(r, runs, rounds)
+        for i in mine:
+            res = mbcomp.simulate(model, t_end=t_end, params={k: v[i] for k, v in table.items()}, **TOL)
+            if i < SAMPLE:
+                first = results[variants[0][0]]
+                diff = max(diff, max(float(np.max(np.abs(res[n] - first[n][i]))) for n in names))
+        scale = runs / len(mine)
+        times.setdefault("simulate calls", []).append(((time.perf_counter() - w0) * scale,
+                                                       (time.process_time() - c0) * scale))
+    base = np.array(times[variants[0][0]])
+    out = {}
+    for name, tc in times.items():
+        tc = np.array(tc)
+        out[name] = (float(np.median(tc[:, 0])), float(np.median(tc[:, 1])),
+                     float(np.median(tc[:, 0] / base[:, 0])), float(np.median(tc[:, 1] / base[:, 1])))
+    return out, results, diff
 
 
 def angles(res):
@@ -139,13 +155,12 @@ def matched_step(phi, t_end, ref, target, threads):
 def pendulum(args, threads):
     table, phi = pendulum_table(args.runs)
     model = PENDULUM(N=N)
-    wall_b, res = time_batch(model, table, args.t_end, args.repeat)
     names = [f"joint{k + 1}.{c}" for k in range(N) for c in ("phi", "w")]
-    wall_s, diff = time_simulate(model, table, args.t_end, res, names)
+    times, results, diff = interleaved(model, table, args.t_end, args.repeat, names)
+    res = results["batch"]
     ref = mbcomp.batch(model, {k: v[:SAMPLE] for k, v in table.items()}, t_end=args.t_end, rtol=1e-12, atol=1e-14)
     err_b = float(np.max(np.abs(angles(res)[:SAMPLE] - angles(ref))))
-    rows = [("batch", wall_b, err_b, res), ("simulate calls", wall_s, err_b, None)]
-    mj = None
+    rows = [("batch", times["batch"], err_b, res), ("simulate calls", times["simulate calls"], err_b, None)]
     try:
         import mujoco  # noqa: F401
     except ImportError as exc:
@@ -155,46 +170,50 @@ def pendulum(args, threads):
         print("MuJoCo RK4 error on the sample against the step: "
               + ", ".join(f"dt={d:.4g} s: {e:.2g} rad" for d, e in tried))
         if dt is not None:
-            walls = []
+            tc = []
             for _ in range(args.repeat):
+                c0 = time.process_time()
                 w, q = mujoco_rollout(phi, args.t_end, dt, threads)
-                walls.append(w)
-            mj = (dt, float(np.median(walls)), float(np.max(np.abs(q[:SAMPLE] - angles(ref)))))
-            rows.append((f"mujoco rollout RK4 dt={dt:.4g} s", mj[1], mj[2], None))
-    report(f"5-link pendulum, {args.runs} runs of {args.t_end:g} s, rtol {TOL['rtol']:g}", rows, wall_b, args.runs)
-    print(f"batch vs simulate: largest state difference on {SAMPLE} runs {diff:.2g}")
+                tc.append((w, time.process_time() - c0))
+            wall, cpu = np.median(np.array(tc), axis=0)
+            b = times["batch"]
+            rows.append((f"mujoco rollout RK4 dt={dt:.4g} s", (wall, cpu, wall / b[0], cpu / b[1]),
+                         float(np.max(np.abs(q[:SAMPLE] - angles(ref)))), None))
+    report(f"5-link pendulum, {args.runs} runs of {args.t_end:g} s, rtol {TOL['rtol']:g}", rows, args.runs)
+    print(f"batch vs simulate: largest state difference on the runs simulated of the first {SAMPLE}: {diff:.2g}")
 
 
 def slider(args):
     table = slider_table(args.runs)
     model = SLIDER()
-    wall_b, res = time_batch(model, table, args.t_end, args.repeat)
     names = ["crank_joint.phi", "crank_joint.w", "slider_joint.s", "slider_joint.v"]
-    wall_s, diff = time_simulate(model, table, args.t_end, res, names)
-    wall_p, res_p = time_batch(model, table, args.t_end, args.repeat, initialization="program")
+    prog = "batch, initialization='program'"
+    times, results, diff = interleaved(model, table, args.t_end, args.repeat, names,
+                                       (("batch", {}), (prog, {"initialization": "program"})))
+    res, res_p = results["batch"], results[prog]
     ref = mbcomp.batch(model, {k: v[:SAMPLE] for k, v in table.items()}, t_end=args.t_end, rtol=1e-12, atol=1e-14)
 
     def err(r):
         return max(float(np.max(np.abs(r[n][:SAMPLE] - ref[n]))) for n in ("crank_joint.phi", "pin.phi"))
-    rows = [("batch", wall_b, err(res), res), ("batch, initialization='program'", wall_p, err(res_p), res_p),
-            ("simulate calls", wall_s, err(res), None)]
-    report(f"slider-crank, {args.runs} runs of {args.t_end:g} s, rtol {TOL['rtol']:g}", rows, wall_b, args.runs)
-    print(f"batch vs simulate: largest state difference on {SAMPLE} runs {diff:.2g}; with initialization='program' "
-          f"(starts equal to rounding) {max(float(np.nanmax(np.abs(res_p[n] - res[n]))) for n in names):.2g} "
-          "over all runs")
+    rows = [("batch", times["batch"], err(res), res), (prog, times[prog], err(res_p), res_p),
+            ("simulate calls", times["simulate calls"], err(res), None)]
+    report(f"slider-crank, {args.runs} runs of {args.t_end:g} s, rtol {TOL['rtol']:g}", rows, args.runs)
+    print(f"batch vs simulate: largest state difference on the runs simulated of the first {SAMPLE}: {diff:.2g}; "
+          f"with initialization='program' (starts equal to rounding) "
+          f"{max(float(np.nanmax(np.abs(res_p[n] - res[n]))) for n in names):.2g} over all runs")
 
 
-def report(title, rows, wall_b, runs):
+def report(title, rows, runs):
     print(f"\n### {title}\n")
-    print("| method | wall (s) | per run (ms) | ratio to batch | max angle error (rad) |")
-    print("|---|---|---|---|---|")
-    for name, wall, err, res in rows:
-        print(f"| {name} | {wall:.3g} | {1e3 * wall / runs:.3g} | {wall / wall_b:.3g} | "
+    print("| method | wall (s) | per run (ms) | wall / batch | CPU (s) | CPU / batch | max angle error (rad) |")
+    print("|---|---|---|---|---|---|---|")
+    for name, (wall, cpu, rw, rc), err, res in rows:
+        print(f"| {name} | {wall:.3g} | {1e3 * wall / runs:.3g} | {rw:.3g} | {cpu:.3g} | {rc:.3g} | "
               f"{'' if err is None else f'{err:.2g}'} |")
         if res is not None:
             st = res.stats
-            print(f"|   of which Python (initialization, parameters) | {st['setup_time']:.3g} | | | |")
-            print(f"|   of which C calls (threads={st['threads']}, overlapping) | {st['integrate_time']:.3g} | | | |")
+            print(f"|   of which Python (initialization, parameters) | {st['setup_time']:.3g} | | | | | |")
+            print(f"|   of which C calls (threads={st['threads']}, overlapping) | {st['integrate_time']:.3g} | | | | | |")
 
 
 def main():
