@@ -102,3 +102,26 @@ def test_the_units_are_the_structures_own():
     assert second.units == first.units
     assert second.units["j1.tau.z"] == "N m" and second.units["b1.v.x"] == "m/s"
     assert all(second.units[k] == table[k] for k in second.units if k in table)
+
+
+def test_without_python_headers_the_ctypes_path_gives_the_same_values(monkeypatch, tmp_path):
+    """A fresh machine without Python's headers: no extension, no thin call, the same ``fun``."""
+    import sysconfig
+
+    from mbcomp.codegen import thin as thin_module
+
+    system, form = form_of(chain(3))
+    y = np.linspace(-1.0, 1.0, 6)
+    ref = system.evaluator.lagrange_bound().run_fun(0.2, y, 10.0, 10.0)
+    paths = dict(sysconfig.get_paths(), include=str(tmp_path))        # no Python.h there
+    monkeypatch.setattr(sysconfig, "get_paths", lambda *a, **k: paths)
+    thin_module.forget()
+    try:
+        assert thin_module.extension(str(tmp_path)) is None
+        assert system.evaluator.lagrange_thin(10.0, 10.0) is None
+        fresh = LagrangeIndex1(system)
+        np.testing.assert_array_equal(fresh.fun(0.2, y), ref)
+        assert fresh.nfev == 1
+    finally:
+        monkeypatch.undo()
+        thin_module.forget()

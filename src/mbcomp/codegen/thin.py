@@ -49,7 +49,7 @@ import numpy as np
 
 from .toolchain import c_compiler, cache_directory
 
-__all__ = ["thin_fun", "extension"]
+__all__ = ["thin_fun", "extension", "forget"]
 
 _SOURCE = r"""
 #define PY_SSIZE_T_CLEAN
@@ -205,6 +205,12 @@ def extension(cache_dir=None):
                 mod = None
         _EXT["module"] = mod
     return _EXT["module"]
+
+
+def forget():
+    """Forget whether the extension could be built here: the next use tries again (after
+    installing Python's headers or a compiler, or in a test of the fallback)."""
+    _EXT.clear()
 
 
 class _Gains:
