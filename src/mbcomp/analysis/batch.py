@@ -116,26 +116,9 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
     """
     t0 = time.perf_counter()
     check_model(model)
-    if method not in METHODS:
-        raise ValueError(f"method={method!r}: a batch integrates with the C engine's 'dop853' or 'dopri5' -> use one "
-                         "of them, or mbcomp.study(...) to run simulate per run with any method")
-    stabilization = "baumgarte" if stabilization is None else stabilization
-    if stabilization not in ("baumgarte", "none"):
-        raise ValueError(f"stabilization={stabilization!r}: a batch runs 'baumgarte' or 'none' (the projection after "
-                         "every step needs a second program per thread) -> use mbcomp.study(..., stabilization="
-                         f"{stabilization!r})")
-    check_numbers(t_start=t_start, t_end=t_end, rtol=rtol, atol=atol, alpha=alpha, beta=beta, n_out=n_out,
-                  dt_out=dt_out, max_step=max_step, h=None, max_wall_time=None, max_steps=max_steps)
-    if not t_end > t_start:
-        raise ValueError(f"t_end ({t_end}) must be greater than t_start ({t_start})")
-    from ..codegen import c_compiler
-
-    if c_compiler() is None:
-        raise RuntimeError("mbcomp.batch needs a C compiler (gcc or cc on PATH, or $CC) -> install one, or use "
-                           "mbcomp.study(...) (simulate per run)")
-    if initialization not in ("simulate", "program"):
-        raise ValueError(f"initialization={initialization!r}: use 'simulate' (the numeric evaluation, starts bit for "
-                         "bit simulate's) or 'program' (the compiled evaluation program: faster, equal to rounding)")
+    stabilization = _check_request(method, stabilization, initialization, t_start=t_start, t_end=t_end, rtol=rtol,
+                                   atol=atol, alpha=alpha, beta=beta, n_out=n_out, dt_out=dt_out, max_step=max_step,
+                                   max_steps=max_steps)
     system = system_of(model, None, "c")
     if initialization == "program" and system.backend == "c":
         from ..codegen import compile_system
@@ -156,6 +139,31 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
         _rerun(res, system, values, request)
     res.stats["wall_time"] = time.perf_counter() - t0
     return res
+
+
+def _check_request(method, stabilization, initialization, **numbers):
+    """The stabilization to use; a ``ValueError`` (``RuntimeError`` without a C compiler)
+    naming the argument and the fix for what a batch cannot do, before anything is built."""
+    if method not in METHODS:
+        raise ValueError(f"method={method!r}: a batch integrates with the C engine's 'dop853' or 'dopri5' -> use one "
+                         "of them, or mbcomp.study(...) to run simulate per run with any method")
+    stabilization = "baumgarte" if stabilization is None else stabilization
+    if stabilization not in ("baumgarte", "none"):
+        raise ValueError(f"stabilization={stabilization!r}: a batch runs 'baumgarte' or 'none' (the projection after "
+                         "every step needs a second program per thread) -> use mbcomp.study(..., stabilization="
+                         f"{stabilization!r})")
+    if initialization not in ("simulate", "program"):
+        raise ValueError(f"initialization={initialization!r}: use 'simulate' (the numeric evaluation, starts bit for "
+                         "bit simulate's) or 'program' (the compiled evaluation program: faster, equal to rounding)")
+    check_numbers(h=None, max_wall_time=None, **numbers)
+    if not numbers["t_end"] > numbers["t_start"]:
+        raise ValueError(f"t_end ({numbers['t_end']}) must be greater than t_start ({numbers['t_start']})")
+    from ..codegen import c_compiler
+
+    if c_compiler() is None:
+        raise RuntimeError("mbcomp.batch needs a C compiler (gcc or cc on PATH, or $CC) -> install one, or use "
+                           "mbcomp.study(...) (simulate per run)")
+    return stabilization
 
 
 def _interruptible(runner, block):
