@@ -73,7 +73,7 @@ def targets(starts, andrews, others):
     def add(out, target, case, ratio_detail, limit):
         ratio, detail = ratio_detail
         met = "-" if limit is None else ("not measured" if ratio is None else ("met" if ratio <= limit else "NOT met"))
-        out.append([target, case, num(ratio, ".2f"), "-" if limit is None else f"<= {limit:g}", met, detail])
+        out.append([target, case, num(ratio, ".3g"), "-" if limit is None else f"<= {limit:g}", met, detail])
 
     for (start, N), (head, rows) in sorted(starts.items(), key=lambda kv: (kv[0][1], kv[0][0])):
         case = f"N = {N}, {start}, {num(head.get('t_end'), 'g')} s"

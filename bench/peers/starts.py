@@ -16,7 +16,8 @@ is chaotic: 10 s from the curled start is not measurable to 1e-8 at N = 20). Row
 LSODA and DOP853 on Pinocchio's ``rhs``, scipy DOP853 on MuJoCo's ``mj_forward``, MuJoCo +
 C DOP853 (:mod:`peers.mujoco_dop853`), and mbcomp's default call
 ``mbcomp.simulate(model, t_end, rtol=tol, atol=tol, n_out=101)`` from the Model, its cache
-warm, and the same first call in an empty cache (cold: tracing and the compiler included).
+warm, and the same first call in an empty cache (cold: tracing and the compiler included);
+the header's ``fixed_s`` is the warm default call over 1 us of motion (:func:`fixed_cost`).
 Each is the cheapest tolerance (half decades) within 1e-8 max state error on 101 points.
 """
 import math
@@ -30,7 +31,7 @@ from . import mujoco_dop853, mujoco_pendulum, pinocchio_pendulum
 from .cpu_clock import cpu
 from .timing import Try, fresh_cache, sweep
 
-__all__ = ["STARTS", "start_state", "run_case", "T_ENDS", "peer_run", "construct_run", "default_run", "reference"]
+__all__ = ["STARTS", "start_state", "run_case", "T_ENDS", "peer_run", "construct_run", "default_run", "reference", "fixed_cost"]
 
 STARTS = ("curled", "low swing", "thrown")
 T_ENDS = (10.0, 5.0, 2.0, 1.0, 0.5)
@@ -97,6 +98,22 @@ def default_run(build, N, t_end, grid, ref):
                                                          if "stiff_from" in res.stats else "")
         return t
     return run
+
+
+def fixed_cost(build, repeats=5):
+    """CPU s of the default call over 1 us of motion (warm cache): what a call costs before its
+    integration (assembly, tracing or the cached library, initialization, outputs); median."""
+    import mbcomp
+
+    times = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for _ in range(repeats):
+            model = build()
+            c0 = cpu()
+            mbcomp.simulate(model, t_end=1e-6, n_out=N_OUT)
+            times.append(cpu() - c0)
+    return float(np.median(times))
 
 
 def reference(rhs_ref, construct, y0, N):
@@ -178,6 +195,7 @@ def run_case(model_module, phys, N, start, budget, log=print):
             mbcomp.simulate(build(), t_end=0.01, n_out=N_OUT)  # fill the cache (the output program too)
         t, note, _ = sweep(run, 12, budget)
         record("mbcomp default call", "default", t, note)
+        head["fixed_s"] = fixed_cost(build)
     if t is not None:
         with fresh_cache():  # the first call: tracing and the C compiler in the time
             cold = run(t.setting)
