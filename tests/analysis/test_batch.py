@@ -134,6 +134,18 @@ def test_what_a_batch_cannot_run_is_refused_with_the_fix():
     m.connect(w.frame_b, j.frame_a), m.connect(j.frame_b, rod.frame_a), m.connect(rod.frame_b, bob.frame_a)
     with pytest.raises(ValueError, match=r"j have modes.*mbcomp.study"):
         mbcomp.batch(m, {"bob.m": [1.0]}, t_end=0.1)
+    from mbcomp.library import Torque
+
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("j", Revolute(n=(0, 0, 1)))
+    rod = m.add("rod", FixedTranslation(r=(1.0, 0, 0)))
+    bob = m.add("bob", PointMass(m=2.0))
+    motor = m.add("motor", Torque(tau=mbcomp.Input("motor_torque", unit="N m")))
+    m.connect(w.frame_b, j.frame_a), m.connect(j.frame_b, rod.frame_a), m.connect(rod.frame_b, bob.frame_a)
+    m.connect(j.axis, motor.flange_b)
+    with pytest.raises(ValueError, match=r"external inputs \(motor_torque\).*simulate"):
+        mbcomp.batch(m, {"bob.m": [1.0]}, t_end=0.1)
     with pytest.raises(ValueError, match="dop853"):
         mbcomp.batch(PENDULUM(N=2), {"link1.m": [1.0]}, method="radau5")
     with pytest.raises(ValueError, match="projection"):

@@ -243,10 +243,12 @@ def _refuse_events(system):
         raise ValueError(f"a batch runs smooth models only: {', '.join(sorted(modes))} have modes (stops, contacts or "
                          "friction: events change the equations during a run) -> use mbcomp.study(model, grid, ...), "
                          "which runs mbcomp.simulate per run")
-    inputs = getattr(system.topology.flat, "inputs", None)
+    from ..modeling.inputs import Input
+
+    inputs = sorted({v.name for ns in system.P.values() for v in vars(ns).values() if isinstance(v, Input)})
     if inputs:
-        raise ValueError(f"a batch cannot run a model with external inputs ({', '.join(map(str, inputs))}): they are "
-                         "Python functions of time -> use mbcomp.simulate(..., inputs=...) per run or mbcomp.study")
+        raise ValueError(f"a batch cannot run a model with external inputs ({', '.join(inputs)}): they are Python "
+                         "functions of time, called at every step -> use mbcomp.simulate(..., inputs=...) per run")
 
 
 class _Runner:
