@@ -113,6 +113,9 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
     -------
     BatchResult
         ``res["joint1.phi"]`` is ``(n_runs, n_out)``; ``res.status``, ``res.message`` per run.
+        Every run's states at every output time are kept (``n_runs x n_out x (nq + nu)``
+        doubles, 40 MB for 1,000 runs of the 5-link pendulum at 501 points), and each
+        requested output column is ``n_runs x n_out`` more: choose ``n_out`` for large batches.
     """
     t0 = time.perf_counter()
     check_model(model)
