@@ -16,6 +16,10 @@ joint's own width), but keep per joint only its motion subspace ``S`` (6 x k), s
   accelerations, the ``m x m`` matrix ``A M^-1 A^T`` from the rows' own paths, and one solve
   with the constraint wrenches added.
 
+The factorization uses the products' structure (:func:`articulated`): symmetric matrices are
+computed on one triangle, pivots below the root keep their Cholesky factor, and a ball joint is
+solved over its angular velocity about its centre, where its motion subspace is ``[1; 0]``.
+
 Spatial vectors
 ---------------
 All spatial quantities are resolved in world coordinates *about the world origin* O, so no
@@ -116,6 +120,10 @@ class TreePass:
         (pose, velocity and bias acceleration only).
     S : list of ndarray (6, k)
         Each link's motion subspace: the twist about O per unit joint speed.
+    Jw, r : lists
+        Per link, for a joint of three speeds whose twist at its child frame's origin
+        ``r`` (m, world) has no linear part (a ball joint: ``S = [Jw; r x Jw]``), ``Jw``
+        (3, k); None otherwise (see :func:`articulated`).
     I : list of ndarray (6, 6)
         Each link's own spatial inertia about O (its bodies' sum).
     W : list of ndarray (6,)
@@ -123,15 +131,25 @@ class TreePass:
         (velocity-product) wrench ``-dh/dt`` at ``du/dt = 0``.
     """
 
-    def __init__(self, links, jets, S, I, W, dt, t=0.0, q=None):
+    def __init__(self, links, jets, S, I, W, dt, t=0.0, q=None, Jw=None, r=None):
         self.links, self.jets, self.S, self.I, self.W, self.dt = links, jets, S, I, W, dt
         self.t, self.q = t, q  # for the rows of flange constraints (assembly/flange_rows.py)
+        # per link, a ball-like joint's angular columns Jw (its twist at the child frame's
+        # origin r has no linear part; None for other joints) and that origin r (m, world)
+        self.Jw = [None] * len(S) if Jw is None else Jw
+        self.r = [None] * len(S) if r is None else r
+
+
+def _exact_zeros(A):
+    """True if every entry of ``A`` is the number 0 (a structural zero when traced)."""
+    return all(not is_traced(x) and x == 0 for x in A.flat)
 
 
 def _link_jets(system, links, t, q, u):
-    """The narrow jets of every frame and the links' motion subspaces ``S``."""
+    """The narrow jets of every frame, the links' motion subspaces ``S`` and, per link, a
+    ball-like joint's angular columns and origin (see :class:`TreePass`)."""
     jets = {ROOT: FrameJet.ground(0)}
-    S = []
+    S, Jw, r = [], [], []
     for e in system.topology.tree:
         pj = jets[e.parent]
         k = e.u.stop - e.u.start
@@ -142,8 +160,11 @@ def _link_jets(system, links, t, q, u):
         cj = system.child_jet(e, FrameJet(pj.R, pj.r, pj.w, pj.v, z, z, pj.alpha, pj.a), t, q, u, slice(0, k))
         # the columns give the twist of the child frame's origin; about O: v_O = v_c + r_c x w
         S.append(np.vstack((cj.Jw, cj.Jv + skew(cj.r) @ cj.Jw)))
+        ball = k == 3 and _exact_zeros(cj.Jv)
+        Jw.append(cj.Jw if ball else None)
+        r.append(cj.r if ball else None)
         jets[e.child] = _narrow(cj)
-    return jets, S
+    return jets, S, Jw, r
 
 
 def _body_terms(system, links, jets, I, W):
@@ -176,7 +197,7 @@ def tree_pass(system, t, q, u):
     wrenches ``W`` (gravity, applied forces of force and flange elements, inertial terms)."""
     links = tree_links(system)
     dt = _dtype(t, q, u)
-    jets, S = _link_jets(system, links, t, q, u)
+    jets, S, Jw, r = _link_jets(system, links, t, q, u)
     I = [np.zeros((6, 6), dt) for _ in range(links.n)]
     W = [np.zeros(6, dt) for _ in range(links.n)]
     _body_terms(system, links, jets, I, W)
@@ -184,7 +205,7 @@ def tree_pass(system, t, q, u):
         i = links.link_of.get(node, -1)
         if i >= 0:
             W[i] = W[i] + np.concatenate((T + cross(jets[node].r, F), F))
-    return TreePass(links, jets, S, I, W, dt, t, q)
+    return TreePass(links, jets, S, I, W, dt, t, q, Jw, r)
 
 
 def _summed(links, vals):
@@ -319,48 +340,196 @@ def _chol_solve(L, b):
     return np.array(x, dtype=L.dtype)
 
 
+class _Pivot:
+    """One link's pivot ``D = S^T I^A S``, factored for the solves.
+
+    * ``dense``: ``D^-1`` itself (``Dinv``): a root link (no articulated inertia to pass) or a
+      one-speed joint;
+    * otherwise its Cholesky factor ``L`` (with its pivots' reciprocals ``rinv``) and
+      ``W = U L^-T``, so that ``U D^-1 U^T = W W^T`` and ``U D^-1 b = W (L^-1 b)``;
+    * a ball joint (``Jinv`` given): the same over the joint's angular velocity in world axes
+      ``w = Jw x`` instead of its speeds ``x``: ``D`` is then ``I_aa``, the articulated inertia's
+      angular block about the joint's centre, ``U`` is ``I^A X_r [1; 0]`` and ``x = Jinv w``
+      (see :func:`articulated`).
+    """
+
+    __slots__ = ("Dinv", "L", "rinv", "W", "Jinv")
+
+    def __init__(self, D, U, what, dense, Jinv=None):
+        self.Dinv = self.L = self.rinv = self.W = None
+        self.Jinv = Jinv
+        if dense or D.shape[0] == 1:
+            self.Dinv = _chol_inverse(D, what)
+            return
+        L = _cholesky(D, what)
+        k = L.shape[0]
+        self.L, self.rinv = L, [1.0 / L[j, j] for j in range(k)]
+        self.W = np.array([self.forward(U[a]) for a in range(U.shape[0])], dtype=U.dtype)
+
+    def forward(self, b):
+        """``L^-1 b``."""
+        L, r = self.L, self.rinv
+        y = []
+        for i in range(len(r)):
+            acc = b[i]
+            for k in range(i):
+                acc = acc - L[i, k] * y[k]
+            y.append(acc * r[i])
+        return y
+
+    def backward(self, y):
+        """``L^-T y``."""
+        L, r = self.L, self.rinv
+        n = len(r)
+        x = [None] * n
+        for i in range(n - 1, -1, -1):
+            acc = y[i]
+            for k in range(i + 1, n):
+                acc = acc - L[k, i] * x[k]
+            x[i] = acc * r[i]
+        return np.array(x, dtype=L.dtype)
+
+    def passed(self, U):
+        """``U D^-1 U^T`` (6 x 6), its lower triangle computed and mirrored (the same values)."""
+        P, Q = (U @ self.Dinv, U) if self.W is None else (self.W, self.W)
+        if P.dtype != object:  # numbers: one product, its lower triangle mirrored
+            return _mirrored(P @ Q.T)
+        out = np.empty((6, 6), dtype=object)
+        for a in range(6):
+            for b in range(a + 1):
+                out[a, b] = out[b, a] = P[a] @ Q[b]
+        return out
+
+
+def _mirrored(A):
+    """``A`` (a new product of numbers) made symmetric: its lower triangle copied upwards."""
+    n = A.shape[0]
+    if n not in _UPPER:
+        _UPPER[n] = np.triu_indices(n, 1)
+    i, j = _UPPER[n]
+    A[i, j] = A[j, i]
+    return A
+
+
+_UPPER = {}
+
+
+def _lower(S, U):
+    """``S^T U`` for the symmetric ``D``: its lower triangle computed, mirrored (the Cholesky
+    reads only the lower triangle, so its values are those of the full product)."""
+    if S.dtype != object and U.dtype != object:
+        return _mirrored(S.T @ U)
+    k = S.shape[1]
+    D = np.empty((k, k), dtype=object)
+    for a in range(k):
+        for b in range(a + 1):
+            D[a, b] = D[b, a] = S[:, a] @ U[:, b]
+    return D
+
+
+def _inverse3(J, what):
+    """Inverse of a 3 x 3 matrix by its cofactors (rows ``b x c / det``, ``c x a / det``,
+    ``a x b / det`` for the columns ``a, b, c``); raises :class:`SingularTree` when
+    ``det^2 <= PIVOT_TOL |a|^2 |b|^2 |c|^2`` (a scale-free test of the columns' volume)."""
+    a, b, c = J[:, 0], J[:, 1], J[:, 2]
+    rows = [cross(b, c), cross(c, a), cross(a, b)]
+    det = a @ rows[0]
+    if not det * det > PIVOT_TOL * ((a @ a) * (b @ b) * (c @ c)):  # a runtime guard when traced
+        raise SingularTree(what)
+    return np.array(rows, dtype=J.dtype) * (1.0 / det)
+
+
+def _ball_pivot(IA, Jw, r, what):
+    """The pivot of a ball joint at ``r`` (three speeds, ``S = [Jw; r x Jw]``): over its
+    angular velocity ``w = Jw x`` the motion subspace is ``X_r [1; 0]``, so ``U' = I^A X_r [1; 0]
+    = I_1 + I_2 [r]x`` (column blocks of ``I^A``) and ``D' = I_aa = U'_1 - [r]x U'_2``, the
+    articulated inertia's angular block about ``r``; ``D = Jw^T D' Jw`` and ``U = U' Jw``, so
+    ``U D^-1 U^T = U' D'^-1 U'^T`` (``Jw`` cancels) and ``x = Jw^-1 w``."""
+    Rx = skew(r)
+    left = IA[:, :3] + IA[:, 3:] @ Rx
+    Iaa = np.empty((3, 3), dtype=left.dtype)
+    for a in range(3):
+        for b in range(a + 1):
+            Iaa[a, b] = Iaa[b, a] = left[a, b] - Rx[a] @ left[3:, b]
+    return _Pivot(Iaa, left, what, False, Jinv=_inverse3(Jw, what))
+
+
 def articulated(tp):
-    """The articulated-body factorization of ``M``: per link ``U = I^A S`` and ``D^-1`` with
-    ``D = S^T I^A S``. Raises :class:`SingularTree` if a joint moves nothing with inertia."""
+    """The articulated-body factorization of ``M``: per link ``U = I^A S`` (None where the
+    pivot keeps ``W``) and the factored pivot ``D = S^T I^A S`` (:class:`_Pivot`). Raises
+    :class:`SingularTree` if a joint moves nothing with inertia. The articulated inertias
+    passed to the parents are symmetric: their lower triangles are computed and mirrored."""
     links = tp.links
     IA = list(tp.I)
-    U, Dinv = [None] * links.n, [None] * links.n
+    U, piv = [None] * links.n, [None] * links.n
     for i in range(links.n - 1, -1, -1):
-        Ui = IA[i] @ tp.S[i]
-        Di = _chol_inverse(tp.S[i].T @ Ui, links.edges[i].name)
-        U[i], Dinv[i] = Ui, Di
         p = links.parent[i]
+        what = links.edges[i].name
+        if tp.Jw[i] is not None:
+            piv[i] = _ball_pivot(IA[i], tp.Jw[i], tp.r[i], what)
+        else:
+            U[i] = IA[i] @ tp.S[i]
+            piv[i] = _Pivot(_lower(tp.S[i], U[i]), U[i], what, dense=p < 0)
         if p >= 0:
-            IA[p] = IA[p] + IA[i] - Ui @ Di @ Ui.T
-    return U, Dinv
+            IA[p] = IA[p] + IA[i] - piv[i].passed(U[i])
+    return U, piv
+
+
+def _joint_force(tp, i, P, pA):
+    """``tau = -S^T pA`` of link ``i`` (a ball joint's over its world angular velocity:
+    ``-(pA_1 - r x pA_2)``, the moment about its centre)."""
+    if P.Jinv is None:
+        return -(tp.S[i].T @ pA)
+    return -(pA[:3] - cross(tp.r[i], pA[3:]))
+
+
+def _twist(tp, i, P, z):
+    """The joint's speeds ``x`` and their twist about O from the solve's result ``z``."""
+    if P.Jinv is None:
+        return z, tp.S[i] @ z
+    return P.Jinv @ z, np.concatenate((z, cross(tp.r[i], z)))
 
 
 def tree_solve(tp, factor, W):
     """``x = M^-1 S^T W^C``: the speeds' rates caused by the link wrenches ``W`` (list of
     6-vectors or None) and the twist rates they give each link (``(x, acc)``), by the
     articulated-body algorithm's two passes over ``factor`` (:func:`articulated`)."""
-    links, S = tp.links, tp.S
-    U, Dinv = factor
+    links = tp.links
+    U, piv = factor
     n = links.n
     pA = [(-w if w is not None else None) for w in W]
-    tau = [None] * n
+    tau, y = [None] * n, [None] * n
     for i in range(n - 1, -1, -1):
         p = links.parent[i]
         if pA[i] is None:
             continue
-        tau[i] = -(S[i].T @ pA[i])
+        P = piv[i]
+        tau[i] = _joint_force(tp, i, P, pA[i])
         if p >= 0:
-            carried = pA[i] + U[i] @ (Dinv[i] @ tau[i])
+            if P.W is None:
+                carried = pA[i] + U[i] @ (P.Dinv @ tau[i])
+            else:
+                y[i] = P.forward(tau[i])
+                carried = pA[i] + P.W @ np.array(y[i], dtype=P.W.dtype)
             pA[p] = carried if pA[p] is None else pA[p] + carried
     acc, xs = [None] * n, []
     for i in range(n):
         p = links.parent[i]
         ap = acc[p] if p >= 0 else None
-        rhs = tau[i] if tau[i] is not None else np.zeros(S[i].shape[1])
-        if ap is not None:
-            rhs = rhs - U[i].T @ ap
-        xi = Dinv[i] @ rhs
-        acc[i] = S[i] @ xi if ap is None else ap + S[i] @ xi
+        P = piv[i]
+        k = len(P.rinv) if P.W is not None else P.Dinv.shape[0]
+        if P.W is None:
+            rhs = tau[i] if tau[i] is not None else np.zeros(k)
+            if ap is not None:
+                rhs = rhs - U[i].T @ ap
+            z = P.Dinv @ rhs
+        else:  # D^-1 (tau - U^T a) = L^-T (L^-1 tau - W^T a), L^-1 tau kept from the first pass
+            yi = y[i] if y[i] is not None else (P.forward(tau[i]) if tau[i] is not None else [0.0] * k)
+            if ap is not None:
+                yi = np.array(yi, dtype=object if P.W.dtype == object else float) - P.W.T @ ap
+            z = P.backward(yi)
+        xi, twist = _twist(tp, i, P, z)
+        acc[i] = twist if ap is None else ap + twist
         xs.append(xi)
     x = np.concatenate(xs) if xs else np.zeros(0)
     return x, acc
