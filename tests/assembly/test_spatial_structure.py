@@ -109,3 +109,25 @@ def test_the_ball_chain_program_takes_fewer_operations():
     c = compile_system(s, "python")
     c.evaluator.capabilities
     assert c.stats["n_ops_fun"] <= 8100, c.stats["n_ops_fun"]
+
+
+@pytest.mark.parametrize("r_cm", [(0.0, 0.0, 0.0), (0.0, -0.5, 0.0)])
+def test_a_ball_joint_moving_no_inertia_about_an_axis_is_singular(r_cm):
+    """A ball joint carrying a point mass (at its centre, or on a massless rod: no inertia
+    about the rod's line) cannot be solved: the recursion raises SingularTree (the callers'
+    dense solve then gives the diagnosis), as the dense pivot ``S^T I^A S`` did."""
+    from mbcomp.assembly.recursive import SingularTree
+
+    mdl = mbcomp.Model()
+    world = mdl.add("world", World(g=(0.0, -9.81, 0.0)))
+    ball = mdl.add("ball", Spherical())
+    bob = mdl.add("bob", RigidBody(m=1.0, r_cm=r_cm, I=np.zeros((3, 3))))
+    mdl.connect(world.frame_b, ball.frame_a)
+    mdl.connect(ball.frame_b, bob.frame_a)
+    s = mbcomp.assemble(mdl)
+    q, u = s.default_q(), np.array([0.1, 0.2, 0.3])
+    with pytest.raises(SingularTree):
+        lagrange_accelerations(s, 0.0, q, u)
+    tp = tree_pass(s, 0.0, q, u)
+    with pytest.raises(np.linalg.LinAlgError):
+        dense_aba(tp, s.nu)
