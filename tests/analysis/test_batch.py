@@ -217,9 +217,11 @@ def test_ctrl_c_stops_every_run_and_keeps_what_finished():
     mbcomp.batch(model, {"joint1.phi0": [0.1]}, t_end=0.1)   # compiled before the clock starts
     timer = threading.Timer(0.3, _thread.interrupt_main)
     timer.start()
-    with pytest.raises(mbcomp.errors.SimulationInterrupted) as err:
-        mbcomp.batch(model, table, t_end=10.0, threads=2, block=16)
-    timer.cancel()
+    try:
+        with pytest.raises(mbcomp.errors.SimulationInterrupted) as err:
+            mbcomp.batch(model, table, t_end=10.0, threads=2, block=16)
+    finally:
+        timer.cancel()
     res = err.value.result
     done = [i for i, s in enumerate(res.status) if s == "success"]
     assert err.value.signal == "SIGINT" and 0 < len(done) < 400
@@ -228,3 +230,25 @@ def test_ctrl_c_stops_every_run_and_keeps_what_finished():
     assert all(np.isnan(res["joint1.phi"][i, -1]) for i in late)
     again = mbcomp.batch(model, {"joint1.phi0": table["joint1.phi0"][done[-3:]]}, t_end=10.0)
     np.testing.assert_array_equal(again["joint1.phi"], res["joint1.phi"][done[-3:]])
+
+
+def test_ctrl_c_in_a_batch_study_keeps_the_finished_rows():
+    import _thread
+    import threading
+
+    grid = {"joint1.phi0": np.linspace(-1.0, 1.0, 3000).tolist()}
+    build = lambda: PENDULUM(N=3)  # noqa: E731
+    mbcomp.study(build, {"joint1.phi0": [0.1]}, t_end=0.1, executor="batch")   # compiled before the clock
+    from mbcomp.analysis.study import StudyInterrupted
+
+    timer = threading.Timer(1.5, _thread.interrupt_main)   # after the first block of 64 runs
+    timer.start()
+    try:
+        with pytest.raises(StudyInterrupted) as err:
+            mbcomp.study(build, grid, t_end=10.0, executor="batch", metrics={"end": lambda r: r["joint1.phi"][-1]})
+    finally:
+        timer.cancel()
+    part = err.value.result
+    assert 0 < len(part) < 3000 and list(part["status"]) == ["success"] * len(part)
+    again = mbcomp.batch(build(), {"joint1.phi0": [r["joint1.phi0"] for r in part.runs[:3]]}, t_end=10.0)
+    np.testing.assert_array_equal(part["end"][:3], again["joint1.phi"][:, -1])

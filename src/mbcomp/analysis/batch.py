@@ -57,7 +57,7 @@ from ..hybrid.contacts import initialize_in_modes
 from ..simulation.endings import Terminated, sigterm_interrupts
 from ..simulation.setup import check_model, check_numbers, output_times, system_of
 from ..solvers import STEPPERS
-from .batch_result import BatchResult, STATUS_OF
+from .batch_result import STATUS_OF, BatchResult, OneRun
 
 __all__ = ["batch", "BatchResult", "BLOCK"]
 
@@ -69,7 +69,7 @@ METHODS = {"dop853": 8, "dopri5": 5}
 
 def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol=1e-10, n_out=None, dt_out=None,
           method="dop853", stabilization=None, alpha=10.0, beta=10.0, max_step=np.inf, max_steps=None,
-          threads=None, fallback=True, initialization="simulate", block=BLOCK, cache_dir=None):
+          threads=None, fallback=True, initialization="simulate", reduce=None, block=BLOCK, cache_dir=None):
     """Run a model once per row of ``table``, all integrations in one compiled call.
 
     Parameters
@@ -104,6 +104,12 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
         once): about twice as fast on a loop's Newton closure (the slider-crank's), the start
         equal to rounding (1e-15 measured), so a run may differ from ``simulate``'s by up to
         its error tolerance (a step accepted on the other side of the threshold).
+    reduce : callable, optional
+        ``reduce(run)`` called on each run as it ends (``run``: a
+        :class:`~mbcomp.analysis.batch_result.OneRun` -- ``run["column"]``, ``run.time``,
+        ``run.status`` -- or, for a run finished by ``simulate``, its ``Result``); the values
+        are ``res.reduced`` and the output columns are then not kept for every run (the
+        memory of a large batch with many columns), only the states.
     block : int
         Runs per C call.
     cache_dir : str, optional
@@ -135,11 +141,11 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
     request = dict(t_start=float(t_start), t_end=float(t_end), rtol=float(rtol), atol=atol, method=method,
                    stabilization=stabilization, alpha=float(alpha), beta=float(beta), n_out=n_out, dt_out=dt_out,
                    max_step=max_step)
-    runner = _Runner(system, request, values, n_runs, outputs, max_steps, threads, cache_dir)
+    runner = _Runner(system, request, values, n_runs, outputs, max_steps, threads, cache_dir, reduce)
     _interruptible(runner, max(1, int(block)))
     res = runner.result()
     if fallback:
-        _rerun(res, system, values, request)
+        _rerun(res, system, values, request, reduce)
     res.stats["wall_time"] = time.perf_counter() - t0
     return res
 
@@ -179,8 +185,9 @@ def _interruptible(runner, block):
     except (KeyboardInterrupt, Terminated) as exc:
         sig = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
         for i in np.flatnonzero(runner.c_status == -1):
-            if not runner.message[i]:  # not started (a run that could not start keeps its error)
+            if not runner.message[i]:  # not started, or its block not stored whole (an error row keeps its error)
                 runner.status[i], runner.message[i] = "interrupted", f"not run: the batch was interrupted by {sig}"
+                runner.Y[i] = np.nan
         res = runner.result()
         done = int(sum(s == "success" for s in res.status))
         raise SimulationInterrupted(res, sig, f"batch interrupted by {sig}: {done} of {len(res)} runs finished "
@@ -258,7 +265,7 @@ class _Runner:
     """The runs of one batch: prepared in Python block by block, integrated in C (the next
     block prepared while C integrates), their output columns computed as each block ends."""
 
-    def __init__(self, system, request, values, n_runs, outputs, max_steps, threads, cache_dir):
+    def __init__(self, system, request, values, n_runs, outputs, max_steps, threads, cache_dir, reduce=None):
         import os
 
         self.system, self.req, self.values, self.n_runs = system, request, values, n_runs
@@ -278,6 +285,8 @@ class _Runner:
         self.wanted = None
         self.times = dict(setup_time=0.0, integrate_time=0.0, outputs_time=0.0)
         self.stop = np.zeros(1, np.intc)
+        self.reduce = reduce
+        self.reduced = [None] * n_runs if reduce is not None else None
 
     def params_of(self, i):
         return {name: col[i] for name, col in self.values.items()}
@@ -303,14 +312,14 @@ class _Runner:
         # (the zero pattern is baked; see mbcomp.codegen.tracer.param_layout)
         zeros = tuple((np.asarray(col[i]) != 0).tobytes() for col in self.values.values())
         key = (None if rm is None or rm.all() else rm.tobytes(), zeros)
-        hp = self._hoisted(key, s, form)
+        hp = self._hoisted(key, s, form, y0)
         if hp is None:
             self.message[i] = ("the C engine cannot run this parameter set (it changes a decision baked into the "
                                "program, which was traced again without an engine) -> simulate it")
             return None
         return (hp[0], hp[1], hp[2], y0, s, form)
 
-    def _hoisted(self, key, s, form):
+    def _hoisted(self, key, s, form, y0):
         """``(group key, h, p)`` for run system ``s``: the program's hoisted values and parameter
         vector. Runs of one group share the row mask and the table's zero pattern, hence the
         program's structure (its signature) with the group's first run, whose program the
@@ -337,24 +346,32 @@ class _Runner:
         bound = integ.bound
         gkey = key if group is None else (key, id(bound.code))
         if gkey not in self.groups:
-            self.groups[gkey] = (bound.code, tuple(integ.d), self._output_program(s, form))
+            self.groups[gkey] = (bound.code, tuple(integ.d), self._output_program(s, form, y0))
         return gkey, bound.hbuf.copy(), bound.pbuf.copy()
 
-    def _output_program(self, s, form):
-        """The output program of a group (None without requested outputs)."""
+    def _output_program(self, s, form, y0):
+        """The output program of a group: ``"evaluator"`` -- the system's own
+        (:meth:`~mbcomp.codegen.evaluator.ProgramEvaluator.output_grid`, what ``simulate``'s
+        post-processing calls, kept per structure across calls) when it makes one for this grid
+        (100 points or more, or made before) -- else one built here; None without outputs."""
         if not self.outputs:
             return None
         from ..codegen.outputs import OutputProgram
 
-        prog = OutputProgram.build(s, "c", baumgarte=form.output_gains() is not None, cache_dir=self.cache_dir)
+        gains = form.output_gains()
+        grid = s.evaluator.output_grid(self.T, np.tile(y0, (len(self.T), 1)), gains)
+        if grid is not None:
+            self._check_outputs(s, grid[0], list(grid[2]))
+            return "evaluator"
+        prog = OutputProgram.build(s, "c", baumgarte=gains is not None, cache_dir=self.cache_dir)
         if prog is None:
             raise ValueError("the output program cannot be traced at this model's trace point -> ask for the "
                              "states only (outputs=None), or use mbcomp.study(...)")
-        self._check_outputs(s, prog)
+        self._check_outputs(s, prog.names, prog.rotation_paths)
         return prog
 
-    def _check_outputs(self, s, prog):
-        have = list(prog.names) + [f"{p}.Q.{a}" for p in prog.rotation_paths for a in "wxyz"]
+    def _check_outputs(self, s, names, rotation_paths):
+        have = list(names) + [f"{p}.Q.{a}" for p in rotation_paths for a in "wxyz"]
         aliases = dict(s.topology.flat.aliases)
         wanted = have if self.outputs == "all" else list(self.outputs)
         states = set(s.q_names) | set(s.u_names)
@@ -368,26 +385,35 @@ class _Runner:
                                  "model output functions) are not in a batch -> use mbcomp.simulate or study")
         if self.wanted is None:
             self.wanted = [(n, aliases.get(n, n)) for n in wanted if aliases.get(n, n) not in states]
-            self.columns = {n: np.full((self.n_runs, len(self.T)), np.nan) for n, _ in self.wanted}
+            self.columns = {} if self.reduce is not None else {
+                n: np.full((self.n_runs, len(self.T)), np.nan) for n, _ in self.wanted}
 
     # --- the pipeline ---------------------------------------------------------------------------
     def run(self, block):
-        """Every run, block by block: block ``k + 1`` is prepared while C integrates block ``k``."""
+        """Every run, block by block: block ``k + 1`` is prepared while C integrates block ``k``.
+        Stopped (Ctrl-C, an error), the C runs stop at their next stretch and the blocks in
+        flight are stored as they ended (their finished runs kept)."""
         pool = concurrent.futures.ThreadPoolExecutor(1)
-        pending = None
+        flight = []  # (job, prepared) submitted and not stored yet, oldest first
         try:
             for start in range(0, self.n_runs, block):
                 t0 = time.perf_counter()
                 prepared = [(i, self.prepare(i)) for i in range(start, min(start + block, self.n_runs))]
                 self.times["setup_time"] += time.perf_counter() - t0
-                job = pool.submit(self._integrate, [(i, p) for i, p in prepared if p is not None])
-                if pending is not None:
-                    self._finish(*pending)
-                pending = (job, prepared)
-            if pending is not None:
-                self._finish(*pending)
+                flight.append((pool.submit(self._integrate, [(i, p) for i, p in prepared if p is not None]),
+                               prepared))
+                if len(flight) > 1:
+                    self._finish(*flight[0])
+                    flight.pop(0)
+            while flight:
+                self._finish(*flight[0])
+                flight.pop(0)
         except BaseException:  # Ctrl-C or an error: the C runs stop at their next stretch
             self.stop[0] = 1
+            pool.shutdown(wait=True)
+            for job, prepared in flight:
+                if job.done() and job.exception() is None:
+                    self._finish(job, prepared)
             raise
         finally:
             pool.shutdown(wait=True)
@@ -426,12 +452,23 @@ class _Runner:
                 self.message[i] = "reached t_end" if code == 0 else (
                     f"the integrator {self.req['method']} stopped at t={r.t_reached[k]:.9g} s: {r.messages[k]} "
                     f"({_why(code)})")
-        if self.columns is not None:
-            t0 = time.perf_counter()
-            for i, p in prepared:
-                if p is not None:
-                    self._outputs(i, p)
-            self.times["outputs_time"] += time.perf_counter() - t0
+        t0 = time.perf_counter()
+        for i, p in prepared:
+            cols = self._outputs(i, p) if p is not None and self.wanted else {}
+            if self.reduce is not None:
+                self.reduced[i] = self.reduce(self.one_run(i, cols))
+            else:
+                for name, arr in cols.items():
+                    self.columns[name][i] = arr
+        self.times["outputs_time"] += time.perf_counter() - t0
+
+    def one_run(self, i, cols):
+        """Run ``i`` as a :class:`OneRun`: its states, aliases of them and the columns ``cols``."""
+        names = list(self.system.q_names) + list(self.system.u_names)
+        series = {n: self.Y[i, :, j] for j, n in enumerate(names)}
+        series.update({a: series[v] for a, v in self.system.topology.flat.aliases.items() if v in series})
+        series.update(cols)
+        return OneRun(self.T, series, self.status[i], self.message[i], self.params_of(i))
 
     def _outputs(self, i, p):
         """Run ``i``'s requested columns over the output times it reached (the output program;
@@ -440,9 +477,13 @@ class _Runner:
         prog = self.groups[gkey][2]
         reached = int(np.isfinite(self.Y[i]).all(axis=1).sum())
         if prog is None or reached == 0:
-            return
+            return {}
         T, Y, gains = self.T[:reached], self.Y[i, :reached], form.output_gains()
-        names, V, quats, ok = prog.grid(s, T, Y, gains)
+        grid = s.evaluator.output_grid(T, Y, gains) if prog == "evaluator" else prog.grid(s, T, Y, gains)
+        if grid is None:  # the evaluator's program did not hold for these values (traced again: none)
+            self.message[i] += "; its output columns could not be computed (no output program for its values)"
+            return {}
+        names, V, quats, ok = grid
         col = {n: V[j] for j, n in enumerate(names)}
         col.update({f"{path}.Q.{a}": Q[:, j] for path, Q in quats.items() for j, a in enumerate("wxyz")})
         for k in np.flatnonzero(~ok):
@@ -460,8 +501,11 @@ class _Runner:
                 for j, a in enumerate("wxyz"):
                     if f"{path}.Q.{a}" in col:
                         col[f"{path}.Q.{a}"][k] = Q[j]
+        out = {}
         for name, real in self.wanted:
-            self.columns[name][i, :reached] = col[real]
+            out[name] = np.full(len(self.T), np.nan)
+            out[name][:reached] = col[real]
+        return out
 
     def result(self):
         """The :class:`BatchResult`."""
@@ -478,7 +522,7 @@ class _Runner:
                      nsteps=c[:, 2].copy(), nreject=c[:, 3].copy(), c_calls=c[:, 4].copy(),
                      c_status=self.c_status.copy(), simulate_reruns=[],
                      **self.times)
-        return BatchResult(self.T, cols, self.status, self.message, self.values, self.t_reached, stats)
+        return BatchResult(self.T, cols, self.status, self.message, self.values, self.t_reached, stats, self.reduced)
 
 
 def _why(code):
@@ -487,7 +531,7 @@ def _why(code):
     return STATUS.get(code, "unknown")
 
 
-def _rerun(res, system, values, req):
+def _rerun(res, system, values, req, reduce=None):
     """Finish with :func:`mbcomp.simulate` each run whose program guard failed in C (``simulate``
     goes on on its Python path there): its states and columns replace the batch's."""
     from ..simulation.driver import simulate
@@ -499,3 +543,5 @@ def _rerun(res, system, values, req):
                      beta=req["beta"], n_out=req["n_out"], dt_out=req["dt_out"], max_step=req["max_step"])
         res.replace_run(i, r, f"run by simulate after the C program's guard failed ({res.message[i]}): {r.message}")
         res.stats["simulate_reruns"].append(i)
+        if reduce is not None:
+            res.reduced[i] = reduce(r)

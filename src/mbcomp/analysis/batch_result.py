@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["BatchResult", "RunView", "STATUS_OF"]
+__all__ = ["BatchResult", "RunView", "OneRun", "STATUS_OF"]
 
 #: the batch runner's codes (:data:`mbcomp.codegen.batch.STATUS`) as a run's status
 STATUS_OF = {0: "success", 1: "failed", 2: "failed", 3: "budget", 4: "failed", 5: "interrupted", 6: "failed",
@@ -38,6 +38,8 @@ class BatchResult:
         The table: ``{name: per-run values}``.
     t_reached : ndarray (n_runs,)
         Time each run reached (s); its columns after it are NaN.
+    reduced : list or None
+        Per run, what ``batch(..., reduce=f)`` returned (None for a run not finished).
     stats : dict
         ``runs``, ``failed``, ``threads``, ``setup_time`` (Python: parameters, consistent
         initialization), ``integrate_time`` (the C calls), ``outputs_time``, ``wall_time``
@@ -53,8 +55,9 @@ class BatchResult:
     (['x'], 2, 'success')
     """
 
-    def __init__(self, time, columns, status, message, params, t_reached, stats):
+    def __init__(self, time, columns, status, message, params, t_reached, stats, reduced=None):
         self.time = np.asarray(time)
+        self.reduced = reduced
         self._columns = dict(columns)
         self.status = np.array(list(status), dtype=object)
         self.message = list(message)
@@ -133,3 +136,36 @@ class RunView:
 
     def __contains__(self, name):
         return name in self.batch
+
+
+class OneRun:
+    """One run's columns on their own (what ``batch(..., reduce=f)`` hands ``f``), read like a
+    :class:`~mbcomp.simulation.result.Result`: ``time``, ``status``, ``message``, ``params``,
+    ``run["column"]`` (``(n_out,)``, NaN past where the run ended), ``names``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> r = OneRun(np.array([0.0, 1.0]), {"x": np.array([1.0, 2.0])}, "success", "reached t_end", {"k": 2.0})
+    >>> r["x"].tolist(), "x" in r, r.names, r.params
+    ([1.0, 2.0], True, ['x'], {'k': 2.0})
+    """
+
+    def __init__(self, time, columns, status, message, params):
+        self.time, self._columns = time, dict(columns)
+        self.status, self.message, self.params = status, message, dict(params)
+
+    @property
+    def names(self):
+        return list(self._columns)
+
+    def __getitem__(self, name):
+        if name == "time":
+            return self.time
+        try:
+            return self._columns[name]
+        except KeyError:
+            raise KeyError(f"no column {name!r} in this run; it has {', '.join(self._columns)}") from None
+
+    def __contains__(self, name):
+        return name == "time" or name in self._columns

@@ -256,8 +256,10 @@ BATCH_OPTIONS = ("t_start", "rtol", "atol", "n_out", "dt_out", "method", "stabil
 def run_batch_chunk(recipe, chunk, t_end, metrics, outputs, keep, options):
     """Rows ``(index, row, kept)`` of the runs ``chunk`` as :func:`mbcomp.batch` calls, one per
     set of ``build()`` arguments (and of parameter names): the runs of a structure integrate
-    in one C call. Metrics read each run as a :class:`~mbcomp.analysis.batch_result.RunView`
-    (``r["column"]``, ``r.time``, ``r.status``); ``cpu_time`` is the batch's wall time per run.
+    in one C call. Metrics read each run as it ends (``batch(..., reduce=...)``: a
+    :class:`~mbcomp.analysis.batch_result.OneRun`, ``r["column"]``, ``r.time``, ``r.status``; a
+    run finished by ``simulate``, its ``Result``), so no table of every column of every run is
+    kept; ``cpu_time`` is the batch's wall time per run.
     A batch that cannot start (a model it cannot run) gives every run of it an ``"error"`` row."""
     from .batch import batch
 
@@ -277,16 +279,27 @@ def run_batch_chunk(recipe, chunk, t_end, metrics, outputs, keep, options):
         try:
             system = prepared(recipe, dict(build_args), options.get("backend", "auto"))
             res = batch(system, [{n: run[n] for n in names} for _, run in part], t_end=t_end,
-                        outputs="all" if metrics or keep else None, threads=1 if _in_worker() else None, **opts)
+                        outputs="all" if metrics or keep else None, threads=1 if _in_worker() else None,
+                        reduce=lambda r: _batch_row(r, metrics, outputs, keep), **opts)
+        except SimulationInterrupted as exc:  # Ctrl-C, SIGTERM: the runs that finished are rows
+            share = (time.perf_counter() - wall) / len(part)
+            done = [(index,) + _with_cpu(exc.result.reduced[k], share) for k, (index, _) in enumerate(part)
+                    if exc.result.status[k] == "success" and exc.result.reduced[k] is not None]
+            raise ChunkStopped(rows + done, exc.signal) from None
         except (ModelError, SimulationError, ValueError, TypeError) as exc:
             err = {name: math.nan for name in metrics}
             rows += [(i, dict(err, status="error", message=f"{type(exc).__name__}: {exc}", cpu_time=0.0), None)
                      for i, _ in part]
             continue
         share = (time.perf_counter() - wall) / len(part)
-        for k, (index, _) in enumerate(part):
-            rows.append((index,) + _batch_row(res.run(k), metrics, outputs, keep, share))
+        rows += [(index,) + _with_cpu(res.reduced[k], share) for k, (index, _) in enumerate(part)]
     return rows
+
+
+def _with_cpu(row_kept, seconds):
+    """A batch run's ``(row, kept)`` with its share of the batch's time as ``cpu_time``."""
+    row, kept = row_kept
+    return dict(row, cpu_time=seconds), kept
 
 
 def _in_worker():
@@ -298,8 +311,8 @@ def _in_worker():
     return multiprocessing.parent_process() is not None or threading.current_thread() is not threading.main_thread()
 
 
-def _batch_row(view, metrics, outputs, keep, cpu):
-    """``(row, kept)`` of one run of a batch (see :func:`_one`)."""
+def _batch_row(view, metrics, outputs, keep):
+    """``(row, kept)`` of one run of a batch (see :func:`_one`), as the batch hands it over."""
     row, message = {name: math.nan for name in metrics}, view.message
     for name, fn in metrics.items():
         try:
@@ -307,7 +320,7 @@ def _batch_row(view, metrics, outputs, keep, cpu):
         except Exception as exc:  # noqa: BLE001 - a user's metric: reported in its row
             message += f"; metric {name!r} failed ({type(exc).__name__}: {exc})"
     kept = {"time": view.time, **{n: view[n] for n in outputs if n in view}} if keep == "outputs" else None
-    row.update(status=view.status, message=message, cpu_time=cpu)
+    row.update(status=view.status, message=message)
     return row, kept
 
 
@@ -410,7 +423,7 @@ def study(model_or_build, grid, *, t_end=1.0, metrics=None, outputs=(), keep=Non
         Each task's runs as one :func:`mbcomp.batch` on its worker (one thread each), e.g. a
         batch per Dask worker. A batch runs smooth models on ``simulate``'s default path
         (``dop853``/``dopri5``, no events or inputs) and hands metrics a
-        :class:`~mbcomp.analysis.batch_result.RunView`; ``keep="all"`` is refused.
+        :class:`~mbcomp.analysis.batch_result.OneRun` as each run ends; ``keep="all"`` is refused.
     progress : bool
         A progress bar counting finished runs.
     **simulate_options
