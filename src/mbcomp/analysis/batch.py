@@ -63,6 +63,9 @@ __all__ = ["batch", "BatchResult", "BLOCK"]
 
 #: runs per C call: Python prepares the next block while C integrates this one
 BLOCK = 64
+#: how much the C threads lower their own priority (Linux nice steps): the Python thread preparing
+#: the next block keeps its core, the C threads take the rest and all of it once Python is done
+NICE = 5
 #: the methods a batch integrates (the C engine's)
 METHODS = {"dop853": 8, "dopri5": 5}
 
@@ -435,7 +438,7 @@ class _Runner:
             hmax = req["max_step"] if np.isfinite(req["max_step"]) else 0.0
             out[gkey] = ([i for i, _ in runs], run_batch(
                 code, METHODS[req["method"]], H, P, Y0, self.T, req["rtol"], req["atol"], gains=gains, hmax=hmax,
-                max_steps=self.max_steps, threads=self.threads, stop=self.stop, cache_dir=self.cache_dir))
+                max_steps=self.max_steps, threads=self.threads, stop=self.stop, nice=NICE, cache_dir=self.cache_dir))
         return out, time.perf_counter() - t0
 
     def _finish(self, job, prepared):
