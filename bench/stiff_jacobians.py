@@ -49,35 +49,19 @@ import mbcomp  # noqa: E402
 from mbcomp.codegen import compile_system  # noqa: E402
 from mbcomp.codegen.evaluator import ProgramEvaluator  # noqa: E402
 from mbcomp import Guess  # noqa: E402
-from mbcomp.library import (FixedTranslation, PointMass, Prismatic, Revolute, RigidBody, Spring,  # noqa: E402
+from mbcomp.library import (FixedTranslation, Prismatic, Revolute, RigidBody,  # noqa: E402
                             TranslationalSpringDamper, World)
 
 import andrews  # noqa: E402
 
 
 def spring_chain(N=4, c=1e6, m=1.0, L=0.5):
-    """N pendulum links (revolute), each bob sliding on its link against a spring of rate
-    ``c`` (N/m); the last bob tied to the ground by a soft spring (100 N/m)."""
-    mod = mbcomp.Model()
-    w = mod.add("world", World(g=(0, -9.81, 0)))
-    prev = w.frame_b
-    for k in range(N):
-        j = mod.add(f"j{k}", Revolute(n=(0, 0, 1), phi0=0.6 if k == 0 else 0.1 * k))
-        rod = mod.add(f"rod{k}", FixedTranslation(r=(L, 0, 0)))
-        s = mod.add(f"s{k}", Prismatic(n=(1, 0, 0), s0=1e-3))
-        bob = mod.add(f"bob{k}", PointMass(m=m))
-        sp = mod.add(f"k{k}", TranslationalSpringDamper(c=c, d=1.0))
-        mod.connect(prev, j.frame_a)
-        mod.connect(j.frame_b, rod.frame_a)
-        mod.connect(rod.frame_b, s.frame_a)
-        mod.connect(s.frame_b, bob.frame_a)
-        mod.connect(s.support, sp.flange_a)
-        mod.connect(s.axis, sp.flange_b)
-        prev = s.frame_b
-    tie = mod.add("tie", Spring(c=100.0, s_unstretched=0.5))
-    mod.connect(prev, tie.frame_a)
-    mod.connect(w.frame_b, tie.frame_b)
-    return mod
+    """``models/spring_chain.py``: N pendulum links (revolute), each bob sliding on its link
+    against a spring of rate ``c`` (N/m, damper 1 N s/m); the last bob tied to the ground by a
+    soft spring (100 N/m)."""
+    import spring_chain as chain  # models/ is on sys.path (above)
+
+    return chain.build(N=N, c=c, d=1.0, m=m, L=L)
 
 
 def flyball_governor(c=1e5, arm=0.3, link=0.15, m_ball=1.0, m_sleeve=0.5, w0=10.0, theta0=0.5):

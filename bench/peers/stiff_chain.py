@@ -7,18 +7,21 @@ spring ``c`` (N/m) and a damper ``d`` (N s/m) on the slider's own coordinate ``s
 ``-(c s + d ds/dt)``); the next hinge sits on the bob. A spring ``c_tie`` (N/m, rest length
 ``0.5`` m) ties the last bob to the world origin; gravity ``(0, -g, 0)``. The sliders' modes
 are near ``-c/d = -10`` and ``-d/m = -1e5`` 1/s, the pendulum's a few 1/s: stiff. Start:
-hinge 0 at 0.6 rad, hinge k at 0.1 k rad, sliders at 1e-3 m, at rest. (The model of
-``tests/solvers/test_stiff_switch.py``'s ``damped_spring_chain``, copied here: benchmarks do
-not import tests.)
+hinge 0 at 0.6 rad, hinge k at 0.1 k rad, sliders at 1e-3 m, at rest. mbcomp's side is
+``models/spring_chain.py`` (also the model of ``tests/solvers/test_stiff_switch.py``).
 
 Coordinates: ``y = [phi_0, s_0, phi_1, s_1, ..., rates in the same order]`` on both sides
 (mbcomp's ``j<k>.phi``, ``s<k>.s``; Pinocchio's ``JointModelRZ``, ``JointModelPX`` in tree
 order). Pinocchio's right-hand side: the spring-damper forces on the slider coordinates and
 the tie's force mapped by the last bob's world-aligned Jacobian, then ``pin.aba``.
 """
+import pathlib
+
 import numpy as np
 
 from .cpu_clock import cpu
+
+MODEL_FILE = pathlib.Path(__file__).resolve().parents[2] / "models" / "spring_chain.py"
 
 __all__ = ["build_model", "build", "available", "start", "state_names", "DEFAULTS"]
 
@@ -44,32 +47,12 @@ def state_names(N):
 
 
 def build_model(N=2, c=1e6, d=1e5, m=1.0, L=0.5, c_tie=100.0, tie_length=0.5, g=9.81):
-    """The mbcomp Model (components ``j<k>``, ``rod<k>``, ``s<k>``, ``bob<k>``, ``k<k>``, ``tie``)."""
+    """The mbcomp Model: ``models/spring_chain.py`` (components ``j<k>``, ``rod<k>``, ``s<k>``,
+    ``bob<k>``, ``k<k>``, ``tie``) with these values."""
     import mbcomp
-    from mbcomp.library import (FixedTranslation, PointMass, Prismatic, Revolute, Spring,
-                                TranslationalSpringDamper, World)
 
-    phi0, s0 = start(N)
-    mod = mbcomp.Model()
-    w = mod.add("world", World(g=(0, -g, 0)))
-    prev = w.frame_b
-    for k in range(N):
-        j = mod.add(f"j{k}", Revolute(n=(0, 0, 1), phi0=phi0[k]))
-        rod = mod.add(f"rod{k}", FixedTranslation(r=(L, 0, 0)))
-        s = mod.add(f"s{k}", Prismatic(n=(1, 0, 0), s0=s0[k]))
-        bob = mod.add(f"bob{k}", PointMass(m=m))
-        sp = mod.add(f"k{k}", TranslationalSpringDamper(c=c, d=d))
-        mod.connect(prev, j.frame_a)
-        mod.connect(j.frame_b, rod.frame_a)
-        mod.connect(rod.frame_b, s.frame_a)
-        mod.connect(s.frame_b, bob.frame_a)
-        mod.connect(s.support, sp.flange_a)
-        mod.connect(s.axis, sp.flange_b)
-        prev = s.frame_b
-    tie = mod.add("tie", Spring(c=c_tie, s_unstretched=tie_length))
-    mod.connect(prev, tie.frame_a)
-    mod.connect(w.frame_b, tie.frame_b)
-    return mod
+    chain = mbcomp.load_model_file(str(MODEL_FILE))
+    return chain.build(N=N, c=c, d=d, m=m, L=L, c_tie=c_tie, tie_length=tie_length, g=g)
 
 
 class Peer:

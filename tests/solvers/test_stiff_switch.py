@@ -14,36 +14,16 @@ import pytest
 import mbcomp
 from conftest import load_model
 from mbcomp.codegen.toolchain import c_compiler
-from mbcomp.library import FixedTranslation, PointMass, Prismatic, Revolute, Spring, TranslationalSpringDamper, World
 
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="no C compiler: no C engine to test")
 
 pendulum = load_model("models/n_link_pendulum.py")
+spring_chain = load_model("models/spring_chain.py")
 
 
-def damped_spring_chain(N=2, c=1e6, d=1e5, m=1.0, L=0.5):
-    """N links on hinges, each bob sliding on its link against a spring ``c`` (N/m) with a
-    damper ``d`` (N s/m): modes near ``-c/d`` = -10 1/s and ``-d/m`` = -1e5 1/s (stiff)."""
-    mod = mbcomp.Model()
-    w = mod.add("world", World(g=(0, -9.81, 0)))
-    prev = w.frame_b
-    for k in range(N):
-        j = mod.add(f"j{k}", Revolute(n=(0, 0, 1), phi0=0.6 if k == 0 else 0.1 * k))
-        rod = mod.add(f"rod{k}", FixedTranslation(r=(L, 0, 0)))
-        s = mod.add(f"s{k}", Prismatic(n=(1, 0, 0), s0=1e-3))
-        bob = mod.add(f"bob{k}", PointMass(m=m))
-        sp = mod.add(f"k{k}", TranslationalSpringDamper(c=c, d=d))
-        mod.connect(prev, j.frame_a)
-        mod.connect(j.frame_b, rod.frame_a)
-        mod.connect(rod.frame_b, s.frame_a)
-        mod.connect(s.frame_b, bob.frame_a)
-        mod.connect(s.support, sp.flange_a)
-        mod.connect(s.axis, sp.flange_b)
-        prev = s.frame_b
-    tie = mod.add("tie", Spring(c=100.0, s_unstretched=0.5))
-    mod.connect(prev, tie.frame_a)
-    mod.connect(w.frame_b, tie.frame_b)
-    return mod
+def damped_spring_chain(N=2):
+    """``models/spring_chain.py`` with dampers of 1e5 N s/m: modes near -10 and -1e5 1/s (stiff)."""
+    return spring_chain.build(N=N, c=1e6, d=1e5)
 
 
 def test_the_default_switches_on_a_stiff_chain_and_stays_accurate():
