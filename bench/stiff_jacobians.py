@@ -136,13 +136,14 @@ METHODS = [("radau5", dict(method="radau5", index=3)), ("radau5 index 1", dict(m
 @contextlib.contextmanager
 def differences_only():
     """The evaluator's exact Jacobian programs switched off: every form differences."""
-    saved = ProgramEvaluator.dae_jacobian, ProgramEvaluator.lagrange_jac
+    saved = ProgramEvaluator.dae_jacobian, ProgramEvaluator.lagrange_jac, ProgramEvaluator.lagrange_jacobian
     ProgramEvaluator.dae_jacobian = lambda self, form: None
     ProgramEvaluator.lagrange_jac = lambda self, t, y, alpha, beta: None
+    ProgramEvaluator.lagrange_jacobian = lambda self: None  # what LagrangeIndex1.jac keeps per row mask
     try:
         yield
     finally:
-        ProgramEvaluator.dae_jacobian, ProgramEvaluator.lagrange_jac = saved
+        ProgramEvaluator.dae_jacobian, ProgramEvaluator.lagrange_jac, ProgramEvaluator.lagrange_jacobian = saved
 
 
 def run(system, opts, repeats):
