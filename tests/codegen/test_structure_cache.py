@@ -176,3 +176,47 @@ def test_a_callable_object_is_keyed_by_its_state():
     kp = structure_key(mbcomp.assemble(double_pendulum(tau=functools.partial(lin, 0.5))), "python")[0]
     kq = structure_key(mbcomp.assemble(double_pendulum(tau=functools.partial(lin, 2.0))), "python")[0]
     assert kp != kq  # a partial's arguments are not in its __dict__: keyed by identity
+
+
+def module_law(t, phi, w):
+    return -SETTINGS.K * w   # a constant read through a module
+
+
+SETTINGS = __import__("types").ModuleType("settings")
+SETTINGS.K = 0.5
+
+
+def test_a_law_reading_a_changed_module_attribute_is_traced_again():
+    """``cfg.K`` is traced as a constant too: the attribute's value is part of the structure."""
+    SETTINGS.K = 0.5
+    first = cold(double_pendulum(tau=module_law))
+    SETTINGS.K = 3.0
+    try:
+        warm = run(double_pendulum(tau=module_law))
+        assert reused(warm) == "miss"
+        ref = cold(double_pendulum(tau=module_law))
+        assert np.max(np.abs(states(warm) - states(ref))) <= 1e-12
+        assert np.max(np.abs(states(warm) - states(first))) > 1e-3   # the damping changed the motion
+    finally:
+        SETTINGS.K = 0.5
+
+
+def test_a_changed_class_constant_of_a_component_is_another_structure():
+    """A component's class constant its equations read (here a torque gain) is structure."""
+    class GainTorque(Torque):
+        GAIN = 1.0
+
+    def law(t, phi, w):   # one law object for both models: only the class constant differs
+        return -GainTorque.GAIN * w
+
+    def model():
+        m = double_pendulum()
+        t = m.add("tq", GainTorque(tau=law))
+        m.connect(t.flange_b, m["j1"].axis)
+        return m
+
+    k1 = structure_key(mbcomp.assemble(model()), "python")[0]
+    assert structure_key(mbcomp.assemble(model()), "python")[0] == k1   # the same structure: one key
+    GainTorque.GAIN = 2.0
+    k2 = structure_key(mbcomp.assemble(model()), "python")[0]
+    assert k1 != k2

@@ -114,8 +114,20 @@ def _function(f, refs, depth):
             cells.append(_fingerprint(c.cell_contents, refs, depth + 1))
         except ValueError:  # an empty cell
             cells.append(("empty",))
+    code_names = _code_names(f.__code__, set())
     return ("fn", f, _fingerprint(f.__defaults__, refs, depth + 1), _fingerprint(f.__kwdefaults__, refs, depth + 1),
-            tuple(cells), tuple((n, _fingerprint(g[n], refs, depth + 1)) for n in names))
+            tuple(cells), tuple((n, _global(g[n], code_names, refs, depth + 1)) for n in names))
+
+
+def _global(v, code_names, refs, depth):
+    """A global a law reads; a module also by the values of the attributes the law's code
+    names (``cfg.K``: a changed ``K`` is another program, as a changed global ``K`` is)."""
+    if not isinstance(v, types.ModuleType):
+        return _fingerprint(v, refs, depth)
+    refs.append(v)
+    attrs = tuple((n, _fingerprint(getattr(v, n), refs, depth)) for n in sorted(code_names)
+                  if n in vars(v) and not isinstance(vars(v)[n], (types.ModuleType, types.FunctionType, type)))
+    return ("module", v, attrs)
 
 
 def _fingerprint(v, refs, depth=0):
@@ -150,11 +162,26 @@ def _fingerprint(v, refs, depth=0):
         return ("id", id(v))
 
 
+def _class_data(cls, refs):
+    """The plain data a component's class (and its bases) holds: numbers, strings, tuples
+    and arrays its methods may read (a changed class constant is another program)."""
+    out = []
+    for c in cls.__mro__[:-1]:
+        for k, x in sorted(vars(c).items()):
+            if not k.startswith("__") and isinstance(x, (_PLAIN, tuple, np.ndarray)):
+                out.append((c.__name__, k, _fingerprint(x, refs)))
+    return tuple(out)
+
+
 def _components(flat, refs):
     comps = []
+    classes = {}
     for path, comp in flat.components.items():
         extra = tuple((k, _fingerprint(x, refs)) for k, x in sorted(vars(comp).items()) if k not in _COMPONENT_OWN)
-        comps.append((path, type(comp), extra))
+        cls = type(comp)
+        if cls not in classes:
+            classes[cls] = _class_data(cls, refs)
+        comps.append((path, cls, classes[cls], extra))
     where = {id(c): path for path, c in flat.components.items()}
     conns = tuple((where.get(id(a.component)), a.name, where.get(id(b.component)), b.name) for a, b in flat.connections)
     return tuple(comps), conns, tuple(sorted(flat.free))
