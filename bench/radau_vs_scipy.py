@@ -1,0 +1,110 @@
+"""radau5 against scipy's Radau, work-precision: CPU time at matched accuracy (issue 32, item 4).
+
+Each model (the damped stiff spring chain of ``models/spring_chain.py``, N=10, c=1e6 N/m,
+d=1e5 N s/m; the 4-link chain and the slider-crank of ``bench/radau_reuse.py``) runs through ``mbcomp.simulate`` at the Lagrange form of index 1 (radau5: the
+index-1 DAE; scipy's ``Radau``: the index-1 ODE), both with the problem's Jacobian, over a
+ladder of tolerances. The error is the largest coordinate error on the output grid against
+a tight reference (DOP853, Lagrange index 1 with projection, ``rtol=1e-12``; for the
+stiff spring chain scipy's Radau at ``rtol=1e-11``); the time is the
+CPU time of the whole ``simulate`` call (median of ``--repeat`` runs). For each radau5 run the
+table prints the ratio of its time to scipy Radau's time at the same error, interpolated
+log-log on scipy's work-precision line (``< 1``: radau5 is faster).
+
+``--before PATH`` adds another ``radau.py`` (e.g. ``git show <rev>:src/mbcomp/solvers/radau.py
+> /tmp/radau_before.py``), loaded beside the current one, so before/after share one run.
+
+Run: ``python bench/radau_vs_scipy.py [--before /tmp/radau_before.py] [--repeat 3] [--cases chain]``
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import pathlib
+import sys
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+import mbcomp  # noqa: E402
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+
+from radau_reuse import REFERENCE, coordinate_error, load_stepper, run  # noqa: E402
+
+
+def _model_file(path, **params):
+    return lambda: mbcomp.load_model_file(ROOT / path).build(**params)
+
+
+#: (label, builder, t_end (s), radau5 rtols, scipy Radau rtols)
+CASES = [
+    ("spring chain N=10", _model_file("models/spring_chain.py", N=10, c=1e6, d=1e5), 1.0, (1e-4, 1e-5, 1e-6, 1e-7), (1e-6, 1e-7, 1e-8, 1e-9)),
+    ("4-link chain", _model_file("models/n_link_pendulum.py", N=4), 3.0, (1e-5, 1e-6, 1e-7, 1e-8),
+     (1e-6, 1e-7, 1e-8, 1e-9, 1e-10)),
+    ("slider-crank", _model_file("models/slider_crank.py"), 3.0, (1e-5, 1e-6, 1e-7, 1e-8),
+     (1e-6, 1e-7, 1e-8, 1e-9, 1e-10)),
+]
+N_OUT = 61
+
+
+def timed(build, t_end, opts, stepper, repeat):
+    """(error, median CPU s, stats) of ``repeat`` runs."""
+    times, res = [], None
+    for _ in range(repeat):
+        res = run(build(), dict(t_end=t_end, **opts), "auto", stepper)
+        times.append(res.stats["bench_cpu"])
+    return res, float(np.median(times))
+
+
+def matched(err, line):
+    """scipy's CPU time at error ``err``, log-log interpolated on its (error, time) points."""
+    pts = sorted((e, c) for e, c in line if np.isfinite(e) and e > 0)
+    if len(pts) < 2 or not pts[0][0] <= err <= pts[-1][0]:
+        return np.nan
+    le = np.log([p[0] for p in pts])
+    lc = np.log([p[1] for p in pts])
+    return float(np.exp(np.interp(np.log(err), le, lc)))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--before", help="path of another radau.py to compare with")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--cases", help="comma-separated substrings selecting cases")
+    args = ap.parse_args(argv)
+    cases = CASES
+    if args.cases:
+        cases = [c for c in cases if any(s.strip() in c[0] for s in args.cases.split(","))]
+    variants = [("radau5", None)] + ([("before", load_stepper(args.before))] if args.before else [])
+    head = f"{'model':18s} {'method':8s} {'rtol':>7s} {'steps':>6s} {'nlu':>6s} {'nfev':>7s} {'cpu s':>7s} " \
+           f"{'error':>9s} {'/scipy@err':>10s}"
+    print(head)
+    print("-" * len(head))
+    for label, build, t_end, r_rtols, s_rtols in cases:
+        # the stiff chain's reference: scipy Radau at rtol 1e-11 (DOP853 would take ~1e6 steps)
+        refopts = dict(method="Radau", rtol=1e-11, atol=1e-13) if "spring" in label else REFERENCE
+        ref = mbcomp.simulate(build(), n_out=N_OUT, t_end=t_end, backend="auto", **refopts)
+        line, rows = [], []
+        for rtol in s_rtols:
+            res, cpu = timed(build, t_end, dict(method="Radau", rtol=rtol, atol=rtol * 1e-2), None,
+                             args.repeat)
+            err = coordinate_error(res, ref)
+            line.append((err, cpu))
+            rows.append(("Radau", rtol, res, cpu, err, np.nan))
+        for name, stepper in variants:
+            for rtol in r_rtols:
+                opts = dict(method="radau5", index=1, stabilization="none", rtol=rtol, atol=rtol * 1e-2)
+                res, cpu = timed(build, t_end, opts, stepper, args.repeat)
+                err = coordinate_error(res, ref)
+                rows.append((name, rtol, res, cpu, err, cpu / matched(err, line)))
+        for name, rtol, res, cpu, err, ratio in rows:
+            st = res.stats
+            print(f"{label:18s} {name:8s} {rtol:7.0e} {st['steps']:6d} {st.get('nlu_integrator', st.get('nlu', 0)):6d} "
+                  f"{st['nfev']:7d} {cpu:7.3f} {err:9.2e} {ratio:10.2f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
