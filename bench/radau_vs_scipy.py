@@ -8,7 +8,8 @@ a tight reference (DOP853, Lagrange index 1 with projection, ``rtol=1e-12``; for
 stiff spring chain scipy's Radau at ``rtol=1e-11``); the time is the
 CPU time of the whole ``simulate`` call (median of ``--repeat`` runs). For each radau5 run the
 table prints the ratio of its time to scipy Radau's time at the same error, interpolated
-log-log on scipy's work-precision line (``< 1``: radau5 is faster).
+log-log on scipy's work-precision line (``< 1``: radau5 is faster). Rows ``r5-ode``: radau5
+stepping scipy's very ODE (:class:`Radau5OnOde`), which separates the solvers from the forms.
 
 ``--before PATH`` adds another ``radau.py`` (e.g. ``git show <rev>:src/mbcomp/solvers/radau.py
 > /tmp/radau_before.py``), loaded beside the current one, so before/after share one run.
@@ -18,6 +19,7 @@ Run: ``python bench/radau_vs_scipy.py [--before /tmp/radau_before.py] [--repeat 
 from __future__ import annotations
 
 import argparse
+from types import SimpleNamespace
 import os
 import pathlib
 import sys
@@ -33,6 +35,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 
 from radau_reuse import REFERENCE, coordinate_error, load_stepper, run  # noqa: E402
+
+import mbcomp.solvers as solvers  # noqa: E402
+from mbcomp.solvers.radau import Radau5  # noqa: E402
 
 
 def _model_file(path, **params):
@@ -50,11 +55,30 @@ CASES = [
 N_OUT = 61
 
 
+class Radau5OnOde(Radau5):
+    """radau5 stepping the index-1 *ODE* scipy's Radau steps (``E = I``, every index 1): the
+    same formulation and system, so the solvers alone are compared. Put in place of
+    ``STEPPERS["Radau"]`` for its runs (bench only: the driver gives radau5 the DAE form)."""
+
+    problem = "ode"
+    name = "Radau"
+
+    def __init__(self, problem, t0, y0, t_bound, **kw):
+        ode = SimpleNamespace(n=len(y0), fun=problem.fun, jac=getattr(problem, "jac", None))
+        super().__init__(ode, t0, y0, t_bound, **kw)
+
+
 def timed(build, t_end, opts, stepper, repeat):
-    """(error, median CPU s, stats) of ``repeat`` runs."""
+    """(result, median CPU s) of ``repeat`` runs; ``stepper="ode"``: radau5 on the ODE form."""
     times, res = [], None
     for _ in range(repeat):
-        res = run(build(), dict(t_end=t_end, **opts), "auto", stepper)
+        saved = solvers.STEPPERS["Radau"]
+        if stepper == "ode":
+            solvers.STEPPERS["Radau"] = Radau5OnOde
+        try:
+            res = run(build(), dict(t_end=t_end, **opts), "auto", None if stepper == "ode" else stepper)
+        finally:
+            solvers.STEPPERS["Radau"] = saved
         times.append(res.stats["bench_cpu"])
     return res, float(np.median(times))
 
@@ -78,7 +102,8 @@ def main(argv=None):
     cases = CASES
     if args.cases:
         cases = [c for c in cases if any(s.strip() in c[0] for s in args.cases.split(","))]
-    variants = [("radau5", None)] + ([("before", load_stepper(args.before))] if args.before else [])
+    variants = [("radau5", None), ("r5-ode", "ode")]
+    variants += [("before", load_stepper(args.before))] if args.before else []
     head = f"{'model':18s} {'method':8s} {'rtol':>7s} {'steps':>6s} {'nlu':>6s} {'nfev':>7s} {'cpu s':>7s} " \
            f"{'error':>9s} {'/scipy@err':>10s}"
     print(head)
@@ -96,7 +121,10 @@ def main(argv=None):
             rows.append(("Radau", rtol, res, cpu, err, np.nan))
         for name, stepper in variants:
             for rtol in r_rtols:
-                opts = dict(method="radau5", index=1, stabilization="none", rtol=rtol, atol=rtol * 1e-2)
+                if stepper == "ode":
+                    opts = dict(method="Radau", rtol=rtol, atol=rtol * 1e-2)
+                else:
+                    opts = dict(method="radau5", index=1, stabilization="none", rtol=rtol, atol=rtol * 1e-2)
                 res, cpu = timed(build, t_end, opts, stepper, args.repeat)
                 err = coordinate_error(res, ref)
                 rows.append((name, rtol, res, cpu, err, cpu / matched(err, line)))
