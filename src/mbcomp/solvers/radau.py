@@ -38,7 +38,7 @@ Jacobian and LU reuse (RADAU5's rule, Hairer & Wanner IV.8)
     accepted steps, 0.4-0.7 when ``h`` grows, 210 "too slow" failures in 1154 attempts)
     almost every attempt has a new ``h`` or ``J``, so almost every one factors: the rule is
     RADAU5's, the cost is the form's (on scipy's index-1 ODE of the same chain radau5 takes
-    ~0.5 factorizations a step; ``bench/radau_vs_scipy.py``). The factors:
+    0.5-0.85 factorizations a step; ``bench/radau_vs_scipy.py``). The factors:
     :mod:`mbcomp.solvers.radau_linalg`.
 Dense output
     The collocation polynomial (degree 3) through ``y0`` and the three stage values.
