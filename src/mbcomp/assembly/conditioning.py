@@ -45,6 +45,9 @@ __all__ = ["MASSLESS", "ILL_CONDITIONED", "directions", "check_inertia", "moving
 EPS = np.finfo(float).eps
 MASSLESS = 1e-12
 ILL_CONDITIONED = float(np.sqrt(EPS))
+#: how far above ``ILL_CONDITIONED`` the eigenvalues without vectors decide alone (their
+#: rounding, ``n eps`` of the largest, is far below this margin)
+SCREEN = 2.0
 
 
 def directions(Mr, scale=0.0):
@@ -76,7 +79,15 @@ def directions(Mr, scale=0.0):
     >>> directions(np.diag([2.0, 1.0]))[0].shape, directions(np.diag([2.0, 1.0]))[1]
     ((2, 0), None)
     """
-    w, V = np.linalg.eigh(0.5 * (Mr + Mr.T))
+    sym = 0.5 * (Mr + Mr.T)
+    # the eigenvalues alone first (a third of the work): they differ from eigh's by rounding
+    # (n eps of the largest), so only a matrix far from both limits is decided by them; any
+    # other takes eigh's values and vectors, the decisions and ratio made as always
+    w = np.linalg.eigvalsh(sym)
+    top = max(w[-1] if w.size else 0.0, scale, 0.0)
+    if top > 0.0 and w[0] > SCREEN * ILL_CONDITIONED * top:
+        return np.zeros((len(w), 0)), None
+    w, V = np.linalg.eigh(sym)
     top = max(w[-1] if w.size else 0.0, scale, 0.0)
     small = w <= MASSLESS * top
     if small.any() or top == 0.0:
@@ -110,7 +121,10 @@ def check_inertia(system, ev):
     N = sla.null_space(C) if C.size else np.eye(system.nu)
     if N.shape[1] == 0:
         return []
-    Mr = N.T @ ev.M @ N
+    M = ev.M
+    # no rows: N = I and N^T M N is M itself (a finite float M: the products add exact zeros)
+    plain = not C.size and isinstance(M, np.ndarray) and M.dtype.kind == "f" and np.isfinite(M).all()
+    Mr = M if plain else N.T @ M @ N
     Z, ratio = directions(Mr, moving_scale(system, ev.jets))
     if Z.shape[1]:
         raise _massless(system, N @ Z, ev.M)

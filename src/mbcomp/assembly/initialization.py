@@ -75,6 +75,9 @@ class InitialState:
     rank: int = 0  # rank of the holonomic constraint Jacobian
     nonholonomic: int = 0  # number of velocity-level constraint rows
     notes: list = field(default_factory=list)  # warnings for the run (an ill-conditioned mass matrix)
+    #: ``(system, Evaluation)``: the evaluation at the start ``(t0, q, u)`` and the system it is
+    #: of, for later users at the same state (the accuracy alarm's tolerance energy)
+    start: tuple = field(default=None, repr=False, compare=False)
 
 
 def _starts(system):
@@ -184,9 +187,11 @@ def initialize(system, t0=0.0, tol=POSITION_TOL, max_iter=60):
 
         raise _not_closed(system, closure, qfix, cut_fixed, closes_when_free)
     system.row_mask = mask
-    u, ev = _close_speeds(system, t0, closure.q, u, ufix, cut_fixed)
+    # every row kept: the closure's last evaluation (unmasked, at closure.q, u) is the masked one
+    u, ev = _close_speeds(system, t0, closure.q, u, ufix, cut_fixed, closure.data if mask.all() else None)
     notes = check_inertia(system, ev)
-    return InitialState(closure.q, u, mask, dropped, closure.iterations, rank(ev.C), ev.B.shape[0], notes)
+    return InitialState(closure.q, u, mask, dropped, closure.iterations, rank(ev.C), ev.B.shape[0], notes,
+                        start=(system, ev))
 
 
 def _close_positions(system, t0, q, u, cut_fixed, free, tol, max_iter):
@@ -241,10 +246,12 @@ def _not_closed(system, closure, qfix, cut_fixed, closes_when_free):
         "check lengths and joint axes of the loop (can it close at all?) or give better Guess(...) start values")])
 
 
-def _close_speeds(system, t0, q, u, ufix, cut_fixed):
+def _close_speeds(system, t0, q, u, ufix, cut_fixed, ev=None):
     """Free speeds corrected (minimum norm) so that ``[dPhi/dt; Psi; fixed cut-joint speeds]``
-    vanish; returns ``(u, evaluation)``, or raises when fixed start speeds over-specify."""
-    ev = system.evaluate(t0, q, u)
+    vanish; returns ``(u, evaluation)``, or raises when fixed start speeds over-specify.
+    ``ev``: the evaluation at ``(t0, q, u)`` when the caller has it."""
+    if ev is None:
+        ev = system.evaluate(t0, q, u)
     r2, C2, _ = _measure_rows(system, t0, q, u, cut_fixed, "u")
     Cv = np.vstack((ev.A, C2))
     rv = np.concatenate((ev.Phid, ev.Psi, r2))

@@ -77,11 +77,12 @@ def dof_report(system, init=None):
     >>> d["gruebler"], d["mobility"]
     (1, 1)
     """
-    return _dof_report(observer(system), init)
+    return _dof_report(observer(system), init, system.constraint_names(all_rows=True))
 
 
-def _dof_report(view, init):
-    """:func:`dof_report` of an observer copy ``view`` (initialized here when ``init`` is None)."""
+def _dof_report(view, init, cut_rows):
+    """:func:`dof_report` of an observer copy ``view`` (initialized here when ``init`` is None);
+    ``cut_rows``: the names of every constraint row (the system's, kept per structure)."""
     topo = view.topology
     parent = {}
 
@@ -100,7 +101,7 @@ def _dof_report(view, init):
     # constraint-only joints (the library's contacts) remove as many DOF as they have holonomic rows
     # ... and so do flange constraints (gears: one holonomic row each, assembly/flange_rows.py)
     gears = {fr.name for fr in topo.flange_rows}
-    C += sum(1 for name in view.constraint_names(all_rows=True)
+    C += sum(1 for name in cut_rows
              if name.rsplit(".", 1)[0] in gears or not topo.edge(name.rsplit(".", 1)[0]).comp.tree_edge)
     L = sum(1 for e in topo.edges if e.drive)
     if init is None:
@@ -111,14 +112,14 @@ def _dof_report(view, init):
                 redundant=list(init.dropped) if init is not None else [])
 
 
-def _excess(d, init, view):
+def _excess(d, init, cut_rows):
     """Why the mobility exceeds Gruebler's count (text after it, or ""): rows out of force at
     the start -- a contact starting open (the rows of its joint counted, none in force) -- and
     the rest redundant rows (e.g. a planar loop closed by a spatial joint)."""
     if not (isinstance(d["mobility"], int) and d["mobility"] > d["gruebler"]):
         return ""
     excess = d["mobility"] - d["gruebler"]
-    rows = len(view.constraint_names(all_rows=True)) + int(init.nonholonomic or 0)
+    rows = len(cut_rows) + int(init.nonholonomic or 0)
     out = min(excess, max(0, rows - len(d["redundant"]) - int(d["rank"])))  # neither in force nor dropped
     why = ([f"{out} constraint row{'s' if out > 1 else ''} of contacts starting open {'are' if out > 1 else 'is'} "
             "not in force"] if out else [])
@@ -152,7 +153,8 @@ def summary(system, init=None):
     why = None
     if init is None:
         init, why = _initialize(view)
-    d = _dof_report(view, init)
+    cut_rows = system.constraint_names(all_rows=True)  # structural: no evaluation on a warm structure
+    d = _dof_report(view, init, cut_rows)
     lines = ["mbcomp model summary", "===================="]
     if init is None:
         lines.append(f"initialization failed: {why}")
@@ -163,11 +165,10 @@ def summary(system, init=None):
                                                                         if topo.gravity_source else " (no World)"))
     dof = d["mobility"] if d["mobility"] is not None else "unknown (initialization failed)"
     lines.append(f"degrees of freedom: {dof}   (Gruebler M = 6N - C - L = 6*{d['N']} - {d['C']} - {d['L']}"
-                 f" = {d['gruebler']}" + _excess(d, init, view) + ")")
+                 f" = {d['gruebler']}" + _excess(d, init, cut_rows) + ")")
     lines.append(f"coordinates ({system.nq} q, {system.nu} speeds): {', '.join(system.q_names) or 'none'}")
     tree = [e.name for e in topo.tree if e.kind == "joint" and e.dof > 0 and not e.drive]
     lines.append(f"tree joints (minimal coordinates): {', '.join(tree) or 'none'}")
-    cut_rows = view.constraint_names(all_rows=True)
     lines.append(f"cut joints (loop closure): {', '.join(topo.cut) or 'none'}; {len(cut_rows)} constraint rows"
                  f"{' with the gears' if topo.flange_rows else ''}, "
                  f"rank {d['rank']}")

@@ -277,13 +277,14 @@ class MultibodySystem:
 
     def constraint_names(self, all_rows=False):
         """Names ``"<cut joint>.<row>"`` of the loop-closure constraint rows."""
-        if self._row_names is None:
-            q0 = self.default_q()
-            ev = self.evaluate_numeric(0.0, q0, np.zeros(self.nu), masked=False)
-            self._row_names = [f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows]
-        if all_rows or self.row_mask is None:
-            return list(self._row_names)
-        return [n for n, k in zip(self._row_names, self.row_mask) if k]
+        if self._row_names is None:  # structural: kept per structure by a compiled evaluator
+            memo = getattr(self.evaluator, "structure_memo", dict)()
+            if "constraint_names" not in memo:
+                ev = self.evaluate_numeric(0.0, self.default_q(), np.zeros(self.nu), masked=False)
+                memo["constraint_names"] = tuple(f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows)
+            self._row_names = list(memo["constraint_names"])
+        names, mask = self._row_names, (None if all_rows else self.row_mask)
+        return list(names) if mask is None else [n for n, k in zip(names, mask) if k]
 
     def default_q(self):
         q = np.zeros(self.nq)

@@ -59,13 +59,15 @@ def _rounding(T, V):
     return 100.0 * np.finfo(float).eps * float(np.max(np.abs(T) + np.abs(V)))
 
 
-def tolerance_energy(system, t, Y, rtol, atol):
+def tolerance_energy(system, t, Y, rtol, atol, known=None):
     """The energy (J) the integration tolerances leave open: how far ``E = T + V`` moves when
     every state moves by its tolerance, ``sum |dE/dq_i| (atol + rtol |q_i|) + |dE/du_i| (atol +
     rtol |u_i|)``, with ``dE/du = M u`` (the momenta) and ``|dE/dq|`` sized by the generalized
     forces ``f`` (``-dV/dq`` at rest); the largest over up to :data:`TOLERANCE_POINTS` of the
     outputs ``Y`` (``[q, u]`` rows at times ``t``, s). A ball resting on a floor at rtol 1e-10
     leaves ``m g rtol z`` open: its energy wanders by that much, and exchanges nothing else.
+    ``known``: an evaluation of ``system`` already made (the start's), taken instead of
+    evaluating again at an output of exactly its time and state.
 
     Examples
     --------
@@ -90,13 +92,19 @@ def tolerance_energy(system, t, Y, rtol, atol):
         if not (np.isfinite(q).all() and np.isfinite(u).all()):
             continue
         try:
-            ev = system.evaluate(t[k], q, u)
+            ev = known if _at(known, t[k], q, u) else system.evaluate(t[k], q, u)
             f, p = np.abs(np.asarray(ev.f, float)), np.abs(np.asarray(ev.M, float) @ u)
         except Exception:  # noqa: BLE001 - a state the mechanism cannot evaluate adds nothing here
             continue
         dq = atol + rtol * (np.abs(q) if nq == nu else np.max(np.abs(q), initial=0.0))
         worst = max(worst, float(f @ (dq * np.ones(nu)) + p @ (atol + rtol * np.abs(u))))
     return worst
+
+
+def _at(ev, t, q, u):
+    """Whether the evaluation ``ev`` (or None) is at exactly the time ``t`` and state ``q, u``."""
+    return (ev is not None and ev.t == t and np.array_equal(np.asarray(ev.q), q)
+            and np.array_equal(np.asarray(ev.u), u))
 
 
 def _drift(x):

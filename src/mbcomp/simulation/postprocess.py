@@ -42,10 +42,11 @@ __all__ = ["postprocess"]
 
 class _Columns:
     """Result columns of ``n`` output times, created full of NaN when first written, and the
-    bodies' orientation quaternions (``(n, 4)`` per body)."""
+    bodies' orientation quaternions (``(n, 4)`` per body; from the rotation matrices kept
+    point by point, converted in one pass when read)."""
 
     def __init__(self, n):
-        self.n, self.series, self.quat = n, {}, {}
+        self.n, self.series, self._quat, self.matrices = n, {}, {}, {}
 
     def put(self, name, k, val):
         arr = self.series.get(name)
@@ -54,19 +55,39 @@ class _Columns:
         arr[k] = val
 
     def rotation(self, path, k, R):
-        arr = self.quat.get(path)
-        if arr is None:
-            arr = self.quat[path] = np.full((self.n, 4), np.nan)
-        arr[k] = matrix_to_quat(R)
+        kept = self.matrices.get(path)
+        if kept is None:
+            kept = self.matrices[path] = {}
+        kept[k] = R
+
+    @property
+    def quat(self):
+        """``{body: (n, 4) quaternions}`` of the rotations kept so far."""
+        self._quaternions()
+        return self._quat
+
+    def _quaternions(self):
+        """The kept rotation matrices into ``quat`` (elementwise, so one stacked pass gives each
+        point's quaternion as a call per point would)."""
+        where = [(path, k) for path, kept in self.matrices.items() for k in kept]
+        if where:
+            Q = matrix_to_quat(np.stack([np.asarray(self.matrices[path][k], float) for path, k in where]))
+            for (path, k), row in zip(where, Q):
+                arr = self._quat.get(path)
+                if arr is None:
+                    arr = self._quat[path] = np.full((self.n, 4), np.nan)
+                arr[k] = row
+        self.matrices = {}
 
     def finished(self):
         """The series with every body's quaternion ``<body>.Q.w/x/y/z`` after its position."""
-        after = {f"{path}.r.z": path for path in self.quat}
+        quats = self.quat
+        after = {f"{path}.r.z": path for path in quats}
         out = {}
         for name, arr in self.series.items():
             out[name] = arr
             if name in after:
-                quat = self.quat[after[name]]
+                quat = quats[after[name]]
                 for j, ax in enumerate("wxyz"):
                     out[f"{after[name]}.Q.{ax}"] = quat[:, j].copy()
         return out
@@ -141,7 +162,10 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
         warnings.warn(f"mbcomp: {loop}", RuntimeWarning, stacklevel=3)
         notes.append(loop)
     if status == "success" and "rtol" in stats:  # the energy the tolerances leave open (J) scales the alarms
-        stats = dict(stats, energy_tolerance=tolerance_energy(system, t, Y, stats["rtol"], stats.get("atol", 0.0)))
+        start = getattr(init, "start", None)  # the start's evaluation, if of this system
+        known = start[1] if start is not None and start[0] is system else None
+        stats = dict(stats, energy_tolerance=tolerance_energy(system, t, Y, stats["rtol"], stats.get("atol", 0.0),
+                                                              known))
         alarm, text = _alarms(system, t, Y, series, stats["rtol"], quadrature, stats["energy_tolerance"])
         if alarm:
             status, notes = alarm, [text] + notes
