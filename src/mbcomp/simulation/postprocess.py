@@ -252,9 +252,11 @@ def _joint_notes(system, t, series):
     joints = [e for e in system.topology.edges if e.kind == "joint"]
     own = {e.name: {} for e in joints}
     for name, arr in series.items():  # one pass: a column belongs to the joint named by a prefix of it
-        for i, ch in enumerate(name):
-            if ch == "." and name[:i] in own:
+        i = name.find(".")
+        while i >= 0:
+            if name[:i] in own:
                 own[name[:i]][name[i + 1:]] = arr
+            i = name.find(".", i + 1)
     notes = []
     for e in joints:
         notes.extend(e.comp.result_notes(e.name, t, own[e.name]))
