@@ -74,3 +74,25 @@ def test_summary_row_names_are_the_evaluated_ones():
     names = warm.system.constraint_names(all_rows=True)
     ev = warm.system.evaluate_numeric(0.0, warm.system.default_q(), np.zeros(warm.system.nu), masked=False)
     assert names == [f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows]
+
+
+def test_a_wrapped_evaluator_gets_its_own_masked_evaluation():
+    """An evaluator whose masked evaluations differ from its unmasked ones (a hybrid mode adds
+    held rows or friction to masked ones only) is asked again at the start: the closure's
+    unmasked evaluation is not taken for it."""
+    from mbcomp.hybrid.active import ForcesAdded, WrappingEvaluator
+
+    class PushWhenMasked(WrappingEvaluator):
+        def evaluate(self, t, q, u, masked=True):
+            ev = self.inner.evaluate(t, q, u, masked)
+            return ForcesAdded(ev, np.asarray(ev.f, float) + 1.0) if masked else ev
+
+        def rebind(self, system, laws=False):
+            return PushWhenMasked(self.inner.rebind(system, laws))
+
+    base = mbcomp.assemble(load_model("models/n_link_pendulum.py").build(N=3))
+    s = base.with_evaluator(lambda new: PushWhenMasked(base.evaluator))
+    init = initialize(s)
+    ev = init.start[1]
+    np.testing.assert_array_equal(ev.f, s.evaluate(0.0, init.q, init.u).f)
+    np.testing.assert_array_equal(ev.f, base.evaluate(0.0, init.q, init.u).f + 1.0)

@@ -187,8 +187,12 @@ def initialize(system, t0=0.0, tol=POSITION_TOL, max_iter=60):
 
         raise _not_closed(system, closure, qfix, cut_fixed, closes_when_free)
     system.row_mask = mask
-    # every row kept: the closure's last evaluation (unmasked, at closure.q, u) is the masked one
-    u, ev = _close_speeds(system, t0, closure.q, u, ufix, cut_fixed, closure.data if mask.all() else None)
+    # every row kept and the system's own evaluator (numeric or program, wrapping nothing): the
+    # closure's last evaluation (unmasked, at closure.q, u) is the masked one (a hybrid mode's
+    # wrapper adds held rows or friction to masked evaluations only)
+    own = getattr(system.evaluator, "system", None) is system and getattr(system.evaluator, "inner", None) is None
+    same = bool(mask.all()) and own
+    u, ev = _close_speeds(system, t0, closure.q, u, ufix, cut_fixed, closure.data if same else None)
     notes = check_inertia(system, ev)
     return InitialState(closure.q, u, mask, dropped, closure.iterations, rank(ev.C), ev.B.shape[0], notes,
                         start=(system, ev))
