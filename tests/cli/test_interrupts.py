@@ -34,6 +34,7 @@ psutil = pytest.importorskip("psutil")
 
 MODEL = '''
 import os
+import time
 
 from mbcomp import Model
 from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
@@ -48,6 +49,7 @@ def build(k=1.0):
         if log:
             with open(log, "a") as fh:
                 fh.write(f"{os.getpid()} {k!r} {float(t)!r}\\n")
+            time.sleep(float(os.environ.get("MBCOMP_STUDY_PAUSE", "0")))  # see _run_until
         return -0.1 * k * w
 
     def done(phi):  # computed once a run's results are post-processed: how many rows it has
@@ -163,10 +165,12 @@ def _signal(proc, sig):
         proc.send_signal(sig)
 
 
-def _run_until(cmd, log, ready, sig, deadline_s=60):
+def _run_until(cmd, log, ready, sig, deadline_s=60, pause=0.0):
     """Start ``cmd`` in its own session, wait until ``ready(log entries)``, mark the log, send
-    ``sig``; ``(returncode, stdout, stderr, pgid)``."""
-    env = dict(os.environ, MBCOMP_STUDY_LOG=str(log))
+    ``sig``; ``(returncode, stdout, stderr, pgid)``. ``pause`` (s): the model's law sleeps that
+    long per evaluation, so that short runs last long enough for the poll to find them in the
+    state ``ready`` waits for (a loaded machine slows the poll more than the runs)."""
+    env = dict(os.environ, MBCOMP_STUDY_LOG=str(log), MBCOMP_STUDY_PAUSE=repr(pause))
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                             start_new_session=True)
     try:
@@ -204,7 +208,7 @@ def test_an_interrupted_study_writes_exactly_the_finished_rows(model_file, refer
     cmd = [sys.executable, "-m", "mbcomp.cli", "study", str(model_file), "--grid", "k=1:2.5:8",
            *[a for m in METRICS for a in ("--metric", m)], "--backend", "numeric", "--executor", executor,
            "--out", str(out), "-q"] + (["--workers", "2"] if executor == "processes" else [])
-    code, stdout, stderr, left = _run_until(cmd, log, _mid_run, sig)
+    code, stdout, stderr, left = _run_until(cmd, log, _mid_run, sig, pause=5e-4)
     name = signal.Signals(sig).name
     assert code == EXIT[sig], (stdout, stderr)
     assert left == [], f"processes left behind: {left}"

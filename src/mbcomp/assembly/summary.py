@@ -77,7 +77,8 @@ def dof_report(system, init=None):
     >>> d["gruebler"], d["mobility"]
     (1, 1)
     """
-    return _dof_report(observer(system), init, system.constraint_names(all_rows=True))
+    view = observer(system)  # the names are kept on the copy: the caller's system stays as it was
+    return _dof_report(view, init, view.constraint_names(all_rows=True))
 
 
 def _dof_report(view, init, cut_rows):
@@ -153,7 +154,7 @@ def summary(system, init=None):
     why = None
     if init is None:
         init, why = _initialize(view)
-    cut_rows = system.constraint_names(all_rows=True)  # structural: no evaluation on a warm structure
+    cut_rows = view.constraint_names(all_rows=True)  # kept per structure by a compiled evaluator; on the copy
     d = _dof_report(view, init, cut_rows)
     lines = ["mbcomp model summary", "===================="]
     if init is None:
