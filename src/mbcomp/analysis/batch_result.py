@@ -21,7 +21,28 @@ STATUS_OF = {0: "success", 1: "failed", 2: "failed", 3: "budget", 4: "failed", 5
              7: "failed"}
 
 
-class BatchResult:
+class _Columns:
+    """Columns by name (``self._columns``) and ``"time"``, read like a
+    :class:`~mbcomp.simulation.result.Result`; ``_missing(name)`` says what an unknown name lacks."""
+
+    @property
+    def names(self):
+        """Every column's name."""
+        return list(self._columns)
+
+    def __getitem__(self, name):
+        if name == "time":
+            return self.time
+        try:
+            return self._columns[name]
+        except KeyError:
+            raise KeyError(self._missing(name)) from None
+
+    def __contains__(self, name):
+        return name == "time" or name in self._columns
+
+
+class BatchResult(_Columns):
     """Columns of many runs on one output grid.
 
     Attributes
@@ -65,26 +86,13 @@ class BatchResult:
         self.t_reached = np.asarray(t_reached, float)
         self.stats = dict(stats)
 
-    @property
-    def names(self):
-        """Every column's name (each ``(n_runs, n_out)``)."""
-        return list(self._columns)
-
     def __len__(self):
         return len(self.status)
 
-    def __getitem__(self, name):
-        if name == "time":
-            return self.time
-        try:
-            return self._columns[name]
-        except KeyError:
-            close = [n for n in self._columns if str(name).split(".")[0] in n][:8]
-            raise KeyError(f"no column {name!r} in the batch; similar: {', '.join(close) or 'none'} (ask for output "
-                           "columns with batch(..., outputs=[...]))") from None
-
-    def __contains__(self, name):
-        return name == "time" or name in self._columns
+    def _missing(self, name):
+        close = [n for n in self._columns if str(name).split(".")[0] in n][:8]
+        return (f"no column {name!r} in the batch; similar: {', '.join(close) or 'none'} (ask for output "
+                "columns with batch(..., outputs=[...]))")
 
     @property
     def failed(self):
@@ -138,7 +146,7 @@ class RunView:
         return name in self.batch
 
 
-class OneRun:
+class OneRun(_Columns):
     """One run's columns on their own (what ``batch(..., reduce=f)`` hands ``f``), read like a
     :class:`~mbcomp.simulation.result.Result`: ``time``, ``status``, ``message``, ``params``,
     ``run["column"]`` (``(n_out,)``, NaN past where the run ended), ``names``.
@@ -155,17 +163,5 @@ class OneRun:
         self.time, self._columns = time, dict(columns)
         self.status, self.message, self.params = status, message, dict(params)
 
-    @property
-    def names(self):
-        return list(self._columns)
-
-    def __getitem__(self, name):
-        if name == "time":
-            return self.time
-        try:
-            return self._columns[name]
-        except KeyError:
-            raise KeyError(f"no column {name!r} in this run; it has {', '.join(self._columns)}") from None
-
-    def __contains__(self, name):
-        return name == "time" or name in self._columns
+    def _missing(self, name):
+        return f"no column {name!r} in this run; it has {', '.join(self._columns)}"

@@ -173,16 +173,8 @@ static int trial(mbrt_rk_state *S, double *err)
             S->t_fail = S->t + h;
             return rc;
         }
-        /* stiffness estimate (Hairer's dop853): stage 12 is at t+h too, at the
-         * argument still in ys */
-        const double *ys = S->s + 14 * (size_t)n;
-        double num = 0.0, den2 = 0.0;
-        for (int i = 0; i < n; ++i) {
-            double a = S->f1[i] - K[11][i], b = S->y1[i] - ys[i];
-            num += a * a;
-            den2 += b * b;
-        }
-        S->hlamb = (den2 > 0.0) ? fabs(h) * sqrt(num / den2) : 0.0;
+        /* stage 12 is at t+h too, its argument still in the stage buffer */
+        mbrt_rk_stiffness(S, S->s + 14 * (size_t)n, K[11]);
     }
     return 0;
 }

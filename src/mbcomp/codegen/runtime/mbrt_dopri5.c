@@ -93,15 +93,7 @@ static int trial(mbrt_rk_state *S, double *err)
         sum += e * e;
     }
     *err = sqrt(sum / n);
-    /* stiffness estimate (Hairer's dopri5): stage 6 is at t+h too, at the argument
-     * still in ys */
-    double num = 0.0, den2 = 0.0;
-    for (int i = 0; i < n; ++i) {
-        double a = S->f1[i] - K[5][i], b = S->y1[i] - ys[i];
-        num += a * a;
-        den2 += b * b;
-    }
-    S->hlamb = (den2 > 0.0) ? fabs(h) * sqrt(num / den2) : 0.0;
+    mbrt_rk_stiffness(S, ys, K[5]); /* stage 6 is at t+h too, its argument still in ys */
     return 0;
 }
 

@@ -88,6 +88,20 @@ static inline void mbrt_rk_combine(int n, double *out, const double *y, double h
         out[i] = y[i] + h * out[i];
 }
 
+/* Hairer's stiffness estimate of an accepted step, into S->hlamb: |h| |f(t+h, y1) -
+ * f(t+h, Y)| / |y1 - Y| for the method's last stage Y at t+h (argument ys, derivative
+ * k_last); f(t+h, y1) is S->f1.  Estimates |h lambda| of the largest eigenvalue met. */
+static inline void mbrt_rk_stiffness(mbrt_rk_state *S, const double *ys, const double *k_last)
+{
+    double num = 0.0, den = 0.0;
+    for (int i = 0; i < S->n; ++i) {
+        double a = S->f1[i] - k_last[i], b = S->y1[i] - ys[i];
+        num += a * a;
+        den += b * b;
+    }
+    S->hlamb = (den > 0.0) ? fabs(S->h) * sqrt(num / den) : 0.0;
+}
+
 /* The driver: argument checks, starting step, the step-size loop, dense
  * output at t_out and the callbacks.  The public mbrt_dopri5/mbrt_dop853 are
  * thin wrappers around it. */
