@@ -20,6 +20,7 @@ import pathlib
 import numpy as np
 
 from .cpu_clock import cpu
+from .pinocchio_pendulum import available  # the same peer: the same check
 
 MODEL_FILE = pathlib.Path(__file__).resolve().parents[2] / "models" / "spring_chain.py"
 
@@ -28,12 +29,6 @@ __all__ = ["build_model", "build", "available", "start", "state_names", "DEFAULT
 DEFAULTS = dict(N=2, c=1e6, d=1e5, m=1.0, L=0.5, c_tie=100.0, tie_length=0.5, g=9.81)
 
 
-def available():
-    try:
-        import pinocchio  # noqa: F401
-    except ImportError as exc:
-        return f"pinocchio not installed ({exc}); pip install pin"
-    return None
 
 
 def start(N):

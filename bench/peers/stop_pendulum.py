@@ -15,16 +15,11 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from .cpu_clock import cpu
+from .pinocchio_pendulum import available  # the same peer: the same check
 
 __all__ = ["build", "available"]
 
 
-def available():
-    try:
-        import pinocchio  # noqa: F401
-    except ImportError as exc:
-        return f"pinocchio not installed ({exc}); pip install pin"
-    return None
 
 
 class Peer:
