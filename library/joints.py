@@ -15,7 +15,7 @@ from mbcomp import Cylinder, Flange, Joint, Param, Sphere
 from mbcomp.errors import Problem
 from mbcomp.jets import local_point, local_vector, position_constraints, rigid_constraints
 from mbcomp.kinematics import cross, matrix_to_quat, perpendicular_pair, quat_rate, quat_to_matrix, rot_axis
-from mbcomp.modeling.events import AxisRow, Impact, Switch
+from mbcomp.modeling.events import AxisRow, EventRow, Impact, Switch
 from mbcomp.modeling.modes import Modes
 from mbcomp.modeling.free_joint import FreeMotion, quat_increment  # noqa: F401  (FreeMotion: re-exported)
 from mbcomp.modeling.shapes import z_to
@@ -64,11 +64,17 @@ class StopModes(Modes):
         super().__init__("free")
         self.lo, self.hi, self.restitution = float(lo), float(hi), float(restitution)
 
-    def events(self, q, u, mode):
-        """The distances (rad or m) to each limit while free."""
+    linear_events = True
+
+    def event_rows(self, mode):
+        """The distances (rad or m) to each limit while free, as rows of ``s``."""
         if mode != "free":
             return []
-        return [("lo", q[0] - self.lo, -1), ("hi", self.hi - q[0], -1)]
+        return [EventRow("lo", "q", 0, 1.0, self.lo, -1), EventRow("hi", "q", 0, -1.0, self.hi, -1)]
+
+    def events(self, q, u, mode):
+        """The distances (rad or m) to each limit while free (:meth:`event_rows`' values)."""
+        return [(r.name, r.value(q, u), r.direction) for r in self.event_rows(mode)]
 
     def action(self, name, mode):
         """An impact engaging the limit hit; free again at a ``"release"``."""

@@ -54,7 +54,7 @@ from .graph import CodegenError
 from .runtime import RUNTIME_DIR, SOURCES
 from .toolchain import c_compiler
 
-__all__ = ["GLUE", "Integrator", "Mech", "DAlembertProgram", "runtime_objects", "runtime_library",
+__all__ = ["GLUE", "Integrator", "LinearEvents", "Mech", "DAlembertProgram", "runtime_objects", "runtime_library",
            "coordinate_map", "mech_of", "dalembert_program", "DAEProgram", "dae_program", "STATUS", "MECH_STATUS",
            "PROJECT_MAX_ITER"]
 
@@ -81,6 +81,7 @@ typedef struct {
     long nproj;              /* projections made                                  */
     int stiff_steps;         /* > 0: stop with MBRT_STIFF after that many steps held by
                                 stability (the runtime's *_stiff calls); 0: no test   */
+    mbrt_events *events;     /* not NULL: stop with MBRT_EVENT at the first event  */
 } mbcomp_ctx;
 
 static int mbcomp_rhs(void *c, double t, const double *y, double *dy)
@@ -146,17 +147,19 @@ int mbcomp_integrate(int order, mbcomp_ctx *ctx, double t0, const double *y0, do
         return MBRT_BAD_ARGUMENT;
     }
     if (order == 8)
-        return mbrt_dop853_stiff(mbcomp_rhs, mbcomp_on_step, ctx, ctx->n, t0, y0, t_end, rtol, atol, h0, hmax,
-                                 max_steps, t_out, n_out, y_out, n_written, work, stats, ctx->stiff_steps);
-    return mbrt_dopri5_stiff(mbcomp_rhs, mbcomp_on_step, ctx, ctx->n, t0, y0, t_end, rtol, atol, h0, hmax,
-                             max_steps, t_out, n_out, y_out, n_written, work, stats, ctx->stiff_steps);
+        return mbrt_dop853_events(mbcomp_rhs, mbcomp_on_step, ctx, ctx->n, t0, y0, t_end, rtol, atol, h0, hmax,
+                                  max_steps, t_out, n_out, y_out, n_written, work, stats, ctx->stiff_steps,
+                                  ctx->events);
+    return mbrt_dopri5_events(mbcomp_rhs, mbcomp_on_step, ctx, ctx->n, t0, y0, t_end, rtol, atol, h0, hmax,
+                              max_steps, t_out, n_out, y_out, n_written, work, stats, ctx->stiff_steps,
+                              ctx->events);
 }
 """
 
 #: the runtime's status codes (``mbrt.h``)
 STATUS = {0: "reached t_end", 1: "a guard of the program failed", 2: "step size too small",
           3: "too many steps", 4: "non-finite state", 5: "stopped", 6: "bad argument",
-          7: "the problem became stiff"}
+          7: "the problem became stiff", 8: "an event was located"}
 _FLAGS = ["-O2", "-fPIC", "-fno-fast-math", f"-I{RUNTIME_DIR}"]
 
 
@@ -516,7 +519,7 @@ class _Ctx(ctypes.Structure):
                 ("t_last", ctypes.c_double), ("h_last", ctypes.c_double), ("mech", ctypes.c_void_p),
                 ("mech_work", ctypes.c_void_p), ("proj_tol", ctypes.c_double), ("proj_accept", ctypes.c_double),
                 ("proj_iter", ctypes.c_int), ("declined", ctypes.c_int), ("nproj", ctypes.c_long),
-                ("stiff_steps", ctypes.c_int)]
+                ("stiff_steps", ctypes.c_int), ("events", ctypes.c_void_p)]
 
 
 class RuntimeStats(ctypes.Structure):
@@ -526,6 +529,93 @@ class RuntimeStats(ctypes.Structure):
     _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
                 ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
                 ("message", ctypes.c_char * 200)]
+
+
+class _LinearEvents(ctypes.Structure):
+    _fields_ = [("n_ev", ctypes.c_int), ("index", ctypes.c_void_p), ("sign", ctypes.c_void_p),
+                ("at", ctypes.c_void_p)]
+
+
+class _Events(ctypes.Structure):
+    _fields_ = [("g", ctypes.c_void_p), ("gctx", ctypes.c_void_p), ("n_ev", ctypes.c_int),
+                ("direction", ctypes.c_void_p), ("tol", ctypes.c_double), ("fresh", ctypes.c_int),
+                ("work", ctypes.c_void_p), ("y_event", ctypes.c_void_p), ("which", ctypes.c_int),
+                ("t_event", ctypes.c_double), ("nevals", ctypes.c_long)]
+
+
+class LinearEvents:
+    """Event functions ``g_k = sign_k (y[index_k] - at_k)`` watched inside the C loop
+    (``mbrt_events`` / ``mbrt_linear_events`` in ``mbrt.h``): after every accepted step, a
+    sign change in ``direction_k`` is located on the step's continuous extension to ``tol``
+    (s) and the stretch ends there (status 8).
+
+    Parameters
+    ----------
+    integrator : Integrator
+        The engine whose library evaluates them (``mbrt_linear_event_values``).
+    index : sequence of int
+        Entries of the state ``y = [q, u]``.
+    sign, at : sequence of float
+        Per event (``at`` in the entry's unit).
+    direction : sequence of int
+        -1 (falling through zero), +1 (rising) or 0.
+    tol : float
+        Location tolerance (s).
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.codegen import c_compiler, compile_system
+    >>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, 0)))
+    >>> j = m.add("j", Revolute(phi0=0.0, w0=2.0)); rod = m.add("rod", FixedTranslation(r=(1.0, 0, 0)))
+    >>> bob = m.add("bob", PointMass(m=1.0))
+    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+    >>> if c_compiler():
+    ...     eng = compile_system(mbcomp.assemble(m), "c").evaluator.integrator(0.0, 0.0)
+    ...     ev = LinearEvents(eng, index=[0], sign=[-1.0], at=[1.0], direction=[-1], tol=1e-13)
+    ...     out = eng.integrate(8, 0.0, np.array([0.0, 2.0]), 3.0, np.array([3.0]), 1e-10, 1e-12, events=ev)
+    ...     print(out.status, out.which, round(out.t_event, 12))     # phi = 1 rad at 2 rad/s
+    ... else:
+    ...     print(8, 0, 0.5)
+    8 0 0.5
+    """
+
+    def __init__(self, integrator, index, sign, at, direction, tol):
+        n = integrator.n
+        self.index = np.ascontiguousarray(index, dtype=np.intc)
+        self.sign = np.ascontiguousarray(sign, dtype=float)
+        self.at = np.ascontiguousarray(at, dtype=float)
+        self.direction = np.ascontiguousarray(direction, dtype=np.intc)
+        m = len(self.index)
+        if not (m and len(self.sign) == m and len(self.at) == m and len(self.direction) == m):
+            raise ValueError(f"LinearEvents: index, sign, at and direction need one entry per event ({m} indices)")
+        if self.index.min() < 0 or self.index.max() >= n:
+            raise ValueError(f"LinearEvents: the indices {self.index.tolist()} must be state entries 0..{n - 1}")
+        if not np.all(np.isin(self.direction, (-1, 0, 1))) or not np.all(np.isfinite(self.at)):
+            raise ValueError("LinearEvents: directions are -1, 0 or +1 and the values finite")
+        if not tol > 0:
+            raise ValueError(f"LinearEvents: tol={tol!r} must be positive (s)")
+        dll = integrator.bound.code.dll
+        self.lin = _LinearEvents(m, self.index.ctypes.data, self.sign.ctypes.data, self.at.ctypes.data)
+        self.work = np.zeros(int(dll.mbrt_events_work_size(n, m)))
+        self.y_event = np.zeros(n)
+        g = ctypes.cast(dll.mbrt_linear_event_values, ctypes.c_void_p).value
+        self.struct = _Events(g, ctypes.addressof(self.lin), m, self.direction.ctypes.data, float(tol), -1,
+                              self.work.ctypes.data, self.y_event.ctypes.data, -1, 0.0, 0)
+        self.ptr = ctypes.addressof(self.struct)
+
+    def arm(self, fresh=-1, tol=None):
+        """The pointer the engine's context takes, with event ``fresh`` (acted on at the
+        start: found in the first step only when it returns through zero) or -1, and the
+        location tolerance ``tol`` (s; default: as made)."""
+        self.struct.fresh = int(fresh)
+        if tol is not None:
+            if not tol > 0:
+                raise ValueError(f"LinearEvents: tol={tol!r} must be positive (s)")
+            self.struct.tol = float(tol)
+        self.struct.which = -1
+        return self.ptr
 
 
 class Integrator:
@@ -561,6 +651,11 @@ class Integrator:
                         mech.work.ctypes.data if mech is not None else None, tol, accept, PROJECT_MAX_ITER, 0, 0)
         self.stats = RuntimeStats()
 
+    def linear_events(self, index, sign, at, direction, tol):
+        """The :class:`LinearEvents` ``sign_k (y[index_k] - at_k)`` over this engine, for
+        :meth:`integrate`'s ``events``."""
+        return LinearEvents(self, index, sign, at, direction, tol)
+
     @property
     def projects(self):
         """Whether the C loop projects after every accepted step."""
@@ -572,7 +667,8 @@ class Integrator:
             w = self.work[order] = np.zeros(int(self.bound.code.dll.mbcomp_work_size(order, self.n)))
         return w
 
-    def integrate(self, order, t0, y0, t_end, t_out, rtol, atol, h0=0.0, hmax=0.0, max_steps=0, stiff_steps=0):
+    def integrate(self, order, t0, y0, t_end, t_out, rtol, atol, h0=0.0, hmax=0.0, max_steps=0, stiff_steps=0,
+                  events=None, fresh=-1, event_tol=None):
         """Integrate ``[q, u]`` from ``(t0, y0)`` to ``t_end`` by DOPRI5 (``order`` 5) or
         DOP853 (8); ``stiff_steps > 0``: stop with status 7 at the step where Hairer's
         stiffness test (``mbrt.h``, ``mbrt_dop853_stiff``) held for that many steps. Returns a
@@ -581,7 +677,10 @@ class Integrator:
         steps), ``t_last``, ``y_last``, ``h_last`` (the last accepted step, projected),
         ``nfev``, ``naccept``, ``nreject``, ``projections`` and ``declined`` (the
         :data:`MECH_STATUS` of a projection that stopped the stretch at ``t_last`` with
-        ``y_last`` unprojected, status 5; else 0)."""
+        ``y_last`` unprojected, status 5; else 0). With ``events`` (:class:`LinearEvents`;
+        ``fresh`` the one acted on at ``t0``, or -1; ``event_tol`` the location tolerance,
+        s) the stretch ends at the first event located (status 8): ``which``, ``t_event``, ``y_event`` (``which`` -1 otherwise), the
+        outputs at ``t_out <= t_event`` written."""
         y0 = np.ascontiguousarray(y0, float)
         t_out = np.ascontiguousarray(t_out, float)
         atol_v = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, float), (self.n,)))
@@ -589,6 +688,7 @@ class Integrator:
         nw = ctypes.c_int(0)
         st = self.stats
         self.ctx.stiff_steps = int(stiff_steps)
+        self.ctx.events = events.arm(fresh, event_tol) if events is not None else None
         status = self.fn(order, ctypes.byref(self.ctx), ctypes.c_double(t0), y0.ctypes.data, ctypes.c_double(t_end),
                          ctypes.c_double(rtol), atol_v.ctypes.data, ctypes.c_double(h0), ctypes.c_double(hmax),
                          ctypes.c_long(max_steps), t_out.ctypes.data, len(t_out), Y.ctypes.data, ctypes.byref(nw),
@@ -596,7 +696,10 @@ class Integrator:
         return SimpleNamespace(status=int(status), message=st.message.decode(errors="replace"), Y=Y[: nw.value],
                                t_last=self.ctx.t_last, y_last=self.y_last.copy(), h_last=self.ctx.h_last,
                                nfev=int(st.nfev), naccept=int(st.naccept), nreject=int(st.nreject),
-                               projections=int(self.ctx.nproj), declined=int(self.ctx.declined))
+                               projections=int(self.ctx.nproj), declined=int(self.ctx.declined),
+                               which=int(events.struct.which) if events is not None else -1,
+                               t_event=float(events.struct.t_event) if events is not None else float("nan"),
+                               y_event=events.y_event.copy() if events is not None else None)
 
 
 def integrate_signature(fn):
@@ -608,3 +711,5 @@ def integrate_signature(fn):
                                     ctypes.c_void_p, ctypes.c_void_p]
     fn.mbcomp_work_size.restype = ctypes.c_size_t
     fn.mbcomp_work_size.argtypes = [ctypes.c_int, ctypes.c_int]
+    fn.mbrt_events_work_size.restype = ctypes.c_size_t
+    fn.mbrt_events_work_size.argtypes = [ctypes.c_int, ctypes.c_int]

@@ -63,7 +63,7 @@ from .stops import consistent, impact_speeds, row_push, row_values
 from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, tangent_rows, with_slip_friction
 from .friction import row_events
 
-__all__ = ["EventRecord", "Events", "Cut", "Outcome", "stepwise", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
+__all__ = ["EventRecord", "Events", "Cut", "Outcome", "stepwise", "watching", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
            "SPIN_TURNS", "SPIN_SPAN"]
 
 #: an impact whose rebound rises less than this times ``atol`` (m or rad) settles engaged
@@ -85,6 +85,27 @@ def stepwise(stepper_class):
     def __init__(self, *args, **kw):
         stepper_class.__init__(self, *args, **kw)
         self.engine = None
+
+    return type(stepper_class.__name__, (stepper_class,), {"__init__": __init__, "__doc__": stepper_class.__doc__})
+
+
+def watching(stepper_class, events):
+    """``stepper_class``, or for a C integrator (:class:`~mbcomp.solvers.compiled_rk.CompiledRK`)
+    one whose stretches watch the events in C (:meth:`Events.c_watch`: every event function
+    of the segment declared affine, ``Modes.linear_events``) -- or, where they cannot be
+    (a user's function, a push, a slide, no compiled engine), steps scipy's method of the
+    same order one step at a time as :func:`stepwise` does. Each stepper is made at the start
+    of a segment, so it watches that segment's events."""
+    if not issubclass(stepper_class, CompiledRK):
+        return stepper_class
+
+    def __init__(self, *args, **kw):
+        stepper_class.__init__(self, *args, **kw)
+        spec = events.c_watch() if self.engine is not None else None
+        if spec is None:
+            self.engine = None
+        else:
+            self.watch(*spec)
 
     return type(stepper_class.__name__, (stepper_class,), {"__init__": __init__, "__doc__": stepper_class.__doc__})
 
@@ -120,6 +141,7 @@ class Events(SlideEvents):
         self._systems, self._hits = {}, {}
         self._g0 = None
         self._fresh = self._last = None  # the event just handled (its function starts at zero)
+        self._c_keys = []  # the keys of the events the C loop watches (c_watch)
         self.stats = dict(events=0, event_evaluations=0, mode_changes=0)
         self.slip_dirs = {}  # {sliding contact: the unit direction (tangent coordinates) its slide started with}
         self.segments = []  # [SegmentStart]: the run's start and every event's next segment (the columns)
@@ -162,6 +184,31 @@ class Events(SlideEvents):
             if self.user_left[i] != 0:
                 out[("user", i, getattr(f, "__name__", f"event{i}"))] = float(getattr(f, "direction", 0.0))
         return out
+
+    def c_watch(self):
+        """The current segment's event functions as the C loop watches them --
+        ``(index, sign, at, direction, fresh)`` for
+        :meth:`~mbcomp.solvers.compiled_rk.CompiledRK.watch`, ``y = [q, u]`` -- or None when
+        one of them is not an :class:`~mbcomp.modeling.events.EventRow` (a user's function,
+        a mode that does not declare ``linear_events``, an engaged row's push, a slide)."""
+        if any(left != 0 for left in self.user_left):
+            return None
+        sysm, nq = self.system, self.system.nq
+        keys, index, sign, at, direction = [], [], [], [], []
+        for name, mode in self.modes.items():
+            declared = sysm.edge(name).comp.modes(sysm.P[name])
+            if not declared.linear_events or declared.rows(mode) or declared.slips:
+                return None
+            e = sysm.edge(name)
+            for row in declared.event_rows(mode):
+                keys.append(("joint", name, row.name))
+                index.append(e.q.start + row.index if row.of == "q" else nq + e.u.start + row.index)
+                sign.append(row.sign)
+                at.append(row.at)
+                direction.append(row.direction)
+        self._c_keys = keys
+        fresh = keys.index(self._fresh) if self._fresh in keys else -1
+        return index, sign, at, direction, fresh
 
     def values(self, t, qu):
         """``{key: value}`` of every event function at ``(t, [q, u])``."""
@@ -211,6 +258,8 @@ class Events(SlideEvents):
         first that acts, a :class:`Cut` (the step's other hooks are then not due; the driver
         keeps the outputs up to it and calls :meth:`act`), or None. Events that do not act (a
         user's non-terminal event, an impact not closing) are recorded on the way."""
+        if getattr(run.stepper, "watched_step", False):  # the C loop watched this stretch
+            return self._located(run)
         dense_y = run.step_dense()
         full = run.form.full
 
@@ -218,6 +267,8 @@ class Events(SlideEvents):
             return full(tt, dense_y(tt))
 
         t0, t1 = run.t_prev, run.stepper.t
+        if self._g0 is None:  # the steps before were watched in C
+            self._g0 = self.values(t0, qu(t0))
         g1 = self.values(t1, full(t1, run.stepper.y))
         dirs = self._functions()
         hits = []
@@ -238,6 +289,21 @@ class Events(SlideEvents):
         self._slide_work(run, qu, t1)
         self._g0 = g1
         return None
+
+    def _located(self, run):
+        """:meth:`check` of a stretch the C loop watched: the event it located (the stretch
+        ends there) decided as in Python; one that does not act lets the stepper's next step
+        go past it on the Python path."""
+        self._fresh, self._g0 = None, None
+        hit = run.stepper.hit
+        if hit is None:
+            return None
+        which, t_e = hit
+        qu = run.dense()
+        cut = self._decide(self._c_keys[which], t_e, qu)
+        if cut is None:
+            run.stepper.step_python_once()
+        return cut
 
     def _locate(self, key, qu, t0, t1, g0, g1):
         """The root of event function ``key`` in ``[t0, t1]`` (s) on the step's dense output

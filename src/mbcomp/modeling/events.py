@@ -32,7 +32,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass
 
-__all__ = ["Impact", "Switch", "End", "AxisRow", "ContactRow", "StickRow", "SlipSpeed", "ACTIONS"]
+__all__ = ["Impact", "Switch", "End", "AxisRow", "ContactRow", "StickRow", "SlipSpeed", "EventRow", "ACTIONS"]
 
 
 @dataclass(frozen=True)
@@ -113,6 +113,56 @@ class AxisRow:
     def value(self, s):
         """``sign (s - at)`` (rad or m)."""
         return self.sign * (s - self.at)
+
+
+@dataclass(frozen=True)
+class EventRow:
+    """An event function affine in one of the joint's own coordinates or speeds:
+    ``sign (x[index] - at)``, ``x`` the joint's coordinates (``of="q"``) or speeds
+    (``of="u"``). A :class:`~mbcomp.modeling.modes.Modes` that declares ``linear_events``
+    gives its events as these rows (:meth:`~mbcomp.modeling.modes.Modes.event_rows`); the
+    run then watches them inside the C integrator's loop, where the Python functions cannot
+    be called.
+
+    Parameters
+    ----------
+    name : str
+        The event's name (as in :meth:`~mbcomp.modeling.modes.Modes.events`).
+    of : {"q", "u"}
+        Coordinates or speeds of the joint.
+    index : int
+        Which of them (0 for a 1-DOF joint).
+    sign : float
+        +1 or -1.
+    at : float
+        The value where the event fires (rad, m, rad/s or m/s).
+    direction : int
+        scipy's convention: -1 fires when the value falls through zero, +1 when it rises, 0 either.
+
+    Examples
+    --------
+    >>> EventRow("hi", "q", 0, -1.0, 0.5, -1).value([0.2], [1.0])   # 0.3 rad below the upper stop
+    0.3
+    """
+
+    name: str
+    of: str
+    index: int
+    sign: float
+    at: float
+    direction: int
+
+    def __post_init__(self):
+        if self.of not in ("q", "u"):
+            raise ValueError(f"EventRow {self.name!r}: of={self.of!r} -> fix: 'q' (the joint's coordinates) or 'u' "
+                             "(its speeds)")
+        if self.direction not in (-1, 0, 1):
+            raise ValueError(f"EventRow {self.name!r}: direction={self.direction!r} -> fix: -1, 0 or +1")
+
+    def value(self, q, u):
+        """``sign (x[index] - at)`` of the joint's coordinates ``q`` / speeds ``u``."""
+        x = q if self.of == "q" else u
+        return self.sign * (float(x[self.index]) - self.at)
 
 
 @dataclass(frozen=True)

@@ -16,10 +16,12 @@ the run (:mod:`mbcomp.hybrid`) asks that object, and nothing else, about:
   ``ContactRow``), whether the joint's own constraint rows are in the system in a mode
   (:meth:`Modes.holds_rows`), and the mode to *rest* in when an event chatters
   (:meth:`Modes.rest`);
-* two declared capabilities, plain attributes set by the component, never inferred:
+* declared capabilities, plain attributes set by the component, never inferred:
   :attr:`Modes.has_force` (the joint applies a force on its own speed in some mode:
-  :meth:`Modes.force`) and :attr:`Modes.slips` (a contact that slides with Coulomb friction
-  in some mode: :meth:`Modes.slip_friction`).
+  :meth:`Modes.force`), :attr:`Modes.slips` (a contact that slides with Coulomb friction
+  in some mode: :meth:`Modes.slip_friction`) and :attr:`Modes.linear_events` (every event
+  is an :class:`~mbcomp.modeling.events.EventRow`, affine in one coordinate or speed:
+  :meth:`Modes.event_rows`; the C integrators then watch them in their loop).
 
 The parameters are bound when the object is made (``modes(p)``), so none of its methods
 takes them.
@@ -50,6 +52,10 @@ class Modes:
     slips : bool
         Class attribute, declared: True when :meth:`slip_friction` gives a coefficient in some
         mode (a contact sliding with Coulomb friction). Default False: never asked.
+    linear_events : bool
+        Class attribute, declared: True when every event of every mode is an
+        :class:`~mbcomp.modeling.events.EventRow` (:meth:`event_rows`), and :meth:`events`
+        gives exactly their values. Default False: the run calls :meth:`events` (in Python).
 
     Examples
     --------
@@ -65,8 +71,8 @@ class Modes:
     >>> m = Latch("open")
     >>> m.start, m.events([0.25], [2.0], "open"), m.action("latched", "open")
     ('open', [('latched', 0.75, -1)], End(reason='the door latched'))
-    >>> m.rows("open"), m.holds_rows("open"), m.has_force, m.slips
-    ([], True, False, False)
+    >>> m.rows("open"), m.holds_rows("open"), m.has_force, m.slips, m.linear_events
+    ([], True, False, False, False)
 
     A joint declares it from its parameters; the run then ends there:
 
@@ -88,6 +94,7 @@ class Modes:
 
     has_force = False
     slips = False
+    linear_events = False
 
     def __init__(self, start):
         if not isinstance(start, str):
@@ -114,6 +121,11 @@ class Modes:
             the run evaluates; ``direction`` scipy's convention (-1 fires when the value falls
             through zero, +1 when it rises, 0 either way). Default: none.
         """
+        return []
+
+    def event_rows(self, mode):
+        """The events of ``mode`` as :class:`~mbcomp.modeling.events.EventRow` (asked only
+        when :attr:`linear_events`; :meth:`events` must give their values). Default: none."""
         return []
 
     def action(self, name, mode):

@@ -39,7 +39,7 @@ import numpy as np
 from ..errors import SimulationError, SimulationInterrupted
 from ..formulations import FORMULATIONS, build
 from ..hybrid.contacts import initialize_in_modes
-from ..hybrid.events import Events, stepwise
+from ..hybrid.events import Events, stepwise, watching
 from ..modeling.inputs import check_names, input_signals, signal_of
 from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
@@ -243,7 +243,7 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
         form, y0 = watcher.start(form, y0, t_start, init.q, init.u)
     after = bool(sensitivities) and Sensitivities.after_the_run(form, watcher, stepper)
     stepped = bool(sensitivities) and not after  # a step's dense output carries them: one step at a time
-    run = Run(form, stepwise(stepper) if watcher or stepped else stepper,
+    run = Run(form, stepwise(stepper) if stepped else watching(stepper, watcher) if watcher else stepper,
               output_times(t_start, t_end, n_out, dt_out), y0, rtol=rtol, atol=atol, max_step=max_step, h=h)
     sens = None
     if sensitivities:

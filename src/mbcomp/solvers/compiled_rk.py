@@ -40,6 +40,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import StepFailure, Stepper
+from .locate import time_tolerance
 
 __all__ = ["CompiledRK", "COMPILED_STEPPERS", "STIFF_METHOD", "STIFF_ONE_STEP", "STIFF_STEPS"]
 
@@ -95,19 +96,49 @@ class CompiledRK(Stepper):
         del self.stats["njev"], self.stats["nlu"]
         self._outs = (np.zeros(0), np.zeros((0, self.y.size)))
         self._y_old = self.y
+        self._events, self._fresh_event, self._watching = None, -1, False
+        #: ``(which, t)`` of the event that ended the last stretch (:meth:`watch`), else None
+        self.hit = None
+        #: whether the last step was a C stretch watching events (:meth:`watch`)
+        self.watched_step = False
+        self.stats["event_stretches"] = 0
+
+    def watch(self, index, sign, at, direction, fresh=-1):
+        """Watch event functions ``sign_k (y[index_k] - at_k)`` (falling through zero for
+        ``direction_k`` -1, rising for +1, either for 0) inside the C loop: a stretch ends at
+        the first one located on a step's dense output (``time_tolerance``), its outputs
+        before it kept, its state the stepper's, :attr:`hit` = ``(k, t)``. ``fresh``: the
+        event acted on at the start (found in the first step only when it returns through
+        zero), or -1. Needs the engine (``self.engine`` not None); no events: the plain C
+        stretches."""
+        if self.engine is None:
+            raise ValueError("events can be watched in C only over the compiled engine (compiled_integrator)")
+        self._watching = True
+        if len(index):
+            self._events = self.engine.linear_events(index, sign, at, direction, time_tolerance(self.t_bound, self.rtol))
+            self._fresh_event = int(fresh)
+
+    def step_python_once(self):
+        """Take the next step on the Python path (scipy's method of the same order): after an
+        event located in C that does not act, the step goes on past it."""
+        self._python_until = max(self._python_until, np.nextafter(self.t, np.inf))
 
     def _stretch(self):
         k = int(np.searchsorted(self.t_eval, self.t, side="right"))
         return self.t_eval[k: k + self.chunk]
 
     def _step(self):
+        self.hit, self.watched_step = None, False
         if self.engine is None or self.t < self._python_until:
             return self._python_step()
         self._solver = None
         outs = self._stretch()
+        fresh, self._fresh_event = self._fresh_event, -1
+        ev = self._events
         r = self.engine.integrate(self.order, self.t, self.y, outs[-1], outs, self.rtol, self.atol, h0=self.h,
                                   hmax=self.max_step if np.isfinite(self.max_step) else 0.0,
-                                  stiff_steps=self.stiff_steps)
+                                  stiff_steps=self.stiff_steps, events=ev, fresh=fresh,
+                                  event_tol=None if ev is None else time_tolerance(outs[-1], self.rtol))
         self.stats["stretches"] += 1
         self.stats["nfev"] += r.nfev
         if hasattr(self.prob, "nfev"):  # the engine's calls are the formulation's evaluations
@@ -121,7 +152,8 @@ class CompiledRK(Stepper):
         # the C call's own step cap (status 3, MAX_STEPS) is no failure: the stretch ends at its
         # last accepted step and the next call goes on (a 1e9 s run's 2e6 s output intervals)
         capped = r.status == 3 and r.t_last > self.t
-        if r.status not in (0, 1) and not declined and not capped and not stiff:
+        event = r.status == 8
+        if r.status not in (0, 1, 8) and not declined and not capped and not stiff:
             self._reached = max(self._reached, float(r.t_last))
             raise StepFailure(f"the integrator {type(self).__name__} failed at t={r.t_last:g}: {r.message}")
         ts, Ys = list(outs[: len(r.Y)]), list(r.Y)
@@ -145,6 +177,14 @@ class CompiledRK(Stepper):
                 Ys.append(r.y_last)
         elif capped:
             ts, Ys = ts + [r.t_last], Ys + [r.y_last]
+        elif event:  # the stretch ends at the event: its state is the stepper's
+            self.hit = (r.which, float(r.t_event))
+            self.stats["event_stretches"] += 1
+            if ts and ts[-1] >= r.t_event:
+                Ys[-1] = r.y_event
+            else:
+                ts, Ys = ts + [r.t_event], Ys + [r.y_event]
+        self.watched_step = self._watching
         self._y_old, self.t_old = self.y, self.t
         self._outs = (np.array(ts), np.array(Ys))
         self.t, self.y = float(ts[-1]), np.array(Ys[-1])

@@ -13,6 +13,13 @@ generated model code is compiled together with:
     with PI ("Lund") stabilisation and starting-step guess, dense output at
     a caller-given time grid, per-step callback (for projections), argument
     checks and failure reporting.
+``mbrt_events.c``
+    Events watched by the driver: event functions evaluated after every
+    accepted step, a sign change located on the step's continuous extension
+    (Brent's method; a return through zero by golden section first), the
+    integration ended at the earliest (``MBRT_EVENT``); event functions
+    affine in one state entry each (``mbrt_linear_events``: a joint's
+    coordinate against its stops).
 ``mbrt_dopri5.c``, ``mbrt_dop853.c``
     The Dormand--Prince 5(4) pair with 4th-order dense output and the
     8(5,3) pair with 7th-order dense output.
@@ -45,7 +52,7 @@ Examples
 --------
 >>> from mbcomp.codegen.runtime import SOURCES, RUNTIME_DIR
 >>> sorted(p.name for p in SOURCES)
-['mbrt_dop853.c', 'mbrt_dopri5.c', 'mbrt_linalg.c', 'mbrt_mech.c', 'mbrt_rk.c']
+['mbrt_dop853.c', 'mbrt_dopri5.c', 'mbrt_events.c', 'mbrt_linalg.c', 'mbrt_mech.c', 'mbrt_rk.c']
 >>> (RUNTIME_DIR / "mbrt.h").is_file()
 True
 """

@@ -94,7 +94,8 @@ enum {
     MBRT_NONFINITE = 4,       /* state or derivative became NaN/Inf         */
     MBRT_STOPPED = 5,         /* step callback returned nonzero             */
     MBRT_BAD_ARGUMENT = 6,    /* invalid input                              */
-    MBRT_STIFF = 7            /* the stiffness test fired (the *_stiff calls) */
+    MBRT_STIFF = 7,           /* the stiffness test fired (the *_stiff calls) */
+    MBRT_EVENT = 8            /* an event was located (the *_events calls)  */
 };
 
 /* Number of doubles the work buffer of mbrt_dopri5 must hold (0 if n <= 0). */
@@ -161,6 +162,68 @@ int mbrt_dopri5_stiff(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
                       long max_steps, const double *t_out, int n_out,
                       double *y_out, int *n_written,
                       double *work, mbrt_stats *stats, int stiff_steps);
+
+/* ------------------------------------------------------------------ */
+/* Events located on the dense output (mbrt_events.c)                  */
+/* ------------------------------------------------------------------ */
+
+/* Event functions: writes the n_ev values g[0..n_ev-1] at (t, y).  Returns 0,
+ * or nonzero to stop the integration (status MBRT_RHS_FAILED). */
+typedef int (*mbrt_event_fn)(void *ectx, double t, const double *y, double *g);
+
+/* What the *_events integrators watch.  After every accepted step each event
+ * function is evaluated at the step's end; a sign change in its direction
+ * (-1: from >= 0 to < 0, +1: from <= 0 to > 0, 0: either) is located on the
+ * step's continuous extension by Brent's method to tol (s).  The event `fresh`
+ * (acted on at t0: its value starts at zero) is found in the first step only
+ * when it is back on the far side of zero at the step's end: the root between
+ * its extreme on the leaving side (golden section) and the step's end, or t0
+ * when it never left.  The earliest event of the step ends the integration
+ * there with status MBRT_EVENT: the outputs at t_out <= t_event are written
+ * (from the continuous extension), `which`, `t_event` and `y_event` (n) are
+ * set, stats->t = t_event; the step callback is not called for that step. */
+typedef struct {
+    mbrt_event_fn g;        /* the event values                                   */
+    void *gctx;             /* g's context                                         */
+    int n_ev;               /* number of event functions (>= 1)                   */
+    const int *direction;   /* n_ev directions: -1, 0, +1                          */
+    double tol;             /* location tolerance (s), > 0                        */
+    int fresh;              /* the event acted on at t0, or -1                     */
+    double *work;           /* mbrt_events_work_size(n, n_ev) doubles              */
+    double *y_event;        /* n doubles: the state at the event (written)         */
+    int which;              /* the event located, -1 if none (written)             */
+    double t_event;         /* its time (written)                                  */
+    long nevals;            /* event-function evaluations (written)                */
+} mbrt_events;
+
+/* Doubles of work an mbrt_events needs for n equations and n_ev events. */
+size_t mbrt_events_work_size(int n, int n_ev);
+
+/* Event functions affine in one state entry each: g[k] = sign[k] (y[index[k]]
+ * - at[k]) (a joint's own coordinate or speed against a limit).  Its context
+ * is an mbrt_linear_events. */
+typedef struct {
+    int n_ev;
+    const int *index;       /* entries of y, 0 <= index[k] < n                     */
+    const double *sign, *at;
+} mbrt_linear_events;
+
+int mbrt_linear_event_values(void *ectx, double t, const double *y, double *g);
+
+/* As mbrt_dop853_stiff / mbrt_dopri5_stiff, watching the events ev (NULL:
+ * none). */
+int mbrt_dop853_events(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
+                       double t0, const double *y0, double t_end,
+                       double rtol, const double *atol, double h0, double hmax,
+                       long max_steps, const double *t_out, int n_out,
+                       double *y_out, int *n_written,
+                       double *work, mbrt_stats *stats, int stiff_steps, mbrt_events *ev);
+int mbrt_dopri5_events(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
+                       double t0, const double *y0, double t_end,
+                       double rtol, const double *atol, double h0, double hmax,
+                       long max_steps, const double *t_out, int n_out,
+                       double *y_out, int *n_written,
+                       double *work, mbrt_stats *stats, int stiff_steps, mbrt_events *ev);
 
 /* ------------------------------------------------------------------ */
 /* Constrained mechanics over an evaluation program (mbrt_mech.c)      */

@@ -162,7 +162,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
                       double rtol, const double *atol, double h0, double hmax,
                       long max_steps, const double *t_out, int n_out,
                       double *y_out, int *n_written, double *work, mbrt_stats *stats,
-                      int stiff_steps)
+                      int stiff_steps, mbrt_events *ev)
 {
     mbrt_stats local;
     mbrt_stats *st = stats ? stats : &local;
@@ -175,6 +175,11 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
     if (check_args(f, n, t0, y0, t_end, rtol, atol, h0, hmax, max_steps, t_out, n_out, y_out,
                    work, st))
         return st->status;
+    if (ev != NULL && (ev->g == NULL || ev->n_ev < 1 || ev->direction == NULL || ev->work == NULL ||
+                       ev->y_event == NULL || !(ev->tol > 0.0) || ev->fresh >= ev->n_ev))
+        return finish(st, MBRT_BAD_ARGUMENT, t0, "%s: the events are incomplete (a function, n_ev >= 1, "
+                      "directions, work, y_event, tol > 0 and fresh < n_ev are needed).", M->name);
+    int fresh = ev != NULL ? ev->fresh : -1;
 
     mbrt_rk_state S;
     S.f = f;
@@ -213,6 +218,13 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
     }
 
     int rc;
+    if (ev != NULL) {
+        rc = mbrt_events_begin(ev, t0, S.y);
+        if (rc != 0) {
+            finish(st, MBRT_RHS_FAILED, t0, "%s: the event function returned %d at t=%.17g.", M->name, rc, t0);
+            goto done;
+        }
+    }
     S.nfev++;
     rc = f(ctx, t0, S.y, S.f0);
     if (rc != 0) {
@@ -299,11 +311,30 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
         double told = t;
         t = last ? t_end : t + h;
 
-        /* outputs in (told, t] from the continuous extension of this step */
-        int prepared = 0;
-        while (iout < n_out && t_out[iout] <= t) {
+        /* the events of this step: the earliest ends the integration there */
+        int prepared = 0, hit = 0;
+        double t_stop = t;
+        if (ev != NULL) {
+            S.t = told;
+            hit = mbrt_events_step(M, &S, ev, t, &prepared, &fresh);
+            if (hit == MBRT_EVENTS_G_FAILED) {
+                finish(st, MBRT_RHS_FAILED, told, "%s: an event function failed (a nonzero return or a "
+                       "non-finite value) in the step from t=%.17g.", M->name, told);
+                goto done;
+            }
+            if (hit == MBRT_EVENTS_RHS_FAILED) {
+                finish(st, MBRT_RHS_FAILED, told, "%s: rhs failed at t=%.17g (dense output of the step from "
+                       "t=%.17g).", M->name, S.t_fail, told);
+                goto done;
+            }
+            if (hit)
+                t_stop = ev->t_event;
+        }
+
+        /* outputs in (told, t_stop] from the continuous extension of this step */
+        while (iout < n_out && t_out[iout] <= t_stop) {
             double *row = y_out + (size_t)iout * (size_t)n;
-            if (t_out[iout] == t) {
+            if (t_out[iout] == t && !hit) {
                 memcpy(row, S.y1, nb);
             } else {
                 if (!prepared) {
@@ -319,6 +350,10 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
                 M->dense_eval(&S, (t_out[iout] - told) / h, row);
             }
             iout++;
+        }
+        if (hit) {
+            finish(st, MBRT_EVENT, t_stop, "%s: event %d at t=%.17g.", M->name, ev->which, t_stop);
+            goto done;
         }
 
         memcpy(S.y, S.y1, nb);

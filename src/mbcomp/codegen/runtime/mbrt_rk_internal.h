@@ -110,7 +110,24 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
                       double rtol, const double *atol, double h0, double hmax,
                       long max_steps, const double *t_out, int n_out,
                       double *y_out, int *n_written, double *work, mbrt_stats *stats,
-                      int stiff_steps);
+                      int stiff_steps, mbrt_events *ev);
+
+/* The events of an accepted step from S->t to t_new (S->y, S->f0 the step's
+ * start, S->y1, S->f1 its end; mbrt.h, mbrt_events): g at the step's end,
+ * then the earliest crossing located on the continuous extension (built here
+ * if *prepared is 0, which is then set).  *fresh is the event acted on at the
+ * run's start (checked in the first step only; set to -1).  Returns 1 with
+ * ev->which, t_event, y_event set; 0 (no event: ev's start values become the
+ * step's end values); MBRT_EVENTS_G_FAILED (an event function returned nonzero
+ * or a value that is not finite) or MBRT_EVENTS_RHS_FAILED (the rhs failed in
+ * the continuous extension, S->t_fail its time). */
+enum { MBRT_EVENTS_G_FAILED = -1, MBRT_EVENTS_RHS_FAILED = -2 };
+int mbrt_events_step(const mbrt_rk_method *M, mbrt_rk_state *S, mbrt_events *ev, double t_new,
+                     int *prepared, int *fresh);
+
+/* Evaluates the events at the start (t0, y0) into their start values; 0 or
+ * the event function's code. */
+int mbrt_events_begin(mbrt_events *ev, double t0, const double *y0);
 
 /* Doubles of work needed by method M for n equations (0 if n <= 0). */
 size_t mbrt_rk_work_size(const mbrt_rk_method *M, int n);
