@@ -231,9 +231,24 @@ class RowsInForce:
 def rows_in_force(system, active):
     """The :class:`RowsInForce` of the active set ``active`` (``{joint: mode}``) on ``system``:
     the one description of what is closed, open, sticking and sliding that the system stepped,
-    the initialization, the impacts and the columns are made from."""
-    return RowsInForce(tuple(open_joints(system, active)), tuple(slipping_joints(system, active)),
-                       tuple(mode_rows(system, active)), tuple(mode_forces(system, active)))
+    the initialization, the impacts and the columns are made from. One pass over the joints,
+    each joint's ``modes(p)`` asked once: what :func:`open_joints`, :func:`slipping_joints`,
+    :func:`mode_rows` and :func:`mode_forces` give, in their order (by joint name)."""
+    opened, sliding, held, forces = [], [], [], []
+    for name, mode in sorted(active.items()):
+        e = system.edge(name)
+        declared = e.comp.modes(system.P[name])
+        if not declared.holds_rows(mode):
+            opened.append(name)
+        if declared.slips and declared.slip_friction(mode) is not None:
+            sliding.append(name)
+        for row in declared.rows(mode):
+            if not isinstance(row, ContactRow):  # a contact's rows are its own: see open_joints
+                held.append((name, row, *_axis_index(system, name)))
+        value = declared.force(mode) if declared.has_force else 0.0
+        if value:
+            forces.append((e.u.start, float(value)))
+    return RowsInForce(tuple(opened), tuple(sliding), tuple(held), tuple(forces))
 
 
 def system_in_force(system, rows, held=True):

@@ -34,7 +34,7 @@ from ..assembly.kkt import accelerations
 from .active import open_joints, rows_in_force, start_modes, system_in_force, without_rows
 
 __all__ = ["contact_rows", "contact_impact", "initialize_in_modes", "event_value",
-           "contact_pushes", "tangent_force", "zero_open", "touching_at_start"]
+           "contact_pushes", "tangent_force", "zero_open", "open_force_columns", "touching_at_start"]
 
 
 def contact_rows(system, name, t, q, u, row="normal", jets=None):
@@ -161,17 +161,28 @@ def initialize_in_modes(system, t0):
 
 
 def zero_open(series, system, names, k, units=None):
-    """Set the force columns (N or N m) of the open contacts ``names`` to 0 at output ``k``."""
+    """Set the force columns (N or N m) of the open contacts ``names`` to 0 at output ``k``
+    (an index, or an array of them)."""
+    for col in open_force_columns(series, system, names, units):
+        series[col][k] = 0.0
+
+
+def open_force_columns(series, system, names, units=None):
+    """The columns of ``series`` that are force columns (N or N m) of the open contacts
+    ``names`` (``units``: ``column_units(system)``, made when not given): what
+    :func:`zero_open` sets to 0."""
     if not names:
-        return
+        return []
     if units is None:
         from ..assembly.column_units import column_units
 
         units = column_units(system)
+    out = []
     for col in series:
         own = [col[len(n) + 1:] for n in names if col.startswith(n + ".")]
         if own and (units.get(col) in ("N", "N m") or own[0] == "N" or own[0].startswith(("F_", "f.", "tau."))):
-            series[col][k] = 0.0
+            out.append(col)
+    return out
 
 
 def touching_at_start(system, modes, t, q, u, tol):

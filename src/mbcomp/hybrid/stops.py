@@ -102,9 +102,8 @@ def changes_dynamics(system, modes):
     (a slipping friction's) the assembled system lacks: their columns (the speeds' rates, the
     reactions and drive efforts carrying them) are solved again over the mode's system
     (:func:`engaged_values`)."""
-    return bool(mode_rows(system, modes)) or any(
-        system.edge(n).comp.modes(system.P[n]).has_force and system.edge(n).comp.modes(system.P[n]).force(m)
-        for n, m in modes.items())
+    in_force = rows_in_force(system, modes)
+    return bool(in_force.held or in_force.forces)
 
 
 def _stop_rows(system, modes):
@@ -113,21 +112,25 @@ def _stop_rows(system, modes):
     return [r for r in mode_rows(system, modes) if not _is_stick(r[1])]
 
 
-def engaged_values(system, sysm, modes, t, q, u):
+def engaged_values(system, sysm, modes, t, q, u, *, in_force=None, base=None):
     """``(columns, {joint: push})`` at ``(t, q, u)`` in the active set ``modes`` whose rows
     hold or forces act (:func:`changes_dynamics`): the speeds' rates and multipliers of the
     mode's system ``sysm`` (index-1 solve without stabilization), every column written again
     from them over the system without the stops' rows (its reactions, by the backward pass,
     then carry a stop's force or torque: it acts across the joint), and each engaged stop's
     push along its axis (N or N m, minus its row's multiplier, positive pushing the joint away
-    from the limit into the allowed range)."""
+    from the limit into the allowed range).
+
+    ``in_force`` (``rows_in_force(system, modes)``) and ``base`` (``system_in_force(system,
+    in_force, held=False)``) may be passed in, made once for many outputs of one segment."""
     from types import SimpleNamespace
 
     from ..assembly.outputs import result_columns
 
     # a sliding contact's rolling rows are out here too (its friction is then in no reaction)
-    in_force = rows_in_force(system, modes)
-    base, rows = system_in_force(system, in_force, held=False), list(in_force.held)
+    in_force = rows_in_force(system, modes) if in_force is None else in_force
+    base = system_in_force(system, in_force, held=False) if base is None else base
+    rows = list(in_force.held)
     ev = sysm.evaluate(t, q, u)
     ud, lam = accelerations(ev)
     first = ev.Phi.size - len(rows)  # the mode's rows follow the holonomic rows

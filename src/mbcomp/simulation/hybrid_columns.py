@@ -17,17 +17,17 @@ import numpy as np
 
 from ..assembly.column_units import column_units
 from ..assembly.outputs import output_values
-from ..hybrid.active import open_joints, rows_in_force, segment_at, without_rows
-from ..hybrid.contacts import zero_open
+from ..hybrid.active import rows_in_force, segment_at, system_in_force, without_rows
+from ..hybrid.contacts import open_force_columns
 from ..hybrid.friction import friction_columns
-from ..hybrid.stops import changes_dynamics, engaged_values, stop_joints, stop_units
+from ..hybrid.stops import engaged_values, stop_joints, stop_units
 from ..hybrid.slip import frictional_contacts, slip_dissipation, slip_state, sliding_values, slipping_joints
 from .accuracy import balance_alarm, between_events, energy_alarm
 
 __all__ = ["segment_columns", "finish"]
 
 
-def segment_columns(series, system, segments, t, Y, system_now):  # long: one pass, each segment kind a few lines
+def segment_columns(series, system, segments, t, Y, system_now):
     """Correct the result's ``series`` (``{column: array}``, over the assembled ``system``) at
     the output times ``t`` (s; ``Y`` their states ``[q, u]``) whose segment's rows in force
     differ, and add the hybrid run's own columns; returns ``{column: unit}`` of the added ones.
@@ -58,38 +58,59 @@ def segment_columns(series, system, segments, t, Y, system_now):  # long: one pa
     >>> float(r["s.stop"][0]), round(float(r["s.stop"][-1]), 6), r.units["s.stop"]
     (0.0, 19.62, 'N')
     """
-    nq = system.nq
     at = segment_at([seg.t for seg in segments], t)
     stops, cones = stop_joints(system, segments), frictional_contacts(system, segments)
     for n in stops:
         series[f"{n}.stop"] = np.zeros(len(t))
     for n in cones:
         series[f"{n}.sticking"], series[f"{n}.slip"] = np.zeros(len(t)), np.zeros(len(t))
-    units, opened = column_units(system), {}
+    made = {}
+    for i in np.unique(at):  # each segment's rows in force made once, for all its outputs
+        _in_segment(series, system, segments[i], t, Y, np.flatnonzero(at == i), cones, made, system_now)
+    sticking = {f"{n}.sticking": "1" for n in cones}
+    return {**stop_units(system, stops), **sticking, **{f"{n}.slip": "m/s" for n in cones}}
+
+
+def _in_segment(series, system, seg, t, Y, ks, cones, made, system_now):
+    """:func:`segment_columns` at the outputs ``ks`` of the segment ``seg``: what its active set
+    changes (read once) written at each (in the order of the outputs, each output's
+    corrections in the order of :func:`segment_columns`' list); nothing where it changes
+    nothing (the assembled system's columns hold). ``made``: what the run's segments share,
+    made when first needed (the columns' units; the systems without open contacts' rows, by
+    their names)."""
+    nq, modes, dirs = system.nq, seg.modes, seg.dirs
+    in_force = rows_in_force(system, modes)
+    names = in_force.open
+    changes = bool(in_force.held or in_force.forces)  # stops.changes_dynamics
+    if not (names or changes or cones):
+        return
+    if names and names not in made:
+        made[names] = without_rows(system, names)
+        made.setdefault("units", column_units(system))
+    zeroed = open_force_columns(series, system, names, made.get("units"))
+    if changes:
+        sysm, base = system_now(modes), system_in_force(system, in_force, held=False)
+    sliding = system_now(modes, dirs) if cones and in_force.sliding else None
 
     def put(k, values):
         for col, val in values.items():
             if col in series:
                 series[col][k] = val
 
-    for k, tk in enumerate(t):
-        modes, dirs = segments[at[k]].modes, segments[at[k]].dirs
-        q, u = Y[k, :nq], Y[k, nq:]
-        names = rows_in_force(system, modes).open
+    for k in ks:
+        tk, q, u = t[k], Y[k, :nq], Y[k, nq:]
         if names:
-            put(k, output_values(opened.setdefault(names, without_rows(system, names)), tk, q, u)[0])
-            zero_open(series, system, names, k, units)
-        if changes_dynamics(system, modes):
-            values, pushes = engaged_values(system, system_now(modes), modes, tk, q, u)
+            put(k, output_values(made[names], tk, q, u)[0])
+        if changes:
+            values, pushes = engaged_values(system, sysm, modes, tk, q, u, in_force=in_force, base=base)
             put(k, values)
             put(k, {f"{n}.stop": push for n, push in pushes.items()})
-            zero_open(series, system, open_joints(system, modes), k)
+        for col in zeroed:  # open contacts' forces (N or N m): 0
+            series[col][k] = 0.0
         if cones:
             put(k, slip_state(system, cones, modes, tk, q, u))
-            if slipping_joints(system, modes):
-                put(k, sliding_values(system, system_now(modes, dirs), modes, dirs, tk, q, u))
-    sticking = {f"{n}.sticking": "1" for n in cones}
-    return {**stop_units(system, stops), **sticking, **{f"{n}.slip": "m/s" for n in cones}}
+            if sliding is not None:
+                put(k, sliding_values(system, sliding, modes, dirs, tk, q, u))
 
 
 def finish(res, events, states=None):
