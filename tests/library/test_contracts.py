@@ -619,6 +619,13 @@ def test_declared_modes_match_what_the_joint_does(joint):
         kind = AxisRow if joint.tree_edge else ContactRow
         assert all(isinstance(r, kind) for r in declared.rows(mode)), declared.rows(mode)
         assert declared.holds_rows(mode) or not joint.tree_edge
+        if declared.linear_events:  # the C loop watches the rows: events() must be exactly their values
+            rng = np.random.default_rng(len(seen))
+            for _ in range(5):
+                q, u = rng.normal(size=joint.nq), rng.normal(size=joint.nu)
+                rows = declared.event_rows(mode)
+                assert [(r.name, r.value(q, u), r.direction) for r in rows] == declared.events(q, u, mode)
+                assert all(0 <= r.index < (joint.nq if r.of == "q" else joint.nu) for r in rows)
 
 
 def test_modes_that_are_no_modes_object_are_refused_naming_the_joint():

@@ -230,7 +230,7 @@ class Run:
             out["projections"] += total.get("c_projections", 0)  # made in the C loop
         out["njev"] = total.get("njev", 0)
         out["nlu_integrator"] = total.get("nlu", 0)
-        out.update({key: total[key] for key in ("nreject", "nnewton") if key in total})
+        out.update({key: total[key] for key in ("nreject", "nnewton", "python_steps") if key in total})
         return out
 
 
