@@ -94,6 +94,13 @@ def impulse_work(system, t, q, u_minus, u_plus, loss):
     the impact, so its impulse does work (a cart driven at 1 m/s whose load hits a stop on it);
     without drives the kinetic energy drops by the loss and this is 0 to roundoff.
 
+    Without drives it is 0, returned without evaluating: every frame's velocity is then
+    ``J(q) u`` (only a drive adds a velocity of its own to the jets), so ``T(u) = u^T M u / 2``
+    and ``T(u+) - T(u-) + loss`` vanishes for the loss ``(u-^T M u- - u+^T M u+) / 2`` the
+    callers give (the impulse solve's, :func:`mbcomp.hybrid.stops.impact_speeds`): a rheonomic
+    row's impulse too leaves the kinetic energy and the loss equal. Two evaluations per
+    impact otherwise, the two sides' ``T`` rounded apart by ~1e-16 of it.
+
     Examples
     --------
     >>> import numpy as np, mbcomp
@@ -105,6 +112,8 @@ def impulse_work(system, t, q, u_minus, u_plus, loss):
     >>> impulse_work(s, 0.0, np.zeros(1), np.array([1.0]), np.array([0.0]), 1.0)
     0.0
     """
+    if not system.topology.drives:
+        return 0.0
     T_minus = system.energies(system.evaluate(t, q, u_minus))[0]
     T_plus = system.energies(system.evaluate(t, q, u_plus))[0]
     return float(T_plus - T_minus + loss)

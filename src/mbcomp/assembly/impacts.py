@@ -65,7 +65,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
+from scipy.linalg.lapack import dpotrf, dpotrs
 
 from ..errors import SimulationError
 from .manifold import pivot_partition, rank
@@ -177,11 +177,11 @@ def impulse(M, C, u_minus, normal_rows, restitution, keep_rows=None, *, offset=N
     target[keep] = before[keep] if hold_drift else 0.0
     rhs = target - s - C @ u  # the change of C u the impulses must make
     try:
-        factor = sla.cho_factor(M)
+        factor = _cho_factor(M)
     except (np.linalg.LinAlgError, ValueError):
         raise SimulationError("impact: the mass matrix is not positive definite (some speed carries no inertia): "
                               "the impulse equations have no unique answer; give the bodies mass") from None
-    Y = sla.cho_solve(factor, C.T)
+    Y = _cho_solve(factor, C.T)
     G = C @ Y
     lam, active, redundant, pivots = _complementarity(C, G, rhs, normal, keep)
     u_plus = u + Y @ lam
@@ -204,11 +204,11 @@ def _inputs(M, C, u_minus, normal_rows, restitution, keep_rows, offset):
     normal = np.asarray(normal_rows if normal_rows is not None else [], int).reshape(-1)
     keep = np.asarray(keep_rows if keep_rows is not None else [], int).reshape(-1)
     for name, idx in (("normal_rows", normal), ("keep_rows", keep)):
-        if idx.size and (idx.min() < 0 or idx.max() >= m or np.unique(idx).size != idx.size):
+        if idx.size and (idx.min() < 0 or idx.max() >= m or len(set(idx.tolist())) != idx.size):
             raise ValueError(f"impact: {name}={idx.tolist()} must be distinct row indices of C (0..{m - 1})")
-    if np.intersect1d(normal, keep).size:
-        raise ValueError(f"impact: rows {np.intersect1d(normal, keep).tolist()} are both impacting and kept: "
-                         "a row is either one or the other")
+    both = sorted(set(normal.tolist()) & set(keep.tolist()))
+    if both:
+        raise ValueError(f"impact: rows {both} are both impacting and kept: a row is either one or the other")
     e = np.broadcast_to(np.asarray(restitution, float), normal.shape).copy() if np.ndim(restitution) == 0 \
         else np.asarray(restitution, float).reshape(-1)
     if e.shape != normal.shape:
@@ -218,6 +218,38 @@ def _inputs(M, C, u_minus, normal_rows, restitution, keep_rows, offset):
         raise ValueError(f"impact: restitution {e.tolist()} must lie in [0, 1] (0 plastic, 1 elastic)")
     s = np.zeros(m) if offset is None else np.asarray(offset, float).reshape(m)
     return M, C, u, normal, keep, e, s
+
+
+def _cho_factor(A):
+    """The upper Cholesky factor of the symmetric positive definite ``A`` by LAPACK's
+    ``dpotrf``, the routine and arguments of ``scipy.linalg.cho_factor`` (the same bits)
+    without its wrapper's ~15 us a call (an impact makes two to four factorizations and
+    solves); ``LinAlgError`` where ``A`` is not positive definite, ``ValueError`` where it is
+    not finite."""
+    if not np.isfinite(A).all():
+        raise ValueError("impact: a matrix with inf or NaN entries")
+    if not A.size:
+        return np.zeros_like(A)
+    c, info = dpotrf(A, lower=0, clean=0)
+    if info > 0:
+        raise np.linalg.LinAlgError(f"{info}-th leading minor is not positive definite")
+    if info < 0:
+        raise ValueError(f"dpotrf: illegal value in argument {-info}")
+    return c
+
+
+def _cho_solve(c, b):
+    """``A x = b`` from ``A``'s factor ``c`` (:func:`_cho_factor`): LAPACK's ``dpotrs``, as
+    ``scipy.linalg.cho_solve``; ``ValueError`` where ``b`` is not finite."""
+    b = np.asarray(b, float)
+    if not np.isfinite(b).all():
+        raise ValueError("impact: a right-hand side with inf or NaN entries")
+    if not b.size:
+        return np.zeros_like(b)
+    x, info = dpotrs(c, b, lower=0)
+    if info != 0:
+        raise ValueError(f"dpotrs: illegal value in argument {-info}")
+    return x
 
 
 def _independent(C, keep, normal):
@@ -247,7 +279,7 @@ def _solve(C, G, rhs, rows, m):
     if rows.size:
         Gr = G[np.ix_(rows, rows)]
         try:
-            lam[rows] = sla.cho_solve(sla.cho_factor(Gr), rhs[rows])
+            lam[rows] = _cho_solve(_cho_factor(Gr), rhs[rows])
         except np.linalg.LinAlgError:  # independent by the rank test, yet G not numerically SPD
             lam[rows] = np.linalg.lstsq(Gr, rhs[rows], rcond=None)[0]
     return lam
