@@ -154,7 +154,7 @@ def summary(system, init=None):
     why = None
     if init is None:
         init, why = _initialize(view)
-    cut_rows = view.constraint_names(all_rows=True)  # kept per structure by a compiled evaluator; on the copy
+    cut_rows = system.row_names()  # kept per structure by a compiled evaluator; nothing kept on the system
     d = _dof_report(view, init, cut_rows)
     lines = ["mbcomp model summary", "===================="]
     if init is None:

@@ -275,14 +275,22 @@ class MultibodySystem:
         out.update({e.name: e.comp for e in topo.edges if e.implicit})
         return out
 
+    def row_names(self):
+        """Names ``"<cut joint>.<row>"`` of every loop-closure row (the row mask not applied),
+        keeping nothing on this system: structural, kept per structure by a compiled evaluator
+        (what a description of the system reads without changing it)."""
+        if self._row_names is not None:
+            return list(self._row_names)
+        memo = getattr(self.evaluator, "structure_memo", dict)()
+        if "constraint_names" not in memo:
+            ev = self.evaluate_numeric(0.0, self.default_q(), np.zeros(self.nu), masked=False)
+            memo["constraint_names"] = tuple(f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows)
+        return list(memo["constraint_names"])
+
     def constraint_names(self, all_rows=False):
         """Names ``"<cut joint>.<row>"`` of the loop-closure constraint rows."""
-        if self._row_names is None:  # structural: kept per structure by a compiled evaluator
-            memo = getattr(self.evaluator, "structure_memo", dict)()
-            if "constraint_names" not in memo:
-                ev = self.evaluate_numeric(0.0, self.default_q(), np.zeros(self.nu), masked=False)
-                memo["constraint_names"] = tuple(f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows)
-            self._row_names = list(memo["constraint_names"])
+        if self._row_names is None:
+            self._row_names = self.row_names()
         names, mask = self._row_names, (None if all_rows else self.row_mask)
         return list(names) if mask is None else [n for n, k in zip(names, mask) if k]
 

@@ -61,27 +61,35 @@ def momentum_columns(system, series, per_body=False):
     """``{column: ndarray (n,)}``: the whole mechanism's linear momentum (kg m/s) and
     angular momentum about the world origin (kg m^2/s), world frame, from the bodies' columns
     ``<body>.r|v|w.*`` and ``<body>.Q.*`` (see the module notes); each body's as well when
-    ``per_body``. Empty when a body's columns are missing."""
+    ``per_body``. Empty when a body's columns are missing. Every body at once (arrays
+    ``(bodies, n, 3)``), summed over the bodies in their order."""
+    bodies = system.topology.bodies
+    if not bodies:
+        return {}
+    try:
+        cols = [[series[f"{path}.{v}.{ax}"] for v in ("r", "v", "w") for ax in _XYZ]
+                + [series[f"{path}.Q.{ax}"] for ax in "wxyz"] for path, _, _ in bodies]
+    except KeyError:
+        return {}
+    X = np.asarray(cols, float).transpose(0, 2, 1)  # (bodies, n, 13)
+    r, v, w, Q = X[..., 0:3], X[..., 3:6], X[..., 6:9], X[..., 9:13]
+    props = [comp.mass_properties(system.P[path]) for path, comp, _ in bodies]
+    m = np.array([mp[0] for mp in props], float)[:, None, None]
+    rc = np.array([np.asarray(mp[1], float) for mp in props])[:, None, :, None]  # (bodies, 1, 3, 1)
+    I = np.array([np.asarray(mp[2], float) for mp in props])[:, None]  # (bodies, 1, 3, 3)
+    R = _quat_matrices(Q.reshape(-1, 4)).reshape(Q.shape[:-1] + (3, 3))
+    rho = (R @ rc)[..., 0]
+    p = m * (v + np.cross(w, rho))
+    Iw = R @ I @ np.swapaxes(R, -1, -2)
+    h = np.cross(r + rho, p) + np.einsum("bnij,bnj->bni", Iw, w)
     out = {}
-    P = L = 0.0
-    for path, comp, _node in system.topology.bodies:
-        try:
-            r, v, w = _vec(series, f"{path}.r"), _vec(series, f"{path}.v"), _vec(series, f"{path}.w")
-            Q = np.stack([series[f"{path}.Q.{ax}"] for ax in "wxyz"], -1)
-        except KeyError:
-            return {}
-        m, rc, I = comp.mass_properties(system.P[path])
-        R = _quat_matrices(Q)
-        rho = R @ np.asarray(rc, float)
-        p = m * (v + np.cross(w, rho))
-        Iw = R @ np.asarray(I, float) @ np.swapaxes(R, 1, 2)
-        h = np.cross(r + rho, p) + np.einsum("nij,nj->ni", Iw, w)
-        P, L = P + p, L + h
-        if per_body:
+    if per_body:
+        for k, (path, _, _) in enumerate(bodies):
             for j, ax in enumerate(_XYZ):
-                out[f"{path}.momentum.{ax}"], out[f"{path}.angular_momentum.{ax}"] = p[:, j], h[:, j]
-    if np.ndim(P) == 0:
-        return out
+                out[f"{path}.momentum.{ax}"], out[f"{path}.angular_momentum.{ax}"] = p[k, :, j], h[k, :, j]
+    P, L = p[0], h[0]
+    for k in range(1, len(bodies)):  # in the bodies' order, as the sum of the columns reads
+        P, L = P + p[k], L + h[k]
     for j, ax in enumerate(_XYZ):
         out[f"momentum.{ax}"], out[f"angular_momentum.{ax}"] = P[:, j], L[:, j]
     return out
