@@ -101,8 +101,12 @@ def open_joints(system, modes):
 
 def slipping_joints(system, modes):
     """Names of the contacts of ``modes`` sliding in their mode (``Modes.slip_friction`` not None)."""
-    return sorted(n for n, mode in modes.items() if system.edge(n).comp.modes(system.P[n]).slips
-                  and system.edge(n).comp.modes(system.P[n]).slip_friction(mode) is not None)
+    out = []
+    for n, mode in modes.items():
+        declared = system.edge(n).comp.modes(system.P[n])
+        if declared.slips and declared.slip_friction(mode) is not None:
+            out.append(n)
+    return sorted(out)
 
 
 def cone_joints(system, modes):
