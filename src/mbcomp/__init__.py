@@ -18,6 +18,8 @@ Examples
 >>> res.status
 'success'
 """
+import sys as _sys
+
 from . import _aliases
 from .errors import InitializationError, ModelError, SimulationError
 from .modeling.component import Component, Flange, Frame, Guess, Param
@@ -45,6 +47,10 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
         from .assembly.system import assemble
         return assemble
     if name == "simulate":
+        if "mbcomp.simulation.driver" not in _sys.modules:  # the first time: start the C runtime's
+            from .codegen.compiler import prepare_runtime  # build (where missing) before the imports
+
+            prepare_runtime()
         from .simulation.driver import simulate
         return simulate
     if name == "Result":

@@ -27,6 +27,7 @@ import concurrent.futures
 import ctypes
 import hashlib
 import os
+import threading
 import time
 
 import numpy as np
@@ -34,14 +35,84 @@ import numpy as np
 from .engine import integrate_signature, runtime_objects
 from .graph import CodegenError, Fallback, Retrace, no_gc
 from .printers import PY_ENV, ParamProgram, Program
+from .thin import extension
 from .toolchain import (FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_objects, compile_units, n_units,
                         object_path, unit_key)
 from .tracer import FIELDS, param_vector
 
-__all__ = ["Code", "Bound"]
+__all__ = ["Code", "Bound", "prepare_runtime"]
 
 #: kept for compatibility: every program is now compiled at -O2
 OPT_O2 = OPT_O1 = float("inf")
+
+
+#: (compiler, cache directory) -> the futures (runtime objects, thin extension); also the
+#: arguments and environment a call was made with -> the same futures
+_PREPARED = {}
+_PREPARED_LOCK = threading.Lock()
+
+
+def _forget_prepared():
+    """In a forked child: the parent's threads are not there, so neither are their futures."""
+    global _PREPARED_LOCK
+    _PREPARED.clear()
+    _PREPARED_LOCK = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_prepared)
+
+
+def _in_thread(fn, *args):
+    """``fn(*args)`` run on a new (non-daemon: the interpreter waits for it at exit, so no
+    compiler is left half-way) thread, as a future."""
+    fut = concurrent.futures.Future()
+
+    def work():
+        try:
+            fut.set_result(fn(*args))
+        except BaseException as exc:  # handed to whoever waits for it
+            fut.set_exception(exc)
+    threading.Thread(target=work, name="mbcomp-runtime", daemon=False).start()
+    return fut
+
+
+def prepare_runtime(cache_dir=None):
+    """Start building what every C program of this machine shares, if it is not built: the
+    runtime's objects (:func:`~mbcomp.codegen.engine.runtime_objects`: the integrators, ~0.7 s
+    of the compiler on the first run on a machine) and the thin call's extension
+    (:func:`~mbcomp.codegen.thin.extension`), each on a thread of its own, once per process
+    and cache directory. Returns the two futures ``(runtime, thin)``, or None without a C
+    compiler.
+
+    :func:`mbcomp.simulate` calls it first (before importing and tracing anything), so that the
+    compiler works while Python does; a program's build waits for what it links
+    (:class:`Code`). With everything built it costs a hash of the runtime's sources and a few
+    file checks, off the calling thread.
+
+    Examples
+    --------
+    >>> from mbcomp.codegen.compiler import prepare_runtime
+    >>> jobs = prepare_runtime()
+    >>> jobs is None or all(o.endswith(".o") for o in jobs[0].result())   # the runtime's object files
+    True
+    >>> jobs is None or jobs is prepare_runtime()                         # once per process
+    True
+    """
+    asked = (cache_dir, os.environ.get("CC"), os.environ.get("MBCOMP_CACHE"), os.environ.get("PATH"))
+    jobs = _PREPARED.get(asked)  # asked before: no compiler search, no directory made (~1 us)
+    if jobs is not None and not (jobs[0].done() and jobs[0].exception() is not None):
+        return jobs
+    cc = c_compiler()
+    if cc is None:
+        return None
+    d = cache_directory(cache_dir)
+    with _PREPARED_LOCK:
+        jobs = _PREPARED.get((cc, d))
+        if jobs is None or (jobs[0].done() and jobs[0].exception() is not None):  # a failure is tried again
+            jobs = _PREPARED[(cc, d)] = (_in_thread(runtime_objects, cc, d), _in_thread(extension, d))
+        _PREPARED[asked] = jobs
+    return jobs
 
 
 class Code:
@@ -125,14 +196,15 @@ class Code:
         # the C engine (the runtime's integrators over mbcomp_fun) when no drive needs Python per call
         self.has_engine = self.has_fun and not self.drives and not self.inputs
         self.objects = {"compiled": [], "reused": []}
-        if self.has_engine and not all(os.path.exists(object_path(cc, d, src, fl)) for _, src, fl in units):
-            # the runtime's objects (compiled once per machine) while this program's units compile
-            with concurrent.futures.ThreadPoolExecutor(1) as pool:
-                runtime = pool.submit(runtime_objects, cc, d)
+        extra = []
+        if self.has_engine:
+            # the runtime's objects and the thin call's extension (built once per machine, maybe
+            # started already by simulate) while this program's units compile
+            runtime, thin = prepare_runtime(d)
+            if not all(os.path.exists(object_path(cc, d, src, fl)) for _, src, fl in units):
                 self.objects = compile_objects(cc, units, d)[1]
-                extra = runtime.result()
-        else:
-            extra = runtime_objects(cc, d) if self.has_engine else []
+                thin.result()  # (None where it cannot be built) its compiler ran beside this program's
+            extra = runtime.result()
         key = hashlib.sha256("\0".join([unit_key(cc, src, fl) for _, src, fl in units] + list(extra))
                              .encode()).hexdigest()[:32]
         lib = os.path.join(d, f"mbcomp_{key}.so")

@@ -106,7 +106,15 @@ def system_of(model, params, backend):
 
     A system passed in is never the one run: the run works on its own copy (same topology,
     parameter values and program), as initialization chooses the constraint rows kept
-    (``row_mask``) and a run may choose them again; the caller's system is left as it was."""
+    (``row_mask``) and a run may choose them again; the caller's system is left as it was.
+
+    A C backend's shared pieces (the runtime, the thin call's extension) start compiling first,
+    on threads, where this machine has not built them yet: the compiler works while the model
+    is assembled and traced (:func:`~mbcomp.codegen.compiler.prepare_runtime`)."""
+    if backend in ("auto", "c") and getattr(model, "backend", "numeric") in ("numeric", "c"):
+        from ..codegen.compiler import prepare_runtime
+
+        prepare_runtime()
     if isinstance(model, MultibodySystem):
         try:
             system = model.with_params(params or {})
