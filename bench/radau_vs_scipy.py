@@ -1,40 +1,36 @@
 """radau5 against scipy's Radau, work-precision: CPU time at matched accuracy (issue 32, item 4).
 
 Each model (the damped stiff spring chain of ``models/spring_chain.py``, N=10, c=1e6 N/m,
-d=1e5 N s/m; the 4-link chain and the slider-crank of ``bench/radau_reuse.py``) runs through ``mbcomp.simulate`` at the Lagrange form of index 1 (radau5: the
-index-1 DAE; scipy's ``Radau``: the index-1 ODE), both with the problem's Jacobian, over a
-ladder of tolerances. The error is the largest coordinate error on the output grid against
-a tight reference (DOP853, Lagrange index 1 with projection, ``rtol=1e-12``; for the
-stiff spring chain scipy's Radau at ``rtol=1e-11``); the time is the
-CPU time of the whole ``simulate`` call (median of ``--repeat`` runs). For each radau5 run the
-table prints the ratio of its time to scipy Radau's time at the same error, interpolated
-log-log on scipy's work-precision line (``< 1``: radau5 is faster). Rows ``r5-ode``: radau5
-stepping scipy's very ODE (:class:`Radau5OnOde`), which separates the solvers from the forms.
+d=1e5 N s/m; the 4-link chain and the slider-crank of ``bench/radau_reuse.py``) runs through
+``mbcomp.simulate`` over a ladder of tolerances: scipy's ``Radau`` on the Lagrange index-1 ODE,
+``radau5`` as a user calls it (no index: the same index-1 ODE, ``Radau5.ode_by_default``), and
+``r5-dae`` (``radau5`` with ``index=1``: the index-1 DAE ``[q, u, a, lam]``), all with the
+problem's Jacobian. The error is the largest coordinate error on the output grid against a
+tight reference (DOP853, Lagrange index 1 with projection, ``rtol=1e-12``; for the stiff spring
+chain scipy's Radau at ``rtol=1e-11``); the time is the CPU time of the whole ``simulate`` call
+(median of ``--repeat`` runs). Each radau5 row prints the ratio of its time to scipy Radau's
+time at the same error, interpolated log-log on scipy's work-precision line (``< 1``: radau5
+is faster; ``nan``: the error lies outside scipy's line).
 
-``--before PATH`` adds another ``radau.py`` (e.g. ``git show <rev>:src/mbcomp/solvers/radau.py
-> /tmp/radau_before.py``), loaded beside the current one, so before/after share one run.
+Measured 2026-11-28 (2-core machine shared, medians of 3; radau5 / scipy Radau at radau5's error):
 
-Measured (2-core machine shared, medians of 5; time of radau5 / scipy Radau at radau5's error):
+=================  ==================  =====================  ==========================
+model              rtol                ``r5-dae`` (index=1)   ``radau5`` (the default)
+=================  ==================  =====================  ==========================
+spring chain N=10  1e-5 / 1e-6 / 1e-7  2.41 / 2.13 / 2.36     0.68 / -- / 0.58
+4-link chain       1e-6 / 1e-7 / 1e-8  0.89 / 0.87 / 1.01     0.65 / 0.64 / 0.69
+slider-crank       1e-6 / 1e-7 / 1e-8  0.61 / 0.68 / 0.74     0.85 / 0.75 / 0.60
+=================  ==================  =====================  ==========================
 
-=================  ==================  =============  =============  ================
-model              rtol                radau5 before  radau5 after   radau5 on the ODE
-=================  ==================  =============  =============  ================
-spring chain N=10  1e-5 / 1e-6 / 1e-7  1.74/1.84/2.18 1.53/1.60/1.87 0.82/ -- /0.74
-4-link chain       1e-6 / 1e-7 / 1e-8  1.07/1.09/1.21 0.90/0.90/1.03 0.76/0.70/0.73
-slider-crank       1e-5 / 1e-6 / 1e-7  0.80/0.74/0.83 0.71/0.65/0.72  -- /0.89/0.82
-=================  ==================  =============  =============  ================
-
-("--": the error lies outside scipy's line.) On the spring chain the
-gap is the form's, not the solver's: the index-1 DAE (60 variables, accelerations algebraic)
-takes 931 steps at rtol 1e-5 with 210 Newton failures ("too slow", rates 0.4-0.7) and a
-factorization per attempt; the same radau5 on the 40-variable ODE takes 256 steps.
+On the spring chain the DAE form is the gap: 60 variables with the accelerations algebraic take
+931 steps at rtol 1e-5 with 210 Newton failures ("too slow", rates 0.4-0.7) and a factorization
+per attempt; the ODE, 40 variables, 256 steps. Hence the default.
 
 Run: ``python bench/radau_vs_scipy.py [--before /tmp/radau_before.py] [--repeat 3] [--cases chain]``
 """
 from __future__ import annotations
 
 import argparse
-from types import SimpleNamespace
 import os
 import pathlib
 import sys
@@ -51,8 +47,6 @@ sys.path.insert(0, str(ROOT / "bench"))
 
 from radau_reuse import REFERENCE, coordinate_error, load_stepper, run  # noqa: E402
 
-import mbcomp.solvers as solvers  # noqa: E402
-from mbcomp.solvers.radau import Radau5  # noqa: E402
 
 
 def _model_file(path, **params):
@@ -70,30 +64,11 @@ CASES = [
 N_OUT = 61
 
 
-class Radau5OnOde(Radau5):
-    """radau5 stepping the index-1 *ODE* scipy's Radau steps (``E = I``, every index 1): the
-    same formulation and system, so the solvers alone are compared. Put in place of
-    ``STEPPERS["Radau"]`` for its runs (bench only: the driver gives radau5 the DAE form)."""
-
-    problem = "ode"
-    name = "Radau"
-
-    def __init__(self, problem, t0, y0, t_bound, **kw):
-        ode = SimpleNamespace(n=len(y0), fun=problem.fun, jac=getattr(problem, "jac", None))
-        super().__init__(ode, t0, y0, t_bound, **kw)
-
-
-def timed(build, t_end, opts, stepper, repeat):
-    """(result, median CPU s) of ``repeat`` runs; ``stepper="ode"``: radau5 on the ODE form."""
+def timed(build, t_end, opts, repeat, stepper=None):
+    """(result, median CPU s) of ``repeat`` runs of ``opts`` (``stepper``: another radau5 class)."""
     times, res = [], None
     for _ in range(repeat):
-        saved = solvers.STEPPERS["Radau"]
-        if stepper == "ode":
-            solvers.STEPPERS["Radau"] = Radau5OnOde
-        try:
-            res = run(build(), dict(t_end=t_end, **opts), "auto", None if stepper == "ode" else stepper)
-        finally:
-            solvers.STEPPERS["Radau"] = saved
+        res = run(build(), dict(t_end=t_end, **opts), "auto", stepper)
         times.append(res.stats["bench_cpu"])
     return res, float(np.median(times))
 
@@ -117,7 +92,7 @@ def main(argv=None):
     cases = CASES
     if args.cases:
         cases = [c for c in cases if any(s.strip() in c[0] for s in args.cases.split(","))]
-    variants = [("radau5", None), ("r5-ode", "ode")]
+    variants = [("r5-dae", "dae"), ("radau5", "ode")]
     variants += [("before", load_stepper(args.before))] if args.before else []
     head = f"{'model':18s} {'method':8s} {'rtol':>7s} {'steps':>6s} {'nlu':>6s} {'nfev':>7s} {'cpu s':>7s} " \
            f"{'error':>9s} {'/scipy@err':>10s}"
@@ -129,18 +104,19 @@ def main(argv=None):
         ref = mbcomp.simulate(build(), n_out=N_OUT, t_end=t_end, backend="auto", **refopts)
         line, rows = [], []
         for rtol in s_rtols:
-            res, cpu = timed(build, t_end, dict(method="Radau", rtol=rtol, atol=rtol * 1e-2), None,
-                             args.repeat)
+            res, cpu = timed(build, t_end, dict(method="Radau", rtol=rtol, atol=rtol * 1e-2), args.repeat)
             err = coordinate_error(res, ref)
             line.append((err, cpu))
             rows.append(("Radau", rtol, res, cpu, err, np.nan))
         for name, stepper in variants:
             for rtol in r_rtols:
-                if stepper == "ode":
-                    opts = dict(method="Radau", rtol=rtol, atol=rtol * 1e-2)
-                else:
+                if stepper == "ode":  # the default: the index-1 ODE (Radau5.ode_by_default)
+                    opts = dict(method="radau5", rtol=rtol, atol=rtol * 1e-2)
+                elif stepper == "dae":
                     opts = dict(method="radau5", index=1, stabilization="none", rtol=rtol, atol=rtol * 1e-2)
-                res, cpu = timed(build, t_end, opts, stepper, args.repeat)
+                else:  # another radau.py (--before), on the DAE as before
+                    opts = dict(method="radau5", index=1, stabilization="none", rtol=rtol, atol=rtol * 1e-2)
+                res, cpu = timed(build, t_end, opts, args.repeat, None if isinstance(stepper, str) else stepper)
                 err = coordinate_error(res, ref)
                 rows.append((name, rtol, res, cpu, err, cpu / matched(err, line)))
         for name, rtol, res, cpu, err, ratio in rows:

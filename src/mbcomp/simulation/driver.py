@@ -188,9 +188,12 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="auto", rtol=
     check_model(model)
     check_numbers(t_start=t_start, t_end=t_end, rtol=rtol, atol=atol, alpha=alpha, beta=beta, n_out=n_out,
                   dt_out=dt_out, max_step=max_step, h=h, max_wall_time=max_wall_time, max_steps=max_steps)
+    asked_index = index
     stepper, index = check_request(method, formulation, index, h, t_start, t_end, backend)
     events = check_events(events)
     stabilization = check_singular(singular, method, stepper, formulation, stabilization)
+    if asked_index is None and formulation == "lagrange" and getattr(stepper, "ode_by_default", False):
+        stepper = stepper.on_ode()  # radau5: the index-1 ODE unless an index is asked for (Radau5.ode_by_default)
     check_names(inputs or {})
     sensitivities = check_sensitivities(sensitivities)
 
