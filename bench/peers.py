@@ -833,7 +833,7 @@ def print_cases(starts, andrews, others):
     print(md_table(["target", "case", "ratio", "limit", "met", "CPU s (mbcomp / peer) or why not"], body)
           if body else "(no target case run: --cases starts,andrews)")
     if info:
-        print("\n### Other ratios of this run (item 8 sets no number for them)\n")
+        print("\n### Other ratios of this run (items 4 and 5 set the limits shown; item 8 none)\n")
         print(md_table(["ratio", "case", "value", "limit", "met", "CPU s (mbcomp / peer) or why not"], info))
     return body
 

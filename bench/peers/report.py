@@ -97,10 +97,12 @@ def targets(starts, andrews, others):
                 None)
             add(info, "stiff: default, cold cache / Pinocchio + LSODA", "stiff chain",
                 _ratio(rows, cold, _is("pinocchio", "LSODA")), None)
+            add(info, "stiff: radau5 <= 1x Pinocchio + LSODA (item 4)", "stiff chain",
+                _ratio(rows, _is("mbcomp radau5"), _is("pinocchio", "LSODA")), 1.0)
         elif case == "events":
             peer = lambda r: r["who"].startswith("pinocchio")  # noqa: E731
-            add(info, "events: default / Pinocchio + scipy event loop (cheapest)", "pendulum on a stop",
-                _ratio(rows, dflt, peer), None)
+            add(info, "events: default <= 1x Pinocchio + scipy event loop (cheapest; item 5)", "pendulum on a stop",
+                _ratio(rows, dflt, peer), 1.0)
             add(info, "events: default, cold cache / Pinocchio + event loop", "pendulum on a stop",
                 _ratio(rows, cold, peer), None)
         elif case == "chain3d":
