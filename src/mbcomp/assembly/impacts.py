@@ -187,7 +187,7 @@ def impulse(M, C, u_minus, normal_rows, restitution, keep_rows=None, *, offset=N
     u_plus = u + Y @ lam
     if not full:
         return u_plus, lam
-    held = np.setdiff1d(np.concatenate((keep, normal[active])), redundant)
+    held = _minus(np.concatenate((keep, normal[active])), redundant)
     resid = float(np.abs(C[held] @ u_plus + s[held] - target[held]).max(initial=0.0))
     return Impulse(u_plus, lam, normal[active], normal[~active], redundant, pivots, resid)
 
@@ -270,7 +270,13 @@ def _independent(C, keep, normal):
                 N = N - (N @ Q) @ Q.T
             extra = normal[pivot_partition(N.T, ra, tol=0)[0]] if ra > 0 else normal[:0]
     rows = np.sort(np.concatenate((chosen, extra)))
-    return rows, np.setdiff1d(np.concatenate((keep, normal)), rows)
+    return rows, _minus(np.concatenate((keep, normal)), rows)
+
+
+def _minus(a, b):
+    """The sorted distinct row indices of ``a`` not in ``b`` (``np.setdiff1d`` of a few
+    indices, without its ~25 us of set machinery)."""
+    return np.array(sorted(set(a.tolist()) - set(b.tolist())), dtype=np.intp)
 
 
 def _solve(C, G, rhs, rows, m):
