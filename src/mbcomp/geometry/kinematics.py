@@ -39,8 +39,14 @@ __all__ = [
 
 
 def cross(a, b):
-    """Cross product of two 3-vectors (much faster than ``numpy.cross`` for single vectors)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    """Cross product of two 3-vectors (much faster than ``numpy.cross`` for single vectors).
+
+    An array's entries are taken as Python numbers (``tolist``: a float64's value exactly, a
+    traced value itself), whose arithmetic is several times cheaper than numpy scalars': the
+    same IEEE products and differences, half the time of indexing the arrays."""
+    a0, a1, a2 = a.tolist() if type(a) is np.ndarray else a
+    b0, b1, b2 = b.tolist() if type(b) is np.ndarray else b
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def skew(a):
