@@ -86,3 +86,25 @@ def test_upper_stop_pushes_back_and_slider_stop_is_a_force():
     np.testing.assert_allclose(res["s.stop"][after], M * G, atol=1e-9)
     assert np.all(res["s.stop"][before] == 0.0) and res.units["s.stop"] == "N"
     np.testing.assert_allclose(res["s.f.y"][after], M * G, atol=1e-9)   # frame_b is not rotated
+
+
+def test_the_engaged_columns_take_the_base_evaluation_inside_the_modes():
+    """The columns of an engaged output read the assembled system's evaluation from inside the
+    mode's (``evaluation_within``: the held row appended, a mode force added, each wrapping
+    the same evaluator): the same numbers as evaluating the assembled system again, and the
+    mode's own row and force on top of them; a system that does not wrap it gives None."""
+    from mbcomp.hybrid.active import ForceEvaluator, evaluation_within, mode_system
+
+    system = mbcomp.assemble(_pendulum(0.05))
+    held = mode_system(system, {"hinge": "lo"})
+    pushed = held.with_evaluator(lambda new: ForceEvaluator(held.evaluator, [(0, 1.5)]))
+    q, u = np.array([A + 1e-3]), np.array([-0.4])
+    plain = system.evaluate(0.0, q, u)
+    for sysm in (held, pushed):
+        ev = sysm.evaluate(0.0, q, u)
+        inner = evaluation_within(sysm, ev, system)
+        for name in ("M", "f", "Phi", "C"):
+            np.testing.assert_array_equal(getattr(inner, name), getattr(plain, name))
+        assert ev.Phi.tolist() == [float(q[0] - A)]  # the stop's row, phi - lo, after the system's (none)
+    assert pushed.evaluate(0.0, q, u).f[0] == plain.f[0] + 1.5  # the mode force on the joint's speed
+    assert evaluation_within(system.with_evaluator(None), plain, system) is None

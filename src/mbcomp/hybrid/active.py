@@ -52,7 +52,7 @@ from ..modeling.modes import Modes
 
 __all__ = ["RowsInForce", "rows_in_force", "system_in_force", "SegmentStart", "segment_at", "start_modes", "mode_rows", "open_joints", "slipping_joints", "cone_joints", "without_rows",
            "without_rolling", "WrappingEvaluator", "ModeEvaluator", "mode_system", "mode_forces", "ForcesAdded",
-           "ForceEvaluator", "with_mode_forces"]
+           "ForceEvaluator", "with_mode_forces", "evaluation_within"]
 
 
 def start_modes(system):
@@ -153,6 +153,11 @@ class _RowsAdded:
 
     def __getattr__(self, name):
         return getattr(self._ev, name)
+
+    @property
+    def inner(self):
+        """The wrapped evaluation (without the mode's rows)."""
+        return self._ev
 
     @property
     def A(self):
@@ -324,6 +329,11 @@ class ForcesAdded:
     def __getattr__(self, name):
         return getattr(self._ev, name)
 
+    @property
+    def inner(self):
+        """The wrapped evaluation (without the modes' forces)."""
+        return self._ev
+
 
 class ForceEvaluator(WrappingEvaluator):
     """An evaluator adding constant generalized forces ``[(u index, N or N m)]`` to the wrapped
@@ -342,6 +352,27 @@ class ForceEvaluator(WrappingEvaluator):
 
     def rebind(self, system, laws=False):
         return ForceEvaluator(self.inner.rebind(system, laws), self.forces)
+
+
+def evaluation_within(sysm, ev, base):
+    """The evaluation ``base.evaluate(t, q, u)`` that ``ev``, an evaluation of the mode's
+    system ``sysm`` at ``(t, q, u)``, wraps -- when ``sysm``'s evaluator only wraps ``base``'s
+    (the modes' rows appended, :class:`ModeEvaluator`; their forces added,
+    :class:`ForceEvaluator`) -- else None (``base`` is then evaluated again): the same
+    evaluator asked at the same state, so the same numbers, one evaluation instead of two."""
+    evaluator = sysm.evaluator
+    while evaluator is not base.evaluator:
+        if isinstance(evaluator, ModeEvaluator):
+            if evaluator.rows:  # without rows it hands the inner evaluation through
+                if not isinstance(ev, _RowsAdded):
+                    return None
+                ev = ev.inner
+        elif isinstance(evaluator, ForceEvaluator) and isinstance(ev, ForcesAdded):
+            ev = ev.inner
+        else:
+            return None
+        evaluator = evaluator.inner
+    return ev
 
 
 def with_mode_forces(system, modes):

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..assembly.kkt import accelerations, project_state
-from .active import mode_rows, rows_in_force, system_in_force
+from .active import evaluation_within, mode_rows, rows_in_force, system_in_force
 
 __all__ = ["row_values", "impact_speeds", "consistent", "row_push", "stop_joints", "stop_units", "changes_dynamics",
            "engaged_values"]
@@ -136,7 +136,8 @@ def engaged_values(system, sysm, modes, t, q, u, *, in_force=None, base=None):
     first = ev.Phi.size - len(rows)  # the mode's rows follow the holonomic rows
     pushes = {n: -float(lam[first + i]) for i, (n, row, _, _) in enumerate(rows) if not _is_stick(row)}
     lam_b = np.concatenate((lam[:first], lam[first + len(rows):]))
-    evb = base.evaluate(t, q, u)
+    evb = evaluation_within(sysm, ev, base)  # the mode's evaluation wraps the base's
+    evb = base.evaluate(t, q, u) if evb is None else evb
     evf = base.evaluate(t, q, u, masked=False) if evb.local else evb
     cols = SimpleNamespace(t=t, q=q, u=u, jets=evb.jets, local_nh=evb.local_nh, B=evb.B, Phi_all=evf.Phi,
                            Phid_all=evf.Phid, Psi=evb.Psi)
