@@ -86,7 +86,8 @@ def _in_segment(series, system, seg, t, Y, ks, cones, made, system_now):
         return
     if names and names not in made:
         made[names] = without_rows(system, names)
-        made.setdefault("units", column_units(system))
+        if "units" not in made:
+            made["units"] = column_units(system)
     zeroed = open_force_columns(series, system, names, made.get("units"))
     if changes:
         sysm, base = system_now(modes), system_in_force(system, in_force, held=False)
