@@ -38,8 +38,6 @@ Examples
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..modeling.component import PortRef
@@ -48,6 +46,7 @@ from ..assembly.jets import FrameJet, as_array, is_traced, rigid_constraints
 from ..geometry.kinematics import cross, skew
 from ..modeling.roles import FrameState
 from ..assembly.topology import ROOT, Topology
+from .evaluation import Evaluation
 from .flange_rows import flange_rows, flange_starts, rotor_wrench, rotors
 
 __all__ = ["assemble", "MultibodySystem", "Evaluation", "NumericEvaluator"]
@@ -63,33 +62,6 @@ def assemble(model, params=None):
     """Validate ``model`` and assemble it; ``params`` maps ``"component.param"`` to values."""
     flat = model.validate()
     return MultibodySystem(Topology(flat), params)
-
-
-@dataclass
-class Evaluation:
-    """Everything the formulations need at one ``(t, q, u)``."""
-
-    t: float
-    q: np.ndarray
-    u: np.ndarray
-    jets: dict
-    M: np.ndarray
-    f: np.ndarray
-    Phi: np.ndarray  # position constraints (m rows)
-    Phid: np.ndarray  # their time derivative
-    C: np.ndarray  # (m, nu)
-    cb: np.ndarray  # bias: d2Phi/dt2 = C du + cb
-    B: np.ndarray  # nonholonomic rows (k, nu): B u = b
-    b: np.ndarray
-    Bb: np.ndarray  # bias: d/dt(B u - b) = B du + Bb
-    Psi: np.ndarray  # nonholonomic (velocity-constraint) residual B u - b
-    local: list  # per cut edge: (edge, rows, jac (r,12))
-    local_nh: list  # per edge with velocity constraints: (edge, rows, jac (k,12))
-
-    @property
-    def A(self):
-        """All constraint rows acting on du/dt: holonomic ``C`` then nonholonomic ``B``."""
-        return np.vstack((self.C, self.B)) if self.B.size else self.C
 
 
 class NumericEvaluator:
@@ -276,21 +248,17 @@ class MultibodySystem:
         return out
 
     def row_names(self):
-        """Names ``"<cut joint>.<row>"`` of every loop-closure row (the row mask not applied),
-        keeping nothing on this system: structural, kept per structure by a compiled evaluator
-        (what a description of the system reads without changing it)."""
-        if self._row_names is not None:
-            return list(self._row_names)
+        """Names of every loop-closure row, mask not applied, keeping nothing on this system
+        (structural: kept per structure by a compiled evaluator)."""
         memo = getattr(self.evaluator, "structure_memo", dict)()
-        if "constraint_names" not in memo:
+        if self._row_names is None and "constraint_names" not in memo:
             ev = self.evaluate_numeric(0.0, self.default_q(), np.zeros(self.nu), masked=False)
             memo["constraint_names"] = tuple(f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows)
-        return list(memo["constraint_names"])
+        return list(self._row_names if self._row_names is not None else memo["constraint_names"])
 
     def constraint_names(self, all_rows=False):
         """Names ``"<cut joint>.<row>"`` of the loop-closure constraint rows."""
-        if self._row_names is None:
-            self._row_names = self.row_names()
+        self._row_names = self.row_names() if self._row_names is None else self._row_names
         names, mask = self._row_names, (None if all_rows else self.row_mask)
         return list(names) if mask is None else [n for n, k in zip(names, mask) if k]
 

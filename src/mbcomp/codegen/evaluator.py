@@ -162,11 +162,8 @@ class CompiledEvaluation:
 #: (D'Alembert and the DAE forms in Python) gets the program after the first steps
 LAZY_EVALUATIONS = 200
 
-#: fewer output points than this are post-processed by the numeric route (compiling the
-#: output program costs about as much as ~100 numeric points of a small model) -- counted
-#: over the runs of one structure in the process: once its short runs have post-processed
-#: this many points numerically, the program is made and the next runs use it (a study or a
-#: benchmark of short runs stops paying the numeric route, ~0.5 ms a point at N = 5)
+#: fewer output points than this are post-processed numerically (compiling the output program
+#: costs ~100 numeric points of a small model), counted over a structure's runs in the process
 OUTPUT_GRID_MIN = 100
 
 
@@ -508,21 +505,18 @@ class ProgramEvaluator:
         return bound_program(self.system, self.funs, form, self.backend, o["cache_dir"], o["max_nodes"])
 
     def output_grid(self, t, Y, gains):
-        """The result columns at every output time in one program call
-        (:meth:`mbcomp.codegen.outputs.OutputProgram.grid`: ``(names, values, quaternions, ok)``),
-        or None when there is no such program (fewer than :data:`OUTPUT_GRID_MIN` points, where
-        compiling costs more than the numeric route, unless a run of this structure made it
-        already or the structure's runs have post-processed that many points numerically; a law that cannot be traced; a singular trace point). ``gains``: the multipliers' Baumgarte gains (1/s) or None. The program is
-        made at first need per row mask and kind of gains, and reused by ``with_params``."""
+        """The columns at every output time in one call (:meth:`~mbcomp.codegen.outputs.OutputProgram.grid`:
+        ``(names, values, quaternions, ok)``), or None without the program: fewer than :data:`OUTPUT_GRID_MIN`
+        points (unless the structure's runs made it or paid that many numeric points), a law not traceable, a
+        singular trace point. ``gains``: Baumgarte's (1/s) or None. Made per row mask and kind of gains."""
         from .outputs import OutputProgram
 
         rm = self.system.row_mask
         key = ("outputs", None if rm is None or rm.all() else rm.tobytes(), gains is not None)
         prog = self.funs.get(key, False)
         if len(t) < OUTPUT_GRID_MIN and not prog:  # a small grid takes the program only when made already
-            seen = self.funs.get(("numeric outputs",) + key[1:], 0) + len(t)  # or once the structure's runs
-            self.funs[("numeric outputs",) + key[1:]] = seen                  # paid for it numerically
-            if seen <= OUTPUT_GRID_MIN:
+            seen = self.funs[("numeric outputs",) + key[1:]] = self.funs.get(("numeric outputs",) + key[1:], 0) + len(t)
+            if seen <= OUTPUT_GRID_MIN:  # ... or once the structure's runs paid for it numerically
                 return None
         if prog is not False and prog is not None and self.signature != prog.signature:
             prog = False

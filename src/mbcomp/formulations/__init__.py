@@ -13,8 +13,8 @@ Examples
 ('lagrange', 'dalembert')
 """
 from .base import Formulation
-from .choice import FORMULATIONS, build, check
+from .choice import FORMULATIONS, build, check, stepper_for
 from .dalembert import DAlembert
 from .lagrange import LagrangeIndex1
 
-__all__ = ["Formulation", "LagrangeIndex1", "DAlembert", "build", "check", "FORMULATIONS"]
+__all__ = ["Formulation", "LagrangeIndex1", "DAlembert", "build", "check", "stepper_for", "FORMULATIONS"]

@@ -33,7 +33,7 @@ from .dae import DAE_FORMS, Mechanical
 from .dalembert import DAlembert
 from .lagrange import LagrangeIndex1
 
-__all__ = ["FORMULATIONS", "PROBLEMS", "check", "build"]
+__all__ = ["FORMULATIONS", "PROBLEMS", "check", "build", "stepper_for"]
 
 FORMULATIONS = ("lagrange", "dalembert")
 PROBLEMS = ("ode", "dae", "mechanical")
@@ -89,6 +89,25 @@ def check(formulation, problem, *, index=None, method=None, max_index=None):
     if problem == "mechanical" and index != 3:
         raise ValueError(f"{name} steps the index-3 (position-level) form only -> use index=3")
     return index
+
+
+def stepper_for(stepper, formulation, index):
+    """The stepper class to run ``formulation`` with: ``stepper`` itself, or for a DAE solver
+    that declares ``ode_by_default`` (``radau5``) and the Lagrange formulation with no
+    ``index`` asked for, its ODE variant (``stepper.on_ode()``: the index-1 ODE ``[q, u]``,
+    smaller and, measured, faster than the index-1 DAE; see
+    :attr:`mbcomp.solvers.radau.Radau5.ode_by_default`).
+
+    Examples
+    --------
+    >>> from mbcomp.formulations import stepper_for
+    >>> from mbcomp.solvers import STEPPERS
+    >>> [stepper_for(STEPPERS["radau5"], "lagrange", i).problem for i in (None, 1)]
+    ['ode', 'dae']
+    """
+    if index is None and formulation == "lagrange" and getattr(stepper, "ode_by_default", False):
+        return stepper.on_ode()
+    return stepper
 
 
 def build(formulation, problem, system, *, index=None, stabilization="baumgarte", alpha=10.0, beta=10.0,

@@ -16,7 +16,9 @@ event does (an impulse, a switch of the active set, the end of the run). Bottom 
 * :mod:`.slip` -- contacts that slide: the friction along the slip, its work, its columns;
 * :mod:`.events` -- event functions detected and located on a step's dense output
   (:meth:`~.events.Events.check`) and the action on them (:meth:`~.events.Events.act`,
-  an :class:`~.events.Outcome` the driver starts the next segment from).
+  an :class:`~.events.Outcome` the driver starts the next segment from);
+* :mod:`.steppers` -- which stepper a run with events takes (the C integrators watching the
+  declared event rows in their loop, or one scipy step at a time).
 
 It sits between the solvers and :mod:`mbcomp.simulation` (whose driver integrates the
 segments and whose post-processing writes each output's columns over its segment's system)

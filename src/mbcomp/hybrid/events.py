@@ -53,7 +53,6 @@ from ..assembly.kkt import accelerations
 from ..errors import SimulationError
 from ..modeling.events import ContactRow, End, Impact, SlipSpeed, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value, touching_at_start
-from ..solvers.compiled_rk import CompiledRK
 from ..solvers.locate import return_root, root, time_tolerance
 from ..assembly.conservation import impulse_work
 from .active import (SegmentStart, mode_rows, mode_system, rows_in_force, slipping_joints, start_modes,
@@ -63,7 +62,7 @@ from .stops import consistent, impact_speeds, row_push, row_values
 from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, tangent_rows, with_slip_friction
 from .friction import row_events
 
-__all__ = ["EventRecord", "Events", "Cut", "Outcome", "stepwise", "watching", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
+__all__ = ["EventRecord", "Events", "Cut", "Outcome", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
            "SPIN_TURNS", "SPIN_SPAN"]
 
 #: an impact whose rebound rises less than this times ``atol`` (m or rad) settles engaged
@@ -72,42 +71,6 @@ REST_HEIGHT = 10.0
 CHATTER = 30
 #: this many events of one component within BURST_SPAN max(1, |t|) seconds are chattering (an error naming it)
 BURST, BURST_SPAN = 60, 1e-9
-
-
-def stepwise(stepper_class):
-    """``stepper_class``, or for a C integrator (:class:`~mbcomp.solvers.compiled_rk.CompiledRK`)
-    one that steps scipy's method of the same order over the (compiled) right-hand side one
-    step at a time: an event is located on each step's own dense output, which a C stretch
-    (outputs only at the output times) does not give."""
-    if not issubclass(stepper_class, CompiledRK):
-        return stepper_class
-
-    def __init__(self, *args, **kw):
-        stepper_class.__init__(self, *args, **kw)
-        self.engine = None
-
-    return type(stepper_class.__name__, (stepper_class,), {"__init__": __init__, "__doc__": stepper_class.__doc__})
-
-
-def watching(stepper_class, events):
-    """``stepper_class``, or for a C integrator (:class:`~mbcomp.solvers.compiled_rk.CompiledRK`)
-    one whose stretches watch the events in C (:meth:`Events.c_watch`: every event function
-    of the segment declared affine, ``Modes.linear_events``) -- or, where they cannot be
-    (a user's function, a push, a slide, no compiled engine), steps scipy's method of the
-    same order one step at a time as :func:`stepwise` does. Each stepper is made at the start
-    of a segment, so it watches that segment's events."""
-    if not issubclass(stepper_class, CompiledRK):
-        return stepper_class
-
-    def __init__(self, *args, **kw):
-        stepper_class.__init__(self, *args, **kw)
-        spec = events.c_watch() if self.engine is not None else None
-        if spec is None:
-            self.engine = None
-        else:
-            self.watch(*spec)
-
-    return type(stepper_class.__name__, (stepper_class,), {"__init__": __init__, "__doc__": stepper_class.__doc__})
 
 
 def _crossed(g0, g1, direction):

@@ -227,6 +227,29 @@ class PortRef:
         return f"<{self.kind} {self.path}>"
 
 
+
+#: (class, kind) -> (the sizes of the classes' namespaces along the MRO, {name: declaration})
+_DECLARED = {}
+
+
+def _declared(cls, kind):
+    """``{name: declaration}`` of the ``kind`` (:class:`Param` or :class:`Port`) attributes of
+    ``cls`` and its bases, base classes first. Read once per class (a model builds and
+    assembles its components' declarations hundreds of times); read again when a class on
+    the MRO gained or lost an attribute since."""
+    mro = cls.__mro__
+    sizes = tuple(len(k.__dict__) for k in mro)
+    got = _DECLARED.get((cls, kind))
+    if got is not None and got[0] == sizes:
+        return got[1]
+    out = {}
+    for klass in reversed(mro):
+        for k, v in vars(klass).items():
+            if isinstance(v, kind):
+                out[k] = v
+    _DECLARED[(cls, kind)] = (sizes, out)
+    return out
+
 class Component:
     """Base class of every component: parameters, ports, a name given by the model.
 
@@ -324,22 +347,12 @@ class Component:
     @classmethod
     def params(cls):
         """Dictionary ``name -> Param`` of the class's parameters, in declaration order."""
-        out = {}
-        for klass in reversed(cls.__mro__):
-            for k, v in vars(klass).items():
-                if isinstance(v, Param):
-                    out[k] = v
-        return out
+        return dict(_declared(cls, Param))
 
     @classmethod
     def ports(cls):
         """Dictionary ``name -> Port`` of the class's connectors."""
-        out = {}
-        for klass in reversed(cls.__mro__):
-            for k, v in vars(klass).items():
-                if isinstance(v, Port):
-                    out[k] = v
-        return out
+        return dict(_declared(cls, Port))
 
     @property
     def path(self):

@@ -37,9 +37,10 @@ import time as _time
 import numpy as np
 
 from ..errors import SimulationError, SimulationInterrupted
-from ..formulations import FORMULATIONS, build
+from ..formulations import FORMULATIONS, build, stepper_for
 from ..hybrid.contacts import initialize_in_modes
-from ..hybrid.events import Events, stepwise, watching
+from ..hybrid.events import Events
+from ..hybrid.steppers import stepwise, watching
 from ..modeling.inputs import check_names, input_signals, signal_of
 from ..solvers import SCIPY_STEPPERS, StepFailure
 from .monitors import SingularPosition, monitors_for
@@ -192,8 +193,7 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="auto", rtol=
     stepper, index = check_request(method, formulation, index, h, t_start, t_end, backend)
     events = check_events(events)
     stabilization = check_singular(singular, method, stepper, formulation, stabilization)
-    if asked_index is None and formulation == "lagrange" and getattr(stepper, "ode_by_default", False):
-        stepper = stepper.on_ode()  # radau5: the index-1 ODE unless an index is asked for (Radau5.ode_by_default)
+    stepper = stepper_for(stepper, formulation, asked_index)  # radau5: the index-1 ODE unless an index is asked for
     check_names(inputs or {})
     sensitivities = check_sensitivities(sensitivities)
 
