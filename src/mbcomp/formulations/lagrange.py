@@ -182,10 +182,16 @@ class LagrangeIndex1(Formulation):
         call; a joint whose coordinates move in a way the C projection does not know (see
         :func:`mbcomp.codegen.engine.coordinate_map`: additive, ball and free joints it
         knows) leaves no engine: scipy's method steps :meth:`fun` and the driver projects
-        after every step."""
+        after every step.
+
+        With ``singular="pass"`` there is none: scipy's method steps through the singular
+        positions, each step watched by the rank monitor on its own dense output (C stretches
+        located passages on a cubic through their ends, and a handover to Python next to a
+        passage made its steps collapse: docs/design/generated-programs.md, *Passing singular
+        positions stays on the Python path*)."""
         evaluator = self.system.evaluator
         if "c_integrate" not in evaluator.capabilities or self.singular == "pass":
-            return None  # passing singular positions: the driver watches every step (not stretches)
+            return None
         if not self.projects:
             return evaluator.integrator(*((self.alpha, self.beta) if self.stabilization == "baumgarte"
                                           else (0.0, 0.0)))
