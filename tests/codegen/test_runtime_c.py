@@ -31,6 +31,10 @@ TEST_C = r"""
 int rhs_decay(void *ctx, double t, const double *y, double *dy)
 { (void)ctx; (void)t; dy[0] = -y[0]; return 0; }
 
+/* a fall: y0' = y1, y1' = -g  (g = p[0]) */
+int rhs_fall(void *ctx, double t, const double *y, double *dy)
+{ (void)t; dy[0] = y[1]; dy[1] = -((const double *)ctx)[0]; return 0; }
+
 /* y0' = y1, y1' = -w^2 y0  (w = p[0]) */
 int rhs_osc(void *ctx, double t, const double *y, double *dy)
 { double w = ((const double *)ctx)[0]; (void)t; dy[0] = y[1]; dy[1] = -w * w * y[0]; return 0; }
@@ -250,6 +254,56 @@ int main(void)
         CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 0, y2, 10.0, 1e-8, 11, 0, &st, last) == 6);
         CHECK(run(meth[m], wsz[m], rhs_osc, NULL, &w, 2, y2, 10.0, -1.0, 11, 0, &st, last) == 6);
         printf("%s ok (last message: %s)\n", m ? "DOP853" : "DOPRI5", st.message);
+    }
+
+    /* events (mbrt_events.c) on exact-size heap buffers: the oscillator y0 = cos(2t) falling
+     * through 0.5 (t = pi/6) and rising through -0.5 (t = pi/3), watched on both methods; a
+     * mass thrown up from 0 returning inside one first step (fresh); bad descriptions */
+    {
+        typedef int (*ev_fn)(mbrt_rhs_fn, mbrt_step_fn, void *, int, double, const double *, double, double,
+                             const double *, double, double, long, const double *, int, double *, int *,
+                             double *, mbrt_stats *, int, mbrt_events *);
+        ev_fn evm[2] = {mbrt_dopri5_events, mbrt_dop853_events};
+        for (int m = 0; m < 2; ++m) {
+            int idx[2] = {0, 0}, dir[2] = {-1, 1};
+            double sg[2] = {1.0, -1.0}, at[2] = {0.5, -0.5}, w = 2.0, y2[2] = {1.0, 0.0}, atl[2] = {1e-12, 1e-12};
+            mbrt_linear_events L = {2, idx, sg, at};
+            mbrt_events E;
+            memset(&E, 0, sizeof E);
+            E.g = mbrt_linear_event_values; E.gctx = &L; E.n_ev = 2; E.direction = dir; E.tol = 1e-13; E.fresh = -1;
+            E.work = malloc(mbrt_events_work_size(2, 2) * sizeof(double));
+            E.y_event = malloc(2 * sizeof(double));
+            double *wk = malloc(wsz[m](2) * sizeof(double)), to[4] = {0.1, 0.2, 0.6, 1.0}, yo[8];
+            int nw = -1;
+            mbrt_stats st;
+            CHECK(evm[m](rhs_osc, NULL, &w, 2, 0.0, y2, 1.0, 1e-10, atl, 0.0, 0.0, 0, to, 4, yo, &nw, wk, &st, 0, &E)
+                  == MBRT_EVENT && E.which == 0 && nw == 2);
+            CHECK(fabs(E.t_event - acos(-1.0) / 6) < 1e-9 && fabs(E.y_event[0] - 0.5) < 1e-9 && st.t == E.t_event);
+            /* on from there watching the second only (the first would be found again at its start) */
+            double y3[2] = {E.y_event[0], E.y_event[1]};
+            mbrt_linear_events L2 = {1, idx + 1, sg + 1, at + 1};
+            mbrt_events E2 = E;
+            E2.gctx = &L2; E2.n_ev = 1; E2.direction = dir + 1;
+            CHECK(evm[m](rhs_osc, NULL, &w, 2, E.t_event, y3, 2.0, 1e-10, atl, 0.0, 0.0, 0, NULL, 0, NULL, &nw, wk,
+                         &st, 0, &E2) == MBRT_EVENT && E2.which == 0 && fabs(E2.t_event - acos(-1.0) / 3) < 1e-9);
+            /* thrown up at 1 m/s under g = 9.81 from y = 0 (rhs_osc with w = 0 and a constant pull) */
+            double yt[2] = {0.0, 1.0}, g = 9.81;
+            int i0[1] = {0}, d0[1] = {-1};
+            double s0[1] = {1.0}, a0[1] = {0.0};
+            mbrt_linear_events L1 = {1, i0, s0, a0};
+            mbrt_events F = E;
+            F.gctx = &L1; F.n_ev = 1; F.direction = d0; F.fresh = 0;
+            CHECK(evm[m](rhs_fall, NULL, &g, 2, 0.0, yt, 1.0, 1e-9, atl, 1.0, 0.0, 0, NULL, 0, NULL, &nw, wk, &st, 0,
+                         &F) == MBRT_EVENT && fabs(F.t_event - 2.0 / g) < 1e-12 && st.naccept == 1);
+            F.fresh = 3;  /* beyond n_ev: refused */
+            CHECK(evm[m](rhs_fall, NULL, &g, 2, 0.0, yt, 1.0, 1e-9, atl, 1.0, 0.0, 0, NULL, 0, NULL, &nw, wk, &st, 0,
+                         &F) == MBRT_BAD_ARGUMENT);
+            F.fresh = -1; F.tol = 0.0;
+            CHECK(evm[m](rhs_fall, NULL, &g, 2, 0.0, yt, 1.0, 1e-9, atl, 1.0, 0.0, 0, NULL, 0, NULL, &nw, wk, &st, 0,
+                         &F) == MBRT_BAD_ARGUMENT);
+            free(wk); free(E.work); free(E.y_event);
+            printf("%s events ok\n", m ? "DOP853" : "DOPRI5");
+        }
     }
 
     /* the mechanics kernels on the Cartesian pendulum, exact-size heap scratch */
