@@ -124,6 +124,8 @@ GAMMA = _COEF["gamma"]
 MU = _COEF["mu"]
 D_ERR = _COEF["d"]
 P_DENSE = _COEF["P"]
+C1, C2, C3 = (float(c) for c in C)  # the nodes as Python floats: the stage times in float arithmetic
+_P_DENSE_T = np.ascontiguousarray(P_DENSE.T)
 
 NEWTON_MAXITER = 7  # RADAU5's NIT
 #: Reuse the Jacobian when Newton contracts faster than this (RADAU5's THET: 1e-3 for cheap
@@ -143,6 +145,13 @@ MAX_SINGULAR = 5  # consecutive singular iteration matrices before giving up
 MAX_FAILURES = 60  # consecutive failed attempts within one step before giving up
 #: shortest default first step (s), RADAU5's default ``H``: see ``_initial_step``
 H_START = 1e-6
+
+
+def _all_finite(x, zeros):
+    """Whether every entry of the 1-d array ``x`` is finite: ``x . 0`` is 0 then, NaN when an
+    entry is infinite or NaN (one dot product: a third of ``np.isfinite(x).all()``'s cost).
+    ``zeros``: at least ``x.size`` zeros."""
+    return not math.isnan(x.dot(zeros[: x.size]))
 
 
 class RadauDenseOutput:
@@ -168,7 +177,7 @@ class RadauDenseOutput:
         self.t_old, self.h = float(t_old), float(h)
         self.t_min, self.t_max = self.t_old, self.t_old + self.h
         self.y_old = np.array(y_old, dtype=float)
-        self.Q = P_DENSE.T @ Z  # (3, n): y = y_old + sum_k Q[k] s**(k+1)
+        self.Q = _P_DENSE_T.dot(Z)  # (3, n): y = y_old + sum_k Q[k] s**(k+1)
 
     def __call__(self, t):
         t = np.asarray(t, dtype=float)
@@ -177,6 +186,18 @@ class RadauDenseOutput:
             return self.y_old + self.Q.T @ np.array([s, s * s, s ** 3])
         powers = np.vstack([s, s * s, s ** 3])  # (3, m)
         return self.y_old[:, None] + self.Q.T @ powers
+
+    def increments(self, t, h, y, out):
+        """``y(t + c_i h) - y`` (3, n) at the three nodes of a step ``[t, t + h]``, written into
+        ``out``: the next step's predicted stage increments (the numbers of
+        ``(self(t + c h) - y[:, None]).T``, in fewer array calls)."""
+        t0, h0 = self.t_old, self.h
+        s1, s2, s3 = (((t + c * h) - t0) / h0 for c in (C1, C2, C3))
+        p1, p2, p3 = np.power((s1, s2, s3), 3).tolist()  # numpy's power: the numbers of s ** 3
+        powers = np.array(((s1, s1 * s1, p1), (s2, s2 * s2, p2), (s3, s3 * s3, p3)))
+        np.add(self.y_old, powers.dot(self.Q), out)
+        out -= y
+        return out
 
 
 class Radau5(Stepper):
@@ -312,6 +333,11 @@ class Radau5(Stepper):
         self._hasjac = callable(getattr(problem, "jac", None))
         self._index_m1 = self.index - 1
         self._scaled = bool(np.any(self.index > 1))  # error weights depend on h
+        self._ode = bool(np.all(self.mass == 1.0))  # E = I: the products with E are skipped
+        # work arrays of a step (the stage increments Z, their transform W, the Newton
+        # right-hand side and increment, the scaled increment): no allocation per iteration
+        self._Z, self._W, self._R, self._dW, self._v, self._F = (np.empty((3, n)) for _ in range(6))
+        self._zeros = np.zeros(3 * n)  # for _all_finite
 
     # ------------------------------------------------------------------ evaluations
     def _fun(self, t, y):
@@ -320,7 +346,7 @@ class Radau5(Stepper):
 
     def _fun_checked(self, t, y, what):
         f = self._fun(t, y)
-        if not np.all(np.isfinite(f)):
+        if not _all_finite(f, self._zeros):
             bad = np.flatnonzero(~np.isfinite(f)).tolist()
             raise StepFailure(f"Radau5: fun returned non-finite values at t={t:.17g} ({what}; components {bad})")
         return f
@@ -362,9 +388,10 @@ class Radau5(Stepper):
         self.f = self._fun_checked(self.t, self.y, "projected state")
 
     # ------------------------------------------------------------------ norms
-    def _scale(self, h, y_a, y_b=None):
-        """Error weights (n,): ``atol + rtol*|y|``, divided by ``h**(index-1)``."""
-        ya = np.abs(y_a) if y_b is None else np.maximum(np.abs(y_a), np.abs(y_b))
+    def _scale(self, h, abs_y, y_b=None):
+        """Error weights (n,): ``atol + rtol*|y|``, divided by ``h**(index-1)``; ``|y|`` is
+        ``abs_y`` (the step's start, computed once a step) or ``max(abs_y, |y_b|)``."""
+        ya = abs_y if y_b is None else np.maximum(abs_y, np.abs(y_b))
         sc = self.atol + self.rtol * ya
         return sc / h ** self._index_m1 if self._scaled else sc
 
@@ -373,7 +400,7 @@ class Radau5(Stepper):
         """Scaled RMS norm ``sqrt(mean((x/scale)**2))`` (one dot product: np.mean's overhead
         was a tenth of the stepper's time)."""
         v = (x / scale).ravel()
-        return math.sqrt(float(v @ v) / v.size)
+        return math.sqrt(float(v.dot(v)) / v.size)
 
     # ------------------------------------------------------------------ initial step
     def _initial_step(self):
@@ -405,36 +432,38 @@ class Radau5(Stepper):
             ``(ok, Z (3, n), n_iter, info)``; on failure ``info`` is ``(reason, factor)`` with
             the suggested step-size factor, on success the contraction rate ``theta``.
         """
-        Mh = self.mass / h
-        W = TI @ Z0
-        Z = Z0.copy()
-        F = np.empty((3, self.n))
-        rc = np.empty(self.n, dtype=complex)  # right-hand side of the complex system
-        ts = [t + c * h for c in C]
-        fun, lu = self.prob.fun, self.lu
+        Z, W, R, dW, v, F = self._Z, self._W, self._R, self._dW, self._v, self._F
+        if Z0 is not Z:
+            Z[...] = Z0
+        TI.dot(Z, W)
+        Mh = 1.0 / h if self._ode else self.mass / h  # E / h (E = I: the scalar, the same numbers)
+        t1, t2, t3 = t + C1 * h, t + C2 * h, t + C3 * h
+        fun, lu, stats = self.prob.fun, self.lu, self.stats
+        vr = v.reshape(-1)  # a view
         faccon = max(self.faccon, EPS) ** 0.8
         theta = THETA_JAC
         dnorm_old = thq_old = None
         for k in range(NEWTON_MAXITER):
-            self.stats["nnewton"] += 1
-            self.stats["nfev"] += 3
-            for i in range(3):
-                F[i] = fun(ts[i], y + Z[i])
-            R = TI @ F
-            R -= (LAM @ W) * Mh
-            dW = np.empty_like(W)
-            dW[0] = lu.solve_real(R[0])
-            rc.real, rc.imag = R[1], R[2]
-            dc = lu.solve_complex(rc)
-            dW[1], dW[2] = dc.real, dc.imag
-            dnorm = self._norm(dW, scale)
+            stats["nnewton"] += 1
+            stats["nfev"] += 3
+            Y = y + Z  # a new array each iteration: fun may keep its argument
+            F[0] = fun(t1, Y[0])
+            F[1] = fun(t2, Y[1])
+            F[2] = fun(t3, Y[2])
+            TI.dot(F, R)  # ndarray.dot: the numbers of @, a third of its call cost
+            LAM.dot(W, v)
+            v *= Mh
+            R -= v
+            lu.solve_stages(R, dW)
+            np.divide(dW, scale, v)
+            dnorm = math.sqrt(float(vr.dot(vr)) / vr.size)  # the scaled RMS norm (_norm)
             if not math.isfinite(dnorm):  # a non-finite F gives a non-finite increment
                 if not np.isfinite(F).all():
                     return False, Z, k + 1, ("fun returned non-finite values at a Newton iterate", 0.5)
                 return False, Z, k + 1, ("the Newton increment is not finite", 0.5)
             if k >= 1:
                 thq = dnorm / dnorm_old if dnorm_old > 0 else 0.0
-                theta = thq if k == 1 else np.sqrt(thq * thq_old)
+                theta = thq if k == 1 else math.sqrt(thq * thq_old)
                 thq_old = thq
                 if theta < 0.99:
                     faccon = theta / (1.0 - theta)
@@ -448,7 +477,7 @@ class Radau5(Stepper):
                     return False, Z, k + 1, (f"Newton diverges (rate {theta:.3g})", 0.5)
             dnorm_old = dnorm
             W += dW
-            Z = T @ W
+            T.dot(W, Z)
             if faccon * dnorm <= self.newton_tol:
                 self.faccon = faccon
                 return True, Z, k + 1, theta
@@ -481,6 +510,7 @@ class Radau5(Stepper):
         h = min(self.h, self.max_step)
         kind, reason, history = "none", "", ""
         n_fail = n_singular = 0
+        abs_y, scale = np.abs(y), None
         while True:
             hmin = 1e-14 * abs(t)
             if h <= hmin or n_fail >= MAX_FAILURES:
@@ -512,7 +542,9 @@ class Radau5(Stepper):
                     n_fail += 1
                     h = self._retry(h, 0.5)
                     continue
-            ok, Z, n_iter, info = self._newton(t, y, h, self._predict(t, y, h), self._scale(h, y))
+            if scale is None or self._scaled:  # the weights of an index-1 problem do not depend on h
+                scale = self._scale(h, abs_y)
+            ok, Z, n_iter, info = self._newton(t, y, h, self._predict(t, y, h), scale)
             if not ok:
                 reason, fac = info
                 kind = "newton"
@@ -523,7 +555,7 @@ class Radau5(Stepper):
                 continue
             theta = info
             y_new = y + Z[2]
-            err = self._error(t, y, h, Z, y_new, n_fail)
+            err = self._error(t, y, h, Z, y_new, n_fail, abs_y)
             fac = min(SAFETY, SAFETY * (2 * NEWTON_MAXITER + 1) / (n_iter + 2 * NEWTON_MAXITER))
             quot = max(1.0 / FAC_MAX, min(1.0 / FAC_MIN, err ** 0.25 / fac))
             h_new = h / quot
@@ -548,26 +580,31 @@ class Radau5(Stepper):
     def _predict(self, t, y, h):
         """Starting values of the stage increments (3, n): the last step's collocation
         polynomial extrapolated (zero at the first step or if it is not finite)."""
+        Z = self._Z
         if self._dense is not None:
-            Z0 = (self._dense(t + C * h) - y[:, None]).T
-            if np.all(np.isfinite(Z0)):
-                return Z0
-        return np.zeros((3, self.n))
+            self._dense.increments(t, h, y, Z)
+            if _all_finite(Z.reshape(-1), self._zeros):
+                return Z
+        Z.fill(0.0)
+        return Z
 
-    def _error(self, t, y, h, Z, y_new, n_fail):
+    def _error(self, t, y, h, Z, y_new, n_fail, abs_y):
         """Scaled local error of the step (>= 1e-10; ``inf`` if not finite), with the
         improved estimate after a rejection or at the first step (Hairer-Wanner IV.8)."""
-        MZE = self.mass * ((D_ERR @ Z) / h)
+        MZE = D_ERR.dot(Z)
+        MZE /= h
+        if not self._ode:
+            MZE *= self.mass
         err_vec = self.lu.solve_real(self.f + MZE)
-        scale = self._scale(h, y, y_new)
+        scale = self._scale(h, abs_y, y_new)
         err = self._norm(err_vec, scale)
-        if err >= 1.0 and (self.first or n_fail > 0) and np.isfinite(err):
+        if err >= 1.0 and (self.first or n_fail > 0) and math.isfinite(err):
             f1 = self._fun(t, y + err_vec)
-            if np.all(np.isfinite(f1)):
+            if np.isfinite(f1).all():
                 err_vec = self.lu.solve_real(f1 + MZE)
                 err = self._norm(err_vec, scale)
-        if not np.isfinite(err):
-            err = np.inf
+        if not math.isfinite(err):
+            err = math.inf
         return max(err, 1e-10)
 
     def _accept(self, t, y, h, Z, y_new, err, quot, h_new, n_fail, theta, last):
