@@ -59,3 +59,31 @@ def test_a_rank_deficient_algebraic_block_is_reported_by_its_pivot():
     with pytest.raises(SingularMatrix, match="rank deficient") as exc:
         IterationMatrices(J, np.array([1.0, 0.0, 0.0]), GAMMA, MU, 0.1)
     assert not exc.value.structural
+
+
+@pytest.mark.parametrize("h", [1e-6, 1e-3, 0.1])
+def test_solve_stages_is_the_real_and_the_complex_solve(h):
+    # one call for the Newton iteration's two solves: the numbers of solve_real on R[0] and of
+    # solve_complex on R[1] + i R[2], bit for bit, and the solutions solve both matrices
+    J, mass = _badly_scaled_dae()
+    m = IterationMatrices(J, mass, GAMMA, MU, h)
+    R = np.random.default_rng(1).standard_normal((3, J.shape[0]))
+    out = np.full_like(R, np.nan)
+    m.solve_stages(R, out)
+    np.testing.assert_array_equal(out[0], m.solve_real(R[0]))
+    z = m.solve_complex(R[1] + 1j * R[2])
+    np.testing.assert_array_equal(out[1] + 1j * out[2], z)
+    Mc = np.diag(MU / h * mass) - J
+    assert np.linalg.norm(Mc @ (out[1] + 1j * out[2]) - (R[1] + 1j * R[2])) <= \
+        1e-12 * np.linalg.norm(np.abs(Mc) @ np.abs(z))
+
+
+def test_the_ode_shortcut_gives_the_same_factors():
+    # E = I: the diagonal formed without the products with mass -- the same numbers
+    J, _ = _badly_scaled_dae()
+    ones = np.ones(J.shape[0])
+    b = np.random.default_rng(2).standard_normal(J.shape[0])
+    for h in (1e-5, 0.03):
+        a, z = IterationMatrices(J, ones, GAMMA, MU, h, ode=True), IterationMatrices(J, ones, GAMMA, MU, h, ode=False)
+        np.testing.assert_array_equal(a.solve_real(b), z.solve_real(b))
+        np.testing.assert_array_equal(a.solve_complex(b + 1j), z.solve_complex(b + 1j))

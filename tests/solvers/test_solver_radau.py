@@ -293,6 +293,24 @@ def test_dense_output_is_the_collocation_polynomial(dae_index):
             assert np.abs(u[0] ** 2 + u[1] ** 2 - 1.0).max() < 1e-9
 
 
+
+@pytest.mark.parametrize("dae_index", [3, 1])
+def test_predicted_stages_are_the_dense_output_extrapolated(dae_index):
+    # the next step's starting values (RadauDenseOutput.increments, the predictor) are the
+    # collocation polynomial at the new step's nodes minus the step's start -- bit for bit
+    # what calling the dense output gives, and the polynomial's passage through the stages
+    s, ts, ys, dense, _ = pendulum_run(dae_index, 1e-8)
+    c = radau_mod.C
+    out = np.empty((3, ys.shape[1]))
+    for k in range(len(dense) - 1):
+        d, t, h = dense[k], ts[k + 1], ts[k + 2] - ts[k + 1]
+        got = d.increments(t, h, ys[k + 1], out)
+        assert got is out
+        np.testing.assert_array_equal(out, (d(t + c * h) - ys[k + 1][:, None]).T)
+    d = dense[0]  # inside its own step the increments are the stages Z_i = Y_i - y0
+    own = d.increments(d.t_old, d.h, d.y_old, out) + d.y_old
+    np.testing.assert_allclose(own[2], ys[1], rtol=0, atol=1e-12 * (1 + np.abs(ys[1])).max())
+
 # ==========================================================================================
 # failures
 # ==========================================================================================

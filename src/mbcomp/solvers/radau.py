@@ -33,13 +33,9 @@ Jacobian and LU reuse (RADAU5's rule, Hairer & Wanner IV.8)
     otherwise they are factored again at ``h_new``. After a failed attempt (error test,
     Newton divergence or slow convergence, singular matrix) ``h`` shrinks and the matrices
     are factored again -- with a new Jacobian first when the current one is stale (formed at
-    an earlier point), with the same one when it is up to date. Where Newton contracts slowly
-    even with a fresh Jacobian (the damped stiff spring chain's index-1 DAE: rates 0.03-0.1 at
-    accepted steps, 0.4-0.7 when ``h`` grows, 210 "too slow" failures in 1154 attempts)
-    almost every attempt has a new ``h`` or ``J``, so almost every one factors: the rule is
-    RADAU5's, the cost is the form's (on scipy's index-1 ODE of the same chain radau5 takes
-    0.5-0.85 factorizations a step; ``bench/radau_vs_scipy.py``). The factors:
-    :mod:`mbcomp.solvers.radau_linalg`.
+    an earlier point), with the same one when it is up to date. The factors:
+    :mod:`mbcomp.solvers.radau_linalg`; what a step costs and why almost every attempt
+    factors on the stiff spring chain's DAE: ``docs/design/equations.md``, *radau5's cost*.
 Dense output
     The collocation polynomial (degree 3) through ``y0`` and the three stage values.
 
@@ -148,9 +144,8 @@ H_START = 1e-6
 
 
 def _all_finite(x, zeros):
-    """Whether every entry of the 1-d array ``x`` is finite: ``x . 0`` is 0 then, NaN when an
-    entry is infinite or NaN (one dot product: a third of ``np.isfinite(x).all()``'s cost).
-    ``zeros``: at least ``x.size`` zeros."""
+    """Whether every entry of the 1-d array ``x`` is finite (``zeros``: >= ``x.size`` zeros): ``x . 0``
+    is 0 then, NaN if one is infinite or NaN (a third of ``np.isfinite(x).all()``'s cost)."""
     return not math.isnan(x.dot(zeros[: x.size]))
 
 
@@ -378,7 +373,7 @@ class Radau5(Stepper):
 
     def _factorize(self, h):
         self.lu = None
-        self.lu = IterationMatrices(self.J, self.mass, GAMMA, MU, h)
+        self.lu = IterationMatrices(self.J, self.mass, GAMMA, MU, h, self._ode)
         self.stats["nlu"] += 2  # the real and the complex matrix
 
     def reset_state(self, y):
@@ -424,7 +419,7 @@ class Radau5(Stepper):
 
     # ------------------------------------------------------------------ Newton
     def _newton(self, t, y, h, Z0, scale):
-        """Simplified Newton iteration for the stage increments.
+        """Simplified Newton iteration for the stage increments, from ``Z0`` (updated in place).
 
         Returns
         -------
@@ -432,9 +427,7 @@ class Radau5(Stepper):
             ``(ok, Z (3, n), n_iter, info)``; on failure ``info`` is ``(reason, factor)`` with
             the suggested step-size factor, on success the contraction rate ``theta``.
         """
-        Z, W, R, dW, v, F = self._Z, self._W, self._R, self._dW, self._v, self._F
-        if Z0 is not Z:
-            Z[...] = Z0
+        Z, W, R, dW, v, F = Z0, self._W, self._R, self._dW, self._v, self._F  # Z0: _predict's work array
         TI.dot(Z, W)
         Mh = 1.0 / h if self._ode else self.mass / h  # E / h (E = I: the scalar, the same numbers)
         t1, t2, t3 = t + C1 * h, t + C2 * h, t + C3 * h

@@ -78,7 +78,7 @@ def _lu(getrf, M, r, s):
     M *= s
     lu, piv, _ = getrf(M, overwrite_a=True)
     pivots = np.abs(lu.diagonal())
-    smallest = pivots.min()
+    smallest = np.minimum.reduce(pivots)
     if not PIVOT_TOL < smallest < np.inf:  # also NaN
         k = int(np.argmin(pivots))
         raise SingularMatrix(f"pivot {k} of the equilibrated matrix is {pivots[k]:.3g} (rank deficient)")
@@ -100,6 +100,9 @@ class IterationMatrices:
         The complex eigenvalue used by the complex system.
     h : float
         Step size (s) the matrices are formed with.
+    ode : bool, optional
+        Whether ``mass`` is all ones (``E = I``; the caller may know it): then the diagonal is
+        formed without the products with ``mass`` (the same numbers). Default: looked up.
 
     Raises
     ------
@@ -118,14 +121,20 @@ class IterationMatrices:
     equation 1 involves no variable (row 1 is zero) True
     """
 
-    def __init__(self, J, mass, gamma, mu, h):
+    def __init__(self, J, mass, gamma, mu, h, ode=None):
         self.h = h
         n = J.shape[0]
+        if ode is None:
+            ode = bool(np.all(mass == 1.0))
         M = np.empty((n, n))
         np.negative(J, out=M)
         Md = M.reshape(-1)[:: n + 1]  # the diagonal, a view
-        dc = (mu / h) * mass + Md  # before Md changes: (mu/h) E - J on the diagonal
-        Md += (gamma / h) * mass
+        if ode:  # E = I: (mu/h) * 1.0 is mu/h, the same numbers without the products
+            dc = (mu / h) + Md  # before Md changes: (mu/h) E - J on the diagonal
+            Md += gamma / h
+        else:
+            dc = (mu / h) * mass + Md
+            Md += (gamma / h) * mass
         absM = np.empty((2, n, n))  # the real matrix's magnitudes, the complex one's
         np.abs(M, out=absM[0])
         absM[1] = absM[0]
