@@ -40,9 +40,9 @@ from ..geometry.kinematics import cross
 from ..modeling.component import PortRef
 from ..modeling.roles import FlangeElement, ForceElement, FrameState, Joint
 from .flange_rows import flange_flows, flange_states
-from .recursive import lagrange_solution, tree_links
+from .recursive import generalized_forces, generalized_momenta, lagrange_solution, tree_links, tree_pass
 
-__all__ = ["output_values", "result_columns", "MeasuredFrame"]
+__all__ = ["output_values", "result_columns", "MeasuredFrame", "HIDDEN", "tolerance_terms"]
 
 _XYZ = ("x", "y", "z")
 
@@ -79,6 +79,21 @@ def output_values(system, t, q, u, alpha=0.0, beta=0.0, baumgarte=False):
     rates = _link_rates(tree_links(system), sol.acc)
     reac = system.reactions(ev, rates, sol.lam)
     return result_columns(system, ev, sol.ud, sol.lam, reac, rates)
+
+
+#: the prefix of the output program's hidden columns: read by the post-processing, never kept
+HIDDEN = "~"
+
+
+def tolerance_terms(system, t, q, u):
+    """``{"~f.i": f_i, "~p.i": (M u)_i}``: the generalized forces and momenta (N or N m;
+    kg m/s or kg m^2/s) at ``(t, q, u)`` by the recursive pass (O(N), equal to the dense
+    evaluation's ``f`` and ``M u`` to rounding) -- what
+    :func:`mbcomp.simulation.accuracy.tolerance_energy` weighs the tolerances with, carried by
+    the output program as hidden columns (:data:`HIDDEN`) so that it evaluates nothing again."""
+    tp = tree_pass(system, t, q, u)
+    f, p = generalized_forces(tp, system.nu), generalized_momenta(tp, u, system.nu)
+    return {**{f"{HIDDEN}f.{i}": x for i, x in enumerate(f)}, **{f"{HIDDEN}p.{i}": x for i, x in enumerate(p)}}
 
 
 def result_columns(system, ev, ud, lam, reac, rates=None):

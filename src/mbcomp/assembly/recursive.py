@@ -226,6 +226,22 @@ def generalized_forces(tp, nu):
     return f
 
 
+def generalized_momenta(tp, u, nu):
+    """``M u`` in O(N): each link's twist ``V_k`` from the speeds (its ancestors' ``S_j u_j``
+    summed), the momenta ``I_k V_k`` summed over each subtree, ``S_i^T`` of the sum -- the
+    composite-rigid-body algorithm's ``M`` times ``u`` without forming ``M``."""
+    links = tp.links
+    V = []
+    for i in range(links.n):  # parents before their children
+        v = tp.S[i] @ u[links.cols[i]]
+        p = links.parent[i]
+        V.append(v if p < 0 else V[p] + v)
+    out = np.zeros(nu, tp.dt)
+    for i, H in enumerate(_summed(links, [tp.I[i] @ V[i] for i in range(links.n)])):
+        out[links.cols[i]] = tp.S[i].T @ H
+    return out
+
+
 def mass_matrix(tp, nu):
     """``M`` by the composite-rigid-body algorithm: ``M[i, j] = S_i^T I^C_j S_j`` for ``i`` an
     ancestor of (or equal to) ``j``, zero between links on different branches."""

@@ -33,7 +33,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..assembly.outputs import output_values
+from ..assembly.outputs import output_values, tolerance_terms
 from ..assembly.recursive import SingularTree, lagrange_accelerations, tree_evaluation
 from ..modeling.blame import blame
 from ..modeling.inputs import traced_inputs
@@ -238,7 +238,11 @@ def _outputs(g, ts, t, q, u, n_drives, baumgarte):
     """The traced result columns (:func:`~mbcomp.assembly.outputs.output_values`), the gains
     inputs as in :func:`_lagrange`; None if the trace point itself is singular."""
     alpha, beta = g.input("d", 3 * n_drives, 10.0), g.input("d", 3 * n_drives + 1, 10.0)
-    return _unless_singular(g, lambda: output_values(ts, t, q, u, alpha, beta, baumgarte=baumgarte))
+
+    def make():  # the columns, then the hidden tolerance terms (the graph shares the tree pass's nodes)
+        values, rotations = output_values(ts, t, q, u, alpha, beta, baumgarte=baumgarte)
+        return {**values, **tolerance_terms(ts, t, q, u)}, rotations
+    return _unless_singular(g, make)
 
 
 def _unless_singular(g, make):

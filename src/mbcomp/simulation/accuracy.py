@@ -59,7 +59,7 @@ def _rounding(T, V):
     return 100.0 * np.finfo(float).eps * float(np.max(np.abs(T) + np.abs(V)))
 
 
-def tolerance_energy(system, t, Y, rtol, atol, known=None):
+def tolerance_energy(system, t, Y, rtol, atol, known=None, terms=None):
     """The energy (J) the integration tolerances leave open: how far ``E = T + V`` moves when
     every state moves by its tolerance, ``sum |dE/dq_i| (atol + rtol |q_i|) + |dE/du_i| (atol +
     rtol |u_i|)``, with ``dE/du = M u`` (the momenta) and ``|dE/dq|`` sized by the generalized
@@ -67,7 +67,10 @@ def tolerance_energy(system, t, Y, rtol, atol, known=None):
     outputs ``Y`` (``[q, u]`` rows at times ``t``, s). A ball resting on a floor at rtol 1e-10
     leaves ``m g rtol z`` open: its energy wanders by that much, and exchanges nothing else.
     ``known``: an evaluation of ``system`` already made (the start's), taken instead of
-    evaluating again at an output of exactly its time and state.
+    evaluating again at an output of exactly its time and state. ``terms``: ``(F, P, ok)``,
+    the generalized forces and momenta ``M u`` at every output (arrays ``(n, nu)``, the output
+    program's hidden columns, :func:`mbcomp.assembly.outputs.tolerance_terms`) and where they
+    hold: taken instead of evaluating there.
 
     Examples
     --------
@@ -92,8 +95,11 @@ def tolerance_energy(system, t, Y, rtol, atol, known=None):
         if not (np.isfinite(q).all() and np.isfinite(u).all()):
             continue
         try:
-            ev = known if _at(known, t[k], q, u) else system.evaluate(t[k], q, u)
-            f, p = np.abs(np.asarray(ev.f, float)), np.abs(np.asarray(ev.M, float) @ u)
+            if terms is not None and terms[2][k]:
+                f, p = np.abs(terms[0][k]), np.abs(terms[1][k])
+            else:
+                ev = known if _at(known, t[k], q, u) else system.evaluate(t[k], q, u)
+                f, p = np.abs(np.asarray(ev.f, float)), np.abs(np.asarray(ev.M, float) @ u)
         except Exception:  # noqa: BLE001 - a state the mechanism cannot evaluate adds nothing here
             continue
         dq = atol + rtol * (np.abs(q) if nq == nu else np.max(np.abs(q), initial=0.0))

@@ -28,7 +28,7 @@ import numpy as np
 
 from ..assembly.column_units import column_units
 from ..assembly.conservation import momenta, momentum_conserved, nonconservative
-from ..assembly.outputs import output_values, result_columns
+from ..assembly.outputs import HIDDEN, output_values, result_columns
 from ..assembly.recursive import SingularTree
 from ..assembly.summary import summary
 from ..assembly.topology import no_gravity_note
@@ -130,13 +130,17 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
     gains = form.output_gains()
     todo = range(len(t))
     evaluator = system.evaluator
+    terms = None  # the output program's f and M u at every point (tolerance_energy's weights)
     if len(t) and "outputs" in evaluator.capabilities:
         grid = evaluator.output_grid(t, Y, gains)
         if grid is not None:
             names, values, quaternions, ok = grid
-            cols.series.update(zip(names, values))  # rows of one block (NaN where not ok)
+            hidden = {n: v for n, v in zip(names, values) if n.startswith(HIDDEN)}
+            cols.series.update((n, v) for n, v in zip(names, values) if not n.startswith(HIDDEN))  # NaN where not ok
             cols.quat.update(quaternions)
             todo = np.flatnonzero(~ok)
+            if f"{HIDDEN}f.0" in hidden:
+                terms = tuple(np.array([hidden[f"{HIDDEN}{x}.{i}"] for i in range(system.nu)]).T for x in "fp") + (ok,)
     for k in todo:
         q, u = Y[k, :nq], Y[k, nq:]
         try:
@@ -165,7 +169,7 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
         start = getattr(init, "start", None)  # the start's evaluation, if of this system
         known = start[1] if start is not None and start[0] is system else None
         stats = dict(stats, energy_tolerance=tolerance_energy(system, t, Y, stats["rtol"], stats.get("atol", 0.0),
-                                                              known))
+                                                              known, terms))
         alarm, text = _alarms(system, t, Y, series, stats["rtol"], quadrature, stats["energy_tolerance"])
         if alarm:
             status, notes = alarm, [text] + notes
