@@ -15,15 +15,20 @@ user's job from nothing:
   has no closed-loop forward dynamics on this path, so the 3-link chain stands in for the
   slider-crank (same bodies' count; the chain has 3 degrees of freedom, the showcase 1).
 
-The mbcomp jobs run with the compile cache ``$MBCOMP_CACHE``:
+The mbcomp jobs run with the programs' compile cache ``$MBCOMP_CACHE`` in one of four states:
 
 * **warm**: a directory filled by a previous run of the same job;
-* **cold**: a fresh empty directory per run (the C compiler runs for everything mbcomp builds:
-  the model's programs and the runtime): the first run on a machine;
 * **new model**: a fresh copy of a cache filled by another model's run (the 2-link pendulum):
   what every model shares is built (the runtime's integrators, the thin call's extension,
   compiled once per machine and Python; the output grid's loop), the showcase's own programs
   are not -- what a user meets at the first run of a model new to the machine.
+* **cold cache**: a fresh empty directory per run: the C compiler runs for the model's programs
+  and everything else the cache holds; the runtime (the integrators, the thin call's
+  extension) is the machine's, built once per machine in ``$MBCOMP_RUNTIME`` (a directory of
+  this benchmark's, filled by the warm-up) -- a version of mbcomp keeping its runtime in the
+  programs' cache compiles it here too;
+* **first run**: nothing built anywhere (a fresh ``$MBCOMP_CACHE``, ``$MBCOMP_RUNTIME`` and
+  ``$HOME``): a machine's first run, where the C compiler runs for the runtime as well;
 
 Rounds alternate the jobs (round-robin), the figures are medians over ``--rounds``; wall
 seconds (``time.perf_counter`` around the child) and CPU seconds (the child's and its
@@ -130,7 +135,7 @@ SEED = _MBCOMP.format(path=os.path.join(ROOT, "models", "n_link_pendulum.py"), k
 
 
 class Env:
-    """The children's environments: bytecode, and the compile cache of each cache mode."""
+    """The children's environments: bytecode, and the compile caches of each cache mode."""
 
     def __init__(self, bytecode, keep):
         self.tmp = tempfile.mkdtemp(prefix="mbcomp_cold_start_")
@@ -140,18 +145,19 @@ class Env:
         if bytecode:
             base.pop("PYTHONDONTWRITEBYTECODE", None)
             base["PYTHONPYCACHEPREFIX"] = os.path.join(self.tmp, "pycache")
+        base["MBCOMP_RUNTIME"] = os.path.join(self.tmp, "machine")  # this machine's runtime, built once
         self.base = base
         self.warm = os.path.join(self.tmp, "warm")
         self.seed = os.path.join(self.tmp, "seed")
         self.n = 0
 
-    def fresh(self, seeded):
+    def fresh(self, seeded=False):
         """A new cache directory: empty, or a copy of the seed cache if ``seeded``."""
         self.n += 1
         d = os.path.join(self.tmp, f"cold{self.n}")
         if seeded:
-            if not os.path.isdir(self.seed):
-                run_child(SEED, dict(self.base, MBCOMP_CACHE=self.seed))
+            if not os.path.isdir(self.seed):  # its runtime in it too: a version keeping it there finds it
+                run_child(SEED, dict(self.base, MBCOMP_CACHE=self.seed, MBCOMP_RUNTIME=self.seed))
             shutil.copytree(self.seed, d)
         else:
             os.makedirs(d)
@@ -162,10 +168,12 @@ class Env:
         env = dict(self.base)
         if mode == "warm":
             env["MBCOMP_CACHE"] = self.warm
-        elif mode in ("cold", "new model"):
+        elif mode in ("new model", "cold cache"):
             env["MBCOMP_CACHE"] = self.fresh(seeded=mode == "new model")
+        elif mode == "first run":  # nothing built anywhere: the caches and the home directory new
+            env["MBCOMP_CACHE"], env["MBCOMP_RUNTIME"], env["HOME"] = self.fresh(), self.fresh(), self.fresh()
         elif mode is not None:
-            raise ValueError(f"unknown cache mode {mode!r}: give warm, cold or 'new model'")
+            raise ValueError(f"unknown cache mode {mode!r}: give warm, 'new model', 'cold cache' or 'first run'")
         return env
 
     def close(self):
@@ -341,7 +349,7 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--jobs", nargs="+", default=["showcase", "pendulum", "pinocchio"],
                     choices=["showcase", "pendulum", "pinocchio"])
-    ap.add_argument("--modes", nargs="+", default=["warm", "new model", "cold"])
+    ap.add_argument("--modes", nargs="+", default=["warm", "new model", "cold cache", "first run"])
     ap.add_argument("--no-bytecode", action="store_true", help="keep this environment's PYTHONDONTWRITEBYTECODE")
     ap.add_argument("--no-breakdown", action="store_true")
     ap.add_argument("--keep", action="store_true", help="keep the temporary caches")

@@ -1,6 +1,8 @@
-"""The shared C pieces built ahead (``prepare_runtime``): once per process and cache directory,
-on threads; a program built after links them; a forked child builds its own instead of
-waiting for its parent's threads, which it does not have."""
+"""The shared C pieces (the runtime's objects, the thin call's extension) built ahead by
+``prepare_runtime``: once per process and directory, on threads, in the machine's runtime
+directory (``$MBCOMP_RUNTIME``), not in each programs' cache; a program built in any cache links
+them and computes what it computes with its own runtime; a forked child builds its own instead
+of waiting for its parent's threads, which it does not have."""
 import multiprocessing
 import os
 
@@ -10,19 +12,32 @@ import pytest
 import mbcomp
 from mbcomp.codegen import c_compiler
 from mbcomp.codegen.compiler import prepare_runtime
+from mbcomp.codegen.toolchain import runtime_directory
 
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
 
 
-def test_the_runtime_is_built_once_per_process_and_directory(tmp_path):
+def test_the_runtime_is_built_once_per_process_and_directory(tmp_path, monkeypatch):
     a, b = str(tmp_path / "a"), str(tmp_path / "b")
-    jobs = prepare_runtime(a)
+    monkeypatch.setenv("MBCOMP_RUNTIME", a)
+    (tmp_path / "programs").mkdir()
+    monkeypatch.setenv("MBCOMP_CACHE", str(tmp_path / "programs"))
+    jobs = prepare_runtime()
     objs = jobs[0].result(timeout=300)
     assert objs and all(os.path.exists(o) and os.path.dirname(o) == a for o in objs)
-    assert prepare_runtime(a) is jobs                        # asked again: the same build
-    other = prepare_runtime(b)
+    assert prepare_runtime() is jobs                         # asked again: the same build
+    assert not os.listdir(tmp_path / "programs")             # nothing of it in the programs' cache
+    monkeypatch.setenv("MBCOMP_RUNTIME", b)
+    other = prepare_runtime()
     assert other is not jobs and [os.path.basename(o) for o in other[0].result(timeout=300)] == \
         [os.path.basename(o) for o in objs]                  # the same runtime, in the other directory
+
+
+def test_without_a_writable_runtime_directory_the_programs_cache_holds_it(tmp_path, monkeypatch):
+    blocked = tmp_path / "a file"
+    blocked.write_text("")
+    monkeypatch.setenv("MBCOMP_RUNTIME", str(blocked / "runtime"))   # cannot be made: a file is in the way
+    assert runtime_directory(str(tmp_path / "programs")) == str(tmp_path / "programs")
 
 
 def _pendulum():
@@ -37,39 +52,39 @@ def _pendulum():
     return m
 
 
-def test_a_run_after_the_runtime_was_prepared_is_the_run_of_a_cold_cache(tmp_path, monkeypatch):
-    """The C engine runs in both (the prepared runtime linked, not compiled again) and every
-    column is the same, bit for bit."""
+def test_a_new_programs_cache_links_the_machines_runtime_and_computes_the_same(tmp_path, monkeypatch):
+    """Two runs in two new programs' caches: the first with a new runtime directory too (all
+    compiled), the second with the runtime the first built (none of it compiled again, nothing
+    of it in its cache). The C engine runs in both and every column is the same, bit for bit."""
+    monkeypatch.setenv("MBCOMP_RUNTIME", str(tmp_path / "machine"))
     runs = []
-    for name, prepare in (("cold", False), ("prepared", True)):
-        d = str(tmp_path / name)
-        monkeypatch.setenv("MBCOMP_CACHE", d)
-        if prepare:
-            prepare_runtime()[0].result(timeout=300)
-            before = set(os.listdir(d))
+    for name in ("first", "second"):
+        d = tmp_path / name
+        monkeypatch.setenv("MBCOMP_CACHE", str(d))
+        before = set(os.listdir(tmp_path / "machine")) if runs else None
         res = mbcomp.simulate(_pendulum(), t_end=2.0, rtol=1e-9, atol=1e-11)
         assert res.status == "success" and res.stats["stretches"] > 0 and res.stats["python_steps"] == 0, res.stats
         runs.append(res)
-        if prepare:
-            made = set(os.listdir(d)) - before
-            assert not any(f.startswith("mbrt_") for f in made), sorted(made)   # the runtime was there
-    cold, prepared = runs
-    assert cold.names == prepared.names
-    for name in cold.names:
-        np.testing.assert_array_equal(cold[name], prepared[name])
+        assert not [f for f in os.listdir(d) if f.startswith("mbrt_")]
+        if before is not None:
+            assert set(os.listdir(tmp_path / "machine")) == before   # the second compiled no runtime
+    first, second = runs
+    assert first.names == second.names
+    for name in first.names:
+        np.testing.assert_array_equal(first[name], second[name])
 
 
-def _child(d, queue):
-    objs = prepare_runtime(d)[0].result(timeout=60)
+def _child(queue):
+    objs = prepare_runtime()[0].result(timeout=60)
     queue.put(all(os.path.exists(o) for o in objs))
 
 
-def test_a_forked_child_does_not_wait_for_its_parents_threads(tmp_path):
+def test_a_forked_child_does_not_wait_for_its_parents_threads(tmp_path, monkeypatch):
+    monkeypatch.setenv("MBCOMP_RUNTIME", str(tmp_path / "fresh"))
     ctx = multiprocessing.get_context("fork")
-    d = str(tmp_path / "fresh")
-    prepare_runtime(d)          # compiling on the parent's threads while it forks
+    prepare_runtime()           # compiling on the parent's threads while it forks
     queue = ctx.Queue()
-    proc = ctx.Process(target=_child, args=(d, queue))
+    proc = ctx.Process(target=_child, args=(queue,))
     proc.start()
     try:
         assert queue.get(timeout=90) is True

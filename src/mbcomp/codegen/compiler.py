@@ -37,7 +37,7 @@ from .graph import CodegenError, Fallback, Retrace, no_gc
 from .printers import PY_ENV, ParamProgram, Program
 from .thin import extension
 from .toolchain import (FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_objects, compile_units, n_units,
-                        object_path, unit_key)
+                        object_path, runtime_directory, unit_key)
 from .tracer import FIELDS, param_vector
 
 __all__ = ["Code", "Bound", "prepare_runtime"]
@@ -79,16 +79,18 @@ def _in_thread(fn, *args):
 
 def prepare_runtime(cache_dir=None):
     """Start building what every C program of this machine shares, if it is not built: the
-    runtime's objects (:func:`~mbcomp.codegen.engine.runtime_objects`: the integrators, ~0.7 s
-    of the compiler on the first run on a machine) and the thin call's extension
-    (:func:`~mbcomp.codegen.thin.extension`), each on a thread of its own, once per process
-    and cache directory. Returns the two futures ``(runtime, thin)``, or None without a C
+    runtime's objects (:func:`~mbcomp.codegen.engine.runtime_objects`: the integrators, ~0.65 s
+    of the compiler) and the thin call's extension (:func:`~mbcomp.codegen.thin.extension`),
+    each on a thread of its own, once per process and directory. They go to
+    :func:`~mbcomp.codegen.toolchain.runtime_directory` (``$MBCOMP_RUNTIME``, else
+    ``~/.cache/mbcomp``), not into each programs' cache: built once per machine, linked by the
+    programs of every cache. Returns the two futures ``(runtime, thin)``, or None without a C
     compiler.
 
-    :func:`mbcomp.simulate` calls it first (before importing and tracing anything), so that the
-    compiler works while Python does; a program's build waits for what it links
-    (:class:`Code`). With everything built it costs a hash of the runtime's sources and a few
-    file checks, off the calling thread.
+    :func:`mbcomp.simulate` calls it first (before importing and tracing anything), so that on a
+    machine's first run the compiler works while Python does; a program's build waits for what
+    it links (:class:`Code`). With everything built it costs a hash of the runtime's sources and
+    a few file checks, off the calling thread, once; ~2 us when asked again.
 
     Examples
     --------
@@ -99,14 +101,14 @@ def prepare_runtime(cache_dir=None):
     >>> jobs is None or jobs is prepare_runtime()                         # once per process
     True
     """
-    asked = (cache_dir, os.environ.get("CC"), os.environ.get("MBCOMP_CACHE"), os.environ.get("PATH"))
+    asked = (cache_dir,) + tuple(os.environ.get(k) for k in ("CC", "MBCOMP_CACHE", "MBCOMP_RUNTIME", "HOME", "PATH"))
     jobs = _PREPARED.get(asked)  # asked before: no compiler search, no directory made (~1 us)
     if jobs is not None and not (jobs[0].done() and jobs[0].exception() is not None):
         return jobs
     cc = c_compiler()
     if cc is None:
         return None
-    d = cache_directory(cache_dir)
+    d = runtime_directory(cache_dir)
     with _PREPARED_LOCK:
         jobs = _PREPARED.get((cc, d))
         if jobs is None or (jobs[0].done() and jobs[0].exception() is not None):  # a failure is tried again
@@ -200,7 +202,7 @@ class Code:
         if self.has_engine:
             # the runtime's objects and the thin call's extension (built once per machine, maybe
             # started already by simulate) while this program's units compile
-            runtime, thin = prepare_runtime(d)
+            runtime, thin = prepare_runtime(cache_dir)
             if not all(os.path.exists(object_path(cc, d, src, fl)) for _, src, fl in units):
                 self.objects = compile_objects(cc, units, d)[1]
                 thin.result()  # (None where it cannot be built) its compiler ran beside this program's

@@ -31,7 +31,7 @@ import time
 
 from .graph import CodegenError
 
-__all__ = ["c_compiler", "cache_directory", "compile_units", "compile_objects", "object_path", "unit_key",
+__all__ = ["c_compiler", "cache_directory", "runtime_directory", "compile_units", "compile_objects", "object_path", "unit_key",
            "cached_library",
            "chunk", "n_units", "FLAGS", "HEADER", "CHUNK", "LOOP_CHUNK", "SMALL", "SMALL_CHUNK", "PART"]
 
@@ -59,6 +59,23 @@ def cache_directory(cache_dir=None):
     d = cache_dir or os.environ.get("MBCOMP_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "mbcomp")
     os.makedirs(d, exist_ok=True)
     return d
+
+
+def runtime_directory(cache_dir=None):
+    """The directory of what every program of this machine shares (the runtime's objects, the
+    thin call's extension: compiled once per machine, not once per program cache), made if
+    missing: ``$MBCOMP_RUNTIME``, else the default cache ``~/.cache/mbcomp`` -- also when the
+    programs' cache is another (``cache_dir``, ``$MBCOMP_CACHE``: a fresh one per project or
+    test links the runtime built before) -- else, where that cannot be made or written, the
+    programs' cache itself (:func:`cache_directory`)."""
+    d = os.environ.get("MBCOMP_RUNTIME") or os.path.join(os.path.expanduser("~"), ".cache", "mbcomp")
+    try:
+        os.makedirs(d, exist_ok=True)
+        if os.access(d, os.W_OK | os.X_OK):
+            return d
+    except OSError:
+        pass
+    return cache_directory(cache_dir)
 
 
 #: the flags of every generated program: -O2 at every size (affordable since output
