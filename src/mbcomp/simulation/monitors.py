@@ -236,6 +236,7 @@ class ConstraintRank:
         if min(s0, rel) >= self.BRACKET:  # both ends far from flat (sigma grows ~ linearly off it): nothing to see
             self._end = (t, rel, None)  # its slope is taken if the next step needs it
             return []
+        evaluate_by_program(self.system)  # ~20 evaluations per step looked into, from now on: by the program
         dt = self.SLOPE_SPAN * h
         ts = np.linspace(t_prev, t, self.PARTS + 1)
         slope0 = first[2] if first and first[2] is not None else (self._sigma_at(dense, t_prev + dt) - s0) / dt
