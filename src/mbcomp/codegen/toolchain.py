@@ -67,7 +67,18 @@ def runtime_directory(cache_dir=None):
     missing: ``$MBCOMP_RUNTIME``, else the default cache ``~/.cache/mbcomp`` -- also when the
     programs' cache is another (``cache_dir``, ``$MBCOMP_CACHE``: a fresh one per project or
     test links the runtime built before) -- else, where that cannot be made or written, the
-    programs' cache itself (:func:`cache_directory`)."""
+    programs' cache itself (:func:`cache_directory`).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from mbcomp.codegen.toolchain import runtime_directory
+    >>> d = tempfile.mkdtemp()
+    >>> os.environ["MBCOMP_RUNTIME"] = d
+    >>> runtime_directory("/some/programs/cache") == d
+    True
+    >>> del os.environ["MBCOMP_RUNTIME"]
+    """
     d = os.environ.get("MBCOMP_RUNTIME") or os.path.join(os.path.expanduser("~"), ".cache", "mbcomp")
     try:
         os.makedirs(d, exist_ok=True)
