@@ -208,16 +208,20 @@ class Flange(Port):
 class PortRef:
     """A port of a component instance: what :meth:`Model.connect` takes."""
 
-    __slots__ = ("component", "name", "kind")
+    __slots__ = ("component", "name", "kind", "_hash")
 
     def __init__(self, component, name, kind):
         self.component, self.name, self.kind = component, name, kind
+        self._hash = hash((id(component), name))  # the assembly's union-finds hash each port hundreds of times
 
     def __eq__(self, other):
         return isinstance(other, PortRef) and other.component is self.component and other.name == self.name
 
     def __hash__(self):
-        return hash((id(self.component), self.name))
+        return self._hash
+
+    def __reduce__(self):  # made again where unpickled or copied: the hash follows the component's new id
+        return PortRef, (self.component, self.name, self.kind)
 
     @property
     def path(self):
