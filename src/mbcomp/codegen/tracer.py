@@ -139,20 +139,22 @@ def _untraceable(exc):
     return CodegenError(f"cannot trace the model's evaluation ({type(exc).__name__}: {exc} {at}) -> fix: {_FIX}")
 
 
-def trace(system, max_nodes, program="eval", baumgarte=True, keep=()):
+def trace(system, max_nodes, program="eval", baumgarte=True, keep=(), hidden=True):
     """See :func:`_trace`; the right-hand side (``program="fun"``) and the result columns
     (``"outputs"``) first try the drives' motion laws traced into the program (no per-call
     inputs: the C engine can step it, an exported FMU can hold it), and fall back to their
-    ``(s, v, a)`` as inputs when a law cannot be traced."""
+    ``(s, v, a)`` as inputs when a law cannot be traced. ``hidden``: the result columns with
+    the post-processing's hidden ones (:func:`mbcomp.assembly.outputs.tolerance_terms`; an
+    FMU's outputs leave them out)."""
     if program in ("fun", "outputs") and drives(system):
         try:
-            return _trace(system, max_nodes, program, baumgarte, inline_drives=True, keep=keep)
+            return _trace(system, max_nodes, program, baumgarte, inline_drives=True, keep=keep, hidden=hidden)
         except CodegenError:
             pass  # a drive law a program cannot hold: evaluated in Python at every call
-    return _trace(system, max_nodes, program, baumgarte, keep=keep)
+    return _trace(system, max_nodes, program, baumgarte, keep=keep, hidden=hidden)
 
 
-def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=False, keep=()):
+def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=False, keep=(), hidden=True):
     """Trace the evaluation and the coordinate rates of ``system`` (``program="eval"``), or
     the coordinate rates and the Lagrange right-hand side with the system's row mask
     (``program="fun"``: output group ``"fun"``, absent when the trace point is singular), or
@@ -199,7 +201,7 @@ def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=Fals
             qd = q_rates(ts, q, u)
             n2 = len(g.guards)
             ud = _lagrange(g, ts, t, q, u, len(order)) if program == "fun" else None
-            cols = _outputs(g, ts, t, q, u, len(order), baumgarte) if program == "outputs" else None
+            cols = _outputs(g, ts, t, q, u, len(order), baumgarte, hidden) if program == "outputs" else None
         except CodegenError:
             raise
         except Exception as exc:  # noqa: BLE001 - re-raised naming the component
@@ -234,14 +236,14 @@ def _lagrange(g, ts, t, q, u, n_drives):
     return _unless_singular(g, lambda: lagrange_accelerations(ts, t, q, u, alpha, beta, baumgarte=True))
 
 
-def _outputs(g, ts, t, q, u, n_drives, baumgarte):
+def _outputs(g, ts, t, q, u, n_drives, baumgarte, hidden=True):
     """The traced result columns (:func:`~mbcomp.assembly.outputs.output_values`), the gains
     inputs as in :func:`_lagrange`; None if the trace point itself is singular."""
     alpha, beta = g.input("d", 3 * n_drives, 10.0), g.input("d", 3 * n_drives + 1, 10.0)
 
     def make():  # the columns, then the hidden tolerance terms (the graph shares the tree pass's nodes)
         values, rotations = output_values(ts, t, q, u, alpha, beta, baumgarte=baumgarte)
-        return {**values, **tolerance_terms(ts, t, q, u)}, rotations
+        return ({**values, **tolerance_terms(ts, t, q, u)} if hidden else values), rotations
     return _unless_singular(g, make)
 
 

@@ -385,7 +385,7 @@ def _output_program(system, tr_fun, max_nodes):
     its C (with its parameter program and the quaternion of a rotation), the defines the core
     reads, and ``variables``: ``(name, index in the outputs)`` of every column, then every
     body's quaternion (the caller leaves out the states)."""
-    tr = trace(system, max_nodes, program="outputs", baumgarte=True)
+    tr = trace(system, max_nodes, program="outputs", baumgarte=True, hidden=False)
     ok = ("outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
           and [i.name for i in tr.inputs] == [i.name for i in tr_fun.inputs])
     if not ok:  # a drive the program does not hold, or a singular trace point: no outputs
