@@ -57,6 +57,9 @@ EXIT_USAGE = 2
 
 def cmd_simulate(args):
     """Simulate the model file; print status, statistics and drift; write ``--out``/``--plot``."""
+    from ..codegen.compiler import prepare_runtime
+
+    prepare_runtime()  # a machine's first run: the runtime compiles on threads while the rest imports
     from ..simulation.driver import simulate
 
     check_output(args.out, "--out")

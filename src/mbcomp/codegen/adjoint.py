@@ -432,14 +432,14 @@ class AdjointIntegrator:
 
     def __init__(self, vjp, integrand, gains, cache_dir=None):
         from .engine import RuntimeStats, runtime_library
-        from .toolchain import c_compiler, cache_directory
+        from .toolchain import c_compiler, cache_directory, runtime_directory
 
         if vjp.code.backend != "c" or (integrand is not None and integrand.code.backend != "c"):
             raise ValueError("AdjointIntegrator needs the C programs (backend='c')")
         self.vjp, self.integrand = vjp, integrand
         self.n, self.nq, self.np = vjp.code.n, vjp.nq, len(vjp.code.wrt)
         d = cache_directory(cache_dir)
-        self.rt = runtime_library(c_compiler(), d)
+        self.rt = runtime_library(c_compiler(), runtime_directory(d))
         self.glue = cached_library([("adjglue", HEADER + ADJOINT_GLUE, list(FLAGS))], "mbcomp_adjglue", cache_dir,
                                    "adjoint integrator")
         self.rhs = ctypes.cast(self.glue.mbcomp_adj_rhs, ctypes.c_void_p).value

@@ -53,7 +53,7 @@ import numpy as np
 from .graph import CodegenError
 from .c_events import LinearEvents
 from .runtime import RUNTIME_DIR, SOURCES
-from .toolchain import c_compiler
+from .toolchain import c_compiler, runtime_directory
 
 __all__ = ["GLUE", "Integrator", "LinearEvents", "Mech", "DAlembertProgram", "runtime_objects", "runtime_library",
            "coordinate_map", "mech_of", "dalembert_program", "DAEProgram", "dae_program", "STATUS", "MECH_STATUS",
@@ -433,9 +433,10 @@ class DAEProgram:
 
 
 def _library_for(code):
-    """:func:`runtime_library` in the cache directory of a C program, or None without a compiler."""
+    """:func:`runtime_library` in the machine's runtime directory (the programs' cache of ``code``
+    where that cannot be written), or None without a compiler."""
     cc = c_compiler()
-    return runtime_library(cc, os.path.dirname(code.lib_path)) if cc is not None else None
+    return runtime_library(cc, runtime_directory(os.path.dirname(code.lib_path))) if cc is not None else None
 
 
 def mech_of(bound, system):

@@ -10,7 +10,7 @@ import ctypes
 import numpy as np
 
 from .engine import RuntimeStats, runtime_library
-from .toolchain import FLAGS, HEADER, c_compiler, cache_directory, cached_library
+from .toolchain import FLAGS, HEADER, c_compiler, cache_directory, cached_library, runtime_directory
 
 __all__ = ["SensitivityIntegrator", "SENSITIVITY_GLUE"]
 
@@ -91,7 +91,7 @@ class SensitivityIntegrator:
             raise ValueError("SensitivityIntegrator needs the C programs (backend='c')")
         jvp = bound.program("jvp")
         self.n, self.nq, self.k = code.n, code.nq, len(code.directions)
-        self.rt = runtime_library(c_compiler(), cache_directory(cache_dir))
+        self.rt = runtime_library(c_compiler(), runtime_directory(cache_directory(cache_dir)))
         self.glue = cached_library([("sensglue", HEADER + SENSITIVITY_GLUE, list(FLAGS))], "mbcomp_sensglue",
                                    cache_dir, "sensitivity integrator")
         self.fn = ctypes.cast(self.glue.mbcomp_sens_rhs, ctypes.c_void_p).value
