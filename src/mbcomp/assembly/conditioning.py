@@ -153,7 +153,10 @@ def moving_scale(system, jets):
         rho = J.R @ np.asarray(rc, float)
         r = J.r + rho
         Jw = np.atleast_2d(np.asarray(J.Jw, float))
-        Jc = np.atleast_2d(np.asarray(J.Jv, float)) - np.cross(rho, Jw.T).T  # v_c = v + w x rho
+        # v_c = v + w x rho, column by column (numpy.cross's products and differences, without its
+        # axis handling: a third of a short run's inertia check)
+        wxr = np.array([Jw[1] * rho[2] - Jw[2] * rho[1], Jw[2] * rho[0] - Jw[0] * rho[2], Jw[0] * rho[1] - Jw[1] * rho[0]])
+        Jc = np.atleast_2d(np.asarray(J.Jv, float)) + wxr
         w2 = float(np.sum(Jw * Jw))
         total += float(m) * (float(np.sum(Jc * Jc)) + float(r @ r) * w2) + float(np.trace(I)) * w2
     return total
