@@ -22,6 +22,7 @@ Examples
 """
 from __future__ import annotations
 
+from functools import partial
 from types import SimpleNamespace
 
 import numpy as np
@@ -178,7 +179,7 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
     message = "; ".join([message] + notes)
     stats = dict(stats)
     stats["coordinates"] = list(system.q_names)
-    return Result(t, series, status, message, stats, summary(system, init), units=_units(system, series),
+    return Result(t, series, status, message, stats, partial(summary, system, init), units=_units(system, series),
                   system=system)
 
 

@@ -76,13 +76,25 @@ class Result:
         self._series = dict(series)
         self.status, self.message = status, message
         self.stats = dict(stats or {})
-        self.summary = summary
+        self.summary = summary  # a str, or a callable making it at the first read (most runs never read it)
         self.units = dict(units or {})
         self.system = system
         self.events = []  # EventRecord(time, component, name, kind, detail): mbcomp.hybrid.events
         self.sensitivities = None  # SensitivityTable: simulate(..., sensitivities=[...])
 
+    @property
+    def summary(self):
+        """The model summary (str), made at its first read when the run handed a maker."""
+        if callable(self._summary):
+            self._summary = self._summary()
+        return self._summary
+
+    @summary.setter
+    def summary(self, value):
+        self._summary = value
+
     def __getstate__(self):
+        self.summary  # made before the system is dropped  # noqa: B018
         state = dict(self.__dict__)
         state["system"] = None  # laws and compiled programs need not pickle; the columns do
         return state
