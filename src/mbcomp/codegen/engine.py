@@ -81,7 +81,7 @@ typedef struct {
     int declined;            /* mbrt_project's status that stopped the stretch    */
     long nproj;              /* projections made                                  */
     int stiff_steps;         /* > 0: stop with MBRT_STIFF after that many steps held by
-                                stability (the runtime's *_stiff calls); 0: no test   */
+                                stability (the runtime's *_events calls); 0: no test  */
     mbrt_events *events;     /* not NULL: stop with MBRT_EVENT at the first event  */
 } mbcomp_ctx;
 
@@ -586,7 +586,7 @@ class Integrator:
                   events=None, fresh=-1, event_tol=None):
         """Integrate ``[q, u]`` from ``(t0, y0)`` to ``t_end`` by DOPRI5 (``order`` 5) or
         DOP853 (8); ``stiff_steps > 0``: stop with status 7 at the step where Hairer's
-        stiffness test (``mbrt.h``, ``mbrt_dop853_stiff``) held for that many steps. Returns a
+        stiffness test (``mbrt.h``, ``mbrt_dop853_events``) held for that many steps. Returns a
         namespace: ``status`` (:data:`STATUS`), ``message``, ``Y``
         (the states at the ``t_out`` reached, from the dense output of the unprojected
         steps), ``t_last``, ``y_last``, ``h_last`` (the last accepted step, projected),

@@ -94,7 +94,7 @@ enum {
     MBRT_NONFINITE = 4,       /* state or derivative became NaN/Inf         */
     MBRT_STOPPED = 5,         /* step callback returned nonzero             */
     MBRT_BAD_ARGUMENT = 6,    /* invalid input                              */
-    MBRT_STIFF = 7,           /* the stiffness test fired (the *_stiff calls) */
+    MBRT_STIFF = 7,           /* the stiffness test fired (the *_events calls) */
     MBRT_EVENT = 8            /* an event was located (the *_events calls)  */
 };
 
@@ -141,27 +141,6 @@ int mbrt_dop853(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
                 long max_steps, const double *t_out, int n_out,
                 double *y_out, int *n_written,
                 double *work, mbrt_stats *stats);
-
-/* As mbrt_dop853 / mbrt_dopri5 with Hairer's stiffness test: after every
- * accepted step hlamb = |h| |f(t+h, y1) - f(t+h, Y)| / |y1 - Y| (Y the last
- * stage's argument at t+h, so hlamb estimates |h lambda| of the largest
- * eigenvalue of df/dy met) is compared with the method's stability limit
- * (6.1 for DOP853, 3.25 for DOPRI5); when it was above it for stiff_steps
- * accepted steps with fewer than 6 below it in between, the integration
- * stops at that step with status MBRT_STIFF (state and outputs as for
- * MBRT_STOPPED).  stiff_steps <= 0: no test (the plain calls). */
-int mbrt_dop853_stiff(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
-                      double t0, const double *y0, double t_end,
-                      double rtol, const double *atol, double h0, double hmax,
-                      long max_steps, const double *t_out, int n_out,
-                      double *y_out, int *n_written,
-                      double *work, mbrt_stats *stats, int stiff_steps);
-int mbrt_dopri5_stiff(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
-                      double t0, const double *y0, double t_end,
-                      double rtol, const double *atol, double h0, double hmax,
-                      long max_steps, const double *t_out, int n_out,
-                      double *y_out, int *n_written,
-                      double *work, mbrt_stats *stats, int stiff_steps);
 
 /* ------------------------------------------------------------------ */
 /* Events located on the dense output (mbrt_events.c)                  */
@@ -210,8 +189,17 @@ typedef struct {
 
 int mbrt_linear_event_values(void *ectx, double t, const double *y, double *g);
 
-/* As mbrt_dop853_stiff / mbrt_dopri5_stiff, watching the events ev (NULL:
- * none). */
+/* As mbrt_dop853 / mbrt_dopri5, with two options.
+ *
+ * Hairer's stiffness test (stiff_steps > 0): after every accepted step
+ * hlamb = |h| |f(t+h, y1) - f(t+h, Y)| / |y1 - Y| (Y the last stage's argument
+ * at t+h, so hlamb estimates |h lambda| of the largest eigenvalue of df/dy met)
+ * is compared with the method's stability limit (6.1 for DOP853, 3.25 for
+ * DOPRI5); when it was above it for stiff_steps accepted steps with fewer than
+ * 6 below it in between, the integration stops at that step with status
+ * MBRT_STIFF (state and outputs as for MBRT_STOPPED).  stiff_steps <= 0: no test.
+ *
+ * Events (ev not NULL): watched as described above (MBRT_EVENT). */
 int mbrt_dop853_events(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n,
                        double t0, const double *y0, double t_end,
                        double rtol, const double *atol, double h0, double hmax,

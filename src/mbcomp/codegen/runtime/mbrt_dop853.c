@@ -238,15 +238,6 @@ int mbrt_dop853(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n, double t0
                              max_steps, t_out, n_out, y_out, n_written, work, stats, 0, NULL);
 }
 
-int mbrt_dop853_stiff(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n, double t0,
-                      const double *y0, double t_end, double rtol, const double *atol, double h0,
-                      double hmax, long max_steps, const double *t_out, int n_out, double *y_out,
-                      int *n_written, double *work, mbrt_stats *stats, int stiff_steps)
-{
-    return mbrt_rk_integrate(&DOP853, f, on_step, ctx, n, t0, y0, t_end, rtol, atol, h0, hmax,
-                             max_steps, t_out, n_out, y_out, n_written, work, stats, stiff_steps, NULL);
-}
-
 int mbrt_dop853_events(mbrt_rhs_fn f, mbrt_step_fn on_step, void *ctx, int n, double t0,
                       const double *y0, double t_end, double rtol, const double *atol, double h0,
                       double hmax, long max_steps, const double *t_out, int n_out, double *y_out,
