@@ -207,3 +207,22 @@ def test_a_stop_on_a_closed_loop_agrees_with_the_python_loop():
         assert c.status == py.status == "success" and len(tc) == len(tp) == 2
         assert np.max(np.abs(tc - tp)) < 1e-8 and c.stats.get("python_steps", 0) == 0
         assert np.max(np.abs(c["slider_joint.s"] - py["slider_joint.s"])) < 1e-6
+
+
+class _PastTheJoint(StopModes):
+    """Stops whose lower row reads q[1] of a 1-DOF joint (a wrong declaration)."""
+
+    def event_rows(self, mode):
+        return [EventRow("lo", "q", 1, 1.0, self.lo, -1)] if mode == "free" else []
+
+
+class _BadRevolute(Revolute):
+    def modes(self, p):
+        return _PastTheJoint(p.limits[0], p.limits[1], p.restitution)
+
+
+def test_an_event_row_past_the_joint_is_a_model_problem_naming_it():
+    """A declared row that points past the joint's own coordinates would make the C loop watch
+    another joint's entry: the run is refused, naming the joint, the row and the fix."""
+    with pytest.raises(mbcomp.errors.ModelError, match=r"hinge.*EventRow 'lo' reads q\[1\].*1 coordinates.*from 0 to 0"):
+        mbcomp.simulate(pendulum(joint=_BadRevolute), t_end=1.0)

@@ -50,7 +50,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..assembly.kkt import accelerations
-from ..errors import SimulationError
+from ..errors import ModelError, Problem, SimulationError
 from ..modeling.events import ContactRow, End, Impact, SlipSpeed, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value, touching_at_start
 from ..solvers.locate import return_root, root, time_tolerance
@@ -71,6 +71,16 @@ REST_HEIGHT = 10.0
 CHATTER = 30
 #: this many events of one component within BURST_SPAN max(1, |t|) seconds are chattering (an error naming it)
 BURST, BURST_SPAN = 60, 1e-9
+
+
+def _check_row(name, row, edge):
+    """A ``ModelError`` naming joint, row and fix for an EventRow past the joint's own entries."""
+    n = (edge.q if row.of == "q" else edge.u).stop - (edge.q if row.of == "q" else edge.u).start
+    if not 0 <= row.index < n:
+        kind = "coordinates" if row.of == "q" else "speeds"
+        raise ModelError([Problem(name, f"its modes' EventRow {row.name!r} reads {row.of}[{row.index}], but the joint "
+                                  f"has {n} {kind}", f"give an index from 0 to {n - 1} in event_rows")],
+                         header="event rows out of range")
 
 
 def _crossed(g0, g1, direction):
@@ -104,7 +114,7 @@ class Events(SlideEvents):
         self._systems, self._hits = {}, {}
         self._g0 = None
         self._fresh = self._last = None  # the event just handled (its function starts at zero)
-        self._c_keys = []  # the keys of the events the C loop watches (c_watch)
+        self._c_keys, self._checked = [], set()  # the events the C loop watches (c_watch); (joint, mode) checked
         self.stats = dict(events=0, event_evaluations=0, mode_changes=0)
         self.slip_dirs = {}  # {sliding contact: the unit direction (tangent coordinates) its slide started with}
         self.segments = []  # [SegmentStart]: the run's start and every event's next segment (the columns)
@@ -138,7 +148,7 @@ class Events(SlideEvents):
         for name, mode in self.modes.items():
             e = sysm.edge(name)
             qj = np.zeros(e.q.stop - e.q.start)
-            declared = e.comp.modes(sysm.P[name])
+            declared = self._declared(name, mode)
             for ev_name, _, direction in declared.events(qj, np.zeros(e.u.stop - e.u.start), mode):
                 out[("joint", name, ev_name)] = direction
             for row in declared.rows(mode):
@@ -147,6 +157,16 @@ class Events(SlideEvents):
             if self.user_left[i] != 0:
                 out[("user", i, getattr(f, "__name__", f"event{i}"))] = float(getattr(f, "direction", 0.0))
         return out
+
+    def _declared(self, name, mode):
+        """Joint ``name``'s ``Modes``, its event rows in ``mode`` checked once (:func:`_check_row`)."""
+        e = self.system.edge(name)
+        declared = e.comp.modes(self.system.P[name])
+        if declared.linear_events and (name, mode) not in self._checked:
+            for row in declared.event_rows(mode):
+                _check_row(name, row, e)
+            self._checked.add((name, mode))
+        return declared
 
     def c_watch(self):
         """The current segment's event functions as the C loop watches them --
@@ -159,10 +179,9 @@ class Events(SlideEvents):
         sysm, nq = self.system, self.system.nq
         keys, index, sign, at, direction = [], [], [], [], []
         for name, mode in self.modes.items():
-            declared = sysm.edge(name).comp.modes(sysm.P[name])
+            declared, e = self._declared(name, mode), sysm.edge(name)
             if not declared.linear_events or declared.rows(mode) or declared.slips:
                 return None
-            e = sysm.edge(name)
             for row in declared.event_rows(mode):
                 keys.append(("joint", name, row.name))
                 index.append(e.q.start + row.index if row.of == "q" else nq + e.u.start + row.index)
@@ -182,7 +201,7 @@ class Events(SlideEvents):
         rows = None
         for name, mode in self.modes.items():
             e = sysm.edge(name)
-            declared = e.comp.modes(sysm.P[name])
+            declared = self._declared(name, mode)
             for ev_name, value, _ in declared.events(q[e.q], u[e.u], mode):
                 if isinstance(value, SlipSpeed):  # a slide's speed along its start direction
                     self._slip_keys.add(("joint", name, ev_name))
@@ -556,11 +575,12 @@ class Events(SlideEvents):
         start, where an impact at speed 0 was dropped: the joint went through its stop."""
         out = []
         for who, mode in self.modes.items():
-            e, p = self.system.edge(who), self.system.P[who]
+            e = self.system.edge(who)
             if not e.comp.tree_edge:
                 continue
-            for name, value, _ in e.comp.modes(p).events(q[e.q], u[e.u], mode):
-                action = e.comp.modes(p).action(name, mode)
+            declared = self._declared(who, mode)
+            for name, value, _ in declared.events(q[e.q], u[e.u], mode):
+                action = declared.action(name, mode)
                 if isinstance(action, Impact) and abs(float(value)) <= tol:
                     _, speed, _ = row_values(self.system, mode_rows(self.system, {who: action.engage}), q, u)
                     out.append((who, name, action, None, float(value), float(speed[0])))
