@@ -154,12 +154,9 @@ class CompiledEvaluation:
         return self.numeric().local_nh
 
 
-#: a lazy evaluator (``compile_system(..., lazy=True)``, what ``simulate`` uses) answers this
-#: many evaluations numerically before it makes the evaluation program: the default path
-#: (the Lagrange program, the C engine, the output program) asks for a handful (consistent
-#: initialization), and at N = 1000 the evaluation program is 2.6 million operations (minutes
-#: of gcc) while a numeric evaluation takes 0.2 s; a formulation that evaluates at every step
-#: (D'Alembert and the DAE forms in Python) gets the program after the first steps
+#: a lazy evaluator (``compile_system(..., lazy=True)``: ``simulate``'s) answers this many evaluations
+#: numerically before it makes the evaluation program (at N = 1000 minutes of gcc against 0.2 s a
+#: numeric evaluation), unless told otherwise (:meth:`ProgramEvaluator.evaluate_by_program`)
 LAZY_EVALUATIONS = 200
 
 #: fewer output points than this are post-processed numerically (compiling the output program
@@ -576,8 +573,7 @@ class ProgramEvaluator:
         return CompiledEvaluation(system, t, q, u, flat, masked, bound.code.layout_out, mask)
 
     def q_rate(self, q, u):
-        """``dq/dt`` from the speeds (generated program; a copy of ``u`` for angle coordinates;
-        the joints' own rates while a lazy evaluator has no evaluation program)."""
+        """``dq/dt`` from the speeds (the program; ``u`` for angles; the joints' own while lazy)."""
         bound = self.bound
         if bound is None:
             if self.options["lazy"]:
@@ -590,6 +586,10 @@ class ProgramEvaluator:
         except (Fallback, ArithmeticError, ValueError):
             self.stats["fallbacks"] += 1
             return self.system.q_rate_numeric(q, u)
+
+    def evaluate_by_program(self):
+        """Evaluate by the program from the next call on, not after :data:`LAZY_EVALUATIONS` numeric ones."""
+        self.options["lazy"] = False
 
     @property
     def source(self):

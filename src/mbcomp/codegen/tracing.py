@@ -96,14 +96,10 @@ def parameter_entries(system):
     """
     owners = system.owners()
     driving = set(drives(system))
-    declared = {}  # a class's declared parameters, once per class (a chain repeats a few classes)
     for path in sorted(system.P):
         if path in driving:
             continue
-        cls = type(owners[path])
-        decl = declared.get(cls)
-        if decl is None:
-            decl = declared[cls] = owners[path].params()
+        decl = owners[path].params()  # read once per class (modeling.component)
         for name, value in sorted(vars(system.P[path]).items()):
             par = decl.get(name)
             yield path, name, (par.kind if par is not None else "number"), value

@@ -78,9 +78,9 @@ def evaluate_by_program(system):
     ``LAZY_EVALUATIONS`` (200) numeric evaluations: for a run whose monitors evaluate at every
     step (:class:`ConstraintRank` passing singular positions; the N-four-bar at N = 10 spent
     0.6 s of 1 s in those 200 evaluations). Any other evaluator is left as it is."""
-    options = getattr(system.evaluator, "options", None)
-    if isinstance(options, dict) and options.get("lazy"):
-        options["lazy"] = False
+    eager = getattr(system.evaluator, "evaluate_by_program", None)
+    if eager is not None:
+        eager()
 
 
 class SingularPosition(SimulationError):
