@@ -116,6 +116,10 @@ def result_columns(system, ev, ud, lam, reac, rates=None):
         rotations[path] = J.R
     T, V = system.energies(ev)
     cols["energy.kinetic"], cols["energy.potential"], cols["energy.total"] = T, V, T + V
+    if system.topology.bodies:
+        P, L = system.momenta(ev)
+        _vector(cols, "momentum", P)
+        _vector(cols, "angular_momentum", L)
     cols["residual.position"] = _norm(ev.Phi_all)
     cols["residual.velocity"] = _norm(ev.Phid_all)
     cols["residual.nonholonomic"] = _norm(ev.Psi)

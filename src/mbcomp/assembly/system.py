@@ -513,6 +513,18 @@ class MultibodySystem:
             V += comp.potential(states, self.P[path])
         return T, V
 
+    def momenta(self, ev: Evaluation):
+        """``(p, h)``: the bodies' linear momentum (kg m/s) and angular momentum about the
+        world origin (kg m^2/s), world frame, summed in the bodies' order (rotors on joint
+        axes not included)."""
+        P = L = np.zeros(3)
+        for path, comp, node in self.topology.bodies:
+            J = ev.jets[node]
+            m, rho, Iw = self.body_inertia(comp, path, J)
+            p = m * (J.v + cross(J.w, rho))
+            P, L = P + p, L + (cross(J.r + rho, p) + Iw @ J.w)
+        return P, L
+
     def reactions(self, ev: Evaluation, ud, lam):
         """Reaction wrench of every edge: dict name -> (f, tau), the force and torque exerted on
         frame_b through the joint (flange-element forces excluded; a drive's force is included),

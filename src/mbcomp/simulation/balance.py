@@ -1,11 +1,14 @@
 """System-wide result columns made from the others: momenta and the energy balance.
 
-Both are computed from the columns of a whole run at once (numpy over the output grid), not
-in the per-point programs:
+The per-body momenta and the energy balance are computed from the columns of a whole run at
+once (numpy over the output grid), not in the per-point programs:
 
 * ``momentum.x|y|z`` (kg m/s) and ``angular_momentum.x|y|z`` (kg m^2/s, about the world
   origin), world frame: summed over the bodies from their pose and twist columns and mass
-  properties; per body (``<body>.momentum.*``, ``<body>.angular_momentum.*``) on request;
+  properties -- the totals are the output programs' own columns
+  (:meth:`mbcomp.assembly.system.MultibodySystem.momenta`, in C over the grid), computed here
+  only for a series without them; per body (``<body>.momentum.*``,
+  ``<body>.angular_momentum.*``) on request;
 * ``energy.work`` (J): the work done on the mechanism since the start by the elements that
   feed or take energy other than by dissipating it (actuators, external loads, drives);
   ``energy.dissipated`` (J, >= 0 for dampers): the energy the dissipative elements
@@ -61,10 +64,11 @@ def momentum_columns(system, series, per_body=False):
     """``{column: ndarray (n,)}``: the whole mechanism's linear momentum (kg m/s) and
     angular momentum about the world origin (kg m^2/s), world frame, from the bodies' columns
     ``<body>.r|v|w.*`` and ``<body>.Q.*`` (see the module notes); each body's as well when
-    ``per_body``. Empty when a body's columns are missing. Every body at once (arrays
+    ``per_body``. Empty when a body's columns are missing, or without ``per_body`` when the
+    series has the totals (the output programs'). Every body at once (arrays
     ``(bodies, n, 3)``), summed over the bodies in their order."""
     bodies = system.topology.bodies
-    if not bodies:
+    if not bodies or (not per_body and "momentum.x" in series):  # the output programs' own sums
         return {}
     try:
         cols = [[series[f"{path}.{v}.{ax}"] for v in ("r", "v", "w") for ax in _XYZ]
