@@ -54,6 +54,7 @@ import math
 import numpy as np
 
 from .base import StepFailure, Stepper
+from .compiled_radau import CompiledRadau5
 from .radau_linalg import IterationMatrices, SingularMatrix
 
 __all__ = ["Radau5", "RadauDenseOutput"]
@@ -643,7 +644,7 @@ class Radau5(Stepper):
         return self._dense
 
 
-_RADAU5_ODE = type("radau5", (Radau5,), dict(
+_RADAU5_ODE = type("radau5", (CompiledRadau5, Radau5), dict(
     problem="ode", ode_by_default=False, __module__=__name__,
-    __doc__="radau5 over the index-1 ODE of the Lagrange formulation (every variable differential): "
-            "what ``simulate(method='radau5')`` steps when no index is asked for; see :class:`Radau5`."))
+    __doc__="radau5 over the Lagrange index-1 ODE: what ``simulate(method='radau5')`` steps when no index is "
+            "asked for (:class:`Radau5`; in C over a compiled program: :mod:`mbcomp.solvers.compiled_radau`)."))

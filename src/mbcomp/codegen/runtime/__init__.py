@@ -31,6 +31,13 @@ generated model code is compiled together with:
     constraint manifold (Gauss--Newton with minimum-norm steps, then the
     minimum-norm speed correction), and the residual and Jacobian of the
     multiplier forms as DAEs (index 1, GGL, index 3).
+``mbrt_radau5.c``
+    RADAU5 (Radau IIA of order 5) for stiff ODEs, the whole integration in
+    one call: simplified Newton on the real and complex systems, equilibrated
+    LU, the filtered error estimate, Gustafsson's controller, Jacobian and LU
+    reuse, the collocation polynomial at the output times, resumable across
+    calls; exact Jacobians by callback (``mbrt_prog_ode``: a generated
+    program's), else forward differences.
 
 The runtime must stay free of Python: an exported FMU carries these sources
 (or the object code built from them) and runs where no interpreter exists.
@@ -52,7 +59,7 @@ Examples
 --------
 >>> from mbcomp.codegen.runtime import SOURCES, RUNTIME_DIR
 >>> sorted(p.name for p in SOURCES)
-['mbrt_dop853.c', 'mbrt_dopri5.c', 'mbrt_events.c', 'mbrt_linalg.c', 'mbrt_mech.c', 'mbrt_rk.c']
+['mbrt_dop853.c', 'mbrt_dopri5.c', 'mbrt_events.c', 'mbrt_linalg.c', 'mbrt_mech.c', 'mbrt_radau5.c', 'mbrt_rk.c']
 >>> (RUNTIME_DIR / "mbrt.h").is_file()
 True
 """

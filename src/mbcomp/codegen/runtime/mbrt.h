@@ -322,6 +322,84 @@ int mbrt_dae_fun(const mbrt_mech *P, int form, double t, const double *y, const 
  * n*n scratch); INFINITY when A is singular. */
 double mbrt_cond2(int n, const double *A, double *S);
 
+/* ------------------------------------------------------------------ */
+/* RADAU5 for stiff ODEs, the whole integration in one call            */
+/* (mbrt_radau5.c; helper-28's block)                                   */
+/* ------------------------------------------------------------------ */
+
+/* d f / d y at (t, y) (fy = f(t, y)) into J (n x n, row-major).  Returns 0,
+ * or nonzero when there is no exact Jacobian there: the integrator then
+ * differences f (so does a non-finite entry). */
+typedef int (*mbrt_jac_fn)(void *ctx, double t, const double *y, const double *fy, double *J);
+
+/* A singular iteration matrix ended the integration (mbrt_radau5). */
+enum { MBRT_RADAU5_SINGULAR = 20 };
+
+/* mbrt_radau5's counters of one call, besides mbrt_stats. */
+typedef struct {
+    long njev;          /* Jacobians formed (exact or differenced)                 */
+    long ndiff;         /* of them by forward differences                          */
+    long nlu;           /* LU factorizations (the real and the complex each count) */
+    long nnewton;       /* Newton iterations                                       */
+    long nfail_newton;  /* attempts failed by Newton                               */
+    long nsingular;     /* singular iteration matrices met                         */
+    double h_next;      /* the step the next step (or a resumed call) tries        */
+} mbrt_radau5_info;
+
+/* Doubles of work / ints of iwork mbrt_radau5 needs (0 if n <= 0). */
+size_t mbrt_radau5_work_size(int n);
+size_t mbrt_radau5_iwork_size(int n);
+
+/* The method's coefficients, as mbcomp.solvers.radau derives them (45 doubles:
+ * c (3), T (9), TI (9), LAM (9), gamma, mu (re, im), d (3), P (9)). */
+void mbrt_radau5_coefficients(double *out);
+
+/* Integrates the stiff ODE y' = f(t, y) from t0 to t_end >= t0 by Radau IIA
+ * of order 5 (the algorithm of mbcomp.solvers.radau with E = I: simplified
+ * Newton on the real and complex systems, equilibrated LU, the filtered error
+ * estimate, Gustafsson's controller, RADAU5's Jacobian and LU reuse).
+ *
+ *   jac        exact Jacobian (NULL: forward differences of f)
+ *   rtol       scalar (>= 100 DBL_EPSILON); atol n entries >= 0; the weights
+ *              atol_i + rtol max(|y_i(t)|, |y_i(t+h)|)
+ *   h0         first step (0: 0.01 |y|/|f|, at least 1e-6); hmax 0: none
+ *   max_steps  attempted steps at most (0 = 100000): MBRT_MAX_STEPS, resumable
+ *   t_out      n_out increasing times in [t0, t_end]: y_out (n_out x n) from
+ *              each step's collocation polynomial; *n_written rows written
+ *   work, iwork  mbrt_radau5_work_size(n) doubles, _iwork_size(n) ints
+ *   resume     nonzero: continue the integration the work buffer holds when it
+ *              ended at t0 (Jacobian, factors, predictor, controller kept: the
+ *              steps of one call); a y0 other than its state is taken as moved
+ *              there (f again).  Otherwise, or at another t0: a fresh start.
+ *   y_last     if not NULL: the state at stats->t (n)
+ *
+ * Returns MBRT_OK, MBRT_RHS_FAILED (f returned nonzero: stats->t, y_last the
+ * last accepted state), MBRT_STEP_TOO_SMALL (the step size collapsed: the
+ * message names the last cause), MBRT_MAX_STEPS, MBRT_NONFINITE (f not finite
+ * at an accepted state or in a difference Jacobian), MBRT_RADAU5_SINGULAR,
+ * MBRT_BAD_ARGUMENT. */
+int mbrt_radau5(mbrt_rhs_fn f, mbrt_jac_fn jac, void *ctx, int n, double t0, const double *y0, double t_end,
+                double rtol, const double *atol, double h0, double hmax, long max_steps, const double *t_out,
+                int n_out, double *y_out, int *n_written, double *work, int *iwork, int resume, double *y_last,
+                mbrt_stats *stats, mbrt_radau5_info *info);
+
+/* A generated program's ODE y = [q, u], y' = fun(q, u, t) and its exact
+ * Jacobian program (jac may be NULL), as mbrt_radau5's f and jac: pass
+ * mbrt_prog_ode_rhs, mbrt_prog_ode_jac and a mbrt_prog_ode as ctx.  A failed
+ * guard of fun stops the integration (MBRT_RHS_FAILED); of jac, differences. */
+typedef struct {
+    mbrt_prog_fn fun;
+    const double *d, *h, *p;
+    double *w;
+    mbrt_prog_fn jac;
+    const double *jd, *jh, *jp;
+    double *jw;
+    int nq;
+} mbrt_prog_ode;
+
+int mbrt_prog_ode_rhs(void *ctx, double t, const double *y, double *dy);
+int mbrt_prog_ode_jac(void *ctx, double t, const double *y, const double *fy, double *J);
+
 #ifdef __cplusplus
 }
 #endif
