@@ -49,15 +49,13 @@ import time
 import numpy as np
 
 from ..assembly.outputs import output_values
-from ..errors import InitializationError, ModelError, SimulationError, SimulationInterrupted
-from ..formulations import build
+from ..errors import SimulationInterrupted
 from ..geometry.kinematics import matrix_to_quat
 from ..hybrid.active import start_modes
-from ..hybrid.contacts import initialize_in_modes
 from ..simulation.endings import Terminated, sigterm_interrupts
 from ..simulation.setup import check_model, check_numbers, output_times, system_of
-from ..solvers import STEPPERS
 from .batch_result import STATUS_OF, BatchResult, OneRun
+from .batch_starts import ForkedStarts, fork_workers, run_form, start_or_message
 
 __all__ = ["batch", "BatchResult", "BLOCK"]
 
@@ -72,7 +70,8 @@ METHODS = {"dop853": 8, "dopri5": 5}
 
 def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol=1e-10, n_out=None, dt_out=None,
           method="dop853", stabilization=None, alpha=10.0, beta=10.0, max_step=np.inf, max_steps=None,
-          threads=None, fallback=True, initialization="simulate", reduce=None, block=BLOCK, cache_dir=None):
+          threads=None, processes=None, fallback=True, initialization="simulate", reduce=None, block=BLOCK,
+          cache_dir=None):
     """Run a model once per row of ``table``, all integrations in one compiled call.
 
     Parameters
@@ -97,6 +96,12 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
         Attempted steps per run at most; a run that needs more ends with status ``"budget"``.
     threads : int, optional
         Threads integrating runs at once (default: this machine's cores).
+    processes : int, optional
+        Worker processes making the runs' consistent starts (forked from this one, Linux;
+        the same code on the same numbers, so the same starts), blocks ahead of the C
+        threads; 0: in this process, between the C calls. Default: this machine's cores
+        for :data:`~mbcomp.analysis.batch_starts.MIN_FORKED_RUNS` runs or more, none in a
+        daemon process (a Dask or multiprocessing worker) or for fewer runs.
     fallback : bool
         Finish a run whose program guard fails with :func:`mbcomp.simulate` (default); else
         report it ``"failed"``.
@@ -145,6 +150,7 @@ def batch(model, table, *, t_end=1.0, t_start=0.0, outputs=None, rtol=1e-8, atol
                    stabilization=stabilization, alpha=float(alpha), beta=float(beta), n_out=n_out, dt_out=dt_out,
                    max_step=max_step)
     runner = _Runner(system, request, values, n_runs, outputs, max_steps, threads, cache_dir, reduce)
+    runner.workers = fork_workers(n_runs, processes)
     _interruptible(runner, max(1, int(block)))
     res = runner.result()
     if fallback:
@@ -286,29 +292,34 @@ class _Runner:
         self.groups = {}  # (row mask, table's zero pattern) -> (code, gains, output program or None)
         self.columns = None  # name -> (n_runs, n_t), made when the first output program is
         self.wanted = None
-        self.times = dict(setup_time=0.0, integrate_time=0.0, outputs_time=0.0)
+        self.times = dict(setup_time=0.0, integrate_time=0.0, c_cpu_time=0.0, outputs_time=0.0)
         self.stop = np.zeros(1, np.intc)
         self.reduce = reduce
         self.reduced = [None] * n_runs if reduce is not None else None
+        self.workers = 0  # processes to fork for the starts: 0 none, None decided by measuring
+        self.used_workers = 0
+        self.start_cpu = 0.0  # CPU seconds of this thread making the starts (what decides the workers)
+        self.cores = os.cpu_count() or 1
+        self.nice = NICE
 
     def params_of(self, i):
         return {name: col[i] for name, col in self.values.items()}
 
     # --- Python: a run's start ----------------------------------------------------------------
-    def prepare(self, i):
-        """``(key, h, p, y0, system, form)`` of run ``i``, or None (its status says why)."""
-        req = self.req
-        try:
-            s = self.system.with_params(self.params_of(i))
-            init = initialize_in_modes(s, req["t_start"])
-            form = build("lagrange", "ode", s, stabilization=req["stabilization"], alpha=req["alpha"],
-                         beta=req["beta"], method=req["method"], max_index=STEPPERS[req["method"]].max_index)
-            y0 = np.asarray(form.full(req["t_start"], form.initial_state(req["t_start"], init.q, init.u)), float)
-        except (InitializationError, ModelError, SimulationError) as exc:
-            self.message[i] = f"{type(exc).__name__}: {exc}"
-            return None
-        except Exception as exc:  # noqa: BLE001 - a law raising at the start: this run's error row, named
-            self.message[i] = f"the run could not start: {type(exc).__name__}: {exc}"
+    def prepare(self, i, start=None):
+        """``(key, h, p, y0, system, form)`` of run ``i``, or None (its status says why).
+        ``start``: its ``(y0, row mask, message)`` made by a worker process
+        (:class:`~mbcomp.analysis.batch_starts.ForkedStarts`), or None: made here."""
+        if start is None:
+            s, form, y0, message = start_or_message(self.system, self.params_of(i), self.req)
+        else:
+            y0, mask, message = start
+            if message is None:
+                s = self.system.with_params(self.params_of(i))
+                s.row_mask = mask
+                form = run_form(s, self.req)
+        if message is not None:
+            self.message[i] = message
             return None
         rm = s.row_mask
         # what decides the program besides the row mask: which table entries are exactly zero
@@ -394,20 +405,38 @@ class _Runner:
     # --- the pipeline ---------------------------------------------------------------------------
     def run(self, block):
         """Every run, block by block: block ``k + 1`` is prepared while C integrates block ``k``.
-        Stopped (Ctrl-C, an error), the C runs stop at their next stretch and the blocks in
-        flight are stored as they ended (their finished runs kept)."""
+        The starts are made here, or by worker processes blocks ahead of the C threads
+        (:class:`~mbcomp.analysis.batch_starts.ForkedStarts`: asked for, from the second run on;
+        by default from the third block on when :meth:`_workers_pay`). Stopped (Ctrl-C, an
+        error), the C runs stop at their next stretch and the blocks in flight are stored as
+        they ended (their finished runs kept)."""
         pool = concurrent.futures.ThreadPoolExecutor(1)
         flight = []  # (job, prepared) submitted and not stored yet, oldest first
+        starts = None
+        decided = self.workers is not None
         try:
-            for start in range(0, self.n_runs, block):
-                t0 = time.perf_counter()
-                prepared = [(i, self.prepare(i)) for i in range(start, min(start + block, self.n_runs))]
+            for a in range(0, self.n_runs, block):
+                b = min(a + block, self.n_runs)
+                t0, c0 = time.perf_counter(), time.thread_time()
+                if starts is not None:
+                    prepared = [(i, self.prepare(i, st)) for i, st in zip(range(a, b), starts.take(a, b))]
+                elif a == 0 and self.workers and self.n_runs > 1:
+                    prepared = [(0, self.prepare(0))]  # made here: the workers inherit the programs it made
+                    starts = self._starts(1, block)
+                    prepared += [(i, self.prepare(i, st)) for i, st in zip(range(1, b), starts.take(1, b))]
+                else:
+                    prepared = [(i, self.prepare(i)) for i in range(a, b)]
                 self.times["setup_time"] += time.perf_counter() - t0
+                self.start_cpu += time.thread_time() - c0
                 flight.append((pool.submit(self._integrate, [(i, p) for i, p in prepared if p is not None]),
                                prepared))
                 if len(flight) > 1:
                     self._finish(*flight[0])
                     flight.pop(0)
+                    if not decided and b < self.n_runs:
+                        decided = True
+                        if self._workers_pay(b):
+                            starts = self._starts(b, block)
             while flight:
                 self._finish(*flight[0])
                 flight.pop(0)
@@ -419,7 +448,27 @@ class _Runner:
                     self._finish(job, prepared)
             raise
         finally:
+            if starts is not None:
+                starts.close()
             pool.shutdown(wait=True)
+
+    def _starts(self, first, block):
+        """The starts of the runs from ``first`` on, made by worker processes."""
+        self.used_workers = self.workers or self.cores
+        return ForkedStarts(self.system, self.values, self.req, first, self.n_runs, block, self.used_workers)
+
+    def _workers_pay(self, prepared):
+        """Whether worker processes make the batch faster, measured on the ``prepared`` runs
+        started here and those integrated: with ``k`` cores, a start's CPU time here ``P`` and a
+        run's CPU time in C ``C`` (CPU times: other processes' load does not decide), a batch
+        takes about ``max(P, (P + C) / k)`` a run with the starts here, ``(P + C) / k`` with
+        them in workers: workers when ``(k - 1) P > C`` (a closed loop's Newton closure, ~2 ms,
+        against 0.6 ms in C; not an open chain's start, 0.5 ms against 1.1 ms)."""
+        done = int(np.sum(self.c_status != -1))
+        k = min(self.threads, self.cores)
+        if not done or k < 2:
+            return False
+        return (k - 1) * self.start_cpu / prepared > self.times["c_cpu_time"] / done
 
     def _integrate(self, ready):
         """The C call(s) of one block (one per group of equal programs); in a worker thread."""
@@ -438,7 +487,7 @@ class _Runner:
             hmax = req["max_step"] if np.isfinite(req["max_step"]) else 0.0
             out[gkey] = ([i for i, _ in runs], run_batch(
                 code, METHODS[req["method"]], H, P, Y0, self.T, req["rtol"], req["atol"], gains=gains, hmax=hmax,
-                max_steps=self.max_steps, threads=self.threads, stop=self.stop, nice=NICE, cache_dir=self.cache_dir))
+                max_steps=self.max_steps, threads=self.threads, stop=self.stop, nice=self.nice, cache_dir=self.cache_dir))
         return out, time.perf_counter() - t0
 
     def _finish(self, job, prepared):
@@ -446,6 +495,7 @@ class _Runner:
         out, seconds = job.result()
         self.times["integrate_time"] += seconds
         for gkey, (idx, r) in out.items():
+            self.times["c_cpu_time"] += r.cpu_time
             self.Y[idx] = r.Y
             self.t_reached[idx] = r.t_reached
             self.counts[idx] = r.counts
@@ -523,7 +573,7 @@ class _Runner:
         stats = dict(runs=self.n_runs, failed=int(sum(s != "success" for s in self.status)), threads=self.threads,
                      method=self.req["method"], rtol=self.req["rtol"], atol=self.req["atol"], nfev=c[:, 0].copy(),
                      nsteps=c[:, 2].copy(), nreject=c[:, 3].copy(), c_calls=c[:, 4].copy(),
-                     c_status=self.c_status.copy(), simulate_reruns=[],
+                     c_status=self.c_status.copy(), simulate_reruns=[], processes=self.used_workers,
                      **self.times)
         return BatchResult(self.T, cols, self.status, self.message, self.values, self.t_reached, stats, self.reduced)
 

@@ -62,9 +62,10 @@ class BatchResult(_Columns):
     reduced : list or None
         Per run, what ``batch(..., reduce=f)`` returned (None for a run not finished).
     stats : dict
-        ``runs``, ``failed``, ``threads``, ``setup_time`` (Python: parameters, consistent
-        initialization), ``integrate_time`` (the C calls), ``outputs_time``, ``wall_time``
-        (s); per run ``nfev``, ``nsteps``, ``nreject``, ``c_calls``; ``simulate_reruns`` (runs
+        ``runs``, ``failed``, ``threads``, ``processes`` (worker processes that made the starts),
+        ``setup_time`` (Python: parameters, consistent initialization, or waiting for the
+        workers' starts), ``integrate_time`` (the C calls), ``c_cpu_time`` (their threads' CPU
+        time), ``outputs_time``, ``wall_time`` (s); per run ``nfev``, ``nsteps``, ``nreject``, ``c_calls``; ``simulate_reruns`` (runs
         finished by :func:`mbcomp.simulate` after a program guard failed).
 
     Examples
