@@ -8,14 +8,21 @@ event's direction is located on the step's continuous extension (Brent's method;
 acted on at the start is found only when it returns through zero), and the stretch ends at
 the earliest (status 8) with the state there. :class:`LinearEvents` holds the ctypes
 structures an :class:`mbcomp.codegen.engine.Integrator` hands to its C call.
+
+:class:`LinearImpacts` goes one step further for the plainest action, a stop's rebound: the
+runtime's ``mbrt_impacts_integrate`` runs a run's stretches one after the other and acts on
+the impacts between them itself (Newton's restitution on the row, ``M`` from the evaluation
+program), restarting as a new stepper would; whatever is not plainly a rebound (one that may
+rest, chattering, no restitution) ends the loop at the event for the hybrid layer to decide.
 """
 from __future__ import annotations
 
 import ctypes
+from types import SimpleNamespace
 
 import numpy as np
 
-__all__ = ["LinearEvents"]
+__all__ = ["LinearEvents", "LinearImpacts"]
 
 
 class _LinearEvents(ctypes.Structure):
@@ -103,3 +110,144 @@ class LinearEvents:
             self.struct.tol = float(tol)
         self.struct.which = -1
         return self.ptr
+
+
+class _Impacts(ctypes.Structure):
+    _fields_ = [("n_ev", ctypes.c_int), ("iu", ctypes.c_void_p), ("sign", ctypes.c_void_p), ("e", ctypes.c_void_p),
+                ("comp", ctypes.c_void_p), ("n_comp", ctypes.c_int), ("last", ctypes.c_void_p),
+                ("gap", ctypes.c_void_p), ("shrinks", ctypes.c_void_p), ("chatter", ctypes.c_int),
+                ("burst", ctypes.c_double), ("rest", ctypes.c_double), ("P", ctypes.c_void_p),
+                ("work", ctypes.c_void_p), ("cap", ctypes.c_int), ("count", ctypes.c_int),
+                ("log_t", ctypes.c_void_p), ("log_which", ctypes.c_void_p), ("log_y", ctypes.c_void_p),
+                ("log_loss", ctypes.c_void_p)]
+
+
+class _Stats(ctypes.Structure):  # mbrt_stats (mbrt.h)
+    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
+                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
+                ("message", ctypes.c_char * 200)]
+
+
+_ARGS = ([ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
+          ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_int, ctypes.c_int]
+         + [ctypes.c_double, ctypes.c_double, ctypes.c_void_p] + [ctypes.c_double] * 3 + [ctypes.c_long]
+         + [ctypes.c_void_p] * 5)
+
+
+class LinearImpacts:
+    """Stops' rebounds acted on inside the C loop (``mbrt_impacts`` / ``mbrt_impacts_integrate``
+    in ``mbrt.h``): event ``k`` of ``events`` closes the row ``sign_k u[iu_k] >= 0`` with
+    Newton's restitution ``e_k`` (``iu_k = -1``: never acted on in C), on a system without
+    constraint rows whose evaluation program ``mech`` gives ``M`` and ``f``.
+
+    Parameters
+    ----------
+    integrator : Integrator
+        The engine (its ``mbcomp_integrate`` is the stretch function, its context the call's).
+    mech : Mech
+        The evaluation program of the same system, bound to the same parameters.
+    iu, sign, e, comp : sequence
+        Per event: the speed entry of its row (0..nu-1, or -1), the row's sign (+-1), the
+        restitution (1, in [0, 1]) and its component (0..n_comp-1).
+    chatter, burst, rest : int, float, float
+        Shrinking intervals that make chattering; s per ``max(1, |t|)`` within which an impact
+        is the caller's; the resting height (m or rad).
+    cap : int
+        Impacts logged at most per call (then the caller acts on the next).
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.codegen import c_compiler, compile_system
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1), s0=1.0)); b = m.add("b", PointMass(m=1.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> if c_compiler():            # a ball dropped from 1 m onto the floor, e = 0.5
+    ...     ev = compile_system(mbcomp.assemble(m), "c")
+    ...     eng, mech = ev.evaluator.integrator(0.0, 0.0), ev.evaluator.dae_program(1).mech
+    ...     watch = LinearEvents(eng, index=[0], sign=[1.0], at=[0.0], direction=[-1], tol=1e-13)
+    ...     imp = LinearImpacts(eng, mech, iu=[0], sign=[1.0], e=[0.5], comp=[0])
+    ...     out = imp.integrate(watch, 8, 0.0, np.array([1.0, 0.0]), np.array([0.5, 1.0]), 2, 2, 1e-13, 1e-10, 1e-12)
+    ...     t1 = np.sqrt(2 / 9.81)      # the fall; the next after 2 v / g, v = e sqrt(2 g) (m/s)
+    ...     times = [x[0] for x in out.impacts]
+    ...     print(out.status, len(times), abs(times[0] - t1) < 1e-9, abs(times[1] - times[0] - t1) < 1e-9)
+    ... else:
+    ...     print(0, 2, True, True)
+    0 2 True True
+    """
+
+    def __init__(self, integrator, mech, iu, sign, e, comp, chatter=30, burst=1e-9, rest=0.0, cap=64):
+        dll = integrator.bound.code.dll
+        self.integrator, self.mech, self.dll = integrator, mech, dll
+        n, m = integrator.n, len(iu)
+        self.iu = np.ascontiguousarray(iu, dtype=np.intc)
+        self.sign = np.ascontiguousarray(sign, dtype=float)
+        self.e = np.ascontiguousarray(e, dtype=float)
+        self.comp = np.ascontiguousarray(comp, dtype=np.intc)
+        if not (len(self.iu) == len(self.sign) == len(self.e) == len(self.comp) == m):
+            raise ValueError(f"LinearImpacts: iu, sign, e and comp need one entry per watched event ({m})")
+        acted = self.iu >= 0
+        if np.any((self.e[acted] < 0.0) | (self.e[acted] > 1.0)) or not np.all(np.abs(self.sign[acted]) == 1.0):
+            raise ValueError(f"LinearImpacts: restitution {self.e.tolist()} must lie in [0, 1] (0 plastic, 1 "
+                             f"elastic) and the signs {self.sign.tolist()} be +1 or -1")
+        n_comp = int(self.comp.max()) + 1 if m else 1
+        self.last, self.gap = np.full(n_comp, -np.inf), np.full(n_comp, -1.0)
+        self.shrinks = np.zeros(n_comp, dtype=np.intc)
+        self.log_t, self.log_which = np.zeros(cap), np.zeros(cap, dtype=np.intc)
+        self.log_y, self.log_loss = np.zeros((cap, 2 * n)), np.zeros(cap)
+        dll.mbrt_impacts_work_size.restype = ctypes.c_size_t
+        dll.mbrt_impacts_work_size.argtypes = [ctypes.c_void_p]
+        self.work = np.zeros(max(1, int(dll.mbrt_impacts_work_size(mech.ptr))))
+        self.struct = _Impacts(m, self.iu.ctypes.data, self.sign.ctypes.data, self.e.ctypes.data,
+                               self.comp.ctypes.data, n_comp, self.last.ctypes.data, self.gap.ctypes.data,
+                               self.shrinks.ctypes.data, int(chatter), float(burst), float(rest), mech.ptr,
+                               self.work.ctypes.data, int(cap), 0, self.log_t.ctypes.data,
+                               self.log_which.ctypes.data, self.log_y.ctypes.data, self.log_loss.ctypes.data)
+        fn = dll.mbrt_impacts_integrate
+        fn.restype, fn.argtypes = ctypes.c_int, _ARGS
+        self.fn, self.stretch = fn, ctypes.cast(dll.mbcomp_integrate, ctypes.c_void_p).value
+        self.stretch_work = {}
+        self.y_start = np.zeros(n)
+
+    def history(self, comp, last, gap, shrinks):
+        """Component ``comp``'s impacts so far: the last one's time (s; -inf: none), the
+        interval before it (s; negative: none) and how many successive intervals shrank."""
+        self.last[comp], self.gap[comp], self.shrinks[comp] = last, gap, shrinks
+
+    def integrate(self, events, order, t0, y0, t_out, first, chunk, tol_scale, rtol, atol, h0=0.0, h_restart=0.0,
+                  hmax=0.0, max_steps=0, stiff_steps=0, fresh=-1):
+        """The stretches watching ``events`` (:class:`LinearEvents`, one per entry of ``iu``)
+        from ``(t0, y0)`` over the output times ``t_out`` (every one left, > t0;
+        the first stretch ends at ``t_out[first - 1]``, each after an impact ``chunk`` outputs
+        later), the impacts acted on between them (``mbrt_impacts_integrate``). Returns what
+        :meth:`mbcomp.codegen.engine.Integrator.integrate` does, the counters summed over the
+        stretches, with ``impacts``: ``[(t, event, [q, u-], [q, u+], energy lost J)]``."""
+        eng, n = self.integrator, self.integrator.n
+        y0 = np.ascontiguousarray(y0, float)
+        t_out = np.ascontiguousarray(t_out, float)
+        atol_v = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, float), (n,)))
+        Y = np.zeros((len(t_out), n))
+        work = self.stretch_work.get(order)
+        if work is None:
+            work = self.stretch_work[order] = np.zeros(int(self.dll.mbcomp_work_size(order, n)))
+        nw, st = ctypes.c_int(0), _Stats()
+        self.struct.count = 0
+        eng.ctx.stiff_steps = int(stiff_steps)
+        if len(events.index) != len(self.iu):
+            raise ValueError(f"LinearImpacts: {len(events.index)} events watched for {len(self.iu)} described")
+        eng.ctx.events = events.arm(fresh)
+        status = self.fn(self.stretch, order, ctypes.addressof(eng.ctx), events.ptr, ctypes.addressof(self.struct),
+                         n, t0, y0.ctypes.data, t_out.ctypes.data, len(t_out), int(first), int(chunk), tol_scale,
+                         rtol, atol_v.ctypes.data, h0, h_restart, hmax, int(max_steps), Y.ctypes.data,
+                         ctypes.addressof(nw), work.ctypes.data, ctypes.addressof(st), self.y_start.ctypes.data)
+        ev = events.struct
+        k = self.struct.count
+        impacts = [(float(self.log_t[j]), int(self.log_which[j]), self.log_y[j, :n].copy(), self.log_y[j, n:].copy(),
+                    float(self.log_loss[j])) for j in range(k)]
+        return SimpleNamespace(status=int(status), message=st.message.decode(errors="replace"), Y=Y[: nw.value],
+                               t_last=eng.ctx.t_last, y_last=eng.y_last.copy(), h_last=eng.ctx.h_last,
+                               nfev=int(st.nfev), naccept=int(st.naccept), nreject=int(st.nreject),
+                               projections=int(eng.ctx.nproj), declined=int(eng.ctx.declined),
+                               which=int(ev.which), t_event=float(ev.t_event), y_event=events.y_event.copy(),
+                               impacts=impacts)

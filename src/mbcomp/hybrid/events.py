@@ -50,7 +50,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..assembly.kkt import accelerations
-from ..errors import ModelError, Problem, SimulationError
+from ..errors import SimulationError
 from ..modeling.events import ContactRow, End, Impact, SlipSpeed, Switch
 from .contacts import contact_impact, contact_pushes, contact_rows, event_value, touching_at_start
 from ..solvers.locate import return_root, root, time_tolerance
@@ -60,6 +60,7 @@ from .active import (SegmentStart, mode_rows, mode_system, rows_in_force, slippi
 from .outcomes import Cut, EventRecord, Outcome
 from .stops import consistent, impact_speeds, row_push, row_values
 from .slip import SPIN_SPAN, SPIN_TURNS, SlideEvents, tangent_rows, with_slip_friction
+from .c_loop import CLoop
 from .friction import row_events
 
 __all__ = ["EventRecord", "Events", "Cut", "Outcome", "REST_HEIGHT", "CHATTER", "BURST", "BURST_SPAN",
@@ -73,23 +74,13 @@ CHATTER = 30
 BURST, BURST_SPAN = 60, 1e-9
 
 
-def _check_row(name, row, edge):
-    """A ``ModelError`` naming joint, row and fix for an EventRow past the joint's own entries."""
-    n = (edge.q if row.of == "q" else edge.u).stop - (edge.q if row.of == "q" else edge.u).start
-    if not 0 <= row.index < n:
-        kind = "coordinates" if row.of == "q" else "speeds"
-        raise ModelError([Problem(name, f"its modes' EventRow {row.name!r} reads {row.of}[{row.index}], but the joint "
-                                  f"has {n} {kind}", f"give an index from 0 to {n - 1} in event_rows")],
-                         header="event rows out of range")
-
-
 def _crossed(g0, g1, direction):
     if direction <= 0 and g0 >= 0.0 > g1:
         return True
     return direction >= 0 and g0 <= 0.0 < g1
 
 
-class Events(SlideEvents):
+class Events(CLoop, SlideEvents):
     """The events of one run (see the module notes).
 
     Parameters
@@ -157,40 +148,6 @@ class Events(SlideEvents):
             if self.user_left[i] != 0:
                 out[("user", i, getattr(f, "__name__", f"event{i}"))] = float(getattr(f, "direction", 0.0))
         return out
-
-    def _declared(self, name, mode):
-        """Joint ``name``'s ``Modes``, its event rows in ``mode`` checked once (:func:`_check_row`)."""
-        e = self.system.edge(name)
-        declared = e.comp.modes(self.system.P[name])
-        if declared.linear_events and (name, mode) not in self._checked:
-            for row in declared.event_rows(mode):
-                _check_row(name, row, e)
-            self._checked.add((name, mode))
-        return declared
-
-    def c_watch(self):
-        """The current segment's event functions as the C loop watches them --
-        ``(index, sign, at, direction, fresh)`` for
-        :meth:`~mbcomp.solvers.compiled_rk.CompiledRK.watch`, ``y = [q, u]`` -- or None when
-        one of them is not an :class:`~mbcomp.modeling.events.EventRow` (a user's function,
-        a mode that does not declare ``linear_events``, an engaged row's push, a slide)."""
-        if any(left != 0 for left in self.user_left):
-            return None
-        sysm, nq = self.system, self.system.nq
-        keys, index, sign, at, direction = [], [], [], [], []
-        for name, mode in self.modes.items():
-            declared, e = self._declared(name, mode), sysm.edge(name)
-            if not declared.linear_events or declared.rows(mode) or declared.slips:
-                return None
-            for row in declared.event_rows(mode):
-                keys.append(("joint", name, row.name))
-                index.append(e.q.start + row.index if row.of == "q" else nq + e.u.start + row.index)
-                sign.append(row.sign)
-                at.append(row.at)
-                direction.append(row.direction)
-        self._c_keys = keys
-        fresh = keys.index(self._fresh) if self._fresh in keys else -1
-        return index, sign, at, direction, fresh
 
     def values(self, t, qu):
         """``{key: value}`` of every event function at ``(t, [q, u])``."""
@@ -276,6 +233,7 @@ class Events(SlideEvents):
         """:meth:`check` of a stretch the C loop watched: the event it located (the stretch
         ends there) decided as in Python; one that does not act lets the stepper's next step
         go past it on the Python path."""
+        self.take_c_impacts(getattr(run.stepper, "impacts_done", ()))  # acted on in the C loop
         self._fresh, self._g0 = None, None
         hit = run.stepper.hit
         if hit is None:

@@ -294,6 +294,75 @@ int mbrt_dalembert_rhs(const mbrt_mech *P, double t, const double *y, const int 
 int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_iter, double accept,
                  double *norm, double *work);
 
+/* ------------------------------------------------------------------ */
+/* Impacts acted on inside the C loop (mbrt_events.c; helper-30's block) */
+/* ------------------------------------------------------------------ */
+
+/* One stretch of a run by a *_events integrator (the glue's mbcomp_integrate
+ * has this signature; ctx carries the rhs, the step callback and the
+ * mbrt_events). */
+typedef int (*mbrt_stretch_fn)(int order, void *ctx, double t0, const double *y0, double t_end, double rtol,
+                               const double *atol, double h0, double hmax, long max_steps, const double *t_out,
+                               int n_out, double *y_out, int *n_written, double *work, mbrt_stats *stats);
+
+/* The impacts a stretch loop acts on itself: event k of the watched
+ * mbrt_events is an impact closing the row sign[k] u[iu[k]] >= 0 of a system
+ * with no constraint rows (P: its evaluation program; only M and f are read),
+ * Newton's restitution e[k] in [0, 1]:
+ *   du = -(1 + e) (c u) M^-1 c^T / (c M^-1 c^T),  c = sign e_iu.
+ * It is acted on only when it is plainly a rebound: approaching (c u < 0),
+ * e > 0, the rebound c u+ rising more than twice `rest` (m or rad) against
+ * the acceleration c M^-1 f(q, u+) pressing into the row (u+^2 > 4 rest |acc|),
+ * the component's impacts not chattering (fewer than `chatter` successive
+ * shrinking intervals, none within burst max(1, |t|) s of the one before),
+ * room left in the log, an output time left after it; otherwise the loop
+ * ends at the event (MBRT_EVENT) and the caller decides.  iu[k] < 0: event k
+ * is never acted on here. */
+typedef struct {
+    int n_ev;               /* the watched events' number                         */
+    const int *iu;          /* n_ev speed entries of the rows (0..nu-1), or -1    */
+    const double *sign;     /* n_ev signs (+1, -1)                                */
+    const double *e;        /* n_ev restitution coefficients in [0, 1]            */
+    const int *comp;        /* n_ev components (0..n_comp-1): chattering per component */
+    int n_comp;
+    double *last;           /* n_comp: time of the last impact (-INFINITY: none); in/out */
+    double *gap;            /* n_comp: the interval before it (< 0: none); in/out */
+    int *shrinks;           /* n_comp: successive shrinking intervals; in/out     */
+    int chatter;            /* shrinking intervals that make chattering (>= 1)    */
+    double burst;           /* s per max(1, |t|): closer impacts are the caller's */
+    double rest;            /* the resting height (m or rad), >= 0                */
+    const mbrt_mech *P;     /* the evaluation program (nrows = mn = 0, nq = nu)   */
+    double *work;           /* mbrt_impacts_work_size(P) doubles                   */
+    int cap;                /* log entries at most                                 */
+    int count;              /* log entries written                                 */
+    double *log_t;          /* cap: the impacts' times (s)                         */
+    int *log_which;         /* cap: their events                                   */
+    double *log_y;          /* cap x 2 n: [q, u-] and [q, u+] of each              */
+    double *log_loss;       /* cap: kinetic energy lost (J)                        */
+} mbrt_impacts;
+
+/* Doubles of work an mbrt_impacts needs (0 if P is NULL). */
+size_t mbrt_impacts_work_size(const mbrt_mech *P);
+
+/* A run's stretches with the impacts of I acted on in between: the first
+ * stretch integrates from (t0, y0) over t_out[0..first-1] (ending at
+ * t_out[first-1], events located to tol_scale max(1, |t_end|) s, ev->fresh
+ * as armed, first step h0); at an impact acted on (I, above) the next
+ * stretch starts at the event with the speeds after it, event `which`
+ * fresh, first step h_restart, over the next `chunk` output times after it --
+ * as a new stepper would.  The loop ends with the first stretch that ends
+ * without an event (its status), at an event not acted on (MBRT_EVENT, ev's
+ * which/t_event/y_event set) or at a failure.  t_out: every output time left
+ * (n_out, increasing, > t0); y_out (n_out x n) and *n_written count from
+ * t_out[0] over all stretches; stats sums the counters (the status, time and
+ * message are the last stretch's); y_start: n doubles of scratch.  Returns the
+ * status; MBRT_BAD_ARGUMENT for an incomplete description. */
+int mbrt_impacts_integrate(mbrt_stretch_fn integrate, int order, void *ctx, mbrt_events *ev, mbrt_impacts *I,
+                           int n, double t0, const double *y0, const double *t_out, int n_out, int first, int chunk,
+                           double tol_scale, double rtol, const double *atol, double h0, double h_restart,
+                           double hmax, long max_steps, double *y_out, int *n_written, double *work,
+                           mbrt_stats *stats, double *y_start);
+
 /* The multiplier forms as semi-explicit DAEs E dy/dt = F(t, y) (mbcomp's
  * formulations/dae.py), y = [q, u, a, lam] with lam the m = nrows + mn
  * multipliers (GGL: and eta, nrows more):

@@ -17,6 +17,7 @@
 #include "mbrt_rk_internal.h"
 
 #include <float.h>
+#include <stdio.h>
 #include <string.h>
 
 size_t mbrt_events_work_size(int n, int n_ev)
@@ -225,4 +226,188 @@ int mbrt_events_step(const mbrt_rk_method *M, mbrt_rk_state *S, mbrt_events *ev,
     ev->t_event = t_best;
     M->dense_eval(S, (t_best - S->t) / S->h, ev->y_event);
     return 1;
+}
+
+/* ------------------------------------------------------------------ */
+/* Impacts acted on between two stretches (mbrt.h, mbrt_impacts)       */
+/* ------------------------------------------------------------------ */
+
+/* Work layout: out[n_out] (the program's output), L[nu * nu] (Cholesky of M),
+ * x[nu] (M^-1 c^T), a[nu] (M^-1 f at the speeds after). */
+size_t mbrt_impacts_work_size(const mbrt_mech *P)
+{
+    if (P == NULL || P->nu <= 0 || P->n_out <= 0)
+        return 0;
+    return (size_t)P->n_out + (size_t)P->nu * (size_t)P->nu + 2 * (size_t)P->nu;
+}
+
+static int impacts_complete(const mbrt_impacts *I, const mbrt_events *ev, int n)
+{
+    if (I == NULL || ev == NULL || I->n_ev != ev->n_ev || I->iu == NULL || I->sign == NULL || I->e == NULL ||
+        I->comp == NULL || I->n_comp < 1 || I->last == NULL || I->gap == NULL || I->shrinks == NULL ||
+        I->chatter < 1 || !(I->burst >= 0.0) || !(I->rest >= 0.0) || I->P == NULL || I->work == NULL ||
+        I->cap < 0 || I->count < 0 || I->count > I->cap || (I->cap > 0 && (I->log_t == NULL ||
+        I->log_which == NULL || I->log_y == NULL || I->log_loss == NULL)))
+        return 0;
+    const mbrt_mech *P = I->P;
+    if (P->eval == NULL || P->nrows != 0 || P->mn != 0 || P->nq != P->nu || P->nq + P->nu != n ||
+        P->off_M < 0 || P->off_f < 0 || P->off_M + P->nu * P->nu > P->n_out || P->off_f + P->nu > P->n_out)
+        return 0;
+    for (int k = 0; k < I->n_ev; ++k) {
+        if (I->iu[k] >= P->nu || I->comp[k] < 0 || I->comp[k] >= I->n_comp)
+            return 0;
+        if (I->iu[k] >= 0 && (!(I->e[k] >= 0.0 && I->e[k] <= 1.0) || fabs(I->sign[k]) != 1.0))
+            return 0;
+    }
+    return 1;
+}
+
+/* The program's M (Cholesky-factored into L) and f at (t, q, u); 0, or 1 when a
+ * guard failed, a value was not finite or M is not positive definite. */
+static int mass_and_force(const mbrt_mech *P, double t, const double *q, const double *u, double *out, double *L)
+{
+    const int nu = P->nu;
+    if (P->eval(q, u, t, P->d, P->h, P->p, P->w, out) != 0)
+        return 1;
+    for (int i = 0; i < nu * nu; ++i)
+        if (!isfinite(out[P->off_M + i]))
+            return 1;
+    for (int i = 0; i < nu; ++i)
+        if (!isfinite(out[P->off_f + i]))
+            return 1;
+    if (L != NULL) {
+        memcpy(L, out + P->off_M, sizeof(double) * (size_t)nu * (size_t)nu);
+        if (mbrt_chol_factor(nu, L) != 0)
+            return 1;
+    }
+    return 0;
+}
+
+/* u^T M u with M the program's (row-major at out + off_M). */
+static double quadratic(const mbrt_mech *P, const double *out, const double *u)
+{
+    const int nu = P->nu;
+    const double *M = out + P->off_M;
+    double s = 0.0;
+    for (int i = 0; i < nu; ++i) {
+        double r = 0.0;
+        for (int j = 0; j < nu; ++j)
+            r += M[(size_t)i * nu + j] * u[j];
+        s += u[i] * r;
+    }
+    return s;
+}
+
+/* Act on the located event ev->which at (ev->t_event, ev->y_event) if it is
+ * plainly a rebound (mbrt.h, mbrt_impacts): 1 with y_plus = [q, u+] written and
+ * the impact logged, else 0 (the caller decides). */
+static int act_on_impact(mbrt_impacts *I, const mbrt_events *ev, int n, double *y_plus)
+{
+    const int k = ev->which;
+    if (k < 0 || k >= I->n_ev || I->iu[k] < 0 || I->count >= I->cap || !(I->e[k] > 0.0))
+        return 0;
+    const mbrt_mech *P = I->P;
+    const int nu = P->nu, iu = I->iu[k], c = I->comp[k];
+    const double t = ev->t_event, s = I->sign[k], *q = ev->y_event, *um = ev->y_event + P->nq;
+    const double before = s * um[iu];
+    if (!(before < 0.0))
+        return 0;
+    double d = t - I->last[c];
+    int shrinks = 0;
+    if (isfinite(I->last[c])) {
+        if (d <= I->burst * fmax(1.0, fabs(t)))
+            return 0;
+        shrinks = (I->gap[c] >= 0.0 && d < I->gap[c]) ? I->shrinks[c] + 1 : 0;
+        if (shrinks >= I->chatter)
+            return 0;
+    }
+    double *out = I->work, *L = out + P->n_out, *x = L + (size_t)nu * nu, *a = x + nu;
+    if (mass_and_force(P, t, q, um, out, L) != 0)
+        return 0;
+    for (int i = 0; i < nu; ++i)
+        x[i] = 0.0;
+    x[iu] = s;
+    mbrt_chol_solve(nu, L, x); /* M^-1 c^T */
+    const double G = s * x[iu];
+    if (!(G > 0.0) || !isfinite(G))
+        return 0;
+    const double lam = -(1.0 + I->e[k]) * before / G;
+    double *up = y_plus + P->nq;
+    memcpy(y_plus, q, sizeof(double) * (size_t)P->nq);
+    for (int i = 0; i < nu; ++i)
+        up[i] = um[i] + lam * x[i];
+    const double t_minus = quadratic(P, out, um), t_plus = quadratic(P, out, up);
+    const double after = s * up[iu];
+    if (mass_and_force(P, t, q, up, out, NULL) != 0) /* f at the speeds after */
+        return 0;
+    memcpy(a, out + P->off_f, sizeof(double) * (size_t)nu);
+    mbrt_chol_solve(nu, L, a);
+    const double acc = s * a[iu];
+    if (!isfinite(acc) || !isfinite(after) || !(after * after > 4.0 * I->rest * fabs(acc)))
+        return 0; /* a rebound that may rest: the caller's resting test */
+    const int j = I->count++;
+    I->log_t[j] = t;
+    I->log_which[j] = k;
+    memcpy(I->log_y + (size_t)j * 2 * n, ev->y_event, sizeof(double) * (size_t)n);
+    memcpy(I->log_y + (size_t)j * 2 * n + n, y_plus, sizeof(double) * (size_t)n);
+    I->log_loss[j] = 0.5 * (t_minus - t_plus);
+    I->gap[c] = isfinite(I->last[c]) ? d : -1.0;
+    I->shrinks[c] = shrinks;
+    I->last[c] = t;
+    return 1;
+}
+
+static void add_counts(mbrt_stats *total, const mbrt_stats *st)
+{
+    total->nfev += st->nfev;
+    total->nstep += st->nstep;
+    total->naccept += st->naccept;
+    total->nreject += st->nreject;
+    total->status = st->status;
+    total->t = st->t;
+    memcpy(total->message, st->message, sizeof total->message);
+}
+
+int mbrt_impacts_integrate(mbrt_stretch_fn integrate, int order, void *ctx, mbrt_events *ev, mbrt_impacts *I,
+                           int n, double t0, const double *y0, const double *t_out, int n_out, int first, int chunk,
+                           double tol_scale, double rtol, const double *atol, double h0, double h_restart,
+                           double hmax, long max_steps, double *y_out, int *n_written, double *work,
+                           mbrt_stats *stats, double *y_start)
+{
+    mbrt_stats local, st;
+    mbrt_stats *total = stats ? stats : &local;
+    memset(total, 0, sizeof *total);
+    total->t = t0;
+    if (n_written)
+        *n_written = 0;
+    if (integrate == NULL || n <= 0 || y0 == NULL || t_out == NULL || n_out < 1 || first < 1 || chunk < 1 ||
+        !(tol_scale > 0.0) || y_out == NULL || y_start == NULL || !impacts_complete(I, ev, n)) {
+        total->status = MBRT_BAD_ARGUMENT;
+        snprintf(total->message, sizeof total->message, "mbrt_impacts_integrate: the description is incomplete "
+                 "(a stretch function, outputs, first and chunk >= 1, tol_scale > 0, the events and impacts).");
+        return MBRT_BAD_ARGUMENT;
+    }
+    double t = t0, h = h0;
+    int k0 = 0, size = first;
+    memcpy(y_start, y0, sizeof(double) * (size_t)n);
+    for (;;) {
+        const int nout = size < n_out - k0 ? size : n_out - k0;
+        const double t_end = t_out[k0 + nout - 1];
+        ev->tol = tol_scale * fmax(1.0, fabs(t_end));
+        ev->which = -1;
+        int nw = 0;
+        memset(&st, 0, sizeof st);
+        const int rc = integrate(order, ctx, t, y_start, t_end, rtol, atol, h, hmax, max_steps, t_out + k0, nout,
+                                 y_out + (size_t)k0 * (size_t)n, &nw, work, &st);
+        add_counts(total, &st);
+        k0 += nw;
+        if (n_written)
+            *n_written = k0;
+        if (rc != MBRT_EVENT || k0 >= n_out || !act_on_impact(I, ev, n, y_start))
+            return rc;
+        t = ev->t_event;
+        ev->fresh = ev->which;
+        h = h_restart;
+        size = chunk;
+    }
 }
