@@ -30,9 +30,9 @@
 Timing: the machine has 2 cores shared with other work, whose load changes by the minute, so the
 batch and the simulate calls are interleaved: each of ``--repeat`` rounds times the batch on all
 runs, then ``simulate`` on every ``repeat``-th run (scaled to all runs); the table gives medians
-and the median of the per-round ratios, in wall time and in CPU time of this process (all its
-threads: a batch's CPU time counts both cores' work, so the CPU ratio is the work saved and the
-wall ratio adds the threads' overlap). MuJoCo is timed after, its ratio against the batch's
+and the median of the per-round ratios, in wall time and in CPU time of this process and its children
+(all threads, and the worker processes a batch forks for the starts: a batch's CPU time counts
+both cores' work, so the CPU ratio is the work saved and the wall ratio adds the overlap). MuJoCo is timed after, its ratio against the batch's
 median.
 
 Run: python bench/batch.py [--runs 1000] [--repeat 3] [--t-end 10]
@@ -73,6 +73,12 @@ def slider_table(runs):
             "rod.m": rng.uniform(1.5, 2.5, runs)}
 
 
+def cpu_time():
+    """CPU seconds of this process's threads and of its children that ended (the batch's workers)."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
 def interleaved(model, table, t_end, rounds, names, variants=(("batch", {}),)):
     """Timings under a shared machine's changing load: each round times every batch variant on
     all runs, then ``simulate`` on every ``rounds``-th run (scaled to all runs). Returns
@@ -86,10 +92,10 @@ def interleaved(model, table, t_end, rounds, names, variants=(("batch", {}),)):
     times, results, diff = {}, {}, 0.0
     for r in range(rounds):
         for name, kw in variants:
-            w0, c0 = time.perf_counter(), time.process_time()
+            w0, c0 = time.perf_counter(), cpu_time()
             results[name] = mbcomp.batch(model, table, t_end=t_end, **TOL, **kw)
-            times.setdefault(name, []).append((time.perf_counter() - w0, time.process_time() - c0))
-        w0, c0 = time.perf_counter(), time.process_time()
+            times.setdefault(name, []).append((time.perf_counter() - w0, cpu_time() - c0))
+        w0, c0 = time.perf_counter(), cpu_time()
         mine = range(r, runs, rounds)
         for i in mine:
             res = mbcomp.simulate(model, t_end=t_end, params={k: v[i] for k, v in table.items()}, **TOL)
@@ -98,7 +104,7 @@ def interleaved(model, table, t_end, rounds, names, variants=(("batch", {}),)):
                 diff = max(diff, max(float(np.max(np.abs(res[n] - first[n][i]))) for n in names))
         scale = runs / len(mine)
         times.setdefault("simulate calls", []).append(((time.perf_counter() - w0) * scale,
-                                                       (time.process_time() - c0) * scale))
+                                                       (cpu_time() - c0) * scale))
     base = np.array(times[variants[0][0]])
     out = {}
     for name, tc in times.items():
@@ -172,9 +178,9 @@ def pendulum(args, threads):
         if dt is not None:
             tc = []
             for _ in range(args.repeat):
-                c0 = time.process_time()
+                c0 = cpu_time()
                 w, q = mujoco_rollout(phi, args.t_end, dt, threads)
-                tc.append((w, time.process_time() - c0))
+                tc.append((w, cpu_time() - c0))
             wall, cpu = np.median(np.array(tc), axis=0)
             b = times["batch"]
             rows.append((f"mujoco rollout RK4 dt={dt:.4g} s", (wall, cpu, wall / b[0], cpu / b[1]),
@@ -212,8 +218,10 @@ def report(title, rows, runs):
               f"{'' if err is None else f'{err:.2g}'} |")
         if res is not None:
             st = res.stats
-            print(f"|   of which Python (initialization, parameters) | {st['setup_time']:.3g} | | | | | |")
-            print(f"|   of which C calls (threads={st['threads']}, overlapping) | {st['integrate_time']:.3g} | | | | | |")
+            where = f"{st['processes']} worker processes" if st["processes"] else "this process"
+            print(f"|   of which Python: starts ({where}), parameters | {st['setup_time']:.3g} | | | | | |")
+            print(f"|   of which C calls (threads={st['threads']}, overlapping; their CPU {st['c_cpu_time']:.3g} s) | "
+                  f"{st['integrate_time']:.3g} | | | | | |")
 
 
 def main():

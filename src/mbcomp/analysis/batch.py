@@ -7,9 +7,11 @@ the C engine -- except that the integrations of all runs are one C call
 (:func:`mbcomp.codegen.batch.run_batch`), on POSIX threads with the GIL released, each run
 with its own error control and the stretches ``simulate`` makes, so each run gives the numbers
 ``simulate`` gives (the tests hold them to 1e-12). Python prepares the next block of runs
-(initialization, the parameter program) while C integrates the previous one. The requested
-output columns come from the output program (:mod:`mbcomp.codegen.outputs`) over each run's
-grid.
+(initialization, the parameter program) while C integrates the previous one; where the
+initializations are the bottleneck (a closed loop's Newton closure), forked worker processes
+make them, blocks ahead (:mod:`mbcomp.analysis.batch_starts`; the same starts, bit for bit).
+The requested output columns come from the output program (:mod:`mbcomp.codegen.outputs`) over
+each run's grid.
 
 What a batch does not do, and says so: models with events (stops, contacts, friction modes),
 external inputs, drives whose law is not traced, ``stabilization="projection"`` and methods
@@ -487,7 +489,8 @@ class _Runner:
             hmax = req["max_step"] if np.isfinite(req["max_step"]) else 0.0
             out[gkey] = ([i for i, _ in runs], run_batch(
                 code, METHODS[req["method"]], H, P, Y0, self.T, req["rtol"], req["atol"], gains=gains, hmax=hmax,
-                max_steps=self.max_steps, threads=self.threads, stop=self.stop, nice=self.nice, cache_dir=self.cache_dir))
+                max_steps=self.max_steps, threads=self.threads, stop=self.stop, nice=self.nice,
+                cache_dir=self.cache_dir))
         return out, time.perf_counter() - t0
 
     def _finish(self, job, prepared):
