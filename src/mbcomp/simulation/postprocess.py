@@ -34,6 +34,7 @@ from ..assembly.recursive import SingularTree
 from ..assembly.summary import summary
 from ..assembly.topology import no_gravity_note
 from ..geometry.kinematics import matrix_to_quat
+from ..modeling.roles import Joint
 from .accuracy import balance_alarm, energy_alarm, momentum_alarm, tolerance_energy
 from .balance import energy_balance, momentum_columns
 from .result import Result
@@ -253,8 +254,11 @@ def _sample(system, form, cols, k, t, q, u):
 
 
 def _joint_notes(system, t, series):
-    """What each joint says about its own results (:meth:`Joint.result_notes`)."""
-    joints = [e for e in system.topology.edges if e.kind == "joint"]
+    """What each joint says about its own results (:meth:`Joint.result_notes`): asked of the
+    joints whose class has its own (the base says nothing), each with its columns."""
+    joints = [e for e in system.topology.edges if e.kind == "joint" and type(e.comp).result_notes is not Joint.result_notes]
+    if not joints:
+        return []
     own = {e.name: {} for e in joints}
     for name, arr in series.items():  # one pass: a column belongs to the joint named by a prefix of it
         i = name.find(".")
