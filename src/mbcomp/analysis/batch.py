@@ -301,6 +301,7 @@ class _Runner:
         self.workers = 0  # processes to fork for the starts: 0 none, None decided by measuring
         self.used_workers = 0
         self.start_cpu = 0.0  # CPU seconds of this thread making the starts (what decides the workers)
+        self.group_cpu = 0.0  # ... of which making the groups' programs
         self.cores = os.cpu_count() or 1
         self.nice = NICE
 
@@ -352,8 +353,10 @@ class _Runner:
                 return key, np.array(list(code.pre.run(pv)) + [0.0]), np.array(pv + [0.0])
             except Retrace:
                 pass
+        c0 = time.thread_time()  # a group's programs (traced, compiled): not a start's cost
         integ = form.compiled_integrator()
         if integ is None:
+            self.group_cpu += time.thread_time() - c0
             if not self.groups:
                 raise ValueError("the C engine cannot integrate this model (a drive law or input needs Python per "
                                  "call, or the program has no Lagrange right-hand side) -> use mbcomp.study(...) "
@@ -363,6 +366,7 @@ class _Runner:
         gkey = key if group is None else (key, id(bound.code))
         if gkey not in self.groups:
             self.groups[gkey] = (bound.code, tuple(integ.d), self._output_program(s, form, y0))
+        self.group_cpu += time.thread_time() - c0
         return gkey, bound.hbuf.copy(), bound.pbuf.copy()
 
     def _output_program(self, s, form, y0):
@@ -412,7 +416,7 @@ class _Runner:
         by default from the third block on when :meth:`_workers_pay`). Stopped (Ctrl-C, an
         error), the C runs stop at their next stretch and the blocks in flight are stored as
         they ended (their finished runs kept)."""
-        pool = concurrent.futures.ThreadPoolExecutor(1)
+        pools = [concurrent.futures.ThreadPoolExecutor(1)]  # the thread calling C (a new one at a fork)
         flight = []  # (job, prepared) submitted and not stored yet, oldest first
         starts = None
         decided = self.workers is not None
@@ -424,13 +428,13 @@ class _Runner:
                     prepared = [(i, self.prepare(i, st)) for i, st in zip(range(a, b), starts.take(a, b))]
                 elif a == 0 and self.workers and self.n_runs > 1:
                     prepared = [(0, self.prepare(0))]  # made here: the workers inherit the programs it made
-                    starts = self._starts(1, block)
+                    starts = self._starts(1, block, pools)
                     prepared += [(i, self.prepare(i, st)) for i, st in zip(range(1, b), starts.take(1, b))]
                 else:
                     prepared = [(i, self.prepare(i)) for i in range(a, b)]
                 self.times["setup_time"] += time.perf_counter() - t0
                 self.start_cpu += time.thread_time() - c0
-                flight.append((pool.submit(self._integrate, [(i, p) for i, p in prepared if p is not None]),
+                flight.append((pools[-1].submit(self._integrate, [(i, p) for i, p in prepared if p is not None]),
                                prepared))
                 if len(flight) > 1:
                     self._finish(*flight[0])
@@ -438,13 +442,14 @@ class _Runner:
                     if not decided and b < self.n_runs:
                         decided = True
                         if self._workers_pay(b):
-                            starts = self._starts(b, block)
+                            starts = self._starts(b, block, pools)
             while flight:
                 self._finish(*flight[0])
                 flight.pop(0)
         except BaseException:  # Ctrl-C or an error: the C runs stop at their next stretch
             self.stop[0] = 1
-            pool.shutdown(wait=True)
+            for pool in pools:
+                pool.shutdown(wait=True)
             for job, prepared in flight:
                 if job.done() and job.exception() is None:
                     self._finish(job, prepared)
@@ -452,12 +457,20 @@ class _Runner:
         finally:
             if starts is not None:
                 starts.close()
-            pool.shutdown(wait=True)
+            for pool in pools:
+                pool.shutdown(wait=True)
 
-    def _starts(self, first, block):
-        """The starts of the runs from ``first`` on, made by worker processes."""
+    def _starts(self, first, block, pools):
+        """The starts of the runs from ``first`` on, made by worker processes. The C threads
+        then run at this process's priority (a new thread calls them: the old one keeps its
+        lowered priority): nothing of this process's needs a core more than they do, and other
+        processes' load takes no more from them than from any other thread."""
         self.used_workers = self.workers or self.cores
-        return ForkedStarts(self.system, self.values, self.req, first, self.n_runs, block, self.used_workers)
+        starts = ForkedStarts(self.system, self.values, self.req, first, self.n_runs, block, self.used_workers)
+        if self.nice:
+            self.nice = 0
+            pools.append(concurrent.futures.ThreadPoolExecutor(1))
+        return starts
 
     def _workers_pay(self, prepared):
         """Whether worker processes make the batch faster, measured on the ``prepared`` runs
@@ -470,7 +483,7 @@ class _Runner:
         k = min(self.threads, self.cores)
         if not done or k < 2:
             return False
-        return (k - 1) * self.start_cpu / prepared > self.times["c_cpu_time"] / done
+        return (k - 1) * (self.start_cpu - self.group_cpu) / prepared > self.times["c_cpu_time"] / done
 
     def _integrate(self, ready):
         """The C call(s) of one block (one per group of equal programs); in a worker thread."""
