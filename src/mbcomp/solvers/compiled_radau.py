@@ -79,8 +79,10 @@ def _signature(dll):
     vp, i, d = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
     fn = dll.mbrt_radau5
     if fn.argtypes is None:
-        fn.argtypes = [vp, vp, vp, i, d, vp, d, d, vp, d, d, ctypes.c_long, vp, i, vp, vp, vp, vp, i, vp, vp, vp]
+        fn.argtypes = [vp, vp, vp, i, d, vp, d, d, d, vp, d, d, ctypes.c_long, vp, i, vp, vp, vp, vp, i, vp, vp, vp]
         fn.restype = i
+        dll.mbrt_radau5_dense.argtypes = [vp, i, d, vp]
+        dll.mbrt_radau5_dense.restype = None
         for name in ("mbrt_radau5_work_size", "mbrt_radau5_iwork_size"):
             getattr(dll, name).argtypes = [i]
             getattr(dll, name).restype = ctypes.c_size_t
@@ -111,6 +113,7 @@ class RadauEngine:
         if not hasattr(dll, "mbrt_radau5"):
             raise ValueError("the compiled program's library has no mbrt_radau5 (built by an older runtime)")
         self.fn = _signature(dll)
+        self.dense_fn = dll.mbrt_radau5_dense
         self.n = n = bound.nq + bound.nu
         self.gains = np.array(integrator.d, float)  # alpha, beta: kept alive here
         jfun = None
@@ -130,10 +133,12 @@ class RadauEngine:
         self.y_last = np.zeros(n)
         self.stats, self.info = _Stats(), RadauInfo()
 
-    def integrate(self, t0, y0, t_end, t_out, rtol, atol, h0=0.0, hmax=0.0, max_steps=0, resume=False):
-        """One call of ``mbrt_radau5`` from ``(t0, y0)`` to ``t_end``; ``resume``: continue the
-        last call (which ended at ``t0``). Returns ``(status, message, Y (rows at the t_out
-        reached), t_last, y_last, stats, info)``."""
+    def integrate(self, t0, y0, t_end, t_out, rtol, atol, h0=0.0, hmax=0.0, max_steps=0, resume=False,
+                  t_pause=0.0):
+        """One call of ``mbrt_radau5`` from ``(t0, y0)`` to ``t_end``, paused after the first
+        step ending at or past ``t_pause`` (status 21) when that lies inside; ``resume``:
+        continue the last call (which ended at ``t0``). Returns ``(status, message, Y (rows
+        at the t_out reached), t_last, y_last, stats, info)``."""
         y0 = np.ascontiguousarray(y0, float)
         t_out = np.ascontiguousarray(t_out, float)
         atol_v = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, float), (self.n,)))
@@ -141,11 +146,17 @@ class RadauEngine:
         nw = ctypes.c_int(0)
         st, info = self.stats, self.info
         status = self.fn(self.f, self.j, ctypes.byref(self.ctx), self.n, float(t0), y0.ctypes.data, float(t_end),
-                         float(rtol), atol_v.ctypes.data, float(h0), float(hmax), int(max_steps), t_out.ctypes.data,
+                         float(t_pause), float(rtol), atol_v.ctypes.data, float(h0), float(hmax), int(max_steps), t_out.ctypes.data,
                          len(t_out), Y.ctypes.data, ctypes.byref(nw), self.work.ctypes.data, self.iwork.ctypes.data,
                          int(bool(resume)), self.y_last.ctypes.data, ctypes.byref(st), ctypes.byref(info))
         return (int(status), st.message.decode(errors="replace"), Y[: nw.value], float(st.t), self.y_last.copy(),
                 st, info)
+
+    def dense(self, t):
+        """The last accepted step's collocation polynomial at ``t`` (s), (n,)."""
+        y = np.zeros(self.n)
+        self.dense_fn(self.work.ctypes.data, self.n, float(t), y.ctypes.data)
+        return y
 
 
 def engine_of(problem):
@@ -176,8 +187,8 @@ class CompiledRadau5(CompiledRK):
     hybrid layer knows a C stretch integrator (:func:`mbcomp.hybrid.steppers.stepwise`,
     ``watching``): there ``engine`` is set to None or :meth:`watch` is called, and both make
     this stepper step in Python, each step's collocation polynomial there to locate events
-    on. Every method of ``CompiledRK`` is overridden here; ``_radau`` (``super(CompiledRK,
-    self)``) reaches the Radau5 methods behind it in the method resolution order.
+    on. Every method of ``CompiledRK`` is overridden here; ``super(CompiledRK, self)``
+    reaches the Radau5 methods behind it in the method resolution order.
 
     Parameters
     ----------
@@ -211,14 +222,9 @@ class CompiledRadau5(CompiledRK):
     one_step = True
     stiff_steps = 0
 
-    @property
-    def _radau(self):
-        """The Radau5 methods behind :class:`CompiledRK` in the method resolution order."""
-        return super(CompiledRK, self)
-
     def __init__(self, problem, t0, y0, t_bound, rtol=1e-6, atol=1e-8, first_step=None, max_step=np.inf,
                  t_eval=None):
-        self._radau.__init__(problem, t0, y0, t_bound, rtol=rtol, atol=atol, first_step=first_step,
+        super(CompiledRK, self).__init__(problem, t0, y0, t_bound, rtol=rtol, atol=atol, first_step=first_step,
                              max_step=max_step)
         self.hit, self.watched_step = None, False
         rt = np.unique(self.rtol)
@@ -248,14 +254,16 @@ class CompiledRadau5(CompiledRK):
         k = int(np.searchsorted(self.t_eval, self.t, side="right"))
         outs = self.t_eval[k: k + min(self.chunk_max, self.chunk << min(self.stats["stretches"], 30))]
         hmax = self.max_step if np.isfinite(self.max_step) else 0.0
+        # to the run's end, paused after the step that passes the stretch's last output: the
+        # steps of one call whatever the stretches (the steps do not land on stretch ends)
         status, msg, Y, t_last, y_last, st, info = self.engine.integrate(
-            self.t, self.y, outs[-1], outs, float(self.rtol[0]), self.atol, h0=self.h or 0.0, hmax=hmax,
-            resume=self._resume)
+            self.t, self.y, self.t_bound, outs, float(self.rtol[0]), self.atol, h0=self.h or 0.0, hmax=hmax,
+            resume=self._resume, t_pause=outs[-1] if outs[-1] < self.t_bound else 0.0)
         self._count(st, info)
         if status == 6:
             raise ValueError(f"radau5 (C): {msg}")
         ts, Ys = list(outs[: len(Y)]), list(Y)
-        if status != 0:
+        if status not in (0, 21):
             # a guard failed (status 1: a law's other branch), or the step failed (collapsed, not
             # finite, singular, capped): the rest of the run by the Python stepper from the last
             # accepted step -- it decides there, and a failure is reported as its own
@@ -265,21 +273,25 @@ class CompiledRadau5(CompiledRK):
             self.h = info.h_next if status == 1 else None
             if t_last <= self.t:
                 return self._python_step()
-            if not ts or ts[-1] < t_last:
-                ts.append(t_last)
-                Ys.append(y_last)
         else:
             self.h = info.h_next or self.h
-        self._resume = status == 0
+            # outputs past the stretch inside its last step: that step's collocation polynomial
+            for tk in self.t_eval[k + len(outs): int(np.searchsorted(self.t_eval, t_last, side="right"))]:
+                ts.append(tk)
+                Ys.append(self.engine.dense(tk))
+        if not ts or ts[-1] < t_last:
+            ts.append(t_last)
+            Ys.append(y_last)
+        self._resume = status in (0, 21)
         self._y_old, self.t_old = self.y, self.t
         self._outs = (np.array(ts), np.array(Ys))
-        self.t, self.y = float(ts[-1]), np.array(Ys[-1])
+        self.t, self.y = t_last, y_last
         self.first = False
 
     def _python_step(self):
         self._outs = None
         self.stats["python_steps"] += 1
-        return self._radau._step()
+        return super(CompiledRK, self)._step()
 
     def _count(self, st, info):
         s = self.stats
@@ -300,7 +312,7 @@ class CompiledRadau5(CompiledRK):
         """Continue from the moved state ``y``: the next C call takes it as moved (its
         derivative again, the rest kept); on the Python path as :class:`Radau5`."""
         if self.engine is None:
-            return self._radau.reset_state(y)
+            return super(CompiledRK, self).reset_state(y)
         self.y = np.array(y, dtype=float)
 
     def step_outputs(self):
@@ -313,7 +325,7 @@ class CompiledRadau5(CompiledRK):
         Python step; after a C stretch the integrator's own outputs at the output times and a
         cubic Hermite interpolant between the stretch's ends elsewhere (for the monitors)."""
         if self._outs is None:
-            return self._radau.dense_output()
+            return super(CompiledRK, self).dense_output()
         ts, Ys = self._outs
         t0, t1, y0, y1 = self.t_old, self.t, self._y_old, self.y
         fun, cache = self.prob.fun, []

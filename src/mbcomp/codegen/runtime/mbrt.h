@@ -401,8 +401,9 @@ double mbrt_cond2(int n, const double *A, double *S);
  * differences f (so does a non-finite entry). */
 typedef int (*mbrt_jac_fn)(void *ctx, double t, const double *y, const double *fy, double *J);
 
-/* A singular iteration matrix ended the integration (mbrt_radau5). */
-enum { MBRT_RADAU5_SINGULAR = 20 };
+/* A singular iteration matrix ended the integration; the integration paused
+ * at t_pause (mbrt_radau5). */
+enum { MBRT_RADAU5_SINGULAR = 20, MBRT_RADAU5_PAUSED = 21 };
 
 /* mbrt_radau5's counters of one call, besides mbrt_stats. */
 typedef struct {
@@ -429,6 +430,9 @@ void mbrt_radau5_coefficients(double *out);
  * estimate, Gustafsson's controller, RADAU5's Jacobian and LU reuse).
  *
  *   jac        exact Jacobian (NULL: forward differences of f)
+ *   t_pause    in (t0, t_end): return after the first accepted step ending at
+ *              or past it (MBRT_RADAU5_PAUSED; resumable: the steps of one call
+ *              to t_end); otherwise none
  *   rtol       scalar (>= 100 DBL_EPSILON); atol n entries >= 0; the weights
  *              atol_i + rtol max(|y_i(t)|, |y_i(t+h)|)
  *   h0         first step (0: 0.01 |y|/|f|, at least 1e-6); hmax 0: none
@@ -446,11 +450,16 @@ void mbrt_radau5_coefficients(double *out);
  * last accepted state), MBRT_STEP_TOO_SMALL (the step size collapsed: the
  * message names the last cause), MBRT_MAX_STEPS, MBRT_NONFINITE (f not finite
  * at an accepted state or in a difference Jacobian), MBRT_RADAU5_SINGULAR,
- * MBRT_BAD_ARGUMENT. */
+ * MBRT_RADAU5_PAUSED, MBRT_BAD_ARGUMENT. */
 int mbrt_radau5(mbrt_rhs_fn f, mbrt_jac_fn jac, void *ctx, int n, double t0, const double *y0, double t_end,
-                double rtol, const double *atol, double h0, double hmax, long max_steps, const double *t_out,
-                int n_out, double *y_out, int *n_written, double *work, int *iwork, int resume, double *y_last,
-                mbrt_stats *stats, mbrt_radau5_info *info);
+                double t_pause, double rtol, const double *atol, double h0, double hmax, long max_steps,
+                const double *t_out, int n_out, double *y_out, int *n_written, double *work, int *iwork, int resume,
+                double *y_last, mbrt_stats *stats, mbrt_radau5_info *info);
+
+/* The collocation polynomial of the last accepted step of the integration
+ * in work (mbrt_radau5's) at t, into y (n): exact at the step's ends,
+ * extrapolated outside it. */
+void mbrt_radau5_dense(const double *work, int n, double t, double *y);
 
 /* A generated program's ODE y = [q, u], y' = fun(q, u, t) and its exact
  * Jacobian program (jac may be NULL), as mbrt_radau5's f and jac: pass

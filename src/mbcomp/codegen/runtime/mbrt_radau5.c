@@ -364,16 +364,15 @@ static void solve_real(const R5 *S, double *b)
     const double *A = S->E1;
     for (int i = 0; i < n; ++i)
         b[i] *= S->r1[i];
-    for (int k = 0; k < n; ++k) {
+    for (int k = 0; k < n; ++k) { /* the rows' interchanges first (L's rows were swapped too) */
         int p = S->p1[k];
-        if (p != k) {
-            double t = b[k];
-            b[k] = b[p];
-            b[p] = t;
-        }
+        double t = b[k];
+        b[k] = b[p];
+        b[p] = t;
+    }
+    for (int k = 0; k < n; ++k)
         for (int i = k + 1; i < n; ++i)
             b[i] -= A[(size_t)i * n + k] * b[k];
-    }
     for (int i = n - 1; i >= 0; --i) {
         double s = b[i];
         for (int j = i + 1; j < n; ++j)
@@ -393,15 +392,15 @@ static void solve_complex(const R5 *S, double *x, double *y, double *cz)
         cz[2 * i] = x[i] * S->r2[i];
         cz[2 * i + 1] = y[i] * S->r2[i];
     }
-    for (int k = 0; k < n; ++k) {
+    for (int k = 0; k < n; ++k) { /* the rows' interchanges first */
         int p = S->p2[k];
-        if (p != k) {
-            double a = cz[2 * k], b = cz[2 * k + 1];
-            cz[2 * k] = cz[2 * p];
-            cz[2 * k + 1] = cz[2 * p + 1];
-            cz[2 * p] = a;
-            cz[2 * p + 1] = b;
-        }
+        double a = cz[2 * k], b = cz[2 * k + 1];
+        cz[2 * k] = cz[2 * p];
+        cz[2 * k + 1] = cz[2 * p + 1];
+        cz[2 * p] = a;
+        cz[2 * p + 1] = b;
+    }
+    for (int k = 0; k < n; ++k) {
         double bre = cz[2 * k], bim = cz[2 * k + 1];
         for (int i = k + 1; i < n; ++i) {
             const double *l = A + 2 * ((size_t)i * n + k);
@@ -628,7 +627,7 @@ static void layout(R5 *S, double *work, int *iwork)
     }
     S->cz = p; /* 2 n: 11 + 18 + 2 = 31 vectors of n in all */
     S->p1 = iwork;
-    S->p2 = iwork + m;
+    S->p2 = iwork != NULL ? iwork + m : NULL;
 }
 
 /* The first step: 0.01 ||y|| / ||y'|| (scaled), at least H_START, at most span and hmax. */
@@ -814,9 +813,9 @@ static void outputs(const R5 *S, double told, double h, double t_new, const doub
 }
 
 int mbrt_radau5(mbrt_rhs_fn f, mbrt_jac_fn jac, void *ctx, int n, double t0, const double *y0, double t_end,
-                double rtol, const double *atol, double h0, double hmax, long max_steps, const double *t_out,
-                int n_out, double *y_out, int *n_written, double *work, int *iwork, int resume, double *y_last,
-                mbrt_stats *stats, mbrt_radau5_info *info)
+                double t_pause, double rtol, const double *atol, double h0, double hmax, long max_steps,
+                const double *t_out, int n_out, double *y_out, int *n_written, double *work, int *iwork, int resume,
+                double *y_last, mbrt_stats *stats, mbrt_radau5_info *info)
 {
     mbrt_stats local;
     mbrt_stats *st = stats ? stats : &local;
@@ -857,8 +856,8 @@ int mbrt_radau5(mbrt_rhs_fn f, mbrt_jac_fn jac, void *ctx, int n, double t0, con
         goto done;
     }
     for (;;) {
-        double err, theta, hnew;
-        int n_fail, last;
+        double err = 1.0, theta = 1.0, hnew = h;
+        int n_fail = 0, last = 0;
         h = fmin(h, hmax);
         if (attempt(&S, st, t, t_end, &h, max_steps, &err, &theta, &hnew, &n_fail, &last) != 0)
             goto done;
@@ -912,6 +911,10 @@ int mbrt_radau5(mbrt_rhs_fn f, mbrt_jac_fn jac, void *ctx, int n, double t0, con
             finish(st, MBRT_OK, t, "RADAU5: reached t_end=%.17g in %ld steps.", t, st->naccept);
             goto done;
         }
+        if (t_pause > t0 && t >= t_pause) {
+            finish(st, MBRT_RADAU5_PAUSED, t, "RADAU5: paused at t=%.17g (t_pause=%.17g).", t, t_pause);
+            goto done;
+        }
     }
 done:
     if (st->status != MBRT_BAD_ARGUMENT) {
@@ -924,6 +927,17 @@ done:
     if (n_written)
         *n_written = iout;
     return st->status;
+}
+
+void mbrt_radau5_dense(const double *work, int n, double t, double *y)
+{
+    R5 S;
+    S.n = n;
+    layout(&S, (double *)work, NULL); /* read only here */
+    const double *hd = S.hdr, *Q = S.Q;
+    double x = (t - hd[H_DT0]) / hd[H_DH], x2 = x * x, x3 = x2 * x;
+    for (int i = 0; i < n; ++i)
+        y[i] = S.yold[i] + (Q[i] * x + Q[n + i] * x2 + Q[2 * (size_t)n + i] * x3);
 }
 
 /* ------------------------------------------------------------------ programs */
