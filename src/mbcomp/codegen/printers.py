@@ -6,8 +6,9 @@ while tracing them) and splits them: nodes depending on parameters only are *hoi
 the parameter program (:class:`ParamProgram`, interpreted once per parameter set), the rest
 are printed as straight-line code, one function per group. The Python printer inlines
 single-use temporaries; the C printer splits long functions into chunks (values crossing a
-chunk boundary go through a work array). A failed state guard makes the generated function
-raise ``_Fallback`` (Python) or return 1 (C).
+chunk boundary go through a work array) and prints repeated blocks of a large program (one
+body's statements of a recursion) as loops (:mod:`mbcomp.codegen.block_loops`). A failed
+state guard makes the generated function raise ``_Fallback`` (Python) or return 1 (C).
 
 Examples
 --------
@@ -35,6 +36,8 @@ import numpy as np
 
 from .graph import Retrace, Sym
 from .ieee import COMPARE, INF, call_or_nan, div, power
+from . import block_loops
+from .block_loops import block_functions, find_blocks
 from .rolling import ROLL_MIN, rolled as _rolled
 
 __all__ = ["PY_ENV", "Program", "ParamProgram", "python_source", "LOCAL_MACRO", "SIGNATURE"]
@@ -87,6 +90,11 @@ def _expr(key, a, lang):
         return f"_hypot({a[0]}, {a[1]})" if lang == "py" else f"hypot({a[0]}, {a[1]})"
     table = _PY_UNARY if lang == "py" else _C_UNARY
     return f"{table[op]}({a[0]})"
+
+
+def _c_key_expr(key, a):
+    """C expression of the node of key ``key`` on operand names ``a``."""
+    return _expr(key, a, "c")
 
 
 def _c_expr(op, a):
@@ -360,14 +368,14 @@ class Program:
         return (f"int {fname}(const double *restrict pv, double *restrict h)\n{{\n" + "\n".join(body)
                 + "\n    (void)pv; (void)h;\n    return 0;\n}\n")
 
-    def c_function(self, group, fname, chunk=2000, roll=None):
+    def c_function(self, group, fname, chunk=2000, roll=None, blocks=None):
         """C source of ``int fname(q, u, t, d, h, p, w, out)``: 0 on success, 1 if a guard failed.
         Values crossing chunk boundaries live in the work array ``w``; returns ``(source,
-        work size)``. ``roll``: see :meth:`c_parts` (one translation unit here)."""
-        parts, n_work = self.c_parts(group, fname, chunk, 1, roll)
+        work size)``. ``roll``, ``blocks``: see :meth:`c_parts` (one translation unit here)."""
+        parts, n_work = self.c_parts(group, fname, chunk, 1, roll, blocks)
         return "\n".join(parts), n_work
 
-    def c_parts(self, group, fname, chunk=2000, n_parts=1, roll=None):
+    def c_parts(self, group, fname, chunk=2000, n_parts=1, roll=None, blocks=None):
         """The C program of ``group`` as ``n_parts`` translation units (without ``#include
         <math.h>``; the last one defines ``int fname(...)``, the others its chunks, with hidden
         visibility) and the size of the work array it needs. ``n_parts`` may be a function of
@@ -381,9 +389,15 @@ class Program:
         . F_j`` for every pair of links) that occur at least ``roll`` times (default
         :data:`~mbcomp.codegen.rolling.ROLL_MIN`; 0: never) are computed by one loop over a
         table of their operands' places instead (:mod:`mbcomp.codegen.rolling`): the program's
-        text then grows like its distinct values (O(N) for a chain) instead of its outputs."""
+        text then grows like its distinct values (O(N) for a chain) instead of its outputs.
+        In a program of at least ``blocks`` straight-line statements (default
+        :data:`~mbcomp.codegen.block_loops.BLOCK_MIN`; 0: never), runs of repeated blocks (the
+        recursions' per-body statements) are computed by loops over the blocks
+        (:mod:`mbcomp.codegen.block_loops`; the same operations in the same order): the text
+        then grows like one body's statements and tables of places, not like N."""
         keys = self.g.keys
         roll = ROLL_MIN if roll is None else roll
+        blocks = block_loops.BLOCK_MIN if blocks is None else blocks
         nodes = self.op_nodes(group).tolist()
         loops, slot, rolled = _rolled(self, group, nodes, roll) if roll and len(nodes) >= roll else ([], {}, None)
         if rolled is not None:
@@ -391,12 +405,17 @@ class Program:
         where_out, tail = self._out_places(group, nodes, rolled)
         if callable(chunk):
             chunk = chunk(len(nodes), len(slot))
-        chunks = [nodes[s: s + chunk] for s in range(0, len(nodes), chunk)] or [[]]
         guards = self._guards_by_node(self.guards_of[group])
-        chunk_of = _crossing(keys, chunks, guards, slot)
-        if callable(n_parts):
-            n_parts = n_parts(len(nodes) + sum(lp.weight for lp in loops))
+        blocks = find_blocks(self, nodes, guards, where_out) if blocks and len(nodes) >= blocks else []
+        if callable(n_parts):  # a repeated block's loop weighs its body
+            n_parts = n_parts(len(nodes) - sum(b.L * (b.R - 1) for b in blocks) + sum(lp.weight for lp in loops))
         linkage = "MBCOMP_LOCAL int" if n_parts > 1 else "static int"
+        if blocks:
+            funcs, n_work = block_functions(self, nodes, blocks, chunk, guards, where_out, slot, fname, linkage,
+                                            SIGNATURE, _c_key_expr, self.c_name, self.c_name)
+            return self._c_finish(fname, funcs, loops, guards, tail, n_parts, linkage), n_work
+        chunks = [nodes[s: s + chunk] for s in range(0, len(nodes), chunk)] or [[]]
+        chunk_of = _crossing(keys, chunks, guards, slot)
         funcs = []  # (weight, name, source)
 
         def name(j, c):
@@ -419,6 +438,12 @@ class Program:
                     body.append(f"    if ({'!' if res else ''}({cond})) return 1;")
             funcs.append((len(ch), f"{fname}_{c}",
                           f"{linkage} {fname}_{c}({SIGNATURE})\n{{\n" + "\n".join(body) + "\n    return 0;\n}\n"))
+        return self._c_finish(fname, funcs, loops, guards, tail, n_parts, linkage), len(slot)
+
+    def _c_finish(self, fname, funcs, loops, guards, tail, n_parts, linkage):
+        """The translation units of :meth:`c_parts`: the functions ``funcs``, the output
+        expressions' ``loops``, and the entry calling them in order, then writing the
+        ``tail`` outputs and checking the guards on inputs and hoisted values."""
         for r, lp in enumerate(loops):
             funcs.append((lp.weight, f"{fname}_r{r}", lp.source(f"{fname}_r{r}", linkage, SIGNATURE, _c_expr)))
         tail_lines = _tail_c([(k, self._out_name(o, 'c')) for k, o in tail])
@@ -428,7 +453,22 @@ class Program:
             tail_lines.append(f"    if ({'!' if res else ''}({cond})) return 1;")
         calls = "\n".join(f"    if ({fn}(q, u, t, d, h, p, w, out)) return 1;" for _, fn, _ in funcs)
         entry = f"int {fname}({SIGNATURE})\n{{\n{calls}\n" + "\n".join(tail_lines) + "\n    return 0;\n}\n"
-        return _units(funcs, entry, n_parts, linkage), len(slot)
+        return _units(funcs, entry, n_parts, linkage)
+
+    def guards_by_node(self, group):
+        """The state guards of ``group`` keyed by the node after which they are checked
+        (``-1``: at the end)."""
+        return self._guards_by_node(self.guards_of[group])
+
+    def output_places(self, group, nodes):
+        """``({node: [output places]}, [(place, output)])``: where the straight-line
+        ``nodes`` of ``group`` write its outputs, and the outputs written at the end."""
+        return self._out_places(group, nodes, None)
+
+    def c_name(self, i):
+        """The C text of node ``i`` inside a state program (a local value ``x<i>``, a hoisted
+        value, an input or a constant)."""
+        return self._name(i, "c", True)
 
     def _out_places(self, group, nodes, rolled):
         """Where the outputs of ``group`` are written: ``{node: [places]}`` for the
