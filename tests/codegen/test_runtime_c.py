@@ -175,6 +175,47 @@ static int run(integ_fn F, size_t (*ws)(int), mbrt_rhs_fn f, mbrt_step_fn s, voi
     return rc;
 }
 
+/* the van der Pol Jacobian (rhs_vdp's, mu = p[0]) for mbrt_radau5 */
+static int jac_vdp(void *ctx, double t, const double *y, const double *fy, double *J)
+{ double mu = ((const double *)ctx)[0]; (void)t; (void)fy;
+  J[0] = 0.0; J[1] = 1.0; J[2] = -2.0 * mu * y[0] * y[1] - 1.0; J[3] = mu * (1.0 - y[0] * y[0]); return 0; }
+
+/* mbrt_radau5 (mbrt_radau5.c) with exact-size heap buffers: paused and resumed, the dense
+ * output, exact and differenced Jacobians, a failing rhs, max_steps, a NaN rhs, bad input */
+static void radau5_selftest(void)
+{
+    int n = 2, nw = 0;
+    double *w = malloc(mbrt_radau5_work_size(n) * sizeof(double));
+    int *iw = malloc(mbrt_radau5_iwork_size(n) * sizeof(int));
+    double mu[1] = {1000.0}, y0[2] = {2.0, 0.0}, atol[2] = {1e-8, 1e-8}, yl[2], yd[2];
+    double tout[3] = {1.0, 5.0, 3000.0}, yout[6]; /* a relaxation near t = 800 */
+    mbrt_stats st;
+    mbrt_radau5_info info;
+    CHECK(mbrt_radau5(rhs_vdp, jac_vdp, mu, n, 0.0, y0, 3000.0, 5.0, 1e-6, atol, 0, 0, 0, tout, 3, yout, &nw, w, iw,
+                      0, yl, &st, &info) == MBRT_RADAU5_PAUSED);
+    CHECK(st.t >= 5.0 && nw >= 2 && info.ndiff == 0 && info.njev >= 1);
+    mbrt_radau5_dense(w, n, st.t, yd);
+    CHECK(fabs(yd[0] - yl[0]) < 1e-12 && fabs(yd[1] - yl[1]) < 1e-9);
+    int done = nw;
+    CHECK(mbrt_radau5(rhs_vdp, NULL, mu, n, st.t, yl, 3000.0, 0.0, 1e-6, atol, 0, 0, 0, tout + done, 3 - done,
+                      yout + 2 * done, &nw, w, iw, 1, yl, &st, &info) == MBRT_OK);
+    CHECK(st.t == 3000.0 && nw == 3 - done && yout[4] == yl[0] && info.ndiff == info.njev);
+    double p[4] = {0.5, 7.0, 0.0, 0.0}, one[1] = {1.0}, a1[1] = {1e-8}, y1[1], o1[4], tf[4] = {0.25, 0.5, 0.75, 1.0};
+    CHECK(mbrt_radau5(rhs_fail, NULL, p, 1, 0.0, one, 1.0, 0.0, 1e-6, a1, 0, 0, 0, tf, 4, o1, &nw, w, iw, 0, y1, &st,
+                      &info) == MBRT_RHS_FAILED);
+    CHECK(st.t <= 0.5 && nw >= 1 && isfinite(y1[0]));
+    CHECK(mbrt_radau5(rhs_decay, NULL, NULL, 1, 0.0, one, 1.0, 0.0, 1e-6, a1, 0, 0, 3, tf, 4, o1, &nw, w, iw, 0, y1,
+                      &st, &info) == MBRT_MAX_STEPS);
+    double q[1] = {0.3};
+    int rc = mbrt_radau5(rhs_nan, NULL, q, 1, 0.0, one, 1.0, 0.0, 1e-6, a1, 0, 0, 0, tf, 4, o1, &nw, w, iw, 0, y1, &st,
+                         &info);
+    CHECK((rc == MBRT_STEP_TOO_SMALL || rc == MBRT_NONFINITE) && isfinite(y1[0]) && st.t <= 0.3 + 1e-12);
+    CHECK(mbrt_radau5(rhs_decay, NULL, NULL, 0, 0.0, one, 1.0, 0.0, 1e-6, a1, 0, 0, 0, tf, 4, o1, &nw, w, iw, 0, y1,
+                      &st, &info) == MBRT_BAD_ARGUMENT);
+    free(w);
+    free(iw);
+}
+
 int main(void)
 {
     /* linear algebra on a pseudo-random diagonally dominant matrix */
@@ -390,6 +431,7 @@ int main(void)
         CHECK(fabs(mbrt_cond2(3, R, S) / 88.44 - 1.0) < 1e-3);  /* numpy: 88.4482799 */
         CHECK(isinf(mbrt_cond2(2, Z, S2)));
     }
+    radau5_selftest();
     printf("%d failures\n", failures);
     return failures != 0;
 }
