@@ -31,7 +31,7 @@ generated model code is compiled together with:
     constraint manifold (Gauss--Newton with minimum-norm steps, then the
     minimum-norm speed correction), and the residual and Jacobian of the
     multiplier forms as DAEs (index 1, GGL, index 3).
-``mbrt_radau5.c``
+``mbrt_radau5.c``, ``mbrt_radau5_step.c``, ``mbrt_radau5_linalg.c``, ``mbrt_radau5_internal.h``
     RADAU5 (Radau IIA of order 5) for stiff ODEs, the whole integration in
     one call: simplified Newton on the real and complex systems, equilibrated
     LU, the filtered error estimate, Gustafsson's controller, Jacobian and LU
@@ -58,8 +58,9 @@ SOURCES : tuple of pathlib.Path
 Examples
 --------
 >>> from mbcomp.codegen.runtime import SOURCES, RUNTIME_DIR
->>> sorted(p.name for p in SOURCES)
-['mbrt_dop853.c', 'mbrt_dopri5.c', 'mbrt_events.c', 'mbrt_linalg.c', 'mbrt_mech.c', 'mbrt_radau5.c', 'mbrt_rk.c']
+>>> print(" ".join(sorted(p.name for p in SOURCES)))  # doctest: +NORMALIZE_WHITESPACE
+mbrt_dop853.c mbrt_dopri5.c mbrt_events.c mbrt_linalg.c mbrt_mech.c mbrt_radau5.c mbrt_radau5_linalg.c
+mbrt_radau5_step.c mbrt_rk.c
 >>> (RUNTIME_DIR / "mbrt.h").is_file()
 True
 """
