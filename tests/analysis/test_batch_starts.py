@@ -137,3 +137,20 @@ def test_no_fork_in_a_daemon_and_bad_counts_are_refused():
     assert fork_workers(1000, None) is None and fork_workers(10, None) == 0 and fork_workers(10, 3) == 3
     with pytest.raises(ValueError, match="processes=-1"):
         mbcomp.batch(SLIDER(), {"rod.m": [1.0]}, t_end=0.1, processes=-1)
+
+
+def test_a_warning_raised_in_a_worker_reaches_the_caller():
+    import warnings
+
+    # run 2's 1 ug tip link makes the mass matrix ill-conditioned: initialization warns, naming it
+    table = {"link3.m": [1.0, 1.0, 1e-9, 1.0], "link3.I": [np.diag([0.02, 0.0, 0.02])] * 2 + [np.diag([1e-12] * 3)]
+             + [np.diag([0.02, 0.0, 0.02])]}
+    said = {}
+    for processes in (0, 2):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res = mbcomp.batch(PENDULUM(N=3), table, t_end=0.2, n_out=3, processes=processes)
+        assert res.stats["processes"] == processes and list(res.status) == ["success"] * 4
+        said[processes] = {str(w.message) for w in caught if "ill-conditioned" in str(w.message)}
+    assert len(said[0]) == 1 and "link3 (1e-09 kg)" in next(iter(said[0]))
+    assert said[2] == said[0]   # made in a worker (run 2 is past the first run), said here
