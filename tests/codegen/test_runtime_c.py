@@ -147,6 +147,22 @@ void mech_pendulum(mbrt_mech *P, const double *p, const int *rows, int qrate)
   P->off_M = 0; P->off_f = 4; P->off_Phi = 6; P->off_Phid = 7; P->off_C = 8; P->off_cb = 10;
   P->off_B = 11; P->off_Bb = 11; P->off_Psi = 11; }
 
+/* A mass on a vertical line over a floor at s = 0 (mbrt_impacts): the evaluation program of
+ * q = s, u = ds/dt, mass p[0] (kg), gravity p[1] (m/s^2): M = [m], f = [-m g]; n_out 2. */
+int prog_fall(const double *q, const double *u, double t, const double *d, const double *h,
+              const double *p, double *w, double *out)
+{ (void)q; (void)u; (void)t; (void)d; (void)h; (void)w; out[0] = p[0]; out[1] = -p[0] * p[1]; return 0; }
+
+/* A stretch function over mbrt_dop853_events for the falling mass (ctx: an mbrt_events *,
+ * gravity 9.81), with mbcomp_integrate's signature. */
+static double g_fall = 9.81;
+int stretch_fall(int order, void *ctx, double t0, const double *y0, double t_end, double rtol,
+                 const double *atol, double h0, double hmax, long max_steps, const double *t_out,
+                 int n_out, double *y_out, int *n_written, double *work, mbrt_stats *stats)
+{ (void)order;
+  return mbrt_dop853_events(rhs_fall, NULL, &g_fall, 2, t0, y0, t_end, rtol, atol, h0, hmax, max_steps, t_out,
+                            n_out, y_out, n_written, work, stats, 0, (mbrt_events *)ctx); }
+
 #ifdef MBRT_SELFTEST_MAIN
 /* Standalone driver for sanitizer / valgrind runs: exercises every code path
  * with work buffers of exactly the advertised size (heap, so overruns show). */
@@ -345,6 +361,66 @@ int main(void)
             free(wk); free(E.work); free(E.y_event);
             printf("%s events ok\n", m ? "DOP853" : "DOPRI5");
         }
+    }
+
+    /* impacts acted on between stretches (mbrt_impacts_integrate): a mass dropped from 1 m onto
+     * the floor, e = 0.5: impacts at t1 = sqrt(2/g), then every 2 e^k sqrt(2 g) / g; a rebound
+     * too low (rest) and bad descriptions are the caller's; exact-size heap buffers */
+    {
+        double par[2] = {2.0, 9.81};
+        mbrt_mech P;
+        memset(&P, 0, sizeof P);
+        P.eval = prog_fall; P.p = par; P.nq = 1; P.nu = 1; P.n_out = 2; P.off_M = 0; P.off_f = 1;
+        P.off_Phi = P.off_Phid = P.off_C = P.off_cb = P.off_B = P.off_Bb = P.off_Psi = 2;
+        int idx[1] = {0}, dir[1] = {-1}, iu[1] = {0}, comp[1] = {0}, shr[1] = {0}, wh[8];
+        double sg[1] = {1.0}, at[1] = {0.0}, e[1] = {0.5}, last[1] = {-INFINITY}, gap[1] = {-1.0};
+        mbrt_linear_events L = {1, idx, sg, at};
+        mbrt_events E;
+        memset(&E, 0, sizeof E);
+        E.g = mbrt_linear_event_values; E.gctx = &L; E.n_ev = 1; E.direction = dir; E.tol = 1e-13; E.fresh = -1;
+        E.work = malloc(mbrt_events_work_size(2, 1) * sizeof(double));
+        E.y_event = malloc(2 * sizeof(double));
+        double *iw = malloc(mbrt_impacts_work_size(&P) * sizeof(double));
+        double *lt = malloc(8 * sizeof(double)), *ly = malloc(8 * 4 * sizeof(double)), *ll = malloc(8 * sizeof(double));
+        mbrt_impacts I = {1, iu, sg, e, comp, 1, last, gap, shr, 30, 1e-9, 0.0, &P, iw, 8, 0, lt, wh, ly, ll};
+        double *wk = malloc(mbrt_dop853_work_size(2) * sizeof(double)), *ys = malloc(2 * sizeof(double));
+        double to[4] = {0.25, 0.5, 1.0, 1.5}, yo[8], y0[2] = {1.0, 0.0}, atl[2] = {1e-12, 1e-12};
+        int nw = -1;
+        mbrt_stats st;
+        int rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 2, 4, 1e-13, 1e-10, atl, 0.0,
+                                        0.0, 0.0, 0, yo, &nw, wk, &st, ys);
+        /* Zeno at 3 t1 = 1.35 s: the log's 8 entries fill, the 9th impact is the caller's */
+        double t1 = sqrt(2.0 / 9.81), v1 = sqrt(2.0 * 9.81), tk = t1;
+        CHECK(rc == MBRT_EVENT && I.count == 8 && E.which == 0 && nw == 3 && shr[0] == 6);
+        for (int k = 0; k < 8; ++k) {
+            CHECK(fabs(lt[k] - tk) < 1e-9 && wh[k] == 0 && fabs(ly[4 * k + 3] - pow(0.5, k + 1) * v1) < 1e-8);
+            CHECK(fabs(ll[k] - 0.5 * 2.0 * pow(0.25, k) * v1 * v1 * 0.75) < 1e-8);  /* (1 - e^2) of T- */
+            tk += 2.0 * pow(0.5, k + 1) * v1 / 9.81;
+        }
+        CHECK(fabs(E.t_event - tk) < 1e-9 && st.naccept > 0);
+        /* chattering: 3 shrinking intervals make it the caller's (the 5th impact) */
+        I.count = 0; I.chatter = 3; last[0] = -INFINITY; gap[0] = -1.0; shr[0] = 0; E.fresh = -1;
+        rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 2, 4, 1e-13, 1e-10, atl, 0.0,
+                                    0.0, 0.0, 0, yo, &nw, wk, &st, ys);
+        CHECK(rc == MBRT_EVENT && I.count == 4 && shr[0] == 2);
+        I.chatter = 30;
+        /* the resting height beyond the first rebound's: handed back at the first impact */
+        I.count = 0; I.rest = 10.0; last[0] = -INFINITY; gap[0] = -1.0; shr[0] = 0; E.fresh = -1;
+        rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 4, 1, 1e-13, 1e-10, atl, 0.0,
+                                    0.0, 0.0, 0, yo, &nw, wk, &st, ys);
+        CHECK(rc == MBRT_EVENT && I.count == 0 && E.which == 0 && fabs(E.t_event - t1) < 1e-9 && nw == 1);
+        e[0] = 1.5;  /* restitution outside [0, 1] */
+        CHECK(mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 4, 1, 1e-13, 1e-10, atl, 0.0,
+                                     0.0, 0.0, 0, yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
+        e[0] = 0.5; P.nrows = 1;  /* rows: not a system the loop acts on */
+        CHECK(mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 4, 1, 1e-13, 1e-10, atl, 0.0,
+                                     0.0, 0.0, 0, yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
+        P.nrows = 0;
+        CHECK(mbrt_impacts_integrate(NULL, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 4, 1, 1e-13, 1e-10, atl, 0.0,
+                                     0.0, 0.0, 0, yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
+        CHECK(mbrt_impacts_work_size(NULL) == 0 && mbrt_impacts_work_size(&P) == 5);
+        free(E.work); free(E.y_event); free(iw); free(lt); free(ly); free(ll); free(wk); free(ys);
+        printf("impacts ok\n");
     }
 
     /* the mechanics kernels on the Cartesian pendulum, exact-size heap scratch */

@@ -331,7 +331,11 @@ static int act_on_impact(mbrt_impacts *I, const mbrt_events *ev, int n, double *
     const double G = s * x[iu];
     if (!(G > 0.0) || !isfinite(G))
         return 0;
-    const double lam = -(1.0 + I->e[k]) * before / G;
+    /* the multiplier as assembly/impacts.py's impulse forms it: the change (-e b) - b of the
+     * row's rate, then the 1 x 1 Cholesky solve (two divisions by sqrt(G)); M^-1 c^T is this
+     * runtime's Cholesky, LAPACK's there: the speeds after agree to rounding, not bit for bit */
+    const double change = -I->e[k] * before - before, root = sqrt(G);
+    const double lam = change / root / root;
     double *up = y_plus + P->nq;
     memcpy(y_plus, q, sizeof(double) * (size_t)P->nq);
     for (int i = 0; i < nu; ++i)
