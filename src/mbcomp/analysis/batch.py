@@ -302,7 +302,7 @@ class _Runner:
         self.used_workers = 0
         self.start_cpu = 0.0  # CPU seconds of this thread making the starts (what decides the workers)
         self.group_cpu = 0.0  # ... of which making the groups' programs
-        self.cores = os.cpu_count() or 1
+        self.cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
         self.nice = NICE
 
     def params_of(self, i):
@@ -421,8 +421,7 @@ class _Runner:
         starts = None
         decided = self.workers is not None
         try:
-            for a in range(0, self.n_runs, block):
-                b = min(a + block, self.n_runs)
+            for a, b in block_ranges(self.n_runs, block):
                 t0, c0 = time.perf_counter(), time.thread_time()
                 if starts is not None:
                     prepared = [(i, self.prepare(i, st)) for i, st in zip(range(a, b), starts.take(a, b))]
@@ -592,6 +591,29 @@ class _Runner:
                      c_status=self.c_status.copy(), simulate_reruns=[], processes=self.used_workers,
                      **self.times)
         return BatchResult(self.T, cols, self.status, self.message, self.values, self.t_reached, stats, self.reduced)
+
+
+def block_ranges(n_runs, block):
+    """The blocks of runs, ``[(a, b)]``: ``block`` runs each, but a quarter and a half of it at
+    the start (the C threads begin sooner) and a half, a quarter and an eighth at the end (less
+    C left to do after the last start is made), when there are runs enough.
+
+    Examples
+    --------
+    >>> [b - a for a, b in block_ranges(300, 64)]
+    [16, 32, 64, 64, 64, 4, 32, 16, 8]
+    >>> block_ranges(5, 64)
+    [(0, 5)]
+    """
+    head = [max(1, block // 4), max(1, block // 2)]
+    tail = [max(1, block // 2), max(1, block // 4), max(1, block // 8)]
+    middle = n_runs - sum(head) - sum(tail)
+    if middle < block:
+        sizes = [block] * (n_runs // block) + ([n_runs % block] if n_runs % block else [])
+    else:
+        sizes = head + [block] * (middle // block) + ([middle % block] if middle % block else []) + tail
+    edges = np.cumsum([0] + sizes)
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
 
 
 def _why(code):
