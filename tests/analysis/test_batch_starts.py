@@ -154,3 +154,12 @@ def test_a_warning_raised_in_a_worker_reaches_the_caller():
         said[processes] = {str(w.message) for w in caught if "ill-conditioned" in str(w.message)}
     assert len(said[0]) == 1 and "link3 (1e-09 kg)" in next(iter(said[0]))
     assert said[2] == said[0]   # made in a worker (run 2 is past the first run), said here
+
+
+def test_forked_starts_by_the_evaluation_program_are_the_same_too():
+    # initialization="program": the workers inherit the compiled evaluation program the first run bound
+    table = slider_table(24, seed=9)
+    here = mbcomp.batch(SLIDER(), table, t_end=0.5, n_out=11, initialization="program", processes=0)
+    forked = mbcomp.batch(SLIDER(), table, t_end=0.5, n_out=11, initialization="program", processes=2)
+    assert forked.stats["processes"] == 2
+    assert_same_batch(here, forked)
