@@ -247,6 +247,22 @@ def _chain():
     return stiff_chain
 
 
+def test_a_failed_guard_hands_the_run_to_the_python_stepper():
+    """A torque law with a branch on the speed (traced on the start's branch): the C loop
+    stops where the pendulum's speed passes -0.5 rad/s (a Newton iterate there), the Python
+    Radau5 goes on from the last accepted step; the motion is the numeric path's (scipy's
+    Radau on the dense path) within the tolerance's reach."""
+    from conftest import torque_pendulum
+
+    law = lambda t, phi, w: -0.3 if w > -0.5 else 0.3  # noqa: E731 - a torque switching on the speed
+    kw = dict(t_end=2.0, rtol=1e-9, atol=1e-11, n_out=41)
+    fast = mbcomp.simulate(torque_pendulum(law), method="radau5", backend="c", **kw)
+    ref = mbcomp.simulate(torque_pendulum(law), method="Radau", backend="numeric", **kw)
+    assert fast.success, fast.message
+    assert fast.stats["stretches"] >= 1 and 0 < fast.stats["python_steps"] < fast.stats["steps"]  # C, then Python
+    np.testing.assert_allclose(fast["hinge.phi"], ref["hinge.phi"], atol=1e-6)
+
+
 def test_simulate_runs_radau5_in_c_and_agrees_with_the_python_stepper(monkeypatch):
     """The damped stiff spring chain (N = 2): radau5 in C stretches, the Python Radau5 (engine
     taken away) and scipy's Radau at 1e-12 agree within a few tolerances on 101 outputs."""

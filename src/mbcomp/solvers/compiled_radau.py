@@ -263,14 +263,15 @@ class CompiledRadau5(CompiledRK):
         if status == 6:
             raise ValueError(f"radau5 (C): {msg}")
         ts, Ys = list(outs[: len(Y)]), list(Y)
-        if status not in (0, 21):
+        capped = status == 3 and t_last > self.t  # the call's step cap: the next call resumes
+        if status not in (0, 21) and not capped:
             # a guard failed (status 1: a law's other branch), or the step failed (collapsed, not
             # finite, singular, capped): the rest of the run by the Python stepper from the last
             # accepted step -- it decides there, and a failure is reported as its own
             self.engine, self.J, self.lu, self._dense, self.f = None, None, None, None, None
             self.stats["handovers"] += 1
             self.handover = msg
-            self.h = info.h_next if status == 1 else None
+            self.h = info.h_next if status == 1 and info.h_next > 0 else None  # a collapsed h: start afresh
             if t_last <= self.t:
                 return self._python_step()
         else:
@@ -282,7 +283,7 @@ class CompiledRadau5(CompiledRK):
         if not ts or ts[-1] < t_last:
             ts.append(t_last)
             Ys.append(y_last)
-        self._resume = status in (0, 21)
+        self._resume = status in (0, 21) or capped
         self._y_old, self.t_old = self.y, self.t
         self._outs = (np.array(ts), np.array(Ys))
         self.t, self.y = t_last, y_last

@@ -445,6 +445,7 @@ void mbrt_radau5_coefficients(double *out);
  *              steps of one call); a y0 other than its state is taken as moved
  *              there (f again).  Otherwise, or at another t0: a fresh start.
  *   y_last     if not NULL: the state at stats->t (n)
+ *   stats      may be NULL; info (the counters of this call) must not be
  *
  * Returns MBRT_OK, MBRT_RHS_FAILED (f returned nonzero: stats->t, y_last the
  * last accepted state), MBRT_STEP_TOO_SMALL (the step size collapsed: the
