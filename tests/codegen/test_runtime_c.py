@@ -387,11 +387,13 @@ int main(void)
         double to[4] = {0.25, 0.5, 1.0, 1.5}, yo[8], y0[2] = {1.0, 0.0}, atl[2] = {1e-12, 1e-12};
         int nw = -1;
         mbrt_stats st;
-        int rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 2, 4, 1e-13, 1e-10, atl, 0.0,
-                                        0.0, 0.0, 0, yo, &nw, wk, &st, ys);
+        /* stretches of 2 outputs, 4 after an impact (chunk 2, doubling, at most 4), h_last: none */
+        mbrt_stretches R = {2, 4, 0, 1, 1e-13, 0.0, NULL, 0.0};
+        int rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, &R, 2, 0.0, y0, to, 4, 1e-10, atl, 0.0, 0.0, 0,
+                                        yo, &nw, wk, &st, ys);
         /* Zeno at 3 t1 = 1.35 s: the log's 8 entries fill, the 9th impact is the caller's */
         double t1 = sqrt(2.0 / 9.81), v1 = sqrt(2.0 * 9.81), tk = t1;
-        CHECK(rc == MBRT_EVENT && I.count == 8 && E.which == 0 && nw == 3 && shr[0] == 6);
+        CHECK(rc == MBRT_EVENT && I.count == 8 && E.which == 0 && nw == 3 && shr[0] == 6 && R.t_end == 1.5);
         for (int k = 0; k < 8; ++k) {
             CHECK(fabs(lt[k] - tk) < 1e-9 && wh[k] == 0 && fabs(ly[4 * k + 3] - pow(0.5, k + 1) * v1) < 1e-8);
             CHECK(fabs(ll[k] - 0.5 * 2.0 * pow(0.25, k) * v1 * v1 * 0.75) < 1e-8);  /* (1 - e^2) of T- */
@@ -399,25 +401,38 @@ int main(void)
         }
         CHECK(fabs(E.t_event - tk) < 1e-9 && st.naccept > 0);
         /* chattering: 3 shrinking intervals make it the caller's (the 5th impact) */
-        I.count = 0; I.chatter = 3; last[0] = -INFINITY; gap[0] = -1.0; shr[0] = 0; E.fresh = -1;
-        rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 2, 4, 1e-13, 1e-10, atl, 0.0,
-                                    0.0, 0.0, 0, yo, &nw, wk, &st, ys);
+        I.count = 0; I.chatter = 3; last[0] = -INFINITY; gap[0] = -1.0; shr[0] = 0; E.fresh = -1; R.count = 0;
+        rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, &R, 2, 0.0, y0, to, 4, 1e-10, atl, 0.0, 0.0, 0,
+                                    yo, &nw, wk, &st, ys);
         CHECK(rc == MBRT_EVENT && I.count == 4 && shr[0] == 2);
         I.chatter = 30;
         /* the resting height beyond the first rebound's: handed back at the first impact */
-        I.count = 0; I.rest = 10.0; last[0] = -INFINITY; gap[0] = -1.0; shr[0] = 0; E.fresh = -1;
-        rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 4, 1, 1e-13, 1e-10, atl, 0.0,
-                                    0.0, 0.0, 0, yo, &nw, wk, &st, ys);
-        CHECK(rc == MBRT_EVENT && I.count == 0 && E.which == 0 && fabs(E.t_event - t1) < 1e-9 && nw == 1);
+        I.count = 0; I.rest = 10.0; last[0] = -INFINITY; gap[0] = -1.0; shr[0] = 0; E.fresh = -1; R.count = 2;
+        rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, &R, 2, 0.0, y0, to, 4, 1e-10, atl, 0.0, 0.0, 0,
+                                    yo, &nw, wk, &st, ys);
+        CHECK(rc == MBRT_EVENT && I.count == 0 && E.which == 0 && fabs(E.t_event - t1) < 1e-9 && nw == 1 && R.count == 3);
+        /* no impacts acted on (iu = -1), stretches of 1 output going on with the last step: all four in one call */
+        double hl = 0.05;
+        int iu_off[1] = {-1};
+        mbrt_stretches R1 = {1, 1, 0, 10, 1e-13, 0.0, &hl, 0.0};
+        double yu[2] = {0.0, 10.0};
+        I.iu = iu_off; E.fresh = -1;
+        rc = mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, &R1, 2, 0.0, yu, to, 4, 1e-10, atl, 0.0, 0.0, 0,
+                                    yo, &nw, wk, &st, ys);
+        CHECK(rc == MBRT_OK && nw == 4 && R1.count == 4 && R1.t_end == 1.5 && fabs(yo[7] - (10.0 - 9.81 * 1.5)) < 1e-9);
+        I.iu = iu;
         e[0] = 1.5;  /* restitution outside [0, 1] */
-        CHECK(mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 4, 1, 1e-13, 1e-10, atl, 0.0,
-                                     0.0, 0.0, 0, yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
+        CHECK(mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, &R, 2, 0.0, y0, to, 4, 1e-10, atl, 0.0, 0.0, 0,
+                                     yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
         e[0] = 0.5; P.nrows = 1;  /* rows: not a system the loop acts on */
-        CHECK(mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 4, 1, 1e-13, 1e-10, atl, 0.0,
-                                     0.0, 0.0, 0, yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
+        CHECK(mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, &R, 2, 0.0, y0, to, 4, 1e-10, atl, 0.0, 0.0, 0,
+                                     yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
         P.nrows = 0;
-        CHECK(mbrt_impacts_integrate(NULL, 8, &E, &E, &I, 2, 0.0, y0, to, 4, 4, 1, 1e-13, 1e-10, atl, 0.0,
-                                     0.0, 0.0, 0, yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
+        CHECK(mbrt_impacts_integrate(NULL, 8, &E, &E, &I, &R, 2, 0.0, y0, to, 4, 1e-10, atl, 0.0, 0.0, 0,
+                                     yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
+        R.chunk_max = 1;  /* below chunk */
+        CHECK(mbrt_impacts_integrate(stretch_fall, 8, &E, &E, &I, &R, 2, 0.0, y0, to, 4, 1e-10, atl, 0.0, 0.0, 0,
+                                     yo, &nw, wk, &st, ys) == MBRT_BAD_ARGUMENT);
         CHECK(mbrt_impacts_work_size(NULL) == 0 && mbrt_impacts_work_size(&P) == 5);
         free(E.work); free(E.y_event); free(iw); free(lt); free(ly); free(ll); free(wk); free(ys);
         printf("impacts ok\n");

@@ -134,7 +134,8 @@ def test_the_impact_map_is_the_python_impulse():
     watch = LinearEvents(eng, index=[1, 1], sign=[1.0, -1.0], at=[-0.3, 0.3], direction=[-1, -1], tol=1e-13)
     imp = LinearImpacts(eng, mech, iu=[1, 1], sign=[1.0, -1.0], e=[0.7, 0.7], comp=[0, 0])
     t_out = np.linspace(0.05, 3.0, 60)
-    out = imp.integrate(watch, 8, 0.0, np.concatenate((q0, u0)), t_out, 16, 16, 1e-13, 1e-10, 1e-12)
+    out = imp.integrate(watch, 8, 0.0, np.concatenate((q0, u0)), t_out, 1e-10, 1e-12, chunk=16, tol_scale=1e-13,
+                        max_stretches=10)
     assert len(out.impacts) >= 3
     for t, k, before, after, loss in out.impacts:
         rows = mode_rows(system, {"j2": "lo" if k == 0 else "hi"})

@@ -128,10 +128,16 @@ class _Stats(ctypes.Structure):  # mbrt_stats (mbrt.h)
                 ("message", ctypes.c_char * 200)]
 
 
-_ARGS = ([ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
-          ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_int, ctypes.c_int]
-         + [ctypes.c_double, ctypes.c_double, ctypes.c_void_p] + [ctypes.c_double] * 3 + [ctypes.c_long]
-         + [ctypes.c_void_p] * 5)
+class _Stretches(ctypes.Structure):  # mbrt_stretches (mbrt.h)
+    _fields_ = [("chunk", ctypes.c_int), ("chunk_max", ctypes.c_int), ("count", ctypes.c_int),
+                ("max_stretches", ctypes.c_int), ("tol_scale", ctypes.c_double), ("h_restart", ctypes.c_double),
+                ("h_last", ctypes.c_void_p), ("t_end", ctypes.c_double)]
+
+
+_ARGS = ([ctypes.c_void_p, ctypes.c_int] + [ctypes.c_void_p] * 4 + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p,
+                                                                     ctypes.c_void_p, ctypes.c_int, ctypes.c_double,
+                                                                     ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
+                                                                     ctypes.c_long] + [ctypes.c_void_p] * 5)
 
 
 class LinearImpacts:
@@ -168,7 +174,8 @@ class LinearImpacts:
     ...     eng, mech = ev.evaluator.integrator(0.0, 0.0), ev.evaluator.dae_program(1).mech
     ...     watch = LinearEvents(eng, index=[0], sign=[1.0], at=[0.0], direction=[-1], tol=1e-13)
     ...     imp = LinearImpacts(eng, mech, iu=[0], sign=[1.0], e=[0.5], comp=[0])
-    ...     out = imp.integrate(watch, 8, 0.0, np.array([1.0, 0.0]), np.array([0.5, 1.0]), 2, 2, 1e-13, 1e-10, 1e-12)
+    ...     out = imp.integrate(watch, 8, 0.0, np.array([1.0, 0.0]), np.array([0.5, 1.0]), 1e-10, 1e-12, chunk=2,
+    ...                         tol_scale=1e-13)
     ...     t1 = np.sqrt(2 / 9.81)      # the fall; the next after 2 v / g, v = e sqrt(2 g) (m/s)
     ...     times = [x[0] for x in out.impacts]
     ...     print(out.status, len(times), abs(times[0] - t1) < 1e-9, abs(times[1] - times[0] - t1) < 1e-9)
@@ -215,14 +222,19 @@ class LinearImpacts:
         interval before it (s; negative: none) and how many successive intervals shrank."""
         self.last[comp], self.gap[comp], self.shrinks[comp] = last, gap, shrinks
 
-    def integrate(self, events, order, t0, y0, t_out, first, chunk, tol_scale, rtol, atol, h0=0.0, h_restart=0.0,
-                  hmax=0.0, max_steps=0, stiff_steps=0, fresh=-1):
+    def integrate(self, events, order, t0, y0, t_out, rtol, atol, *, chunk, chunk_max=None, count=0,
+                  max_stretches=1, tol_scale=1e-12, h0=0.0, h_restart=0.0, hmax=0.0, max_steps=0, stiff_steps=0,
+                  fresh=-1):
         """The stretches watching ``events`` (:class:`LinearEvents`, one per entry of ``iu``)
-        from ``(t0, y0)`` over the output times ``t_out`` (every one left, > t0;
-        the first stretch ends at ``t_out[first - 1]``, each after an impact ``chunk`` outputs
-        later), the impacts acted on between them (``mbrt_impacts_integrate``). Returns what
-        :meth:`mbcomp.codegen.engine.Integrator.integrate` does, the counters summed over the
-        stretches, with ``impacts``: ``[(t, event, [q, u-], [q, u+], energy lost J)]``."""
+        from ``(t0, y0)`` over the output times ``t_out`` (every one left, > t0), the impacts
+        acted on between them (``mbrt_impacts_integrate``): a segment's k-th stretch holds
+        ``min(chunk_max, chunk 2^k)`` outputs (``count`` stretches of this one made before),
+        at most ``max_stretches`` ending without an event in this call, each going on with the
+        last step of the one before; a new segment after each impact (first step ``h_restart``).
+        Returns what :meth:`mbcomp.codegen.engine.Integrator.integrate` does, the counters
+        summed over the stretches, with ``impacts``: ``[(t, event, [q, u-], [q, u+], energy
+        lost J)]``, ``count`` (the current segment's stretches) and ``t_end`` (the last
+        stretch's end, s)."""
         eng, n = self.integrator, self.integrator.n
         y0 = np.ascontiguousarray(y0, float)
         t_out = np.ascontiguousarray(t_out, float)
@@ -231,16 +243,19 @@ class LinearImpacts:
         work = self.stretch_work.get(order)
         if work is None:
             work = self.stretch_work[order] = np.zeros(int(self.dll.mbcomp_work_size(order, n)))
+        if len(events.index) != len(self.iu):
+            raise ValueError(f"LinearImpacts: {len(events.index)} events watched for {len(self.iu)} described")
+        R = _Stretches(int(chunk), int(chunk if chunk_max is None else chunk_max), int(count), int(max_stretches),
+                       float(tol_scale), float(h_restart), ctypes.addressof(eng.ctx) + type(eng.ctx).h_last.offset,
+                       0.0)
         nw, st = ctypes.c_int(0), _Stats()
         self.struct.count = 0
         eng.ctx.stiff_steps = int(stiff_steps)
-        if len(events.index) != len(self.iu):
-            raise ValueError(f"LinearImpacts: {len(events.index)} events watched for {len(self.iu)} described")
         eng.ctx.events = events.arm(fresh)
         status = self.fn(self.stretch, order, ctypes.addressof(eng.ctx), events.ptr, ctypes.addressof(self.struct),
-                         n, t0, y0.ctypes.data, t_out.ctypes.data, len(t_out), int(first), int(chunk), tol_scale,
-                         rtol, atol_v.ctypes.data, h0, h_restart, hmax, int(max_steps), Y.ctypes.data,
-                         ctypes.addressof(nw), work.ctypes.data, ctypes.addressof(st), self.y_start.ctypes.data)
+                         ctypes.addressof(R), n, t0, y0.ctypes.data, t_out.ctypes.data, len(t_out), rtol,
+                         atol_v.ctypes.data, h0, hmax, int(max_steps), Y.ctypes.data, ctypes.addressof(nw),
+                         work.ctypes.data, ctypes.addressof(st), self.y_start.ctypes.data)
         ev = events.struct
         k = self.struct.count
         impacts = [(float(self.log_t[j]), int(self.log_which[j]), self.log_y[j, :n].copy(), self.log_y[j, n:].copy(),
@@ -250,4 +265,4 @@ class LinearImpacts:
                                nfev=int(st.nfev), naccept=int(st.naccept), nreject=int(st.nreject),
                                projections=int(eng.ctx.nproj), declined=int(eng.ctx.declined),
                                which=int(ev.which), t_event=float(ev.t_event), y_event=events.y_event.copy(),
-                               impacts=impacts)
+                               impacts=impacts, count=int(R.count), t_end=float(R.t_end))

@@ -21,16 +21,18 @@ from __future__ import annotations
 import numpy as np
 
 from ..codegen.c_events import LinearImpacts
-from ..solvers import compiled_rk
 from ..solvers.compiled_rk import CompiledRK
 from .events import BURST_SPAN, CHATTER, REST_HEIGHT
 
-__all__ = ["stepwise", "watching", "C_IMPACTS", "IMPACT_LOG"]
+__all__ = ["stepwise", "watching", "C_IMPACTS", "IMPACT_LOG", "IMPACT_STRETCHES"]
 
 #: act on stops' plain rebounds inside the C loop (False: every action in Python, as a check)
 C_IMPACTS = True
 #: impacts one C call acts on at most (the next is acted on in Python, and C goes on after it)
 IMPACT_LOG = 64
+#: stretches without an event one C call makes at most (the run's hooks -- budget, progress,
+#: interrupts -- see the run between calls)
+IMPACT_STRETCHES = 8
 
 
 def stepwise(stepper_class):
@@ -48,20 +50,15 @@ def stepwise(stepper_class):
     return type(stepper_class.__name__, (stepper_class,), {"__init__": __init__, "__doc__": stepper_class.__doc__})
 
 
-def _stretch_length(stepper, k):
-    """Output times of a segment's ``k``-th C stretch, as the stepper cuts them."""
-    rule = getattr(compiled_rk, "stretch_size", None)
-    return rule(stepper.chunk, getattr(stepper, "chunk_max", stepper.chunk), k) if rule else stepper.chunk
-
-
 class _ImpactEngine:
     """The engine a stepper calls, running :class:`LinearImpacts` instead: the stepper hands
-    it every output time left; it cuts the stretches itself (:func:`_stretch_length` of the
-    segment's count, ``chunk`` after an impact) and reports the impacts on the stepper."""
+    it every output time left; it cuts the stretches itself, as the stepper would (``chunk``,
+    ``chunk_max``: :attr:`CompiledRK.chunk`; the segment's count of them, a new segment after
+    each impact), up to :data:`IMPACT_STRETCHES` per call, and reports the impacts on the stepper."""
 
     def __init__(self, stepper, engine, impacts, h_first):
         self.stepper, self.engine, self.impacts, self.h_first = stepper, engine, impacts, h_first
-        self.count = 0  # C stretches of the current segment (a new one after every impact)
+        self.count = 0  # C stretches of the current segment
         self.last = None
 
     def __getattr__(self, name):
@@ -69,18 +66,13 @@ class _ImpactEngine:
 
     def integrate(self, order, t0, y0, t_end, t_out, rtol, atol, h0=0.0, hmax=0.0, max_steps=0, stiff_steps=0,
                   events=None, fresh=-1, event_tol=None):
-        first = _stretch_length(self.stepper, self.count)
-        scale = min(1e-12, 1e-3 * rtol)  # solvers.locate.time_tolerance per max(1, |t|)
-        r = self.impacts.integrate(events, order, t0, y0, t_out, first, _stretch_length(self.stepper, 0), scale, rtol, atol,
-                                   h0=h0, h_restart=self.h_first, hmax=hmax, max_steps=max_steps,
-                                   stiff_steps=stiff_steps, fresh=fresh)
-        self.stepper.impacts_done = r.impacts
-        if r.impacts:  # the last stretch was the first of the newest segment
-            k = int(np.searchsorted(t_out, r.impacts[-1][0], side="right"))
-            self.count, end = 1, t_out[min(len(t_out), k + _stretch_length(self.stepper, 0)) - 1]
-        else:
-            self.count, end = self.count + 1, t_out[min(len(t_out), first) - 1]
-        self.last = (r.status, end)
+        s = self.stepper
+        r = self.impacts.integrate(events, order, t0, y0, t_out, rtol, atol, chunk=s.chunk,
+                                   chunk_max=getattr(s, "chunk_max", s.chunk), count=self.count,
+                                   max_stretches=IMPACT_STRETCHES, tol_scale=min(1e-12, 1e-3 * rtol), h0=h0,
+                                   h_restart=self.h_first, hmax=hmax, max_steps=max_steps, stiff_steps=stiff_steps,
+                                   fresh=fresh)  # tol_scale: solvers.locate.time_tolerance per max(1, |t|)
+        s.impacts_done, self.count, self.last = r.impacts, r.count, (r.status, r.t_end)
         return r
 
 

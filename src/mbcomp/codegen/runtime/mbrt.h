@@ -344,24 +344,37 @@ typedef struct {
 /* Doubles of work an mbrt_impacts needs (0 if P is NULL). */
 size_t mbrt_impacts_work_size(const mbrt_mech *P);
 
-/* A run's stretches with the impacts of I acted on in between: the first
- * stretch integrates from (t0, y0) over t_out[0..first-1] (ending at
- * t_out[first-1], events located to tol_scale max(1, |t_end|) s, ev->fresh
- * as armed, first step h0); at an impact acted on (I, above) the next
- * stretch starts at the event with the speeds after it, event `which`
- * fresh, first step h_restart, over the next `chunk` output times after it --
- * as a new stepper would.  The loop ends with the first stretch that ends
- * without an event (its status), at an event not acted on (MBRT_EVENT, ev's
- * which/t_event/y_event set) or at a failure.  t_out: every output time left
- * (n_out, increasing, > t0); y_out (n_out x n) and *n_written count from
- * t_out[0] over all stretches; stats sums the counters (the status, time and
- * message are the last stretch's); y_start: n doubles of scratch.  Returns the
- * status; MBRT_BAD_ARGUMENT for an incomplete description. */
+/* How a run is cut into stretches (one call of the stretch function each), as
+ * the stepper calling mbrt_impacts_integrate cuts them. */
+typedef struct {
+    int chunk, chunk_max;   /* a segment's k-th stretch: min(chunk_max, chunk 2^k) output times */
+    int count;              /* the current segment's stretches so far (in and out)            */
+    int max_stretches;      /* stretches ending without an event per call at most (>= 1)      */
+    double tol_scale;       /* events located to tol_scale max(1, |t_end|) s (> 0)            */
+    double h_restart;       /* the first step after an impact (0: guessed, >= 0)              */
+    const double *h_last;   /* where the stretch function leaves its last accepted step (a
+                               stretch goes on from it); NULL: one stretch without an event   */
+    double t_end;           /* the last stretch's end (written)                               */
+} mbrt_stretches;
+
+/* A run's stretches with the impacts of I acted on in between: from (t0, y0)
+ * (ev->fresh as armed, first step h0) each stretch integrates over the next
+ * R's size of output times, its events located to tol_scale max(1, |t_end|)
+ * s; the next stretch goes on from its end (first step *h_last); at an impact
+ * acted on (I, above) a new segment starts at the event with the speeds after
+ * it, event `which` fresh, first step h_restart, its stretch count 0 -- as a
+ * new stepper would.  The loop ends after max_stretches stretches ending
+ * without an event, at the last output, at an event not acted on
+ * (MBRT_EVENT, ev's which/t_event/y_event set) or at another status of the
+ * stretch function.  t_out: every output time left (n_out, increasing,
+ * > t0); y_out (n_out x n) and *n_written count from t_out[0] over all
+ * stretches; stats sums the counters (status, time and message are the last
+ * stretch's); y_start: n doubles of scratch.  Returns the status;
+ * MBRT_BAD_ARGUMENT for an incomplete description. */
 int mbrt_impacts_integrate(mbrt_stretch_fn integrate, int order, void *ctx, mbrt_events *ev, mbrt_impacts *I,
-                           int n, double t0, const double *y0, const double *t_out, int n_out, int first, int chunk,
-                           double tol_scale, double rtol, const double *atol, double h0, double h_restart,
-                           double hmax, long max_steps, double *y_out, int *n_written, double *work,
-                           mbrt_stats *stats, double *y_start);
+                           mbrt_stretches *R, int n, double t0, const double *y0, const double *t_out, int n_out,
+                           double rtol, const double *atol, double h0, double hmax, long max_steps, double *y_out,
+                           int *n_written, double *work, mbrt_stats *stats, double *y_start);
 
 /* The multiplier forms as semi-explicit DAEs E dy/dt = F(t, y) (mbcomp's
  * formulations/dae.py), y = [q, u, a, lam] with lam the m = nrows + mn

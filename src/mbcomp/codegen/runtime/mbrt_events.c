@@ -372,11 +372,17 @@ static void add_counts(mbrt_stats *total, const mbrt_stats *st)
     memcpy(total->message, st->message, sizeof total->message);
 }
 
+/* Output times of a segment's k-th stretch: min(chunk_max, chunk 2^k). */
+static int stretch_size(const mbrt_stretches *R, int k)
+{
+    double size = (double)R->chunk * pow(2.0, k < 30 ? k : 30);
+    return size < R->chunk_max ? (int)size : R->chunk_max;
+}
+
 int mbrt_impacts_integrate(mbrt_stretch_fn integrate, int order, void *ctx, mbrt_events *ev, mbrt_impacts *I,
-                           int n, double t0, const double *y0, const double *t_out, int n_out, int first, int chunk,
-                           double tol_scale, double rtol, const double *atol, double h0, double h_restart,
-                           double hmax, long max_steps, double *y_out, int *n_written, double *work,
-                           mbrt_stats *stats, double *y_start)
+                           mbrt_stretches *R, int n, double t0, const double *y0, const double *t_out, int n_out,
+                           double rtol, const double *atol, double h0, double hmax, long max_steps, double *y_out,
+                           int *n_written, double *work, mbrt_stats *stats, double *y_start)
 {
     mbrt_stats local, st;
     mbrt_stats *total = stats ? stats : &local;
@@ -384,34 +390,46 @@ int mbrt_impacts_integrate(mbrt_stretch_fn integrate, int order, void *ctx, mbrt
     total->t = t0;
     if (n_written)
         *n_written = 0;
-    if (integrate == NULL || n <= 0 || y0 == NULL || t_out == NULL || n_out < 1 || first < 1 || chunk < 1 ||
-        !(tol_scale > 0.0) || y_out == NULL || y_start == NULL || !impacts_complete(I, ev, n)) {
+    if (integrate == NULL || n <= 0 || y0 == NULL || t_out == NULL || n_out < 1 || R == NULL || R->chunk < 1 ||
+        R->chunk_max < R->chunk || R->count < 0 || R->max_stretches < 1 || !(R->tol_scale > 0.0) ||
+        !(R->h_restart >= 0.0) || y_out == NULL || y_start == NULL || !impacts_complete(I, ev, n)) {
         total->status = MBRT_BAD_ARGUMENT;
         snprintf(total->message, sizeof total->message, "mbrt_impacts_integrate: the description is incomplete "
-                 "(a stretch function, outputs, first and chunk >= 1, tol_scale > 0, the events and impacts).");
+                 "(a stretch function, outputs, the stretches' sizes, tol_scale > 0, the events and impacts).");
         return MBRT_BAD_ARGUMENT;
     }
     double t = t0, h = h0;
-    int k0 = 0, size = first;
+    int k0 = 0, done = 0;
     memcpy(y_start, y0, sizeof(double) * (size_t)n);
     for (;;) {
-        const int nout = size < n_out - k0 ? size : n_out - k0;
+        const int size = stretch_size(R, R->count), nout = size < n_out - k0 ? size : n_out - k0;
         const double t_end = t_out[k0 + nout - 1];
-        ev->tol = tol_scale * fmax(1.0, fabs(t_end));
+        ev->tol = R->tol_scale * fmax(1.0, fabs(t_end));
         ev->which = -1;
+        R->t_end = t_end;
         int nw = 0;
         memset(&st, 0, sizeof st);
         const int rc = integrate(order, ctx, t, y_start, t_end, rtol, atol, h, hmax, max_steps, t_out + k0, nout,
                                  y_out + (size_t)k0 * (size_t)n, &nw, work, &st);
         add_counts(total, &st);
         k0 += nw;
+        R->count++;
         if (n_written)
             *n_written = k0;
-        if (rc != MBRT_EVENT || k0 >= n_out || !act_on_impact(I, ev, n, y_start))
+        if (rc == MBRT_EVENT) {
+            if (k0 >= n_out || !act_on_impact(I, ev, n, y_start))
+                return rc;
+            t = ev->t_event; /* a new segment: as a new stepper starts it */
+            ev->fresh = ev->which;
+            h = R->h_restart;
+            R->count = 0;
+            continue;
+        }
+        if (rc != MBRT_OK || k0 >= n_out || ++done >= R->max_stretches || R->h_last == NULL || nw < 1)
             return rc;
-        t = ev->t_event;
-        ev->fresh = ev->which;
-        h = h_restart;
-        size = chunk;
+        t = t_out[k0 - 1]; /* the next stretch of the segment: as the stepper's next call */
+        memcpy(y_start, y_out + (size_t)(k0 - 1) * (size_t)n, sizeof(double) * (size_t)n);
+        ev->fresh = -1;
+        h = *R->h_last != 0.0 ? *R->h_last : h;
     }
 }
