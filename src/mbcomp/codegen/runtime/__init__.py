@@ -19,7 +19,10 @@ generated model code is compiled together with:
     (Brent's method; a return through zero by golden section first), the
     integration ended at the earliest (``MBRT_EVENT``); event functions
     affine in one state entry each (``mbrt_linear_events``: a joint's
-    coordinate against its stops).
+    coordinate against its stops); a run's stretches with stops' rebounds
+    acted on between them (``mbrt_impacts_integrate``: Newton's restitution
+    on one speed row, ``M`` and ``f`` from an evaluation program, a new
+    segment started as a new stepper would).
 ``mbrt_dopri5.c``, ``mbrt_dop853.c``
     The Dormand--Prince 5(4) pair with 4th-order dense output and the
     8(5,3) pair with 7th-order dense output.

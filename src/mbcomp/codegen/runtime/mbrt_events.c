@@ -13,6 +13,16 @@
  *
  * Work layout (n_ev events, n equations): g0[n_ev] (values at the step's
  * start), g1[n_ev] (at its end), gs[n_ev] (scratch), ys[n] (scratch state).
+ *
+ * mbrt_impacts_integrate (mbrt.h) runs a run's stretches one call of a
+ * stretch function each, and between them acts on the impacts that are
+ * plainly a stop's rebound: Newton's restitution on one row of the speeds
+ * (c = sign e_i), du = -(1 + e)(c u) M^-1 c^T / (c M^-1 c^T) (Newton's law
+ * with the impulse along the row; e.g. Pfeiffer & Glocker, "Multibody
+ * Dynamics with Unilateral Contacts", 1996, ch. 5), M and f from an
+ * evaluation program (mbrt_mech), then a new stretch from the event as a new
+ * stepper would start it.  What may rest, chatter or is no such impact is
+ * handed back to the caller at the event.
  */
 #include "mbrt_rk_internal.h"
 
