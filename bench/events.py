@@ -20,8 +20,9 @@ Three cases with closed-form event times (issue 22, item 6):
   location's, on the numeric path a sliding contact runs on (see
   :mod:`mbcomp.hybrid.slip`).
 
-Each formulation (lagrange, dalembert) x solver (dop853, dopri5 -- the C integrators, stepped
-one step at a time in Python when there are events --, radau5, ida, genalpha; and scipy's
+Each formulation (lagrange, dalembert) x solver (dop853, dopri5 -- the C integrators: the stops'
+events located and their rebounds acted on in the C loop over the Lagrange form, one step at a
+time in Python otherwise --, radau5, ida, genalpha; and scipy's
 DOP853, Radau, LSODA for comparison) runs at rtol 1e-6, 1e-9, 1e-12 (genalpha: fixed steps
 h = 1e-2, 1e-3, 1e-4 s), and once more on an event-free counterpart for the cost ratio: the
 rotor turning freely and the pendulum swinging freely (no stops), and for the ball the same
