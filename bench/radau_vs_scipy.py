@@ -12,22 +12,31 @@ chain scipy's Radau at ``rtol=1e-11``); the time is the CPU time of the whole ``
 time at the same error, interpolated log-log on scipy's work-precision line (``< 1``: radau5
 is faster; ``nan``: the error lies outside scipy's line).
 
-Measured 2026-11-28 (2-core machine shared, medians of 3; radau5 / scipy Radau at radau5's error),
-after radau5's per-step cost was cut (the same steps and numbers bit for bit; ``--before`` with the
-earlier radau.py in the same run: 0.75-0.79x its time on the spring chain, 0.68-0.71x on the
-4-link chain, 0.79-0.88x on the slider-crank):
+Measured 2026-11-28, after radau5's stepping loop moved into C (``solvers/compiled_radau.py``,
+runtime ``mbrt_radau5``: the ODE default runs in C stretches over the compiled program and its
+exact Jacobian program; ``r5-dae`` is still the Python stepper). Two runs on the shared 2-core
+machine, medians of 3 each; radau5 / scipy Radau at radau5's error (``nan``: radau5's error lies
+outside scipy's line -- at rtol 1e-4/1e-5 on the spring chain and 1e-5/1e-6 on the slider-crank):
 
 =================  ==================  =====================  ==========================
 model              rtol                ``r5-dae`` (index=1)   ``radau5`` (the default)
 =================  ==================  =====================  ==========================
-spring chain N=10  1e-5 / 1e-6 / 1e-7  2.36 / 2.01 / 2.19     0.44 / -- / 0.43
-4-link chain       1e-6 / 1e-7 / 1e-8  0.70 / 0.73 / 0.85     0.42 / 0.44 / 0.48
-slider-crank       1e-6 / 1e-7 / 1e-8  0.48 / 0.54 / 0.56     0.67 / 0.61 / 0.48
+spring chain N=10  1e-5 / 1e-6 / 1e-7  2.79-2.35 / 2.33-1.90  0.46-0.44 / 0.23-0.23
+                                       / 2.05-2.23            (1e-6 / 1e-7)
+4-link chain       1e-6 / 1e-7 / 1e-8  0.57-0.70 / 0.76-0.75  0.06 / 0.06-0.07 / 0.05-0.06
+                                       / 0.85
+slider-crank       1e-6 / 1e-7 / 1e-8  0.45 / 0.51-0.53 /     0.03-0.04 / 0.02 (1e-7 / 1e-8)
+                                       0.54-0.57
 =================  ==================  =====================  ==========================
 
-(before the cut, same run: radau5 0.57, 0.60-0.71, 0.61-0.79 on the three. ``--before`` runs the
-other radau.py's default, the ODE, as ``radau5`` does; its ``from .radau_linalg import`` takes
-the current module -- paste the old one into the file for a fair comparison.)
+(with the Python stepper, before: radau5 0.42-0.44, 0.42-0.48 and 0.48-0.67 on the three.) The
+C stepper takes the Python stepper's steps to round-off in the reuse decisions (the same count
+on the N = 2 chain, within 5 % here) at the same errors. On the N = 10 spring chain (40
+variables) a step still costs ~76 us in C (116 us in Python): the 336 pairs of 40 x 40
+factorizations (~42 us a pair in the runtime's LU, 62 us by LAPACK from Python) are most of it, with 184 exact
+Jacobians (~7 us each) and ~4,200 right-hand sides (~1 us); at N = 2 a step is ~2 us and the
+~4 ms around the stepper in ``simulate`` is the run's cost. ``--before`` runs another radau.py's
+ODE default in Python (its ``from .radau_linalg import`` takes the current module).
 
 On the spring chain the DAE form is the gap: 60 variables with the accelerations algebraic take
 931 steps at rtol 1e-5 with 210 Newton failures ("too slow", rates 0.4-0.7) and a factorization
