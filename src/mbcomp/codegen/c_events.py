@@ -22,7 +22,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-__all__ = ["LinearEvents", "LinearImpacts"]
+__all__ = ["LinearEvents", "LinearImpacts", "MassProgram"]
 
 
 class _LinearEvents(ctypes.Structure):
@@ -86,7 +86,7 @@ class LinearEvents:
             raise ValueError(f"LinearEvents: index, sign, at and direction need one entry per event ({m} indices)")
         if self.index.min() < 0 or self.index.max() >= n:
             raise ValueError(f"LinearEvents: the indices {self.index.tolist()} must be state entries 0..{n - 1}")
-        if not np.all(np.isin(self.direction, (-1, 0, 1))) or not np.all(np.isfinite(self.at)):
+        if not set(self.direction.tolist()) <= {-1, 0, 1} or not np.all(np.isfinite(self.at)):
             raise ValueError("LinearEvents: directions are -1, 0 or +1 and the values finite")
         if not tol > 0:
             raise ValueError(f"LinearEvents: tol={tol!r} must be positive (s)")
@@ -110,6 +110,63 @@ class LinearEvents:
             self.struct.tol = float(tol)
         self.struct.which = -1
         return self.ptr
+
+
+class _Mech(ctypes.Structure):  # mbrt_mech (mbrt.h)
+    _fields_ = ([(n, ctypes.c_void_p) for n in ("eval", "qrate", "d", "h", "p", "w")]
+                + [(n, ctypes.c_int) for n in ("nq", "nu", "n_out", "mh", "mn", "nrows")]
+                + [("rows", ctypes.c_void_p)]
+                + [(f"off_{n}", ctypes.c_int) for n in ("M", "f", "Phi", "Phid", "C", "cb", "B", "Bb", "Psi")]
+                + [("nseg", ctypes.c_int), ("seg", ctypes.c_void_p)])
+
+
+class MassProgram:
+    """A C evaluation program as :class:`LinearImpacts` reads it (an ``mbrt_mech`` of ``M`` and
+    ``f``, no rows used): the program's function and the bound parameter set's buffers, which
+    this object keeps alive. ``rows`` is the program's number of holonomic and nonholonomic
+    rows (the impacts in C need 0). Lighter than :class:`mbcomp.codegen.engine.Mech`, which
+    also maps the coordinates for its projection.
+
+    Parameters
+    ----------
+    bound : mbcomp.codegen.compiler.Bound
+        The evaluation program (C backend) bound to its parameter values.
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.codegen import c_compiler, compile_system
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World()); s = m.add("s", Prismatic(n=(0, 0, 1)))
+    >>> b = m.add("b", PointMass(m=2.0)); m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> if c_compiler():
+    ...     print(MassProgram(compile_system(mbcomp.assemble(m), "c").evaluator.dae_program(1).mech.bound).rows)
+    ... else:
+    ...     print(0)
+    0
+    """
+
+    def __init__(self, bound):
+        code, sl = bound.code, bound.code.slices
+        self.bound = bound
+        self.rows = (sl["Phi"][1] - sl["Phi"][0]) + (sl["Psi"][1] - sl["Psi"][0])
+        fn = ctypes.cast(code.dll.mbcomp_eval, ctypes.c_void_p).value
+        self.struct = _Mech(fn, None, bound.dbuf.ctypes.data, bound.hbuf.ctypes.data, bound.pbuf.ctypes.data,
+                            bound.wbuf.ctypes.data, bound.nq, bound.nu, code.n_out, sl["Phi"][1] - sl["Phi"][0],
+                            sl["Psi"][1] - sl["Psi"][0], 0, None,
+                            *(sl[n][0] for n in ("M", "f", "Phi", "Phid", "C", "cb", "B", "Bb", "Psi")), 0, None)
+        self.ptr = ctypes.addressof(self.struct)
+
+
+def _signed(dll):
+    """``dll`` with the impacts' runtime calls' ctypes signatures set (once: the library keeps
+    its function objects)."""
+    fn = dll.mbrt_impacts_integrate
+    if fn.argtypes is None:
+        dll.mbrt_impacts_work_size.restype = ctypes.c_size_t
+        dll.mbrt_impacts_work_size.argtypes = [ctypes.c_void_p]
+        fn.restype, fn.argtypes = ctypes.c_int, _ARGS
+    return dll
 
 
 class _Impacts(ctypes.Structure):
@@ -150,8 +207,8 @@ class LinearImpacts:
     ----------
     integrator : Integrator
         The engine (its ``mbcomp_integrate`` is the stretch function, its context the call's).
-    mech : Mech
-        The evaluation program of the same system, bound to the same parameters.
+    mech : MassProgram or mbcomp.codegen.engine.Mech
+        The evaluation program of the same system, bound to the same parameters (its ``ptr``).
     iu, sign, e, comp : sequence
         Per event: the speed entry of its row (0..nu-1, or -1), the row's sign (+-1), the
         restitution (1, in [0, 1]) and its component (0..n_comp-1).
@@ -203,17 +260,14 @@ class LinearImpacts:
         self.shrinks = np.zeros(n_comp, dtype=np.intc)
         self.log_t, self.log_which = np.zeros(cap), np.zeros(cap, dtype=np.intc)
         self.log_y, self.log_loss = np.zeros((cap, 2 * n)), np.zeros(cap)
-        dll.mbrt_impacts_work_size.restype = ctypes.c_size_t
-        dll.mbrt_impacts_work_size.argtypes = [ctypes.c_void_p]
+        _signed(dll)
         self.work = np.zeros(max(1, int(dll.mbrt_impacts_work_size(mech.ptr))))
         self.struct = _Impacts(m, self.iu.ctypes.data, self.sign.ctypes.data, self.e.ctypes.data,
                                self.comp.ctypes.data, n_comp, self.last.ctypes.data, self.gap.ctypes.data,
                                self.shrinks.ctypes.data, int(chatter), float(burst), float(rest), mech.ptr,
                                self.work.ctypes.data, int(cap), 0, self.log_t.ctypes.data,
                                self.log_which.ctypes.data, self.log_y.ctypes.data, self.log_loss.ctypes.data)
-        fn = dll.mbrt_impacts_integrate
-        fn.restype, fn.argtypes = ctypes.c_int, _ARGS
-        self.fn, self.stretch = fn, ctypes.cast(dll.mbcomp_integrate, ctypes.c_void_p).value
+        self.fn, self.stretch = dll.mbrt_impacts_integrate, ctypes.cast(dll.mbcomp_integrate, ctypes.c_void_p).value
         self.stretch_work = {}
         self.y_start = np.zeros(n)
 

@@ -29,8 +29,6 @@ Examples
 """
 from __future__ import annotations
 
-import ctypes
-
 import numpy as np
 
 from ..errors import ModelError, Problem
@@ -92,29 +90,27 @@ class CLoop:
         fresh = keys.index(self._fresh) if self._fresh in keys else -1
         return index, sign, at, direction, fresh
 
-    def _c_mech(self, lib):
-        """The evaluation program of the run's system as the runtime reads it (``lib``: a
-        library with the runtime)
-        (:class:`mbcomp.codegen.engine.Mech`), or None where the C loop cannot act: not a C
+    def _c_mech(self):
+        """The evaluation program of the run's system as the runtime reads it
+        (:class:`mbcomp.codegen.c_events.MassProgram`), or None where the C loop cannot act: not a C
         program, drives or inputs (their values are set from Python per call), rows."""
         if not hasattr(self, "_mech"):
             s, self._mech = self.system, None
             if (s.backend == "c" and s.nq == s.nu and s.nu <= IMPACT_SPEEDS and not s.topology.cut
                     and not s.topology.drives
                     and not any(e.kind == "joint" and e.comp.has_singularity for e in s.topology.edges)):
-                self._mech = _evaluation_mech(s, lib, self.segments[-1].state)
+                self._mech = _evaluation_mech(s, self.segments[-1].state)
         return self._mech
 
-    def c_impacts(self, rest_height, chatter, burst_span, lib):
+    def c_impacts(self, rest_height, chatter, burst_span):
         """What the C loop may act on in the current segment (after :meth:`c_watch`), or None:
         ``mech`` (the evaluation program), per watched event ``iu`` (its row's speed entry, -1
         when not an impact the loop acts on), ``sign``, ``e``, ``comp`` (its component's index
         into ``history``: ``(last impact s, interval before it s, successive shrinking
         intervals)``), and the thresholds ``rest`` (``rest_height atol``, m or rad),
-        ``chatter`` and ``burst`` (s per ``max(1, |t|)``); ``lib`` the engine's library (it
-        carries the runtime)."""
+        ``chatter`` and ``burst`` (s per ``max(1, |t|)``)."""
         sysm = self.system
-        if self.system_now() is not sysm or self._c_mech(lib) is None:
+        if self.system_now() is not sysm or self._c_mech() is None:
             return None
         iu, sign, e, comp, names = [], [], [], [], []
         for _, who, name in self._c_keys:
@@ -130,7 +126,7 @@ class CLoop:
         if max(iu, default=-1) < 0:
             return None
         self._c_rows = list(zip(sign, iu, e))
-        return dict(mech=self._c_mech(lib), iu=iu, sign=sign, e=e, comp=comp,
+        return dict(mech=self._c_mech(), iu=iu, sign=sign, e=e, comp=comp,
                     history=[_history(self._hits.get(who, [])) for who in names],
                     rest=rest_height * self.atol, chatter=chatter, burst=burst_span)
 
@@ -154,21 +150,19 @@ class CLoop:
             self.stats["event_evaluations"] += 1
 
 
-def _evaluation_mech(system, lib, state):
-    """The :class:`~mbcomp.codegen.engine.Mech` of ``system``'s C evaluation program when it
-    has no rows, drives or inputs, else None; ``lib`` a library carrying the runtime (the
-    engine's: no second library is looked up, 0.3 ms a run), ``state`` a ``[q, u]`` where an
+def _evaluation_mech(system, state):
+    """The :class:`~mbcomp.codegen.c_events.MassProgram` of ``system``'s C evaluation program
+    when it has no rows, drives or inputs, else None; ``state`` a ``[q, u]`` where an
     evaluation makes the program if it is not made yet (a run with events evaluates by it)."""
-    from ..codegen.engine import Mech
+    from ..codegen.c_events import MassProgram
 
     if getattr(system.evaluator, "bound", None) is None:
         system.evaluate(0.0, state[: system.nq], state[system.nq:])
     bound = getattr(system.evaluator, "bound", None)
     if bound is None or bound.drive_comps or bound.code.inputs:
         return None
-    lib.mbrt_mech_work_size.argtypes, lib.mbrt_mech_work_size.restype = [ctypes.c_void_p], ctypes.c_size_t
-    mech = Mech(bound, system, lib)
-    return mech if mech.m == 0 and mech.mh == 0 else None
+    mech = MassProgram(bound)
+    return mech if mech.rows == 0 else None
 
 
 def _history(hits):

@@ -93,7 +93,7 @@ class _Watching:
         self.watch(*spec)
         if self.engine is None:  # a stepper that watches its events in Python after all (compiled radau5)
             return
-        acts = events.c_impacts(REST_HEIGHT, CHATTER, BURST_SPAN, self.engine.bound.code.dll) if C_IMPACTS and len(spec[0]) else None
+        acts = events.c_impacts(REST_HEIGHT, CHATTER, BURST_SPAN) if C_IMPACTS and len(spec[0]) else None
         if acts is not None:
             impacts = LinearImpacts(self.engine, acts["mech"], acts["iu"], acts["sign"], acts["e"], acts["comp"],
                                     acts["chatter"], acts["burst"], acts["rest"], IMPACT_LOG)
