@@ -39,8 +39,10 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import InitializationError, Problem
+from .recursive import ancestry, mass_matrix, tree_pass
 
-__all__ = ["MASSLESS", "ILL_CONDITIONED", "directions", "check_inertia", "moving_scale"]
+__all__ = ["MASSLESS", "ILL_CONDITIONED", "directions", "check_inertia", "check_tree_inertia", "moving_scale",
+           "tree_moving_scale"]
 
 EPS = np.finfo(float).eps
 MASSLESS = 1e-12
@@ -133,6 +135,81 @@ def check_inertia(system, ev):
     note = _ill_conditioned(system, ratio)
     warnings.warn(f"mbcomp: {note}", RuntimeWarning, stacklevel=3)
     return [note]
+
+
+def check_tree_inertia(system, t, q, u):
+    """:func:`check_inertia` of a system without constraint rows (a tree: ``N = I``) from one
+    kinematic pass of the recursive algorithms instead of the dense evaluation: the same
+    mass matrix to rounding by the composite-rigid-body algorithm (one product of the links'
+    motion subspaces with their composite inertias, kept where one link is the other's
+    ancestor: O(N^2) numbers in numpy, not O(N^2) jet columns in Python) and the same
+    :func:`moving_scale`, then the same decisions (:func:`directions`). At N = 1000 links
+    0.1 s instead of 0.6 s.
+
+    Parameters
+    ----------
+    system : MultibodySystem
+        Without cut joints, flange constraints or nonholonomic rows.
+    t : float
+        Time (s).
+    q, u : ndarray
+        The start (coordinates, speeds).
+
+    Returns
+    -------
+    list of str
+        As :func:`check_inertia`.
+
+    Raises
+    ------
+    InitializationError
+        As :func:`check_inertia`.
+    """
+    if system.nu == 0:
+        return []
+    tp = tree_pass(system, t, q, u, forces=False)
+    M = mass_matrix(tp, system.nu)
+    Z, ratio = directions(M, tree_moving_scale(system, tp))
+    if Z.shape[1]:
+        raise _massless(system, Z, M)
+    if ratio is None:
+        return []
+    note = _ill_conditioned(system, ratio)
+    warnings.warn(f"mbcomp: {note}", RuntimeWarning, stacklevel=3)
+    return [note]
+
+
+def tree_moving_scale(system, tp):
+    """:func:`moving_scale` from a kinematic pass (:func:`~mbcomp.assembly.recursive.tree_pass`):
+    a body's Jacobian columns are its ancestor links' motion subspaces ``S = [w; v_O]`` (about
+    the world origin O), so ``|J_w|^2`` sums ``|w|^2`` over them and ``|J_c|^2`` sums
+    ``|v_O + w x c|^2 = |v_O|^2 + 2 c . (v_O x w) + |c|^2 |w|^2 - (c . w)^2`` (``c``: the body's
+    centre, world): every body and column at once."""
+    links, nu = tp.links, system.nu
+    bodies = [(path, comp, node, links.link_of.get(node, -1)) for path, comp, node in system.topology.bodies]
+    bodies = [b for b in bodies if b[3] >= 0]
+    if not bodies:
+        return 0.0
+    S = np.zeros((6, nu))
+    link = np.empty(nu, int)
+    for j, c in enumerate(links.cols):
+        S[:, c], link[c] = tp.S[j], j
+    w, v = S[:3], S[3:]
+    m, tr, C = np.empty(len(bodies)), np.empty(len(bodies)), np.empty((len(bodies), 3))
+    blink = np.empty(len(bodies), int)
+    for k, (path, comp, node, i) in enumerate(bodies):
+        J = tp.jets[node]
+        mk, rho, Iw = system.body_inertia(comp, path, J)
+        m[k], tr[k], C[k], blink[k] = float(mk), float(np.trace(Iw)), J.r + rho, i
+    on = ancestry(links)[np.ix_(link, blink)].T  # (bodies, columns): the column moves the body
+    w2 = np.sum(w * w, axis=0)
+    jc = (np.sum(v * v, axis=0)[None, :] + 2.0 * C @ np.cross(v.T, w.T).T
+          + np.sum(C * C, axis=1)[:, None] * w2[None, :] - (C @ w) ** 2)
+    Jc2 = np.sum(np.where(on, np.maximum(jc, 0.0), 0.0), axis=1)
+    Jw2 = np.where(on, w2[None, :], 0.0).sum(axis=1)
+    moving = (Jc2 > 0.0) | (Jw2 > 0.0)
+    r2 = np.sum(C * C, axis=1)
+    return float(np.sum(np.where(moving, m * (Jc2 + r2 * Jw2) + tr * Jw2, 0.0)))
 
 
 def moving_scale(system, jets):

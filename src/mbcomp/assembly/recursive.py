@@ -73,7 +73,7 @@ from .flange_rows import rotor_wrench, rotors
 from .topology import ROOT
 from ..geometry.kinematics import cross, skew
 
-__all__ = ["SingularTree", "tree_links", "tree_pass", "tree_evaluation", "articulated",
+__all__ = ["SingularTree", "tree_links", "tree_pass", "tree_evaluation", "articulated", "ancestry", "mass_matrix",
            "tree_solve", "constraint_rows", "lagrange_accelerations", "lagrange_solution", "PIVOT_TOL"]
 
 #: a Cholesky pivot at or below ``PIVOT_TOL`` times the matrix's trace counts as singular
@@ -167,8 +167,23 @@ def _link_jets(system, links, t, q, u):
     return jets, S, Jw, r
 
 
+def _spatial_inertia(m, Iw, Cx):
+    """``[[Iw - m Cx Cx, m Cx], [-m Cx, m 1]]``: a body's spatial inertia about O (its centre's
+    cross matrix ``Cx``); numbers assembled in place (numpy.block's checks: half of a pass)."""
+    mC = m * Cx
+    if mC.dtype == object or np.asarray(Iw).dtype == object:
+        return np.block([[Iw - m * (Cx @ Cx), mC], [-mC, m * np.eye(3)]])
+    out = np.zeros((6, 6))
+    out[:3, :3] = Iw - m * (Cx @ Cx)
+    out[:3, 3:] = mC
+    out[3:, :3] = -mC
+    out[3:, 3:] = m * np.eye(3)
+    return out
+
+
 def _body_terms(system, links, jets, I, W):
-    """Add every body's spatial inertia and bias wrench (gravity and inertial) to its link."""
+    """Add every body's spatial inertia and bias wrench (gravity and inertial) to its link
+    (``W`` None: the inertias only)."""
     g = system.g
     for path, comp, node in system.topology.bodies:
         i = links.link_of.get(node, -1)
@@ -178,7 +193,9 @@ def _body_terms(system, links, jets, I, W):
         m, rho, Iw = system.body_inertia(comp, path, J)
         c = J.r + rho
         Cx = skew(c)
-        I[i] = I[i] + np.block([[Iw - m * (Cx @ Cx), m * Cx], [-m * Cx, m * np.eye(3)]])
+        I[i] = I[i] + _spatial_inertia(m, Iw, Cx)
+        if W is None:
+            continue
         a_c = J.a + cross(J.alpha, rho) + cross(J.w, cross(J.w, rho))
         F = m * (g - a_c)
         tau = cross(c, F) - (Iw @ J.alpha + cross(J.w, Iw @ J.w))
@@ -188,20 +205,22 @@ def _body_terms(system, links, jets, I, W):
         if i >= 0:
             z = np.zeros((3, 3))
             I[i] = I[i] + np.block([[Iw, z], [z, z]])
-            W[i] = W[i] + np.concatenate((-rotor_wrench(jets[node], Iw, gyro), np.zeros(3)))
+            if W is not None:
+                W[i] = W[i] + np.concatenate((-rotor_wrench(jets[node], Iw, gyro), np.zeros(3)))
 
 
-def tree_pass(system, t, q, u):
+def tree_pass(system, t, q, u, forces=True):
     """The kinematic pass of the recursive algorithms: a :class:`TreePass` holding the frames'
     poses and motions, the links' motion subspaces ``S``, spatial inertias ``I`` and bias
-    wrenches ``W`` (gravity, applied forces of force and flange elements, inertial terms)."""
+    wrenches ``W`` (gravity, applied forces of force and flange elements, inertial terms;
+    ``forces=False``: zero, for a caller that needs only the inertias -- no law is called)."""
     links = tree_links(system)
     dt = _dtype(t, q, u)
     jets, S, Jw, r = _link_jets(system, links, t, q, u)
     I = [np.zeros((6, 6), dt) for _ in range(links.n)]
     W = [np.zeros(6, dt) for _ in range(links.n)]
-    _body_terms(system, links, jets, I, W)
-    for node, (F, T) in system.applied(t, q, u, jets).items():
+    _body_terms(system, links, jets, I, W if forces else None)
+    for node, (F, T) in system.applied(t, q, u, jets).items() if forces else ():
         i = links.link_of.get(node, -1)
         if i >= 0:
             W[i] = W[i] + np.concatenate((T + cross(jets[node].r, F), F))
@@ -242,10 +261,38 @@ def generalized_momenta(tp, u, nu):
     return out
 
 
+def ancestry(links):
+    """``A[i, j]``: link ``i`` is link ``j`` or one of its ancestors (bool, links x links;
+    parents are numbered before their children, so each column is its parent's plus itself)."""
+    A = np.zeros((links.n, links.n), bool)
+    for j, p in enumerate(links.parent):
+        if p >= 0:
+            A[:, j] = A[:, p]
+        A[j, j] = True
+    return A
+
+
 def mass_matrix(tp, nu):
     """``M`` by the composite-rigid-body algorithm: ``M[i, j] = S_i^T I^C_j S_j`` for ``i`` an
-    ancestor of (or equal to) ``j``, zero between links on different branches."""
+    ancestor of (or equal to) ``j``, zero between links on different branches. On numbers,
+    every block at once: ``S^T F`` (``F_j = I^C_j S_j``) kept where :func:`ancestry` holds
+    (mirrored below the links' own blocks): O(N^2) products in BLAS instead of a Python loop
+    over the ancestor pairs (0.5 s at N = 1000)."""
     links = tp.links
+    if tp.dt != object and links.n:
+        cols = [np.arange(nu)[c] for c in links.cols]
+        order = np.concatenate(cols)
+        if order.size == nu and np.array_equal(np.sort(order), np.arange(nu)):
+            IC = _summed(links, tp.I)
+            S = np.zeros((6, nu))
+            F = np.zeros((6, nu))
+            link = np.empty(nu, int)
+            for j, c in enumerate(cols):
+                S[:, c], F[:, c], link[c] = tp.S[j], IC[j] @ tp.S[j], j
+            A = ancestry(links)[np.ix_(link, link)]
+            G = np.where(A, S.T @ F, 0.0)
+            own = link[:, None] == link[None, :]
+            return G + np.where(own, 0.0, G).T
     M = np.zeros((nu, nu), tp.dt)
     for j, IC in enumerate(_summed(links, tp.I)):
         F = IC @ tp.S[j]
