@@ -5,6 +5,7 @@ The runtime's sources are compiled with a few test right-hand sides (C, below) i
 library called through ctypes, as ``tests/codegen/test_runtime_c.py`` does.
 """
 import ctypes
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -279,3 +280,23 @@ def test_simulate_runs_radau5_in_c_and_agrees_with_the_python_stepper(monkeypatc
     Yc, Yp, Yr = (np.column_stack([r[n] for n in names]) for r in (c, p, ref))
     assert np.max(np.abs(Yc - Yr)) < 2e-7 and np.max(np.abs(Yp - Yr)) < 2e-7
     assert abs(c.stats["steps"] - p.stats["steps"]) <= 0.05 * p.stats["steps"]
+
+
+def test_the_c_constants_are_the_python_steppers(lib):
+    """The two steppers are one algorithm: the C's control constants are radau.py's, and its
+    coefficients the numbers radau.py derives (were they to move -- another LAPACK's
+    eigenvectors -- the hexadecimal floats in mbrt_radau5_internal.h are to be printed again)."""
+    from mbcomp.solvers import radau
+
+    text = (RUNTIME_DIR / "mbrt_radau5_internal.h").read_text()
+    defs = {k: float(v) for k, v in re.findall(r"#define (\w+) +([0-9][0-9.e+-]*)L?\s", text)}
+    assert (defs["NIT"], defs["THETA_JAC"], defs["SAFETY"], defs["FAC_MAX"], defs["FAC_MIN"]) == \
+        (radau.NEWTON_MAXITER, radau.THETA_JAC, radau.SAFETY, radau.FAC_MAX, radau.FAC_MIN)
+    assert (defs["QUOT_LO"], defs["QUOT_HI"]) == radau.QUOT_KEEP
+    assert (defs["MAX_SINGULAR"], defs["MAX_FAILURES"], defs["H_START"]) == \
+        (radau.MAX_SINGULAR, radau.MAX_FAILURES, radau.H_START)
+    out = np.zeros(45)
+    lib.mbrt_radau5_coefficients(out.ctypes.data)
+    mine = np.r_[radau.C, radau.T.ravel(), radau.TI.ravel(), radau.LAM.ravel(), radau.GAMMA, radau.MU.real,
+                 radau.MU.imag, radau.D_ERR, radau.P_DENSE.ravel()]
+    assert np.array_equal(out, mine)
