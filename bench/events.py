@@ -44,7 +44,15 @@ this script reads the steppers' counters instead, see ``_count_all_evaluations``
 Writes bench/events.csv (a run of some ``--cases`` replaces their rows, keeping the other
 cases') and prints the table.
 
+``--actions`` instead times the stop pendulum of ``bench/peers.py --cases events`` (the default
+call at rtol = atol = 1e-7, 101 outputs; the peer Pinocchio in a hand-written scipy DOP853 event
+loop at 1e-8, ``peers/stop_pendulum.py``) with the impacts acted on in the C loop and with every
+action in Python (``mbcomp.hybrid.steppers.C_IMPACTS``): CPU time of batches of 20 runs (one
+3 ms run is too short to time alone on a shared machine), the median of 9 batches and of the
+batches' ratios to the peer, in one process.
+
 Run: python bench/events.py [--cases rotor,pendulum,ball] [--rtols 1e-6,1e-9,1e-12] [--slow]
+     python bench/events.py --actions
 """
 import os
 
@@ -270,6 +278,50 @@ def _kept_rows(path, cases):
         return [r for r in csv.DictReader(fh) if r.get("case") not in cases]
 
 
+def actions_table(batches=9, runs=20):
+    """The stop pendulum with the impacts in C, with the Python actions, and the Pinocchio peer:
+    ``[(who, ms per run, ratio to the peer)]`` (medians over ``batches`` batches of ``runs``)."""
+    import sys
+
+    from mbcomp.hybrid import steppers
+
+    sys.path.insert(0, str(HERE))
+    from peers import stop_pendulum
+
+    why = stop_pendulum.available()
+    if why:
+        return [("pinocchio + scipy event loop", why, None)]
+    peer = stop_pendulum.build(e=0.7, phi0=0.8, t_end=5.0)
+
+    def default_call():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return mbcomp.simulate(pendulum(e=0.7, phi0=0.8), t_end=5.0, rtol=1e-7, atol=1e-7, n_out=101)
+
+    def per_run(f):
+        c0 = time.process_time()
+        for _ in range(runs):
+            f()
+        return (time.process_time() - c0) / runs
+
+    who = {"mbcomp, impacts in C": True, "mbcomp, actions in Python": False}
+    times = {k: [] for k in [*who, "pinocchio + scipy event loop"]}
+    for flag in who.values():  # warm: the programs compiled and cached, scipy imported
+        steppers.C_IMPACTS = flag
+        default_call()
+    peer.impact_times("DOP853", 1e-8, 1e-8)
+    try:
+        for _ in range(batches):
+            for name, flag in who.items():
+                steppers.C_IMPACTS = flag
+                times[name].append(per_run(default_call))
+            times["pinocchio + scipy event loop"].append(per_run(lambda: peer.impact_times("DOP853", 1e-8, 1e-8)))
+    finally:
+        steppers.C_IMPACTS = True
+    base = np.array(times["pinocchio + scipy event loop"])
+    return [(k, 1e3 * float(np.median(v)), float(np.median(np.array(v) / base))) for k, v in times.items()]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", default=",".join(CASES))
@@ -277,7 +329,14 @@ def main(argv=None):
     ap.add_argument("--methods", default=",".join(SOLVERS))
     ap.add_argument("--out", default=str(HERE / "events.csv"))
     ap.add_argument("--slow", action="store_true", help="also run the combinations of SLOW")
+    ap.add_argument("--actions", action="store_true", help="the stop pendulum: impacts in C, actions in Python, "
+                    "Pinocchio + scipy event loop (batches of runs)")
     args = ap.parse_args(argv)
+    if args.actions:
+        print(f"{'who':<32}{'ms per run':>12}{'ratio':>8}")
+        for who, ms, ratio in actions_table():
+            print(f"{who:<32}{ms:>12.3f}{ratio:>8.2f}" if ratio is not None else f"{who:<32}  {ms}")
+        return
     _count_all_evaluations()
     rtols = [float(x) for x in args.rtols.split(",")]
     rows = []
