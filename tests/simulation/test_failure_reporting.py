@@ -5,6 +5,8 @@ failures of bench/failure_map.py: a generalized-alpha step too long for Andrews'
 spring (Newton diverges), a mechanism driven unstable until its state overflows, and the
 reports every failed result carries.
 """
+import re
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -71,3 +73,48 @@ def test_every_failed_result_keeps_time_and_stats():
     res = mbcomp.simulate(AND.build(), t_end=0.03, method="genalpha", h=1e-3, backend="python", n_out=31)
     assert res.stats["steps"] > 0 and res.stats["nfev"] > 0 and "cpu_time" in res.stats
     assert len(res.time) == len(res["beta"]) and res.time[-1] < 0.03
+
+
+def _pendulum():
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("j", Revolute(phi0=0.5))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+    return m
+
+
+@pytest.mark.parametrize("exc, says", [
+    ("CodegenError('cannot load the compiled library x.so: bad ELF -> fix: delete it')",
+     r"the generated program could not be used at t=0\.25\d*: cannot load the compiled library x\.so: bad ELF -> fix"),
+    ("OSError('undefined symbol: mbrt_foo')",
+     r"mbcomp's own code raised OSError at t=0\.25\d*: undefined symbol: mbrt_foo \(no component's law .* report it"),
+])
+def test_a_failure_in_mbcomps_own_code_is_not_blamed_on_a_law(monkeypatch, exc, says):
+    """An exception with no component's or user's code in its traceback (a compiled library
+    that cannot be loaded, mbcomp's own bug) ends the run with what failed and whose it is --
+    not "the model: ? raised ... -> fix the law" -- and keeps the results before it."""
+    import mbcomp.formulations.lagrange as lagrange
+    from mbcomp.codegen import CodegenError
+
+    # a function of mbcomp's own (its code in mbcomp's sources) that raises from t = 0.25 s
+    src = (f"def fun(self, t, y, _fun=_fun):\n    if t >= 0.25:\n        raise {exc}\n    return _fun(self, t, y)\n")
+    scope = {"_fun": lagrange.LagrangeIndex1.fun, "CodegenError": CodegenError}
+    exec(compile(src, lagrange.__file__, "exec"), scope)
+    monkeypatch.setattr(lagrange.LagrangeIndex1, "fun", scope["fun"])
+    res = mbcomp.simulate(_pendulum(), t_end=1.0, n_out=11, method="RK45", backend="numeric")
+    assert res.status == "failed"
+    assert re.match(says, res.message), res.message
+    assert "fix the law" not in res.message and "are kept" in res.message
+    assert 0.1 < res.time[-1] < 0.25 + 1e-12
+
+
+def test_a_compiled_library_that_cannot_be_loaded_says_which_file_and_the_fix(tmp_path):
+    from mbcomp.codegen import CodegenError
+    from mbcomp.codegen.toolchain import load_library
+
+    cut = tmp_path / "mbcomp_cut_short.so"
+    cut.write_bytes(b"\x7fELF not a library")
+    with pytest.raises(CodegenError, match=r"cannot load the compiled library .*mbcomp_cut_short\.so: .* -> fix: delete it"):
+        load_library(str(cut))

@@ -36,7 +36,8 @@ from .engine import integrate_signature, runtime_objects
 from .graph import CodegenError, Fallback, Retrace, no_gc
 from .printers import PY_ENV, ParamProgram, Program
 from .thin import extension
-from .toolchain import (FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_objects, compile_units, n_units,
+from .toolchain import (FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_objects, compile_units, load_library,
+                        n_units,
                         object_path, runtime_directory, unit_key)
 from .tracer import FIELDS, param_vector
 
@@ -218,7 +219,7 @@ class Code:
             self.objects["compiled"] += done["compiled"]
             self.objects["reused"] = [n for n in done["reused"] if n not in self.objects["compiled"]]
         self.lib_path = lib
-        self.dll = ctypes.CDLL(lib)
+        self.dll = load_library(lib)
         argt = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p,
                 ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
         for fn in (self.dll.mbcomp_eval, self.dll.mbcomp_qrate) + ((self.dll.mbcomp_fun,) if self.has_fun else ()):

@@ -32,7 +32,7 @@ import time
 from .graph import CodegenError
 
 __all__ = ["c_compiler", "cache_directory", "runtime_directory", "compile_units", "compile_objects", "object_path", "unit_key",
-           "cached_library",
+           "cached_library", "load_library",
            "chunk", "n_units", "FLAGS", "HEADER", "CHUNK", "LOOP_CHUNK", "SMALL", "SMALL_CHUNK", "PART"]
 
 
@@ -153,6 +153,18 @@ def compile_units(cc, units, lib, cache_dir, extra=()):
     return done
 
 
+def load_library(path):
+    """``ctypes.CDLL(path)``; a library that cannot be loaded (a cache file cut short or
+    built for another machine, a missing symbol) is a :class:`CodegenError` naming the file
+    and the fix, not an ``OSError`` from the dynamic loader."""
+    try:
+        return ctypes.CDLL(path)
+    except OSError as exc:
+        raise CodegenError(f"cannot load the compiled library {path}: {exc} -> fix: delete it (it is built again at "
+                           f"the next run; or empty the cache directory {os.path.dirname(path)}), or use "
+                           "backend='python'") from exc
+
+
 def cached_library(units, stem, cache_dir, what):
     """The shared library of ``(name, source, flags)`` units, loaded (``ctypes.CDLL``): linked
     once into ``cache_dir`` under ``<stem>_<hash of the units' keys>.so`` and reused after,
@@ -167,7 +179,7 @@ def cached_library(units, stem, cache_dir, what):
     lib = os.path.join(d, f"{stem}_{key}.so")
     if not os.path.exists(lib):
         compile_units(cc, units, lib, d)
-    return ctypes.CDLL(lib)
+    return load_library(lib)
 
 
 def object_path(cc, cache_dir, src, flags):

@@ -24,6 +24,7 @@ import threading
 from contextlib import contextmanager
 from numbers import Real
 
+from ..codegen.graph import CodegenError
 from ..errors import SimulationError
 from ..modeling.blame import blame
 
@@ -93,6 +94,13 @@ def start_failure(exc, t_start):
 
 def _raised(exc, t_reached):
     b = blame(exc)
+    if b.law == "?":  # no component's or user's code in the traceback: not a law to fix
+        t = time_of(exc)
+        when = f"at t={t:g}" if t is not None else f"in the step from t={t_reached:g}"
+        if isinstance(exc, CodegenError):  # its text says what failed and the fix
+            return f"the generated program could not be used {when}: {exc}"
+        return (f"mbcomp's own code raised {type(exc).__name__} {when}: {exc} (no component's law is in its "
+                "traceback) -> this is mbcomp's failure, not the model's: report it with the model")
     who = b.who if b.component is not None else "the model"
     own = f"{b.path}: "  # a component's own diagnosis (a law returned None): its message as it is
     if isinstance(exc, SimulationError) and b.component is not None and str(exc).startswith(own):
