@@ -31,16 +31,23 @@ Timed per call (CPU time, medians of 5 batches):
 * ``mbcomp fun``: :meth:`LagrangeIndex1.fun` on the compiled system (what scipy's integrators
   call; the Python wrapper's cost included); ``pin py``: ``pinocchio.aba`` called from Python.
 
-Ratios: ``C / C++`` (the algorithms) and ``fun / py`` (what a Python caller sees).
+Ratios: ``C / C++`` (the algorithms) and ``fun / py`` (what a Python caller sees). With
+``--straight`` the same ``fun`` printed without loops over repeated blocks
+(``codegen/block_loops.py``; straight-line code, as before them) is timed too, and its
+``dy/dt`` compared with the printed program's (``diff``: 0, the same operations in the same
+order).
 
 Measured (2026-11-28, 2-core VM, pin 4.1.0; C / C++ at N = 10 / 40 / 100): with dense 6 x 6
 products in the ABA (11,002 / 47,752 / 121,252 operations) the ball chain 0.78 / 0.86 / 1.85,
 the floating tree 0.82 / 0.92 / 1.83; with the spatial algebra's structure
 (``docs/design/generated-programs.md``, 8,023 / 34,633 / 87,853 operations) 0.61 / 0.66 / 0.96
 and 0.62 / 0.66 / 0.99-1.04. At N = 100 the straight-line program (~1 MB of machine code) no
-longer fits the L2 cache: its cost per operation is 1.45 times that at N = 40.
+longer fits the L2 cache: its cost per operation is 1.45 times that at N = 40. With the
+repeated blocks printed as loops (``--straight``, three runs, medians, C / C++ at N = 10 / 40 /
+100): the ball chain 0.49 / 0.48 / 0.48 (straight-line in the same runs 0.61 / 0.63 / 0.99),
+the floating tree 0.59 / 0.54 / 0.51 (0.61 / 0.63 / 1.05); the same dy/dt bit for bit.
 
-Run: python bench/chain3d.py [--Ns 10,40,100] [--mechanisms chain,tree]
+Run: python bench/chain3d.py [--Ns 10,40,100] [--mechanisms chain,tree] [--straight]
 """
 import os
 
@@ -63,7 +70,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import mbcomp  # noqa: E402
-from mbcomp.codegen import compile_system  # noqa: E402
+from mbcomp.codegen import block_loops, compile_system  # noqa: E402
 from mbcomp.codegen.compiler import Bound, Code  # noqa: E402
 from mbcomp.codegen.toolchain import cache_directory, cached_library  # noqa: E402
 from mbcomp.codegen.tracer import trace  # noqa: E402
@@ -366,7 +373,7 @@ def per_call(f, target=0.05, repeats=5):
 # ------------------------------------------------------------------------------------------
 # one mechanism at one N
 # ------------------------------------------------------------------------------------------
-def measure(kind, N, loop, cpp):
+def measure(kind, N, loop, cpp, straight=False):
     import pinocchio as pin
 
     model, names = pinocchio_model(kind, N)
@@ -412,6 +419,8 @@ def measure(kind, N, loop, cpp):
             raise RuntimeError(f"{kind} N = {N}: the program's guard failed at the timed state")
         return s
     row["mbcomp C"] = median_loop(c_run)
+    if straight:
+        time_straight(system, y, bound, loop, row)
     row["mbcomp fun"] = per_call(lambda: fun(T0, y))
     row["pin py"] = per_call(lambda: pin.aba(model, data, q, v, tau))
     if cpp is not None:
@@ -426,30 +435,63 @@ def measure(kind, N, loop, cpp):
     return row
 
 
+def time_straight(system, y, bound, loop, row):
+    """The same ``fun`` printed without loops over repeated blocks (straight-line, as before
+    issue 32's loops) timed into ``row["straight C"]``, with its largest relative difference
+    from the printed program's ``dy/dt`` (``row["rolled vs straight"]``: 0, the same
+    operations in the same order)."""
+    was, block_loops.BLOCK_MIN = block_loops.BLOCK_MIN, 0
+    try:
+        code0 = Code(trace(system, 3_000_000, program="fun"), "c")
+    finally:
+        block_loops.BLOCK_MIN = was
+    bound0 = Bound(code0, system)
+    dy0 = bound0.run_fun(T0, y, 0.0, 0.0)
+    dy = bound.run_fun(T0, y, 0.0, 0.0)
+    row["rolled vs straight"] = np.max(np.abs(np.asarray(dy) - dy0)) / np.max(np.abs(dy0))
+    bound0.yin[:y.size] = y
+    _, _, pd, ph, pp, pw, _, _, py = bound0.ptrs
+    pq, pu = bound0.fun_args
+    f0 = ctypes.cast(code0.dll.mbcomp_fun, ctypes.c_void_p).value
+    row["straight C"] = median_loop(lambda n: loop(f0, pq, pu, pd, ph, pp, pw, py, n))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--Ns", default="10,40,100")
     ap.add_argument("--mechanisms", default="chain,tree")
+    ap.add_argument("--straight", action="store_true",
+                    help="also time the same program printed without loops (straight-line, as before issue 32's loops)")
     args = ap.parse_args(argv)
     loop = c_loop()
     cpp, why = cpp_loop()
     if cpp is None:
         print(f"pin C++ column skipped: {why}")
     head = (f"{'mechanism':<14}{'N':>5}{'ops':>9}{'mbcomp C':>10}{'pin C++':>9}{'C/C++':>7}"
-            f"{'mbcomp fun':>12}{'pin py':>8}{'fun/py':>7}{'cond M':>9}{'err mb':>9}{'err pin':>9}")
+            f"{'mbcomp fun':>12}{'pin py':>8}{'fun/py':>7}{'cond M':>9}{'err mb':>9}{'err pin':>9}"
+            + (f"{'straight C':>11}{'/C++':>6}{'diff':>9}" if args.straight else ""))
     print("one forward-dynamics call, microseconds (CPU, median of 5 batches); err: max |du/dt - reference| / "
           "max |reference|,\nreference: Pinocchio's crba + nonLinearEffects solved densely (numpy); err mb: mbcomp's "
           "compiled fun, err pin: pinocchio.aba")
     print(head)
     for kind in args.mechanisms.split(","):
         for N in (int(n) for n in args.Ns.split(",")):
-            r = measure(kind, N, loop, cpp)
+            r = measure(kind, N, loop, cpp, args.straight)
             us = {k: r[k] * 1e6 for k in ("mbcomp C", "pin C++", "mbcomp fun", "pin py") if k in r}
             cpp_s = f"{us['pin C++']:9.2f}{us['mbcomp C'] / us['pin C++']:7.2f}" if "pin C++" in us else f"{'-':>9}{'-':>7}"
             name = {"chain": "ball chain", "tree": "floating tree"}[kind]
             print(f"{name:<14}{N:>5}{r['ops']:>9}{us['mbcomp C']:10.2f}{cpp_s}{us['mbcomp fun']:12.2f}"
                   f"{us['pin py']:8.2f}{us['mbcomp fun'] / us['pin py']:7.2f}{r['cond']:9.1e}{r['err compiled']:9.1e}"
-                  f"{r['err pin aba']:9.1e}", flush=True)
+                  f"{r['err pin aba']:9.1e}" + _straight_cells(r), flush=True)
+
+
+def _straight_cells(r):
+    """The straight-line program's columns: its time, its ratio to Pinocchio's C++ and the
+    largest relative difference of its dy/dt from the printed program's."""
+    if "straight C" not in r:
+        return ""
+    ratio = f"{r['straight C'] / r['pin C++']:6.2f}" if "pin C++" in r else f"{'-':>6}"
+    return f"{r['straight C'] * 1e6:11.2f}{ratio}{r['rolled vs straight']:9.1e}"
 
 
 if __name__ == "__main__":
