@@ -6,7 +6,8 @@
 
    * ``batch``: one :func:`mbcomp.batch` call (threads = cores), the median wall time of
      ``--repeat`` calls, split into its Python part (per-run consistent initialization and
-     parameter program) and its C calls (which overlap);
+     parameter program, or waiting for the worker processes that make the starts where the
+     batch chose them) and its C calls (which overlap; their threads' CPU time beside);
    * ``simulate``: one :func:`mbcomp.simulate` call per run on the model (what a user loop
      does), wall time of all of them (once); the first 20 runs are compared with the batch's
      (the largest difference of any state, which the tests hold to 1e-12);
