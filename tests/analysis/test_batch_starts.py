@@ -164,3 +164,25 @@ def test_forked_starts_by_the_evaluation_program_are_the_same_too():
     forked = mbcomp.batch(SLIDER(), table, t_end=0.5, n_out=11, initialization="program", processes=2)
     assert forked.stats["processes"] == 2
     assert_same_batch(here, forked)
+
+
+def test_a_worker_killed_mid_batch_leaves_its_starts_to_this_process():
+    import signal
+
+    table = slider_table(600, seed=11)
+    killed = []
+
+    def kill_a_worker(run):   # the metric: at the first run read, a worker is killed (SIGKILL: its task is lost)
+        if not killed:
+            workers = multiprocessing.active_children()
+            assert workers
+            os.kill(workers[0].pid, signal.SIGKILL)
+            killed.append(workers[0].pid)
+        return run["slider_joint.s"][-1]
+
+    with pytest.warns(RuntimeWarning, match="worker process making the runs' starts ended"):
+        hit = mbcomp.batch(SLIDER(), table, t_end=0.2, n_out=5, processes=2, block=16, reduce=kill_a_worker)
+    calm = mbcomp.batch(SLIDER(), table, t_end=0.2, n_out=5, processes=0, block=16)
+    assert killed and hit.stats["processes"] == 2
+    assert_same_batch(hit, calm)   # every run, its start made by whichever process
+    np.testing.assert_array_equal(hit.reduced, calm["slider_joint.s"][:, -1])

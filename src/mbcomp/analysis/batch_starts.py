@@ -13,7 +13,8 @@ one (Linux; the workers inherit the system and its programs, nothing is pickled 
 table's indices going out and each run's ``(y0, row mask, message)`` coming back), blocks of
 runs in order, while this process integrates the blocks already started. The same code on the
 same numbers: the starts are bit for bit those made in this process
-(``tests/analysis/test_batch_starts.py``).
+(``tests/analysis/test_batch_starts.py``). A worker that dies leaves the starts not received to
+this process (a ``concurrent.futures`` pool: broken, not hung).
 
 Examples
 --------
@@ -44,7 +45,7 @@ from ..formulations import build
 from ..hybrid.contacts import initialize_in_modes
 from ..solvers import STEPPERS
 
-__all__ = ["run_start", "start_or_message", "ForkedStarts", "fork_workers", "MIN_FORKED_RUNS"]
+__all__ = ["run_start", "start_or_message", "starts_of_runs", "ForkedStarts", "fork_workers", "MIN_FORKED_RUNS"]
 
 #: fewer runs than this start in this process unless workers are asked for (a pool costs ~15 ms
 #: to fork and close, and the choice needs a block integrated first)
@@ -121,10 +122,14 @@ def _worker_init():
 
 
 def _starts_of(args):
-    """In a worker: ``[(y0, row mask, message)]`` of the runs ``range(a, b)`` of job ``token``,
-    and the texts of the warnings they raised (the batch raises them again, once)."""
+    """In a worker: :func:`starts_of_runs` of job ``token``'s runs ``range(a, b)``."""
     token, a, b = args
-    system, values, req = _JOBS[token]
+    return starts_of_runs(*_JOBS[token], a, b)
+
+
+def starts_of_runs(system, values, req, a, b):
+    """``[(y0, row mask, message)]`` of the runs ``range(a, b)`` of the table ``values``, and
+    the texts of the warnings their starts raised, ``[(category, text)]`` (once each)."""
     out = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -164,25 +169,37 @@ class ForkedStarts:
     """
 
     def __init__(self, system, values, req, first, n_runs, block, workers):
-        self.token = next(_TOKENS)
-        _JOBS[self.token] = (system, values, req)
+        import concurrent.futures
+
+        self.job = (system, values, req)
+        token = next(_TOKENS)
+        _JOBS[token] = self.job
         self.next = first
-        try:
-            self.pool = multiprocessing.get_context("fork").Pool(workers, initializer=_worker_init)
+        self.pool = concurrent.futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
+                                                           initializer=_worker_init)
+        try:  # the first submit forks every worker (the fork start method), which inherit the job
+            self.tasks = [self.pool.submit(_starts_of, (token, a, min(a + block, n_runs)))
+                          for a in range(first, n_runs, block)]
+        except BaseException:
+            self.pool.shutdown(wait=True, cancel_futures=True)
+            raise
         finally:
-            del _JOBS[self.token]  # the workers have it (forked); this process needs it no more
-        tasks = [(self.token, a, min(a + block, n_runs)) for a in range(first, n_runs, block)]
-        self.results = self.pool.imap(_starts_of, tasks)
+            del _JOBS[token]
+        self.ranges = [(a, min(a + block, n_runs)) for a in range(first, n_runs, block)]
         self.ready = []
         self.warned = set()
+        self.broken = None
 
     def take(self, a, b):
         """``[(y0, row mask, message)]`` of runs ``a .. b - 1`` (in order: ``a`` is the first
-        run not taken yet); a run that cannot start has ``y0`` None and its message."""
+        run not taken yet); a run that cannot start has ``y0`` None and its message. Should a
+        worker die (killed: its task is lost), the starts not received yet are made in this
+        process, with a warning."""
         if a != self.next:
             raise ValueError(f"ForkedStarts.take({a}, {b}): runs are taken in order, the next is {self.next}")
         while len(self.ready) < b - a:
-            out, warned = next(self.results)
+            task, (lo, hi) = self.tasks.pop(0), self.ranges.pop(0)
+            out, warned = self._result(task, lo, hi)
             self.ready.extend(out)
             for category, text in warned:
                 if text not in self.warned:  # each text once, as in this process
@@ -192,10 +209,21 @@ class ForkedStarts:
         self.next = b
         return got
 
+    def _result(self, task, lo, hi):
+        from concurrent.futures.process import BrokenProcessPool
+
+        if self.broken is None:
+            try:
+                return task.result()
+            except BrokenProcessPool as exc:
+                self.broken = exc
+                warnings.warn(f"mbcomp.batch: a worker process making the runs' starts ended ({exc}); the starts from "
+                              f"run {lo} on are made in this process", RuntimeWarning, stacklevel=3)
+        return starts_of_runs(*self.job, lo, hi)
+
     def close(self):
-        """Stop the workers (the starts not taken are dropped)."""
-        self.pool.terminate()
-        self.pool.join()
+        """Stop the workers (the starts not taken are dropped; a task under way is finished)."""
+        self.pool.shutdown(wait=True, cancel_futures=True)
 
     def __enter__(self):
         return self
