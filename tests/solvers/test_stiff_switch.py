@@ -52,3 +52,21 @@ def test_the_default_never_switches_on_a_pendulum_and_equals_dop853():
     for k in range(1, 6):
         np.testing.assert_array_equal(auto[f"joint{k}.phi"], plain[f"joint{k}.phi"])
     assert auto.stats["nfev"] == plain.stats["nfev"]
+
+
+def test_a_small_stiff_state_goes_on_by_radau5_in_c_a_large_one_by_lsoda():
+    """``auto`` hands a stiff run of at most HANDOVER_STATES states to radau5, whose loop runs
+    in C (Newton iterations counted, no Python steps), and a larger one to LSODA (Python steps):
+    both from the step found stiff, both as accurate as their tolerance promises against a
+    tight Radau reference."""
+    from mbcomp.solvers.compiled_rk import HANDOVER_STATES
+
+    opts = dict(t_end=0.3, n_out=7, rtol=1e-6, atol=1e-8)
+    for N, by_radau in ((2, True), (HANDOVER_STATES // 4 + 1, False)):
+        model = damped_spring_chain(N)
+        auto = mbcomp.simulate(model, **opts)
+        ref = mbcomp.simulate(model, method="Radau", t_end=0.3, n_out=7, rtol=1e-11, atol=1e-13)
+        assert auto.status == "success" and 0.0 < auto.stats["stiff_from"] < 0.01
+        assert (auto.stats.get("nnewton", 0) > 0 and auto.stats["python_steps"] == 0) == by_radau, (N, auto.stats)
+        for k in range(N):
+            np.testing.assert_allclose(auto[f"j{k}.phi"], ref[f"j{k}.phi"], atol=1e-4, rtol=0)

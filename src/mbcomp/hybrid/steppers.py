@@ -81,6 +81,9 @@ class _Watching:
     ``hybrid_events`` is the run's :class:`~mbcomp.hybrid.events.Events`)."""
 
     hybrid_events = None
+    #: a stiff segment goes on inside this stepper (scipy's stiff method, stepped where the
+    #: events are located), not by another stepper the run would make without them
+    stiff_handover = None
 
     def __init__(self, *args, **kw):
         super().__init__(*args, **kw)

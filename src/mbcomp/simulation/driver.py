@@ -85,8 +85,9 @@ def simulate(model, t_end=1.0, *, t_start=0.0, params=None, method="auto", rtol=
     method : str
         ``"auto"`` (default): ``"dop853"`` until the C integrator finds the problem stiff
         (Hairer's test: 15 accepted steps held by the method's stability, not its accuracy),
-        then scipy's ``LSODA`` with the exact Jacobian from that step on (``stats["stiff_from"]``
-        says when); ``"dop853"`` or ``"dopri5"``: Dormand-Prince 8(5,3) / 5(4) run in C over
+        then from that step on (``stats["stiff_from"]`` says when) ``"radau5"`` with its loop in
+        C for a state of at most 24 entries (a formulation that does not project), else scipy's
+        ``LSODA`` with the exact Jacobian; ``"dop853"`` or ``"dopri5"``: Dormand-Prince 8(5,3) / 5(4) run in C over
         the compiled right-hand side (the whole stretch between outputs is one C call;
         scipy's ``DOP853``/``RK45`` over the Python right-hand side when there is no C
         program), a ``scipy.integrate.solve_ivp`` method name (ODE forms: Lagrange at index

@@ -51,6 +51,7 @@ import time
 import numpy as np
 
 from ..errors import SimulationError
+from ..solvers import STEPPERS
 from .monitors import StepEnd
 
 __all__ = ["Run", "StepHook", "Monitoring", "KeepOutputs", "Projection", "Repartition", "Progress", "Budget",
@@ -129,6 +130,8 @@ class Run:
         """One step; ``True`` when it moved (its hooks are due), ``SimulationError`` when the
         stepper failed (its message names the cause)."""
         s = self.stepper
+        if s.go_on_by is not None:  # the stepper asks another to go on from its state (auto -> radau5)
+            s = self._hand_over(s)
         self.t_prev = s.t
         msg = s.step()
         if s.status == "failed":
@@ -136,6 +139,15 @@ class Run:
         self.stats["steps"] += 1
         self._dense = None
         return s.t != self.t_prev
+
+    def _hand_over(self, s):
+        """A new stepper of the kind ``s.go_on_by`` names, going on from ``s``'s state (the
+        ODE variant of a DAE solver on an ODE form), the run's outputs and options as before."""
+        nxt = STEPPERS[s.go_on_by]
+        if self.form.problem == "ode" and hasattr(nxt, "on_ode"):
+            nxt = nxt.on_ode()
+        self.stepper_class = nxt
+        return self.start(s.t, s.y)
 
     def step_end(self):
         """The :class:`~mbcomp.simulation.monitors.StepEnd` of the stepper's current state,

@@ -183,6 +183,11 @@ class Stepper:
         dense output."""
         return None
 
+    #: set by a stepper that asks the run to go on from its state by another stepper (a name
+    #: in :data:`mbcomp.solvers.STEPPERS`: ``auto`` hands a stiff problem to ``"radau5"``); the
+    #: run makes that one at its next step (:meth:`mbcomp.simulation.stepping.Run.advance`)
+    go_on_by = None
+
     def step(self):
         """Advance one step; returns ``None`` or, on failure, the message (status ``"failed"``)."""
         if self.status != "running":

@@ -42,7 +42,7 @@ import numpy as np
 from .base import StepFailure, Stepper
 from .locate import time_tolerance
 
-__all__ = ["CompiledRK", "COMPILED_STEPPERS", "STIFF_METHOD", "STIFF_ONE_STEP", "STIFF_STEPS"]
+__all__ = ["CompiledRK", "COMPILED_STEPPERS", "STIFF_METHOD", "STIFF_ONE_STEP", "STIFF_STEPS", "HANDOVER_STATES"]
 
 
 class CompiledRK(Stepper):
@@ -75,6 +75,12 @@ class CompiledRK(Stepper):
     #: accepted steps held by stability after which the run goes on by a stiff method
     #: (:data:`STIFF_METHOD`); 0: never (``dop853``, ``dopri5``; ``auto`` switches)
     stiff_steps = 0
+    #: the stepper (a name in :data:`mbcomp.solvers.STEPPERS`) the run hands over to from a step
+    #: found stiff when the formulation does not project and the state has at most
+    #: :data:`HANDOVER_STATES` entries (``auto``: ``"radau5"``, whose loop runs in C over the same
+    #: program, :mod:`mbcomp.solvers.compiled_radau`); else scipy's :data:`STIFF_METHOD` steps on
+    #: inside this stepper
+    stiff_handover = None
 
     @classmethod
     def make(cls, name):
@@ -159,8 +165,13 @@ class CompiledRK(Stepper):
         ts, Ys = list(outs[: len(r.Y)]), list(r.Y)
         if stiff:  # Hairer's test fired: the rest of the run by the stiff method, from this step
             projects = bool(getattr(self.prob, "projects", False))
-            self._python_until, self._python_method = np.inf, STIFF_ONE_STEP if projects else STIFF_METHOD
             self.stats["stiff_from"] = float(r.t_last)
+            if not projects and self.stiff_handover is not None and self.y.size <= HANDOVER_STATES:  # radau5 in C
+                self.go_on_by = self.stiff_handover
+                if r.t_last <= self.t:  # no step made: the next stepper goes on from here
+                    return
+            else:
+                self._python_until, self._python_method = np.inf, STIFF_ONE_STEP if projects else STIFF_METHOD
         if r.status == 1 or declined or stiff:
             # a guard failed (a law's other branch, a singular matrix), or the C projection
             # could not be made (rows losing rank, Newton not converging: the driver's
@@ -265,22 +276,29 @@ STIFF_METHOD = "LSODA"
 #: where a projected state would not reach it; scipy's Radau is one-step (2x LSODA's time
 #: on the chain above, 40x more accurate)
 STIFF_ONE_STEP = "Radau"
+#: states at most for which ``auto`` hands a stiff run to radau5 (its loop in C:
+#: :attr:`CompiledRK.stiff_handover`) rather than going on by :data:`STIFF_METHOD`: radau5 factors
+#: a real and a complex matrix of the state's size, LSODA's BDF a real one, less often. Measured
+#: on bench/peers/stiff_chain.py (1 s, rtol 1e-8; 4 states a link): 2 links 6.6 ms against 25
+#: ms by LSODA, 5 links 35 against 59 ms, 10 links 78 against 57 ms, 20 links 390 against 113 ms
+HANDOVER_STATES = 24
 #: Hairer's count (dop853's NSTIFF test: 15 accepted steps with ``|h lambda|`` above the
 #: stability limit, fewer than 6 below it in between)
 STIFF_STEPS = 15
 
 
-def _declare(name, order, scipy_method, stiff_steps=0):
+def _declare(name, order, scipy_method, stiff_steps=0, stiff_handover=None):
     doc = (f"``{name}``: {'DOP853' if order == 8 else 'DOPRI5'} in C over the compiled engine (scipy's "
            f"``{scipy_method}`` without one)"
            + (f"; where the C integrator finds the problem stiff (Hairer's test, {stiff_steps} steps held by "
-              f"stability) the run goes on by ``{STIFF_METHOD}`` with the exact Jacobian, from that step (the "
-              "stats' ``stiff_from``)" if stiff_steps else "")
+              f"stability) the run goes on from that step (the stats' ``stiff_from``) by "
+              + (f"``{stiff_handover}`` (its loop in C) for a state of at most {HANDOVER_STATES} entries, else "
+                 if stiff_handover else "") + f"``{STIFF_METHOD}`` with the exact Jacobian" if stiff_steps else "")
            + "; see :class:`CompiledRK`.")
     return type(name, (CompiledRK,), dict(order=order, scipy_method=scipy_method, stiff_steps=stiff_steps,
-                                          __doc__=doc, __module__=__name__))
+                                          stiff_handover=stiff_handover, __doc__=doc, __module__=__name__))
 
 
 #: name -> stepper class
-COMPILED_STEPPERS = {"auto": _declare("auto", 8, "DOP853", STIFF_STEPS), "dop853": _declare("dop853", 8, "DOP853"),
+COMPILED_STEPPERS = {"auto": _declare("auto", 8, "DOP853", STIFF_STEPS, "radau5"), "dop853": _declare("dop853", 8, "DOP853"),
                      "dopri5": _declare("dopri5", 5, "RK45")}
