@@ -3,7 +3,8 @@
 ``directions`` screens with the eigenvalues alone, initialization hands the closure's
 evaluation on to the speeds, the accuracy alarm's tolerance energy takes the start's
 evaluation, the summary takes the structure's constraint row names: each against the long
-way, exactly (the results of a run are the same bits either way)."""
+way, exactly (the results of a run are the same bits either way; an ill-conditioned ratio far
+from the limits, which only the warning's text shows to three digits, to rounding)."""
 import numpy as np
 import pytest
 
@@ -35,7 +36,12 @@ def test_screened_directions_are_the_eigh_directions(smallest, n):
     w[0] = smallest * w[-1]
     Mr = (Q * w) @ Q.T
     got, ref = directions(Mr), _reference(Mr)
-    assert got[1] == ref[1]
+    # the decisions exactly; an ill-conditioned ratio far from both limits comes from the
+    # eigenvalues alone (eigh's differ by n eps of the largest), the warning's text the same
+    assert (got[1] is None) == (ref[1] is None)
+    if ref[1] is not None:
+        assert got[1] == pytest.approx(ref[1], rel=n * 4 * np.finfo(float).eps / ref[1])
+        assert f"{got[1]:.3g}" == f"{ref[1]:.3g}"
     assert got[0].shape == ref[0].shape
     np.testing.assert_array_equal(got[0], ref[0])
     if smallest == 0.0:

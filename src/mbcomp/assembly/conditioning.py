@@ -83,12 +83,16 @@ def directions(Mr, scale=0.0):
     """
     sym = 0.5 * (Mr + Mr.T)
     # the eigenvalues alone first (a third of the work): they differ from eigh's by rounding
-    # (n eps of the largest), so only a matrix far from both limits is decided by them; any
-    # other takes eigh's values and vectors, the decisions and ratio made as always
+    # (n eps of the largest), so only a matrix far from both limits is decided by them (its
+    # ratio, if ill-conditioned, theirs); any other takes eigh's values and vectors
     w = np.linalg.eigvalsh(sym)
     top = max(w[-1] if w.size else 0.0, scale, 0.0)
     if top > 0.0 and w[0] > SCREEN * ILL_CONDITIONED * top:
         return np.zeros((len(w), 0)), None
+    if top > 0.0 and SCREEN * MASSLESS * top < w[0] < ILL_CONDITIONED * top / SCREEN:
+        # far from both limits on the ill-conditioned side: the same decision, the ratio from these
+        # values (a long chain: eigh's vectors were 0.1 s of a 1000-link start)
+        return np.zeros((len(w), 0)), float(w[0] / top)
     w, V = np.linalg.eigh(sym)
     top = max(w[-1] if w.size else 0.0, scale, 0.0)
     small = w <= MASSLESS * top
