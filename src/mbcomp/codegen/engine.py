@@ -53,7 +53,7 @@ import numpy as np
 from .graph import CodegenError
 from .c_events import LinearEvents
 from .runtime import RUNTIME_DIR, SOURCES
-from .toolchain import c_compiler, runtime_directory
+from .toolchain import c_compiler, load_library, runtime_directory
 
 __all__ = ["GLUE", "Integrator", "LinearEvents", "Mech", "DAlembertProgram", "runtime_objects", "runtime_library",
            "coordinate_map", "mech_of", "dalembert_program", "DAEProgram", "dae_program", "STATUS", "MECH_STATUS",
@@ -210,7 +210,7 @@ def runtime_library(cc, cache_dir):
                 raise CodegenError(f"the C linker failed on the runtime ({cc}): {res.stderr[-2000:]} -> fix: use "
                                    "backend='python'")
             os.replace(out, lib)
-    dll = ctypes.CDLL(lib)
+    dll = load_library(lib)
     vp, i, d = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
     dll.mbrt_mech_work_size.argtypes = [vp]
     dll.mbrt_mech_work_size.restype = ctypes.c_size_t
