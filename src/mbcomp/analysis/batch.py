@@ -66,6 +66,10 @@ BLOCK = 64
 #: how much the C threads lower their own priority (Linux nice steps): the Python thread preparing
 #: the next block keeps its core, the C threads take the rest and all of it once Python is done
 NICE = 5
+#: what the start workers add to a run's CPU time (s): the parent rebuilding each run's system,
+#: the transfer, two processes' caches -- measured 0.2 ms (numeric starts) to 0.4 ms (by the
+#: evaluation program) on the slider-crank; they pay only beyond it (:meth:`_Runner._workers_pay`)
+WORKER_COST = 4e-4
 #: the methods a batch integrates (the C engine's)
 METHODS = {"dop853": 8, "dopri5": 5}
 
@@ -475,14 +479,15 @@ class _Runner:
         """Whether worker processes make the batch faster, measured on the ``prepared`` runs
         started here and those integrated: with ``k`` cores, a start's CPU time here ``P`` and a
         run's CPU time in C ``C`` (CPU times: other processes' load does not decide), a batch
-        takes about ``max(P, (P + C) / k)`` a run with the starts here, ``(P + C) / k`` with
-        them in workers: workers when ``(k - 1) P > C`` (a closed loop's Newton closure, ~2 ms,
-        against 0.6 ms in C; not an open chain's start, 0.5 ms against 1.1 ms)."""
+        takes about ``max(P, (P + C) / k)`` a run with the starts here, ``(P + C + W) / k`` with
+        them in workers (:data:`WORKER_COST` ``W``): workers when ``(k - 1) P > C + W`` (a
+        closed loop's Newton closure, ~2 ms, against 0.6 ms in C; not the same closure by the
+        evaluation program, 0.9 ms, nor an open chain's start, 0.5 ms against 1.1 ms)."""
         done = int(np.sum(self.c_status != -1))
         k = min(self.threads, self.cores)
         if not done or k < 2:
             return False
-        return (k - 1) * (self.start_cpu - self.group_cpu) / prepared > self.times["c_cpu_time"] / done
+        return (k - 1) * (self.start_cpu - self.group_cpu) / prepared > self.times["c_cpu_time"] / done + WORKER_COST
 
     def _integrate(self, ready):
         """The C call(s) of one block (one per group of equal programs); in a worker thread."""
