@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import mbcomp
-from conftest import load_model
+from conftest import load_model, torque_pendulum
 from mbcomp.library import FixedTranslation, PointMass, Revolute, Torque, World
 
 AND = load_model("models/andrews.py")
@@ -75,16 +75,6 @@ def test_every_failed_result_keeps_time_and_stats():
     assert len(res.time) == len(res["beta"]) and res.time[-1] < 0.03
 
 
-def _pendulum():
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j = m.add("j", Revolute(phi0=0.5))
-    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", PointMass(m=1.0))
-    m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
-    return m
-
-
 @pytest.mark.parametrize("exc, says", [
     ("CodegenError('cannot load the compiled library x.so: bad ELF -> fix: delete it')",
      r"the generated program could not be used at t=0\.25\d*: cannot load the compiled library x\.so: bad ELF -> fix"),
@@ -103,7 +93,8 @@ def test_a_failure_in_mbcomps_own_code_is_not_blamed_on_a_law(monkeypatch, exc, 
     scope = {"_fun": lagrange.LagrangeIndex1.fun, "CodegenError": CodegenError}
     exec(compile(src, lagrange.__file__, "exec"), scope)
     monkeypatch.setattr(lagrange.LagrangeIndex1, "fun", scope["fun"])
-    res = mbcomp.simulate(_pendulum(), t_end=1.0, n_out=11, method="RK45", backend="numeric")
+    res = mbcomp.simulate(torque_pendulum(lambda t, phi, w: 0.0), t_end=1.0, n_out=11, method="RK45",
+                         backend="numeric")
     assert res.status == "failed"
     assert re.match(says, res.message), res.message
     assert "fix the law" not in res.message and "are kept" in res.message
