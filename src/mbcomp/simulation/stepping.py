@@ -375,7 +375,8 @@ class Budget(StepHook):
     """Ends the run when its wall time (s, from the hook's creation) or its step count (the
     integrator's steps, :meth:`Run.counters`) reaches the budget. Checked after every
     driver step: a compiled stepper's stretch (up to 16 output intervals in one C call) may
-    overshoot the budget by one stretch.
+    overshoot the budget by one stretch, a run acting on its impacts in C by up to
+    ``IMPACT_STRETCHES`` (8) of them (:mod:`mbcomp.hybrid.steppers`).
 
     Parameters
     ----------
