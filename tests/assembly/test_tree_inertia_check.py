@@ -108,3 +108,26 @@ def test_a_rowless_start_is_the_dense_start():
     np.testing.assert_array_equal(res.stats["init_iterations"], 0)
     q0 = np.array([res[n][0] for n in s.q_names])
     np.testing.assert_array_equal(q0, init.q)
+
+
+def test_the_tolerance_energy_of_a_large_system_by_the_recursive_pass_is_the_dense_ones(monkeypatch):
+    """Without the output program's terms a system of >= RECURSIVE_SPEEDS speeds weighs the
+    tolerances with f and M u from the recursive pass: the same energy, to rounding, as from
+    the dense evaluation (taken where the start's evaluation is handed in)."""
+    from mbcomp.simulation.accuracy import RECURSIVE_SPEEDS, tolerance_energy
+
+    s = chain(RECURSIVE_SPEEDS + 5)
+    q, u = start(s)
+    Y = np.array([np.concatenate((q, u)), np.concatenate((q + 0.01, 1.3 * u))])
+    t = np.array([0.0, 0.1])
+
+    def no_dense(*args, **kw):
+        raise AssertionError("the dense evaluation was asked for")
+
+    with monkeypatch.context() as mp:  # (tolerance_energy skips a point it cannot evaluate: 0 then)
+        mp.setattr(s, "evaluate", no_dense)
+        by_pass = tolerance_energy(s, t, Y, 1e-6, 1e-8)
+    dense = max(tolerance_energy(s, t[k:k + 1], Y[k:k + 1], 1e-6, 1e-8, known=s.evaluate_numeric(t[k], Y[k, :s.nq],
+                                                                                                 Y[k, s.nq:]))
+                for k in range(2))
+    assert by_pass > 0.0 and by_pass == pytest.approx(dense, rel=1e-12)
