@@ -23,7 +23,7 @@ from ..modeling.units import unit_exponents
 __all__ = ["unit_exponents", "unit_name", "output_name", "parameter_doc", "build_description", "model_description3",
            "model_description2"]
 
-RUNTIME_C = ("mbrt_rk.c", "mbrt_events.c", "mbrt_dop853.c", "mbrt_mech.c", "mbrt_linalg.c")
+RUNTIME_C = ("mbrt_rk.c", "mbrt_check.c", "mbrt_events.c", "mbrt_dop853.c", "mbrt_mech.c", "mbrt_linalg.c")
 
 
 def _version():

@@ -80,7 +80,7 @@ __all__ = ["export_fmu"]
 HERE = pathlib.Path(__file__).resolve().parent
 #: the C runtime's files the FMU carries: Co-Simulation steps with its DOP853
 RUNTIME_DIR = pathlib.Path(__file__).resolve().parent.parent / "codegen" / "runtime"
-RUNTIME = ("mbrt.h", "mbrt_rk_internal.h") + RUNTIME_C
+RUNTIME = ("mbrt.h", "mbrt_rk_internal.h", "mbrt_check.h") + RUNTIME_C
 #: Baumgarte gains (1/s) compiled into an FMU of a model with loops (as ``simulate``'s defaults)
 ALPHA = BETA = 10.0
 

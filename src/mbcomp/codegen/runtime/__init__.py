@@ -8,6 +8,9 @@ generated model code is compiled together with:
 ``mbrt_linalg.c``
     Dense LU (partial pivoting) and Cholesky factorisations and solves on
     row-major ``double`` arrays, in place.
+``mbrt_check.c``, ``mbrt_check.h``
+    What every integrator reports and checks alike: the status with its message
+    (``mbrt_finish``) and the arguments of an integration (``mbrt_check_integration``).
 ``mbrt_rk.c``, ``mbrt_rk_internal.h``
     The adaptive explicit Runge--Kutta driver: Hairer's step-size control
     with PI ("Lund") stabilisation and starting-step guess, dense output at
@@ -62,8 +65,8 @@ Examples
 --------
 >>> from mbcomp.codegen.runtime import SOURCES, RUNTIME_DIR
 >>> print(" ".join(sorted(p.name for p in SOURCES)))  # doctest: +NORMALIZE_WHITESPACE
-mbrt_dop853.c mbrt_dopri5.c mbrt_events.c mbrt_linalg.c mbrt_mech.c mbrt_radau5.c mbrt_radau5_linalg.c
-mbrt_radau5_step.c mbrt_rk.c
+mbrt_check.c mbrt_dop853.c mbrt_dopri5.c mbrt_events.c mbrt_linalg.c mbrt_mech.c mbrt_radau5.c
+mbrt_radau5_linalg.c mbrt_radau5_step.c mbrt_rk.c
 >>> (RUNTIME_DIR / "mbrt.h").is_file()
 True
 """

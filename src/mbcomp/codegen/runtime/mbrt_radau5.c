@@ -36,8 +36,8 @@
  * in stretches takes the steps of one call.
  */
 #include "mbrt_radau5_internal.h"
+#include "mbrt_check.h"
 
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -52,50 +52,15 @@ size_t mbrt_radau5_work_size(int n)
 
 size_t mbrt_radau5_iwork_size(int n) { return n <= 0 ? 0 : 2 * (size_t)n; }
 
-static int finish(mbrt_stats *st, int status, double t, const char *fmt, ...)
-{
-    va_list ap;
-    st->status = status;
-    st->t = t;
-    va_start(ap, fmt);
-    vsnprintf(st->message, sizeof st->message, fmt, ap);
-    va_end(ap);
-    return status;
-}
-
 static int check_args(mbrt_rhs_fn f, int n, double t0, const double *y0, double t_end, double rtol,
                       const double *atol, double h0, double hmax, long max_steps, const double *t_out,
                       int n_out, const double *y_out, const double *work, const int *iwork,
                       const mbrt_radau5_info *info, mbrt_stats *st)
 {
-    const int B = MBRT_BAD_ARGUMENT;
-    if (f == NULL || y0 == NULL || atol == NULL || work == NULL || iwork == NULL || info == NULL)
-        return finish(st, B, t0, "RADAU5: f, y0, atol, work, iwork and info must not be NULL.");
-    if (n <= 0)
-        return finish(st, B, t0, "RADAU5: the number of equations n=%d must be positive.", n);
-    if (!isfinite(t0) || !isfinite(t_end) || !(t_end >= t0) || !isfinite(t_end - t0))
-        return finish(st, B, t0, "RADAU5: t0=%.17g and t_end=%.17g must be finite, t_end >= t0.", t0, t_end);
-    if (!isfinite(rtol) || !(rtol >= 100.0 * DBL_EPSILON))
-        return finish(st, B, t0, "RADAU5: rtol=%g must be finite and at least 100*DBL_EPSILON.", rtol);
-    for (int i = 0; i < n; ++i) {
-        if (!isfinite(atol[i]) || atol[i] < 0.0)
-            return finish(st, B, t0, "RADAU5: atol[%d]=%g must be finite and >= 0.", i, atol[i]);
-        if (!isfinite(y0[i]))
-            return finish(st, B, t0, "RADAU5: y0[%d]=%g is not finite.", i, y0[i]);
-    }
-    if (!isfinite(h0) || h0 < 0.0 || !isfinite(hmax) || hmax < 0.0 || max_steps < 0 || n_out < 0)
-        return finish(st, B, t0, "RADAU5: h0=%g, hmax=%g, max_steps=%ld and n_out=%d must be finite and >= 0.",
-                      h0, hmax, max_steps, n_out);
-    if (n_out > 0 && (t_out == NULL || y_out == NULL))
-        return finish(st, B, t0, "RADAU5: t_out and y_out must not be NULL when n_out=%d > 0.", n_out);
-    for (int i = 0; i < n_out; ++i) {
-        if (!(t_out[i] >= t0 && t_out[i] <= t_end))
-            return finish(st, B, t0, "RADAU5: t_out[%d]=%.17g is outside [t0, t_end]=[%.17g, %.17g].", i, t_out[i],
-                          t0, t_end);
-        if (i > 0 && !(t_out[i] > t_out[i - 1]))
-            return finish(st, B, t0, "RADAU5: t_out is not strictly increasing at index %d.", i);
-    }
-    return 0;
+    if (iwork == NULL || info == NULL)
+        return mbrt_finish(st, MBRT_BAD_ARGUMENT, t0, "RADAU5: iwork and info must not be NULL.");
+    return mbrt_check_integration("RADAU5", f, n, t0, y0, t_end, rtol, atol, h0, hmax, max_steps, t_out, n_out,
+                                  y_out, work, st);
 }
 
 /* The first step: 0.01 ||y|| / ||y'|| (scaled), at least H_START, at most span and hmax. */
@@ -128,15 +93,15 @@ static int retry(R5 *S, double t, double *h, double fac)
 static int collapsed(mbrt_stats *st, int kind, double t, double h, const char *reason, int n_fail)
 {
     if (kind == 1)
-        return finish(st, MBRT_STEP_TOO_SMALL, t, "RADAU5: Newton iteration failed to converge at t=%.17g with "
+        return mbrt_finish(st, MBRT_STEP_TOO_SMALL, t, "RADAU5: Newton iteration failed to converge at t=%.17g with "
                       "h=%.3g (step size collapsed): %s (%d consecutive failed attempts)", t, h, reason, n_fail);
     if (kind == 2)
-        return finish(st, MBRT_STEP_TOO_SMALL, t, "RADAU5: step size collapsed at t=%.17g with h=%.3g: the local "
+        return mbrt_finish(st, MBRT_STEP_TOO_SMALL, t, "RADAU5: step size collapsed at t=%.17g with h=%.3g: the local "
                       "error test keeps failing (last %s; %d consecutive failed attempts)", t, h, reason, n_fail);
     if (kind == 3)
-        return finish(st, MBRT_RADAU5_SINGULAR, t, "RADAU5: the iteration matrix is singular at t=%.17g with "
+        return mbrt_finish(st, MBRT_RADAU5_SINGULAR, t, "RADAU5: the iteration matrix is singular at t=%.17g with "
                       "h=%.3g (step size collapsed): %s", t, h, reason);
-    return finish(st, MBRT_STEP_TOO_SMALL, t, "RADAU5: step size collapsed at t=%.17g: h=%.3g is below "
+    return mbrt_finish(st, MBRT_STEP_TOO_SMALL, t, "RADAU5: step size collapsed at t=%.17g: h=%.3g is below "
                   "1e-14*|t| without a failed attempt in this step (the solution blows up or is not smooth there)",
                   t, h);
 }
@@ -145,9 +110,9 @@ static int collapsed(mbrt_stats *st, int kind, double t, double h, const char *r
 static int jacobian_failed(R5 *S, mbrt_stats *st, int rc, double t)
 {
     if (rc > 0)
-        return finish(st, MBRT_RHS_FAILED, t, "RADAU5: rhs returned %d at t=%.17g (difference Jacobian).",
+        return mbrt_finish(st, MBRT_RHS_FAILED, t, "RADAU5: rhs returned %d at t=%.17g (difference Jacobian).",
                       S->rhs_rc, S->t_fail);
-    return finish(st, MBRT_NONFINITE, t, "RADAU5: rhs returned non-finite values at t=%.17g "
+    return mbrt_finish(st, MBRT_NONFINITE, t, "RADAU5: rhs returned non-finite values at t=%.17g "
                   "(difference Jacobian).", t);
 }
 
@@ -174,9 +139,9 @@ static int begin(R5 *S, mbrt_stats *st, double t0, const double *y0, double h0, 
     hd[H_VALID] = 0.0; /* valid again once the derivative is */
     hd[H_T] = t0;
     if (mbrt_r5_rhs(S, t0, S->y, S->fy) != 0)
-        return finish(st, MBRT_RHS_FAILED, t0, "RADAU5: rhs returned %d at t=%.17g.", S->rhs_rc, t0);
+        return mbrt_finish(st, MBRT_RHS_FAILED, t0, "RADAU5: rhs returned %d at t=%.17g.", S->rhs_rc, t0);
     if (!mbrt_r5_finite(n, S->fy))
-        return finish(st, MBRT_NONFINITE, t0, "RADAU5: rhs returned non-finite values at t=%.17g (initial state).",
+        return mbrt_finish(st, MBRT_NONFINITE, t0, "RADAU5: rhs returned non-finite values at t=%.17g (initial state).",
                       t0);
     hd[H_VALID] = 1.0;
     if (*h == 0.0)
@@ -197,7 +162,7 @@ static int attempt(R5 *S, mbrt_stats *st, double t, double t_end, double *h, lon
     *n_fail = 0;
     for (;;) {
         if (st->nstep >= max_steps)
-            return finish(st, MBRT_MAX_STEPS, t, "RADAU5: max_steps=%ld attempted steps were not enough; stopped "
+            return mbrt_finish(st, MBRT_MAX_STEPS, t, "RADAU5: max_steps=%ld attempted steps were not enough; stopped "
                           "at t=%.17g.", max_steps, t);
         if (*h <= 1e-14 * fabs(t) || *n_fail >= MAX_FAILURES || !(*h > 0.0))
             return collapsed(st, kind, t, *h, reason, *n_fail);
@@ -214,7 +179,7 @@ static int attempt(R5 *S, mbrt_stats *st, double t, double t_end, double *h, lon
                 S->info->nsingular++;
                 st->nreject++;
                 if (structural || ++n_sing >= MAX_SINGULAR)
-                    return finish(st, MBRT_RADAU5_SINGULAR, t, "RADAU5: the iteration matrix is singular at "
+                    return mbrt_finish(st, MBRT_RADAU5_SINGULAR, t, "RADAU5: the iteration matrix is singular at "
                                   "t=%.17g with h=%.3g: %s", t, *h, reason);
                 kind = 3;
                 ++*n_fail;
@@ -229,7 +194,7 @@ static int attempt(R5 *S, mbrt_stats *st, double t, double t_end, double *h, lon
         double fac;
         rc = mbrt_r5_newton(S, t, *h, theta, &iters, &fac, reason, sizeof reason);
         if (rc < 0)
-            return finish(st, MBRT_RHS_FAILED, t, "RADAU5: rhs returned %d at t=%.17g (a Newton iterate of the "
+            return mbrt_finish(st, MBRT_RHS_FAILED, t, "RADAU5: rhs returned %d at t=%.17g (a Newton iterate of the "
                           "step from t=%.17g).", S->rhs_rc, S->t_fail, t);
         if (rc == 0) {
             S->info->nfail_newton++;
@@ -244,7 +209,7 @@ static int attempt(R5 *S, mbrt_stats *st, double t, double t_end, double *h, lon
             S->ynew[i] = S->y[i] + S->Z[2 * (size_t)n + i];
         *err = mbrt_r5_error(S, t, *h, hd[H_FIRST] != 0.0 || *n_fail > 0, S->y);
         if (*err < 0.0)
-            return finish(st, MBRT_RHS_FAILED, t, "RADAU5: rhs returned %d at t=%.17g (the error estimate of the "
+            return mbrt_finish(st, MBRT_RHS_FAILED, t, "RADAU5: rhs returned %d at t=%.17g (the error estimate of the "
                           "step from t=%.17g).", S->rhs_rc, S->t_fail, t);
         double fs = fmin(SAFETY, SAFETY * (2 * NIT + 1) / (iters + 2 * NIT));
         double quot = fmax(1.0 / FAC_MAX, fmin(1.0 / FAC_MIN, pow(*err, 0.25) / fs));
@@ -357,7 +322,7 @@ int mbrt_radau5(mbrt_rhs_fn f, mbrt_jac_fn jac, void *ctx, int n, double t0, con
     if (iout < n_out && t_out[0] == t0)
         memcpy(y_out, S.y, nb), iout++;
     if (span == 0.0) {
-        finish(st, MBRT_OK, t0, "RADAU5: t_end equals t0, nothing to integrate.");
+        mbrt_finish(st, MBRT_OK, t0, "RADAU5: t_end equals t0, nothing to integrate.");
         goto done;
     }
     for (;;) {
@@ -378,20 +343,20 @@ int mbrt_radau5(mbrt_rhs_fn f, mbrt_jac_fn jac, void *ctx, int n, double t0, con
         hd[H_H] = h;
         hd[H_VALID] = 0.0;
         if (mbrt_r5_rhs(&S, t, S.y, S.fy) != 0) {
-            finish(st, MBRT_RHS_FAILED, t, "RADAU5: rhs returned %d at t=%.17g (the accepted step).", S.rhs_rc, t);
+            mbrt_finish(st, MBRT_RHS_FAILED, t, "RADAU5: rhs returned %d at t=%.17g (the accepted step).", S.rhs_rc, t);
             goto done;
         }
         if (!mbrt_r5_finite(n, S.fy)) {
-            finish(st, MBRT_NONFINITE, t, "RADAU5: rhs returned non-finite values at t=%.17g (the accepted step).", t);
+            mbrt_finish(st, MBRT_NONFINITE, t, "RADAU5: rhs returned non-finite values at t=%.17g (the accepted step).", t);
             goto done;
         }
         hd[H_VALID] = 1.0;
         if (last) {
-            finish(st, MBRT_OK, t, "RADAU5: reached t_end=%.17g in %ld steps.", t, st->naccept);
+            mbrt_finish(st, MBRT_OK, t, "RADAU5: reached t_end=%.17g in %ld steps.", t, st->naccept);
             goto done;
         }
         if (t_pause > t0 && t >= t_pause) {
-            finish(st, MBRT_RADAU5_PAUSED, t, "RADAU5: paused at t=%.17g (t_pause=%.17g).", t, t_pause);
+            mbrt_finish(st, MBRT_RADAU5_PAUSED, t, "RADAU5: paused at t=%.17g (t_pause=%.17g).", t, t_pause);
             goto done;
         }
     }

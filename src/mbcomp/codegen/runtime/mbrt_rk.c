@@ -21,9 +21,9 @@
  * second derivative estimated by one explicit Euler step.
  */
 #include "mbrt_rk_internal.h"
+#include "mbrt_check.h"
 
 #include <float.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -35,18 +35,6 @@ size_t mbrt_rk_work_size(const mbrt_rk_method *M, int n)
         return 0;
     /* driver: y, f0, y1, f1, ysave */
     return (size_t)(5 + M->scratch_per_n) * (size_t)n;
-}
-
-/* Records status, time and a printf-style message; returns the status. */
-static int finish(mbrt_stats *st, int status, double t, const char *fmt, ...)
-{
-    va_list ap;
-    st->status = status;
-    st->t = t;
-    va_start(ap, fmt);
-    vsnprintf(st->message, sizeof st->message, fmt, ap);
-    va_end(ap);
-    return status;
 }
 
 static int all_finite(int n, const double *v)
@@ -109,54 +97,6 @@ static int initial_step(const mbrt_rk_method *M, mbrt_rk_state *S, double hmax, 
     return 0;
 }
 
-/* Checks the arguments; returns 0 or MBRT_BAD_ARGUMENT with a message. */
-static int check_args(mbrt_rhs_fn f, int n, double t0, const double *y0, double t_end,
-                      double rtol, const double *atol, double h0, double hmax,
-                      long max_steps, const double *t_out, int n_out, const double *y_out,
-                      const double *work, mbrt_stats *st)
-{
-    const int B = MBRT_BAD_ARGUMENT;
-    if (f == NULL)
-        return finish(st, B, t0, "the rhs function pointer is NULL.");
-    if (n <= 0)
-        return finish(st, B, t0, "the number of equations n=%d must be positive.", n);
-    if (y0 == NULL || atol == NULL || work == NULL)
-        return finish(st, B, t0, "y0, atol and work must not be NULL.");
-    if (!isfinite(t0) || !isfinite(t_end) || !isfinite(t_end - t0))
-        return finish(st, B, t0, "t0=%g and t_end=%g must be finite.", t0, t_end);
-    if (t_end < t0)
-        return finish(st, B, t0, "t_end=%.17g is before t0=%.17g (only forward integration).",
-                      t_end, t0);
-    if (!isfinite(rtol) || !(rtol >= 100.0 * DBL_EPSILON))
-        return finish(st, B, t0, "rtol=%g must be finite and at least 100*DBL_EPSILON=%.3g.",
-                      rtol, 100.0 * DBL_EPSILON);
-    for (int i = 0; i < n; ++i) {
-        if (!isfinite(atol[i]) || atol[i] < 0.0)
-            return finish(st, B, t0, "atol[%d]=%g must be finite and >= 0.", i, atol[i]);
-        if (!isfinite(y0[i]))
-            return finish(st, B, t0, "y0[%d]=%g is not finite.", i, y0[i]);
-    }
-    if (!isfinite(h0) || h0 < 0.0)
-        return finish(st, B, t0, "h0=%g must be finite and >= 0 (0 = automatic).", h0);
-    if (!isfinite(hmax) || hmax < 0.0)
-        return finish(st, B, t0, "hmax=%g must be finite and >= 0 (0 = t_end - t0).", hmax);
-    if (max_steps < 0)
-        return finish(st, B, t0, "max_steps=%ld must be >= 0 (0 = default).", max_steps);
-    if (n_out < 0)
-        return finish(st, B, t0, "n_out=%d must be >= 0.", n_out);
-    if (n_out > 0 && (t_out == NULL || y_out == NULL))
-        return finish(st, B, t0, "t_out and y_out must not be NULL when n_out=%d > 0.", n_out);
-    for (int i = 0; i < n_out; ++i) {
-        if (!(t_out[i] >= t0 && t_out[i] <= t_end)) /* also rejects NaN */
-            return finish(st, B, t0, "t_out[%d]=%.17g is outside [t0, t_end]=[%.17g, %.17g].",
-                          i, t_out[i], t0, t_end);
-        if (i > 0 && !(t_out[i] > t_out[i - 1]))
-            return finish(st, B, t0, "t_out is not strictly increasing at index %d (%.17g after %.17g).",
-                          i, t_out[i], t_out[i - 1]);
-    }
-    return 0;
-}
-
 int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_step,
                       void *ctx, int n, double t0, const double *y0, double t_end,
                       double rtol, const double *atol, double h0, double hmax,
@@ -172,12 +112,12 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
     if (n_written)
         *n_written = 0;
 
-    if (check_args(f, n, t0, y0, t_end, rtol, atol, h0, hmax, max_steps, t_out, n_out, y_out,
-                   work, st))
+    if (mbrt_check_integration(M->name, f, n, t0, y0, t_end, rtol, atol, h0, hmax, max_steps, t_out, n_out,
+                               y_out, work, st))
         return st->status;
     if (ev != NULL && (ev->g == NULL || ev->n_ev < 1 || ev->direction == NULL || ev->work == NULL ||
                        ev->y_event == NULL || !(ev->tol > 0.0) || ev->fresh >= ev->n_ev))
-        return finish(st, MBRT_BAD_ARGUMENT, t0, "%s: the events are incomplete (a function, n_ev >= 1, "
+        return mbrt_finish(st, MBRT_BAD_ARGUMENT, t0, "%s: the events are incomplete (a function, n_ev >= 1, "
                       "directions, work, y_event, tol > 0 and fresh < n_ev are needed).", M->name);
     int fresh = ev != NULL ? ev->fresh : -1;
 
@@ -213,7 +153,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
         iout++;
     }
     if (span == 0.0) {
-        finish(st, MBRT_OK, t0, "%s: t_end equals t0, nothing to integrate.", M->name);
+        mbrt_finish(st, MBRT_OK, t0, "%s: t_end equals t0, nothing to integrate.", M->name);
         goto done;
     }
 
@@ -221,18 +161,18 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
     if (ev != NULL) {
         rc = mbrt_events_begin(ev, t0, S.y);
         if (rc != 0) {
-            finish(st, MBRT_RHS_FAILED, t0, "%s: the event function returned %d at t=%.17g.", M->name, rc, t0);
+            mbrt_finish(st, MBRT_RHS_FAILED, t0, "%s: the event function returned %d at t=%.17g.", M->name, rc, t0);
             goto done;
         }
     }
     S.nfev++;
     rc = f(ctx, t0, S.y, S.f0);
     if (rc != 0) {
-        finish(st, MBRT_RHS_FAILED, t0, "%s: rhs returned %d at t=%.17g.", M->name, rc, t0);
+        mbrt_finish(st, MBRT_RHS_FAILED, t0, "%s: rhs returned %d at t=%.17g.", M->name, rc, t0);
         goto done;
     }
     if (!all_finite(n, S.f0)) {
-        finish(st, MBRT_NONFINITE, t0, "%s: rhs returned a non-finite value at t=%.17g.",
+        mbrt_finish(st, MBRT_NONFINITE, t0, "%s: rhs returned a non-finite value at t=%.17g.",
                M->name, t0);
         goto done;
     }
@@ -243,7 +183,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
     } else {
         rc = initial_step(M, &S, hmax, &h);
         if (rc != 0) {
-            finish(st, MBRT_RHS_FAILED, t0, "%s: rhs returned %d at t=%.17g.",
+            mbrt_finish(st, MBRT_RHS_FAILED, t0, "%s: rhs returned %d at t=%.17g.",
                    M->name, rc, S.t_fail);
             goto done;
         }
@@ -256,14 +196,14 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
     double t = t0;
     for (;;) {
         if (st->nstep >= max_steps) {
-            finish(st, MBRT_MAX_STEPS, t, "%s: max_steps=%ld steps were not enough; stopped at t=%.17g.",
+            mbrt_finish(st, MBRT_MAX_STEPS, t, "%s: max_steps=%ld steps were not enough; stopped at t=%.17g.",
                    M->name, max_steps, t);
             goto done;
         }
         /* round-off limit: h must change t by more than a few ulps of t (of
          * the span when t is near 0); also catches h underflowing */
         if (!(fabs(h) > 10.0 * DBL_EPSILON * fmax(fabs(t), span))) {
-            finish(st, MBRT_STEP_TOO_SMALL, t, "%s: step size %.3g too small at t=%.17g%s.",
+            mbrt_finish(st, MBRT_STEP_TOO_SMALL, t, "%s: step size %.3g too small at t=%.17g%s.",
                    M->name, h, t,
                    last_nonfinite ? " (trial steps gave non-finite values)" : "");
             goto done;
@@ -279,7 +219,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
         double err;
         rc = M->trial(&S, &err);
         if (rc != 0) {
-            finish(st, MBRT_RHS_FAILED, t, "%s: rhs returned %d at t=%.17g (in a step from t=%.17g).",
+            mbrt_finish(st, MBRT_RHS_FAILED, t, "%s: rhs returned %d at t=%.17g (in a step from t=%.17g).",
                    M->name, rc, S.t_fail, t);
             goto done;
         }
@@ -318,12 +258,12 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
             S.t = told;
             hit = mbrt_events_step(M, &S, ev, t, &prepared, &fresh);
             if (hit == MBRT_EVENTS_G_FAILED) {
-                finish(st, MBRT_RHS_FAILED, told, "%s: an event function failed (a nonzero return or a "
+                mbrt_finish(st, MBRT_RHS_FAILED, told, "%s: an event function failed (a nonzero return or a "
                        "non-finite value) in the step from t=%.17g.", M->name, told);
                 goto done;
             }
             if (hit == MBRT_EVENTS_RHS_FAILED) {
-                finish(st, MBRT_RHS_FAILED, told, "%s: rhs failed at t=%.17g (dense output of the step from "
+                mbrt_finish(st, MBRT_RHS_FAILED, told, "%s: rhs failed at t=%.17g (dense output of the step from "
                        "t=%.17g).", M->name, S.t_fail, told);
                 goto done;
             }
@@ -340,7 +280,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
                 if (!prepared) {
                     rc = M->dense_prepare(&S);
                     if (rc != 0) {
-                        finish(st, MBRT_RHS_FAILED, told,
+                        mbrt_finish(st, MBRT_RHS_FAILED, told,
                                "%s: rhs returned %d at t=%.17g (dense output of the step from t=%.17g).",
                                M->name, rc, S.t_fail, told);
                         goto done;
@@ -352,7 +292,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
             iout++;
         }
         if (hit) {
-            finish(st, MBRT_EVENT, t_stop, "%s: event %d at t=%.17g.", M->name, ev->which, t_stop);
+            mbrt_finish(st, MBRT_EVENT, t_stop, "%s: event %d at t=%.17g.", M->name, ev->which, t_stop);
             goto done;
         }
 
@@ -363,12 +303,12 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
             memcpy(ysave, S.y, nb);
             rc = on_step(ctx, t, S.y);
             if (rc != 0) {
-                finish(st, MBRT_STOPPED, t, "%s: step callback returned %d at t=%.17g.",
+                mbrt_finish(st, MBRT_STOPPED, t, "%s: step callback returned %d at t=%.17g.",
                        M->name, rc, t);
                 goto done;
             }
             if (!all_finite(n, S.y)) {
-                finish(st, MBRT_NONFINITE, t, "%s: step callback made the state non-finite at t=%.17g.",
+                mbrt_finish(st, MBRT_NONFINITE, t, "%s: step callback made the state non-finite at t=%.17g.",
                        M->name, t);
                 goto done;
             }
@@ -376,18 +316,18 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
                 S.nfev++;
                 rc = f(ctx, t, S.y, S.f0);
                 if (rc != 0) {
-                    finish(st, MBRT_RHS_FAILED, t, "%s: rhs returned %d at t=%.17g.", M->name, rc, t);
+                    mbrt_finish(st, MBRT_RHS_FAILED, t, "%s: rhs returned %d at t=%.17g.", M->name, rc, t);
                     goto done;
                 }
                 if (!all_finite(n, S.f0)) {
-                    finish(st, MBRT_NONFINITE, t, "%s: rhs returned a non-finite value at t=%.17g.",
+                    mbrt_finish(st, MBRT_NONFINITE, t, "%s: rhs returned a non-finite value at t=%.17g.",
                            M->name, t);
                     goto done;
                 }
             }
         }
         if (last) {
-            finish(st, MBRT_OK, t, "%s: reached t_end=%.17g in %ld steps.", M->name, t,
+            mbrt_finish(st, MBRT_OK, t, "%s: reached t_end=%.17g in %ld steps.", M->name, t,
                    st->naccept);
             goto done;
         }
@@ -395,7 +335,7 @@ int mbrt_rk_integrate(const mbrt_rk_method *M, mbrt_rhs_fn f, mbrt_step_fn on_st
             if (S.hlamb > M->stiff_limit) {
                 calm_run = 0;
                 if (++stiff_run >= stiff_steps) {
-                    finish(st, MBRT_STIFF, t,
+                    mbrt_finish(st, MBRT_STIFF, t,
                            "%s: the problem became stiff at t=%.17g (|h lambda| = %.3g above %.3g "
                            "for %d steps).", M->name, t, S.hlamb, M->stiff_limit, stiff_run);
                     goto done;
