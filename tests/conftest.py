@@ -53,6 +53,24 @@ def torque_pendulum(law):
     return m
 
 
+def stop_pendulum(limits=(0.0, 3.0), e=0.7, phi0=0.8, joint=None):
+    """A 1 kg point mass on a 1 m rod on a hinge (``joint``: Revolute by default) released at
+    ``phi0`` (rad) from rest under g = 9.81 along -y, with stops at ``limits`` (rad; None: no
+    stops) of restitution ``e``: the model of the events-in-C tests and bench/events.py."""
+    from mbcomp.library import FixedTranslation, PointMass, Revolute, World
+
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, -9.81, 0)))
+    lim = dict(limits=limits, restitution=e) if limits else {}
+    j = m.add("hinge", (joint or Revolute)(phi0=phi0, w0=0.0, **lim))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=1.0))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    return m
+
+
 def turntable(tau):
     """A 2 kg point mass on a 1 m rod turning about a vertical hinge ``j`` (no gravity: 2 kg m^2
     about the axis), driven by a torque ``tau`` (component ``"motor"``): ``2 phi'' = tau``."""

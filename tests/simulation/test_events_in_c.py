@@ -9,8 +9,9 @@ import pytest
 from scipy.special import ellipk
 
 import mbcomp
+from conftest import stop_pendulum
 from mbcomp.codegen import c_compiler, compile_system
-from mbcomp.library import FixedTranslation, PointMass, Prismatic, Revolute, RigidBody, World
+from mbcomp.library import PointMass, Prismatic, Revolute, RigidBody, World
 from mbcomp.library.joints import StopModes
 from mbcomp.modeling.events import EventRow
 
@@ -31,17 +32,7 @@ def rotor(e=0.8, w0=1.0, limits=(-0.5, 0.5)):
     return m
 
 
-def pendulum(limits=(0.0, 3.0), e=0.7, phi0=0.8, joint=Revolute):
-    m = mbcomp.Model()
-    w = m.add("world", World(g=(0, -G, 0)))
-    lim = dict(limits=limits, restitution=e) if limits else {}
-    j = m.add("hinge", joint(phi0=phi0, w0=0.0, **lim))
-    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", PointMass(m=1.0))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    return m
+pendulum = stop_pendulum  # tests/conftest.py
 
 
 def faller(v0=1.0):

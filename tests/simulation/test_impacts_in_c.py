@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import mbcomp
+from conftest import stop_pendulum
 from mbcomp.codegen import c_compiler
 from mbcomp.errors import ModelError
 from mbcomp.hybrid import steppers
@@ -31,18 +32,6 @@ def drop(e=0.5, h=1.0, mass=2.0, hi=5.0):
     b = m.add("b", PointMass(m=mass))
     m.connect(w.frame_b, s.frame_a)
     m.connect(s.frame_b, b.frame_a)
-    return m
-
-
-def pendulum(e=0.7, phi0=0.8):
-    m = mbcomp.Model()
-    w = m.add("world", World(g=(0, -G, 0)))
-    j = m.add("hinge", Revolute(phi0=phi0, w0=0.0, limits=(0.0, 3.0), restitution=e))
-    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", PointMass(m=1.0))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
     return m
 
 
@@ -110,7 +99,7 @@ def assert_same_run(c, py, tol=1e-7):
 @pytest.mark.parametrize("method", ["dop853", "dopri5", "auto"])
 @pytest.mark.parametrize("case", ["pendulum", "rotor", "drop", "chain"])
 def test_c_actions_agree_with_the_python_actions(monkeypatch, case, method):
-    build, t_end = {"pendulum": (pendulum, 5.0), "rotor": (rotor, 6.0), "drop": (lambda: drop(e=0.8), 2.5),
+    build, t_end = {"pendulum": (stop_pendulum, 5.0), "rotor": (rotor, 6.0), "drop": (lambda: drop(e=0.8), 2.5),
                     "chain": (chain, 3.0)}[case]
     c, py = both(monkeypatch, build, t_end=t_end, method=method, rtol=1e-10, atol=1e-12, n_out=201)
     assert len([x for x in py.events if x.kind == "impact"]) >= 3
