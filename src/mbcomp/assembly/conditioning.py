@@ -131,14 +131,7 @@ def check_inertia(system, ev):
     # no rows: N = I and N^T M N is M itself (a finite float M: the products add exact zeros)
     plain = not C.size and isinstance(M, np.ndarray) and M.dtype.kind == "f" and np.isfinite(M).all()
     Mr = M if plain else N.T @ M @ N
-    Z, ratio = directions(Mr, moving_scale(system, ev.jets))
-    if Z.shape[1]:
-        raise _massless(system, N @ Z, ev.M)
-    if ratio is None:
-        return []
-    note = _ill_conditioned(system, ratio)
-    warnings.warn(f"mbcomp: {note}", RuntimeWarning, stacklevel=3)
-    return [note]
+    return _decided(system, Mr, moving_scale(system, ev.jets), N)
 
 
 def check_tree_inertia(system, t, q, u):
@@ -173,13 +166,20 @@ def check_tree_inertia(system, t, q, u):
         return []
     tp = tree_pass(system, t, q, u, forces=False)
     M = mass_matrix(tp, system.nu)
-    Z, ratio = directions(M, tree_moving_scale(system, tp))
+    return _decided(system, M, tree_moving_scale(system, tp))
+
+
+def _decided(system, Mr, scale, N=None):
+    """What :func:`check_inertia` says of the admissible motions' mass matrix ``Mr`` (speeds
+    ``N`` times its coordinates; None: the speeds themselves): raises on massless directions,
+    warns and returns the note on an extreme ratio, else ``[]``."""
+    Z, ratio = directions(Mr, scale)
     if Z.shape[1]:
-        raise _massless(system, Z, M)
+        raise _massless(system, Z if N is None else N @ Z)
     if ratio is None:
         return []
     note = _ill_conditioned(system, ratio)
-    warnings.warn(f"mbcomp: {note}", RuntimeWarning, stacklevel=3)
+    warnings.warn(f"mbcomp: {note}", RuntimeWarning, stacklevel=4)  # the caller of initialize's caller
     return [note]
 
 
@@ -243,7 +243,7 @@ def moving_scale(system, jets):
     return total
 
 
-def _massless(system, modes, M):
+def _massless(system, modes):
     """One problem per massless direction (columns of ``modes``, speeds coordinates)."""
     k = modes.shape[1]
     _, _, piv = sla.qr(modes.T, pivoting=True, mode="economic")
