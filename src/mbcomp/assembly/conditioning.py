@@ -39,7 +39,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import InitializationError, Problem
-from .recursive import ancestry, mass_matrix, tree_pass
+from .recursive import ancestry, mass_matrix, speed_columns, tree_pass
 
 __all__ = ["MASSLESS", "ILL_CONDITIONED", "directions", "check_inertia", "check_tree_inertia", "moving_scale",
            "tree_moving_scale"]
@@ -165,6 +165,8 @@ def check_tree_inertia(system, t, q, u):
     if system.nu == 0:
         return []
     tp = tree_pass(system, t, q, u, forces=False)
+    if speed_columns(tp, system.nu) is None:  # a speed no tree joint has: the dense way
+        return check_inertia(system, system.evaluate(t, q, u))
     M = mass_matrix(tp, system.nu)
     return _decided(system, M, tree_moving_scale(system, tp))
 
@@ -194,10 +196,7 @@ def tree_moving_scale(system, tp):
     bodies = [b for b in bodies if b[3] >= 0]
     if not bodies:
         return 0.0
-    S = np.zeros((6, nu))
-    link = np.empty(nu, int)
-    for j, c in enumerate(links.cols):
-        S[:, c], link[c] = tp.S[j], j
+    S, link = speed_columns(tp, nu)
     w, v = S[:3], S[3:]
     m, tr, C = np.empty(len(bodies)), np.empty(len(bodies)), np.empty((len(bodies), 3))
     blink = np.empty(len(bodies), int)

@@ -75,7 +75,7 @@ from .pivots import PIVOT_TOL, Pivot, SingularTree, ball_pivot, chol_solve, chol
 from .topology import ROOT
 from ..geometry.kinematics import cross, skew
 
-__all__ = ["SingularTree", "tree_links", "tree_pass", "tree_evaluation", "articulated", "ancestry", "mass_matrix",
+__all__ = ["SingularTree", "tree_links", "tree_pass", "tree_evaluation", "articulated", "ancestry", "speed_columns", "mass_matrix",
            "tree_solve", "constraint_rows", "lagrange_accelerations", "lagrange_solution", "PIVOT_TOL"]
 
 #: ... and for the constraint rows' ``A M^-1 A^T``, at or below ``ROWS_PIVOT_TOL``: the rows
@@ -266,6 +266,23 @@ def ancestry(links):
     return A
 
 
+def speed_columns(tp, nu):
+    """``(S, link)``: every link's motion subspace at its speeds' columns (6 x nu, numbers) and
+    each column's link (nu,), or None when the links' columns are not the ``nu`` speeds each
+    once (a speed no tree joint has) or the pass is traced."""
+    links = tp.links
+    if tp.dt == object or not links.n:
+        return None
+    cols = [np.arange(nu)[c] for c in links.cols]
+    order = np.concatenate(cols)
+    if order.size != nu or not np.array_equal(np.sort(order), np.arange(nu)):
+        return None
+    S, link = np.zeros((6, nu)), np.empty(nu, int)
+    for j, c in enumerate(cols):
+        S[:, c], link[c] = tp.S[j], j
+    return S, link
+
+
 def mass_matrix(tp, nu):
     """``M`` by the composite-rigid-body algorithm: ``M[i, j] = S_i^T I^C_j S_j`` for ``i`` an
     ancestor of (or equal to) ``j``, zero between links on different branches. On numbers,
@@ -273,20 +290,17 @@ def mass_matrix(tp, nu):
     (mirrored below the links' own blocks): O(N^2) products in BLAS instead of a Python loop
     over the ancestor pairs (0.5 s at N = 1000)."""
     links = tp.links
-    if tp.dt != object and links.n:
-        cols = [np.arange(nu)[c] for c in links.cols]
-        order = np.concatenate(cols)
-        if order.size == nu and np.array_equal(np.sort(order), np.arange(nu)):
-            IC = _summed(links, tp.I)
-            S = np.zeros((6, nu))
-            F = np.zeros((6, nu))
-            link = np.empty(nu, int)
-            for j, c in enumerate(cols):
-                S[:, c], F[:, c], link[c] = tp.S[j], IC[j] @ tp.S[j], j
-            A = ancestry(links)[np.ix_(link, link)]
-            G = np.where(A, S.T @ F, 0.0)
-            own = link[:, None] == link[None, :]
-            return G + np.where(own, 0.0, G).T
+    columns = speed_columns(tp, nu)
+    if columns is not None:
+        S, link = columns
+        IC = _summed(links, tp.I)
+        F = np.zeros((6, nu))
+        for j, c in enumerate(links.cols):
+            F[:, c] = IC[j] @ tp.S[j]
+        A = ancestry(links)[np.ix_(link, link)]
+        G = np.where(A, S.T @ F, 0.0)
+        own = link[:, None] == link[None, :]
+        return G + np.where(own, 0.0, G).T
     M = np.zeros((nu, nu), tp.dt)
     for j, IC in enumerate(_summed(links, tp.I)):
         F = IC @ tp.S[j]
