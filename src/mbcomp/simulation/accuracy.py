@@ -102,13 +102,14 @@ def tolerance_energy(system, t, Y, rtol, atol, known=None, terms=None):
         if not (np.isfinite(q).all() and np.isfinite(u).all()):
             continue
         try:
+            at_start = _at(known, t[k], q, u)
             if terms is not None and terms[2][k]:
                 f, p = np.abs(terms[0][k]), np.abs(terms[1][k])
-            elif not _at(known, t[k], q, u) and nu >= RECURSIVE_SPEEDS:  # O(N): no dense M
+            elif not at_start and nu >= RECURSIVE_SPEEDS:  # O(N): no dense M
                 tp = tree_pass(system, t[k], q, u)
                 f, p = np.abs(generalized_forces(tp, nu)), np.abs(generalized_momenta(tp, u, nu))
             else:
-                ev = known if _at(known, t[k], q, u) else system.evaluate(t[k], q, u)
+                ev = known if at_start else system.evaluate(t[k], q, u)
                 f, p = np.abs(np.asarray(ev.f, float)), np.abs(np.asarray(ev.M, float) @ u)
         except Exception:  # noqa: BLE001 - a state the mechanism cannot evaluate adds nothing here
             continue
