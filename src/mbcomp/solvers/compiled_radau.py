@@ -96,22 +96,20 @@ class RadauEngine:
     ----------
     integrator : mbcomp.codegen.engine.Integrator
         The compiled engine of the Lagrange right-hand side (its program ``bound``, gains
-        ``d``); its library links the runtime.
+        ``d``; ``radau_library()``: the runtime's RADAU5, a library of its own).
     jacobian : mbcomp.codegen.jacobian.BoundJacobian or None
         The exact Jacobian program (C backend) of the same system; None: forward differences
         in C.
 
     Raises
     ------
-    ValueError
-        When the library has no ``mbrt_radau5`` (a program built before the runtime had it).
+    mbcomp.codegen.graph.CodegenError
+        When RADAU5 cannot be compiled or loaded.
     """
 
     def __init__(self, integrator, jacobian=None):
         bound = integrator.bound
-        dll = bound.code.dll
-        if not hasattr(dll, "mbrt_radau5"):
-            raise ValueError("the compiled program's library has no mbrt_radau5 (built by an older runtime)")
+        dll = integrator.radau_library()  # RADAU5 alone, built at its first use; the program by pointers
         self.fn = _signature(dll)
         self.dense_fn = dll.mbrt_radau5_dense
         self.n = n = bound.nq + bound.nu
@@ -122,7 +120,7 @@ class RadauEngine:
             jfun = ctypes.cast(jacobian.code.loaded.cfun, ctypes.c_void_p).value
         self.jacobian = jacobian if jfun else None
         a = jacobian.addresses if jfun else (None,) * 7
-        self.ctx = _ProgODE(ctypes.cast(dll.mbcomp_fun, ctypes.c_void_p).value, self.gains.ctypes.data,
+        self.ctx = _ProgODE(ctypes.cast(bound.code.dll.mbcomp_fun, ctypes.c_void_p).value, self.gains.ctypes.data,
                             bound.hbuf.ctypes.data, bound.pbuf.ctypes.data, bound.wbuf.ctypes.data,
                             jfun, a[2], a[3], a[4], a[5], bound.nq)
         self._keep = bound  # the buffers the context points into
