@@ -28,7 +28,13 @@ The mbcomp jobs run with the programs' compile cache ``$MBCOMP_CACHE`` in one of
   this benchmark's, filled by the warm-up) -- a version of mbcomp keeping its runtime in the
   programs' cache compiles it here too;
 * **first run**: nothing built anywhere (a fresh ``$MBCOMP_CACHE``, ``$MBCOMP_RUNTIME`` and
-  ``$HOME``): a machine's first run, where the C compiler runs for the runtime as well;
+  ``$HOME``) but what the install built: a machine's first run after ``pip install``, whose
+  build step compiled the runtime's objects into the package (``setup.py``,
+  ``mbcomp/codegen/prebuilt``; an editable install made before that step has none: install
+  again, ``pip install -e .``); the run copies them, and compiles the thin call's extension;
+* **not installed**: the first run without the install's objects (``MBCOMP_PREBUILT=""``):
+  a machine where the install could not compile them (no compiler then, a wheel built for
+  another one), where the C compiler runs for the runtime as well;
 
 Rounds alternate the jobs (round-robin), the figures are medians over ``--rounds``; wall
 seconds (``time.perf_counter`` around the child) and CPU seconds (the child's and its
@@ -170,10 +176,13 @@ class Env:
             env["MBCOMP_CACHE"] = self.warm
         elif mode in ("new model", "cold cache"):
             env["MBCOMP_CACHE"] = self.fresh(seeded=mode == "new model")
-        elif mode == "first run":  # nothing built anywhere: the caches and the home directory new
+        elif mode in ("first run", "not installed"):  # the caches and the home directory new
             env["MBCOMP_CACHE"], env["MBCOMP_RUNTIME"], env["HOME"] = self.fresh(), self.fresh(), self.fresh()
+            if mode == "not installed":  # nor the install's objects of the runtime
+                env["MBCOMP_PREBUILT"] = ""
         elif mode is not None:
-            raise ValueError(f"unknown cache mode {mode!r}: give warm, 'new model', 'cold cache' or 'first run'")
+            raise ValueError(f"unknown cache mode {mode!r}: give warm, 'new model', 'cold cache', 'first run' or "
+                             "'not installed'")
         return env
 
     def close(self):
@@ -223,14 +232,14 @@ def measure(env, jobs, modes, rounds, baseline=None):
 def print_table(table, rounds):
     peer = next((v for (job, _), v in table.items() if job == "pinocchio"), None)
     print(f"\nfresh process, whole job, median of {rounds} rounds (ratios: / Pinocchio's fresh process)")
-    head = f"{'job':<22}{'cache':<12}{'wall s':>8}{'ratio':>8}{'CPU s':>8}{'ratio':>8}" \
+    head = f"{'job':<22}{'cache':<14}{'wall s':>8}{'ratio':>8}{'CPU s':>8}{'ratio':>8}" \
            f"{'import s':>10}{'build s':>9}{'run s':>8}{'nfev':>8}"
     print(head)
     print("-" * len(head))
     for (job, mode), v in table.items():
         rw = f"{v['wall'] / peer['wall']:.2f}x" if peer else "-"
         rc = f"{v['cpu'] / peer['cpu']:.2f}x" if peer else "-"
-        print(f"{job:<22}{mode or '-':<12}{v['wall']:8.3f}{rw:>8}{v['cpu']:8.3f}{rc:>8}"
+        print(f"{job:<22}{mode or '-':<14}{v['wall']:8.3f}{rw:>8}{v['cpu']:8.3f}{rc:>8}"
               f"{v['import_s']:10.3f}{v['build_s']:9.3f}{v['run_s']:8.3f}{v['nfev']:8.0f}")
 
 
@@ -301,10 +310,10 @@ def breakdown(env, modes):
     code = _TIMELINE.format(path=os.path.join(ROOT, "models", "slider_crank.py"), t_end=T_END, rtol=RTOL, atol=ATOL)
     cols = {mode: run_child(code, env.of(mode))[2] for mode in modes}
     print("\nwhere the showcase's fresh process spends its time (wall s, timed inside the child, one run each)")
-    print(f"{'stage':<48}" + "".join(f"{m:>12}" for m in cols))
+    print(f"{'stage':<48}" + "".join(f"{m:>14}" for m in cols))
     for label, key, minus in PHASES:
         vals = [rec.get(key, 0.0) - sum(rec.get(k, 0.0) for k in minus) for rec in cols.values()]
-        print(f"{label:<48}" + "".join(f"{v:12.3f}" for v in vals))
+        print(f"{label:<48}" + "".join(f"{v:14.3f}" for v in vals))
 
 
 def import_costs(env, top=12):
@@ -339,8 +348,9 @@ def runtime_sources():
             if name.endswith((".c", ".h")):
                 with open(os.path.join(d, name), "rb") as fh:
                     h.update(fh.read())
-    with open(os.path.join(ROOT, "src", "mbcomp", "codegen", "engine.py"), "rb") as fh:
-        h.update(fh.read())
+    for name in ("engine.py", "runtime_build.py"):
+        with open(os.path.join(ROOT, "src", "mbcomp", "codegen", name), "rb") as fh:
+            h.update(fh.read())
     return h.hexdigest()
 
 
@@ -349,7 +359,7 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--jobs", nargs="+", default=["showcase", "pendulum", "pinocchio"],
                     choices=["showcase", "pendulum", "pinocchio"])
-    ap.add_argument("--modes", nargs="+", default=["warm", "new model", "cold cache", "first run"])
+    ap.add_argument("--modes", nargs="+", default=["warm", "new model", "cold cache", "first run", "not installed"])
     ap.add_argument("--no-bytecode", action="store_true", help="keep this environment's PYTHONDONTWRITEBYTECODE")
     ap.add_argument("--no-breakdown", action="store_true")
     ap.add_argument("--keep", action="store_true", help="keep the temporary caches")
@@ -361,6 +371,10 @@ def main(argv=None):
     try:
         print(f"cold start: {os.cpu_count()} processors, Python {sys.version.split()[0]}, bytecode "
               f"{'not cached (PYTHONDONTWRITEBYTECODE)' if a.no_bytecode else 'cached'}; caches under {env.tmp}")
+        pre = os.path.join(ROOT, "src", "mbcomp", "codegen", "prebuilt")
+        if "first run" in a.modes and not (os.path.isdir(pre) and os.listdir(pre)):
+            print(f"note: no runtime built at install in {pre} (an editable install older than setup.py's "
+                  "build step: run pip install -e . again): 'first run' is 'not installed'")
         before = runtime_sources()
         table = measure(env, a.jobs, a.modes, a.rounds, a.baseline)
         print_table(table, a.rounds)

@@ -80,8 +80,10 @@ def _in_thread(fn, *args):
 
 def prepare_runtime(cache_dir=None):
     """Start building what every C program of this machine shares, if it is not built: the
-    runtime's objects (:func:`~mbcomp.codegen.engine.runtime_objects`: the integrators, ~0.65 s
-    of the compiler) and the thin call's extension (:func:`~mbcomp.codegen.thin.extension`),
+    runtime's core objects (:func:`~mbcomp.codegen.engine.runtime_objects`: the explicit
+    integrators, events, mechanics kernels, ~0.8 s of gcc, copied instead from what the install
+    built where it did: :mod:`~mbcomp.codegen.runtime_build`; RADAU5 is built at its first use)
+    and the thin call's extension (:func:`~mbcomp.codegen.thin.extension`),
     each on a thread of its own, once per process and directory. They go to
     :func:`~mbcomp.codegen.toolchain.runtime_directory` (``$MBCOMP_RUNTIME``, else
     ``~/.cache/mbcomp``), not into each programs' cache: built once per machine, linked by the

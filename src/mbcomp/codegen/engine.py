@@ -13,8 +13,10 @@ model's evaluation program it projects ``[q, u]`` onto the constraint manifold a
 accepted step (``mbrt_project``, the steps of
 :meth:`mbcomp.formulations.LagrangeIndex1.project`); the outputs are the dense output of the
 unprojected steps, as the Python driver's, which projects them when it keeps them. The
-runtime is compiled once per machine and cached beside the programs
-(:func:`runtime_objects`).
+runtime is compiled once per machine (or copied from what the install built) into the
+machine's runtime directory (:func:`runtime_objects`, :mod:`~mbcomp.codegen.runtime_build`):
+its core, which every such library links, and RADAU5 apart, a library of its own built at a
+run's first radau5 step in C (:func:`radau_library`).
 
 The mechanics kernels need only the evaluation program, which lives in another library than
 ``mbcomp_fun`` (and exists with drives too): they reach it through function pointers

@@ -61,7 +61,7 @@ class RuntimeBuildError(RuntimeError):
     """The C compiler failed on one of the runtime's sources (``name``: which; ``stderr``)."""
 
     def __init__(self, name, stderr):
-        super().__init__(f"the C compiler failed on the runtime ({name}): {stderr[-2000:]}")
+        super().__init__(f"the C compiler failed on the runtime ({name}): {stderr[-2000:].strip()}")
         self.name, self.stderr = name, stderr
 
 

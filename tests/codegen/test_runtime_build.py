@@ -1,0 +1,112 @@
+"""How the C runtime's objects come to be (``codegen/runtime_build.py``, issue 32 item 7): a
+machine's first run of the default path compiles no RADAU5 (a library of its own, built at the
+first radau5 step in C, stepping the same as before); objects an install built are copied, not
+compiled again, and only under the key a run computes; an install never fails for the runtime."""
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import mbcomp
+from mbcomp.codegen import c_compiler
+from mbcomp.codegen import runtime_build
+from mbcomp.codegen.engine import runtime_objects
+
+pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
+
+
+def _pendulum():
+    m = mbcomp.Model()
+    w = m.add("world", mbcomp.library.World())
+    j = m.add("j", mbcomp.library.Revolute(phi0=0.5))
+    rod = m.add("rod", mbcomp.library.FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", mbcomp.library.PointMass(m=1.0))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    return m
+
+
+def _radau_files(d):
+    return sorted(f for f in os.listdir(d) if "radau5" in f)
+
+
+def test_the_default_path_builds_no_radau_and_radau_builds_its_own_library(tmp_path, monkeypatch):
+    """A run by the default method in a new runtime directory compiles the core only; a radau5
+    run then builds RADAU5's three objects and its library there, steps in C, and agrees with
+    the default run (both to their tolerance of the closed-loop-free pendulum's swing)."""
+    machine = tmp_path / "machine"
+    monkeypatch.setenv("MBCOMP_RUNTIME", str(machine))
+    monkeypatch.setenv("MBCOMP_CACHE", str(tmp_path / "programs"))
+    monkeypatch.setenv("MBCOMP_PREBUILT", "")      # nothing from an install: what is compiled shows
+    opts = dict(t_end=2.0, rtol=1e-9, atol=1e-11)
+    auto = mbcomp.simulate(_pendulum(), **opts)
+    assert auto.status == "success" and auto.stats["stretches"] > 0
+    assert _radau_files(machine) == []
+    core = {os.path.basename(o).split("_", 2)[2] for o in runtime_objects(c_compiler(), str(machine))}
+    assert core == {"mbcomp_glue.o", "mbrt_check.o", "mbrt_dop853.o", "mbrt_dopri5.o", "mbrt_events.o",
+                    "mbrt_linalg.o", "mbrt_mech.o", "mbrt_rk.o"}
+    rad = mbcomp.simulate(_pendulum(), method="radau5", **opts)
+    assert rad.status == "success" and rad.stats["stretches"] >= 1 and rad.stats["python_steps"] == 0, rad.stats
+    made = _radau_files(machine)
+    assert [f for f in made if f.endswith(".o")] and [f for f in made if f.startswith("mbrt_radau5_")]
+    np.testing.assert_allclose(rad["j.phi"], auto["j.phi"], atol=1e-6)
+
+
+def test_objects_an_install_built_are_copied_not_compiled(tmp_path, monkeypatch):
+    """``build_install`` into a directory, then a new runtime directory reading it as the
+    install's: every object arrives byte for byte, no compiler runs (one that would raises)."""
+    cc = c_compiler()
+    pre = tmp_path / "prebuilt"
+    made = runtime_build.build_install(str(pre))
+    assert len(made) == sum(len(runtime_build.sources(p)) for p in runtime_build.PARTS)
+    monkeypatch.setenv("MBCOMP_PREBUILT", str(pre))
+
+    def no_compiler(*a, **k):
+        raise AssertionError(f"compiled although the install built it: {a[0]}")
+    monkeypatch.setattr(runtime_build.subprocess, "run", no_compiler)
+    machine = tmp_path / "machine"
+    for part in runtime_build.PARTS:
+        for obj in runtime_build.build_objects(cc, str(machine), part):
+            assert (pre / os.path.basename(obj)).read_bytes() == open(obj, "rb").read()
+
+
+def test_an_object_built_for_another_compiler_is_not_taken(tmp_path, monkeypatch):
+    """The key names the compiler (and flags, platform, architecture): objects an install built
+    with another compiler are not linked; this one's are compiled."""
+    pre = tmp_path / "prebuilt"
+    runtime_build.build_install(str(pre))
+    monkeypatch.setenv("MBCOMP_PREBUILT", str(pre))
+    other = tmp_path / "bin"
+    other.mkdir()
+    (other / "cc2").symlink_to(c_compiler())
+    objs = runtime_build.build_objects(str(other / "cc2"), str(tmp_path / "machine"), "radau")
+    assert all(not (pre / os.path.basename(o)).exists() for o in objs) and all(os.path.exists(o) for o in objs)
+
+
+def test_an_install_without_a_working_compiler_builds_nothing_and_does_not_fail(tmp_path, monkeypatch):
+    false = subprocess.run(["which", "false"], capture_output=True, text=True).stdout.strip()
+    monkeypatch.setenv("CC", false)                # a compiler that fails on every source
+    assert runtime_build.build_install(str(tmp_path / "a")) == []
+    monkeypatch.delenv("CC")
+    monkeypatch.setenv("PATH", str(tmp_path / "nothing"))  # no compiler at all
+    assert runtime_build.find_compiler() is None and runtime_build.build_install(str(tmp_path / "b")) == []
+
+
+def test_a_source_the_compiler_fails_on_is_named_and_nothing_half_built_stays(tmp_path, monkeypatch):
+    """A compiler failing on one source: the error names it (and the fix, as a CodegenError from
+    the engine); no object of that source is left in the directory, the others are whole."""
+    from mbcomp.codegen.graph import CodegenError
+
+    cc = tmp_path / "cc"
+    cc.write_text(f'#!/bin/sh\ncase "$*" in *mbrt_linalg.c*) echo "broken here" >&2; exit 1;; esac\n'
+                  f'exec {c_compiler()} "$@"\n')
+    cc.chmod(0o755)
+    monkeypatch.setenv("MBCOMP_PREBUILT", "")
+    d = tmp_path / "machine"
+    with pytest.raises(CodegenError, match=r"mbrt_linalg\): broken here.*backend='python'"):
+        runtime_objects(str(cc), str(d))
+    left = os.listdir(d)
+    assert not [f for f in left if "linalg" in f] and all(f.endswith(".o") for f in left)
+    assert not [f for f in left if os.path.getsize(d / f) == 0]
