@@ -46,7 +46,7 @@ from ..assembly.jets import FrameJet, as_array, is_traced, rigid_constraints
 from ..geometry.kinematics import cross, skew
 from ..modeling.roles import FrameState
 from ..assembly.topology import ROOT, Topology
-from .evaluation import Evaluation
+from .evaluation import Evaluation, Rows, completed, cut_rows
 from .flange_rows import flange_rows, flange_starts, rotor_wrench, rotors
 
 __all__ = ["assemble", "MultibodySystem", "Evaluation", "NumericEvaluator"]
@@ -102,6 +102,12 @@ class NumericEvaluator:
 
     def q_rate(self, q, u):
         return self.system.q_rate_numeric(q, u)
+
+    def evaluate_rows(self, t, q, u):
+        return self.system.evaluate_rows_numeric(t, q, u)
+
+    def complete(self, rows, masked=True):
+        return self.system.complete_numeric(rows, masked)
 
     def rebind(self, system, laws=False):
         return NumericEvaluator(system)
@@ -252,7 +258,7 @@ class MultibodySystem:
         (structural: kept per structure by a compiled evaluator)."""
         memo = getattr(self.evaluator, "structure_memo", dict)()
         if self._row_names is None and "constraint_names" not in memo:
-            ev = self.evaluate_numeric(0.0, self.default_q(), np.zeros(self.nu), masked=False)
+            ev = self.evaluate_rows_numeric(0.0, self.default_q(), np.zeros(self.nu))
             memo["constraint_names"] = tuple(f"{e.name}.{r}" for e, rows, _ in ev.local for r in rows)
         return list(self._row_names if self._row_names is not None else memo["constraint_names"])
 
@@ -373,6 +379,22 @@ class MultibodySystem:
         (``masked``: only the independent constraint rows, see ``row_mask``)."""
         return self.evaluator.evaluate(t, q, u, masked)
 
+    def evaluate_rows(self, t, q, u) -> Rows:
+        """The loop-closure rows alone at ``(t, q, u)``, every row (:class:`~mbcomp.assembly.evaluation.Rows`):
+        ``Phi, Phid, C, cb`` of ``evaluate(t, q, u, masked=False)`` bit for bit, without the mass
+        matrix and forces where the evaluator can (its ``evaluate_rows``), else from that
+        evaluation. For Newton closures (:mod:`mbcomp.assembly.initialization`)."""
+        rows = getattr(self.evaluator, "evaluate_rows", None)
+        return rows(t, q, u) if rows is not None else Rows.of(self.evaluate(t, q, u, masked=False))
+
+    def evaluate_from(self, rows, masked=True) -> Evaluation:
+        """``evaluate(rows.t, rows.q, rows.u, masked)`` bit for bit, reusing what ``rows`` (this
+        system's :meth:`evaluate_rows`) holds: its unmasked evaluation, or the jets and rows
+        the evaluator completes (its ``complete``)."""
+        if rows.evaluation is None:
+            return self.evaluator.complete(rows, masked)
+        return self.evaluate(rows.t, rows.q, rows.u, masked) if masked else rows.evaluation
+
     def q_rate(self, q, u):
         """``dq/dt`` from the speeds ``u`` (quaternion kinematics where needed), from the evaluator."""
         return self.evaluator.q_rate(q, u)
@@ -413,41 +435,29 @@ class MultibodySystem:
 
     def evaluate_numeric(self, t, q, u, masked=True) -> Evaluation:
         """Mass matrix, forces and constraints at ``(t, q, u)`` by the jet recursion."""
-        nu = self.nu
         dt = _dtype(t, q, u)
         jets = self.kinematics(t, q, u)
-        M, f = self._inertia_terms(jets, nu, dt)
+        M, f = self._dynamics(t, q, u, jets, dt)  # before the rows: a traced program's order
+        return completed(self, cut_rows(self, t, q, u, jets, dt), M, f, masked, dt)
+
+    def evaluate_rows_numeric(self, t, q, u) -> Rows:
+        """The loop-closure rows alone at ``(t, q, u)`` (every row) by the jet recursion: those
+        of ``evaluate_numeric`` bit for bit (the same code), without ``M`` and ``f``."""
+        return cut_rows(self, t, q, u, self.kinematics(t, q, u), _dtype(t, q, u))
+
+    def complete_numeric(self, rows, masked=True) -> Evaluation:
+        """``evaluate_numeric`` at the point of ``rows`` (:meth:`evaluate_rows_numeric`'s),
+        bit for bit, its jets and rows taken from ``rows``."""
+        dt = _dtype(rows.t, rows.q, rows.u)
+        return completed(self, rows, *self._dynamics(rows.t, rows.q, rows.u, rows.jets, dt), masked, dt)
+
+    def _dynamics(self, t, q, u, jets, dt):
+        """``M`` and ``f``: the bodies' inertia terms and the applied wrenches."""
+        M, f = self._inertia_terms(jets, self.nu, dt)
         for node, (F, T) in self.applied(t, q, u, jets).items():
             J = jets[node]
             f += J.Jv.T @ F + J.Jw.T @ T
-        Phi, Phid, Crows, cb, local = [], [], [], [], []
-        for e, cons in self.cut_constraints(jets, t, q):
-            if not cons:
-                continue
-            jac = np.array([c.jac for _, c in cons])
-            Crows.append(jac @ np.vstack([X for n in e.nodes for X in (jets[n].Jv, jets[n].Jw)]))
-            Phi += [c.val for _, c in cons]
-            Phid += [c.dot for _, c in cons]
-            cb += [c.bias for _, c in cons]
-            local.append((e, [n for n, _ in cons], jac))
-        C = np.vstack(Crows) if Crows else np.zeros((0, nu), dt)
-        Phi, Phid, cb = np.array(Phi, dt), np.array(Phid, dt), np.array(cb, dt)
-        if masked and self.row_mask is not None:
-            C, Phi, Phid, cb = C[self.row_mask], Phi[self.row_mask], Phid[self.row_mask], cb[self.row_mask]
-        Brows, gval, Bb, local_nh = [], [], [], []
-        for e, cons in self.velocity_constraints(jets):
-            if not cons:
-                continue
-            jac = np.array([c.jac for _, c in cons])
-            a, b = jets[e.node_a], jets[e.node_b]
-            Brows.append(jac @ np.vstack((a.Jv, a.Jw, b.Jv, b.Jw)))
-            gval += [c.val for _, c in cons]
-            Bb += [c.bias for _, c in cons]
-            local_nh.append((e, [n for n, _ in cons], jac))
-        B = np.vstack(Brows) if Brows else np.zeros((0, nu), dt)
-        gval = np.array(gval, dt)
-        return Evaluation(t, q, u, jets, M, f, Phi, Phid, C, cb, B, B @ u - gval, np.array(Bb, dt), gval,
-                          local, local_nh)
+        return M, f
 
     def cut_constraints(self, jets, t=0.0, q=None):
         """``(edge, [(row name, ScalarJet)])`` of every cut joint at the frames' ``jets`` (a
