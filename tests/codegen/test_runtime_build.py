@@ -110,3 +110,41 @@ def test_a_source_the_compiler_fails_on_is_named_and_nothing_half_built_stays(tm
     left = os.listdir(d)
     assert not [f for f in left if "linalg" in f] and all(f.endswith(".o") for f in left)
     assert not [f for f in left if os.path.getsize(d / f) == 0]
+
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def _wheel(tmp_path, env):
+    """Build mbcomp's wheel from a copy of the source tree (no build isolation: offline, the
+    installed setuptools); the names in it."""
+    import shutil
+    import sys
+    import zipfile
+
+    tree = tmp_path / "tree"
+    skip = shutil.ignore_patterns("prebuilt", "__pycache__", "*.egg-info", "build")
+    for name in ("src", "library"):
+        shutil.copytree(os.path.join(ROOT, name), tree / name, ignore=skip)
+    for name in ("pyproject.toml", "setup.py", "README.md"):
+        shutil.copy(os.path.join(ROOT, name), tree / name)
+    out = tmp_path / "wheel"
+    res = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
+                          str(out), str(tree)], capture_output=True, text=True, env=env, timeout=600)
+    assert res.returncode == 0, res.stderr[-3000:]
+    (whl,) = out.glob("*.whl")
+    return zipfile.ZipFile(whl).namelist()
+
+
+def test_a_wheel_carries_the_runtime_under_the_keys_a_run_computes_and_builds_without_a_compiler(tmp_path):
+    """``setup.py``'s step: the wheel holds every part's objects, named as this machine's run
+    names them (so they are copied, not compiled); with a compiler that fails, the wheel is
+    built all the same, without them."""
+    names = _wheel(tmp_path / "a", dict(os.environ))
+    got = sorted(n.rsplit("/", 1)[1] for n in names if n.startswith("mbcomp/codegen/prebuilt/"))
+    want = sorted(os.path.basename(o) for p in runtime_build.PARTS
+                  for _, _, o in runtime_build.object_paths(c_compiler(), "", p))
+    assert got == want
+    false = subprocess.run(["which", "false"], capture_output=True, text=True).stdout.strip()
+    names = _wheel(tmp_path / "b", dict(os.environ, CC=false))
+    assert "mbcomp/codegen/runtime_build.py" in names and not [n for n in names if "/prebuilt/" in n]

@@ -298,4 +298,11 @@ def build_install(target):
         print(f"mbcomp: the C runtime was not built at install ({exc}); the first run compiles it",
               file=sys.stderr)
         return []
+    keep = {os.path.basename(o) for o in made}
+    for name in os.listdir(target):  # an earlier install's (other sources): never linked again
+        if name.startswith("mbrt_") and name.endswith(".o") and name not in keep:
+            try:
+                os.remove(os.path.join(target, name))
+            except OSError:
+                pass
     return made
