@@ -138,6 +138,9 @@ def radau_library(cc, cache_dir):
     compiled and linked the first time a run steps by radau5 in C (a machine's first run of
     another method does not wait for them), cached in ``cache_dir``, loaded once per process.
     It reaches a model's programs through function pointers (``mbrt_prog_ode``)."""
+    dll = _RADAU.get((cc, cache_dir))  # asked before in this process: no sources hashed again
+    if dll is not None:
+        return dll
     objs = runtime_objects(cc, cache_dir, "radau")
     objs += [o for o in runtime_objects(cc, cache_dir) if o.endswith("_mbrt_check.o")]
     key = hashlib.sha256("\0".join(objs).encode()).hexdigest()[:16]
@@ -147,7 +150,11 @@ def radau_library(cc, cache_dir):
         if not os.path.exists(lib):
             _link(cc, objs, lib)
         dll = _LIBRARIES[lib] = load_library(lib)
+    _RADAU[(cc, cache_dir)] = dll
     return dll
+
+
+_RADAU = {}
 
 #: ``mbrt_mech.c``'s status codes (``mbrt.h``)
 MECH_STATUS = {0: "ok", 1: "fallback", 2: "singular", 3: "mass singular", 4: "no convergence", -1: "bad argument"}
