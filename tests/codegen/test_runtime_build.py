@@ -29,7 +29,7 @@ def _pendulum():
 
 
 def _radau_files(d):
-    return sorted(f for f in os.listdir(d) if "radau5" in f)
+    return sorted(f for f in os.listdir(d) if "radau" in f)
 
 
 def test_the_default_path_builds_no_radau_and_radau_builds_its_own_library(tmp_path, monkeypatch):
@@ -45,12 +45,12 @@ def test_the_default_path_builds_no_radau_and_radau_builds_its_own_library(tmp_p
     assert auto.status == "success" and auto.stats["stretches"] > 0
     assert _radau_files(machine) == []
     core = {os.path.basename(o).split("_", 2)[2] for o in runtime_objects(c_compiler(), str(machine))}
-    assert core == {"mbcomp_glue.o", "mbrt_check.o", "mbrt_dop853.o", "mbrt_dopri5.o", "mbrt_events.o",
-                    "mbrt_linalg.o", "mbrt_mech.o", "mbrt_rk.o"}
+    assert {"mbcomp_glue.o", "mbrt_rk.o", "mbrt_dopri5.o", "mbrt_dop853.o", "mbrt_mech.o"} <= core
+    assert not [o for o in core if "radau" in o]
     rad = mbcomp.simulate(_pendulum(), method="radau5", **opts)
     assert rad.status == "success" and rad.stats["stretches"] >= 1 and rad.stats["python_steps"] == 0, rad.stats
     made = _radau_files(machine)
-    assert [f for f in made if f.endswith(".o")] and [f for f in made if f.startswith("mbrt_radau5_")]
+    assert [f for f in made if f.endswith(".o")] and [f for f in made if f.startswith("mbrt_radau_")]
     np.testing.assert_allclose(rad["j.phi"], auto["j.phi"], atol=1e-6)
 
 

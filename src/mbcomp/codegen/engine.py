@@ -16,7 +16,7 @@ unprojected steps, as the Python driver's, which projects them when it keeps the
 runtime is compiled once per machine (or copied from what the install built) into the
 machine's runtime directory (:func:`runtime_objects`, :mod:`~mbcomp.codegen.runtime_build`):
 its core, which every such library links, and RADAU5 apart, a library of its own built at a
-run's first radau5 step in C (:func:`radau_library`).
+run's first radau5 step in C (:func:`part_library`).
 
 The mechanics kernels need only the evaluation program, which lives in another library than
 ``mbcomp_fun`` (and exists with drives too): they reach it through function pointers
@@ -58,7 +58,7 @@ from .runtime_build import GLUE, RuntimeBuildError, build_objects
 from .toolchain import c_compiler, load_library, runtime_directory
 
 __all__ = ["GLUE", "Integrator", "LinearEvents", "Mech", "DAlembertProgram", "runtime_objects", "runtime_library",
-           "radau_library",
+           "part_library",
            "coordinate_map", "mech_of", "dalembert_program", "DAEProgram", "dae_program", "STATUS", "MECH_STATUS",
            "PROJECT_MAX_ITER"]
 
@@ -131,30 +131,31 @@ def runtime_library(cc, cache_dir):
 _LIBRARIES = {}
 
 
-def radau_library(cc, cache_dir):
-    """RADAU5 of the runtime (``mbrt_radau5``, ``mbrt_radau5_dense``, the work sizes and the
-    program callbacks ``mbrt_prog_ode_rhs``/``_jac``) as a shared library of its own: its
-    objects (part ``"radau"`` of :func:`runtime_objects`) and the argument checks it calls,
-    compiled and linked the first time a run steps by radau5 in C (a machine's first run of
-    another method does not wait for them), cached in ``cache_dir``, loaded once per process.
-    It reaches a model's programs through function pointers (``mbrt_prog_ode``)."""
-    dll = _RADAU.get((cc, cache_dir))  # asked before in this process: no sources hashed again
+def part_library(cc, cache_dir, part):
+    """A part of the runtime built apart from the core (:data:`~mbcomp.codegen.runtime_build.PARTS`:
+    ``"radau"``, RADAU5: ``mbrt_radau5``, ``mbrt_radau5_dense``, the work sizes, the program
+    callbacks ``mbrt_prog_ode_rhs``/``_jac``) as a shared library of its own: the part's objects
+    (:func:`runtime_objects`) and the core's but the glue (whatever of them the part calls),
+    compiled and linked the first time a run uses the part (a machine's first run that does not
+    use it does not wait for it), cached in ``cache_dir``, loaded once per process. It reaches
+    a model's programs through function pointers (``mbrt_prog_ode``, ``mbrt_mech``)."""
+    dll = _PARTS.get((cc, cache_dir, part))  # asked before in this process: no sources hashed again
     if dll is not None:
         return dll
-    objs = runtime_objects(cc, cache_dir, "radau")
-    objs += [o for o in runtime_objects(cc, cache_dir) if o.endswith("_mbrt_check.o")]
+    objs = runtime_objects(cc, cache_dir, part)
+    objs += [o for o in runtime_objects(cc, cache_dir) if not o.endswith("_mbcomp_glue.o")]
     key = hashlib.sha256("\0".join(objs).encode()).hexdigest()[:16]
-    lib = os.path.join(cache_dir, f"mbrt_radau5_{key}.so")
+    lib = os.path.join(cache_dir, f"mbrt_{part}_{key}.so")
     dll = _LIBRARIES.get(lib)
     if dll is None:
         if not os.path.exists(lib):
             _link(cc, objs, lib)
         dll = _LIBRARIES[lib] = load_library(lib)
-    _RADAU[(cc, cache_dir)] = dll
+    _PARTS[(cc, cache_dir, part)] = dll
     return dll
 
 
-_RADAU = {}
+_PARTS = {}
 
 #: ``mbrt_mech.c``'s status codes (``mbrt.h``)
 MECH_STATUS = {0: "ok", 1: "fallback", 2: "singular", 3: "mass singular", 4: "no convergence", -1: "bad argument"}
@@ -496,11 +497,12 @@ class Integrator:
         """Whether the C loop projects after every accepted step."""
         return self.mech is not None
 
-    def radau_library(self):
-        """:func:`radau_library` (RADAU5 of the runtime, built at its first use) in the machine's
-        runtime directory: it steps this engine's program through function pointers."""
+    def part_library(self, part):
+        """:func:`part_library` (a part of the runtime built apart, at its first use: ``"radau"``)
+        in the machine's runtime directory: it reaches this engine's program through function
+        pointers."""
         code = self.bound.code
-        return radau_library(c_compiler(), runtime_directory(os.path.dirname(code.lib_path)))
+        return part_library(c_compiler(), runtime_directory(os.path.dirname(code.lib_path)), part)
 
     def _work(self, order):
         w = self.work.get(order)

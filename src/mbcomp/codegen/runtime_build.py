@@ -12,7 +12,7 @@ The runtime (:mod:`mbcomp.codegen.runtime`) is built in two parts:
   the mechanics kernels, the dense solves, the argument checks) and :data:`GLUE`, the engine's
   glue over a program's ``mbcomp_fun``;
 * ``"radau"``: RADAU5 (``mbrt_radau5*.c``), compiled only when a run first steps by radau5 in
-  C and loaded as a library of its own (``mbcomp.codegen.engine.radau_library``), which
+  C and loaded as a library of its own (``mbcomp.codegen.engine.part_library``), which
   reaches the program through function pointers. A machine's first run of the default path
   does not pay for it (0.33 s of gcc at -O2).
 
@@ -53,7 +53,9 @@ PREBUILT_DIR = Path(__file__).resolve().parent / "prebuilt"
 #: the runtime's flags (the include path is added at compile time and is not in the key: an
 #: install's build directory and the installed package have different paths)
 FLAGS = ("-O2", "-fPIC", "-fno-fast-math")
-#: the sources (stems in ``runtime/``) of the parts built apart from the core, by prefix
+#: the sources (stems in ``runtime/``) of the parts built apart from the core, by prefix: what
+#: the default path never calls (a new ``mbrt_*.c`` is the core's unless a prefix here takes it;
+#: a part is reached through ``engine.part_library``, not the program's library)
 PARTS = {"core": None, "radau": ("mbrt_radau5",)}
 
 

@@ -96,7 +96,7 @@ class RadauEngine:
     ----------
     integrator : mbcomp.codegen.engine.Integrator
         The compiled engine of the Lagrange right-hand side (its program ``bound``, gains
-        ``d``; ``radau_library()``: the runtime's RADAU5, a library of its own).
+        ``d``; ``part_library("radau")``: the runtime's RADAU5, a library of its own).
     jacobian : mbcomp.codegen.jacobian.BoundJacobian or None
         The exact Jacobian program (C backend) of the same system; None: forward differences
         in C.
@@ -109,7 +109,7 @@ class RadauEngine:
 
     def __init__(self, integrator, jacobian=None):
         bound = integrator.bound
-        dll = integrator.radau_library()  # RADAU5 alone, built at its first use; the program by pointers
+        dll = integrator.part_library("radau")  # RADAU5 apart, built at its first use; the program by pointers
         self.fn = _signature(dll)
         self.dense_fn = dll.mbrt_radau5_dense
         self.n = n = bound.nq + bound.nu
