@@ -337,6 +337,18 @@ def import_costs(env, top=12):
         print(f"  {key:<34}{us / 1e3:8.1f} ms")
 
 
+def installed_runtime():
+    """Whether the install built the runtime's core as the sources are now (``setup.py``): an
+    editable install's objects fall behind a later change of the runtime's C."""
+    sys.path.insert(0, os.path.join(ROOT, "src", "mbcomp", "codegen"))
+    try:
+        import runtime_build as rb  # the standard library only: as setup.py loads it
+    finally:
+        sys.path.pop(0)
+    cc, pre = rb.find_compiler(), rb.prebuilt_directory()
+    return bool(cc and pre) and all(os.path.exists(o) for _, _, o in rb.object_paths(cc, pre, "core"))
+
+
 def runtime_sources():
     """A hash of the runtime's sources: a change during the run (someone editing them) makes
     the "new model" cache miss the runtime."""
@@ -371,10 +383,9 @@ def main(argv=None):
     try:
         print(f"cold start: {os.cpu_count()} processors, Python {sys.version.split()[0]}, bytecode "
               f"{'not cached (PYTHONDONTWRITEBYTECODE)' if a.no_bytecode else 'cached'}; caches under {env.tmp}")
-        pre = os.path.join(ROOT, "src", "mbcomp", "codegen", "prebuilt")
-        if "first run" in a.modes and not (os.path.isdir(pre) and os.listdir(pre)):
-            print(f"note: no runtime built at install in {pre} (an editable install older than setup.py's "
-                  "build step: run pip install -e . again): 'first run' is 'not installed'")
+        if "first run" in a.modes and not installed_runtime():
+            print("note: the install's runtime is missing or older than the runtime's sources (an editable "
+                  "install made before them: pip install -e . again): 'first run' is 'not installed'")
         before = runtime_sources()
         table = measure(env, a.jobs, a.modes, a.rounds, a.baseline)
         print_table(table, a.rounds)
