@@ -29,6 +29,7 @@ import numpy as np
 from ..assembly.kkt import project_state, solve_kkt
 from ..assembly.manifold import ACCEPT_FACTOR, POSITION_TOL
 from .base import Formulation, projection_needed
+from .passing import PassingEngine
 
 __all__ = ["LagrangeIndex1"]
 
@@ -184,18 +185,28 @@ class LagrangeIndex1(Formulation):
         knows) leaves no engine: scipy's method steps :meth:`fun` and the driver projects
         after every step.
 
-        With ``singular="pass"`` there is none: scipy's method steps through the singular
-        positions, each step watched by the rank monitor on its own dense output (C stretches
-        located passages on a cubic through their ends, and a handover to Python next to a
-        passage made its steps collapse: docs/design/generated-programs.md, *Passing singular
-        positions stays on the Python path*)."""
+        With ``singular="pass"`` it is a :class:`~mbcomp.formulations.passing.PassingEngine`:
+        the C loop steps through the singular positions (the range-space solve where the
+        program's guard fails) and locates the rows' closest approaches on its own
+        continuous extension for the rank monitor, without a restart next to them
+        (docs/design/generated-programs.md, *Passing singular positions in C*); None where
+        the runtime has no ``mbrt_pass_integrate`` or the projection's program is missing."""
         evaluator = self.system.evaluator
-        if "c_integrate" not in evaluator.capabilities or self.singular == "pass":
+        if "c_integrate" not in evaluator.capabilities:
             return None
+        if self.singular == "pass":
+            return self._passing_engine(evaluator)
         if not self.projects:
             return evaluator.integrator(*((self.alpha, self.beta) if self.stabilization == "baumgarte"
                                           else (0.0, 0.0)))
         return evaluator.integrator(0.0, 0.0, project=(POSITION_TOL, ACCEPT_FACTOR * POSITION_TOL))
+
+    def _passing_engine(self, evaluator):
+        """The :class:`~mbcomp.formulations.passing.PassingEngine` of a ``singular="pass"`` run, or None."""
+        inner = evaluator.integrator(0.0, 0.0, project=(POSITION_TOL, ACCEPT_FACTOR * POSITION_TOL))
+        if inner is None or inner.mech is None or not hasattr(inner.bound.code.dll, "mbrt_pass_integrate"):
+            return None
+        return PassingEngine(inner, self.system, self.PASS_RANK, project=self.projects)
 
     def project(self, t, y):
         """``y = [q, u]`` moved onto ``Phi = 0`` and ``[dPhi/dt, Psi] = 0`` by minimum-norm

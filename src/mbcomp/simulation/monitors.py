@@ -47,6 +47,7 @@ import numpy as np
 
 from ..assembly.system import MultibodySystem
 from ..errors import SimulationError
+from ..formulations.passing import engine_of
 from ..solvers.locate import minimum, time_tolerance
 
 __all__ = ["relative_sigma", "evaluate_by_program", "SingularPosition", "StepEnd", "StepWindow", "RedundantRows",
@@ -214,6 +215,7 @@ class ConstraintRank:
         self.window = StepWindow(self.BRACKET)
         self.passages = []
         self._end = None  # (t, sigma, slope of sigma) at the last step's end
+        self._taken = 0  # minima of the C loop's log judged so far
 
     def _sigma_at(self, dense, t):
         """``sigma`` of the state the step's ``dense`` output gives at ``t`` (s)."""
@@ -295,9 +297,30 @@ class ConstraintRank:
         names = self.system.constraint_names(all_rows=True)
         return drop, list(dict.fromkeys(n.rsplit(".", 1)[0] for n, w in zip(names, weight) if w > 0.1 * weight.max()))
 
+    def _located_in_c(self, t_prev, t):
+        """Judge the minima the C loop located in ``(t_prev, t]`` (s) when it stepped there
+        (:func:`mbcomp.formulations.passing.engine_of`): True, or False for a step on the
+        Python path (the step window's and :meth:`_inside`'s location then)."""
+        engine = engine_of(self.system) if self.singular == "pass" else None
+        if engine is None or engine.reached < t:
+            return False
+        minima, sysm = engine.minima, self.system
+        while self._taken < len(minima) and minima[self._taken][0] <= t:
+            tm, ym = minima[self._taken]
+            self._taken += 1
+            q, u = sysm.normalize(ym[: sysm.nq]), ym[sysm.nq: sysm.nq + sysm.nu]
+            sm = self.sigma(sysm.evaluate(tm, q, u, masked=False))
+            self.sigma_min = min(self.sigma_min, sm)
+            if sm < self.SIGMA_MIN and tm > t_prev:
+                self._passed(tm, sm, ym[: sysm.nq + sysm.nu])
+        self._end = None
+        return True
+
     def check(self, end, t_prev, dense):
         rel = self.sigma(end.ev)
         self.sigma_min = min(self.sigma_min, rel)
+        if self._located_in_c(t_prev, end.t):
+            return
         sysm = self.system
         for ts, smin in self._inside(t_prev, end.t, rel, dense):  # flat positions crossed within this step
             self.sigma_min = min(self.sigma_min, smin)
@@ -317,6 +340,9 @@ class ConstraintRank:
         out = {"min_constraint_sigma": self.sigma_min}
         if self.singular == "pass":
             out["singular_passages"] = list(self.passages)
+            engine = engine_of(self.system)
+            if engine is not None:  # the C loop's: range-space solves, projections left out, minima located
+                out.update(engine.counts)
         return out
 
 

@@ -37,6 +37,11 @@ generated model code is compiled together with:
     constraint manifold (Gauss--Newton with minimum-norm steps, then the
     minimum-norm speed correction), and the residual and Jacobian of the
     multiplier forms as DAEs (index 1, GGL, index 3).
+``mbrt_pass.c``, ``mbrt_pass.h``
+    Singular positions passed inside the C loop (``singular="pass"``): the range-space
+    solve where the Lagrange program's guard fails, the rows' closest approaches located
+    on the integrator's own continuous extension and logged, the integration going on
+    without a restart next to them.
 ``mbrt_radau5.c``, ``mbrt_radau5_step.c``, ``mbrt_radau5_linalg.c``, ``mbrt_radau5_internal.h``
     RADAU5 (Radau IIA of order 5) for stiff ODEs, the whole integration in
     one call: simplified Newton on the real and complex systems, equilibrated
@@ -65,7 +70,7 @@ Examples
 --------
 >>> from mbcomp.codegen.runtime import SOURCES, RUNTIME_DIR
 >>> print(" ".join(sorted(p.name for p in SOURCES)))  # doctest: +NORMALIZE_WHITESPACE
-mbrt_check.c mbrt_dop853.c mbrt_dopri5.c mbrt_events.c mbrt_linalg.c mbrt_mech.c mbrt_radau5.c
+mbrt_check.c mbrt_dop853.c mbrt_dopri5.c mbrt_events.c mbrt_linalg.c mbrt_mech.c mbrt_pass.c mbrt_radau5.c
 mbrt_radau5_linalg.c mbrt_radau5_step.c mbrt_rk.c
 >>> (RUNTIME_DIR / "mbrt.h").is_file()
 True
