@@ -522,19 +522,21 @@ class ProgramEvaluator:
     def evaluate_rows(self, t, q, u):
         """The loop-closure rows at ``(t, q, u)``, every row
         (:meth:`~mbcomp.assembly.system.MultibodySystem.evaluate_rows`): while a lazy evaluator
-        answers numerically, the numeric rows alone (not counted among its numeric
-        evaluations: no mass matrix); else those of the unmasked :meth:`evaluate`."""
+        answers numerically, the numeric rows alone (counted as the evaluation they stand
+        for); else those of the unmasked :meth:`evaluate`."""
         if self.bound is None and self.options["lazy"] and self.numeric_calls < LAZY_EVALUATIONS:
+            self.numeric_calls += 1
             return self.system.evaluate_rows_numeric(t, q, u)
         return Rows.of(self.evaluate(t, q, u, masked=False))
 
     def complete(self, rows, masked=True):
-        """:meth:`evaluate` at the point of the numeric ``rows`` (:meth:`evaluate_rows`'s): from
-        their jets while a lazy evaluator answers numerically (counted as one evaluation)."""
-        if self.bound is None and self.options["lazy"] and self.numeric_calls < LAZY_EVALUATIONS:
-            self.numeric_calls += 1
-            return self.system.complete_numeric(rows, masked)
-        return self.evaluate(rows.t, rows.q, rows.u, masked)
+        """:meth:`evaluate` at the point of the numeric ``rows`` (:meth:`evaluate_rows`'s) from
+        their jets: unmasked, their own evaluation completed (not counted again); masked,
+        another evaluation (numeric and counted while lazy, else by the program)."""
+        if masked and not (self.bound is None and self.options["lazy"] and self.numeric_calls < LAZY_EVALUATIONS):
+            return self.evaluate(rows.t, rows.q, rows.u, masked)
+        self.numeric_calls += bool(masked)
+        return self.system.complete_numeric(rows, masked)
 
     def q_rate(self, q, u):
         """``dq/dt`` from the speeds (the program; ``u`` for angles; the joints' own while lazy)."""
