@@ -369,9 +369,10 @@ static int redo_outputs(mbrt_pass *S, int order, const double *t_out, int m, dou
         const double *ya = side == 0 ? W.y_before : W.y_after;
         double *rows = y_out + (size_t)lo * (size_t)n;
         int nw = 0;
-        const int rc = order == 8 ? mbrt_dop853(f, NULL, S, n, ta, ya, tb, rtol, atol, 0.0, 0.0, max_steps, times, cnt,
-                                                rows, &nw, work, &st)
-                                  : mbrt_dopri5(f, NULL, S, n, ta, ya, tb, rtol, atol, 0.0, 0.0, max_steps, times,
+        /* first step: the whole way (within the step the main integration took at once) */
+        const int rc = order == 8 ? mbrt_dop853(f, NULL, S, n, ta, ya, tb, rtol, atol, tb - ta, 0.0, max_steps, times,
+                                                cnt, rows, &nw, work, &st)
+                                  : mbrt_dopri5(f, NULL, S, n, ta, ya, tb, rtol, atol, tb - ta, 0.0, max_steps, times,
                                                 cnt, rows, &nw, work, &st);
         total->nfev += st.nfev;
         if (rc != MBRT_OK || nw != cnt)
@@ -418,16 +419,17 @@ static int refine_minimum(mbrt_pass *S, int order, double rtol, const double *at
     double ta = te - d, tb = -(te + d);
     mbrt_stats st;
     int nw = 0, rc;
-    rc = order == 8 ? mbrt_dop853(pass_rhs, NULL, S, n, S->t_before, W.y_before, ta, rtol, atol, 0.0, 0.0, max_steps,
+    const double ha = ta - S->t_before, hb = S->t_after + tb; /* first steps: the whole way */
+    rc = order == 8 ? mbrt_dop853(pass_rhs, NULL, S, n, S->t_before, W.y_before, ta, rtol, atol, ha, 0.0, max_steps,
                                   &ta, 1, ya, &nw, work, &st)
-                    : mbrt_dopri5(pass_rhs, NULL, S, n, S->t_before, W.y_before, ta, rtol, atol, 0.0, 0.0, max_steps,
+                    : mbrt_dopri5(pass_rhs, NULL, S, n, S->t_before, W.y_before, ta, rtol, atol, ha, 0.0, max_steps,
                                   &ta, 1, ya, &nw, work, &st);
     total->nfev += st.nfev;
     if (rc != MBRT_OK)
         return rc;
-    rc = order == 8 ? mbrt_dop853(pass_rhs_back, NULL, S, n, -S->t_after, W.y_after, tb, rtol, atol, 0.0, 0.0,
+    rc = order == 8 ? mbrt_dop853(pass_rhs_back, NULL, S, n, -S->t_after, W.y_after, tb, rtol, atol, hb, 0.0,
                                   max_steps, &tb, 1, yb, &nw, work, &st)
-                    : mbrt_dopri5(pass_rhs_back, NULL, S, n, -S->t_after, W.y_after, tb, rtol, atol, 0.0, 0.0,
+                    : mbrt_dopri5(pass_rhs_back, NULL, S, n, -S->t_after, W.y_after, tb, rtol, atol, hb, 0.0,
                                   max_steps, &tb, 1, yb, &nw, work, &st);
     total->nfev += st.nfev;
     if (rc != MBRT_OK)
