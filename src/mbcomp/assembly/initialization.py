@@ -15,7 +15,8 @@ velocity rows); the full evaluation is made once, at the closed configuration, f
 rows' jets (:meth:`~mbcomp.assembly.system.MultibodySystem.evaluate_from`), masked when rows
 were dropped: bit for bit what a full evaluation at every iterate gave
 (``tests/assembly/test_initialization_rows.py``), with one to two full evaluations instead of
-one per iterate plus one or two (Andrews' squeezer: 1.9 -> 1.25 ms).
+one per iterate plus one or two (CPU: Andrews' squeezer 1.7 -> 1.0 ms, a slider-crank start
+from guesses in ``mbcomp.batch`` 2.3 -> 1.8 ms).
 
 Tolerances, each with its reason
 --------------------------------
