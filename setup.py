@@ -4,7 +4,8 @@
 also compiles the runtime's objects (``src/mbcomp/codegen/runtime_build.py``, loaded by its
 path: it needs only the standard library, and mbcomp's dependencies are not there yet) into
 the package's ``codegen/prebuilt/`` directory -- the source tree's for an editable install, the
-wheel's otherwise. A run that misses an object in its runtime directory copies it from there
+wheel's otherwise -- and, where the environment has numpy already, the thin call's extension
+(``mbcomp.codegen.thin``; built by this Python outside the isolated build, whose numpy it needs). A run that misses an object in its runtime directory copies it from there
 instead of compiling it, so a machine's first run does not wait for the compiler (issue 32
 item 7, ``docs/design/generated-programs.md``, "Cold start").
 
@@ -43,7 +44,9 @@ class BuildPyWithRuntime(build_py):
             else:
                 target = os.path.join(self.build_lib, "mbcomp", "codegen", "prebuilt")
             made = rb.build_install(target)
-            print(f"mbcomp: {len(made)} runtime objects built ahead in {target}", file=sys.stderr)
+            thin = made and rb.build_thin_install(target, os.path.join(HERE, "src"))
+            print(f"mbcomp: {len(made)} runtime objects{' and the thin extension' if thin else ''} built ahead "
+                  f"in {target}", file=sys.stderr)
         except Exception as exc:  # noqa: BLE001 - an install never fails for the runtime
             print(f"mbcomp: the C runtime was not built at install ({exc}); the first run compiles it",
                   file=sys.stderr)

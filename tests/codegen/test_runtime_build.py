@@ -14,6 +14,7 @@ from mbcomp.codegen import runtime_build
 from mbcomp.codegen.engine import runtime_objects
 
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def _pendulum():
@@ -112,7 +113,7 @@ def test_a_source_the_compiler_fails_on_is_named_and_nothing_half_built_stays(tm
     assert not [f for f in left if os.path.getsize(d / f) == 0]
 
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
 
 
 def _wheel(tmp_path, env):
@@ -138,13 +139,37 @@ def _wheel(tmp_path, env):
 
 def test_a_wheel_carries_the_runtime_under_the_keys_a_run_computes_and_builds_without_a_compiler(tmp_path):
     """``setup.py``'s step: the wheel holds every part's objects, named as this machine's run
-    names them (so they are copied, not compiled); with a compiler that fails, the wheel is
-    built all the same, without them."""
+    names them (so they are copied, not compiled; and the thin call's extension where this
+    environment has numpy); with a compiler that fails, the wheel is built all the same,
+    without them."""
     names = _wheel(tmp_path / "a", dict(os.environ))
-    got = sorted(n.rsplit("/", 1)[1] for n in names if n.startswith("mbcomp/codegen/prebuilt/"))
+    got = sorted(n.rsplit("/", 1)[1] for n in names if n.startswith("mbcomp/codegen/prebuilt/") and n.endswith(".o"))
     want = sorted(os.path.basename(o) for p in runtime_build.PARTS
                   for _, _, o in runtime_build.object_paths(c_compiler(), "", p))
     assert got == want
     false = subprocess.run(["which", "false"], capture_output=True, text=True).stdout.strip()
     names = _wheel(tmp_path / "b", dict(os.environ, CC=false))
     assert "mbcomp/codegen/runtime_build.py" in names and not [n for n in names if "/prebuilt/" in n]
+
+
+def test_the_thin_extension_an_install_built_is_the_one_a_run_builds_and_is_copied(tmp_path, monkeypatch):
+    """``build_thin_install`` (a new process of this Python, mbcomp from the source tree) makes
+    the file this process's :func:`~mbcomp.codegen.thin.extension` would make (its name is the
+    key: this Python, this numpy, these headers); a new runtime directory gets it by copy,
+    byte for byte, and nothing else of the install's."""
+    from mbcomp.codegen import thin
+
+    pre = tmp_path / "prebuilt"
+    assert runtime_build.build_thin_install(str(pre), os.path.join(ROOT, "src"))
+    (built,) = [f for f in os.listdir(pre) if f.startswith(runtime_build.THIN_PREFIX)]
+    thin.forget()
+    try:
+        assert thin.extension(str(tmp_path / "here")) is not None
+    finally:
+        thin.forget()
+    assert [f for f in os.listdir(tmp_path / "here") if f.startswith(runtime_build.THIN_PREFIX)] == [built]
+    monkeypatch.setenv("MBCOMP_PREBUILT", str(pre))
+    machine = tmp_path / "machine"
+    assert runtime_build.copy_installed_extensions(str(machine)) == [built]
+    assert (machine / built).read_bytes() == (pre / built).read_bytes() and os.listdir(machine) == [built]
+    assert runtime_build.copy_installed_extensions(str(machine)) == []      # there already: nothing again

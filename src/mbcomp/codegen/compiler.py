@@ -35,6 +35,7 @@ import numpy as np
 from .engine import integrate_signature, runtime_objects
 from .graph import CodegenError, Fallback, Retrace, no_gc
 from .printers import PY_ENV, ParamProgram, Program
+from .runtime_build import copy_installed_extensions
 from .thin import extension
 from .toolchain import (FLAGS, HEADER, c_compiler, cache_directory, chunk, compile_objects, compile_units, load_library,
                         n_units,
@@ -115,9 +116,16 @@ def prepare_runtime(cache_dir=None):
     with _PREPARED_LOCK:
         jobs = _PREPARED.get((cc, d))
         if jobs is None or (jobs[0].done() and jobs[0].exception() is not None):  # a failure is tried again
-            jobs = _PREPARED[(cc, d)] = (_in_thread(runtime_objects, cc, d), _in_thread(extension, d))
+            jobs = _PREPARED[(cc, d)] = (_in_thread(runtime_objects, cc, d), _in_thread(_extension, d))
         _PREPARED[asked] = jobs
     return jobs
+
+
+def _extension(d):
+    """The thin call's extension in the runtime directory ``d``: the install's copied there
+    where it built one for this Python and numpy, else compiled."""
+    copy_installed_extensions(d)
+    return extension(d)
 
 
 class Code:

@@ -43,8 +43,9 @@ import tempfile
 import threading
 from pathlib import Path
 
-__all__ = ["GLUE", "FLAGS", "PARTS", "RUNTIME_DIR", "PREBUILT_DIR", "sources", "part_key", "object_paths",
-           "build_objects", "prebuilt_directory", "find_compiler", "RuntimeBuildError"]
+__all__ = ["GLUE", "FLAGS", "PARTS", "RUNTIME_DIR", "PREBUILT_DIR", "THIN_PREFIX", "sources", "part_key",
+           "object_paths", "build_objects", "prebuilt_directory", "find_compiler", "RuntimeBuildError",
+           "build_install", "build_thin_install", "copy_installed_extensions"]
 
 #: the C sources and headers of the runtime
 RUNTIME_DIR = Path(__file__).resolve().parent / "runtime"
@@ -53,6 +54,8 @@ PREBUILT_DIR = Path(__file__).resolve().parent / "prebuilt"
 #: the runtime's flags (the include path is added at compile time and is not in the key: an
 #: install's build directory and the installed package have different paths)
 FLAGS = ("-O2", "-fPIC", "-fno-fast-math")
+#: the file names of the thin call's extension (``mbcomp.codegen.thin``) start so
+THIN_PREFIX = "_mbcomp_thin_"
 #: the sources (stems in ``runtime/``) of the parts built apart from the core, by prefix: what
 #: the default path never calls (a new ``mbrt_*.c`` is the core's unless a prefix here takes it;
 #: a part is reached through ``engine.part_library``, not the program's library)
@@ -308,3 +311,51 @@ def build_install(target):
             except OSError:
                 pass
     return made
+
+
+def build_thin_install(target, src_root, timeout=300):
+    """Build the thin call's extension (:func:`mbcomp.codegen.thin.extension`) into ``target``
+    in a new process of this Python outside the install's isolated build environment (its
+    numpy: the extension's key names numpy's version and headers, so only the environment's
+    numpy makes one a run finds), importing mbcomp from ``src_root``. Whether it was built:
+    never raises (no numpy there yet, no headers, no compiler: the first run builds it)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONNOUSERSITE")}
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); from mbcomp.codegen.thin import extension; "
+            "sys.exit(0 if extension(sys.argv[2]) is not None else 1)")
+    try:
+        os.makedirs(target, exist_ok=True)
+        for name in os.listdir(target):  # an earlier install's (maybe another numpy or Python)
+            if name.startswith(THIN_PREFIX):
+                os.remove(os.path.join(target, name))
+        res = subprocess.run([sys.executable, "-c", code, str(src_root), str(target)], env=env, timeout=timeout,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    except (OSError, subprocess.SubprocessError) as exc:
+        print(f"mbcomp: the thin call's extension was not built at install ({exc})", file=sys.stderr)
+        return False
+    if res.returncode != 0:
+        print(f"mbcomp: the thin call's extension was not built at install: {res.stderr[-500:].strip()}",
+              file=sys.stderr)
+        return False
+    return True
+
+
+def copy_installed_extensions(cache_dir):
+    """Copy the thin call's extensions the install built (:func:`build_thin_install`) into
+    ``cache_dir`` where missing there: the run finds the one of its numpy and Python under its
+    own name and builds none (another is never loaded: the names are keys). Returns the names
+    copied."""
+    pre = prebuilt_directory()
+    if pre is None or os.path.abspath(pre) == os.path.abspath(cache_dir):
+        return []
+    done = []
+    for name in os.listdir(pre):
+        if name.startswith(THIN_PREFIX) and not os.path.exists(os.path.join(cache_dir, name)):
+            try:
+                os.makedirs(cache_dir, exist_ok=True)
+                with tempfile.TemporaryDirectory(dir=cache_dir) as tmp:
+                    shutil.copyfile(os.path.join(pre, name), os.path.join(tmp, name))
+                    os.replace(os.path.join(tmp, name), os.path.join(cache_dir, name))
+                done.append(name)
+            except OSError:
+                pass
+    return done
