@@ -87,7 +87,8 @@ void model_pass(mbrt_pass *S, const mbrt_mech *P, int cap, double *work, double 
   S->fun = prog_fun; S->d = GAINS; S->h = NULL; S->p = P->p; S->w = NULL; S->mech = P;
   S->mech_work = mech_work; S->pass_rank = 1e-8; S->project = 1; S->proj_tol = 1e-12; S->proj_accept = 1e-9;
   S->proj_iter = 8; S->delta = 1e-7; S->cap = cap; S->log_t = log_t; S->log_y = log_y; S->work = work;
-  S->y_last = y_last; S->y_from = y_from; S->t_min = -INFINITY; S->t_rolled = -INFINITY; }
+  S->y_last = y_last; S->y_from = y_from; S->t_min = -INFINITY; S->t_rolled = -INFINITY;
+  S->t_hidden = -INFINITY; }
 
 size_t model_sizes(int which)
 { mbrt_mech P; double p[1] = {1.0};

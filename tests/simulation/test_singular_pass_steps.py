@@ -91,6 +91,17 @@ def test_collapsing_steps_and_rough_outputs_next_to_a_flat_position_are_not_left
 
 
 @needs_c
+def test_a_step_hiding_a_flat_position_between_ends_of_one_sign_is_halved():
+    # rtol 1e-5: a step of 0.38 s held a flat position 13 ms after its start and the next
+    # maximum of log det before its end, so the event function had one sign at both ends:
+    # 3 of 20 passages went unrecorded before the chord between a step's ends was looked at
+    N = 2
+    r = mbcomp.simulate(nfb.build(N=N), **{**nfb.SIMULATION, "rtol": 1e-5, "atol": 1e-7})
+    assert r.stats["python_steps"] == 0 and r.stats["steps_halved"] > 0
+    check_run(r, N, 1e-2, 5e-2, 5e-2)  # rtol 1e-5: 1.3e-3 s, 9e-3 rad, 7e-3 J measured (Python path: 4.9e-2 rad)
+
+
+@needs_c
 def test_the_program_answers_the_monitor_from_the_start(monkeypatch):
     # on the Python path, the same run with the evaluations numeric until the lazy evaluator's
     # 200 ran out (before): the same steps and passages; the evaluations are the program's

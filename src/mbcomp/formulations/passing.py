@@ -47,7 +47,10 @@ class MbrtPass(ctypes.Structure):
                 + [(n, ctypes.c_double) for n in ("t_seen", "t_stop", "t_back", "h_back", "t_rolled", "t_before",
                                                    "t_after")]
                 + [("nrange_step", ctypes.c_long), ("collapse", ctypes.c_int), ("redo", ctypes.c_int),
-                   ("rolled_here", ctypes.c_int)])
+                   ("rolled_here", ctypes.c_int), ("split", ctypes.c_int), ("hcap", ctypes.c_double),
+                   ("nsplits", ctypes.c_long), ("nhalved", ctypes.c_long)]
+                + [(n, ctypes.c_double) for n in ("g_start", "g_end", "t_hidden")]
+                + [("hidden", ctypes.c_int), ("hidden_here", ctypes.c_int)])
 
 
 class _Stats(ctypes.Structure):  # mbrt_stats (mbrt.h)
@@ -114,12 +117,13 @@ class PassingEngine:
                             pass_rank=float(pass_rank), project=int(bool(project)), proj_tol=ctx.proj_tol,
                             proj_accept=ctx.proj_accept, proj_iter=ctx.proj_iter, delta=self.DELTA, cap=self.CAP,
                             log_t=self.log_t.ctypes.data, log_y=self.log_y.ctypes.data, work=self.work.ctypes.data,
-                            y_last=self.y_last.ctypes.data, y_from=self.y_from.ctypes.data, t_min=-np.inf, t_rolled=-np.inf)
+                            y_last=self.y_last.ctypes.data, y_from=self.y_from.ctypes.data, t_min=-np.inf, t_rolled=-np.inf,
+                            t_hidden=-np.inf)
         self._keep = bound
         self.minima, self.reached = [], -np.inf
         self.counts = dict(range_evaluations=0, skipped_projections=0, event_evaluations=0, retaken_steps=0,
                            collapse_retries=0, outputs_integrated_again=0, minima_located_again=0,
-                           integrated_again_failed=0)
+                           integrated_again_failed=0, steps_split=0, steps_halved=0)
         self._rk_work = {}
         _ENGINES[system] = self
 
@@ -173,7 +177,8 @@ class PassingEngine:
         for key, field in (("range_evaluations", "nrange"), ("skipped_projections", "nskipped"),
                            ("event_evaluations", "nevents"), ("retaken_steps", "nretaken"),
                            ("collapse_retries", "nrollbacks"), ("outputs_integrated_again", "nredone"),
-                           ("minima_located_again", "nrefined"), ("integrated_again_failed", "nredo_failed")):
+                           ("minima_located_again", "nrefined"), ("integrated_again_failed", "nredo_failed"),
+                           ("steps_split", "nsplits"), ("steps_halved", "nhalved")):
             self.counts[key] += int(getattr(S, field))
         status = 1 if status == 5 else int(status)  # the log full: the Python path goes on from t_last
         self.reached = max(self.reached, float(S.t_last))

@@ -26,6 +26,12 @@
 #define PASS_LOGDET_SINGULAR (-1e300)
 /* s: the event's d/dt log det r is passed as r / (1 + (r s)^2), linear in t within ~ 2 k s of a pole */
 #define PASS_POLE_SPAN 1e-3
+/* states sampled on each side of a located minimum inside its step: another sign change of the
+ * event function there (two minima in one step, or a maximum located) takes the step again in
+ * quarters, and no later step is longer */
+#define PASS_SAMPLES 8
+/* parts of a step's chord at whose inner points the rate's sign is checked (hides_pair) */
+#define PASS_CHORD 4
 /* an accepted step with range-space solves below this share of the last step without any:
  * the steps collapse next to a singular position (a step starting ms before one fell to
  * 1e-6 s), and the integration goes back to that step's start (kept across calls), at most
@@ -53,19 +59,19 @@ static const double *arow(const mbrt_mech *P, const double *out, int k)
  * A[m nu], Yt[m nu], G[m m], V[m m], r[m], lam[m], qd[nq], qs[nq],
  * Gk[nrows nrows], events' work[3 + n], y_event[n], y_start[n], y_back[n], y_after[n],
  * y_before[n], times[cap], rf[5 n] (the refinement's two states, their rates and a state
- * between). */
+ * between), smp[PASS_SAMPLES n] (states along the step). */
 size_t mbrt_pass_work_size(const mbrt_mech *P, int cap)
 {
     if (cap < 0 || P == NULL || P->nq <= 0 || P->nu <= 0 || P->n_out <= 0)
         return 0;
     const size_t nq = (size_t)P->nq, nu = (size_t)P->nu, m = (size_t)nvel(P), n = nq + nu;
     return (size_t)P->n_out + nu * nu + nu + 2 * m * nu + 2 * m * m + 2 * m + 2 * nq +
-           (size_t)P->nrows * (size_t)P->nrows + 3 + 11 * n + (size_t)cap;
+           (size_t)P->nrows * (size_t)P->nrows + 3 + (11 + PASS_SAMPLES) * n + (size_t)cap;
 }
 
 typedef struct {
     double *out, *L, *x0, *A, *Yt, *G, *V, *r, *lam, *qd, *qs, *Gk, *evwork, *y_event, *y_start, *y_back, *y_after,
-        *y_before, *times, *rf;
+        *y_before, *times, *rf, *smp;
 } pass_work;
 
 static pass_work layout(const mbrt_pass *S)
@@ -93,6 +99,7 @@ static pass_work layout(const mbrt_pass *S)
     W.y_before = W.y_after + n;
     W.times = W.y_before + n;
     W.rf = W.times + S->cap;
+    W.smp = W.rf + 5 * (size_t)n;
     return W;
 }
 
@@ -260,18 +267,16 @@ static int logdet_rows(const mbrt_pass *S, double t, const double *q, const doub
     return 0;
 }
 
-static int pass_event(void *c, double t, const double *y, double *g)
+/* d/dt log det(C_k C_k^T) at (t, y) by a central difference along dq/dt, into *rate (1/s). */
+static int log_rate(mbrt_pass *S, double t, const double *y, double *rate)
 {
-    mbrt_pass *S = (mbrt_pass *)c;
     const mbrt_mech *P = S->mech;
     const int nq = P->nq;
     const double *q = y, *u = y + nq;
     pass_work W = layout(S);
-    if (t > S->t_seen)
-        S->t_seen = t;
     S->nevents++;
     if (P->nrows == 0) {
-        g[0] = 1.0;
+        *rate = 1.0;
         return 0;
     }
     if (coordinate_rate(P, t, q, u, W.qd) != 0)
@@ -285,11 +290,49 @@ static int pass_event(void *c, double t, const double *y, double *g)
         W.qs[i] = q[i] - S->delta * W.qd[i];
     if (logdet_rows(S, t - S->delta, W.qs, u, &lm) != 0)
         return 1;
-    /* d/dt log det, made linear through a pole (a singular position: 2 k / (t - t_s) for a rank
-     * drop k) as through a plain zero, so Brent's interpolation converges at both */
-    const double rate = (lp - lm) / (2.0 * S->delta), x = rate * PASS_POLE_SPAN;
-    const double v = rate / (1.0 + x * x);
+    *rate = (lp - lm) / (2.0 * S->delta);
+    return 0;
+}
+
+static int pass_event(void *c, double t, const double *y, double *g)
+{
+    mbrt_pass *S = (mbrt_pass *)c;
+    double rate;
+    if (log_rate(S, t, y, &rate) != 0)
+        return 1;
+    if (t > S->t_seen) { /* a step's end (the location's evaluations lie inside the step) */
+        S->t_seen = t;
+        S->g_end = rate;
+    } else if (t == S->t_from && isnan(S->g_start)) { /* a call's start */
+        S->g_start = rate;
+    }
+    /* made linear through a pole (a singular position: 2 k / (t - t_s) for a rank drop k) as
+     * through a plain zero, so Brent's interpolation converges at both */
+    const double x = rate * PASS_POLE_SPAN, v = rate / (1.0 + x * x);
     g[0] = t <= S->t_min ? fabs(v) : v;
+    return 0;
+}
+
+/* Whether the step from (t_from, y_from) to (t, y), whose ends' rates g0, g1 have one sign,
+ * hides a minimum and a maximum of log det: the rate of the opposite sign at PASS_CHORD - 1
+ * states on the chord between its ends (a step of 0.38 s held a flat position 13 ms after its
+ * start and the next maximum before its end: no sign change at the ends). */
+static int hides_pair(mbrt_pass *S, double t, const double *y, double g0, double g1)
+{
+    const int n = S->mech->nq + S->mech->nu;
+    if (!(g0 * g1 > 0.0) || S->mech->nrows == 0)
+        return 0;
+    pass_work W = layout(S);
+    for (int j = 1; j < PASS_CHORD; ++j) {
+        const double f = (double)j / PASS_CHORD;
+        for (int i = 0; i < n; ++i)
+            W.smp[i] = S->y_from[i] + f * (y[i] - S->y_from[i]);
+        double rate;
+        if (log_rate(S, S->t_from + f * (t - S->t_from), W.smp, &rate) != 0)
+            return 0;
+        if (rate * g0 < 0.0)
+            return 1;
+    }
     return 0;
 }
 
@@ -312,6 +355,12 @@ static int pass_on_step(void *c, double t, double *y)
     if (S->h_back > 0.0 && S->h_last < PASS_COLLAPSE * S->h_back && S->nrange > nrange &&
         (S->t_back != S->t_rolled || S->rolled_here < 2)) {
         S->collapse = 1; /* the steps collapse next to a singular position: the step before is taken again */
+        return 1;
+    }
+    const double g0 = S->g_start;
+    S->g_start = S->g_end;
+    if (!isnan(g0) && (S->t_from != S->t_hidden || S->hidden_here < 6) && hides_pair(S, t, y, g0, S->g_end)) {
+        S->hidden = 1; /* the step is taken again in halves */
         return 1;
     }
     if (S->project) {
@@ -399,11 +448,47 @@ static void hermite(int n, double ta, double tb, const double *ya, const double 
         y[i] = h00 * ya[i] + h10 * h * fa[i] + h01 * yb[i] + h11 * h * fb[i];
 }
 
+/* One side of the step (t_before, t_after] holding the minimum at t_min, integrated from its end
+ * (forwards from t_before, backwards in time from t_after) to t (written to y), through
+ * PASS_SAMPLES states on the way at which the event function must keep its sign (below zero
+ * before the minimum, above after it): else S->split is set.  0, or the runtime's failing status. */
+static int sample_side(mbrt_pass *S, int order, int after, double t, double rtol, const double *atol,
+                       long max_steps, double *work, mbrt_stats *total, double *y)
+{
+    const int n = S->mech->nq + S->mech->nu;
+    pass_work W = layout(S);
+    const double t0 = after ? -S->t_after : S->t_before, t1 = after ? -t : t;
+    double times[PASS_SAMPLES];
+    for (int j = 0; j < PASS_SAMPLES; ++j)
+        times[j] = j + 1 == PASS_SAMPLES ? t1 : t0 + (t1 - t0) * (j + 1) / PASS_SAMPLES;
+    const mbrt_rhs_fn f = after ? pass_rhs_back : pass_rhs;
+    const double *y0 = after ? W.y_after : W.y_before;
+    mbrt_stats st;
+    int nw = 0; /* first step: the whole way */
+    const int rc = order == 8 ? mbrt_dop853(f, NULL, S, n, t0, y0, t1, rtol, atol, t1 - t0, 0.0, max_steps, times,
+                                            PASS_SAMPLES, W.smp, &nw, work, &st)
+                              : mbrt_dopri5(f, NULL, S, n, t0, y0, t1, rtol, atol, t1 - t0, 0.0, max_steps, times,
+                                            PASS_SAMPLES, W.smp, &nw, work, &st);
+    total->nfev += st.nfev;
+    if (rc != MBRT_OK)
+        return rc;
+    for (int j = 0; j + 1 < PASS_SAMPLES; ++j) {
+        double g;
+        if (pass_event(S, after ? -times[j] : times[j], W.smp + (size_t)j * (size_t)n, &g) != 0)
+            return MBRT_RHS_FAILED;
+        if (after ? !(g > 0.0) : g > 0.0)
+            S->split = 1;
+    }
+    memcpy(y, W.smp + (size_t)(PASS_SAMPLES - 1) * (size_t)n, sizeof(double) * (size_t)n);
+    return 0;
+}
+
 /* The minimum just logged at t_min (inside the step (t_before, t_after], located on the step's
  * continuous extension) located again on the motion itself: the states at t_min -+ d from
- * integrations from the step's ends (as redo_outputs), the root of the event function on the
- * cubic through them and their rates (Illinois false position to tol).  Left as it is where the
- * root is not bracketed there.  0, or the runtime's failing status. */
+ * integrations from the step's ends (sample_side: another sign change on the way sets
+ * S->split), the root of the event function on the cubic through them and their rates
+ * (Illinois false position to tol).  Left as it is where the root is not bracketed there.  0,
+ * or the runtime's failing status. */
 static int refine_minimum(mbrt_pass *S, int order, double rtol, const double *atol, long max_steps, double *work,
                           double tol, mbrt_stats *total)
 {
@@ -416,29 +501,20 @@ static int refine_minimum(mbrt_pass *S, int order, double rtol, const double *at
     const double d = fmin(0.02 * (S->t_after - S->t_before), 0.5 * fmin(te - S->t_before, S->t_after - te));
     if (!(d > 4.0 * tol))
         return 0;
-    double ta = te - d, tb = -(te + d);
-    mbrt_stats st;
-    int nw = 0, rc;
-    const double ha = ta - S->t_before, hb = S->t_after + tb; /* first steps: the whole way */
-    rc = order == 8 ? mbrt_dop853(pass_rhs, NULL, S, n, S->t_before, W.y_before, ta, rtol, atol, ha, 0.0, max_steps,
-                                  &ta, 1, ya, &nw, work, &st)
-                    : mbrt_dopri5(pass_rhs, NULL, S, n, S->t_before, W.y_before, ta, rtol, atol, ha, 0.0, max_steps,
-                                  &ta, 1, ya, &nw, work, &st);
-    total->nfev += st.nfev;
-    if (rc != MBRT_OK)
-        return rc;
-    rc = order == 8 ? mbrt_dop853(pass_rhs_back, NULL, S, n, -S->t_after, W.y_after, tb, rtol, atol, hb, 0.0,
-                                  max_steps, &tb, 1, yb, &nw, work, &st)
-                    : mbrt_dopri5(pass_rhs_back, NULL, S, n, -S->t_after, W.y_after, tb, rtol, atol, hb, 0.0,
-                                  max_steps, &tb, 1, yb, &nw, work, &st);
-    total->nfev += st.nfev;
-    if (rc != MBRT_OK)
-        return rc;
-    tb = -tb;
-    if (pass_rhs(S, ta, ya, fa) != 0 || pass_rhs(S, tb, yb, fb) != 0)
-        return MBRT_RHS_FAILED;
+    const double ta = te - d, tb = te + d;
     const double keep = S->t_min;
     S->t_min = -INFINITY; /* the event function's own values */
+    int rc = sample_side(S, order, 0, ta, rtol, atol, max_steps, work, total, ya);
+    if (rc == 0)
+        rc = sample_side(S, order, 1, tb, rtol, atol, max_steps, work, total, yb);
+    if (rc != 0 || S->split) {
+        S->t_min = keep;
+        return rc;
+    }
+    if (pass_rhs(S, ta, ya, fa) != 0 || pass_rhs(S, tb, yb, fb) != 0) {
+        S->t_min = keep;
+        return MBRT_RHS_FAILED;
+    }
     double a = ta, b = tb, ga, gb, gm, tm = te;
     int side = 0, ok = pass_event(S, a, ya, &ga) == 0 && pass_event(S, b, yb, &gb) == 0 && ga < 0.0 && gb > 0.0;
     for (int it = 0; ok && it < 100 && b - a > tol; ++it) {
@@ -550,6 +626,26 @@ static int go_back(mbrt_pass *S, const pass_work *W, const double *t_out, int n_
     return k;
 }
 
+/* After a step found to hold more than one sign change of the event function: back to its
+ * start (t_before), the minima logged after it dropped, the step to take there in *h a quarter
+ * of it, and no later step longer (S->hcap).  Returns the index of the first output after it. */
+static int split_back(mbrt_pass *S, const pass_work *W, const double *t_out, int n_out, double t_min0, double *t,
+                      double *h)
+{
+    int k = 0;
+    while (k < n_out && t_out[k] <= S->t_before)
+        ++k;
+    while (S->count > 0 && S->log_t[S->count - 1] > S->t_before)
+        S->count--;
+    S->t_min = S->count > 0 ? S->log_t[S->count - 1] : t_min0;
+    S->hcap = *h = 0.25 * (S->t_after - S->t_before);
+    *t = S->t_before;
+    memcpy(W->y_start, W->y_before, sizeof(double) * (size_t)(S->mech->nq + S->mech->nu));
+    S->split = 0;
+    S->nsplits++;
+    return k;
+}
+
 /* The runtime's events over the event function, location tolerance tol (s). */
 static void arm(mbrt_events *ev, mbrt_pass *S, const pass_work *W, const int *direction, double tol)
 {
@@ -570,7 +666,8 @@ static void begin(mbrt_pass *S, const pass_work *W, double t0, const double *y0,
     const int n = S->mech->nq + S->mech->nu;
     S->count = 0;
     S->nrange = S->nproj = S->nskipped = S->nevents = S->nretaken = 0;
-    S->nrollbacks = S->nredone = S->nrefined = S->nredo_failed = 0;
+    S->nrollbacks = S->nredone = S->nrefined = S->nredo_failed = S->nsplits = S->nhalved = 0;
+    S->split = 0;
     S->h_last = 0.0;
     S->t_stop = t_stop;
     memcpy(W->y_start, y0, sizeof(double) * (size_t)n);
@@ -619,19 +716,35 @@ int mbrt_pass_integrate(mbrt_pass *S, int order, double t0, const double *y0, do
         memcpy(S->y_last, W.y_start, sizeof(double) * (size_t)n);
         memcpy(S->y_from, W.y_start, sizeof(double) * (size_t)n);
         S->nrange_step = S->nrange;
-        S->collapse = 0;
+        S->collapse = S->hidden = 0;
+        S->g_start = NAN;
         int nw = 0;
         memset(&st, 0, sizeof st);
+        const double hm = S->hcap > 0.0 ? (hmax > 0.0 ? fmin(hmax, S->hcap) : S->hcap) : hmax;
         const int rc = order == 8
-            ? mbrt_dop853_events(pass_rhs, pass_on_step, S, n, t, W.y_start, t_end, rtol, atol, h, hmax, max_steps,
+            ? mbrt_dop853_events(pass_rhs, pass_on_step, S, n, t, W.y_start, t_end, rtol, atol, h, hm, max_steps,
                                  t_out + k, n_out - k, y_out + (size_t)k * (size_t)n, &nw, work, &st, 0, &ev)
-            : mbrt_dopri5_events(pass_rhs, pass_on_step, S, n, t, W.y_start, t_end, rtol, atol, h, hmax, max_steps,
+            : mbrt_dopri5_events(pass_rhs, pass_on_step, S, n, t, W.y_start, t_end, rtol, atol, h, hm, max_steps,
                                  t_out + k, n_out - k, y_out + (size_t)k * (size_t)n, &nw, work, &st, 0, &ev);
         add_counts(total, &st);
         if (S->redo == 2)
             redo_step(S, order, t_out + k, nw, y_out + (size_t)k * (size_t)n, rtol, atol, max_steps, work, ev.tol,
                       total);
         S->redo = 0;
+        if (S->split) {
+            k = split_back(S, &W, t_out, n_out, t_min0, &t, &h);
+            continue;
+        }
+        if (rc == MBRT_STOPPED && S->hidden) { /* the step from t_from again, in halves */
+            S->hidden_here = S->t_from == S->t_hidden ? S->hidden_here + 1 : 0;
+            S->t_hidden = t = S->t_from;
+            h = 0.5 * (S->t_last - S->t_from);
+            for (k = 0; k < n_out && t_out[k] <= t; ++k)
+                ;
+            memcpy(W.y_start, S->y_from, sizeof(double) * (size_t)n);
+            S->nhalved++;
+            continue;
+        }
         if (rc == MBRT_STOPPED && S->collapse) {
             k = go_back(S, &W, t_out, n_out, t_min0, &t, &h);
             continue;

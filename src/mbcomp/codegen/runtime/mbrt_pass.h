@@ -32,7 +32,14 @@
  *     it), not read from the continuous extension, whose extra stages may land
  *     where the multipliers are rough (off the rows by 3e-6 rad, 1 J off); the
  *     minimum itself is located again on the cubic through the states at
- *     t_min -+ 2 % of the step those integrations reach.
+ *     t_min -+ 2 % of the step those integrations reach; the event function at
+ *     states along them must keep its sign on each side, else the step held
+ *     two minima (or a maximum was located) and is taken again in quarters, no
+ *     later step longer;
+ *   - a step whose ends' rates have one sign may still hide a minimum and the
+ *     next maximum (a step of 0.38 s over a flat position): the rate at three
+ *     states on the chord between its ends with the other sign takes the step
+ *     again in halves.
  */
 #ifndef MBRT_PASS_H
 #define MBRT_PASS_H
@@ -80,7 +87,15 @@ typedef struct {
                                 the continuous extension's stand (written)             */
     double t_seen, t_stop, t_back, h_back, t_rolled, t_before, t_after;
     long nrange_step;
-    int collapse, redo, rolled_here;
+    int collapse, redo, rolled_here, split;
+    double hcap;             /* no step longer than this (0: none; set where a step held
+                                two sign changes; kept across calls)                  */
+    long nsplits;            /* steps taken again in quarters (written)               */
+    long nhalved;            /* steps taken again in halves: a minimum and a maximum
+                                hidden between their ends (written)                   */
+    double g_start, g_end, t_hidden; /* internal: the rate at the step's ends, the last
+                                start taken again in halves                            */
+    int hidden, hidden_here;
 } mbrt_pass;
 
 /* Doubles of work mbrt_pass needs for the evaluation program P and cap (0 if P is NULL). */
