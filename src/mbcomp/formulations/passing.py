@@ -137,6 +137,18 @@ class PassingEngine:
         hands the stretch to the Python path."""
         return self.inner.linear_events(index, sign, at, direction, tol)
 
+    def range_rate(self, t, y):
+        """``dy/dt`` at ``(t, y = [q, u])`` (s) by the C loop's range-space solve over the evaluation
+        program (``mbrt_pass_rhs``: what it uses where the Lagrange program's guard fails), or
+        None where the evaluation fails or ``M`` is not positive definite."""
+        dll = self.inner.bound.code.dll
+        fn = dll.mbrt_pass_rhs
+        if fn.argtypes is None:
+            fn.argtypes, fn.restype = [_P, ctypes.c_double, _P, _P], ctypes.c_int
+        y = np.ascontiguousarray(y, float)
+        dy = np.zeros(self.n)
+        return dy if fn(ctypes.addressof(self.struct), float(t), y.ctypes.data, dy.ctypes.data) == 0 else None
+
     def _work(self, order):
         w = self._rk_work.get(order)
         if w is None:

@@ -33,13 +33,13 @@
  *     where the multipliers are rough (off the rows by 3e-6 rad, 1 J off); the
  *     minimum itself is located again on the cubic through the states at
  *     t_min -+ 2 % of the step those integrations reach; the event function at
- *     states along them must keep its sign on each side, else the step held
+ *     four states along each of them must keep its sign, else the step held
  *     two minima (or a maximum was located) and is taken again in quarters, no
  *     later step longer;
  *   - a step whose ends' rates have one sign may still hide a minimum and the
- *     next maximum (a step of 0.38 s over a flat position): the rate at three
- *     states on the chord between its ends with the other sign takes the step
- *     again in halves.
+ *     next maximum (a step of 0.38 s over a flat position): where log det moves
+ *     by more than 1 over it (h |rate| > 1), the rate at three states on the
+ *     chord between its ends with the other sign takes the step again in halves.
  */
 #ifndef MBRT_PASS_H
 #define MBRT_PASS_H
