@@ -96,3 +96,38 @@ def test_a_long_chains_constant_outputs_come_from_tables(tmp_path):
             np.testing.assert_allclose(R[path][k], matrix_to_quat(Rk), atol=1e-13)
             n_const += int(np.sum((Rk == 0.0) | (Rk == 1.0)))
     assert n_const // 3 > TAIL_TABLE
+
+
+@pytest.mark.skipif(not c_compiler(), reason="needs a C compiler")
+def test_the_program_made_beside_the_run_is_the_one_made_when_asked(tmp_path, monkeypatch):
+    # simulate starts the output program's C build before integrating (prepare_outputs): the run's
+    # columns are those of a run that made it at the post-processing, bit for bit, and a forked
+    # child (which has the pending build but not its thread) makes its own instead of waiting
+    import os
+    import mbcomp.codegen.evaluator as evaluator
+    from mbcomp.codegen.outputs import PendingOutputs
+
+    build = load_model("models/slider_crank.py").build
+    monkeypatch.setenv("MBCOMP_CACHE", str(tmp_path / "a"))
+    started = []
+    real = evaluator.ProgramEvaluator.prepare_outputs
+
+    def spy(self, n, gains):
+        real(self, n, gains)
+        started.append((self.funs, self.outputs_key(gains), self.funs.get(self.outputs_key(gains))))
+    monkeypatch.setattr(evaluator.ProgramEvaluator, "prepare_outputs", spy)
+    beside = mbcomp.simulate(build(), t_end=1.0)
+    [(funs, key, pending)] = started
+    assert isinstance(pending, PendingOutputs) and funs[key] is pending.result()  # the one the columns took
+    monkeypatch.setattr(evaluator.ProgramEvaluator, "prepare_outputs", lambda *a, **k: None)
+    monkeypatch.setenv("MBCOMP_CACHE", str(tmp_path / "b"))
+    asked = mbcomp.simulate(build(), t_end=1.0)
+    assert beside.names == asked.names and len(beside.names) > 50
+    for name in beside.names:
+        np.testing.assert_array_equal(beside[name], asked[name])
+    pending = PendingOutputs(lambda: "made")
+    assert pending.result() == "made"
+    pid = os.fork()
+    if pid == 0:  # the child: False at once (nothing is made there), never a wait
+        os._exit(0 if pending.result() is False else 1)
+    assert os.waitpid(pid, 0)[1] == 0

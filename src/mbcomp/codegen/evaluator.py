@@ -273,7 +273,10 @@ class ProgramEvaluator:
 
     def offers(self, name):
         """Whether this evaluator offers the capability ``name`` (see :attr:`capabilities`);
-        ``"dalembert_fun"`` and ``"dae_fun"`` are decided without making the Lagrange program."""
+        ``"outputs"``, ``"dalembert_fun"`` and ``"dae_fun"`` are decided without making the
+        Lagrange program."""
+        if name == "outputs":
+            return True
         if name in ("dalembert_fun", "dae_fun"):
             return self._dalembert() is not None
         return name in self.capabilities
@@ -448,16 +451,37 @@ class ProgramEvaluator:
         o = self.options
         return bound_program(self.system, self.funs, form, self.backend, o["cache_dir"], o["max_nodes"])
 
+    def outputs_key(self, gains):
+        """The output program's key among the structure's programs: the row mask now and
+        whether there are Baumgarte ``gains``."""
+        rm = self.system.row_mask
+        return ("outputs", None if rm is None or rm.all() else rm.tobytes(), gains is not None)
+
+    def prepare_outputs(self, n_points, gains):
+        """Start making the output program a grid of ``n_points`` (at least
+        :data:`OUTPUT_GRID_MIN`) will take, unless made, being made or impossible: traced now,
+        compiled on a thread while the run integrates (:meth:`OutputProgram.start`); the one
+        :meth:`output_grid` would make. A C backend only."""
+        from .outputs import OutputProgram
+
+        key = self.outputs_key(gains)
+        if self.backend != "c" or n_points < OUTPUT_GRID_MIN or self.funs.get(key, False) is not False:
+            return
+        try:
+            self.funs[key] = OutputProgram.start(self.system, self.backend, baumgarte=gains is not None,
+                                                 cache_dir=self.options["cache_dir"], max_nodes=self.options["max_nodes"])
+        except CodegenError:
+            self.funs[key] = None
+
     def output_grid(self, t, Y, gains):
         """The columns at every output time in one call (:meth:`~mbcomp.codegen.outputs.OutputProgram.grid`:
         ``(names, values, quaternions, ok)``), or None without the program: fewer than :data:`OUTPUT_GRID_MIN`
         points (unless the structure's runs made it or paid that many numeric points), a law not traceable, a
         singular trace point. ``gains``: Baumgarte's (1/s) or None. Made per row mask and kind of gains."""
-        from .outputs import OutputProgram
+        from .outputs import OutputProgram, settled
 
-        rm = self.system.row_mask
-        key = ("outputs", None if rm is None or rm.all() else rm.tobytes(), gains is not None)
-        prog = self.funs.get(key, False)
+        key = self.outputs_key(gains)
+        prog = settled(self.funs, key)
         if len(t) < OUTPUT_GRID_MIN and not prog:  # a small grid takes the program only when made already
             seen = self.funs[("numeric outputs",) + key[1:]] = self.funs.get(("numeric outputs",) + key[1:], 0) + len(t)
             if seen <= OUTPUT_GRID_MIN:  # ... or once the structure's runs paid for it numerically

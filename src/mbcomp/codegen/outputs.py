@@ -26,7 +26,10 @@ Examples
 """
 from __future__ import annotations
 
+import concurrent.futures
 import ctypes
+import os
+import threading
 import time
 
 import numpy as np
@@ -146,6 +149,18 @@ class OutputProgram:
         tr = trace(system, max_nodes, program="outputs", baumgarte=baumgarte)
         return cls(tr, backend, cache_dir) if "outputs" in tr.groups else None
 
+    @classmethod
+    def start(cls, system, backend="c", baumgarte=True, cache_dir=None, max_nodes=3_000_000):
+        """:meth:`build` with the printing and the C compiler on a thread of its own: traced
+        now (the tracer is single-threaded), the rest beside the caller, which goes on
+        integrating (a first run's post-processing waited ~80 ms for gcc after the run).
+        Returns a :class:`PendingOutputs`; raises as :meth:`build` does while tracing."""
+        if backend == "c" and c_compiler() is None:
+            raise CodegenError("backend='c' needs a C compiler (gcc or cc on PATH, or $CC) -> fix: install one, "
+                               "or use backend='python'")
+        tr = trace(system, max_nodes, program="outputs", baumgarte=baumgarte)
+        return PendingOutputs(lambda: cls(tr, backend, cache_dir) if "outputs" in tr.groups else None)
+
     def _build_c(self, prog, cache_dir):
         # the compile policy of the other programs (docs/design/generated-programs.md): -O2, outputs of one
         # shape rolled into loops, functions of a few hundred statements in translation units
@@ -235,3 +250,62 @@ class OutputProgram:
         table[:, ~ok] = np.nan
         quat[:, ~ok] = np.nan
         return self.names, table, dict(zip(self.rotation_paths, quat)), ok
+
+
+class PendingOutputs:
+    """An :class:`OutputProgram` being made on a thread (:meth:`OutputProgram.start`).
+
+    The thread is not a daemon: the interpreter waits for it at exit, so no compiler is left
+    half-way. A forked child has the future but not the thread, so it makes its own program.
+
+    Parameters
+    ----------
+    make : callable
+        Returns the program or None (:meth:`OutputProgram.build`'s results); run on the thread.
+
+    Examples
+    --------
+    >>> from mbcomp.codegen.outputs import PendingOutputs
+    >>> PendingOutputs(lambda: None).result() is None
+    True
+    """
+
+    def __init__(self, make):
+        self.pid = os.getpid()
+        self._future = concurrent.futures.Future()
+
+        def work():
+            try:
+                self._future.set_result(make())
+            except BaseException as exc:  # handed to whoever waits for it (a CodegenError: no program)
+                self._future.set_exception(exc)
+        threading.Thread(target=work, name="mbcomp-outputs", daemon=False).start()
+
+    def result(self):
+        """The program (or None: the trace point was singular); raises what making it raised
+        (:class:`CodegenError`); :data:`False` in a forked child (nothing is being made there)."""
+        if os.getpid() != self.pid:
+            return False
+        return self._future.result()
+
+
+def settled(programs, key):
+    """The output program under ``key`` in a structure's ``programs`` (dict): the program,
+    None (none can be made) or False (not made); one being made (:class:`PendingOutputs`) is
+    waited for and put in its place.
+
+    Examples
+    --------
+    >>> from mbcomp.codegen.outputs import PendingOutputs, settled
+    >>> programs = {"k": PendingOutputs(lambda: None)}
+    >>> settled(programs, "k"), programs, settled(programs, "other")
+    (None, {'k': None}, False)
+    """
+    prog = programs.get(key, False)
+    if isinstance(prog, PendingOutputs):
+        try:
+            prog = prog.result()
+        except CodegenError:
+            prog = None
+        programs[key] = prog
+    return prog

@@ -254,8 +254,12 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
             form, y0 = watcher.start(form, y0, t_start, init.q, init.u)
         after = bool(sensitivities) and Sensitivities.after_the_run(form, watcher, stepper)
         stepped = bool(sensitivities) and not after  # a step's dense output carries them: one step at a time
+        t_out = output_times(t_start, t_end, n_out, dt_out)
+        offers = getattr(system.evaluator, "offers", None)  # asking every capability would wait for the program
+        if watcher is None and offers is not None and offers("outputs"):  # its C build beside the program's
+            system.evaluator.prepare_outputs(len(t_out), form.output_gains())  # and the integration
         run = Run(form, stepwise(stepper) if stepped else watching(stepper, watcher) if watcher else stepper,
-                  output_times(t_start, t_end, n_out, dt_out), y0, rtol=rtol, atol=atol, max_step=max_step, h=h)
+                  t_out, y0, rtol=rtol, atol=atol, max_step=max_step, h=h)
         sens = None
         if sensitivities:
             sens = Sensitivities(form.system, sensitivities, t_start, run.ys[0], form.output_gains() or (0.0, 0.0),
