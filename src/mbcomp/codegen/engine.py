@@ -134,7 +134,8 @@ _LIBRARIES = {}
 def part_library(cc, cache_dir, part):
     """A part of the runtime built apart from the core (:data:`~mbcomp.codegen.runtime_build.PARTS`:
     ``"radau"``, RADAU5: ``mbrt_radau5``, ``mbrt_radau5_dense``, the work sizes, the program
-    callbacks ``mbrt_prog_ode_rhs``/``_jac``) as a shared library of its own: the part's objects
+    callbacks ``mbrt_prog_ode_rhs``/``_jac``; ``"pass"``, the passage of singular positions:
+    ``mbrt_pass_integrate``, ``mbrt_pass_rhs``) as a shared library of its own: the part's objects
     (:func:`runtime_objects`) and the core's but the glue (whatever of them the part calls),
     compiled and linked the first time a run uses the part (a machine's first run that does not
     use it does not wait for it), cached in ``cache_dir``, loaded once per process. It reaches
@@ -498,7 +499,8 @@ class Integrator:
         return self.mech is not None
 
     def part_library(self, part):
-        """:func:`part_library` (a part of the runtime built apart, at its first use: ``"radau"``)
+        """:func:`part_library` (a part of the runtime built apart, at its first use: ``"radau"``,
+        ``"pass"``)
         in the machine's runtime directory: it reaches this engine's program through function
         pointers."""
         code = self.bound.code

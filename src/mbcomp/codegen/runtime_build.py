@@ -25,7 +25,7 @@ Examples
 --------
 >>> from mbcomp.codegen.runtime_build import PARTS, sources
 >>> sorted(PARTS)
-['core', 'radau']
+['core', 'pass', 'radau']
 >>> [name for name, _ in sources("radau")]
 ['mbrt_radau5', 'mbrt_radau5_linalg', 'mbrt_radau5_step']
 >>> "mbcomp_glue" in [name for name, _ in sources("core")]
@@ -59,7 +59,7 @@ THIN_PREFIX = "_mbcomp_thin_"
 #: the sources (stems in ``runtime/``) of the parts built apart from the core, by prefix: what
 #: the default path never calls (a new ``mbrt_*.c`` is the core's unless a prefix here takes it;
 #: a part is reached through ``engine.part_library``, not the program's library)
-PARTS = {"core": None, "radau": ("mbrt_radau5",)}
+PARTS = {"core": None, "radau": ("mbrt_radau5",), "pass": ("mbrt_pass",)}
 
 
 class RuntimeBuildError(RuntimeError):

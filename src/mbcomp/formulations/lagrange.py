@@ -204,7 +204,7 @@ class LagrangeIndex1(Formulation):
     def _passing_engine(self, evaluator):
         """The :class:`~mbcomp.formulations.passing.PassingEngine` of a ``singular="pass"`` run, or None."""
         inner = evaluator.integrator(0.0, 0.0, project=(POSITION_TOL, ACCEPT_FACTOR * POSITION_TOL))
-        if inner is None or inner.mech is None or not hasattr(inner.bound.code.dll, "mbrt_pass_integrate"):
+        if inner is None or inner.mech is None:
             return None
         return PassingEngine(inner, self.system, self.PASS_RANK, project=self.projects)
 

@@ -119,7 +119,7 @@ class PassingEngine:
         mech = integrator.mech
         self.inner, self.mech = integrator, mech
         code = integrator.bound.code
-        dll = code.dll
+        dll = integrator.part_library("pass")  # built apart at a machine's first passing run
         self.n = integrator.n
         self.fn = dll.mbrt_pass_integrate
         self.fn.restype = ctypes.c_int
@@ -133,7 +133,7 @@ class PassingEngine:
         self._going_on = None  # (time the last call's outputs ended, its last step's start, that step)
         bound = integrator.bound
         ctx = integrator.ctx
-        fun = ctypes.cast(dll.mbcomp_fun, _P).value
+        fun = ctypes.cast(code.dll.mbcomp_fun, _P).value
         self.struct = MbrtPass(fun=fun, d=ctx.d, h=ctx.h, p=ctx.p, w=ctx.w, mech=mech.ptr, mech_work=mech.work.ctypes.data,
                             pass_rank=float(pass_rank), project=int(bool(project)), proj_tol=ctx.proj_tol,
                             proj_accept=ctx.proj_accept, proj_iter=ctx.proj_iter, delta=self.DELTA, cap=self.CAP,
@@ -162,8 +162,7 @@ class PassingEngine:
         """``dy/dt`` at ``(t, y = [q, u])`` (s) by the C loop's range-space solve over the evaluation
         program (``mbrt_pass_rhs``: what it uses where the Lagrange program's guard fails), or
         None where the evaluation fails or ``M`` is not positive definite."""
-        dll = self.inner.bound.code.dll
-        fn = dll.mbrt_pass_rhs
+        fn = self.inner.part_library("pass").mbrt_pass_rhs
         if fn.argtypes is None:
             fn.argtypes, fn.restype = [_P, ctypes.c_double, _P, _P], ctypes.c_int
         y = np.ascontiguousarray(y, float)
