@@ -97,3 +97,36 @@ def test_the_closest_approach_is_reported_for_loops_only():
     res = mbcomp.simulate(disk.build(), t_end=0.2, n_out=5)
     assert res.success and 0.1 < res.stats["min_constraint_sigma"] <= 1.0
     assert "min_constraint_sigma" not in mbcomp.simulate(chain.build(N=2), t_end=0.1, n_out=3).stats
+
+
+
+def test_the_rank_monitor_reads_the_start_and_the_rows_alone_with_the_same_bits(monkeypatch):
+    # the monitors take initialization's rows where the first step starts and the rows alone (no
+    # mass matrix) at step ends: the same run as with full evaluations everywhere, bit for bit,
+    # with fewer full evaluations (Andrews' squeezer: its one step is looked into, sigma 0.198)
+    from mbcomp.assembly.system import MultibodySystem
+    from mbcomp.simulation import driver, monitors
+
+    build = load_model("models/andrews.py").build
+    kw = dict(t_end=0.03, n_out=2, rtol=1e-7, atol=1e-9)
+    mbcomp.simulate(build(), **kw)  # the programs made and verified
+    calls = []
+    real = MultibodySystem.evaluate_numeric
+
+    def counted(self, *a, **k):
+        calls.append(1)
+        return real(self, *a, **k)
+    monkeypatch.setattr(MultibodySystem, "evaluate_numeric", counted)
+    now = mbcomp.simulate(build(), **kw)
+    n_now = len(calls)
+    calls.clear()
+    for_ = monitors.monitors_for
+    with monkeypatch.context() as m:  # as before: full unmasked evaluations, the start evaluated again
+        m.setattr(monitors.StepEnd, "rows", property(lambda e: e.system.evaluate(e.t, e.q, e.u, masked=False)))
+        m.setattr(driver, "monitors_for", lambda system, atol, singular="stop", start=None: for_(system, atol, singular))
+        before = mbcomp.simulate(build(), **kw)
+    assert now.stats["min_constraint_sigma"] == before.stats["min_constraint_sigma"] < monitors.ConstraintRank.BRACKET
+    assert now.stats["steps"] == before.stats["steps"]
+    for name in now.names:
+        np.testing.assert_array_equal(now[name], before[name])
+    assert n_now + 2 <= len(calls)

@@ -93,6 +93,9 @@ class InitialState:
     #: ``(system, Evaluation)``: the evaluation at the start ``(t0, q, u)`` and the system it is
     #: of, for later users at the same state (the accuracy alarm's tolerance energy)
     start: tuple = field(default=None, repr=False, compare=False)
+    #: ``(system, Rows)``: every position row and its Jacobian at ``(t0, q)``, the closure's last
+    #: (``Phi`` and ``C`` depend on the time and the coordinates alone), for the rank monitor
+    rows: tuple = field(default=None, repr=False, compare=False)
 
 
 def _starts(system):
@@ -214,7 +217,7 @@ def initialize(system, t0=0.0, tol=POSITION_TOL, max_iter=60):
     u, ev = _close_speeds(system, t0, closure.q, u, ufix, cut_fixed, system.evaluate_from(closure.data, not same))
     notes = check_inertia(system, ev)
     return InitialState(closure.q, u, mask, dropped, closure.iterations, rank(ev.C), ev.B.shape[0], notes,
-                        start=(system, ev))
+                        start=(system, ev), rows=(system, closure.data))
 
 
 def _rowless(system):

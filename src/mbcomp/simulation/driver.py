@@ -264,7 +264,7 @@ def _simulate(model, *, t_start, t_end, params, backend, formulation, stepper, i
         if sensitivities:
             sens = Sensitivities(form.system, sensitivities, t_start, run.ys[0], form.output_gains() or (0.0, 0.0),
                                  stepper.implicit, rtol, atol, events=watcher)
-    monitors = monitors_for(system, atol, singular)
+    monitors = monitors_for(system, atol, singular, getattr(init, "rows", None))
     wall0 = _time.perf_counter()
     watch = None if stepper.implicit else StiffnessWatch()
     status, message = integrate(run, monitors, progress, [x for x in (watch, budget) if x is not None], watcher,

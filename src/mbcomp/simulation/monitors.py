@@ -94,16 +94,18 @@ class SingularPosition(SimulationError):
 
 
 class StepEnd:
-    """The state ``qu = [q, u]`` at the end of an accepted step, with the unmasked evaluation
-    computed once for every monitor that needs it."""
+    """The state ``qu = [q, u]`` at the end of an accepted step, with its constraint rows
+    (every row: ``Phi``, ``C``, ... of the unmasked evaluation bit for bit, without the mass
+    matrix and forces where the evaluator can) computed once for every monitor that needs them."""
 
     def __init__(self, system, t, qu):
         self.system, self.t = system, t
         self.q, self.u = qu[: system.nq], qu[system.nq: system.nq + system.nu]
 
     @cached_property
-    def ev(self):
-        return self.system.evaluate(self.t, self.q, self.u, masked=False)
+    def rows(self):
+        """:meth:`~mbcomp.assembly.system.MultibodySystem.evaluate_rows` at the step's end."""
+        return self.system.evaluate_rows(self.t, self.q, self.u)
 
 
 class StepWindow:
@@ -165,7 +167,7 @@ class RedundantRows:
         self.tol = 1e-6 + 1e3 * float(np.max(atol))
 
     def check(self, end, t_prev, dense):
-        ev = end.ev
+        ev = end.rows
         if not ev.Phi.size:
             return
         dropped = ~self.system.row_mask  # the rows dropped now (RowChoice may have changed them)
@@ -193,6 +195,11 @@ class ConstraintRank:
     ----------
     system : MultibodySystem
         With loops (cut joints).
+    singular : {"stop", "pass"}
+    start : Rows, optional
+        Every position row and its Jacobian at the start (initialization's,
+        ``InitialState.rows``): the first step's start is looked at through them instead of
+        evaluating it again (``C`` depends on the time and the coordinates alone).
     """
 
     BRACKET = 0.2  # a local minimum below this is located (steps of explicit methods cross a flat
@@ -205,8 +212,8 @@ class ConstraintRank:
     #: explicit method at rtol 1e-3 spans 0.4 s, two flat positions of an N = 2 four-bar)
     PARTS = 3
 
-    def __init__(self, system, singular="stop"):
-        self.system, self.singular = system, singular
+    def __init__(self, system, singular="stop", start=None):
+        self.system, self.singular, self._start = system, singular, start
         if singular == "pass":  # evaluated at every step and along the dense output at every passage
             evaluate_by_program(system)
         mask = system.row_mask
@@ -221,7 +228,11 @@ class ConstraintRank:
         """``sigma`` of the state the step's ``dense`` output gives at ``t`` (s)."""
         sysm = self.system
         qu = np.asarray(dense(t))
-        return self.sigma(sysm.evaluate(t, sysm.normalize(qu[: sysm.nq]), qu[sysm.nq: sysm.nq + sysm.nu], masked=False))
+        q, u = sysm.normalize(qu[: sysm.nq]), qu[sysm.nq: sysm.nq + sysm.nu]
+        ev = self._start
+        if ev is None or not (ev.t == t and np.array_equal(ev.q, q)):
+            ev = sysm.evaluate(t, q, u, masked=False)  # (at the start's coordinates: the same C)
+        return self.sigma(ev)
 
     def _inside(self, t_prev, t, rel, dense):
         """``[(t, sigma)]``: the minima of ``sigma`` inside the step ``[t_prev, t]`` (s), located
@@ -317,7 +328,7 @@ class ConstraintRank:
         return True
 
     def check(self, end, t_prev, dense):
-        rel = self.sigma(end.ev)
+        rel = self.sigma(end.rows)
         self.sigma_min = min(self.sigma_min, rel)
         if self._located_in_c(t_prev, end.t):
             return
@@ -327,7 +338,7 @@ class ConstraintRank:
             if smin < self.SIGMA_MIN:
                 self._passed(ts, smin, np.asarray(dense(ts))[: sysm.nq + sysm.nu])
         if rel < self.SIGMA_MIN and self.singular == "stop":
-            raise self._singular(end.t, rel, end.ev)
+            raise self._singular(end.t, rel, end.rows)
         self.window.push(t_prev, end.t, {"sigma": rel}, dense)
         if self.window.dips():
             ts, smin = self.window.locate(lambda tt, q, u: self.sigma(sysm.evaluate(tt, q, u, masked=False)),
@@ -398,10 +409,12 @@ class JointSingularities:
         return {}
 
 
-def monitors_for(system, atol, singular="stop"):
+def monitors_for(system, atol, singular="stop", start=None):
     """The monitors ``system`` needs, in the order they check a step: joint singularities,
     dropped rows, the constraint Jacobian's rank (the last two only for loops; ``singular``:
-    what the rank monitor does at a singular position, ``"stop"`` or ``"pass"``)."""
+    what the rank monitor does at a singular position, ``"stop"`` or ``"pass"``). ``start``:
+    initialization's ``InitialState.rows`` (``(system, Rows)``), which the rank monitor reads
+    where a step starts at their coordinates."""
     out = []
     joints = [e for e in system.topology.edges if e.kind == "joint" and e.comp.has_singularity]
     if joints:
@@ -410,5 +423,5 @@ def monitors_for(system, atol, singular="stop"):
         mask = system.row_mask
         if mask is not None and not mask.all():
             out.append(RedundantRows(system, atol))
-        out.append(ConstraintRank(system, singular))
+        out.append(ConstraintRank(system, singular, start[1] if start is not None and start[0] is system else None))
     return out

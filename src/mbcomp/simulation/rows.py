@@ -74,7 +74,7 @@ class RowChoice(StepHook):
         mask = sysm.row_mask
         end = run.step_end()  # (shared with the run monitors when no projection came between)
         q, u = end.q, end.u
-        C = end.ev.C
+        C = end.rows.C
         kept = relative_sigma(C[mask])
         if kept >= self.KEPT_MIN:
             return
