@@ -170,8 +170,8 @@ int mbcomp_integrate(int order, mbcomp_ctx *ctx, double t0, const double *y0, do
 
 
 def find_compiler():
-    """Path of the C compiler (``$CC``, else ``gcc``, else ``cc``), or None: the rule of
-    :func:`mbcomp.codegen.toolchain.c_compiler`."""
+    """Path of the C compiler (``$CC``, else ``gcc``, else ``cc``), or None: what
+    :func:`mbcomp.codegen.toolchain.c_compiler` answers, and the install builds with."""
     for cand in (os.environ.get("CC"), "gcc", "cc"):
         if cand:
             path = shutil.which(cand)

@@ -23,13 +23,13 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
 import time
 
 from .graph import CodegenError
+from .runtime_build import find_compiler
 
 __all__ = ["c_compiler", "cache_directory", "runtime_directory", "compile_units", "compile_objects", "object_path", "unit_key",
            "cached_library", "load_library",
@@ -45,12 +45,7 @@ def c_compiler():
     >>> c_compiler() is None or isinstance(c_compiler(), str)
     True
     """
-    for cand in (os.environ.get("CC"), "gcc", "cc"):
-        if cand:
-            path = shutil.which(cand)
-            if path:
-                return path
-    return None
+    return find_compiler()  # the install's rule too (runtime_build: the standard library only)
 
 
 def cache_directory(cache_dir=None):

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 int mbrt_finish(mbrt_stats *st, int status, double t, const char *fmt, ...)
 {
@@ -64,4 +65,15 @@ int mbrt_check_integration(const char *who, mbrt_rhs_fn f, int n, double t0, con
                                who, i, t_out[i], t_out[i - 1]);
     }
     return 0;
+}
+
+void mbrt_add_counts(mbrt_stats *total, const mbrt_stats *st)
+{
+    total->nfev += st->nfev;
+    total->nstep += st->nstep;
+    total->naccept += st->naccept;
+    total->nreject += st->nreject;
+    total->status = st->status;
+    total->t = st->t;
+    memcpy(total->message, st->message, sizeof total->message);
 }

@@ -18,4 +18,8 @@ int mbrt_check_integration(const char *who, mbrt_rhs_fn f, int n, double t0, con
                            const double *t_out, int n_out, const double *y_out, const double *work,
                            mbrt_stats *st);
 
+/* Adds st's evaluations, steps, acceptances and rejections to total and takes its status,
+ * time and message: the counts of a loop of integrations (events, passages) as one. */
+void mbrt_add_counts(mbrt_stats *total, const mbrt_stats *st);
+
 #endif

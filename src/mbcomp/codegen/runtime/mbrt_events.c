@@ -25,6 +25,7 @@
  * handed back to the caller at the event.
  */
 #include "mbrt_rk_internal.h"
+#include "mbrt_check.h"
 
 #include <float.h>
 #include <stdio.h>
@@ -371,17 +372,6 @@ static int act_on_impact(mbrt_impacts *I, const mbrt_events *ev, int n, double *
     return 1;
 }
 
-static void add_counts(mbrt_stats *total, const mbrt_stats *st)
-{
-    total->nfev += st->nfev;
-    total->nstep += st->nstep;
-    total->naccept += st->naccept;
-    total->nreject += st->nreject;
-    total->status = st->status;
-    total->t = st->t;
-    memcpy(total->message, st->message, sizeof total->message);
-}
-
 /* Output times of a segment's k-th stretch: min(chunk_max, chunk 2^k). */
 static int stretch_size(const mbrt_stretches *R, int k)
 {
@@ -421,7 +411,7 @@ int mbrt_impacts_integrate(mbrt_stretch_fn integrate, int order, void *ctx, mbrt
         memset(&st, 0, sizeof st);
         const int rc = integrate(order, ctx, t, y_start, t_end, rtol, atol, h, hmax, max_steps, t_out + k0, nout,
                                  y_out + (size_t)k0 * (size_t)n, &nw, work, &st);
-        add_counts(total, &st);
+        mbrt_add_counts(total, &st);
         k0 += nw;
         R->count++;
         if (n_written)

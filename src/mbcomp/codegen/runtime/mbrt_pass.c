@@ -19,6 +19,7 @@
  * step taken again over it finds no crossing there.
  */
 #include "mbrt_pass.h"
+#include "mbrt_check.h"
 
 #include <float.h>
 #include <math.h>
@@ -623,17 +624,6 @@ static int refine_minimum(mbrt_pass *S, int order, double rtol, const double *at
     return 0;
 }
 
-static void add_counts(mbrt_stats *total, const mbrt_stats *st)
-{
-    total->nfev += st->nfev;
-    total->nstep += st->nstep;
-    total->naccept += st->naccept;
-    total->nreject += st->nreject;
-    total->status = st->status;
-    total->t = st->t;
-    memcpy(total->message, st->message, sizeof total->message);
-}
-
 static int complete(const mbrt_pass *S, int order)
 {
     if (S == NULL || S->fun == NULL || S->d == NULL || S->mech == NULL || S->mech->eval == NULL ||
@@ -796,7 +786,7 @@ int mbrt_pass_integrate(mbrt_pass *S, int order, double t0, const double *y0, do
                                  t_out + k, n_out - k, y_out + (size_t)k * (size_t)n, &nw, work, &st, 0, &ev)
             : mbrt_dopri5_events(pass_rhs, pass_on_step, S, n, t, W.y_start, t_end, rtol, atol, h, hm, max_steps,
                                  t_out + k, n_out - k, y_out + (size_t)k * (size_t)n, &nw, work, &st, 0, &ev);
-        add_counts(total, &st);
+        mbrt_add_counts(total, &st);
         if (S->redo == 2)
             redo_step(S, order, t_out + k, nw, y_out + (size_t)k * (size_t)n, rtol, atol, max_steps, work, ev.tol,
                       total);
