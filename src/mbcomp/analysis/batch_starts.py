@@ -4,8 +4,8 @@ A batch run starts where :func:`mbcomp.simulate` starts: the run's system
 (``system.with_params(row)``), consistent initialization with the numeric evaluation
 (:func:`~mbcomp.hybrid.contacts.initialize_in_modes`, the same call ``simulate`` makes), the
 Lagrange formulation and its start state -- :func:`run_start`. That is Python, and it is most
-of a batch's Python time (a closed loop's Newton closure evaluates the numeric path about seven
-times: ~2 ms a slider-crank run, against ~0.6 ms of C integration), so it would be serial
+of a batch's Python time (a closed loop's Newton closure evaluates its rows about seven times
+and completes the last: ~1.8 ms a slider-crank run, against ~0.6 ms of C integration), so it would be serial
 Python beside C threads that wait for it.
 
 :class:`ForkedStarts` computes the starts of many runs in worker processes forked from this
