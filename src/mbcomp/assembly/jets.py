@@ -90,6 +90,11 @@ def as_array(x):
     return a if a.dtype == object else a.astype(float, copy=False)
 
 
+#: the zero motion of a pose-only jet (read-only: shared by every such jet)
+_ZERO3 = np.zeros(3)
+_ZERO3.setflags(write=False)
+
+
 def _obj(J):
     return J if J.dtype == object else J.astype(object)
 
@@ -129,6 +134,36 @@ class FrameJet:
         wxr = _cross(self.w, rho)
         return FrameJet(self.R @ R0, self.r + rho, self.w, self.v + wxr, self.Jw, self.Jv - skew(rho) @ self.Jw,
                         self.alpha, self.a + _cross(self.alpha, rho) + _cross(self.w, wxr))
+
+    def offset_pose(self, R0, p0):
+        """:meth:`offset`'s pose and Jacobians alone (the same operations, so the same bits):
+        ``w``, ``v``, ``alpha``, ``a`` are left zero, for a pass that needs the inertias only."""
+        rho = self.R @ p0
+        return FrameJet(self.R @ R0, self.r + rho, _ZERO3, _ZERO3, self.Jw, self.Jv - skew(rho) @ self.Jw,
+                        _ZERO3, _ZERO3)
+
+    def pose_through(self, R_rel, r_rel, Hw, Hv, cols, forward=True):
+        """:meth:`through` (``forward``) or :meth:`back_through` without the motion: the pose
+        and the Jacobian columns by the same operations (the same bits), ``w``, ``v``,
+        ``alpha``, ``a`` zero -- for a pass that needs the inertias only (float jets)."""
+        if forward:
+            Ra = self.R
+            rho = Ra @ r_rel
+            Jw = self.Jw.copy()
+            Jv = self.Jv - skew(rho) @ self.Jw
+            if Hw.shape[1]:
+                Jw[:, cols] += Ra @ Hw
+                Jv[:, cols] += Ra @ Hv
+            return FrameJet(Ra @ R_rel, self.r + rho, _ZERO3, _ZERO3, Jw, Jv, _ZERO3, _ZERO3)
+        Ra = self.R @ R_rel.T
+        rho = Ra @ r_rel
+        Jw = self.Jw.copy()
+        if Hw.shape[1]:
+            Jw[:, cols] -= Ra @ Hw
+        Jv = self.Jv + skew(rho) @ Jw
+        if Hv.shape[1]:
+            Jv[:, cols] -= Ra @ Hv
+        return FrameJet(Ra, self.r - rho, _ZERO3, _ZERO3, Jw, Jv, _ZERO3, _ZERO3)
 
     def through(self, R_rel, r_rel, Hw, Hv, cols, w_rel, v_rel=None, bw=None, bv=None):
         """Jet of a joint's ``frame_b`` given this jet as its ``frame_a``.

@@ -66,6 +66,8 @@ Examples
 """
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from .evaluation import Evaluation
@@ -139,19 +141,39 @@ def _exact_zeros(A):
     return all(not is_traced(x) and x == 0 for x in A.flat)
 
 
-def _link_jets(system, links, t, q, u):
+def _child_pose(system, e, pj, t, q, u, cols):
+    """:meth:`~mbcomp.assembly.system.MultibodySystem.child_jet`'s pose and Jacobian columns
+    alone, by the same operations (:meth:`FrameJet.pose_through`): no rates, no bias terms."""
+    p = system.P[e.name]
+    if e.dof == 0:  # rigid offsets and ground frames: constant transforms
+        R, r = e.comp.pose(p) if e.kind == "ground" else e.comp.relative(None, p)
+        return pj.offset_pose(R, r) if e.forward else pj.offset_pose(R.T, -(R.T @ r))
+    if e.kind == "ground" or e.drive:  # no speeds of its own (a drive's coordinate is its law's)
+        R, r = (e.comp.pose(p) if e.kind == "ground" else
+                e.comp.relative(np.array([system.topology.flat.components[e.drive].motion(t, system.P[e.drive])[0]]), p))
+        Hw = Hv = np.zeros((3, 0))
+    else:
+        qj = q[e.q]
+        R, r = e.comp.relative(qj, p)
+        Hw, Hv = e.comp.motion(qj, p)
+    return pj.pose_through(R, r, Hw, Hv, cols, e.forward)
+
+
+def _link_jets(system, links, t, q, u, pose_only=False):
     """The narrow jets of every frame, the links' motion subspaces ``S`` and, per link, a
-    ball-like joint's angular columns and origin (see :class:`TreePass`)."""
+    ball-like joint's angular columns and origin (see :class:`TreePass`); ``pose_only``: the
+    poses and subspaces alone (the motions zero), for the inertias."""
+    child = partial(_child_pose, system) if pose_only else system.child_jet
     jets = {ROOT: FrameJet.ground(0)}
     S, Jw, r = [], [], []
     for e in system.topology.tree:
         pj = jets[e.parent]
         k = e.u.stop - e.u.start
         if k == 0:
-            jets[e.child] = system.child_jet(e, pj, t, q, u, slice(0, 0))
+            jets[e.child] = child(e, pj, t, q, u, slice(0, 0))
             continue
         z = np.zeros((3, k))
-        cj = system.child_jet(e, FrameJet(pj.R, pj.r, pj.w, pj.v, z, z, pj.alpha, pj.a), t, q, u, slice(0, k))
+        cj = child(e, FrameJet(pj.R, pj.r, pj.w, pj.v, z, z, pj.alpha, pj.a), t, q, u, slice(0, k))
         # the columns give the twist of the child frame's origin; about O: v_O = v_c + r_c x w
         S.append(np.vstack((cj.Jw, cj.Jv + skew(cj.r) @ cj.Jw)))
         ball = k == 3 and _exact_zeros(cj.Jv)
@@ -210,7 +232,7 @@ def tree_pass(system, t, q, u, forces=True):
     ``forces=False``: zero, for a caller that needs only the inertias -- no law is called)."""
     links = tree_links(system)
     dt = _dtype(t, q, u)
-    jets, S, Jw, r = _link_jets(system, links, t, q, u)
+    jets, S, Jw, r = _link_jets(system, links, t, q, u, pose_only=not forces and dt is float)
     I = [np.zeros((6, 6), dt) for _ in range(links.n)]
     W = [np.zeros(6, dt) for _ in range(links.n)]
     _body_terms(system, links, jets, I, W if forces else None)
