@@ -134,6 +134,7 @@ class TreePass:
         # origin r has no linear part; None for other joints) and that origin r (m, world)
         self.Jw = [None] * len(S) if Jw is None else Jw
         self.r = [None] * len(S) if r is None else r
+        self._columns = {}  # speed_columns by nu: asked by the inertia check, the CRBA and the scale
 
 
 def _exact_zeros(A):
@@ -292,6 +293,13 @@ def speed_columns(tp, nu):
     """``(S, link)``: every link's motion subspace at its speeds' columns (6 x nu, numbers) and
     each column's link (nu,), or None when the links' columns are not the ``nu`` speeds each
     once (a speed no tree joint has) or the pass is traced."""
+    if nu in tp._columns:  # the same pass asked again: the same arrays (read, never written)
+        return tp._columns[nu]
+    tp._columns[nu] = made = _speed_columns(tp, nu)
+    return made
+
+
+def _speed_columns(tp, nu):
     links = tp.links
     if tp.dt == object or not links.n:
         return None
