@@ -136,6 +136,12 @@ class TreePass:
         self.r = [None] * len(S) if r is None else r
         self._columns = {}  # speed_columns by nu: asked by the inertia check, the CRBA and the scale
 
+    def columns(self, nu):
+        """:func:`speed_columns` of this pass, made once (the same arrays again: read, never written)."""
+        if nu not in self._columns:
+            self._columns[nu] = _speed_columns(self, nu)
+        return self._columns[nu]
+
 
 def _exact_zeros(A):
     """True if every entry of ``A`` is the number 0 (a structural zero when traced)."""
@@ -293,10 +299,7 @@ def speed_columns(tp, nu):
     """``(S, link)``: every link's motion subspace at its speeds' columns (6 x nu, numbers) and
     each column's link (nu,), or None when the links' columns are not the ``nu`` speeds each
     once (a speed no tree joint has) or the pass is traced."""
-    if nu in tp._columns:  # the same pass asked again: the same arrays (read, never written)
-        return tp._columns[nu]
-    tp._columns[nu] = made = _speed_columns(tp, nu)
-    return made
+    return tp.columns(nu)
 
 
 def _speed_columns(tp, nu):
