@@ -15,7 +15,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from mbcomp.codegen import c_compiler
-from mbcomp.codegen.runtime import RUNTIME_DIR, SOURCES
+
+from runtime_selftest import Stats, build
 
 CC = c_compiler()
 pytestmark = pytest.mark.skipif(CC is None, reason="no C compiler found")
@@ -530,21 +531,8 @@ int main(void)
 """
 
 
-class Stats(ctypes.Structure):
-    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
-                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
-                ("message", ctypes.c_char * 200)]
-
-
 def _build(outdir, extra=(), exe=False):
-    src = outdir / "mbrt_selftest.c"
-    src.write_text(TEST_C)
-    out = outdir / ("selftest" if exe else "libmbrt_test.so")
-    cmd = [CC, "-std=c99", "-O2", "-g", "-Wall", "-Wextra", "-pedantic", "-I", str(RUNTIME_DIR),
-           *(["-DMBRT_SELFTEST_MAIN"] if exe else ["-shared", "-fPIC"]), *extra,
-           *map(str, SOURCES), str(src), "-o", str(out), "-lm"]
-    res = subprocess.run(cmd, capture_output=True, text=True)
-    return out, res
+    return build(outdir, TEST_C, "mbrt_selftest", "MBRT_SELFTEST_MAIN", extra, exe, ())
 
 
 @pytest.fixture(scope="module")

@@ -22,7 +22,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from mbcomp.codegen import c_compiler
-from mbcomp.codegen.runtime import RUNTIME_DIR, SOURCES
+
+from runtime_selftest import Stats, build
 from mbcomp.formulations.passing import MbrtPass
 
 CC = c_compiler()
@@ -161,20 +162,8 @@ int main(void)
 """
 
 
-class Stats(ctypes.Structure):
-    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
-                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
-                ("message", ctypes.c_char * 200)]
-
-
 def _build(outdir, extra=(), exe=False):
-    src = outdir / "pass_selftest.c"
-    src.write_text(TEST_C)
-    out = outdir / ("selftest" if exe else "libpass_test.so")
-    cmd = [CC, "-std=c99", "-D_DEFAULT_SOURCE", "-O2", "-g", "-Wall", "-Wextra", "-pedantic", "-I", str(RUNTIME_DIR),
-           *(["-DMBRT_PASS_SELFTEST_MAIN"] if exe else ["-shared", "-fPIC"]), *extra,
-           *map(str, SOURCES), str(src), "-o", str(out), "-lm"]
-    return out, subprocess.run(cmd, capture_output=True, text=True)
+    return build(outdir, TEST_C, "pass_selftest", "MBRT_PASS_SELFTEST_MAIN", extra, exe, ("-D_DEFAULT_SOURCE",))
 
 
 class Model:
