@@ -28,3 +28,22 @@ def build(outdir, source, stem, main_macro, extra=(), exe=False, defines=()):
            *([f"-D{main_macro}"] if exe else ["-shared", "-fPIC"]), *extra,
            *map(str, SOURCES), str(src), "-o", str(out), "-lm"]
     return out, subprocess.run(cmd, capture_output=True, text=True)
+
+
+#: the flags of a self-test run under AddressSanitizer and UndefinedBehaviorSanitizer
+SAN_FLAGS = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-O1"]
+
+
+def run_under_sanitizers(tmp_path, build_selftest):
+    """Build the self-test executable with :data:`SAN_FLAGS` (``build_selftest(outdir,
+    extra=..., exe=True)``) and run it: the completed run, or None where this compiler cannot
+    build and run a sanitized program at all (the caller skips)."""
+    probe = tmp_path / "probe.c"
+    probe.write_text("int main(void) { return 0; }\n")
+    res = subprocess.run([CC, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True)
+    if res.returncode != 0 or subprocess.run([str(tmp_path / "probe")], capture_output=True).returncode != 0:
+        return None
+    exe, res = build_selftest(tmp_path, extra=SAN_FLAGS, exe=True)
+    assert res.returncode == 0, res.stderr
+    return subprocess.run([str(exe)], capture_output=True, text=True, timeout=300,
+                          env={"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})

@@ -16,7 +16,7 @@ from scipy.integrate import solve_ivp
 
 from mbcomp.codegen import c_compiler
 
-from runtime_selftest import Stats, build
+from runtime_selftest import Stats, build, run_under_sanitizers
 
 CC = c_compiler()
 pytestmark = pytest.mark.skipif(CC is None, reason="no C compiler found")
@@ -1073,9 +1073,6 @@ def test_cond2_matches_numpy(lib):
 
 
 # --------------------------------------------------------------------------- memory checkers
-SAN_FLAGS = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-O1"]
-
-
 def _runs_clean(cmd, **kw):
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=120, **kw)
     return res
@@ -1084,14 +1081,9 @@ def _runs_clean(cmd, **kw):
 def test_selftest_under_asan_ubsan(tmp_path):
     """The C self-test driver (every status, exact-size heap work buffers) under
     AddressSanitizer + UndefinedBehaviorSanitizer."""
-    probe = tmp_path / "probe.c"
-    probe.write_text("int main(void) { return 0; }\n")
-    res = subprocess.run([CC, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True)
-    if res.returncode != 0 or _runs_clean([str(tmp_path / "probe")]).returncode != 0:
+    run = run_under_sanitizers(tmp_path, _build)
+    if run is None:
         pytest.skip("AddressSanitizer/UBSan not usable here")
-    exe, res = _build(tmp_path, extra=SAN_FLAGS, exe=True)
-    assert res.returncode == 0, res.stderr
-    run = _runs_clean([str(exe)], env={"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
     assert run.returncode == 0, run.stdout + run.stderr
     assert "0 failures" in run.stdout and "runtime error" not in run.stderr
 

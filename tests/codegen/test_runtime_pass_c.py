@@ -23,7 +23,7 @@ from scipy.integrate import solve_ivp
 
 from mbcomp.codegen import c_compiler
 
-from runtime_selftest import Stats, build
+from runtime_selftest import Stats, build, run_under_sanitizers
 from mbcomp.formulations.passing import MbrtPass
 
 CC = c_compiler()
@@ -279,21 +279,12 @@ def test_a_full_log_stops_at_the_last_step_before_the_minimum(lib):
 
 
 # --------------------------------------------------------------------------- memory checkers
-SAN_FLAGS = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-O1"]
-
-
 def test_selftest_under_asan_ubsan(tmp_path):
     """The C driver (one call, stretches, DOPRI5 and DOP853, the bad descriptions, a full log)
     with exact-size heap buffers under AddressSanitizer + UndefinedBehaviorSanitizer."""
-    probe = tmp_path / "probe.c"
-    probe.write_text("int main(void) { return 0; }\n")
-    res = subprocess.run([CC, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True)
-    if res.returncode != 0 or subprocess.run([str(tmp_path / "probe")], capture_output=True).returncode != 0:
+    run = run_under_sanitizers(tmp_path, _build)
+    if run is None:
         pytest.skip("AddressSanitizer/UBSan not usable here")
-    exe, res = _build(tmp_path, extra=SAN_FLAGS, exe=True)
-    assert res.returncode == 0, res.stderr
-    run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=300,
-                         env={"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
     assert run.returncode == 0, run.stdout + run.stderr
     assert "0 failures" in run.stdout and "runtime error" not in run.stderr
 
