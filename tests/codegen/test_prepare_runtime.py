@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import mbcomp
+from conftest import stop_pendulum
 from mbcomp.codegen import c_compiler
 from mbcomp.codegen.compiler import prepare_runtime
 from mbcomp.codegen.toolchain import runtime_directory
@@ -40,16 +41,8 @@ def test_without_a_writable_runtime_directory_the_programs_cache_holds_it(tmp_pa
     assert runtime_directory(str(tmp_path / "programs")) == str(tmp_path / "programs")
 
 
-def _pendulum():
-    m = mbcomp.Model()
-    w = m.add("world", mbcomp.library.World())
-    j = m.add("j", mbcomp.library.Revolute(phi0=0.5))
-    rod = m.add("rod", mbcomp.library.FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", mbcomp.library.PointMass(m=1.0))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    return m
+def _pendulum():  # conftest's pendulum without stops, from 0.5 rad
+    return stop_pendulum(limits=None, phi0=0.5)
 
 
 def test_a_new_programs_cache_links_the_machines_runtime_and_computes_the_same(tmp_path, monkeypatch):
