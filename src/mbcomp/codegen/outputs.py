@@ -143,10 +143,17 @@ class OutputProgram:
         """Trace ``system``'s result columns (multipliers with Baumgarte terms if ``baumgarte``)
         and compile them; None when the trace point is singular (no program: the numeric
         route computes every point). Raises :class:`CodegenError` for untraceable laws."""
+        return cls._make(cls._traced(system, backend, baumgarte, max_nodes), backend, cache_dir)
+
+    @staticmethod
+    def _traced(system, backend, baumgarte, max_nodes):
         if backend == "c" and c_compiler() is None:
             raise CodegenError("backend='c' needs a C compiler (gcc or cc on PATH, or $CC) -> fix: install one, "
                                "or use backend='python'")
-        tr = trace(system, max_nodes, program="outputs", baumgarte=baumgarte)
+        return trace(system, max_nodes, program="outputs", baumgarte=baumgarte)
+
+    @classmethod
+    def _make(cls, tr, backend, cache_dir):
         return cls(tr, backend, cache_dir) if "outputs" in tr.groups else None
 
     @classmethod
@@ -155,11 +162,8 @@ class OutputProgram:
         now (the tracer is single-threaded), the rest beside the caller, which goes on
         integrating (a first run's post-processing waited ~80 ms for gcc after the run).
         Returns a :class:`PendingOutputs`; raises as :meth:`build` does while tracing."""
-        if backend == "c" and c_compiler() is None:
-            raise CodegenError("backend='c' needs a C compiler (gcc or cc on PATH, or $CC) -> fix: install one, "
-                               "or use backend='python'")
-        tr = trace(system, max_nodes, program="outputs", baumgarte=baumgarte)
-        return PendingOutputs(lambda: cls(tr, backend, cache_dir) if "outputs" in tr.groups else None)
+        tr = cls._traced(system, backend, baumgarte, max_nodes)
+        return PendingOutputs(lambda: cls._make(tr, backend, cache_dir))
 
     def _build_c(self, prog, cache_dir):
         # the compile policy of the other programs (docs/design/generated-programs.md): -O2, outputs of one
