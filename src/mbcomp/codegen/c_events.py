@@ -22,7 +22,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-__all__ = ["LinearEvents", "LinearImpacts", "MassProgram"]
+__all__ = ["LinearEvents", "LinearImpacts", "MassProgram", "RuntimeStats"]
 
 
 class _LinearEvents(ctypes.Structure):
@@ -179,7 +179,10 @@ class _Impacts(ctypes.Structure):
                 ("log_loss", ctypes.c_void_p)]
 
 
-class _Stats(ctypes.Structure):  # mbrt_stats (mbrt.h)
+class RuntimeStats(ctypes.Structure):
+    """The runtime integrators' ``mbrt_stats`` (``mbrt.h``): evaluations, steps, accepted and
+    rejected steps, the status, the time reached (s) and a one-sentence message."""
+
     _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
                 ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
                 ("message", ctypes.c_char * 200)]
@@ -302,7 +305,7 @@ class LinearImpacts:
         R = _Stretches(int(chunk), int(chunk if chunk_max is None else chunk_max), int(count), int(max_stretches),
                        float(tol_scale), float(h_restart), ctypes.addressof(eng.ctx) + type(eng.ctx).h_last.offset,
                        0.0)
-        nw, st = ctypes.c_int(0), _Stats()
+        nw, st = ctypes.c_int(0), RuntimeStats()
         self.struct.count = 0
         eng.ctx.stiff_steps = int(stiff_steps)
         eng.ctx.events = events.arm(fresh)

@@ -53,7 +53,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from .graph import CodegenError
-from .c_events import LinearEvents
+from .c_events import LinearEvents, RuntimeStats
 from .runtime_build import GLUE, RuntimeBuildError, build_objects
 from .toolchain import c_compiler, load_library, runtime_directory
 
@@ -446,15 +446,6 @@ class _Ctx(ctypes.Structure):
                 ("stiff_steps", ctypes.c_int), ("events", ctypes.c_void_p)]
 
 
-class RuntimeStats(ctypes.Structure):
-    """The runtime integrators' ``mbrt_stats`` (``mbrt.h``): evaluations, steps, accepted and
-    rejected steps, the status, the time reached (s) and a one-sentence message."""
-
-    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
-                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
-                ("message", ctypes.c_char * 200)]
-
-
 class Integrator:
     """A bound program's right-hand side stepped in C (see the module notes).
 
@@ -497,6 +488,11 @@ class Integrator:
     def projects(self):
         """Whether the C loop projects after every accepted step."""
         return self.mech is not None
+
+    def new_stats(self):
+        """A fresh :class:`RuntimeStats` (``mbrt_stats``) for a C call over this program (the
+        struct's one ctypes mirror, for the callers in the layers above codegen)."""
+        return RuntimeStats()
 
     def part_library(self, part):
         """:func:`part_library` (a part of the runtime built apart, at its first use: ``"radau"``,

@@ -62,12 +62,6 @@ class MbrtPass(ctypes.Structure):
                 + [("hidden", ctypes.c_int), ("hidden_here", ctypes.c_int)])
 
 
-class _Stats(ctypes.Structure):  # mbrt_stats (mbrt.h)
-    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
-                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
-                ("message", ctypes.c_char * 200)]
-
-
 #: system -> its PassingEngine (weakly: the log lives as long as the run's system)
 _ENGINES = weakref.WeakKeyDictionary()
 
@@ -191,7 +185,7 @@ class PassingEngine:
                                    y_event=None)
         atol_v = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, float), (self.n,)))
         Y = np.zeros((len(t_out), self.n))
-        nw, st, S = ctypes.c_int(0), _Stats(), self.struct
+        nw, st, S = ctypes.c_int(0), self.inner.new_stats(), self.struct
         going_on = self._going_on
         if going_on is not None and going_on[0] == t0 and going_on[1] <= t0:  # the step across t0, taken again
             t_start, y_start, h0 = going_on[1], going_on[2], going_on[3]

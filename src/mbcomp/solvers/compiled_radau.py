@@ -61,12 +61,6 @@ class RadauInfo(ctypes.Structure):
                 ("h_next", ctypes.c_double)]
 
 
-class _Stats(ctypes.Structure):  # mbrt_stats
-    _fields_ = [("nfev", ctypes.c_long), ("nstep", ctypes.c_long), ("naccept", ctypes.c_long),
-                ("nreject", ctypes.c_long), ("status", ctypes.c_int), ("t", ctypes.c_double),
-                ("message", ctypes.c_char * 200)]
-
-
 _PF = ctypes.c_void_p
 
 
@@ -129,7 +123,7 @@ class RadauEngine:
         self.work = np.zeros(int(dll.mbrt_radau5_work_size(n)))
         self.iwork = np.zeros(int(dll.mbrt_radau5_iwork_size(n)), dtype=np.intc)
         self.y_last = np.zeros(n)
-        self.stats, self.info = _Stats(), RadauInfo()
+        self.stats, self.info = integrator.new_stats(), RadauInfo()
 
     def integrate(self, t0, y0, t_end, t_out, rtol, atol, h0=0.0, hmax=0.0, max_steps=0, resume=False,
                   t_pause=0.0):
