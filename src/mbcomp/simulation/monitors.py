@@ -214,8 +214,6 @@ class ConstraintRank:
 
     def __init__(self, system, singular="stop", start=None):
         self.system, self.singular, self._start = system, singular, start
-        if singular == "pass":  # evaluated at every step and along the dense output at every passage
-            evaluate_by_program(system)
         mask = system.row_mask
         self.rank = int(mask.sum()) if mask is not None else None  # None: every row
         self.sigma_min = 1.0
@@ -223,6 +221,13 @@ class ConstraintRank:
         self.passages = []
         self._end = None  # (t, sigma, slope of sigma) at the last step's end
         self._taken = 0  # minima of the C loop's log judged so far
+        if singular == "pass":  # evaluated at every step and along the dense output at every passage
+            evaluate_by_program(system)
+        elif start is not None and self.sigma(start) < self.BRACKET:
+            # the first step is looked into (_inside: its start is near flat by this measure), which
+            # switches to the program: switched now, its end's rows come from the program too
+            # instead of one more numeric evaluation (Andrews' squeezer: sigma 0.19 all along)
+            evaluate_by_program(system)
 
     def _sigma_at(self, dense, t):
         """``sigma`` of the state the step's ``dense`` output gives at ``t`` (s)."""
