@@ -97,15 +97,22 @@ def tolerance_energy(system, t, Y, rtol, atol, known=None, terms=None):
     atol = float(np.max(atol))
     rtol = float(np.max(rtol))
     worst = 0.0
-    for k in np.unique(np.linspace(0, len(Y) - 1, min(len(Y), TOLERANCE_POINTS)).astype(int)):
+    ks = np.unique(np.linspace(0, len(Y) - 1, min(len(Y), TOLERANCE_POINTS)).astype(int))
+    if terms is not None:  # the points the output program holds, at once
+        Q, U = Y[ks, :nq], Y[ks, nq:nq + nu]
+        held = terms[2][ks] & np.isfinite(Q).all(axis=1) & np.isfinite(U).all(axis=1)
+        if held.any():
+            Q, U, F, P = Q[held], U[held], np.abs(terms[0][ks[held]]), np.abs(terms[1][ks[held]])
+            dq = atol + rtol * (np.abs(Q) if nq == nu else np.max(np.abs(Q), axis=1, initial=0.0)[:, None])
+            worst = float(np.max(np.sum(F * dq, axis=1) + np.sum(P * (atol + rtol * np.abs(U)), axis=1)))
+        ks = ks[~held]
+    for k in ks:
         q, u = Y[k, :nq], Y[k, nq:nq + nu]
         if not (np.isfinite(q).all() and np.isfinite(u).all()):
             continue
         try:
             at_start = _at(known, t[k], q, u)
-            if terms is not None and terms[2][k]:
-                f, p = np.abs(terms[0][k]), np.abs(terms[1][k])
-            elif not at_start and nu >= RECURSIVE_SPEEDS:  # O(N): no dense M
+            if not at_start and nu >= RECURSIVE_SPEEDS:  # O(N): no dense M
                 tp = tree_pass(system, t[k], q, u)
                 f, p = np.abs(generalized_forces(tp, nu)), np.abs(generalized_momenta(tp, u, nu))
             else:
