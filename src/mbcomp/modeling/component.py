@@ -17,6 +17,7 @@ Examples
 """
 from __future__ import annotations
 
+import math
 from types import SimpleNamespace
 
 import numpy as np
@@ -51,10 +52,12 @@ class Guess:
 
 
 _CHECKS = {
-    "positive": (lambda v: np.all(v > 0), "must be > 0"),
-    "nonnegative": (lambda v: np.all(v >= 0), "must be >= 0"),
+    "positive": (lambda v: (v > 0).all(), "must be > 0"),
+    "nonnegative": (lambda v: (v >= 0).all(), "must be >= 0"),
     "nonzero": (lambda v: np.linalg.norm(np.atleast_1d(v)) > 0, "must not be zero"),
 }
+#: the same checks of a plain float (:meth:`Param.coerce`'s fast path)
+_SCALAR_CHECKS = {"positive": lambda x: x > 0, "nonnegative": lambda x: x >= 0, "nonzero": lambda x: abs(x) > 0}
 
 
 class Param:
@@ -98,6 +101,7 @@ class Param:
         self.default, self.unit, self.doc = default, unit, doc
         self.shape, self.check, self.kind = tuple(shape), check, kind
         self.name = None
+        self._checked_default = None  # (value, problem) of a tuple default, once coerced
 
     def __set_name__(self, owner, name):
         self.name = name
@@ -136,16 +140,47 @@ class Param:
         if self.kind == "start" and isinstance(value, Guess):
             inner, msg = self.coerce(value.value)
             return (Guess(inner) if msg is None else value), msg
-        number, msg = self._convert(value)
-        if msg:
-            return value, msg
+        if (type(value) is float or type(value) is int) and not self.shape:  # a plain number: as below, in floats
+            return self._number(value)
+        if value is self.default and type(value) is tuple:  # a class's default: checked once
+            if self._checked_default is None:
+                self._checked_default = self._coerce_number(value)
+            got, msg = self._checked_default
+            return (got.copy() if isinstance(got, np.ndarray) else got), msg
+        return self._coerce_number(value)
+
+    def _number(self, value):
+        """:meth:`coerce` of a plain ``float`` or ``int`` for a scalar parameter: the same
+        value and messages, without the array operations."""
+        x = float(value)
+        if not math.isfinite(x):
+            return value, f"{value!r} is not finite"
+        if self.check is not None:
+            if isinstance(self.check, str):
+                ok, msg = _SCALAR_CHECKS[self.check], _CHECKS[self.check][1]
+                if not ok(x):
+                    return value, f"{x:g}{self._unit_suffix()} {msg}"
+            else:
+                msg = self.check(np.array(x))
+                if msg:
+                    return value, msg
+        return x, None
+
+    def _coerce_number(self, value):
+        """:meth:`coerce` of a value to be converted and checked as a number or array."""
+        if type(value) in (tuple, list) and all(type(x) is float or type(x) is int for x in value):
+            number = value  # plain numbers: nothing to convert (to_unit would return their list)
+        else:
+            number, msg = self._convert(value)
+            if msg:
+                return value, msg
         try:
             arr = np.array(number, dtype=float)
         except (TypeError, ValueError):
             return value, f"{value!r} is not a number{'' if not self.shape else ' array'}"
         if arr.shape != self.shape:
             return value, f"has shape {arr.shape}, expected {self.shape or 'a scalar'}"
-        if not np.all(np.isfinite(arr)):
+        if not np.isfinite(arr).all():
             return value, f"{value!r} is not finite"
         if self.check is not None:
             if isinstance(self.check, str):
