@@ -137,12 +137,13 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
         grid = evaluator.output_grid(t, Y, gains)
         if grid is not None:
             names, values, quaternions, ok = grid
-            hidden = {n: v for n, v in zip(names, values) if n.startswith(HIDDEN)}
-            cols.series.update((n, v) for n, v in zip(names, values) if not n.startswith(HIDDEN))  # NaN where not ok
+            shown, fp = _grid_layout(names, system.nu)
+            rows = list(values)
+            cols.series.update((n, rows[i]) for n, i in shown)  # NaN where not ok
             cols.quat.update(quaternions)
             todo = np.flatnonzero(~ok)
-            if f"{HIDDEN}f.0" in hidden:
-                terms = tuple(np.array([hidden[f"{HIDDEN}{x}.{i}"] for i in range(system.nu)]).T for x in "fp") + (ok,)
+            if fp is not None:
+                terms = (values[fp[0]].T, values[fp[1]].T, ok)
     for k in todo:
         q, u = Y[k, :nq], Y[k, nq:]
         try:
@@ -182,6 +183,28 @@ def postprocess(system, form, t, Y, status, message, stats, init, body_momenta=F
     stats["coordinates"] = list(system.q_names)
     return Result(t, series, status, message, stats, partial(summary, system, init), units=_units(system, series),
                   system=system)
+
+
+_LAYOUTS = {}  # id of an output program's names -> (the names, what _grid_layout says of them)
+
+
+def _grid_layout(names, nu):
+    """``(shown, fp)`` of an output program's column ``names`` (its own list, so the answer is
+    kept for it): ``shown``, ``[(name, row)]`` of the result columns; ``fp``, the rows of the
+    hidden generalized forces and momenta (:data:`~mbcomp.assembly.outputs.HIDDEN`, ``nu``
+    each) as two index arrays, or None when the program has none."""
+    got = _LAYOUTS.get(id(names))
+    if got is not None and got[0] is names:
+        return got[1]
+    shown = [(n, i) for i, n in enumerate(names) if not n.startswith(HIDDEN)]
+    row = {n: i for i, n in enumerate(names)}
+    fp = None
+    if f"{HIDDEN}f.0" in row:
+        fp = tuple(np.array([row[f"{HIDDEN}{x}.{i}"] for i in range(nu)], int) for x in "fp")
+    if len(_LAYOUTS) >= 64:  # a process running many structures: forget the oldest answers
+        _LAYOUTS.pop(next(iter(_LAYOUTS)))
+    _LAYOUTS[id(names)] = (names, (shown, fp))
+    return shown, fp
 
 
 #: output points at most on which the momenta are computed for their alarm (evenly spaced)
