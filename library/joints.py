@@ -14,7 +14,7 @@ import numpy as np
 from mbcomp import Cylinder, Flange, Joint, Param, Sphere
 from mbcomp.errors import Problem
 from mbcomp.jets import local_point, local_vector, position_constraints, rigid_constraints
-from mbcomp.kinematics import cross, matrix_to_quat, perpendicular_pair, quat_rate, quat_to_matrix, rot_axis
+from mbcomp.kinematics import by_axis, cross, matrix_to_quat, perpendicular_pair, quat_rate, quat_to_matrix, rot_axis
 from mbcomp.modeling.events import AxisRow, EventRow, Impact, Switch
 from mbcomp.modeling.modes import Modes
 from mbcomp.modeling.free_joint import FreeMotion, quat_increment  # noqa: F401  (FreeMotion: re-exported)
@@ -29,7 +29,16 @@ _E = np.eye(3)
 
 
 def _axis(p):
-    return p.n / np.linalg.norm(p.n)
+    """The unit axis of ``p.n``: made once per value of a numeric axis (read-only, shared), afresh
+    for a traced one."""
+    n = p.n
+    if type(n) is np.ndarray and n.dtype.kind == "f":
+        return by_axis("unit", n, _unit)[0]
+    return n / np.linalg.norm(n)
+
+
+def _unit(n):
+    return (n / np.linalg.norm(n),)
 
 
 def _limits_ok(lim):

@@ -56,7 +56,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry.kinematics import cross as _cross, skew
+from ..geometry.kinematics import cross as _cross, cross_entries as _cx, entries as _e, skew
 
 __all__ = ["FrameJet", "VecJet", "ScalarJet", "local_point", "local_vector", "rigid_constraints",
            "position_constraints", "velocity_along", "slip_velocity", "is_traced", "as_array"]
@@ -99,6 +99,23 @@ def _obj(J):
     return J if J.dtype == object else J.astype(object)
 
 
+# The jets' 3-vector arithmetic is done on their entries (kinematics.entries: Python numbers, or
+# the traced values themselves) and each result made an array once: numpy's elementwise
+# operations one by one, in the same order, on operands of three cost more in calls than in
+# arithmetic. Matrix products stay numpy's (``.dot``: the same BLAS call as ``@``, a quarter of
+# its overhead; on object arrays the same sums in the same order).
+def _add(a, b):
+    return [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+
+
+def _sub(a, b):
+    return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+
+
+def _scaled(c, a):
+    return [c * a[0], c * a[1], c * a[2]]
+
+
 class FrameJet:
     """Pose, velocity and bias acceleration of a frame, with Jacobians w.r.t. speeds ``u``.
 
@@ -130,16 +147,19 @@ class FrameJet:
 
     def offset(self, R0, p0):
         """Jet of a frame rigidly attached at ``p0`` (m, this frame's coordinates), rotated by ``R0``."""
-        rho = self.R @ p0
-        wxr = _cross(self.w, rho)
-        return FrameJet(self.R @ R0, self.r + rho, self.w, self.v + wxr, self.Jw, self.Jv - skew(rho) @ self.Jw,
-                        self.alpha, self.a + _cross(self.alpha, rho) + _cross(self.w, wxr))
+        R = self.R
+        rho = R.dot(p0)
+        w, rh = _e(self.w), _e(rho)
+        wxr = _cx(w, rh)
+        a = _add(_add(_e(self.a), _cx(self.alpha, rh)), _cx(w, wxr))
+        return FrameJet(R.dot(R0), self.r + rho, self.w, np.array(_add(_e(self.v), wxr)), self.Jw,
+                        self.Jv - skew(rh).dot(self.Jw), self.alpha, np.array(a))
 
     def offset_pose(self, R0, p0):
         """:meth:`offset`'s pose and Jacobians alone (the same operations, so the same bits):
         ``w``, ``v``, ``alpha``, ``a`` are left zero, for a pass that needs the inertias only."""
-        rho = self.R @ p0
-        return FrameJet(self.R @ R0, self.r + rho, _ZERO3, _ZERO3, self.Jw, self.Jv - skew(rho) @ self.Jw,
+        rho = self.R.dot(p0)
+        return FrameJet(self.R.dot(R0), self.r + rho, _ZERO3, _ZERO3, self.Jw, self.Jv - skew(rho).dot(self.Jw),
                         _ZERO3, _ZERO3)
 
     def pose_through(self, R_rel, r_rel, Hw, Hv, cols, forward=True):
@@ -148,21 +168,21 @@ class FrameJet:
         ``alpha``, ``a`` zero -- for a pass that needs the inertias only (float jets)."""
         if forward:
             Ra = self.R
-            rho = Ra @ r_rel
+            rho = Ra.dot(r_rel)
             Jw = self.Jw.copy()
-            Jv = self.Jv - skew(rho) @ self.Jw
+            Jv = self.Jv - skew(rho).dot(self.Jw)
             if Hw.shape[1]:
-                Jw[:, cols] += Ra @ Hw
-                Jv[:, cols] += Ra @ Hv
-            return FrameJet(Ra @ R_rel, self.r + rho, _ZERO3, _ZERO3, Jw, Jv, _ZERO3, _ZERO3)
-        Ra = self.R @ R_rel.T
-        rho = Ra @ r_rel
+                Jw[:, cols] += Ra.dot(Hw)
+                Jv[:, cols] += Ra.dot(Hv)
+            return FrameJet(Ra.dot(R_rel), self.r + rho, _ZERO3, _ZERO3, Jw, Jv, _ZERO3, _ZERO3)
+        Ra = self.R.dot(R_rel.T)
+        rho = Ra.dot(r_rel)
         Jw = self.Jw.copy()
         if Hw.shape[1]:
-            Jw[:, cols] -= Ra @ Hw
-        Jv = self.Jv + skew(rho) @ Jw
+            Jw[:, cols] -= Ra.dot(Hw)
+        Jv = self.Jv + skew(rho).dot(Jw)
         if Hv.shape[1]:
-            Jv[:, cols] -= Ra @ Hv
+            Jv[:, cols] -= Ra.dot(Hv)
         return FrameJet(Ra, self.r - rho, _ZERO3, _ZERO3, Jw, Jv, _ZERO3, _ZERO3)
 
     def through(self, R_rel, r_rel, Hw, Hv, cols, w_rel, v_rel=None, bw=None, bv=None):
@@ -181,55 +201,58 @@ class FrameJet:
             Relative bias accelerations in frame_a coordinates (e.g. a prescribed ``a(t)``).
         """
         Ra = self.R
-        rho = Ra @ r_rel
-        wr = Ra @ w_rel
+        rho = Ra.dot(r_rel)
+        wr = _e(Ra.dot(w_rel))
+        rh, w = _e(rho), _e(self.w)
         Jw = self.Jw.copy()
-        Jv = self.Jv - skew(rho) @ self.Jw
+        Jv = self.Jv - skew(rh).dot(self.Jw)
         if Hw.shape[1]:
             try:
-                Jw[:, cols] += Ra @ Hw
-                Jv[:, cols] += Ra @ Hv
+                Jw[:, cols] += Ra.dot(Hw)
+                Jv[:, cols] += Ra.dot(Hv)
             except TypeError:  # traced update of a float Jacobian: widen to object (see Tracing)
                 Jw, Jv = self.Jw.astype(object), _obj(Jv)
-                Jw[:, cols] += Ra @ Hw
-                Jv[:, cols] += Ra @ Hv
-        vr = Ra @ v_rel if v_rel is not None else np.zeros(3)
-        wxr = _cross(self.w, rho)
-        alpha = self.alpha + _cross(self.w, wr)
-        a = self.a + _cross(self.alpha, rho) + _cross(self.w, wxr) + 2.0 * _cross(self.w, vr)
+                Jw[:, cols] += Ra.dot(Hw)
+                Jv[:, cols] += Ra.dot(Hv)
+        vr = _e(Ra.dot(v_rel)) if v_rel is not None else [0.0, 0.0, 0.0]
+        wxr = _cx(w, rh)
+        alpha = _add(_e(self.alpha), _cx(w, wr))
+        a = _add(_add(_add(_e(self.a), _cx(self.alpha, rh)), _cx(w, wxr)), _scaled(2.0, _cx(w, vr)))
         if bw is not None:
-            alpha = alpha + Ra @ bw
+            alpha = _add(alpha, _e(Ra.dot(bw)))
         if bv is not None:
-            a = a + Ra @ bv
-        return FrameJet(Ra @ R_rel, self.r + rho, self.w + wr, self.v + wxr + vr, Jw, Jv, alpha, a)
+            a = _add(a, _e(Ra.dot(bv)))
+        return FrameJet(Ra.dot(R_rel), self.r + rho, np.array(_add(w, wr)), np.array(_add(_add(_e(self.v), wxr), vr)),
+                        Jw, Jv, np.array(alpha), np.array(a))
 
     def back_through(self, R_rel, r_rel, Hw, Hv, cols, w_rel, v_rel=None, bw=None, bv=None):
         """Jet of a joint's ``frame_a`` given this jet as its ``frame_b`` (same arguments as
         :meth:`through`): the joint traversed against its direction in the spanning tree."""
-        Ra = self.R @ R_rel.T
-        rho = Ra @ r_rel
-        wr = Ra @ w_rel
-        w = self.w - wr
+        Ra = self.R.dot(R_rel.T)
+        rho = Ra.dot(r_rel)
+        rh, wr = _e(rho), _e(Ra.dot(w_rel))
+        w = _sub(_e(self.w), wr)
         Jw = self.Jw.copy()
         if Hw.shape[1]:
             try:
-                Jw[:, cols] -= Ra @ Hw
+                Jw[:, cols] -= Ra.dot(Hw)
             except TypeError:  # traced update of a float Jacobian
                 Jw = self.Jw.astype(object)
-                Jw[:, cols] -= Ra @ Hw
-        alpha = self.alpha - _cross(w, wr) - (Ra @ bw if bw is not None else 0.0)
-        vr = Ra @ v_rel if v_rel is not None else np.zeros(3)
-        wxr = _cross(w, rho)
-        Jv = self.Jv + skew(rho) @ Jw
+                Jw[:, cols] -= Ra.dot(Hw)
+        alpha = _sub(_sub(_e(self.alpha), _cx(w, wr)), _e(Ra.dot(bw)) if bw is not None else (0.0, 0.0, 0.0))
+        vr = _e(Ra.dot(v_rel)) if v_rel is not None else [0.0, 0.0, 0.0]
+        wxr = _cx(w, rh)
+        Jv = self.Jv + skew(rh).dot(Jw)
         if Hv.shape[1]:
             try:
-                Jv[:, cols] -= Ra @ Hv
+                Jv[:, cols] -= Ra.dot(Hv)
             except TypeError:  # traced update of a float Jacobian
                 Jv = Jv.astype(object)
-                Jv[:, cols] -= Ra @ Hv
-        a = (self.a - _cross(alpha, rho) - _cross(w, wxr) - 2.0 * _cross(w, vr)
-             - (Ra @ bv if bv is not None else 0.0))
-        return FrameJet(Ra, self.r - rho, w, self.v - wxr - vr, Jw, Jv, alpha, a)
+                Jv[:, cols] -= Ra.dot(Hv)
+        a = _sub(_sub(_sub(_sub(_e(self.a), _cx(alpha, rh)), _cx(w, wxr)), _scaled(2.0, _cx(w, vr))),
+                 _e(Ra.dot(bv)) if bv is not None else (0.0, 0.0, 0.0))
+        return FrameJet(Ra, self.r - rho, np.array(w), np.array(_sub(_sub(_e(self.v), wxr), vr)), Jw, Jv,
+                        np.array(alpha), np.array(a))
 
 
 class VecJet:
@@ -249,20 +272,22 @@ class VecJet:
 
     def dot_(self, o):
         """Scalar product, as a :class:`ScalarJet`."""
+        a, b = self.val, o.val
         return ScalarJet(
-            self.val @ o.val,
-            o.val @ self.jac + self.val @ o.jac,
-            self.dot @ o.val + self.val @ o.dot,
-            self.bias @ o.val + 2.0 * (self.dot @ o.dot) + self.val @ o.bias,
+            a.dot(b),
+            b.dot(self.jac) + a.dot(o.jac),
+            self.dot.dot(b) + a.dot(o.dot),
+            self.bias.dot(b) + 2.0 * self.dot.dot(o.dot) + a.dot(o.bias),
         )
 
     def cross_(self, o):
         """Vector product ``self x o``, as a :class:`VecJet`."""
+        a, b = _e(self.val), _e(o.val)
         return VecJet(
-            _cross(self.val, o.val),
-            skew(self.val) @ o.jac - skew(o.val) @ self.jac,
-            _cross(self.dot, o.val) + _cross(self.val, o.dot),
-            _cross(self.bias, o.val) + 2.0 * _cross(self.dot, o.dot) + _cross(self.val, o.bias),
+            np.array(_cx(a, b)),
+            skew(a).dot(o.jac) - skew(b).dot(self.jac),
+            np.array(_add(_cx(self.dot, b), _cx(a, o.dot))),
+            np.array(_add(_add(_cx(self.bias, b), _scaled(2.0, _cx(self.dot, o.dot))), _cx(a, o.bias))),
         )
 
     def times(self, c):
@@ -318,21 +343,27 @@ class ScalarJet:
         return ScalarJet(r, -self.jac * r2, -self.dot * r2, -self.bias * r2 + 2.0 * self.dot * self.dot * r2 * r)
 
 
+#: the Jacobian of a frame's origin w.r.t. the local twists, frame_a's and frame_b's (read-only)
+_POINT_JAC = [np.zeros((3, 12)), np.zeros((3, 12))]
+for _slot, _jac in enumerate(_POINT_JAC):
+    _jac[:, 6 * _slot: 6 * _slot + 3] = np.eye(3)
+    _jac.setflags(write=False)
+
+
 def local_point(F: FrameJet, slot: int) -> VecJet:
     """Origin of frame ``F`` as a :class:`VecJet`; ``slot`` 0 for frame_a, 1 for frame_b."""
-    jac = np.zeros((3, 12))
-    jac[:, 6 * slot: 6 * slot + 3] = np.eye(3)
-    return VecJet(F.r, jac, F.v, F.a)
+    return VecJet(F.r, _POINT_JAC[slot], F.v, F.a)
 
 
 def local_vector(F: FrameJet, e, slot: int) -> VecJet:
     """Vector ``e`` fixed in frame ``F`` (given in its coordinates) as a :class:`VecJet`."""
-    x = F.R @ e
-    S = skew(x)
+    x = F.R.dot(e)
+    xe, w = _e(x), _e(F.w)
+    S = skew(xe)
     jac = np.zeros((3, 12), dtype=S.dtype)
     jac[:, 6 * slot + 3: 6 * slot + 6] = -S
-    wx = _cross(F.w, x)
-    return VecJet(x, jac, wx, _cross(F.alpha, x) + _cross(F.w, wx))
+    wx = _cx(w, xe)
+    return VecJet(x, jac, np.array(wx), np.array(_add(_cx(F.alpha, xe), _cx(w, wx))))
 
 
 def velocity_along(point: VecJet, direction: VecJet) -> ScalarJet:

@@ -23,13 +23,18 @@ True
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = [
+    "entries",
+    "cross_entries",
     "cross",
     "skew",
     "unit",
     "rot_axis",
+    "by_axis",
     "quat_to_matrix",
     "matrix_to_quat",
     "quat_multiply",
@@ -38,15 +43,24 @@ __all__ = [
 ]
 
 
-def cross(a, b):
-    """Cross product of two 3-vectors (much faster than ``numpy.cross`` for single vectors).
+def entries(a):
+    """The entries of a 3-vector as Python numbers (``tolist``: a float64's value exactly, a
+    traced value itself), whose arithmetic is several times cheaper than numpy scalars' and
+    than numpy's on arrays of three: the same IEEE operations, so the same bits."""
+    return a.tolist() if type(a) is np.ndarray else a
 
-    An array's entries are taken as Python numbers (``tolist``: a float64's value exactly, a
-    traced value itself), whose arithmetic is several times cheaper than numpy scalars': the
-    same IEEE products and differences, half the time of indexing the arrays."""
+
+def cross_entries(a, b):
+    """``cross(a, b)`` as a list of three Python numbers (:func:`entries` of each)."""
     a0, a1, a2 = a.tolist() if type(a) is np.ndarray else a
     b0, b1, b2 = b.tolist() if type(b) is np.ndarray else b
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+    return [a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0]
+
+
+def cross(a, b):
+    """Cross product of two 3-vectors (much faster than ``numpy.cross`` for single vectors):
+    the products and differences of their :func:`entries`, half the time of indexing the arrays."""
+    return np.array(cross_entries(a, b))
 
 
 def skew(a):
@@ -57,21 +71,54 @@ def skew(a):
     a : array_like, shape (3,)
         Vector, any unit, any frame (the result is resolved in the same frame).
     """
-    x, y, z = a
+    x, y, z = a.tolist() if type(a) is np.ndarray else a
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 def unit(a):
     """Unit vector along ``a`` (shape (3,)); raises ``ValueError`` for a zero vector."""
     a = np.asarray(a, dtype=float)
-    n = np.linalg.norm(a)
+    n = math.sqrt(a.dot(a)) if a.ndim == 1 else np.linalg.norm(a)  # numpy.linalg.norm's sum and root
     if not np.isfinite(n) or n == 0.0:
         raise ValueError("zero or non-finite vector has no direction")
     return a / n
 
 
+_EYE = np.eye(3)
+_EYE.setflags(write=False)
+#: what :func:`rot_axis` and :func:`perpendicular_pair` make of an axis, by the axis' bits
+#: (a cache hit is the computation's own result); bounded
+_BY_AXIS = {}
+
+
+def by_axis(what, axis, make):
+    """``make(a)`` for the axis ``a`` (``axis`` as a float array), made once per ``what`` and
+    value of the axis (a tuple of read-only arrays, shared: never written). The conversion to
+    floats is made once per call, as an uncached computation does (a traced parameter's
+    value is baked there, its guard kept: :mod:`mbcomp.codegen.graph`)."""
+    a = np.asarray(axis, dtype=float)
+    key = (what, a.tobytes())  # the bits: -0.0 is not 0.0 here
+    hit = _BY_AXIS.get(key)
+    if hit is None:
+        hit = make(a)
+        for M in hit:
+            M.setflags(write=False)
+        if len(_BY_AXIS) >= 4096:
+            _BY_AXIS.clear()
+        _BY_AXIS[key] = hit
+    return hit
+
+
+def _rodrigues(a):
+    N = skew(unit(a))
+    return N, N.dot(N)
+
+
 def rot_axis(axis, angle):
     """Rotation matrix of a rotation by ``angle`` (rad) about ``axis`` (Rodrigues).
+
+    ``N`` (the unit axis' cross matrix) and ``N @ N`` are made once per axis (the joints'
+    axes are constants: half of a hinge's kinematics); ``angle`` may be traced.
 
     Parameters
     ----------
@@ -86,10 +133,9 @@ def rot_axis(axis, angle):
     >>> np.round(rot_axis([1, 0, 0], np.pi / 2) @ [0, 1, 0], 12) + 0.0
     array([0., 0., 1.])
     """
-    n = unit(axis)
+    N, NN = by_axis("rodrigues", axis, _rodrigues)
     c, s = np.cos(angle), np.sin(angle)
-    N = skew(n)
-    return np.eye(3) + s * N + (1.0 - c) * (N @ N)
+    return _EYE + s * N + (1.0 - c) * NN
 
 
 def quat_to_matrix(Q):
@@ -173,7 +219,12 @@ def quat_rate(Q, w_body):
 
 
 def perpendicular_pair(n):
-    """Two unit vectors ``t1, t2`` with ``(t1, t2, n)`` right-handed orthonormal."""
+    """Two unit vectors ``t1, t2`` with ``(t1, t2, n)`` right-handed orthonormal (made once
+    per axis: read-only arrays)."""
+    return by_axis("pair", n, _pair)
+
+
+def _pair(n):
     n = unit(n)
     helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     t1 = unit(cross(helper, n))
