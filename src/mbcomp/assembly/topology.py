@@ -33,7 +33,7 @@ Examples
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -244,6 +244,15 @@ def no_gravity_note(topo):
         return None
     return ("the model has no World, so there is no gravity: bodies feel only the model's forces -> "
             "add model.add('world', World()) for gravity (World(g=(0, 0, 0)) says 'no gravity' explicitly)")
+
+
+#: what a rebound topology shares with its template: names, numbers, nodes (never changed)
+_SHARED = frozenset(("node_ports", "n_nodes", "gravity_source", "_geared", "_graph_edges", "q_names", "u_names",
+                     "q_units", "u_units", "nq", "nu"))
+#: every attribute :meth:`Topology.rebound` knows (``links``: made again when asked)
+_REBINDS = _SHARED | {"flat", "port_node", "edges", "bodies", "forces", "flange_elements", "drives",
+                      "flange_constraints", "flange_inertias", "flange_owner", "flange_of", "flange_rows", "tree",
+                      "cut", "unreached", "floating", "rotors", "links"}
 
 
 class Topology:
@@ -494,6 +503,80 @@ class Topology:
             if e.name == name:
                 return e
         raise KeyError(name)
+
+    # --- one structure, other components (assembly/plan.py) ----------------------------------
+    def choices(self):
+        """What this topology chose from its components' parameter values, hashable: the tree
+        edges in order with their parent sides and drives, the cut joints, the gravity source
+        and each implicit free joint's kind. Two topologies of one structure
+        (:meth:`~mbcomp.modeling.model.FlatModel.structure`) with equal choices lay out the
+        same nodes and coordinates."""
+        return (tuple((e.name, e.parent, e.child, e.forward, e.drive) for e in self.tree), tuple(self.cut),
+                self.gravity_source, tuple((e.name, type(e.comp)) for e in self.edges if e.implicit))
+
+    def probes(self, flat):
+        """The parameter values this topology's choices were made on, read from ``flat``'s
+        components (a model of this one's structure, :meth:`FlatModel.structure
+        <mbcomp.modeling.model.FlatModel.structure>`), hashable: whether each ground is a
+        gravity source, whether each tree-edge joint the spanning tree weighs has fixed start
+        values, whether the bodies at each implicit free joint are point masses. Where they equal
+        those of this topology's own model, ``Topology(flat)`` is :meth:`rebound` ``(flat)``."""
+        comps = flat.components
+        out = []
+        for e in self.edges:
+            if e.implicit:
+                out.append(all(_is_point(comps[path]) for path, _, n in self.bodies if n == e.node_b))
+            elif e.kind == "ground":
+                c = comps[e.name]
+                out.append(c.gravity(c.p) is not None)
+            elif e.dof and not e.drive and e.comp.tree_edge:  # what _weight reads
+                c = comps[e.name]
+                _, qf, _, uf = c.start(c.p)
+                out.append(bool(any(qf) or any(uf)))
+        return tuple(out)
+
+    def rebound(self, flat):
+        """This topology for ``flat``, a model of the same structure whose :meth:`probes` are
+        this topology's own: the frame nodes, tree, cut joints and coordinates kept; every
+        component, port and edge ``flat``'s (implicit free joints made anew) -- what
+        ``Topology(flat)`` builds, attribute by attribute, without its search. ``None`` when
+        this topology holds an attribute it does not know how to rebind."""
+        mine = vars(self)
+        if mine.keys() - _REBINDS:
+            return None
+        comp = {id(a): b for a, b in zip(self.flat.components.values(), flat.components.values())}
+        memo = {}
+
+        def port(x):
+            y = memo.get(id(x))
+            if y is None:
+                y = memo[id(x)] = PortRef(comp[id(x.component)], x.name, x.kind)
+            return y
+
+        edges = {}
+        for e in self.edges:
+            c = comp.get(id(e.comp))
+            if c is None:  # an implicit free joint: a new one, as Topology makes it
+                c = type(e.comp)()
+                c.name = e.comp.name
+            edges[id(e)] = new = object.__new__(Edge)
+            new.__dict__.update(vars(e), comp=c)
+        out = object.__new__(Topology)
+        out.__dict__.update({k: v for k, v in mine.items() if k in _SHARED})
+        out.flat, out.cut, out.floating, out.unreached = flat, list(self.cut), list(self.floating), list(self.unreached)
+        out.edges = [edges[id(e)] for e in self.edges]
+        out.tree = [edges[id(e)] for e in self.tree]
+        out.port_node = {port(x): n for x, n in self.port_node.items()}
+        out.flange_of = {port(x): port(r) for x, r in self.flange_of.items()}
+        out.flange_owner = {port(r): v for r, v in self.flange_owner.items()}
+        out.bodies = [(path, comp[id(c)], n) for path, c, n in self.bodies]
+        out.forces = [(path, comp[id(c)], dict(nodes)) for path, c, nodes in self.forces]
+        for name in ("flange_elements", "drives", "flange_constraints", "flange_inertias"):
+            setattr(out, name, [(path, comp[id(c)]) for path, c in mine[name]])
+        out.flange_rows = [replace(fr, comp=comp[id(fr.comp)], ports=dict(fr.ports),
+                                   root={pn: port(r) for pn, r in fr.root.items()}) for fr in self.flange_rows]
+        out.rotors = [(path, comp[id(c)], n, name) for path, c, n, name in self.rotors]
+        return out
 
 
 class TreeLinks:

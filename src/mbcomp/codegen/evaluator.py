@@ -95,7 +95,7 @@ from .jacobian import JacobianCode
 from .loaded import bind_cached
 from .structure_key import STRUCTURES, compiler
 from .toolchain import FLAGS
-from .tracer import param_layout, trace
+from .tracer import param_signature, trace
 from .verify import verify_evaluation, verify_fun
 
 __all__ = ["compile_system", "ProgramEvaluator", "CompiledEvaluation"]
@@ -199,10 +199,10 @@ class ProgramEvaluator:
 
     @property
     def signature(self):
-        """The parameter signature of this evaluator's system (:func:`mbcomp.codegen.tracer.param_layout`),
+        """The parameter signature of this evaluator's system (:func:`mbcomp.codegen.tracer.param_signature`),
         computed once."""
         if self._signature is None:
-            self._signature = param_layout(self.system)[1]
+            self._signature = param_signature(self.system)
         return self._signature
 
     def _bind_eval(self, code):

@@ -8,7 +8,11 @@ part of it. :func:`structure_key` gathers that everything:
 
 * the components: path and class of every leaf, and every attribute a component keeps
   besides its declared parameters (by value where it is plain data, else by identity);
-* the connections (in order: the spanning tree follows it), the bodies marked free;
+* the connections (in order: the spanning tree follows it), the bodies marked free (the
+  fingerprint of :meth:`FlatModel.structure <mbcomp.modeling.model.FlatModel.structure>`,
+  taken once per model: the assembly's topology plans key on it too);
+* what the topology chose from parameter values (:meth:`~mbcomp.assembly.topology.Topology.choices`:
+  the spanning tree, which fixed start values steer; the gravity source; the free joints' kinds);
 * the parameter signature of :func:`~mbcomp.codegen.tracer.param_layout` (which entries are
   zero, the shapes, the laws) and every non-numeric parameter value (a law, a surface, an
   input) by value where it is plain data, else by identity; a law written as a Python
@@ -46,23 +50,13 @@ from __future__ import annotations
 from collections import OrderedDict
 
 import os
-import types
 
-import numpy as np
-
+from ..modeling.fingerprint import Key, fingerprint
 from .toolchain import c_compiler
-from .tracer import param_layout
+from .tracer import param_signature
 from .tracing import drives
 
 __all__ = ["structure_key", "StructureCache", "STRUCTURES", "compiler"]
-
-#: attributes every component has that no program reads (its name, look, raw constructor values,
-#: construction-time parameters: the runtime values are the system's and are keyed there)
-_COMPONENT_OWN = frozenset(("name", "parent", "look", "_raw", "_bad", "p"))
-_PLAIN = (type(None), bool, int, float, complex, str, bytes, np.bool_, np.integer, np.floating)
-#: how deep a plain object's attributes are looked into before it is keyed by identity
-_DEPTH = 6
-
 
 _COMPILERS = {}
 
@@ -84,124 +78,21 @@ def compiler():
     return _COMPILERS[key]
 
 
-_HEAPTYPE = 1 << 9  # Py_TPFLAGS_HEAPTYPE: a class defined in Python
-
-
-def _plain_class(cls):
-    """Whether instances of ``cls`` keep their whole state in ``__dict__`` (every class of its
-    MRO but ``object`` defined in Python, no ``__slots__``)."""
-    return all(c.__flags__ & _HEAPTYPE and "__slots__" not in vars(c) for c in cls.__mro__[:-1])
-
-
-def _code_names(code, out):
-    """The global names a code object (and the code nested in it) reads."""
-    out.update(code.co_names)
-    for c in code.co_consts:
-        if isinstance(c, types.CodeType):
-            _code_names(c, out)
-    return out
-
-
-def _function(f, refs, depth):
-    """A Python function: itself, its defaults, its closure's values and the globals it reads
-    (a law reading ``K`` traces ``K``'s value into the program as a constant)."""
-    refs.append(f)
-    g = f.__globals__
-    names = sorted(n for n in _code_names(f.__code__, set()) if n in g)
-    cells = []
-    for c in f.__closure__ or ():
-        try:
-            cells.append(_fingerprint(c.cell_contents, refs, depth + 1))
-        except ValueError:  # an empty cell
-            cells.append(("empty",))
-    code_names = _code_names(f.__code__, set())
-    return ("fn", f, _fingerprint(f.__defaults__, refs, depth + 1), _fingerprint(f.__kwdefaults__, refs, depth + 1),
-            tuple(cells), tuple((n, _global(g[n], code_names, refs, depth + 1)) for n in names))
-
-
-def _global(v, code_names, refs, depth):
-    """A global a law reads; a module also by the values of the attributes the law's code
-    names (``cfg.K``: a changed ``K`` is another program, as a changed global ``K`` is)."""
-    if not isinstance(v, types.ModuleType):
-        return _fingerprint(v, refs, depth)
-    refs.append(v)
-    attrs = tuple((n, _fingerprint(getattr(v, n), refs, depth)) for n in sorted(code_names)
-                  if n in vars(v) and not isinstance(vars(v)[n], (types.ModuleType, types.FunctionType, type)))
-    return ("module", v, attrs)
-
-
-def _fingerprint(v, refs, depth=0):
-    """A hashable value equal for two values a program cannot tell apart; objects it cannot
-    see into by identity (``v`` appended to ``refs`` to keep it alive)."""
-    if isinstance(v, _PLAIN):
-        return (type(v).__name__, v.item() if isinstance(v, np.generic) else v)
-    if depth < _DEPTH:
-        if type(v) in (tuple, list):
-            return (type(v).__name__,) + tuple(_fingerprint(x, refs, depth + 1) for x in v)
-        if type(v) is np.ndarray and v.dtype != object:
-            return ("nd", v.dtype.str, v.shape, v.tobytes())
-        if type(v) is dict:
-            return ("dict",) + tuple((_fingerprint(k, refs, depth + 1), _fingerprint(x, refs, depth + 1))
-                                     for k, x in v.items())
-        if type(v) in (set, frozenset):
-            return ("set",) + tuple(sorted((_fingerprint(x, refs, depth + 1) for x in v), key=repr))
-        if isinstance(v, types.FunctionType):
-            return _function(v, refs, depth)
-        if isinstance(v, types.MethodType):
-            return ("method", _fingerprint(v.__func__, refs, depth + 1), _fingerprint(v.__self__, refs, depth + 1))
-        # plain data (a surface, an input, a callable object): a Python class whose state is its __dict__
-        if not isinstance(v, (type, types.ModuleType)) and hasattr(v, "__dict__") and _plain_class(type(v)):
-            return ("obj", type(v)) + tuple((k, _fingerprint(x, refs, depth + 1))
-                                            for k, x in sorted(vars(v).items()))
-    try:
-        hash(v)
-        refs.append(v)
-        return ("is", v) if not isinstance(v, type) else ("class", v)
-    except TypeError:
-        refs.append(v)
-        return ("id", id(v))
-
-
-def _class_data(cls, refs):
-    """The plain data a component's class (and its bases) holds: numbers, strings, tuples
-    and arrays its methods may read (a changed class constant is another program)."""
-    out = []
-    for c in cls.__mro__[:-1]:
-        for k, x in sorted(vars(c).items()):
-            if not k.startswith("__") and isinstance(x, (_PLAIN, tuple, np.ndarray)):
-                out.append((c.__name__, k, _fingerprint(x, refs)))
-    return tuple(out)
-
-
-def _components(flat, refs):
-    comps = []
-    classes = {}
-    for path, comp in flat.components.items():
-        extra = tuple((k, _fingerprint(x, refs)) for k, x in sorted(vars(comp).items()) if k not in _COMPONENT_OWN)
-        cls = type(comp)
-        if cls not in classes:
-            classes[cls] = _class_data(cls, refs)
-        comps.append((path, cls, classes[cls], extra))
-    where = {id(c): path for path, c in flat.components.items()}
-    conns = tuple((where.get(id(a.component)), a.name, where.get(id(b.component)), b.name) for a, b in flat.connections)
-    return tuple(comps), conns, tuple(sorted(flat.free))
-
-
 def structure_key(system, backend, options=(), signature=None):
     """``(key, refs)``: the structure of ``system`` as a hashable key (see the module notes)
     for programs printed for ``backend`` with ``options`` (hashable: node limit, compiler,
     flags); ``refs``, the objects the key holds by identity, to keep alive while it is used.
-    ``signature``: ``param_layout(system)[1]`` when the caller has it."""
-    refs = []
-    flat = system.topology.flat
-    comps, conns, free = _components(flat, refs)
+    ``signature``: :func:`~mbcomp.codegen.tracer.param_signature` ``(system)`` when the caller has it."""
+    topo = system.topology
+    structure, own = topo.flat.structure()  # taken once per model: the assembly's plan keyed on it too
+    refs = [own]
     driving = drives(system)
-    drive_params = tuple((path, _fingerprint(sorted(vars(system.P[path]).items()), refs)) for path in driving)
+    drive_params = tuple((path, fingerprint(sorted(vars(system.P[path]).items()), refs)) for path in driving)
     if signature is None:
-        signature = param_layout(system)[1]
-    laws = tuple(_fingerprint(x, refs) for x in signature if x[2] == "o")
+        signature = param_signature(system)
+    laws = tuple(fingerprint(x, refs) for x in signature if x[2] == "o")
     nonholonomic = tuple(e.name for e in system.nonholonomic)
-    key = (backend, tuple(options), comps, conns, free, drive_params, signature, laws, nonholonomic)
+    key = (backend, tuple(options), structure, topo.choices(), drive_params, signature, laws, nonholonomic)
     return key, refs
 
 
@@ -236,6 +127,7 @@ class StructureCache:
 
     def entry(self, system, backend, options=(), signature=None):
         key, refs = structure_key(system, backend, options, signature)
+        key = Key(key)  # hashed once for the lookup and the reordering
         got = self._entries.get(key)
         if got is not None:
             self._entries.move_to_end(key)

@@ -40,7 +40,7 @@ from ..modeling.inputs import traced_inputs
 from .graph import CodegenError, Graph, Sym
 from .tracing import drives, parameter_entries, q_rates, traced_params, traced_system
 
-__all__ = ["FIELDS", "param_layout", "param_vector", "trace_point", "trace"]
+__all__ = ["FIELDS", "param_layout", "param_signature", "param_vector", "trace_point", "trace"]
 
 #: the fields of an evaluation a program computes, in the order of its flat output
 FIELDS = ("M", "f", "Phi", "Phid", "C", "cb", "B", "b", "Bb", "Psi")
@@ -76,6 +76,29 @@ def param_layout(system, keep=()):
     parameters ``keep`` (``(path, name)`` pairs: zeros too, so that a program can be
     differentiated with respect to them); ``signature`` is hashable and changes when anything
     baked into a program changes (zero pattern, shapes, laws, kept parameters)."""
+    return _layout(system, keep, True)
+
+
+def param_signature(system, keep=()):
+    """``param_layout(system, keep)[1]``, the signature alone (without the layout's indices:
+    half the time; what a program's cache key and its binding compare).
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Prismatic, PointMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, 0, -9.81)))
+    >>> s = m.add("s", Prismatic(n=(0, 0, 1))); b = m.add("b", PointMass(m=2.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, b.frame_a)
+    >>> system = mbcomp.assemble(m)
+    >>> param_signature(system) == param_layout(system)[1]
+    True
+    """
+    return _layout(system, keep, False)[1]
+
+
+def _layout(system, keep, indices):
+    """``(layout, signature)`` of :func:`param_layout`; the layout empty unless ``indices``."""
     layout, sig = [], []
     keep = frozenset(keep)
     for path, name, kind, val in parameter_entries(system):  # _traced_kind inlined: ~1,000 entries at N = 100
@@ -93,12 +116,13 @@ def param_layout(system, keep=()):
             traced = None
         if traced == "s":
             on = bool(val != 0 or kept)
-            if on:
+            if on and indices:
                 layout.append((path, name, None))
             sig.append((path, name, "s", on))
         elif traced == "a":
             nz = (val != 0) | kept if kept else val != 0
-            layout.extend((path, name, idx) for idx in zip(*nz.nonzero()))
+            if indices:
+                layout.extend((path, name, idx) for idx in zip(*nz.nonzero()))
             sig.append((path, name, "a", val.shape, nz.tobytes()))
         else:
             sig.append((path, name, "o", _law_key(val)))

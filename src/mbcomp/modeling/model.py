@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from ..modeling.component import Component, PortRef
 from ..errors import ModelError, Problem
+from .fingerprint import model_structure
 from .roles import MissingFlange
 
 __all__ = ["Model", "FlatModel", "is_rigid_offset"]
@@ -212,16 +213,20 @@ class Model(Component):
         owned = {id(c) for c in flat.components.values()}
         for comp in flat.components.values():
             probs.extend(comp.problems())
-        connected = set()
+        connected = set()  # (id(component), port name): a port's own hash and __eq__ are Python calls
         for a, b in flat.connections:
             for x in (a, b):
                 if id(x.component) not in owned:
                     probs.append(Problem(x.path, "is connected but its component was never added to the model",
                                          f"add it with model.add(name, ...) before connecting {x.name}"))
-                connected.add(x)
+                connected.add((id(x.component), x.name))
         carried = _rotor_carried(flat)
         for path, comp in flat.components.items():
-            probs.extend(_open_ports(path, comp, connected, carried))
+            ports = comp.ports()
+            key = id(comp)
+            open_ = [n for n, port in ports.items() if not port.optional and (key, n) not in connected]
+            if open_:
+                probs.extend(_open_ports(path, comp, ports, open_, carried))
         if not flat.components:
             probs.append(Problem(self.label(), "contains no components", "add components with model.add(name, ...)"))
         if probs:
@@ -261,17 +266,16 @@ def _rotor_carried(flat):
             if x.component.role == "joint" and x.name == "axis" and find(x) in rotors}
 
 
-def _open_ports(path, comp, connected, carried=frozenset()):
-    """Problems of the ports of ``comp`` left unconnected (a rigid offset may leave one frame
-    open; so may a joint's frame_b that turns a rotor on its axis, ``carried``)."""
-    frames = [n for n, port in comp.ports().items() if port.kind == "frame"]
-    open_ = [n for n, port in comp.ports().items()
-             if not port.optional and PortRef(comp, n, port.kind) not in connected]
+def _open_ports(path, comp, ports, open_, carried=frozenset()):
+    """Problems of the ports ``open_`` of ``comp`` (its ``ports``) left unconnected (a rigid
+    offset may leave one frame open; so may a joint's frame_b that turns a rotor on its axis,
+    ``carried``)."""
+    frames = [n for n, port in ports.items() if port.kind == "frame"]
     if id(comp) in carried and "frame_a" not in open_:
         open_ = [n for n in open_ if n != "frame_b"]  # the shaft is the rotor's: a frame that moves it
     out = []
     for pname in open_:
-        kind = comp.ports()[pname].kind
+        kind = ports[pname].kind
         what = f"{kind} of {type(comp).__name__} is not connected"
         fix = f"connect {path}.{pname} to another {kind} with model.connect(...)"
         if is_rigid_offset(comp):
@@ -302,7 +306,20 @@ def _missing_flange(x, y):
 
 class FlatModel:
     """Leaf components by path, connections between their ports, aliases, derived outputs
-    and the paths of the bodies marked ``free`` (immutable hand-off)."""
+    and the paths of the bodies marked ``free`` (immutable hand-off).
+
+    Examples
+    --------
+    >>> from mbcomp import Model
+    >>> from mbcomp.library import World, Revolute
+    >>> def flat(phi0):
+    ...     m = Model(); w = m.add("world", World()); j = m.add("j", Revolute(phi0=phi0))
+    ...     m.connect(w.frame_b, j.frame_a)
+    ...     return m.flatten()
+    >>> a, b = flat(0.1), flat(0.7)
+    >>> list(a.components), a.structure()[0] == b.structure()[0]   # other start values: one structure
+    (['world', 'j'], True)
+    """
 
     def __init__(self, components, connections, aliases, outputs=None, free=()):
         self.free = frozenset(free)
@@ -310,3 +327,22 @@ class FlatModel:
         self.connections = tuple(connections)
         self.aliases = dict(aliases)
         self.outputs = dict(outputs or {})
+        self._structure = None
+
+    def structure(self):
+        """``(key, refs)``: the structure of the components, connections and free bodies as a
+        hashable :class:`~mbcomp.modeling.fingerprint.Key` (:func:`~mbcomp.modeling.fingerprint.model_structure`:
+        paths, classes, attributes besides the parameters, connections; no parameter values)
+        and the objects it holds by identity, to keep alive while the key is used. Taken once,
+        when first asked (a model's components are not changed once it is validated); taken
+        again for a flat model whose components, connections or free bodies were replaced since."""
+        got = getattr(self, "_structure", None)  # (a flat model pickled before it had one)
+        if got is None or got[0] is not self.components or got[1] is not self.connections or got[2] is not self.free:
+            got = self._structure = (self.components, self.connections, self.free,
+                                     model_structure(self.components, self.connections, self.free))
+        return got[3], got[3].refs
+
+    def __getstate__(self):  # pickled and copied without the structure: what it holds by identity may not pickle
+        state = dict(vars(self))
+        state["_structure"] = None
+        return state
