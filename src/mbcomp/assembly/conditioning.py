@@ -192,18 +192,15 @@ def tree_moving_scale(system, tp):
     ``|v_O + w x c|^2 = |v_O|^2 + 2 c . (v_O x w) + |c|^2 |w|^2 - (c . w)^2`` (``c``: the body's
     centre, world): every body and column at once."""
     links, nu = tp.links, system.nu
-    bodies = [(path, comp, node, links.link_of.get(node, -1)) for path, comp, node in system.topology.bodies]
-    bodies = [b for b in bodies if b[3] >= 0]
+    bodies = tp.bodies  # (link, m, c, Iw) of the bodies on links, as the pass summed them
     if not bodies:
         return 0.0
     S, link = speed_columns(tp, nu)
     w, v = S[:3], S[3:]
-    m, tr, C = np.empty(len(bodies)), np.empty(len(bodies)), np.empty((len(bodies), 3))
-    blink = np.empty(len(bodies), int)
-    for k, (path, comp, node, i) in enumerate(bodies):
-        J = tp.jets[node]
-        mk, rho, Iw = system.body_inertia(comp, path, J)
-        m[k], tr[k], C[k], blink[k] = float(mk), float(np.trace(Iw)), J.r + rho, i
+    m = np.array([float(b[1]) for b in bodies])
+    tr = np.array([float(b[3].trace()) for b in bodies])
+    C = np.array([b[2] for b in bodies], float)
+    blink = np.array([b[0] for b in bodies], int)
     on = ancestry(links)[np.ix_(link, blink)].T  # (bodies, columns): the column moves the body
     w2 = np.sum(w * w, axis=0)
     jc = (np.sum(v * v, axis=0)[None, :] + 2.0 * C @ np.cross(v.T, w.T).T

@@ -159,30 +159,25 @@ class FrameJet:
         """:meth:`offset`'s pose and Jacobians alone (the same operations, so the same bits):
         ``w``, ``v``, ``alpha``, ``a`` are left zero, for a pass that needs the inertias only."""
         rho = self.R.dot(p0)
-        return FrameJet(self.R.dot(R0), self.r + rho, _ZERO3, _ZERO3, self.Jw, self.Jv - skew(rho).dot(self.Jw),
-                        _ZERO3, _ZERO3)
+        Jw = self.Jw
+        Jv = self.Jv - skew(rho).dot(Jw) if Jw.shape[1] else self.Jv  # no columns: nothing to move
+        return FrameJet(self.R.dot(R0), self.r + rho, _ZERO3, _ZERO3, Jw, Jv, _ZERO3, _ZERO3)
 
-    def pose_through(self, R_rel, r_rel, Hw, Hv, cols, forward=True):
-        """:meth:`through` (``forward``) or :meth:`back_through` without the motion: the pose
-        and the Jacobian columns by the same operations (the same bits), ``w``, ``v``,
-        ``alpha``, ``a`` zero -- for a pass that needs the inertias only (float jets)."""
+    def pose_through(self, R_rel, r_rel, Hw, Hv, forward=True):
+        """:meth:`through` (``forward``) or :meth:`back_through` without the motion, from a
+        jet without Jacobian columns (a link's parent, :mod:`~mbcomp.assembly.recursive`): the
+        pose and the joint's own ``k`` columns -- what those give a parent whose ``k`` columns
+        are zero, bit for bit (``0 + Ra Hw``; ``0 - [rho]x 0`` is ``+0`` for a finite ``rho``);
+        ``w``, ``v``, ``alpha``, ``a`` zero -- for a pass that needs the inertias only (float jets)."""
         if forward:
             Ra = self.R
             rho = Ra.dot(r_rel)
-            Jw = self.Jw.copy()
-            Jv = self.Jv - skew(rho).dot(self.Jw)
-            if Hw.shape[1]:
-                Jw[:, cols] += Ra.dot(Hw)
-                Jv[:, cols] += Ra.dot(Hv)
-            return FrameJet(Ra.dot(R_rel), self.r + rho, _ZERO3, _ZERO3, Jw, Jv, _ZERO3, _ZERO3)
+            return FrameJet(Ra.dot(R_rel), self.r + rho, _ZERO3, _ZERO3, 0.0 + Ra.dot(Hw), 0.0 + Ra.dot(Hv),
+                            _ZERO3, _ZERO3)
         Ra = self.R.dot(R_rel.T)
         rho = Ra.dot(r_rel)
-        Jw = self.Jw.copy()
-        if Hw.shape[1]:
-            Jw[:, cols] -= Ra.dot(Hw)
-        Jv = self.Jv + skew(rho).dot(Jw)
-        if Hv.shape[1]:
-            Jv[:, cols] -= Ra.dot(Hv)
+        Jw = 0.0 - Ra.dot(Hw)
+        Jv = (0.0 + skew(rho).dot(Jw)) - Ra.dot(Hv)
         return FrameJet(Ra, self.r - rho, _ZERO3, _ZERO3, Jw, Jv, _ZERO3, _ZERO3)
 
     def through(self, R_rel, r_rel, Hw, Hv, cols, w_rel, v_rel=None, bw=None, bv=None):

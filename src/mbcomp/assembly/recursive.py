@@ -66,8 +66,6 @@ Examples
 """
 from __future__ import annotations
 
-from functools import partial
-
 import numpy as np
 
 from .evaluation import Evaluation
@@ -100,10 +98,15 @@ def _dtype(*xs):
     return object if any(is_traced(x) for x in xs) else float
 
 
+#: no Jacobian columns (shared by the narrow jets: an empty array is never written)
+_NO_COLUMNS = np.zeros((3, 0))
+_EYE = np.eye(3)
+_EYE.setflags(write=False)
+
+
 def _narrow(J):
     """A jet's pose and motion without Jacobian columns."""
-    z = np.zeros((3, 0))
-    return FrameJet(J.R, J.r, J.w, J.v, z, z, J.alpha, J.a)
+    return FrameJet(J.R, J.r, J.w, J.v, _NO_COLUMNS, _NO_COLUMNS, J.alpha, J.a)
 
 
 class TreePass:
@@ -125,10 +128,14 @@ class TreePass:
     W : list of ndarray (6,)
         Each link's own bias wrench about O: gravity, applied forces and the inertial
         (velocity-product) wrench ``-dh/dt`` at ``du/dt = 0``.
+    bodies : list of tuple
+        ``(link, m, c, Iw)`` of every body on a link: its link, mass (kg), centre of mass
+        (m) and inertia about it (kg m^2), world -- what the inertias were summed from.
     """
 
-    def __init__(self, links, jets, S, I, W, dt, t=0.0, q=None, Jw=None, r=None):
+    def __init__(self, links, jets, S, I, W, dt, t=0.0, q=None, Jw=None, r=None, bodies=()):
         self.links, self.jets, self.S, self.I, self.W, self.dt = links, jets, S, I, W, dt
+        self.bodies = list(bodies)
         self.t, self.q = t, q  # for the rows of flange constraints (assembly/flange_rows.py)
         # per link, a ball-like joint's angular columns Jw (its twist at the child frame's
         # origin r has no linear part; None for other joints) and that origin r (m, world)
@@ -148,41 +155,46 @@ def _exact_zeros(A):
     return all(not is_traced(x) and x == 0 for x in A.flat)
 
 
-def _child_pose(system, e, pj, t, q, u, cols):
-    """:meth:`~mbcomp.assembly.system.MultibodySystem.child_jet`'s pose and Jacobian columns
-    alone, by the same operations (:meth:`FrameJet.pose_through`): no rates, no bias terms."""
+def _child_pose(system, e, pj, t, q):
+    """:meth:`~mbcomp.assembly.system.MultibodySystem.child_jet`'s pose and the joint's own
+    Jacobian columns alone from a parent without columns, by the same operations
+    (:meth:`FrameJet.pose_through`, :meth:`FrameJet.offset_pose`): no rates, no bias terms."""
     p = system.P[e.name]
     if e.dof == 0:  # rigid offsets and ground frames: constant transforms
         R, r = e.comp.pose(p) if e.kind == "ground" else e.comp.relative(None, p)
-        return pj.offset_pose(R, r) if e.forward else pj.offset_pose(R.T, -(R.T @ r))
+        return pj.offset_pose(R, r) if e.forward else pj.offset_pose(R.T, -(R.T.dot(r)))
     if e.kind == "ground" or e.drive:  # no speeds of its own (a drive's coordinate is its law's)
         R, r = (e.comp.pose(p) if e.kind == "ground" else
                 e.comp.relative(np.array([system.topology.flat.components[e.drive].motion(t, system.P[e.drive])[0]]), p))
-        Hw = Hv = np.zeros((3, 0))
+        Hw = Hv = _NO_COLUMNS
     else:
         qj = q[e.q]
         R, r = e.comp.relative(qj, p)
         Hw, Hv = e.comp.motion(qj, p)
-    return pj.pose_through(R, r, Hw, Hv, cols, e.forward)
+    return pj.pose_through(R, r, Hw, Hv, e.forward)
 
 
 def _link_jets(system, links, t, q, u, pose_only=False):
     """The narrow jets of every frame, the links' motion subspaces ``S`` and, per link, a
     ball-like joint's angular columns and origin (see :class:`TreePass`); ``pose_only``: the
     poses and subspaces alone (the motions zero), for the inertias."""
-    child = partial(_child_pose, system) if pose_only else system.child_jet
     jets = {ROOT: FrameJet.ground(0)}
     S, Jw, r = [], [], []
     for e in system.topology.tree:
         pj = jets[e.parent]
         k = e.u.stop - e.u.start
+        if pose_only:
+            cj = _child_pose(system, e, pj, t, q)
+        elif k == 0:
+            cj = system.child_jet(e, pj, t, q, u, slice(0, 0))
+        else:
+            z = np.zeros((3, k))
+            cj = system.child_jet(e, FrameJet(pj.R, pj.r, pj.w, pj.v, z, z, pj.alpha, pj.a), t, q, u, slice(0, k))
         if k == 0:
-            jets[e.child] = child(e, pj, t, q, u, slice(0, 0))
+            jets[e.child] = cj
             continue
-        z = np.zeros((3, k))
-        cj = child(e, FrameJet(pj.R, pj.r, pj.w, pj.v, z, z, pj.alpha, pj.a), t, q, u, slice(0, k))
         # the columns give the twist of the child frame's origin; about O: v_O = v_c + r_c x w
-        S.append(np.vstack((cj.Jw, cj.Jv + skew(cj.r) @ cj.Jw)))
+        S.append(np.concatenate((cj.Jw, cj.Jv + skew(cj.r).dot(cj.Jw))))
         ball = k == 3 and _exact_zeros(cj.Jv)
         Jw.append(cj.Jw if ball else None)
         r.append(cj.r if ball else None)
@@ -196,18 +208,19 @@ def _spatial_inertia(m, Iw, Cx):
     mC = m * Cx
     if mC.dtype == object or np.asarray(Iw).dtype == object:
         return np.block([[Iw - m * (Cx @ Cx), mC], [-mC, m * np.eye(3)]])
-    out = np.zeros((6, 6))
-    out[:3, :3] = Iw - m * (Cx @ Cx)
+    out = np.empty((6, 6))
+    out[:3, :3] = Iw - m * Cx.dot(Cx)
     out[:3, 3:] = mC
     out[3:, :3] = -mC
-    out[3:, 3:] = m * np.eye(3)
+    out[3:, 3:] = m * _EYE
     return out
 
 
 def _body_terms(system, links, jets, I, W):
     """Add every body's spatial inertia and bias wrench (gravity and inertial) to its link
-    (``W`` None: the inertias only)."""
+    (``W`` None: the inertias only); returns the bodies' ``(link, m, c, Iw)`` (:class:`TreePass`)."""
     g = system.g
+    bodies = []
     for path, comp, node in system.topology.bodies:
         i = links.link_of.get(node, -1)
         if i < 0:
@@ -215,8 +228,8 @@ def _body_terms(system, links, jets, I, W):
         J = jets[node]
         m, rho, Iw = system.body_inertia(comp, path, J)
         c = J.r + rho
-        Cx = skew(c)
-        I[i] = I[i] + _spatial_inertia(m, Iw, Cx)
+        bodies.append((i, m, c, Iw))
+        I[i] = I[i] + _spatial_inertia(m, Iw, skew(c))
         if W is None:
             continue
         a_c = J.a + cross(J.alpha, rho) + cross(J.w, cross(J.w, rho))
@@ -230,6 +243,7 @@ def _body_terms(system, links, jets, I, W):
             I[i] = I[i] + np.block([[Iw, z], [z, z]])
             if W is not None:
                 W[i] = W[i] + np.concatenate((-rotor_wrench(jets[node], Iw, gyro), np.zeros(3)))
+    return bodies
 
 
 def tree_pass(system, t, q, u, forces=True):
@@ -242,12 +256,12 @@ def tree_pass(system, t, q, u, forces=True):
     jets, S, Jw, r = _link_jets(system, links, t, q, u, pose_only=not forces and dt is float)
     I = [np.zeros((6, 6), dt) for _ in range(links.n)]
     W = [np.zeros(6, dt) for _ in range(links.n)]
-    _body_terms(system, links, jets, I, W if forces else None)
+    bodies = _body_terms(system, links, jets, I, W if forces else None)
     for node, (F, T) in system.applied(t, q, u, jets).items() if forces else ():
         i = links.link_of.get(node, -1)
         if i >= 0:
             W[i] = W[i] + np.concatenate((T + cross(jets[node].r, F), F))
-    return TreePass(links, jets, S, I, W, dt, t, q, Jw, r)
+    return TreePass(links, jets, S, I, W, dt, t, q, Jw, r, bodies)
 
 
 def _summed(links, vals):

@@ -43,7 +43,7 @@ import numpy as np
 from ..modeling.component import PortRef
 from ..errors import ModelError, Problem
 from ..assembly.jets import FrameJet, as_array, is_traced, rigid_constraints
-from ..geometry.kinematics import cross, skew
+from ..geometry.kinematics import added, cross, cross_entries, entries, skew
 from ..modeling.roles import FrameState
 from ..assembly.topology import ROOT, Topology
 from .evaluation import Evaluation, Rows, completed, cut_rows
@@ -295,7 +295,7 @@ class MultibodySystem:
         # a joint whose Hw u, Hv u change at constant u (a rod's end on its sphere) declares their
         # rates, the relative bias accelerations (frame_a coordinates): Joint.motion_bias
         bw, bv = e.comp.motion_bias(qj, uj, p) if e.comp.has_motion_bias else (None, None)
-        return R, r, Hw, Hv, Hw @ uj, Hv @ uj, bw, bv, qj, uj
+        return R, r, Hw, Hv, Hw.dot(uj), Hv.dot(uj), bw, bv, qj, uj
 
     def kinematics(self, t, q, u):
         """Jets of every frame node (dict node -> :class:`~mbcomp.jets.FrameJet`)."""
@@ -311,7 +311,7 @@ class MultibodySystem:
         width)."""
         if e.dof == 0:  # rigid offsets and ground frames: constant transforms
             R, r = e.comp.pose(self.P[e.name]) if e.kind == "ground" else e.comp.relative(None, self.P[e.name])
-            return pj.offset(R, r) if e.forward else pj.offset(R.T, -(R.T @ r))
+            return pj.offset(R, r) if e.forward else pj.offset(R.T, -(R.T.dot(r)))
         R, r, Hw, Hv, wr, vr, bw, bv, _, _ = self._joint_motion(e, t, q, u)
         if e.forward:
             return pj.through(R, r, Hw, Hv, cols, wr, vr, bw, bv)
@@ -370,9 +370,8 @@ class MultibodySystem:
     def body_inertia(self, comp, path, J):
         """``(m, rho, Iw)`` of body ``comp`` on jet ``J``: kg, centre of mass (m), inertia (kg m^2); world."""
         m, rc, I = comp.mass_properties(self.P[path])
-        rho = J.R @ rc
-        Iw = J.R @ I @ J.R.T
-        return m, rho, Iw
+        R = J.R
+        return m, R.dot(rc), R.dot(I).dot(R.T)  # .dot: @'s products, a quarter of its overhead
 
     def evaluate(self, t, q, u, masked=True) -> Evaluation:
         """Mass matrix, forces and constraints at ``(t, q, u)``, from the system's evaluator
@@ -409,23 +408,24 @@ class MultibodySystem:
         for path, comp, node in self.topology.bodies:
             J = jets[node]
             m, rho, Iw = self.body_inertia(comp, path, J)
-            Jv = J.Jv - skew(rho) @ J.Jw
-            wxr = cross(J.w, rho)
-            a = J.a + cross(J.alpha, rho) + cross(J.w, wxr)
+            Jw, w, rh = J.Jw, entries(J.w), entries(rho)  # 3-vectors' entries, products by .dot: jets.py
+            Jv = J.Jv - skew(rh).dot(Jw)
+            a = np.array(added(J.a, cross_entries(J.alpha, rh), cross_entries(w, cross_entries(w, rh))))
             if batch:
                 rows_v.append(Jv)
                 rows_mv.append(m * Jv)
-                rows_w.append(J.Jw)
-                rows_iw.append(Iw @ J.Jw)
+                rows_w.append(Jw)
+                rows_iw.append(Iw.dot(Jw))
             else:
-                M += m * (Jv.T @ Jv) + J.Jw.T @ Iw @ J.Jw
-            f += Jv.T @ (m * (g - a)) - J.Jw.T @ (Iw @ J.alpha + cross(J.w, Iw @ J.w))
+                M += m * (Jv.T.dot(Jv)) + Jw.T.dot(Iw).dot(Jw)
+            h = Iw.dot(J.alpha) + cross(w, Iw.dot(J.w))
+            f += Jv.T.dot(m * (g - a)) - Jw.T.dot(h)
         if batch:
             # M = sum_b m Jv^T Jv + Jw^T Iw Jw as two stacked products: one BLAS call each
             # instead of one nu x nu outer product per body (a 1000-link chain: 3.6 s -> 0.2 s
             # per evaluation). Traced evaluations keep the per-body sum: its structure is the
             # generated program's.
-            M = np.vstack(rows_v).T @ np.vstack(rows_mv) + np.vstack(rows_w).T @ np.vstack(rows_iw)
+            M = np.vstack(rows_v).T.dot(np.vstack(rows_mv)) + np.vstack(rows_w).T.dot(np.vstack(rows_iw))
             M = 0.5 * (M + M.T)  # exactly symmetric, as the per-body products were
         for node, Iw, gyro in rotors(self, jets):  # rotors on joint axes: bodies of inertia J n n^T
             J = jets[node]
@@ -456,7 +456,7 @@ class MultibodySystem:
         M, f = self._inertia_terms(jets, self.nu, dt)
         for node, (F, T) in self.applied(t, q, u, jets).items():
             J = jets[node]
-            f += J.Jv.T @ F + J.Jw.T @ T
+            f += J.Jv.T.dot(F) + J.Jw.T.dot(T)
         return M, f
 
     def cut_constraints(self, jets, t=0.0, q=None):

@@ -30,6 +30,7 @@ import numpy as np
 __all__ = [
     "entries",
     "cross_entries",
+    "added",
     "cross",
     "skew",
     "unit",
@@ -55,6 +56,15 @@ def cross_entries(a, b):
     a0, a1, a2 = a.tolist() if type(a) is np.ndarray else a
     b0, b1, b2 = b.tolist() if type(b) is np.ndarray else b
     return [a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0]
+
+
+def added(a, *more):
+    """``a + b + ...`` of 3-vectors, left to right, as a list of :func:`entries`."""
+    a = a.tolist() if type(a) is np.ndarray else a
+    for b in more:
+        b = b.tolist() if type(b) is np.ndarray else b
+        a = [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+    return a
 
 
 def cross(a, b):
