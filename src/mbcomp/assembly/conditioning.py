@@ -39,7 +39,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import InitializationError, Problem
-from .recursive import ancestry, mass_matrix, speed_columns, tree_pass
+from .recursive import mass_matrix, speed_columns, tree_pass
 
 __all__ = ["MASSLESS", "ILL_CONDITIONED", "directions", "check_inertia", "check_tree_inertia", "moving_scale",
            "tree_moving_scale"]
@@ -191,7 +191,7 @@ def tree_moving_scale(system, tp):
     the world origin O), so ``|J_w|^2`` sums ``|w|^2`` over them and ``|J_c|^2`` sums
     ``|v_O + w x c|^2 = |v_O|^2 + 2 c . (v_O x w) + |c|^2 |w|^2 - (c . w)^2`` (``c``: the body's
     centre, world): every body and column at once."""
-    links, nu = tp.links, system.nu
+    nu = system.nu
     bodies = tp.bodies  # (link, m, c, Iw) of the bodies on links, as the pass summed them
     if not bodies:
         return 0.0
@@ -201,7 +201,7 @@ def tree_moving_scale(system, tp):
     tr = np.array([float(b[3].trace()) for b in bodies])
     C = np.array([b[2] for b in bodies], float)
     blink = np.array([b[0] for b in bodies], int)
-    on = ancestry(links)[np.ix_(link, blink)].T  # (bodies, columns): the column moves the body
+    on = tp.ancestry()[np.ix_(link, blink)].T  # (bodies, columns): the column moves the body
     w2 = np.sum(w * w, axis=0)
     jc = (np.sum(v * v, axis=0)[None, :] + 2.0 * C @ np.cross(v.T, w.T).T
           + np.sum(C * C, axis=1)[:, None] * w2[None, :] - (C @ w) ** 2)
@@ -224,19 +224,25 @@ def moving_scale(system, jets):
     total = 0.0
     for path, comp, node in system.topology.bodies:
         J = jets[node]
-        if not (np.any(J.Jv) or np.any(J.Jw)):
+        Jw, Jv = _columns(J.Jw), _columns(J.Jv)
+        if not (Jv.any() or Jw.any()):
             continue
         m, rc, I = comp.mass_properties(system.P[path])
-        rho = J.R @ np.asarray(rc, float)
+        rho = J.R.dot(np.asarray(rc, float))
         r = J.r + rho
-        Jw = np.atleast_2d(np.asarray(J.Jw, float))
         # v_c = v + w x rho, column by column (numpy.cross's products and differences, without its
         # axis handling: a third of a short run's inertia check)
-        wxr = np.array([Jw[1] * rho[2] - Jw[2] * rho[1], Jw[2] * rho[0] - Jw[0] * rho[2], Jw[0] * rho[1] - Jw[1] * rho[0]])
-        Jc = np.atleast_2d(np.asarray(J.Jv, float)) + wxr
-        w2 = float(np.sum(Jw * Jw))
-        total += float(m) * (float(np.sum(Jc * Jc)) + float(r @ r) * w2) + float(np.trace(I)) * w2
+        r0, r1, r2 = rho.tolist()
+        wxr = np.array([Jw[1] * r2 - Jw[2] * r1, Jw[2] * r0 - Jw[0] * r2, Jw[0] * r1 - Jw[1] * r0])
+        Jc = Jv + wxr
+        w2 = float((Jw * Jw).sum())
+        total += float(m) * (float((Jc * Jc).sum()) + float(r.dot(r)) * w2) + float(np.asarray(I, float).trace()) * w2
     return total
+
+
+def _columns(J):
+    """A jet's Jacobian as a float array of three rows (numpy.atleast_2d's, without its calls where it is one)."""
+    return J if type(J) is np.ndarray and J.dtype == float and J.ndim == 2 else np.atleast_2d(np.asarray(J, float))
 
 
 def _massless(system, modes):

@@ -116,6 +116,10 @@ def _scaled(c, a):
     return [c * a[0], c * a[1], c * a[2]]
 
 
+def _dot3(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
 class FrameJet:
     """Pose, velocity and bias acceleration of a frame, with Jacobians w.r.t. speeds ``u``.
 
@@ -133,11 +137,12 @@ class FrameJet:
         Bias angular and linear accelerations (those at ``du/dt = 0``), world coordinates.
     """
 
-    __slots__ = ("R", "r", "w", "v", "Jw", "Jv", "alpha", "a")
+    __slots__ = ("R", "r", "w", "v", "Jw", "Jv", "alpha", "a", "vectors")
 
     def __init__(self, R, r, w, v, Jw, Jv, alpha, a):
         self.R, self.r, self.w, self.v = R, r, w, v
         self.Jw, self.Jv, self.alpha, self.a = Jw, Jv, alpha, a
+        self.vectors = None  # local_vector's results on this jet, by vector (numbers only)
 
     @classmethod
     def ground(cls, nu, R=None, r=None):
@@ -266,13 +271,15 @@ class VecJet:
         return VecJet(self.val + o.val, self.jac + o.jac, self.dot + o.dot, self.bias + o.bias)
 
     def dot_(self, o):
-        """Scalar product, as a :class:`ScalarJet`."""
+        """Scalar product, as a :class:`ScalarJet` (the rate's and bias' products of three on
+        the entries: numpy's dot of three adds them in this order)."""
         a, b = self.val, o.val
+        ae, be, ad, bd = _e(a), _e(b), _e(self.dot), _e(o.dot)
         return ScalarJet(
             a.dot(b),
             b.dot(self.jac) + a.dot(o.jac),
-            self.dot.dot(b) + a.dot(o.dot),
-            self.bias.dot(b) + 2.0 * self.dot.dot(o.dot) + a.dot(o.bias),
+            _dot3(ad, be) + _dot3(ae, bd),
+            _dot3(_e(self.bias), be) + 2.0 * _dot3(ad, bd) + _dot3(ae, _e(o.bias)),
         )
 
     def cross_(self, o):
@@ -351,7 +358,24 @@ def local_point(F: FrameJet, slot: int) -> VecJet:
 
 
 def local_vector(F: FrameJet, e, slot: int) -> VecJet:
-    """Vector ``e`` fixed in frame ``F`` (given in its coordinates) as a :class:`VecJet`."""
+    """Vector ``e`` fixed in frame ``F`` (given in its coordinates) as a :class:`VecJet`.
+
+    On numbers, made once per jet, vector (its bits) and slot: the cut joints of a loop that
+    meet at one frame ask for the same axes of it (Andrews' mechanism: ten of eighteen). The
+    :class:`VecJet` is shared: read, never written."""
+    if type(e) is np.ndarray and e.dtype == float and F.R.dtype == float:
+        memo = F.vectors
+        if memo is None:
+            memo = F.vectors = {}
+        key = (e.tobytes(), slot)
+        hit = memo.get(key)
+        if hit is None:
+            hit = memo[key] = _local_vector(F, e, slot)
+        return hit
+    return _local_vector(F, e, slot)
+
+
+def _local_vector(F, e, slot):
     x = F.R.dot(e)
     xe, w = _e(x), _e(F.w)
     S = skew(xe)

@@ -149,6 +149,13 @@ class TreePass:
             self._columns[nu] = _speed_columns(self, nu)
         return self._columns[nu]
 
+    def ancestry(self):
+        """:func:`ancestry` of the pass's links, made once (the mass matrix and the moving scale
+        both ask; read, never written)."""
+        if "ancestry" not in self._columns:
+            self._columns["ancestry"] = ancestry(self.links)
+        return self._columns["ancestry"]
+
 
 def _exact_zeros(A):
     """True if every entry of ``A`` is the number 0 (a structural zero when traced)."""
@@ -344,7 +351,7 @@ def mass_matrix(tp, nu):
         F = np.zeros((6, nu))
         for j, c in enumerate(links.cols):
             F[:, c] = IC[j] @ tp.S[j]
-        A = ancestry(links)[np.ix_(link, link)]
+        A = tp.ancestry()[np.ix_(link, link)]
         G = np.where(A, S.T @ F, 0.0)
         own = link[:, None] == link[None, :]
         return G + np.where(own, 0.0, G).T
