@@ -249,8 +249,9 @@ def no_gravity_note(topo):
 #: what a rebound topology shares with its template: names, numbers, nodes (never changed)
 _SHARED = frozenset(("node_ports", "n_nodes", "gravity_source", "_geared", "_graph_edges", "q_names", "u_names",
                      "q_units", "u_units", "nq", "nu"))
-#: every attribute :meth:`Topology.rebound` knows (``links``: made again when asked)
-_REBINDS = _SHARED | {"flat", "port_node", "edges", "bodies", "forces", "flange_elements", "drives",
+#: every attribute :meth:`Topology.rebound` knows (``links``: made again when asked; the ports'
+#: maps when first read, from ``_ports_from``)
+_REBINDS = _SHARED | {"_ports_from", "flat", "port_node", "edges", "bodies", "forces", "flange_elements", "drives",
                       "flange_constraints", "flange_inertias", "flange_owner", "flange_of", "flange_rows", "tree",
                       "cut", "unreached", "floating", "rotors", "links"}
 
@@ -455,6 +456,22 @@ class Topology:
         if probs:
             raise ModelError(probs)
 
+    def ports_from(self, template, port):
+        """Take :attr:`port_node` (frame port -> node), :attr:`flange_of` (flange port -> its
+        root port) and :attr:`flange_owner` (root -> ``(joint, "axis" | "support")``) from
+        ``template``'s, each port made ``port(x)``, when first read (most runs read none of
+        them: a 20-link chain's ~140 ports were half the cost of :meth:`rebound`)."""
+        self._ports_from = (template, port)
+
+    def rebound_map(self, name):
+        """The template's map ``name`` (see :meth:`ports_from`) with every port made ``port(x)``."""
+        template, port = self._ports_from
+        return {port(x): port(v) if isinstance(v, PortRef) else v for x, v in getattr(template, name).items()}
+
+    port_node = cached_property(lambda self: self.rebound_map("port_node"))  # (set by __init__ in a topology built)
+    flange_of = cached_property(lambda self: self.rebound_map("flange_of"))
+    flange_owner = cached_property(lambda self: self.rebound_map("flange_owner"))
+
     @property
     def open_frames(self):
         """Port paths of joints' frames connected to nothing: the open ends of rigid offsets
@@ -566,9 +583,7 @@ class Topology:
         out.flat, out.cut, out.floating, out.unreached = flat, list(self.cut), list(self.floating), list(self.unreached)
         out.edges = [edges[id(e)] for e in self.edges]
         out.tree = [edges[id(e)] for e in self.tree]
-        out.port_node = {port(x): n for x, n in self.port_node.items()}
-        out.flange_of = {port(x): port(r) for x, r in self.flange_of.items()}
-        out.flange_owner = {port(r): v for r, v in self.flange_owner.items()}
+        out.ports_from(self, port)
         out.bodies = [(path, comp[id(c)], n) for path, c, n in self.bodies]
         out.forces = [(path, comp[id(c)], dict(nodes)) for path, c, nodes in self.forces]
         for name in ("flange_elements", "drives", "flange_constraints", "flange_inertias"):

@@ -90,7 +90,9 @@ def structure_key(system, backend, options=(), signature=None):
     drive_params = tuple((path, fingerprint(sorted(vars(system.P[path]).items()), refs)) for path in driving)
     if signature is None:
         signature = param_signature(system)
-    laws = tuple(fingerprint(x, refs) for x in signature if x[2] == "o")
+    # the non-numeric values beyond what the signature holds by value (None and strings: nothing more)
+    laws = tuple(fingerprint(x, refs) for x in signature if x[2] == "o" and not (x[3][0] == "v" and (
+        x[3][1] is None or type(x[3][1]) is str)))
     nonholonomic = tuple(e.name for e in system.nonholonomic)
     key = (backend, tuple(options), structure, topo.choices(), drive_params, signature, laws, nonholonomic)
     return key, refs

@@ -23,6 +23,7 @@ False
 """
 from __future__ import annotations
 
+import operator
 import types
 import weakref
 
@@ -153,15 +154,41 @@ def fingerprint(v, refs, depth=0):
         return ("id", id(v))
 
 
+#: class -> (its namespaces when read: keys and values, the entries of _class_data; an entry's
+#: fingerprint, or None for a tuple or an array, fingerprinted again at every use: changed in place)
+_CLASS_DATA = {}
+
+
+def _namespaces(mro):
+    """Every key and value of the namespaces of ``mro``, as tuples (compared by identity)."""
+    return tuple((tuple(vars(c)), tuple(vars(c).values())) for c in mro)
+
+
+def _same(a, b):
+    """Whether two :func:`_namespaces` hold the same keys and values, object for object."""
+    return all(len(x[0]) == len(y[0]) and all(map(operator.is_, x[0], y[0])) and all(map(operator.is_, x[1], y[1]))
+               for x, y in zip(a, b))
+
+
 def _class_data(cls, refs):
     """The plain data a component's class (and its bases) holds: numbers, strings, tuples
-    and arrays its methods may read (a changed class constant is another program)."""
-    out = []
-    for c in cls.__mro__[:-1]:
-        for k, x in sorted(vars(c).items()):
-            if not k.startswith("__") and isinstance(x, (_PLAIN, tuple, np.ndarray)):
-                out.append((c.__name__, k, fingerprint(x, refs)))
-    return tuple(out)
+    and arrays its methods may read (a changed class constant is another program). Read once
+    per class and again when any of its namespaces changed (another object under any name);
+    tuples and arrays, which may change in place, fingerprinted at every call."""
+    mro = cls.__mro__[:-1]
+    now = _namespaces(mro)
+    got = _CLASS_DATA.get(cls)
+    if got is None or len(got[0]) != len(now) or not _same(got[0], now):
+        entries = []
+        for c in mro:
+            for k, x in sorted(vars(c).items()):
+                if not k.startswith("__") and isinstance(x, (_PLAIN, tuple, np.ndarray)):
+                    entries.append((c.__name__, k, None if isinstance(x, (tuple, np.ndarray)) else fingerprint(x, []), x))
+        got = _CLASS_DATA[cls] = [now, entries, None]
+    data = tuple((name, k, fingerprint(x, refs) if fp is None else fp) for name, k, fp, x in got[1])
+    if data != got[2]:
+        got[2] = data
+    return got[2]  # the same object while equal: equal structures compare it by identity
 
 
 def model_structure(components, connections, free):
@@ -190,8 +217,10 @@ def model_structure(components, connections, free):
     own = COMPONENT_OWN
     for path, comp in components.items():
         d = vars(comp)
-        rest = d.keys() - own  # most components keep nothing besides their own attributes
-        extra = tuple((k, fingerprint(d[k], refs)) for k in sorted(rest)) if rest else ()
+        if d.keys() == own:  # most components keep nothing besides their own attributes
+            extra = ()
+        else:
+            extra = tuple((k, fingerprint(d[k], refs)) for k in sorted(d.keys() - own))
         cls = type(comp)
         data = classes.get(cls)
         if data is None:

@@ -221,8 +221,11 @@ class Model(Component):
                                          f"add it with model.add(name, ...) before connecting {x.name}"))
                 connected.add((id(x.component), x.name))
         carried = _rotor_carried(flat)
+        declared = {}  # class -> its ports (a class's declaration, read once per class here)
         for path, comp in flat.components.items():
-            ports = comp.ports()
+            ports = declared.get(type(comp))
+            if ports is None:
+                ports = declared[type(comp)] = comp.ports()
             key = id(comp)
             open_ = [n for n, port in ports.items() if not port.optional and (key, n) not in connected]
             if open_:
