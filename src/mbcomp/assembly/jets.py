@@ -120,7 +120,14 @@ def _dot3(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-class FrameJet:
+class _Memo:
+    """What is made once per jet: :func:`local_vector`'s results by vector (``vectors``, numbers
+    only; None until asked) -- kept apart from the jet's own fields (``FrameJet.__slots__``)."""
+
+    __slots__ = ("vectors",)
+
+
+class FrameJet(_Memo):
     """Pose, velocity and bias acceleration of a frame, with Jacobians w.r.t. speeds ``u``.
 
     Attributes
@@ -137,7 +144,7 @@ class FrameJet:
         Bias angular and linear accelerations (those at ``du/dt = 0``), world coordinates.
     """
 
-    __slots__ = ("R", "r", "w", "v", "Jw", "Jv", "alpha", "a", "vectors")
+    __slots__ = ("R", "r", "w", "v", "Jw", "Jv", "alpha", "a")
 
     def __init__(self, R, r, w, v, Jw, Jv, alpha, a):
         self.R, self.r, self.w, self.v = R, r, w, v
