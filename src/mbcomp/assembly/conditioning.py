@@ -221,7 +221,7 @@ def moving_scale(system, jets):
     from the origin has ``m (1e-16 m)^2`` about it: roundoff, not inertia); a body that only
     translates has no lever arm to round (a 1e10 kg slider 10 m out next to a 1 kg one is a
     stiff mass ratio, not a massless motion)."""
-    total = 0.0
+    moving = []  # (m, r . r, trace I, Jw, Jv, rho) of the bodies that move
     for path, comp, node in system.topology.bodies:
         J = jets[node]
         Jw, Jv = _columns(J.Jw), _columns(J.Jv)
@@ -230,14 +230,27 @@ def moving_scale(system, jets):
         m, rc, I = comp.mass_properties(system.P[path])
         rho = J.R.dot(np.asarray(rc, float))
         r = J.r + rho
-        # v_c = v + w x rho, column by column (numpy.cross's products and differences, without its
-        # axis handling: a third of a short run's inertia check)
-        r0, r1, r2 = rho.tolist()
-        wxr = np.array([Jw[1] * r2 - Jw[2] * r1, Jw[2] * r0 - Jw[0] * r2, Jw[0] * r1 - Jw[1] * r0])
-        Jc = Jv + wxr
-        w2 = float((Jw * Jw).sum())
-        total += float(m) * (float((Jc * Jc).sum()) + float(r.dot(r)) * w2) + float(np.asarray(I, float).trace()) * w2
+        moving.append((float(m), float(r.dot(r)), float(np.asarray(I, float).trace()), Jw, Jv, rho))
+    if not moving:
+        return 0.0
+    # every body at once: v_c = v + w x rho column by column (numpy.cross's products and
+    # differences, rows permuted), the squares summed per body (each body's block a row: the
+    # same sums as the body's own)
+    Jw = np.stack([b[3] for b in moving])
+    rho = np.array([b[5] for b in moving])[:, :, None]
+    wxr = Jw[:, _NEXT] * rho[:, _LAST] - Jw[:, _LAST] * rho[:, _NEXT]
+    Jc = np.stack([b[4] for b in moving]) + wxr
+    k = len(moving)
+    w2 = (Jw * Jw).reshape(k, -1).sum(axis=1).tolist()
+    c2 = (Jc * Jc).reshape(k, -1).sum(axis=1).tolist()
+    total = 0.0
+    for (m, rr, tr, *_), w2k, c2k in zip(moving, w2, c2):
+        total += m * (c2k + rr * w2k) + tr * w2k
     return total
+
+
+#: the rows of a cross product's two terms: (w x r)_i = w_{i+1} r_{i+2} - w_{i+2} r_{i+1}
+_NEXT, _LAST = np.array([1, 2, 0]), np.array([2, 0, 1])
 
 
 def _columns(J):
