@@ -120,7 +120,7 @@ def _layout(system, keep, indices):
                 layout.append((path, name, None))
             sig.append((path, name, "s", on))
         elif traced == "a":
-            nz = (val != 0) | kept if kept else val != 0
+            nz = (val != 0) | kept if kept else val.astype(bool)  # != 0 (NaN too), 5x faster on a 3-vector
             if indices:
                 layout.extend((path, name, idx) for idx in zip(*nz.nonzero()))
             sig.append((path, name, "a", val.shape, nz.tobytes()))

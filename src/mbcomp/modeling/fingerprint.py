@@ -154,41 +154,52 @@ def fingerprint(v, refs, depth=0):
         return ("id", id(v))
 
 
-#: class -> (its namespaces when read: keys and values, the entries of _class_data; an entry's
-#: fingerprint, or None for a tuple or an array, fingerprinted again at every use: changed in place)
+#: class -> (the keys and values of its own namespace when last read, as tuples; the plain data
+#: among them: (name, fingerprint, value), the fingerprint None for a value that may change in
+#: place -- an array, a tuple holding one -- fingerprinted again at every use)
+_NAMESPACES = {}
+#: component class -> (the namespaces' entries it was made of, its plain data, whether that
+#: holds no value that may change in place): the same data object while equal
 _CLASS_DATA = {}
 
 
-def _namespaces(mro):
-    """Every key and value of the namespaces of ``mro``, as tuples (compared by identity)."""
-    return tuple((tuple(vars(c)), tuple(vars(c).values())) for c in mro)
+def _frozen(x):
+    """Whether ``x`` is plain data that cannot change in place (a number, a string, a tuple of such)."""
+    return isinstance(x, _PLAIN) or (type(x) is tuple and all(map(_frozen, x)))
 
 
-def _same(a, b):
-    """Whether two :func:`_namespaces` hold the same keys and values, object for object."""
-    return all(len(x[0]) == len(y[0]) and all(map(operator.is_, x[0], y[0])) and all(map(operator.is_, x[1], y[1]))
-               for x, y in zip(a, b))
+def _own_data(c, seen):
+    """The plain data of class ``c``'s own namespace (see :data:`_NAMESPACES`): read again
+    only when the namespace holds another key or object than when last read; checked once
+    per structure taken (``seen``: class -> data)."""
+    got = seen.get(c)
+    if got is None:
+        ns = vars(c)
+        keys, values = tuple(ns), tuple(ns.values())
+        old = _NAMESPACES.get(c)
+        if old is None or len(old[0]) != len(keys) or not (all(map(operator.is_, old[0], keys))
+                                                             and all(map(operator.is_, old[1], values))):
+            data = tuple((k, fingerprint(x, []) if _frozen(x) else None, x) for k, x in sorted(ns.items())
+                         if not k.startswith("__") and isinstance(x, (_PLAIN, tuple, np.ndarray)))
+            old = _NAMESPACES[c] = (keys, values, data)
+        got = seen[c] = old[2]
+    return got
 
 
-def _class_data(cls, refs):
+def _class_data(cls, refs, seen):
     """The plain data a component's class (and its bases) holds: numbers, strings, tuples
-    and arrays its methods may read (a changed class constant is another program). Read once
-    per class and again when any of its namespaces changed (another object under any name);
-    tuples and arrays, which may change in place, fingerprinted at every call."""
-    mro = cls.__mro__[:-1]
-    now = _namespaces(mro)
-    got = _CLASS_DATA.get(cls)
-    if got is None or len(got[0]) != len(now) or not _same(got[0], now):
-        entries = []
-        for c in mro:
-            for k, x in sorted(vars(c).items()):
-                if not k.startswith("__") and isinstance(x, (_PLAIN, tuple, np.ndarray)):
-                    entries.append((c.__name__, k, None if isinstance(x, (tuple, np.ndarray)) else fingerprint(x, []), x))
-        got = _CLASS_DATA[cls] = [now, entries, None]
-    data = tuple((name, k, fingerprint(x, refs) if fp is None else fp) for name, k, fp, x in got[1])
-    if data != got[2]:
-        got[2] = data
-    return got[2]  # the same object while equal: equal structures compare it by identity
+    and arrays its methods may read (a changed class constant is another program); the same
+    object while equal (equal structures compare it by identity). ``seen``: see :func:`_own_data`."""
+    parts = tuple(_own_data(c, seen) for c in cls.__mro__[:-1])
+    last = _CLASS_DATA.get(cls)
+    if last is not None and last[2] and len(last[0]) == len(parts) and all(map(operator.is_, last[0], parts)):
+        return last[1]
+    data = tuple((c.__name__, k, fingerprint(x, refs) if fp is None else fp)
+                 for c, own in zip(cls.__mro__[:-1], parts) for k, fp, x in own)
+    if last is not None and data == last[1]:
+        data = last[1]
+    _CLASS_DATA[cls] = (parts, data, all(fp is not None for own in parts for _, fp, _ in own))
+    return data
 
 
 def model_structure(components, connections, free):
@@ -213,7 +224,7 @@ def model_structure(components, connections, free):
     (True, (('world', 'frame_b', 'j', 'frame_a'),))
     """
     comps, refs = [], []
-    classes = {}
+    classes, seen = {}, {}
     own = COMPONENT_OWN
     for path, comp in components.items():
         d = vars(comp)
@@ -224,7 +235,7 @@ def model_structure(components, connections, free):
         cls = type(comp)
         data = classes.get(cls)
         if data is None:
-            data = classes[cls] = _class_data(cls, refs)
+            data = classes[cls] = _class_data(cls, refs, seen)
         comps.append((path, cls, data, extra))
     where = {id(c): path for path, c in components.items()}
     conns = tuple((where.get(id(a.component)), a.name, where.get(id(b.component)), b.name) for a, b in connections)
