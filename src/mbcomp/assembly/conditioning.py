@@ -202,14 +202,14 @@ def tree_moving_scale(system, tp):
     C = np.array([b[2] for b in bodies], float)
     blink = np.array([b[0] for b in bodies], int)
     on = tp.ancestry()[np.ix_(link, blink)].T  # (bodies, columns): the column moves the body
-    w2 = np.sum(w * w, axis=0)
-    jc = (np.sum(v * v, axis=0)[None, :] + 2.0 * C @ np.cross(v.T, w.T).T
-          + np.sum(C * C, axis=1)[:, None] * w2[None, :] - (C @ w) ** 2)
-    Jc2 = np.sum(np.where(on, np.maximum(jc, 0.0), 0.0), axis=1)
+    w2 = (w * w).sum(axis=0)
+    vxw = v[_NEXT] * w[_LAST] - v[_LAST] * w[_NEXT]  # numpy.cross(v.T, w.T).T's products and differences
+    r2 = (C * C).sum(axis=1)
+    jc = (v * v).sum(axis=0)[None, :] + 2.0 * C @ vxw + r2[:, None] * w2[None, :] - (C @ w) ** 2
+    Jc2 = np.where(on, np.maximum(jc, 0.0), 0.0).sum(axis=1)
     Jw2 = np.where(on, w2[None, :], 0.0).sum(axis=1)
     moving = (Jc2 > 0.0) | (Jw2 > 0.0)
-    r2 = np.sum(C * C, axis=1)
-    return float(np.sum(np.where(moving, m * (Jc2 + r2 * Jw2) + tr * Jw2, 0.0)))
+    return float(np.where(moving, m * (Jc2 + r2 * Jw2) + tr * Jw2, 0.0).sum())
 
 
 def moving_scale(system, jets):

@@ -362,9 +362,11 @@ def _speed_columns(tp, nu):
     links = tp.links
     if tp.dt == object or not links.n:
         return None
-    cols = [np.arange(nu)[c] for c in links.cols]
-    order = np.concatenate(cols)
-    if order.size != nu or not np.array_equal(np.sort(order), np.arange(nu)):
+    cols = [range(nu)[c] for c in links.cols]
+    order = [i for c in cols for i in c]
+    if order == list(range(nu)):  # the links' columns in the speeds' order (a tree numbered so)
+        return np.concatenate(tp.S, axis=1), np.repeat(np.arange(links.n), [len(c) for c in cols])
+    if len(order) != nu or sorted(order) != list(range(nu)):
         return None
     S, link = np.zeros((6, nu)), np.empty(nu, int)
     for j, c in enumerate(cols):
@@ -385,7 +387,7 @@ def mass_matrix(tp, nu):
         IC = _summed(links, tp.I)
         F = np.zeros((6, nu))
         for j, c in enumerate(links.cols):
-            F[:, c] = IC[j] @ tp.S[j]
+            F[:, c] = IC[j].dot(tp.S[j])
         A = tp.ancestry()[np.ix_(link, link)]
         G = np.where(A, S.T @ F, 0.0)
         own = link[:, None] == link[None, :]
