@@ -206,6 +206,31 @@ def test_a_fixed_start_value_that_moves_the_cut_joint_is_built_afresh():
     assert plans.topology(four_bar(fixed=0).validate()).cut == ["j3"] and plans.hits == 2
 
 
+def chain(fixed=(0, 1, 2)):
+    """Three hinges in a chain (no loop): ``fixed`` the hinges whose start angle is fixed."""
+    m = mbcomp.Model()
+    frame = m.add("world", World()).frame_b
+    for i in range(3):
+        j = m.add(f"j{i}", Revolute(phi0=0.1 if i in fixed else Guess(0.1)))
+        b = m.add(f"b{i}", RigidBody(m=1.0, r_cm=(0.5, 0.0, 0.0), I=np.eye(3)))
+        m.connect(frame, j.frame_a)
+        m.connect(j.frame_b, b.frame_a)
+        frame = b.frame_a
+    return m
+
+
+def test_fixed_start_values_of_a_chain_without_loops_are_rebound_with_their_weights():
+    """A tree without loops takes every joint whatever the weights: rebound, the graph's
+    weights those of the new model."""
+    plans = TopologyPlans()
+    plans.topology(chain().validate())
+    flat = chain(fixed=(1,)).validate()
+    got = plans.topology(flat)
+    assert plans.hits == 1
+    assert_same_topology(Topology(flat), got)
+    assert sorted(w for _, _, w in got.graph.edges(data="weight")) == [0.0, 0.5, 1.0, 1.0]
+
+
 def test_mass_properties_that_make_a_free_body_a_point_are_built_afresh():
     plans = TopologyPlans()
     point = plans.topology(floating().validate())
