@@ -22,6 +22,12 @@ class _Rigid(Joint):
         return rigid_constraints(a, b, R0, r0)
 
 
+#: a rigid offset's rotation when it has none (shared, read-only: a fresh np.eye(3) was a tenth
+#: of a pose pass over a chain)
+_EYE = np.eye(3)
+_EYE.setflags(write=False)
+
+
 class FixedTranslation(_Rigid):
     """Massless rigid link: frame_b is frame_a translated by ``r`` (frame_a coordinates).
 
@@ -35,7 +41,7 @@ class FixedTranslation(_Rigid):
     r = Param((0.0, 0.0, 0.0), unit="m", shape=(3,), doc="origin of frame_b, frame_a coordinates")
 
     def offset(self, p):
-        return np.eye(3), p.r
+        return _EYE, p.r
 
 
 class FixedRotation(_Rigid):

@@ -154,17 +154,22 @@ class FrameJet(_Memo):
     @classmethod
     def ground(cls, nu, R=None, r=None):
         z = np.zeros(3)
-        return cls(np.eye(3) if R is None else as_array(R), z.copy() if r is None else as_array(r),
+        return cls(_EYE.copy() if R is None else as_array(R), z.copy() if r is None else as_array(r),
                    z.copy(), z.copy(), np.zeros((3, nu)), np.zeros((3, nu)), z.copy(), z.copy())
 
     def offset(self, R0, p0):
         """Jet of a frame rigidly attached at ``p0`` (m, this frame's coordinates), rotated by ``R0``."""
         R = self.R
         rho = R.dot(p0)
-        w, rh = _e(self.w), _e(rho)
-        wxr = _cx(w, rh)
-        a = _add(_add(_e(self.a), _cx(self.alpha, rh)), _cx(w, wxr))
-        return FrameJet(R.dot(R0), self.r + rho, self.w, np.array(_add(_e(self.v), wxr)), self.Jw,
+        r0, r1, r2 = rh = rho.tolist()
+        w0, w1, w2 = self.w.tolist()
+        l0, l1, l2 = self.alpha.tolist()
+        a0, a1, a2 = self.a.tolist()
+        v0, v1, v2 = self.v.tolist()
+        x0, x1, x2 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2, w0 * r1 - w1 * r0  # w x rho
+        a = [(a0 + (l1 * r2 - l2 * r1)) + (w1 * x2 - w2 * x1), (a1 + (l2 * r0 - l0 * r2)) + (w2 * x0 - w0 * x2),
+             (a2 + (l0 * r1 - l1 * r0)) + (w0 * x1 - w1 * x0)]
+        return FrameJet(R.dot(R0), self.r + rho, self.w, np.array([v0 + x0, v1 + x1, v2 + x2]), self.Jw,
                         self.Jv - skew(rh).dot(self.Jw), self.alpha, np.array(a))
 
     def offset_pose(self, R0, p0):
@@ -209,8 +214,8 @@ class FrameJet(_Memo):
         """
         Ra = self.R
         rho = Ra.dot(r_rel)
-        wr = _e(Ra.dot(w_rel))
-        rh, w = _e(rho), _e(self.w)
+        wr = Ra.dot(w_rel).tolist()
+        rh, w = rho.tolist(), self.w.tolist()
         Jw = self.Jw.copy()
         Jv = self.Jv - skew(rh).dot(self.Jw)
         if Hw.shape[1]:
@@ -221,16 +226,23 @@ class FrameJet(_Memo):
                 Jw, Jv = self.Jw.astype(object), _obj(Jv)
                 Jw[:, cols] += Ra.dot(Hw)
                 Jv[:, cols] += Ra.dot(Hv)
-        vr = _e(Ra.dot(v_rel)) if v_rel is not None else [0.0, 0.0, 0.0]
-        wxr = _cx(w, rh)
-        alpha = _add(_e(self.alpha), _cx(w, wr))
-        a = _add(_add(_add(_e(self.a), _cx(self.alpha, rh)), _cx(w, wxr)), _scaled(2.0, _cx(w, vr)))
+        r0, r1, r2 = rh
+        w0, w1, w2 = w
+        s0, s1, s2 = vr = Ra.dot(v_rel).tolist() if v_rel is not None else [0.0, 0.0, 0.0]
+        l0, l1, l2 = self.alpha.tolist()
+        a0, a1, a2 = self.a.tolist()
+        v0, v1, v2 = self.v.tolist()
+        x0, x1, x2 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2, w0 * r1 - w1 * r0  # w x rho
+        alpha = _add([l0, l1, l2], _cx(w, wr))
+        a = [((a0 + (l1 * r2 - l2 * r1)) + (w1 * x2 - w2 * x1)) + 2.0 * (w1 * s2 - w2 * s1),
+             ((a1 + (l2 * r0 - l0 * r2)) + (w2 * x0 - w0 * x2)) + 2.0 * (w2 * s0 - w0 * s2),
+             ((a2 + (l0 * r1 - l1 * r0)) + (w0 * x1 - w1 * x0)) + 2.0 * (w0 * s1 - w1 * s0)]
         if bw is not None:
             alpha = _add(alpha, _e(Ra.dot(bw)))
         if bv is not None:
             a = _add(a, _e(Ra.dot(bv)))
-        return FrameJet(Ra.dot(R_rel), self.r + rho, np.array(_add(w, wr)), np.array(_add(_add(_e(self.v), wxr), vr)),
-                        Jw, Jv, np.array(alpha), np.array(a))
+        return FrameJet(Ra.dot(R_rel), self.r + rho, np.array(_add(w, wr)),
+                        np.array([(v0 + x0) + s0, (v1 + x1) + s1, (v2 + x2) + s2]), Jw, Jv, np.array(alpha), np.array(a))
 
     def back_through(self, R_rel, r_rel, Hw, Hv, cols, w_rel, v_rel=None, bw=None, bv=None):
         """Jet of a joint's ``frame_a`` given this jet as its ``frame_b`` (same arguments as
@@ -440,7 +452,7 @@ def slip_velocity(a: FrameJet, b: FrameJet, P: VecJet) -> VecJet:
     return VecJet(P.val, jac, dot, bias)
 
 
-_E = np.eye(3)
+_E = _EYE = np.eye(3)
 
 
 def position_constraints(a: FrameJet, b: FrameJet, r0=None):
