@@ -303,3 +303,19 @@ def test_assemble_through_the_plan_runs_as_built_afresh():
     assert fresh.names == rebound.names
     for name in fresh.names:
         assert np.array_equal(np.asarray(fresh[name]), np.asarray(rebound[name]), equal_nan=True), name
+
+
+def test_a_rebound_topology_pickles_and_copies():
+    import copy
+    import pickle
+
+    plans = TopologyPlans()
+    plans.topology(drivetrain().validate())
+    got = plans.topology(drivetrain(J=1.0).validate())
+    back = pickle.loads(pickle.dumps(got))
+    assert back.q_names == got.q_names and back.cut == got.cut
+    assert sorted(x.path for x in back.port_node) == sorted(x.path for x in got.port_node)
+    assert {x.path: r.path for x, r in back.flange_of.items()} == {x.path: r.path for x, r in got.flange_of.items()}
+    again = plans.topology(drivetrain(J=2.0).validate())
+    shallow = copy.copy(again)
+    assert _plain(shallow.flange_owner, again.flat) == _plain(again.flange_owner, again.flat)

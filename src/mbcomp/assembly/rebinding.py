@@ -131,6 +131,18 @@ class Rebinding:
         template, port = self._ports_from
         return {port(x): port(v) if isinstance(v, PortRef) else v for x, v in getattr(template, name).items()}
 
+    def __getstate__(self):  # pickled and deep-copied with its maps made: the rebinding's function does not pickle
+        for name in ("port_node", "flange_of", "flange_owner", "_graph_edges"):
+            getattr(self, name)
+        state = dict(vars(self))
+        state.pop("_ports_from", None)
+        return state
+
+    def __copy__(self):  # a shallow copy keeps what it has not made yet
+        new = object.__new__(type(self))
+        new.__dict__.update(vars(self))
+        return new
+
     # set by the topology's construction; a rebound topology makes them when first read
     port_node = cached_property(lambda self: self.rebound_map("port_node"))
     flange_of = cached_property(lambda self: self.rebound_map("flange_of"))
