@@ -114,7 +114,7 @@ def cut_rows(system, t, q, u, jets, dt):
         if not cons:
             continue
         jac = np.array([c.jac for _, c in cons])
-        Crows.append(jac @ np.vstack([X for n in e.nodes for X in (jets[n].Jv, jets[n].Jw)]))
+        Crows.append(jac.dot(np.concatenate([X for n in e.nodes for X in (jets[n].Jv, jets[n].Jw)])))
         Phi += [c.val for _, c in cons]
         Phid += [c.dot for _, c in cons]
         cb += [c.bias for _, c in cons]

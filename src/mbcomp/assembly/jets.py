@@ -116,10 +116,6 @@ def _scaled(c, a):
     return [c * a[0], c * a[1], c * a[2]]
 
 
-def _dot3(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
 class _Memo:
     """What is made once per jet: :func:`local_vector`'s results by vector (``vectors``, numbers
     only; None until asked) -- kept apart from the jet's own fields (``FrameJet.__slots__``)."""
@@ -293,12 +289,17 @@ class VecJet:
         """Scalar product, as a :class:`ScalarJet` (the rate's and bias' products of three on
         the entries: numpy's dot of three adds them in this order)."""
         a, b = self.val, o.val
-        ae, be, ad, bd = _e(a), _e(b), _e(self.dot), _e(o.dot)
+        a0, a1, a2 = _e(a)
+        b0, b1, b2 = _e(b)
+        c0, c1, c2 = _e(self.dot)
+        d0, d1, d2 = _e(o.dot)
+        e0, e1, e2 = _e(self.bias)
+        f0, f1, f2 = _e(o.bias)
         return ScalarJet(
             a.dot(b),
             b.dot(self.jac) + a.dot(o.jac),
-            _dot3(ad, be) + _dot3(ae, bd),
-            _dot3(_e(self.bias), be) + 2.0 * _dot3(ad, bd) + _dot3(ae, _e(o.bias)),
+            (c0 * b0 + c1 * b1 + c2 * b2) + (a0 * d0 + a1 * d1 + a2 * d2),
+            (e0 * b0 + e1 * b1 + e2 * b2) + 2.0 * (c0 * d0 + c1 * d1 + c2 * d2) + (a0 * f0 + a1 * f1 + a2 * f2),
         )
 
     def cross_(self, o):
@@ -396,12 +397,16 @@ def local_vector(F: FrameJet, e, slot: int) -> VecJet:
 
 def _local_vector(F, e, slot):
     x = F.R.dot(e)
-    xe, w = _e(x), _e(F.w)
-    S = skew(xe)
-    jac = np.zeros((3, 12), dtype=S.dtype)
-    jac[:, 6 * slot + 3: 6 * slot + 6] = -S
-    wx = _cx(w, xe)
-    return VecJet(x, jac, np.array(wx), np.array(_add(_cx(F.alpha, xe), _cx(w, wx))))
+    x0, x1, x2 = x.tolist()
+    w0, w1, w2 = F.w.tolist()
+    l0, l1, l2 = F.alpha.tolist()
+    minus_skew = np.array([[-0.0, x2, -x1], [-x2, -0.0, x0], [x1, -x0, -0.0]])  # -skew(x): -(-a) is a
+    jac = np.zeros((3, 12), dtype=minus_skew.dtype)
+    jac[:, 6 * slot + 3: 6 * slot + 6] = minus_skew
+    y0, y1, y2 = w1 * x2 - w2 * x1, w2 * x0 - w0 * x2, w0 * x1 - w1 * x0  # w x x
+    return VecJet(x, jac, np.array([y0, y1, y2]), np.array([(l1 * x2 - l2 * x1) + (w1 * y2 - w2 * y1),
+                                                            (l2 * x0 - l0 * x2) + (w2 * y0 - w0 * y2),
+                                                            (l0 * x1 - l1 * x0) + (w0 * y1 - w1 * y0)]))
 
 
 def velocity_along(point: VecJet, direction: VecJet) -> ScalarJet:
