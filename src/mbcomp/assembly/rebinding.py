@@ -44,7 +44,24 @@ def is_point(body):
 class Rebinding:
     """The methods of a :class:`~mbcomp.assembly.topology.Topology` that rebind it to another
     model of its structure (see the module notes); a topology rebound makes its ports' maps
-    and its graph's weights when first read."""
+    and its graph's weights when first read.
+
+    Examples
+    --------
+    >>> from mbcomp import Model
+    >>> from mbcomp.assembly.topology import Topology
+    >>> from mbcomp.library import World, Revolute, PointMass
+    >>> def flat(phi0):
+    ...     m = Model(); w = m.add("world", World()); j = m.add("j", Revolute(phi0=phi0))
+    ...     b = m.add("b", PointMass()); m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, b.frame_a)
+    ...     return m.validate()
+    >>> first, other = Topology(flat(0.1)), flat(0.5)
+    >>> first.probes(other) == first.probes(first.flat)    # the same choices: rebind
+    True
+    >>> again = first.rebound(other)
+    >>> again.q_names, again.edge("j").comp is other.components["j"], again.choices() == Topology(other).choices()
+    (['j.phi'], True, True)
+    """
 
     def choices(self):
         """What this topology chose from its components' parameter values, hashable: the tree
