@@ -70,6 +70,7 @@ import numpy as np
 
 from .evaluation import Evaluation
 from .jets import FrameJet, is_traced
+from .body_stack import spatial_inertias
 from .flange_rows import rotor_wrench, rotors
 from .pivots import PIVOT_TOL, Pivot, SingularTree, ball_pivot, chol_solve, cholesky, lower_product
 from .topology import ROOT
@@ -223,36 +224,6 @@ def _spatial_inertia(m, Iw, Cx):
     return out
 
 
-def _inertias(system, links, jets):
-    """The bodies' ``(link, m, c, Iw)`` and spatial inertias about O (k, 6, 6), every body at
-    once on numbers: :meth:`~mbcomp.assembly.system.MultibodySystem.body_inertia`'s and
-    :func:`_spatial_inertia`'s products stacked (numpy's stacked products are BLAS's per matrix:
-    the same bits), for a pass that needs the inertias only."""
-    rows = []
-    for path, comp, node in system.topology.bodies:
-        i = links.link_of.get(node, -1)
-        if i >= 0:
-            J = jets[node]
-            rows.append((i, *comp.mass_properties(system.P[path]), J.R, J.r))
-    if not rows:
-        return [], None
-    R = np.array([b[4] for b in rows])
-    rho = (R @ np.array([b[2] for b in rows], float)[:, :, None])[:, :, 0]
-    Iw = R @ np.array([b[3] for b in rows], float) @ R.transpose(0, 2, 1)
-    c = np.array([b[5] for b in rows]) + rho
-    m = np.array([b[1] for b in rows], float)[:, None, None]
-    Cx = np.zeros((len(rows), 3, 3))  # skew(c) of each
-    Cx[:, 0, 1], Cx[:, 0, 2], Cx[:, 1, 0] = -c[:, 2], c[:, 1], c[:, 2]
-    Cx[:, 1, 2], Cx[:, 2, 0], Cx[:, 2, 1] = -c[:, 0], -c[:, 1], c[:, 0]
-    mC = m * Cx
-    out = np.empty((len(rows), 6, 6))
-    out[:, :3, :3] = Iw - m * (Cx @ Cx)
-    out[:, :3, 3:] = mC
-    out[:, 3:, :3] = -mC
-    out[:, 3:, 3:] = m * _EYE
-    return [(b[0], b[1], c[k], Iw[k]) for k, b in enumerate(rows)], out
-
-
 def _body_terms(system, links, jets, I, W, numbers=False):
     """Add every body's spatial inertia and bias wrench (gravity and inertial) to its link
     (``W`` None: the inertias only; ``numbers``: the pass is not traced); returns the bodies'
@@ -260,7 +231,7 @@ def _body_terms(system, links, jets, I, W, numbers=False):
     g = system.g
     bodies = []
     if W is None and numbers:
-        bodies, spatial = _inertias(system, links, jets)
+        bodies, spatial = spatial_inertias(system, links, jets)
         for (i, *_), Ib in zip(bodies, spatial if spatial is not None else ()):
             I[i] = I[i] + Ib
     for path, comp, node in system.topology.bodies if not (W is None and numbers) else ():

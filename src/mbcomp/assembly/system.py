@@ -46,6 +46,7 @@ from ..assembly.jets import FrameJet, as_array, is_traced, rigid_constraints
 from ..geometry.kinematics import added, cross, cross_entries, entries, skew
 from ..modeling.roles import FrameState
 from ..assembly.topology import ROOT, Topology
+from .body_stack import kane_terms
 from .evaluation import Evaluation, Rows, completed, cut_rows
 from .flange_rows import flange_rows, flange_starts, rotor_wrench, rotors
 
@@ -400,33 +401,18 @@ class MultibodySystem:
 
     def _inertia_terms(self, jets, nu, dt):
         """``M`` and the inertial and gravity part of ``f`` summed over the bodies (Kane's form)."""
-        M = np.zeros((nu, nu), dt)
-        f = np.zeros(nu, dt)
-        g = self.g
-        batch = dt is float and len(self.topology.bodies) > 8  # see below
-        rows_v, rows_mv, rows_w, rows_iw = [], [], [], []
-        for path, comp, node in self.topology.bodies:
+        if dt is float:  # every body's products at once (body_stack: the same bits as the loop below)
+            M, f = kane_terms(self, jets, nu)
+        else:  # traced: body by body (the generated program's structure)
+            M, f = np.zeros((nu, nu), dt), np.zeros(nu, dt)
+        for path, comp, node in self.topology.bodies if dt is not float else ():
             J = jets[node]
             m, rho, Iw = self.body_inertia(comp, path, J)
             Jw, w, rh = J.Jw, entries(J.w), entries(rho)  # 3-vectors' entries, products by .dot: jets.py
             Jv = J.Jv - skew(rh).dot(Jw)
             a = np.array(added(J.a, cross_entries(J.alpha, rh), cross_entries(w, cross_entries(w, rh))))
-            if batch:
-                rows_v.append(Jv)
-                rows_mv.append(m * Jv)
-                rows_w.append(Jw)
-                rows_iw.append(Iw.dot(Jw))
-            else:
-                M += m * (Jv.T.dot(Jv)) + Jw.T.dot(Iw).dot(Jw)
-            h = Iw.dot(J.alpha) + cross(w, Iw.dot(J.w))
-            f += Jv.T.dot(m * (g - a)) - Jw.T.dot(h)
-        if batch:
-            # M = sum_b m Jv^T Jv + Jw^T Iw Jw as two stacked products: one BLAS call each
-            # instead of one nu x nu outer product per body (a 1000-link chain: 3.6 s -> 0.2 s
-            # per evaluation). Traced evaluations keep the per-body sum: its structure is the
-            # generated program's.
-            M = np.vstack(rows_v).T.dot(np.vstack(rows_mv)) + np.vstack(rows_w).T.dot(np.vstack(rows_iw))
-            M = 0.5 * (M + M.T)  # exactly symmetric, as the per-body products were
+            M += m * (Jv.T.dot(Jv)) + Jw.T.dot(Iw).dot(Jw)
+            f += Jv.T.dot(m * (self.g - a)) - Jw.T.dot(Iw.dot(J.alpha) + cross(w, Iw.dot(J.w)))
         for node, Iw, gyro in rotors(self, jets):  # rotors on joint axes: bodies of inertia J n n^T
             J = jets[node]
             M = M + J.Jw.T @ Iw @ J.Jw
