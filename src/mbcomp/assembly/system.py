@@ -47,6 +47,7 @@ from ..geometry.kinematics import added, cross, cross_entries, entries, skew
 from ..modeling.roles import FrameState
 from ..assembly.topology import ROOT, Topology
 from .body_stack import kane_terms
+from .plan import topology_of
 from .evaluation import Evaluation, Rows, completed, cut_rows
 from .flange_rows import flange_rows, flange_starts, rotor_wrench, rotors
 
@@ -62,7 +63,7 @@ def _dtype(t, q, u):
 def assemble(model, params=None):
     """Validate ``model`` and assemble it; ``params`` maps ``"component.param"`` to values."""
     flat = model.validate()
-    return MultibodySystem(Topology(flat), params)
+    return MultibodySystem(topology_of(flat), params)
 
 
 class NumericEvaluator:
