@@ -44,7 +44,7 @@ from ..modeling.component import PortRef
 from ..errors import ModelError, Problem
 from ..assembly.jets import FrameJet, as_array, is_traced, rigid_constraints
 from ..geometry.kinematics import added, cross, cross_entries, entries, skew
-from ..modeling.roles import FrameState
+from ..modeling.roles import FrameState, Joint
 from ..assembly.topology import ROOT, Topology
 from .body_stack import kane_terms
 from .plan import topology_of
@@ -477,9 +477,21 @@ class MultibodySystem:
         return qd
 
     def increment(self, q, du):
-        """Coordinates moved by ``du`` along the speeds (for Newton corrections)."""
+        """Coordinates moved by ``du`` along the speeds (for Newton corrections); the joints that
+        keep :meth:`Joint.increment <mbcomp.modeling.roles.Joint.increment>` (``q + du``: hinges,
+        sliders) in one addition on numbers."""
         qn = q.copy()
-        for e in self.topology.tree:
+        memo = self.__dict__.get("_increments")
+        if memo is None or memo[0] is not self.topology:  # per topology: which joints add
+            tree = [e for e in self.topology.tree if e.q.stop > e.q.start]
+            add = [e for e in tree if type(e.comp).increment is Joint.increment]
+            own = [e for e in tree if type(e.comp).increment is not Joint.increment]
+            memo = self._increments = (self.topology, np.array([i for e in add for i in range(e.q.start, e.q.stop)], int),
+                                       np.array([i for e in add for i in range(e.u.start, e.u.stop)], int), own)
+        plain = q.dtype == float and getattr(du, "dtype", None) == float
+        if plain:
+            qn[memo[1]] = q[memo[1]] + du[memo[2]]
+        for e in memo[3] if plain else self.topology.tree:
             if e.q.stop > e.q.start:
                 qn[e.q] = e.comp.increment(q[e.q], du[e.u], self.P[e.name])
         return qn
