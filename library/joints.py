@@ -41,6 +41,14 @@ def _unit(n):
     return (n / np.linalg.norm(n),)
 
 
+def _start1(value):
+    """``split_start(value, 1)`` of a 1-DOF joint's start value: a plain number without its
+    array calls (the same array), anything else (None, a Guess, an array) by it."""
+    if type(value) is float:
+        return np.array([value]), True
+    return split_start(value, 1)
+
+
 def _limits_ok(lim):
     return None if lim[0] < lim[1] else f"lower limit {lim[0]:g} must be below the upper {lim[1]:g}"
 
@@ -161,8 +169,8 @@ class Revolute(_Friction, _Stops, Joint):
         return [Cylinder(0.025 * view.scale, 0.1 * view.scale, R=z_to(p.n), color="grey")]
 
     def start(self, p):
-        q, qf = split_start(p.phi0, 1)
-        u, uf = split_start(p.w0, 1)
+        q, qf = _start1(p.phi0)
+        u, uf = _start1(p.w0)
         return q, np.array([qf]), u, np.array([uf])
 
     def relative(self, q, p):
@@ -226,8 +234,8 @@ class Prismatic(_Friction, _Stops, Joint):
         return [Cylinder(0.012 * view.scale, hi - lo + 2 * margin, r=n * (lo + hi) / 2, R=z_to(n), color="grey")]
 
     def start(self, p):
-        q, qf = split_start(p.s0, 1)
-        u, uf = split_start(p.v0, 1)
+        q, qf = _start1(p.s0)
+        u, uf = _start1(p.v0)
         return q, np.array([qf]), u, np.array([uf])
 
     def relative(self, q, p):
