@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["spatial_inertias", "kane_terms"]
+__all__ = ["skews", "spatial_inertias", "kane_terms"]
 
 #: a cross product's rows: (a x b)_i = a_{i+1} b_{i+2} - a_{i+2} b_{i+1}
 _NEXT, _LAST = np.array([1, 2, 0]), np.array([2, 0, 1])
@@ -40,7 +40,7 @@ def _cross(a, b):
     return a[:, _NEXT] * b[:, _LAST] - a[:, _LAST] * b[:, _NEXT]
 
 
-def _skews(c):
+def skews(c):
     """Each row's cross matrix (kinematics.skew's), (k, 3, 3)."""
     S = np.zeros((len(c), 3, 3))
     S[:, 0, 1], S[:, 0, 2], S[:, 1, 0] = -c[:, 2], c[:, 1], c[:, 2]
@@ -70,7 +70,7 @@ def spatial_inertias(system, links, jets):
         return [], None
     m, rho, Iw, props = _placed(system, [b[1:3] for b in on], [b[3].R for b in on])
     c = np.array([b[3].r for b in on]) + rho
-    Cx = _skews(c)
+    Cx = skews(c)
     mC = m * Cx
     out = np.empty((len(on), 6, 6))
     out[:, :3, :3] = Iw - m * (Cx @ Cx)
@@ -91,7 +91,7 @@ def kane_terms(system, jets, nu):
     Js = [jets[node] for _, _, node in bodies]
     m, rho, Iw, _ = _placed(system, [b[:2] for b in bodies], [J.R for J in Js])
     Jw = np.array([J.Jw for J in Js], float)
-    Jv = np.array([J.Jv for J in Js], float) - _skews(rho) @ Jw
+    Jv = np.array([J.Jv for J in Js], float) - skews(rho) @ Jw
     w, alpha = np.array([J.w for J in Js]), np.array([J.alpha for J in Js])
     a = (np.array([J.a for J in Js]) + _cross(alpha, rho)) + _cross(w, _cross(w, rho))
     h = (Iw @ alpha[:, :, None])[:, :, 0] + _cross(w, (Iw @ w[:, :, None])[:, :, 0])

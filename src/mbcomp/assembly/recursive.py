@@ -70,7 +70,7 @@ import numpy as np
 
 from .evaluation import Evaluation
 from .jets import FrameJet, is_traced
-from .body_stack import spatial_inertias
+from .body_stack import skews, spatial_inertias
 from .flange_rows import rotor_wrench, rotors
 from .pivots import PIVOT_TOL, Pivot, SingularTree, ball_pivot, chol_solve, cholesky, lower_product
 from .topology import ROOT
@@ -187,7 +187,7 @@ def _link_jets(system, links, t, q, u, pose_only=False):
     ball-like joint's angular columns and origin (see :class:`TreePass`); ``pose_only``: the
     poses and subspaces alone (the motions zero), for the inertias."""
     jets = {ROOT: FrameJet.ground(0)}
-    S, Jw, r = [], [], []
+    S, Jw, r, own = [], [], [], []
     for e in system.topology.tree:
         pj = jets[e.parent]
         k = e.u.stop - e.u.start
@@ -201,13 +201,23 @@ def _link_jets(system, links, t, q, u, pose_only=False):
         if k == 0:
             jets[e.child] = cj
             continue
-        # the columns give the twist of the child frame's origin; about O: v_O = v_c + r_c x w
-        S.append(np.concatenate((cj.Jw, cj.Jv + skew(cj.r).dot(cj.Jw))))
+        own.append(cj)
         ball = k == 3 and _exact_zeros(cj.Jv)
         Jw.append(cj.Jw if ball else None)
         r.append(cj.r if ball else None)
         jets[e.child] = _narrow(cj)
-    return jets, S, Jw, r
+    return jets, _subspaces(own, pose_only), Jw, r
+
+
+def _subspaces(own, numbers):
+    """Each link's motion subspace from its joint's columns at its child frame: the columns
+    give the twist of the frame's origin; about O, ``v_O = v_c + r_c x w``. A pose pass
+    (``numbers``) whose links all have as many speeds: every link at once (stacked products,
+    BLAS's per matrix: the same bits)."""
+    if numbers and own and len({J.Jw.shape[1] for J in own}) == 1:
+        Jw, Jv, r = (np.array([getattr(J, x) for J in own]) for x in ("Jw", "Jv", "r"))
+        return list(np.concatenate((Jw, Jv + skews(r) @ Jw), axis=1))
+    return [np.concatenate((J.Jw, J.Jv + skew(J.r).dot(J.Jw))) for J in own]
 
 
 def _spatial_inertia(m, Iw, Cx):
