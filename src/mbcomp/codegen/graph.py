@@ -67,6 +67,22 @@ def no_gc():
             gc.enable()
 
 
+def _law_site(law_codes, depth=60):
+    """``(law, file, line)`` of the innermost frame of the calling stack that runs a law's code
+    (``law_codes``: code object -> law name), or None: where a law took a decision."""
+    import inspect  # only a model with laws asks (a new guard while tracing): not at every import
+
+    f = inspect.currentframe().f_back.f_back
+    for _ in range(depth):
+        if f is None:
+            return None
+        law = law_codes.get(f.f_code)
+        if law is not None:
+            return law, f.f_code.co_filename, f.f_lineno
+        f = f.f_back
+    return None
+
+
 # ----------------------------------------------------------------------------------------------
 # the expression graph
 # ----------------------------------------------------------------------------------------------
@@ -98,13 +114,19 @@ class Graph:
     (True, 3, 0.438791280945)
     """
 
-    __slots__ = ("keys", "nodes", "memo", "guards", "_guard_keys", "max_nodes", "baked", "_prev", "_gc")
+    __slots__ = ("keys", "nodes", "memo", "guards", "_guard_keys", "max_nodes", "baked", "_prev", "_gc", "law_codes",
+                 "guard_sites")
 
     def __init__(self, max_nodes=3_000_000):
         self.keys, self.nodes, self.memo = [], [], {}
         self.guards, self._guard_keys = [], set()
         self.baked = []  # param-only nodes converted to numbers (float(), int())
         self.max_nodes = int(max_nodes)
+        #: code object of a law (a callable parameter, or code defined inside one) -> its name
+        #: (``"component.param"``), set by the tracer: a guard taken inside one is a law's branch
+        self.law_codes = {}
+        #: guard -> ``(law, file, line)`` for the guards a law's own code took (:meth:`guard`)
+        self.guard_sites = {}
 
     def __len__(self):
         return len(self.keys)
@@ -151,6 +173,10 @@ class Graph:
         if key not in self._guard_keys:
             self._guard_keys.add(key)
             self.guards.append(key)
+            if self.law_codes:
+                site = _law_site(self.law_codes)
+                if site is not None:
+                    self.guard_sites[key] = site
 
     def drop_guards(self, n):
         """Forget the guards recorded after the first ``n`` (those of a branch of the trace

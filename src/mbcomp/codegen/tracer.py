@@ -38,7 +38,7 @@ from ..assembly.recursive import SingularTree, lagrange_accelerations, tree_eval
 from ..modeling.blame import blame
 from ..modeling.inputs import traced_inputs
 from .graph import CodegenError, Graph, Sym
-from .tracing import drives, parameter_entries, q_rates, traced_params, traced_system
+from .tracing import drives, law_codes, parameter_entries, q_rates, traced_params, traced_system
 
 __all__ = ["FIELDS", "param_layout", "param_signature", "param_vector", "trace_point", "trace"]
 
@@ -203,6 +203,7 @@ def _trace(system, max_nodes, program="eval", baumgarte=True, inline_drives=Fals
     if program == "outputs":
         system.constraint_names()  # the rows' names (structure only), computed numerically once
     g = Graph(max_nodes)
+    g.law_codes = law_codes(system)  # a decision a law takes is told apart (an FMU cannot hold one on a state)
     order = []
 
     def drive_inputs(path, comp, p):  # (s, v, a) are inputs, evaluated numerically at every call

@@ -30,11 +30,13 @@ Examples
 from __future__ import annotations
 
 import copy
+import functools
+import types
 from types import SimpleNamespace
 
 import numpy as np
 
-__all__ = ["DriveInputs", "drives", "parameter_entries", "traced_params", "traced_system", "q_rates"]
+__all__ = ["DriveInputs", "drives", "parameter_entries", "traced_params", "traced_system", "q_rates", "law_codes"]
 
 
 class DriveInputs:
@@ -77,6 +79,47 @@ def drives(system):
     ['d']
     """
     return list(dict.fromkeys(e.drive for e in system.topology.tree if e.drive))
+
+
+def _codes(code, out, name):
+    """``code`` and the code objects defined inside it (a law's helpers, comprehensions)."""
+    out[code] = name
+    for c in code.co_consts:
+        if isinstance(c, types.CodeType):
+            _codes(c, out, name)
+
+
+def law_codes(system):
+    """``{code object: "component.param"}`` of every law of ``system``: a parameter value that is
+    a Python function, a bound method, a ``functools.partial`` of one or a callable object whose
+    ``__call__`` is one, with the code defined inside them (what a tracer attributes a decision
+    to: :attr:`mbcomp.codegen.graph.Graph.law_codes`).
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Revolute, PointMass, FixedTranslation, Torque
+    >>> def tau(t, phi, w):
+    ...     return 1.0 if phi > 0 else -1.0
+    >>> m = mbcomp.Model(); w = m.add("world", World()); j = m.add("j", Revolute())
+    >>> rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0))); b = m.add("b", PointMass(m=1.0))
+    >>> motor = m.add("motor", Torque(tau=tau))
+    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, b.frame_a)
+    >>> m.connect(j.axis, motor.flange_b)
+    >>> law_codes(mbcomp.assemble(m))[tau.__code__]
+    'motor.tau'
+    """
+    out = {}
+    for path, p in system.P.items():
+        for pname, v in vars(p).items():
+            if isinstance(v, functools.partial):
+                v = v.func
+            fn = v.__func__ if isinstance(v, types.MethodType) else v
+            if not isinstance(fn, types.FunctionType) and callable(fn) and not isinstance(fn, type):
+                fn = getattr(type(fn), "__call__", None)
+            if isinstance(fn, types.FunctionType):
+                _codes(fn.__code__, out, f"{path}.{pname}")
+    return out
 
 
 def parameter_entries(system):

@@ -236,8 +236,25 @@ def _fun_program(system, max_nodes):
         raise ModelError([Problem(", ".join(tr.drives), "the motion law cannot be traced into C, so an FMU cannot "
                                   "hold it", "write the law with numpy functions and plain arithmetic")])
     prog = Program(tr.graph, {"fun": tr.groups["fun"]}, guard_groups={"fun": tr.guard_groups["fun"]})
+    _refuse_law_branches(tr.graph, prog.state_guards)
     parts, n_work = prog.c_parts("fun", "mbcomp_fun", chunk, n_parts=lambda n: 1)
     return tr, prog, parts, n_work
+
+
+def _refuse_law_branches(graph, state_guards):
+    """A ``ValueError`` naming every law that took a decision on the time or a state while it was
+    traced (a Python ``if``, ``min``/``max``, ``abs`` of a comparison): the program holds the branch
+    taken at the trace point only, so the FMU would fail (a guard) when the motion takes the other
+    -- ``mbcomp.simulate`` goes on there by its numeric path, which an FMU does not carry. Decisions
+    of mbcomp's own code (a pivot's sign in the recursive solve) are not a law's."""
+    sites = sorted({graph.guard_sites[gd] for gd in state_guards if gd in graph.guard_sites})
+    if sites:
+        where = "; ".join(f"{law} ({file.rsplit('/', 1)[-1]}:{line})" for law, file, line in sites)
+        raise ValueError(f"the model cannot be exported: the law {where} branches on the time or a state (an if, "
+                         "min/max or a comparison on t, phi, w, s or v): the FMU's program would hold only the branch "
+                         "taken at the start and fail when the motion takes the other -> write the law without "
+                         "branching on them (smooth functions such as np.tanh(w / w0) for a sign, abs() and np.hypot "
+                         "for sizes), or run it with mbcomp.simulate, whose numeric path follows every branch")
 
 
 def _states(system, init, select):
