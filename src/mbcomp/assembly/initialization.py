@@ -66,7 +66,7 @@ from ..errors import InitializationError, Problem
 from .conditioning import check_inertia, check_tree_inertia
 from .manifold import POSITION_TOL, close_positions, pivot_partition, rank, solve_speeds
 
-__all__ = ["initialize", "InitialState", "NOT_CLOSED", "VELOCITY_TOL"]
+__all__ = ["initialize", "InitialState", "NOT_CLOSED", "VELOCITY_TOL", "fixed_starts"]
 
 NOT_CLOSED = 1e-8
 VELOCITY_TOL = 1e-12
@@ -113,6 +113,25 @@ def _starts(system):
         elif e.name in system.topology.cut and (np.any(qf) or np.any(uf)):
             cut_fixed.append((e, q0, qf, u0, uf))
     return q, u, qfix, ufix, cut_fixed
+
+
+def fixed_starts(system):
+    """Which start values ``system``'s initialization keeps: ``(qfix, ufix, cut)``, per speed
+    direction whether its position (``qfix``) and its speed (``ufix``) are fixed start values
+    (a value given, not a :class:`~mbcomp.Guess`), and the cut joints with fixed ones (they have
+    no coordinates of their own: initialization measures them on their rows).
+
+    Examples
+    --------
+    >>> import pathlib, mbcomp
+    >>> root = pathlib.Path(mbcomp.__file__).resolve().parents[2]
+    >>> crank = mbcomp.load_model_file(root / "models" / "slider_crank.py")
+    >>> qfix, ufix, cut = fixed_starts(mbcomp.assemble(crank.build()))
+    >>> qfix.tolist(), ufix.tolist(), cut
+    ([True, False, False], [True, False, False], [])
+    """
+    _, _, qfix, ufix, cut_fixed = _starts(system)
+    return qfix, ufix, [e.name for e, *_ in cut_fixed]
 
 
 def _position_names(system):

@@ -63,7 +63,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..assembly.initialization import initialize
+from ..assembly.initialization import fixed_starts, initialize
 from ..assembly.system import assemble
 from ..codegen.graph import CodegenError
 from ..codegen.outputs import QUAT_C
@@ -201,8 +201,29 @@ def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
             f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
             + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
             + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, tr.layout, pv, y0))
+            + _start_freedom(system)
             + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
             + f'\n#include "fmi{fmi[0]}.c"\n')
+
+
+def _start_freedom(system):
+    """The C tables of what the FMU's initialization may move (mbcomp's rule: fixed start values
+    kept, guesses moved): ``PFREE0``/``VFREE0`` per speed direction (1: a guess), ``QDIR``/``QDIRN``
+    the speed directions each coordinate's start value fixes (a joint whose coordinates are not
+    its speeds, a quaternion's: all of the joint's), ``YNAME`` the names of ``[q, u]``."""
+    qfix, ufix, _ = fixed_starts(system)
+    qdir, qdirn = [0] * system.nq, [0] * system.nq
+    for e in system.topology.edges:
+        if e.kind != "joint" or e.q.stop <= e.q.start:
+            continue
+        same = e.q.stop - e.q.start == e.u.stop - e.u.start
+        for i in range(e.q.start, e.q.stop):
+            qdir[i], qdirn[i] = (e.u.start + i - e.q.start, 1) if same else (e.u.start, e.u.stop - e.u.start)
+    names = list(system.q_names) + list(system.u_names)
+    quoted = ", ".join('"' + n.replace("\\", "\\\\").replace('"', '\\"') + '"' for n in names) or '""'
+    flags = (f"static const unsigned char PFREE0[] = {{{', '.join(str(int(not f)) for f in qfix) or '0'}}};\n"
+             f"static const unsigned char VFREE0[] = {{{', '.join(str(int(not f)) for f in ufix) or '0'}}};\n")
+    return flags + _c_ints("QDIR", qdir) + _c_ints("QDIRN", qdirn) + f"static const char *const YNAME[] = {{{quoted}}};\n"
 
 
 def _check_request(model, fmi, kind, stop_time, tolerance, outputs):

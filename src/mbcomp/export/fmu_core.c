@@ -71,6 +71,9 @@ struct Inst {
 #endif
     double y0[NX + 1]; /* the start values (parameters) */
     int starts_changed, tol_set; /* tol_set: the tolerance parameter was set (it wins over the experiment's) */
+    /* per speed direction: whether initialization may move its position (pfree) and its speed
+       (vfree): the model's guesses; a start value the importer sets is fixed (mbcomp's rule) */
+    unsigned char pfree[NU + 1], vfree[NU + 1], set[NX + 1];
     double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
 #if SELECT
     double x[NXS + 1], dx[NXS + 1], growth;
@@ -101,6 +104,9 @@ static void mb_reset(Inst *c)
     memcpy(c->p, P0, sizeof(double) * (NP > 0 ? NP : 0));
     memcpy(c->y, Y0, sizeof(double) * NX);
     memcpy(c->y0, Y0, sizeof(double) * NX);
+    memcpy(c->pfree, PFREE0, sizeof(unsigned char) * (NU > 0 ? NU : 0));
+    memcpy(c->vfree, VFREE0, sizeof(unsigned char) * (NU > 0 ? NU : 0));
+    memset(c->set, 0, sizeof c->set);
     c->starts_changed = 0;
     c->tol_set = 0;
     memcpy(c->d + 2, IN0, sizeof(double) * (NIN > 0 ? NIN : 0));
@@ -336,6 +342,23 @@ static int mb_get(Inst *c, unsigned vr, double *v, int *have)
     return -1;
 }
 
+/* a start value of y[i] (0 <= i < NX) set by the importer before the run: kept by the
+   initialization (its direction fixed), the model's guesses moved to meet the constraints */
+static int mb_set_start(Inst *c, int i, double v)
+{
+    int k;
+    if (!isfinite(v)) { say(c, 1, "the start value of %s set to %g: not finite", YNAME[i], v); return -1; }
+    c->y0[i] = v;
+    c->set[i] = 1;
+    if (i < NQ) {
+        for (k = 0; k < QDIRN[i]; k++) c->pfree[QDIR[i] + k] = 0;
+    } else {
+        c->vfree[i - NQ] = 0;
+    }
+    c->starts_changed = 1;
+    return 0;
+}
+
 static int mb_set(Inst *c, unsigned vr, double v)
 {
     if (vr < VR_X) {
@@ -346,6 +369,14 @@ static int mb_set(Inst *c, unsigned vr, double v)
         c->p[vr] = v;
         c->dirty = 1;
         return 0;
+    }
+    if (vr < VR_DX && (c->mode == M_INSTANTIATED || c->mode == M_INIT)) {  /* a state's start value */
+        int k = (int)(vr - VR_X);
+#if SELECT
+        if (!c->cs && k >= NQ) return mb_set_start(c, NQ + IND0[k - NQ], v);
+        if (c->cs && k >= NQ) return mb_set_start(c, NQ + c->ind[k - NQ], v);
+#endif
+        return mb_set_start(c, k, v);
     }
 #if SELECT
     if (vr < VR_DX) {
@@ -373,10 +404,7 @@ static int mb_set(Inst *c, unsigned vr, double v)
             say(c, 1, "start values are fixed after initialization");
             return -1;
         }
-        if (!isfinite(v)) { say(c, 1, "start value %u set to a non-finite value", vr - VR_START); return -1; }
-        c->y0[vr - VR_START] = v;
-        c->starts_changed = 1;
-        return 0;
+        return mb_set_start(c, (int)(vr - VR_START), v);
     }
     if (vr >= VR_IN && vr < VR_IN + NIN) {
         if (!isfinite(v)) { say(c, 1, "input %u set to a non-finite value", vr - VR_IN); return -1; }
@@ -481,12 +509,25 @@ static int mb_start_states(Inst *c)
     if (c->starts_changed) {  /* new start values: the state from them, onto the constraints */
         memcpy(c->y, c->y0, sizeof(double) * NX);
 #if MECH
-        {
+        {  /* mbcomp's consistent initialization: the fixed starts kept, the guesses moved */
             double norm = 0.0;
-            int rc = mbrt_project(&c->mech, c->t, c->y, PROJ_TOL, 60, PROJ_ACCEPT, &norm, c->mwork);
+            int rc = mbrt_project_free(&c->mech, c->t, c->y, c->pfree, c->vfree, PROJ_TOL, 60, PROJ_ACCEPT, &norm,
+                                       c->mwork);
             if (rc != MBRT_MECH_OK) {
-                say(c, 1, "the start values cannot be closed onto the constraints (status %d, |Phi| = %g): "
-                    "give start values near a position of the mechanism", rc, norm);
+                char names[256];
+                size_t used = 0;
+                int i;
+                names[0] = '\0';
+                for (i = 0; i < NX && used + 2 < sizeof names; i++) {
+                    if (!c->set[i]) continue;
+                    int w = snprintf(names + used, sizeof names - used, "%s%s = %g", used ? ", " : "", YNAME[i],
+                                     c->y0[i]);
+                    if (w < 0) break;
+                    used += (size_t)w < sizeof names - used ? (size_t)w : sizeof names - used - 1;
+                }
+                say(c, 1, "the start values set (%s) and the model's fixed ones cannot all hold: the constraints "
+                    "cannot be met with them (status %d, |Phi| = %g) -> set fewer of them, or values the "
+                    "mechanism can reach", used ? names : "none", rc, norm);
                 return -1;
             }
         }

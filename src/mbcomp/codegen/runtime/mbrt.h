@@ -294,6 +294,14 @@ int mbrt_dalembert_rhs(const mbrt_mech *P, double t, const double *y, const int 
 int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_iter, double accept,
                  double *norm, double *work);
 
+/* mbrt_project with the positions' steps in the speed directions k with pfree[k] != 0 only and
+ * the speeds' correction in those with vfree[k] != 0 only (minimum norm in those directions; the
+ * others keep their values: fixed start values).  NULL: every direction (mbrt_project, the same
+ * arithmetic).  Fixed directions that leave the rows no solution give _SINGULAR. */
+int mbrt_project_free(const mbrt_mech *P, double t, double *y, const unsigned char *pfree,
+                      const unsigned char *vfree, double tol, int max_iter, double accept, double *norm,
+                      double *work);
+
 /* ------------------------------------------------------------------ */
 /* Impacts acted on inside the C loop (mbrt_events.c; helper-30's block) */
 /* ------------------------------------------------------------------ */

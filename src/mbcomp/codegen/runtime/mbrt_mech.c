@@ -82,8 +82,10 @@ static int evaluate(const mbrt_mech *P, double t, const double *q, const double 
  * the flat output); G is m*m scratch, z m scratch.  Returns MBRT_MECH_OK or
  * MBRT_MECH_SINGULAR (dependent rows, see MBRT_MECH_RANK_TOL). */
 static int min_norm(const mbrt_mech *P, const double *out, int m, int n, const double *r, double *x,
-                    double *G, double *z)
+                    double *G, double *z, const unsigned char *free)
 {
+    /* free (NULL: every column): the columns the step may use; the others are 0 in x, and the
+       step is the minimum-norm one in the free columns (J_f x_f = r, J_f: J's free columns) */
     double gmax = 0.0;
     for (int i = 0; i < m; ++i) {
         const double *ri = arow(P, out, i);
@@ -91,7 +93,8 @@ static int min_norm(const mbrt_mech *P, const double *out, int m, int n, const d
             const double *rj = arow(P, out, j);
             double s = 0.0;
             for (int k = 0; k < n; ++k)
-                s += ri[k] * rj[k];
+                if (free == NULL || free[k])
+                    s += ri[k] * rj[k];
             G[(size_t)i * m + j] = s;
         }
         gmax = fmax(gmax, G[(size_t)i * m + i]);
@@ -110,7 +113,8 @@ static int min_norm(const mbrt_mech *P, const double *out, int m, int n, const d
     for (int i = 0; i < m; ++i) {
         const double *ri = arow(P, out, i);
         for (int k = 0; k < n; ++k)
-            x[k] += ri[k] * z[i];
+            if (free == NULL || free[k])
+                x[k] += ri[k] * z[i];
     }
     return finite_all(n, x) ? MBRT_MECH_OK : MBRT_MECH_SINGULAR;
 }
@@ -397,6 +401,13 @@ static void increment(const mbrt_mech *P, double *q, const double *du, double si
 int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_iter, double accept,
                  double *norm, double *work)
 {
+    return mbrt_project_free(P, t, y, NULL, NULL, tol, max_iter, accept, norm, work);
+}
+
+int mbrt_project_free(const mbrt_mech *P, double t, double *y, const unsigned char *pfree,
+                      const unsigned char *vfree, double tol, int max_iter, double accept, double *norm,
+                      double *work)
+{
     if (!mech_ok(P) || y == NULL || work == NULL || !map_ok(P) || max_iter < 0 || !(tol >= 0.0))
         return MBRT_MECH_BAD_ARGUMENT;
     const int nq = P->nq, nu = P->nu, m = nvel(P), mh = P->nrows;
@@ -421,7 +432,7 @@ int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_it
         for (int k = 0; k < mh; ++k)
             r[k] = out[P->off_Phi + P->rows[k]];
         /* only the holonomic rows: the accessor's first mh rows */
-        if ((rc = min_norm(P, out, mh, nu, r, step, G, z)) != MBRT_MECH_OK)
+        if ((rc = min_norm(P, out, mh, nu, r, step, G, z, pfree)) != MBRT_MECH_OK)
             return rc;
         increment(P, q, step, -1.0);
         if (!finite_all(nq, q))
@@ -443,7 +454,7 @@ int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_it
     if (m > 0) {
         for (int k = 0; k < m; ++k)
             r[k] = ares(P, out, k);
-        if ((rc = min_norm(P, out, m, nu, r, step, G, z)) != MBRT_MECH_OK)
+        if ((rc = min_norm(P, out, m, nu, r, step, G, z, vfree)) != MBRT_MECH_OK)
             return rc;
         for (int i = 0; i < nu; ++i)
             u[i] -= step[i];
