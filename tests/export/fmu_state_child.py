@@ -6,8 +6,11 @@ step it, read values. Run as a script it is the "new process" of the serializati
 instantiates the FMU's Co-Simulation, deserializes the bytes of STATE_FILE, sets them, takes N
 steps of H from T and prints, per step, the values of NAME... as exact hexadecimal floats (one
 line of JSON per step)."""
+import ctypes
 import json
 import sys
+
+import numpy as np
 
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Model, FMU2Slave
@@ -17,10 +20,11 @@ CLASSES = {("3.0", "cs"): FMU3Slave, ("3.0", "me"): FMU3Model, ("2.0", "cs"): FM
 
 
 class Instance:
-    """One FMPy instance of ``path`` (FMI ``fmi``, ``kind`` "cs" or "me"), initialized at t = 0
-    with the relative tolerance ``tol``; ``get(names)`` reads Float64 values by name."""
+    """One FMPy instance of ``path`` (FMI ``fmi``, ``kind`` "cs" or "me") with the parameter
+    values ``params`` (by name), initialized at t = 0 with the relative tolerance ``tol``;
+    ``get(names)`` reads Float64 values by name."""
 
-    def __init__(self, path, fmi, kind, tol=1e-10, unzipped=None):
+    def __init__(self, path, fmi, kind, tol=1e-10, params=None, unzipped=None):
         md = read_model_description(str(path))
         self.fmi, self.kind = fmi, kind
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -28,6 +32,9 @@ class Instance:
         self.fmu = CLASSES[fmi, kind](guid=md.guid, unzipDirectory=unzipped or extract(str(path)),
                                       modelIdentifier=iface.modelIdentifier)
         self.fmu.instantiate()
+        self.nx = sum(v.derivative is not None for v in md.modelVariables)  # the continuous states
+        for name, value in (params or {}).items():
+            self.set(name, value)
         if fmi == "2.0":
             self.fmu.setupExperiment(tolerance=tol, startTime=0.0)
             self.fmu.enterInitializationMode()
@@ -42,6 +49,30 @@ class Instance:
     def get(self, names):
         vrs = [self.vr[n] for n in names]
         return list(self.fmu.getReal(vrs) if self.fmi == "2.0" else self.fmu.getFloat64(vrs))
+
+    def set(self, name, value):
+        (self.fmu.setReal if self.fmi == "2.0" else self.fmu.setFloat64)([self.vr[name]], [value])
+
+    # Model Exchange: the continuous states, their derivatives, CompletedIntegratorStep
+    def x(self):
+        buf = (ctypes.c_double * self.nx)()
+        self.fmu.getContinuousStates(buf, self.nx)
+        return np.array(buf)
+
+    def set_x(self, t, x):
+        self.fmu.setTime(t)
+        self.fmu.setContinuousStates((ctypes.c_double * self.nx)(*x), self.nx)
+
+    def dx(self, t, x):
+        """The derivatives at (t, x) (sets them)."""
+        self.set_x(t, x)
+        buf = (ctypes.c_double * self.nx)()
+        (self.fmu.getDerivatives if self.fmi == "2.0" else self.fmu.getContinuousStateDerivatives)(buf, self.nx)
+        return np.array(buf)
+
+    def completed(self):
+        """CompletedIntegratorStep: whether the FMU asks for Event Mode."""
+        return bool(self.fmu.completedIntegratorStep()[0])
 
     def step(self, h):
         """One Co-Simulation step of h from the instance's time."""

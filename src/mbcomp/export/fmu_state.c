@@ -354,7 +354,8 @@ static int mb_state_check(Inst *c, const mb_state *s)
     return 0;
 }
 
-/* the header's fields against this FMU's: 0, or -1 after saying which differs */
+/* the header's fields against this FMU's: 0, or -1 after saying which differs (the checksum
+   was checked before where the size was right: a changed token is a corruption, not another FMU) */
 static int mb_head_check(Inst *c, mb_head *h, size_t n)
 {
     mb_head mine;
@@ -369,15 +370,15 @@ static int mb_head_check(Inst *c, mb_head *h, size_t n)
             (unsigned long long)h->format, MB_STATE_FORMAT);
         return -1;
     }
-    if (h->size != n) {
-        say(c, 1, "DeserializeFMUState: %zu bytes given, the state says it has %llu (%s)", n,
-            (unsigned long long)h->size, h->size > n ? "a truncated buffer" : "a corrupted header");
-        return -1;
-    }
     h->token[MB_TOKEN_BYTES - 1] = '\0';
     if (strcmp(h->token, mine.token) != 0) {
         say(c, 1, "DeserializeFMUState: the state was saved by another FMU (token %s; this FMU's is %s)", h->token,
             GUID);
+        return -1;
+    }
+    if (h->size != n) {
+        say(c, 1, "DeserializeFMUState: %zu bytes given, the state says it has %llu (%s)", n,
+            (unsigned long long)h->size, h->size > n ? "a truncated buffer" : "a corrupted header");
         return -1;
     }
     for (k = 0; k < MB_NDIMS; k++) {
