@@ -329,8 +329,12 @@ int main(void)
     CHECK(fmi3GetFloat64(b, vr, NXS, again, NXS) == fmi3OK);
     CHECK(memcmp(first, again, sizeof(double) * NXS) == 0);
     errors = 0;
-    for (i = 0; i < n; i++) {  /* every truncation; every byte flipped */
-        CHECK(fmi3DeserializeFMUState(b, buf, i, &s3) == fmi3Error && s3 == NULL);
+    for (i = 0; i < n; i++) {  /* every truncation (in a block of its size: ASan sees a read past it); every byte flipped */
+        unsigned char *cut = (unsigned char *)malloc(i ? i : 1);
+        CHECK(cut != NULL);
+        memcpy(cut, buf, i);
+        CHECK(fmi3DeserializeFMUState(b, cut, i, &s3) == fmi3Error && s3 == NULL);
+        free(cut);
         memcpy(bad, buf, n); bad[i] ^= 0x5a;
         CHECK(fmi3DeserializeFMUState(b, bad, n, &s3) == fmi3Error && s3 == NULL);
     }
@@ -360,8 +364,9 @@ int main(void)
 """
 
 
-def test_the_state_code_is_clean_under_asan_and_ubsan(fmu, tmp_path):
-    """The FMU's C (the slider-crank: state selection and projection compiled in) in a harness
+@pytest.mark.parametrize("name", ["pendulum", "slider_crank"])
+def test_the_state_code_is_clean_under_asan_and_ubsan(name, fmu, tmp_path):
+    """The FMU's C (an open tree; the slider-crank: state selection and projection compiled in) in a harness
     built with AddressSanitizer and UBSan: rollback and serialization bit-identical, every
     truncation and every single-byte corruption of a serialized state refused (no read past a
     buffer, no undefined behaviour), the Model Exchange state restored, nothing leaked."""
@@ -371,7 +376,7 @@ def test_the_state_code_is_clean_under_asan_and_ubsan(fmu, tmp_path):
     if subprocess.run([cc, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True).returncode:
         pytest.skip("this compiler cannot build a sanitized program")
     src = tmp_path / "src"
-    with zipfile.ZipFile(fmu("slider_crank", "3.0")) as z:
+    with zipfile.ZipFile(fmu(name, "3.0")) as z:
         z.extractall(src)
     model_c = [p for p in (src / "sources").glob("*.c")
                if p.name not in ("fmu_core.c", "fmu_state.c", "fmi3.c") and not p.name.startswith("mbrt_")]
@@ -387,4 +392,5 @@ def test_the_state_code_is_clean_under_asan_and_ubsan(fmu, tmp_path):
                          env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
     assert run.returncode == 0, (run.stdout[-1000:], run.stderr[-3000:])
     assert run.stdout.startswith("ok ") and "runtime error" not in run.stderr and "Sanitizer" not in run.stderr
+    print(run.stdout.strip(), "(ASan + UBSan)")
     shutil.rmtree(src)
