@@ -8,7 +8,6 @@ back the states and D'Alembert's partition, so an integrator continues exactly a
 detour; a truncated, corrupted or foreign buffer is refused with a message saying which, and the
 instance goes on unharmed. The C runs once under AddressSanitizer and UBSan in a harness.
 """
-import ctypes
 import json
 import os
 import pathlib
