@@ -104,6 +104,11 @@ def _start_names(system):
     return [f"start.{n}" for n in names], units
 
 
+#: the FMU states' capabilities (fmu_state.c), on either interface: FMI 3.0's names ...
+_STATES = ' canGetAndSetFMUState="true" canSerializeFMUState="true"'
+#: ... and FMI 2.0's (its schema spells them "FMUstate")
+_STATES2 = ' canGetAndSetFMUstate="true" canSerializeFMUstate="true"'
+
 _TOL_DOC = "relative tolerance of the Co-Simulation integrator (DOP853; wins over the experiment's when set)"
 
 
@@ -202,10 +207,10 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
     outs = [vr_out + k for _, k in outputs]
     interfaces = ""
     if kind in ("me", "both"):
-        interfaces += f'  <ModelExchange modelIdentifier="{ident}" needsCompletedIntegratorStep="true"/>\n'
+        interfaces += f'  <ModelExchange modelIdentifier="{ident}" needsCompletedIntegratorStep="true"{_STATES}/>\n'
     if kind in ("cs", "both"):
         interfaces += (f'  <CoSimulation modelIdentifier="{ident}" canHandleVariableCommunicationStepSize="true" '
-                       f'hasEventMode="false"/>\n')
+                       f'hasEventMode="false"{_STATES}/>\n')
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="3.0" modelName="{escape(name)}" instantiationToken="{guid}" '
             f'generationTool="mbcomp {_version()}" variableNamingConvention="structured">\n'
@@ -220,7 +225,7 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
 def _interface(tag, ident):
     files = "".join(f'      <File name="{f}"/>\n' for f in (f"{ident}.c",) + RUNTIME_C)
     extra = ' canHandleVariableCommunicationStepSize="true"' if tag == "CoSimulation" else ""
-    return (f'  <{tag} modelIdentifier="{ident}" canNotUseMemoryManagementFunctions="true"{extra}>\n'
+    return (f'  <{tag} modelIdentifier="{ident}" canNotUseMemoryManagementFunctions="true"{_STATES2}{extra}>\n'
             f'    <SourceFiles>\n{files}    </SourceFiles>\n  </{tag}>\n')
 
 

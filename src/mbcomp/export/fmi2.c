@@ -169,18 +169,19 @@ FMI2_EXPORT fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference 
 { (void)vr; (void)v; return n ? unsupported(c, "fmi2SetBoolean (no Boolean variables)") : fmi2OK; }
 FMI2_EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String v[])
 { (void)vr; (void)v; return n ? unsupported(c, "fmi2SetString (no String variables)") : fmi2OK; }
+/* FMU states (fmu_state.c): allowed in every state of the standard's table */
 FMI2_EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s)
-{ (void)s; return unsupported(c, "fmi2GetFMUstate"); }
+{ return c ? OK(mb_state_get((Inst *)c, s)) : fmi2Error; }
 FMI2_EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s)
-{ (void)s; return unsupported(c, "fmi2SetFMUstate"); }
+{ return c ? OK(mb_state_set((Inst *)c, s)) : fmi2Error; }
 FMI2_EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s)
-{ (void)s; return unsupported(c, "fmi2FreeFMUstate"); }
+{ return c ? OK(mb_state_free((Inst *)c, s)) : fmi2Error; }
 FMI2_EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *n)
-{ (void)s; (void)n; return unsupported(c, "fmi2SerializedFMUstateSize"); }
+{ return c ? OK(mb_state_size((Inst *)c, s, n)) : fmi2Error; }
 FMI2_EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte b[], size_t n)
-{ (void)s; (void)b; (void)n; return unsupported(c, "fmi2SerializeFMUstate"); }
+{ return c ? OK(mb_state_serialize((Inst *)c, s, (unsigned char *)b, n)) : fmi2Error; }
 FMI2_EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b[], size_t n, fmi2FMUstate *s)
-{ (void)s; (void)b; (void)n; return unsupported(c, "fmi2DeSerializeFMUstate"); }
+{ return c ? OK(mb_state_deserialize((Inst *)c, (const unsigned char *)b, n, s)) : fmi2Error; }
 FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
                                                     const fmi2ValueReference z[], size_t nz, const fmi2Real du[],
                                                     fmi2Real dz[])

@@ -1,7 +1,7 @@
 /* mbcomp FMI 3.0 wrapper (Model Exchange and Co-Simulation) over the FMU core (fmu_core.c,
  * included before this file): the standard's functions, translated into the core's calls.
  * The types below are the standard's ABI, declared here from the FMI 3.0 specification so the
- * FMU carries no header of anyone else. Scheduled Execution, clocks, FMU states, directional
+ * FMU carries no header of anyone else. Scheduled Execution, clocks, directional
  * derivatives and every non-Float64 type are not supported: those functions log and return
  * fmi3Error (a call with no variables is fine). */
 #include <stdbool.h>
@@ -238,18 +238,19 @@ FMI3_EXPORT fmi3Status fmi3GetVariableDependencies(fmi3Instance c, fmi3ValueRefe
                                                    fmi3ValueReference ind[], size_t ei[], fmi3DependencyKind k[],
                                                    size_t n)
 { (void)dep; (void)ed; (void)ind; (void)ei; (void)k; (void)n; return unsupported(c, "fmi3GetVariableDependencies"); }
+/* FMU states (fmu_state.c): allowed in every mode, as the standard's state table has it */
 FMI3_EXPORT fmi3Status fmi3GetFMUState(fmi3Instance c, fmi3FMUState *s)
-{ (void)s; return unsupported(c, "fmi3GetFMUState"); }
+{ return c ? OK(mb_state_get((Inst *)c, s)) : fmi3Error; }
 FMI3_EXPORT fmi3Status fmi3SetFMUState(fmi3Instance c, fmi3FMUState s)
-{ (void)s; return unsupported(c, "fmi3SetFMUState"); }
+{ return c ? OK(mb_state_set((Inst *)c, s)) : fmi3Error; }
 FMI3_EXPORT fmi3Status fmi3FreeFMUState(fmi3Instance c, fmi3FMUState *s)
-{ (void)s; return unsupported(c, "fmi3FreeFMUState"); }
+{ return c ? OK(mb_state_free((Inst *)c, s)) : fmi3Error; }
 FMI3_EXPORT fmi3Status fmi3SerializedFMUStateSize(fmi3Instance c, fmi3FMUState s, size_t *n)
-{ (void)s; (void)n; return unsupported(c, "fmi3SerializedFMUStateSize"); }
+{ return c ? OK(mb_state_size((Inst *)c, s, n)) : fmi3Error; }
 FMI3_EXPORT fmi3Status fmi3SerializeFMUState(fmi3Instance c, fmi3FMUState s, fmi3Byte b[], size_t n)
-{ (void)s; (void)b; (void)n; return unsupported(c, "fmi3SerializeFMUState"); }
+{ return c ? OK(mb_state_serialize((Inst *)c, s, b, n)) : fmi3Error; }
 FMI3_EXPORT fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte b[], size_t n, fmi3FMUState *s)
-{ (void)s; (void)b; (void)n; return unsupported(c, "fmi3DeserializeFMUState"); }
+{ return c ? OK(mb_state_deserialize((Inst *)c, b, n, s)) : fmi3Error; }
 FMI3_EXPORT fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference u[], size_t nu,
                                                     const fmi3ValueReference k[], size_t nk, const fmi3Float64 seed[],
                                                     size_t ns, fmi3Float64 sens[], size_t nsens)

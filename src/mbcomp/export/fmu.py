@@ -34,7 +34,11 @@ What the FMU holds (see docs/design/fmu.md):
 * the start values of every coordinate and speed as parameters ``start.<name>``, projected
   onto the constraints at initialization when changed.
 
-Not yet: units of the outputs; FMU states and directional derivatives.
+* FMU states: get, set, free, serialize and deserialize (``fmu_state.c``; both kinds, both
+  versions): a Co-Simulation rollback and a state restored in another process continue bit for
+  bit.
+
+Not yet: units of the outputs; directional derivatives.
 
 Examples
 --------
@@ -313,7 +317,7 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", f"fmi{fmi[0]}.c"):
+        for f in ("fmu_core.c", "fmu_state.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)

@@ -653,3 +653,5 @@ static int mb_update(Inst *c, int *changed)
 #endif
     return 0;
 }
+
+#include "fmu_state.c"
