@@ -33,6 +33,7 @@ typedef struct {
     int cs, mode, starts_changed, tol_set;
     double t, alpha, beta, rtol;
     double p[NP + 1], y[NX + 1], y0[NX + 1], d[2 + NIN];
+    int pfree[NU + 1], vfree[NU + 1], set[NX + 1]; /* what initialization may move, the starts set */
 #if MECH
     int projections;
 #endif
@@ -120,6 +121,9 @@ static void mb_state_walk(mb_io *io, mb_state *s)
     io_f64(io, s->p, NP);
     io_f64(io, s->y, NX);
     io_f64(io, s->y0, NX);
+    io_int(io, s->pfree, NU);
+    io_int(io, s->vfree, NU);
+    io_int(io, s->set, NX);
     io_f64(io, s->d, 2 + NIN);
 #if MECH
     io_int(io, &s->projections, 1);
@@ -212,6 +216,11 @@ static void mb_state_take(const Inst *c, mb_state *s)
     memcpy(s->y, c->y, sizeof s->y);
     memcpy(s->y0, c->y0, sizeof s->y0);
     memcpy(s->d, c->d, sizeof s->d);
+    {
+        int k;
+        for (k = 0; k < NU; k++) { s->pfree[k] = c->pfree[k]; s->vfree[k] = c->vfree[k]; }
+        for (k = 0; k < NX; k++) s->set[k] = c->set[k];
+    }
 #if MECH
     s->projections = c->projections;
 #endif
@@ -264,6 +273,11 @@ static int mb_state_set(Inst *c, const void *handle)
     memcpy(c->y, s->y, sizeof s->y);
     memcpy(c->y0, s->y0, sizeof s->y0);
     memcpy(c->d, s->d, sizeof s->d);
+    {
+        int k;
+        for (k = 0; k < NU; k++) { c->pfree[k] = (unsigned char)s->pfree[k]; c->vfree[k] = (unsigned char)s->vfree[k]; }
+        for (k = 0; k < NX; k++) c->set[k] = (unsigned char)s->set[k];
+    }
 #if MECH
     c->projections = s->projections;
 #endif
@@ -346,6 +360,15 @@ static int mb_state_check(Inst *c, const mb_state *s)
     if (s->mode > M_ERROR || s->starts_changed > 1 || s->tol_set > 1) {
         say(c, 1, "DeserializeFMUState: the mode or a flag is out of range (a corrupted buffer)");
         return -1;
+    }
+    {
+        int k, flags_ok = 1;
+        for (k = 0; k < NU; k++) flags_ok = flags_ok && s->pfree[k] <= 1 && s->vfree[k] <= 1;
+        for (k = 0; k < NX; k++) flags_ok = flags_ok && s->set[k] <= 1;
+        if (!flags_ok) {
+            say(c, 1, "DeserializeFMUState: a start's fixed flag is neither 0 nor 1 (a corrupted buffer)");
+            return -1;
+        }
     }
     if (!isfinite(s->t) || !(s->rtol >= 1e-14 && s->rtol < 1.0)) {
         say(c, 1, "DeserializeFMUState: the time %g or the tolerance %g is invalid (a corrupted buffer)", s->t, s->rtol);
