@@ -107,19 +107,20 @@ def _start_names(system):
 _TOL_DOC = "relative tolerance of the Co-Simulation integrator (DOP853; wins over the experiment's when set)"
 
 
-def _start_rows3(system, starts, vr0, unit, defs):
+def _start_rows3(system, starts, vr0, unit, defs, tolerance=1e-8):
     names, units = _start_names(system)
     tol = (f'    <Float64 name="solver.tolerance" valueReference="{vr0 + len(names)}" causality="parameter" '
-           f'variability="fixed" start="1e-08" description="{_TOL_DOC}"/>')
+           f'variability="fixed" start="{float(tolerance)!r}" description="{_TOL_DOC}"/>')
     return [tol] + [f'    <Float64 name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" variability="fixed" '
             f'start="{float(v)!r}" description="start value (projected onto the constraints at initialization)"'
             f'{unit(_define(unit_exponents(u), defs))}/>' for k, (n, u, v) in enumerate(zip(names, units, starts))]
 
 
-def _start_rows2(system, starts, vr0, unit, defs):
+def _start_rows2(system, starts, vr0, unit, defs, tolerance=1e-8):
     names, units = _start_names(system)
     tol = (f'    <ScalarVariable name="solver.tolerance" valueReference="{vr0 + len(names)}" causality="parameter" '
-           f'variability="fixed" initial="exact" description="{_TOL_DOC}"><Real start="1e-08"/></ScalarVariable>')
+           f'variability="fixed" initial="exact" description="{_TOL_DOC}"><Real start="{float(tolerance)!r}"/>'
+           f'</ScalarVariable>')
     return [tol] + [f'    <ScalarVariable name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" '
             f'variability="fixed" initial="exact" description="start value (projected onto the constraints at '
             f'initialization)"><Real start="{float(v)!r}"{unit(_define(unit_exponents(u), defs))}/></ScalarVariable>'
@@ -197,7 +198,7 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
         rows.append(f'    <Float64 name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" causality="input" '
                     f'variability="continuous" start="{inp.start!r}" description="{escape(inp.description)}"'
                     f'{unit(uname)}/>')
-    rows += _start_rows3(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs)
+    rows += _start_rows3(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs, experiment[1])
     der = [npar + nx + k for k in range(nx)]
     outs = [vr_out + k for _, k in outputs]
     interfaces = ""
@@ -258,7 +259,7 @@ def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid
         rows.append(f'    <ScalarVariable name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" '
                     f'causality="input" variability="continuous" description="{escape(inp.description)}">'
                     f'<Real start="{inp.start!r}"{unit(uname)}/></ScalarVariable>')
-    rows += _start_rows2(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs)
+    rows += _start_rows2(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs, experiment[1])
     der = [npar + nx + k + 1 for k in range(nx)]
     outs = [npar + 2 * nx + j + 1 for j in range(len(outputs))]  # 1-based indices among the variables
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in sorted(outs + der))

@@ -74,6 +74,7 @@ from ..errors import ModelError, Problem
 from ..modeling.model import Model
 from .description import (RUNTIME_C, build_description, model_description2, model_description3, output_name,
                           parameter_doc)
+from .rules import c_names, c_rules
 
 __all__ = ["export_fmu"]
 
@@ -172,6 +173,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     y0 = np.concatenate((init.q, init.u))
     pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
     states, x0, state_units = _states(system, init, select)
+    names = _variable_names(pnames, states, out_prog, tr.inputs, system)
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
@@ -182,6 +184,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi)
+    model_c = _named(model_c, names, c_rules(system, layout), tolerance)
     _build(path, ident, fmi, cc, model_c, xml)
     outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
     return dict(states=states, parameters=pnames, outputs=outs,
@@ -203,6 +206,25 @@ def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
             + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, tr.layout, pv, y0))
             + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
             + f'\n#include "fmi{fmi[0]}.c"\n')
+
+
+def _variable_names(pnames, states, out_prog, inputs, system):
+    """The name of every value reference, in the order ``fmu_core.c`` numbers them (an output
+    slot no variable declares: ``output <k>``)."""
+    outs = [f"output {k}" for k in range(out_prog.n_slots)]
+    taken = set(pnames)
+    for n, k in out_prog.variables:
+        outs[k] = output_name(n, taken)
+    starts = [f"start.{n}" for n in list(system.q_names) + list(system.u_names)]
+    return (list(pnames) + list(states) + [f"der({s})" for s in states] + ["time"] + outs
+            + [i.name for i in inputs] + starts + ["solver.tolerance"])
+
+
+def _named(model_c, names, rules, tolerance):
+    """``model_c`` with the variables' names, the parameter rules and the default tolerance
+    (the model description's) defined before the standard's functions are included."""
+    at = model_c.rindex('#include "fmi')
+    return model_c[:at] + f"#define DEFAULT_TOL {float(tolerance)!r}\n" + c_names(names) + rules + model_c[at:]
 
 
 def _check_request(model, fmi, kind, stop_time, tolerance, outputs):
@@ -275,7 +297,7 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", f"fmi{fmi[0]}.c"):
+        for f in ("fmu_core.c", "fmu_rules.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)
