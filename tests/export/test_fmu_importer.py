@@ -283,3 +283,59 @@ def test_co_simulation_without_a_tolerance_runs_at_the_advertised_one(fmi, built
     none, same, loose = run(None), run(float(advertised)), run(1e-8)
     assert np.array_equal(none, same)
     assert not np.array_equal(none, loose)
+
+
+# --- 5. joint coordinates and speeds are outputs ------------------------------------------------
+
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_joint_coordinates_and_speeds_are_outputs(fmi, built, tmp_path):
+    """A tool that wires only outputs sees the joints' coordinates and speeds: the states are
+    outputs too (open tree: [q, u]; with a loop the coordinates, the speeds being computed
+    outputs), FMPy records them by default (it records the outputs) and they move as mbcomp's."""
+    from conftest import load_model
+
+    path = built("pendulum", fmi)
+    md = read_model_description(str(path))
+    causality = {v.name: v.causality for v in md.modelVariables}
+    assert causality["j.phi"] == causality["j.w"] == "output"
+    assert {"j.phi", "j.w"} <= {o.variable.name for o in md.outputs}
+    assert validate_fmu(str(path)) == []
+    ref = mbcomp.simulate(pendulum(), t_end=2.0, n_out=101, rtol=1e-11, atol=1e-13)
+    for fmi_type in ("CoSimulation", "ModelExchange"):
+        r = fmpy.simulate_fmu(str(path), fmi_type=fmi_type, stop_time=2.0, output_interval=0.02,
+                              relative_tolerance=1e-10)  # no output list: FMPy records the outputs
+        for var in ("j.phi", "j.w"):
+            assert float(np.max(np.abs(np.interp(ref.time, r["time"], r[var]) - ref[var]))) < 1e-6, (fmi_type, var)
+    crank = tmp_path / "crank.fmu"
+    info = export_fmu(load_model("models/slider_crank.py").build(), crank, fmi=fmi)
+    assert info["state_outputs"] == ["crank_joint.phi", "slider_joint.s", "pin.phi"]  # not v[1]
+    assert validate_fmu(str(crank)) == []
+    r = fmpy.simulate_fmu(str(crank), fmi_type="ModelExchange", stop_time=1.0, output_interval=0.01,
+                          relative_tolerance=1e-10)
+    assert {"crank_joint.phi", "crank_joint.w", "slider_joint.s"} <= set(r.dtype.names) and "v[1]" not in r.dtype.names
+    ref = mbcomp.simulate(load_model("models/slider_crank.py").build(), t_end=1.0, n_out=101, rtol=1e-11, atol=1e-13)
+    for var in ("crank_joint.phi", "crank_joint.w"):
+        assert float(np.max(np.abs(np.interp(ref.time, r["time"], r[var]) - ref[var]))) < 1e-4, var
+
+
+# --- 6. named units, descriptions, nominal and min ----------------------------------------------
+
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_named_units_descriptions_nominals_and_bounds(fmi, built):
+    """The model description declares N, N.m, J, rad/s2, ... with their base units and uses
+    them; states and outputs are described; the states carry their nominals, a mass min 0."""
+    path = built("body", fmi)
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    var = {v.name: v for v in md.modelVariables}
+    assert var["j.f.x"].unit == "N" and var["j.tau.z"].unit == "N.m" and var["energy.total"].unit == "J"
+    assert var["j.w.der"].unit == "rad/s2" and var["body.I[3,3]"].unit == "kg.m2" and var["j.w"].unit == "rad/s"
+    base = {u.name: u.baseUnit for u in md.unitDefinitions}
+    assert (base["N"].kg, base["N"].m, base["N"].s) == (1, 1, -2)
+    assert (base["J"].kg, base["J"].m, base["J"].s) == (base["N.m"].kg, base["N.m"].m, base["N.m"].s) == (1, 2, -2)
+    assert not [v.name for v in md.modelVariables if v.unit and "/s2" in v.unit and v.unit.startswith("kg")]
+    assert var["j.phi"].description == "coordinate of joint j (a state)"
+    assert var["j.f.x"].description.startswith("reaction force of the joint, x component")
+    assert all(v.description for v in md.modelVariables if v.causality == "output")
+    assert float(var["body.m"].min) == 0.0 and var["j.phi"].nominal is not None
+    assert float(var["j.phi"].nominal) == 1.0  # an angle: 1 rad

@@ -177,17 +177,19 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
+    souts = _state_outputs(system, states, patterns)
     describe = model_description2 if fmi == "2.0" else model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
-                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0)
+                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0,
+                   state_outputs=souts, nominals=_state_nominals(system, tr.layout, pv, y0, select))
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi)
     model_c = _named(model_c, names, c_rules(system, layout), tolerance)
     _build(path, ident, fmi, cc, model_c, xml)
     outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
-    return dict(states=states, parameters=pnames, outputs=outs,
+    return dict(states=states, parameters=pnames, outputs=outs, state_outputs=[states[k] for k in souts],
                 inputs=[i.name for i in tr.inputs], projects=mech.enabled and kind != "me",
                 selects_states=select.enabled, guid=guid, size=os.path.getsize(path),
                 operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
@@ -273,6 +275,24 @@ def _states(system, init, select):
                 np.concatenate((init.q, init.u[select.ind])), list(topo.q_units) + [None] * k)
     return (list(system.q_names) + list(system.u_names), np.concatenate((init.q, init.u)),
             list(topo.q_units) + list(topo.u_units))
+
+
+def _state_outputs(system, states, patterns):
+    """The indices of the states that are outputs too: the joint coordinates and speeds (not
+    D'Alembert's ``v[k]``, whose joint changes with the partition), those the output
+    ``patterns`` choose when given."""
+    from fnmatch import fnmatchcase
+
+    columns = set(system.q_names) | set(system.u_names)
+    return [k for k, s in enumerate(states)
+            if s in columns and (patterns is None or any(fnmatchcase(s, pat) for pat in patterns))]
+
+
+def _state_nominals(system, layout, pv, y0, select):
+    """The nominal values of the states (``_nominals`` of ``[q, u]``, the independent speeds'
+    of the first partition)."""
+    nom = _nominals(system, layout, pv, y0)
+    return np.concatenate((nom[:system.nq], nom[system.nq:][select.ind])) if select.enabled else nom
 
 
 def _nominals(system, layout, pv, y0):
