@@ -12,7 +12,7 @@ What the FMU holds (see docs/design/fmu.md):
   of the standard's header; those this FMU does not support log and return an error), the
   FMI 3.0 ``buildDescription.xml``, and, for Co-Simulation, the C
   runtime's DOP853 (``mbrt.h``, ``mbrt_rk.c``, ``mbrt_dop853.c``: error control at the
-  experiment's tolerance, 1e-8 by default);
+  experiment's tolerance, by default the model description's);
 * ``binaries/x86_64-linux/<id>.so`` (3.0) or ``binaries/linux64/<id>.so`` (2.0) built with
   the system C compiler (libgcc linked statically, no dependency but libm and libc);
 * ``modelDescription.xml``: the parameters (units, descriptions), the continuous states
@@ -34,7 +34,12 @@ What the FMU holds (see docs/design/fmu.md):
 * the start values of every coordinate and speed as parameters ``start.<name>``, projected
   onto the constraints at initialization when changed.
 
-Not yet: units of the outputs; FMU states and directional derivatives.
+* what an importer sees (``fmu_rules.c``, :mod:`mbcomp.export.rules`): the FMI state machine
+  enforced, mbcomp's parameter rules checked in C, messages naming variables, the model
+  description's tolerance as the default, the joint coordinates and speeds as outputs, named
+  units.
+
+Not yet: FMU states and directional derivatives.
 
 Examples
 --------
