@@ -339,3 +339,36 @@ def test_named_units_descriptions_nominals_and_bounds(fmi, built):
     assert all(v.description for v in md.modelVariables if v.causality == "output")
     assert float(var["body.m"].min) == 0.0 and var["j.phi"].nominal is not None
     assert float(var["j.phi"].nominal) == 1.0  # an angle: 1 rad
+
+
+# --- 7. every parameter entry tunable, or listed with the reason ---------------------------------
+
+def test_every_parameter_entry_tunable_or_listed_with_the_reason(built, tmp_path, capfd):
+    """By default the zeros are folded into the program and the export lists them with the
+    reason; ``tunable="all"`` makes every entry a parameter: a centre of mass moved off the
+    rod's line (a zero at export) moves the body as mbcomp does, and the inertia tensor's
+    off-diagonal terms are parameters under its rule (one set alone: not symmetric)."""
+    info = export_fmu(body_pendulum(), tmp_path / "b.fmu")
+    assert "body.r_cm[2]" not in info["parameters"] and "body.I[1,2]" in info["fixed"]
+    assert "folded into the program" in info["fixed"]["body.r_cm[2]"]
+    path = tmp_path / "all.fmu"
+    info = export_fmu(body_pendulum(), path, tunable="all")
+    assert not info["fixed"] and {"body.r_cm[2]", "body.I[1,2]", "body.I[2,1]"} <= set(info["parameters"])
+    assert validate_fmu(str(path)) == []
+    r = fmpy.simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=1.0, relative_tolerance=1e-10,
+                          start_values={"body.r_cm[2]": 0.2, "body.I[1,2]": 0.01, "body.I[2,1]": 0.01},
+                          output=["j.phi"])
+    I = np.diag([0.1, 0.2, 0.25])
+    I[0, 1] = I[1, 0] = 0.01
+    ref = mbcomp.simulate(body_pendulum(), t_end=1.0, n_out=11, rtol=1e-11, atol=1e-13,
+                          params={"body.r_cm": (0.5, 0.2, 0.0), "body.I": I})
+    plain = mbcomp.simulate(body_pendulum(), t_end=1.0, n_out=11, rtol=1e-11, atol=1e-13)
+    assert abs(np.interp(1.0, r["time"], r["j.phi"]) - ref["j.phi"][-1]) < 1e-8
+    assert abs(ref["j.phi"][-1] - plain["j.phi"][-1]) > 1e-3  # the moved centre of mass matters (4e-3 rad)
+    it = Instance(path, "3.0", "cs")
+    it.set("body.I[1,2]", 0.01)
+    it.init()
+    refused(capfd, it.fmu.exitInitializationMode, "body.I in kg m^2: inertia tensor is not symmetric")
+    it.fmu.freeInstance()
+    with pytest.raises(ValueError, match="tunable='x'"):
+        export_fmu(body_pendulum(), tmp_path / "x.fmu", tunable="x")

@@ -120,7 +120,7 @@ def _refuse_modes(system):
 
 
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,
-               tolerance=1e-12, max_nodes=3_000_000):
+               tolerance=1e-12, max_nodes=3_000_000, tunable="nonzero"):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
 
     Parameters
@@ -144,12 +144,19 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     stop_time, tolerance : float
         The FMU's default experiment: end time (s) and the relative tolerance an importer's
         integrator is asked for (FMPy's CVODE on the slider-crank, 10 s: 3.7e-4 rad off at
-        1e-8, 1.4e-7 at 1e-12; hence the default).
+        1e-8, 1.4e-7 at 1e-12; hence the default); also the Co-Simulation integrator's
+        tolerance when the importer gives none.
+    tunable : {"nonzero", "all"}
+        Which numeric parameter entries are FMU parameters: the nonzero ones (default: the
+        zeros are folded into the program, a smaller and faster one), or every entry (zeros and
+        off-diagonal inertia terms too). The entries left out are listed in ``fixed``.
 
     Returns
     -------
     dict
-        ``states``, ``parameters``, ``outputs``, ``inputs`` (names), ``guid`` (the
+        ``states``, ``parameters``, ``outputs``, ``inputs`` (names), ``state_outputs`` (the
+        states that are outputs too), ``fixed`` (``{parameter entry: why it is no FMU
+        parameter}``), ``guid`` (the
         instantiation token), ``size`` (bytes), ``operations`` (of the programs),
         ``compiler``, ``model_identifier``.
 
@@ -163,15 +170,18 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
         A model the FMU cannot hold (a singular start, a drive law evaluated in Python).
     """
     cc, patterns = _check_request(model, fmi, kind, stop_time, tolerance, outputs)
+    if tunable not in ("nonzero", "all"):
+        raise ValueError(f"tunable={tunable!r}: use 'nonzero' (zeros folded into the program) or 'all'")
     path = pathlib.Path(path)
     name = name or path.stem
     ident = _identifier(name)
     system = assemble(model, params)
     _refuse_modes(system)
     init = initialize(system)
-    tr, prog, parts, n_work = _fun_program(system, max_nodes)
-    out_prog = _output_program(system, tr, max_nodes)
-    mech = _projection(system, tr, max_nodes)
+    keep = _kept(system) if tunable == "all" else ()
+    tr, prog, parts, n_work = _fun_program(system, max_nodes, keep)
+    out_prog = _output_program(system, tr, max_nodes, keep)
+    mech = _projection(system, tr, max_nodes, keep)
     select = _selection(system, init, mech, kind)
     layout = tr.layout
     pv = param_vector(system, layout)
@@ -195,6 +205,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     _build(path, ident, fmi, cc, model_c, xml)
     outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
     return dict(states=states, parameters=pnames, outputs=outs, state_outputs=[states[k] for k in souts],
+                fixed=_fixed(system, layout),
                 inputs=[i.name for i in tr.inputs], projects=mech.enabled and kind != "me",
                 selects_states=select.enabled, guid=guid, size=os.path.getsize(path),
                 operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
@@ -250,11 +261,36 @@ def _check_request(model, fmi, kind, stop_time, tolerance, outputs):
     return cc, None if outputs is None else ([outputs] if isinstance(outputs, str) else list(outputs))
 
 
-def _fun_program(system, max_nodes):
+def _kept(system):
+    """``(component, parameter)`` of every numeric parameter: all their entries FMU parameters."""
+    from ..codegen.tracing import parameter_entries
+
+    return tuple((path, name) for path, name, kind, val in parameter_entries(system)
+                 if kind in ("number", "law") and isinstance(val, (float, np.floating, np.ndarray)))
+
+
+def _fixed(system, layout):
+    """``{entry name: why it is no FMU parameter}`` of the numeric parameter entries the
+    program folds in (the export's log of what an importer cannot tune)."""
+    from ..codegen.tracing import parameter_entries
+
+    taken, fixed = {(p, n, None if i is None else tuple(int(k) for k in i)) for p, n, i in layout}, {}
+    for path, name, kind, val in parameter_entries(system):
+        if kind not in ("number", "law") or not isinstance(val, (float, np.floating, np.ndarray)):
+            continue
+        arr = np.asarray(val, dtype=float)
+        for idx in ([None] if arr.ndim == 0 else list(np.ndindex(*arr.shape))):
+            if (path, name, idx) not in taken:
+                entry = f"{path}.{name}" + ("" if idx is None else f"[{','.join(str(k + 1) for k in idx)}]")
+                fixed[entry] = "zero at export: folded into the program (export with tunable='all' to tune it)"
+    return fixed
+
+
+def _fun_program(system, max_nodes, keep=()):
     """The Lagrange right-hand side the FMU carries: ``(trace, Program, C parts, work size)``;
     a clear error for a law, a drive or a start position a program cannot hold."""
     try:
-        tr = trace(system, max_nodes, program="fun")
+        tr = trace(system, max_nodes, program="fun", keep=keep)
     except CodegenError as exc:  # a law the program cannot hold: the FMU cannot either
         raise ValueError(f"the model cannot be exported: {exc} -> or give that value from outside the FMU as an "
                          "mbcomp.Input('name', ...)") from None
@@ -384,7 +420,7 @@ def _selection(system, init, mech, kind):
     return SimpleNamespace(enabled=True, ind=np.asarray(ind, int), c=c)
 
 
-def _projection(system, tr_fun, max_nodes):
+def _projection(system, tr_fun, max_nodes, keep=()):
     """What a Co-Simulation step needs to project onto the constraint manifold after every
     accepted step (the runtime's ``mbrt_project``, as the compiled engine does): the
     evaluation program (constraints and their Jacobian) with its parameter program and
@@ -398,7 +434,7 @@ def _projection(system, tr_fun, max_nodes):
     if not (system.topology.cut or any(e.kind == "joint" and not e.comp.tree_edge for e in system.topology.edges)):
         return none
     seg = coordinate_map(system)
-    tr = trace(system, max_nodes, program="eval")
+    tr = trace(system, max_nodes, program="eval", keep=keep)
     if (seg is None or tr.drives or tr.layout != tr_fun.layout
             or [i.name for i in tr.inputs] != [i.name for i in tr_fun.inputs]):
         return none
@@ -426,13 +462,13 @@ def _projection(system, tr_fun, max_nodes):
     return SimpleNamespace(c=c, enabled=True)
 
 
-def _output_program(system, tr_fun, max_nodes):
+def _output_program(system, tr_fun, max_nodes, keep=()):
     """The result columns the FMU computes as outputs (mbcomp's post-processing program: joint
     reactions, multipliers, body positions, velocities and orientations, energies, residuals):
     its C (with its parameter program and the quaternion of a rotation), the defines the core
     reads, and ``variables``: ``(name, index in the outputs)`` of every column, then every
     body's quaternion (the caller leaves out the states)."""
-    tr = trace(system, max_nodes, program="outputs", baumgarte=True, hidden=False)
+    tr = trace(system, max_nodes, program="outputs", baumgarte=True, hidden=False, keep=keep)
     ok = ("outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
           and [i.name for i in tr.inputs] == [i.name for i in tr_fun.inputs])
     if not ok:  # a drive the program does not hold, or a singular trace point: no outputs
