@@ -372,3 +372,37 @@ def test_every_parameter_entry_tunable_or_listed_with_the_reason(built, tmp_path
     it.fmu.freeInstance()
     with pytest.raises(ValueError, match="tunable='x'"):
         export_fmu(body_pendulum(), tmp_path / "x.fmu", tunable="x")
+
+
+def test_a_rotation_matrix_breaking_mbcomps_rule_is_refused(tmp_path, capfd):
+    """A FixedRotation's R (30 deg about z): a reflection (R[3,3] = -1) or a stretched entry is
+    refused in C as mbcomp's rotation_matrix check refuses it; the rotation itself runs."""
+    from mbcomp.library import FixedRotation, PointMass
+
+    def model():
+        m = mbcomp.Model()
+        w = m.add("world", World())
+        j = m.add("j", Revolute(phi0=0.5))
+        c, s = math.cos(math.pi / 6), math.sin(math.pi / 6)
+        rot = m.add("rot", FixedRotation(r=(0, -1.0, 0), R=[[c, -s, 0], [s, c, 0], [0, 0, 1]]))
+        bob = m.add("bob", PointMass(m=1.0))
+        m.connect(w.frame_b, j.frame_a)
+        m.connect(j.frame_b, rot.frame_a)
+        m.connect(rot.frame_b, bob.frame_a)
+        return m
+
+    path = tmp_path / "rot.fmu"
+    info = export_fmu(model(), path)
+    assert "rot.R[3,3]" in info["parameters"]
+    for entry, value, text in (("rot.R[3,3]", -1.0, "a reflection"), ("rot.R[1,1]", 2.0, "not a rotation matrix")):
+        it = Instance(path, "3.0", "cs")
+        it.set(entry, value)
+        it.init()
+        refused(capfd, it.fmu.exitInitializationMode, "rot.R: ", text, "(the mbcomp rule of FixedRotation.R)")
+        it.fmu.freeInstance()
+    bad = np.diag([1.0, 1.0, -1.0])
+    with pytest.raises(mbcomp.ModelError, match="rot.R"):
+        mbcomp.assemble(model(), {"rot.R": bad})
+    r = fmpy.simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=1.0, output=["j.phi"], relative_tolerance=1e-10)
+    ref = mbcomp.simulate(model(), t_end=1.0, n_out=11, rtol=1e-11, atol=1e-13)
+    assert abs(np.interp(1.0, r["time"], r["j.phi"]) - ref["j.phi"][-1]) < 1e-8
