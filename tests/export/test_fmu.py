@@ -469,8 +469,8 @@ def test_outputs_carry_their_declared_units(fmi, tmp_path, fmus):
     fmus("slider_crank", fmi, tmp_path / "c.fmu")
     md = read_model_description(str(tmp_path / "c.fmu"))
     unit = {v.name: v.unit for v in md.modelVariables if v.causality == "output"}
-    assert unit["rod_joint.f.x"] == "kg.m/s2" and unit["rod_joint.tau.z"] == "kg.m2/s2"  # N, N m
-    assert unit["crank.r.x"] == "m" and unit["crank.w.z"] == "rad/s" and unit["energy.total"] == "kg.m2/s2"
+    assert unit["rod_joint.f.x"] == "N" and unit["rod_joint.tau.z"] == "N.m"  # named units (issue 33)
+    assert unit["crank.r.x"] == "m" and unit["crank.w.z"] == "rad/s" and unit["energy.total"] == "J"
     assert unit["crank_joint.w"] == "rad/s" and unit["crank_joint.w.der"] == "rad/s2"
     assert unit["residual.position"] is None  # mixed metres and radians: no unit
 

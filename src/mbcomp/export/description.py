@@ -20,8 +20,8 @@ from ..assembly.column_units import column_units
 from ..modeling.units import BASE as _BASE
 from ..modeling.units import unit_exponents
 
-__all__ = ["unit_exponents", "unit_name", "output_name", "parameter_doc", "build_description", "model_description3",
-           "model_description2"]
+__all__ = ["unit_exponents", "unit_name", "named_unit", "output_name", "parameter_doc", "column_doc", "state_doc",
+           "build_description", "model_description3", "model_description2"]
 
 RUNTIME_C = ("mbrt_rk.c", "mbrt_check.c", "mbrt_events.c", "mbrt_dop853.c", "mbrt_mech.c", "mbrt_linalg.c")
 
@@ -43,13 +43,52 @@ def unit_name(exps):
     return (num or "1") + (f"/{den}" if den else "")
 
 
-def _define(exps, defs):
+#: named units (SI derived units and the usual products) by their base-unit exponents: the
+#: FMU declares these names, with their base units, instead of ``kg.m/s2``; torque and energy
+#: share exponents: ``J`` where the unit text says J (energies, potentials), else ``N.m``
+NAMED_UNITS = {
+    (("kg", 1), ("m", 1), ("s", -2)): "N",
+    (("kg", 1), ("m", 2), ("s", -2)): "N.m",
+    (("kg", 1), ("m", 2), ("s", -3)): "W",
+    (("kg", 1), ("s", -2)): "N/m",
+    (("kg", 1), ("s", -1)): "N.s/m",
+    (("kg", 1), ("m", 2), ("rad", -1), ("s", -2)): "N.m/rad",
+    (("kg", 1), ("m", 2), ("rad", -1), ("s", -1)): "N.m.s/rad",
+    (("kg", 1), ("m", -1), ("s", -2)): "Pa",
+    (("kg", 1), ("m", 1), ("s", -1)): "N.s",
+    (("kg", 1), ("m", 2), ("s", -1)): "N.m.s",
+}
+
+
+def named_unit(exps, text=None):
+    """The FMU's name of the unit of exponents ``exps`` (``text``: the unit as written, which
+    tells an energy from a torque).
+
+    Examples
+    --------
+    >>> named_unit(unit_exponents("N")), named_unit(unit_exponents("N m")), named_unit(unit_exponents("J"), "J")
+    ('N', 'N.m', 'J')
+    >>> named_unit(unit_exponents("rad/s^2")), named_unit(unit_exponents("kg m^2"))
+    ('rad/s2', 'kg.m2')
+    """
+    name = NAMED_UNITS.get(tuple(sorted(exps.items())))
+    if name == "N.m" and text is not None and "J" in text.split():
+        return "J"
+    return name or unit_name(exps)
+
+
+def _define(exps, defs, text=None):
     """The unit name of the exponents ``exps`` (None for None), added to the definitions ``defs``."""
     if exps is None:
         return None
-    name = unit_name(exps)
+    name = named_unit(exps, text)
     defs[name] = exps
     return name
+
+
+def _text(text, defs):
+    """The unit name of a unit text (None for none or an unreadable one), defined in ``defs``."""
+    return _define(unit_exponents(text), defs, text) if text else None
 
 
 def _per_second(exps):
@@ -66,16 +105,57 @@ def _units(system, layout, state_units):
     where unknown) and ``{name: exponents}`` of every unit used; ``state_units``: the states'
     unit texts (None: unknown)."""
     defs = {}
-    par = [_define(unit_exponents(parameter_doc(system, path, pname)[0]), defs) for path, pname, _ in layout]
-    sta = [_define(unit_exponents(u), defs) for u in state_units]
+    par = [_text(parameter_doc(system, path, pname)[0], defs) for path, pname, _ in layout]
+    sta = [_text(u, defs) for u in state_units]
     der = [_define(_per_second(unit_exponents(u)), defs) for u in state_units]
     return par, sta, der, defs
 
 
+#: what an output column is, by the last parts of its name (``<joint>.f.x``: ``f``)
+_COLUMN_DOCS = {"f": "reaction force of the joint, {0} component (frame_b axes)",
+                "tau": "reaction torque of the joint, {0} component (frame_b axes)",
+                "r": "position of the body's frame, {0} (world)", "v": "velocity of the body's frame, {0} (world)",
+                "w": "angular velocity of the body, {0} (world)", "Q": "orientation quaternion of the body, {0}",
+                "momentum": "linear momentum, {0} (world)", "angular_momentum": "angular momentum, {0} (world)",
+                "energy": "energy of the system: {0}", "residual": "constraint residual: {0}"}
+
+
+def column_doc(name):
+    """A one-line description of the result column ``name`` (an FMU output).
+
+    Examples
+    --------
+    >>> column_doc("crank_joint.f.x"), column_doc("j.w.der")
+    ('reaction force of the joint, x component (frame_b axes)', 'rate of j.w')
+    """
+    parts = name.split(".")
+    if parts[-1] == "der":
+        return f"rate of {'.'.join(parts[:-1])}"
+    if len(parts) >= 2 and parts[-2] in _COLUMN_DOCS:
+        return _COLUMN_DOCS[parts[-2]].format(parts[-1])
+    return f"result column {name} (mbcomp's output program)"
+
+
+def state_doc(system, name):
+    """A one-line description of the state ``name``: a joint's coordinate or speed, or an
+    independent speed of D'Alembert's partition."""
+    if name in system.q_names:
+        return f"coordinate of joint {name.rsplit('.', 1)[0]} (a state)"
+    if name in system.u_names:
+        return f"speed of joint {name.rsplit('.', 1)[0]} (a state)"
+    return "independent speed of the current partition (a state; the joint speeds are outputs)"
+
+
 def _column_units(system):
-    """``{column name: SI exponents}`` of the result columns whose unit is declared
-    (:func:`mbcomp.assembly.column_units.column_units`)."""
-    return {name: unit_exponents(text) for name, text in column_units(system).items()}
+    """``{column name: (SI exponents, unit text)}`` of the result columns whose unit is
+    declared (:func:`mbcomp.assembly.column_units.column_units`)."""
+    return {name: (unit_exponents(text), text) for name, text in column_units(system).items()}
+
+
+def _minimum(system, path, name):
+    """``' min="0"'`` for a parameter mbcomp requires to be >= 0 or > 0, else ``""``."""
+    check = system.topology.flat.components[path].params()[name].check
+    return ' min="0"' if check in ("positive", "nonnegative") else ""
 
 
 def output_name(column, parameters):
@@ -91,10 +171,11 @@ def output_name(column, parameters):
 
 
 def _outputs(system, outputs, pnames, defs):
-    """``(FMU name, index, unit name)`` of the output columns ``outputs`` (``(column,
-    index)``), the units defined in ``defs``; one list for both standards."""
+    """``(FMU name, index, unit name, description)`` of the output columns ``outputs``
+    (``(column, index)``), the units defined in ``defs``; one list for both standards."""
     units, taken = _column_units(system), set(pnames)
-    return [(output_name(c, taken), k, _define(units.get(c), defs)) for c, k in outputs]
+    return [(output_name(c, taken), k, _define(units[c][0], defs, units[c][1]) if c in units else None,
+             column_doc(c)) for c, k in outputs]
 
 
 def _start_names(system):
@@ -112,22 +193,23 @@ _STATES2 = ' canGetAndSetFMUstate="true" canSerializeFMUstate="true"'
 _TOL_DOC = "relative tolerance of the Co-Simulation integrator (DOP853; wins over the experiment's when set)"
 
 
-def _start_rows3(system, starts, vr0, unit, defs):
+def _start_rows3(system, starts, vr0, unit, defs, tolerance=1e-8):
     names, units = _start_names(system)
     tol = (f'    <Float64 name="solver.tolerance" valueReference="{vr0 + len(names)}" causality="parameter" '
-           f'variability="fixed" start="1e-08" description="{_TOL_DOC}"/>')
+           f'variability="fixed" start="{float(tolerance)!r}" description="{_TOL_DOC}"/>')
     return [tol] + [f'    <Float64 name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" variability="fixed" '
             f'start="{float(v)!r}" description="start value (projected onto the constraints at initialization)"'
-            f'{unit(_define(unit_exponents(u), defs))}/>' for k, (n, u, v) in enumerate(zip(names, units, starts))]
+            f'{unit(_text(u, defs))}/>' for k, (n, u, v) in enumerate(zip(names, units, starts))]
 
 
-def _start_rows2(system, starts, vr0, unit, defs):
+def _start_rows2(system, starts, vr0, unit, defs, tolerance=1e-8):
     names, units = _start_names(system)
     tol = (f'    <ScalarVariable name="solver.tolerance" valueReference="{vr0 + len(names)}" causality="parameter" '
-           f'variability="fixed" initial="exact" description="{_TOL_DOC}"><Real start="1e-08"/></ScalarVariable>')
+           f'variability="fixed" initial="exact" description="{_TOL_DOC}"><Real start="{float(tolerance)!r}"/>'
+           f'</ScalarVariable>')
     return [tol] + [f'    <ScalarVariable name="{escape(n)}" valueReference="{vr0 + k}" causality="parameter" '
             f'variability="fixed" initial="exact" description="start value (projected onto the constraints at '
-            f'initialization)"><Real start="{float(v)!r}"{unit(_define(unit_exponents(u), defs))}/></ScalarVariable>'
+            f'initialization)"><Real start="{float(v)!r}"{unit(_text(u, defs))}/></ScalarVariable>'
             for k, (n, u, v) in enumerate(zip(names, units, starts))]
 
 
@@ -169,12 +251,16 @@ def build_description(ident):
 
 
 def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                       experiment=(1.0, 1e-12), state_units=(), starts=()):
+                       experiment=(1.0, 1e-12), state_units=(), starts=(), state_outputs=(), nominals=None):
     """FMI 3.0's ``modelDescription.xml``: the parameters (value references ``0..NP-1``), the
     states and their derivatives, the time, the outputs, the inputs and the start values, in
     the order the generated C (``fmi3.c``) numbers them; ``kind`` is ``"me"``, ``"cs"`` or
-    ``"both"``. :func:`mbcomp.export.fmu.export_fmu` calls it with what it built."""
+    ``"both"``; ``state_outputs``: the indices of the states that are outputs too (the joint
+    coordinates and speeds), ``nominals``: the states' nominal values.
+    :func:`mbcomp.export.fmu.export_fmu` calls it with what it built."""
     nx, npar = len(states), len(pv)
+    souts = sorted(state_outputs)
+    nominal = [f' nominal="{float(v)!r}"' for v in nominals] if nominals is not None else [""] * nx
     upar, usta, uder, defs = _units(system, layout, state_units)
     defs["s"] = {"s": 1}
 
@@ -186,23 +272,27 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
     for k, ((path, pname, _), full) in enumerate(zip(layout, pnames)):
         text, doc = parameter_doc(system, path, pname)
         rows.append(f'    <Float64 name="{escape(full)}" valueReference="{k}" causality="parameter" variability="fixed" '
-                    f'start="{pv[k]!r}" description="{escape(doc or "")} [{escape(text or "")}]"{unit(upar[k])}/>')
+                    f'start="{pv[k]!r}" description="{escape(doc or "")} [{escape(text or "")}]"{unit(upar[k])}'
+                    f'{_minimum(system, path, pname)}/>')
     for k, s in enumerate(states):
-        rows.append(f'    <Float64 name="{escape(s)}" valueReference="{npar + k}" causality="local" '
-                    f'variability="continuous" initial="exact" start="{float(y0[k])!r}"{unit(usta[k])}/>')
+        rows.append(f'    <Float64 name="{escape(s)}" valueReference="{npar + k}" '
+                    f'causality="{"output" if k in souts else "local"}" variability="continuous" initial="exact" '
+                    f'start="{float(y0[k])!r}" description="{escape(state_doc(system, s))}"{unit(usta[k])}'
+                    f'{nominal[k]}/>')
     for k, s in enumerate(states):
         rows.append(f'    <Float64 name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
-                    f'variability="continuous" initial="calculated" derivative="{npar + k}"{unit(uder[k])}/>')
+                    f'variability="continuous" initial="calculated" derivative="{npar + k}" '
+                    f'description="time derivative of {escape(s)}"{unit(uder[k])}/>')
     vr_out = npar + 2 * nx + 1
-    for oname, k, uname in _outputs(system, outputs, pnames, defs):
+    for oname, k, uname, doc in _outputs(system, outputs, pnames, defs):
         rows.append(f'    <Float64 name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
-                    f'variability="continuous" initial="calculated"{unit(uname)}/>')
+                    f'variability="continuous" initial="calculated" description="{escape(doc)}"{unit(uname)}/>')
     for k, inp in enumerate(inputs[0]):
-        uname = _define(unit_exponents(inp.unit), defs)
+        uname = _text(inp.unit, defs)
         rows.append(f'    <Float64 name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" causality="input" '
                     f'variability="continuous" start="{inp.start!r}" description="{escape(inp.description)}"'
                     f'{unit(uname)}/>')
-    rows += _start_rows3(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs)
+    rows += _start_rows3(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs, experiment[1])
     der = [npar + nx + k for k in range(nx)]
     outs = [vr_out + k for _, k in outputs]
     interfaces = ""
@@ -216,7 +306,7 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
             f'generationTool="mbcomp {_version()}" variableNamingConvention="structured">\n'
             + interfaces + _unit_definitions(defs) + _experiment(experiment)
             + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
-            + "".join(f'    <Output valueReference="{v}"/>\n' for v in outs)
+            + "".join(f'    <Output valueReference="{v}"/>\n' for v in [npar + k for k in souts] + outs)
             + "".join(f'    <ContinuousStateDerivative valueReference="{v}"/>\n' for v in der)
             + "".join(f'    <InitialUnknown valueReference="{v}"/>\n' for v in outs + der)
             + '  </ModelStructure>\n</fmiModelDescription>\n')
@@ -230,10 +320,12 @@ def _interface(tag, ident):
 
 
 def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                       experiment=(1.0, 1e-12), state_units=(), starts=()):
+                       experiment=(1.0, 1e-12), state_units=(), starts=(), state_outputs=(), nominals=None):
     """FMI 2.0's ``modelDescription.xml``: the variables of :func:`model_description3` (the
     same value references; the time is no variable in 2.0) with 2.0's model structure."""
     nx, npar = len(states), len(pv)
+    souts = sorted(state_outputs)
+    nominal = [f' nominal="{float(v)!r}"' for v in nominals] if nominals is not None else [""] * nx
     upar, usta, uder, defs = _units(system, layout, state_units)
 
     def unit(u):
@@ -244,37 +336,39 @@ def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid
         text, doc = parameter_doc(system, path, pname)
         rows.append(f'    <ScalarVariable name="{escape(full)}" valueReference="{k}" causality="parameter" '
                     f'variability="fixed" initial="exact" description="{escape(doc or "")} [{escape(text or "")}]">'
-                    f'<Real start="{pv[k]!r}"{unit(upar[k])}/></ScalarVariable>')
+                    f'<Real start="{pv[k]!r}"{unit(upar[k])}{_minimum(system, path, pname)}/></ScalarVariable>')
     for k, s in enumerate(states):
-        rows.append(f'    <ScalarVariable name="{escape(s)}" valueReference="{npar + k}" causality="local" '
-                    f'variability="continuous" initial="exact"><Real start="{float(y0[k])!r}"{unit(usta[k])}/>'
-                    f'</ScalarVariable>')
+        rows.append(f'    <ScalarVariable name="{escape(s)}" valueReference="{npar + k}" '
+                    f'causality="{"output" if k in souts else "local"}" variability="continuous" initial="exact" '
+                    f'description="{escape(state_doc(system, s))}"><Real start="{float(y0[k])!r}"{unit(usta[k])}'
+                    f'{nominal[k]}/></ScalarVariable>')
     first_state = npar + 1  # 1-based index of the first state among the variables
     for k, s in enumerate(states):
         rows.append(f'    <ScalarVariable name="der({escape(s)})" valueReference="{npar + nx + k}" causality="local" '
-                    f'variability="continuous" initial="calculated"><Real derivative="{first_state + k}"{unit(uder[k])}/>'
-                    f'</ScalarVariable>')
+                    f'variability="continuous" initial="calculated" description="time derivative of {escape(s)}">'
+                    f'<Real derivative="{first_state + k}"{unit(uder[k])}/></ScalarVariable>')
     vr_out = npar + 2 * nx + 1  # the time's reference (NP + 2 NX) is not a variable in 2.0
-    for oname, k, uname in _outputs(system, outputs, pnames, defs):
+    for oname, k, uname, doc in _outputs(system, outputs, pnames, defs):
         rows.append(f'    <ScalarVariable name="{escape(oname)}" valueReference="{vr_out + k}" causality="output" '
-                    f'variability="continuous" initial="calculated"><Real{unit(uname)}/></ScalarVariable>')
+                    f'variability="continuous" initial="calculated" description="{escape(doc)}"><Real{unit(uname)}/>'
+                    f'</ScalarVariable>')
     for k, inp in enumerate(inputs[0]):
-        uname = _define(unit_exponents(inp.unit), defs)
+        uname = _text(inp.unit, defs)
         rows.append(f'    <ScalarVariable name="{escape(inp.name)}" valueReference="{vr_out + inputs[1] + k}" '
                     f'causality="input" variability="continuous" description="{escape(inp.description)}">'
                     f'<Real start="{inp.start!r}"{unit(uname)}/></ScalarVariable>')
-    rows += _start_rows2(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs)
+    rows += _start_rows2(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs, experiment[1])
     der = [npar + nx + k + 1 for k in range(nx)]
     outs = [npar + 2 * nx + j + 1 for j in range(len(outputs))]  # 1-based indices among the variables
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in sorted(outs + der))
-    out_list = "".join(f'      <Unknown index="{i}"/>\n' for i in outs)
+    out_list = "".join(f'      <Unknown index="{i}"/>\n' for i in [first_state + k for k in souts] + outs)
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
             f'generationTool="mbcomp {_version()}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
             + "".join(_interface(tag, ident) for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
                       if kind in (k, "both")) + _unit_definitions(defs) + _experiment(experiment)
             + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
-            + '  <ModelStructure>\n' + (f'    <Outputs>\n{out_list}    </Outputs>\n' if outs else '')
+            + '  <ModelStructure>\n' + (f'    <Outputs>\n{out_list}    </Outputs>\n' if out_list else '')
             + '    <Derivatives>\n' + "\n".join(f'      <Unknown index="{i}"/>' for i in der) + '\n    </Derivatives>\n'
             f'    <InitialUnknowns>\n{unknowns}\n    </InitialUnknowns>\n  </ModelStructure>\n'
             f'</fmiModelDescription>\n')

@@ -51,6 +51,8 @@ static void fmi2_log(Inst *c, int error, const char *msg)
 
 #define NEED(c) do { if (!(c)) return fmi2Error; if (((Inst *)(c))->mode == M_ERROR) return fmi2Error; } while (0)
 #define OK(x) ((x) == 0 ? fmi2OK : fmi2Error)
+/* NEED, and the call fn allowed in the instance's mode (mask: fmu_rules.c's S_*) */
+#define STATE(c, fn, mask) do { NEED(c); if (mb_allowed((Inst *)(c), fn, mask)) return fmi2Error; } while (0)
 
 static fmi2Status unsupported(fmi2Component c, const char *what)
 {
@@ -97,7 +99,7 @@ FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, 
                                            fmi2Boolean stopDef, fmi2Real tStop)
 {
     (void)stopDef; (void)tStop;
-    NEED(c);
+    STATE(c, "fmi2SetupExperiment", S_INST);
     ((Inst *)c)->t = t0;
     if (tolDef) {
         if (!(tol >= 1e-14 && tol < 1.0)) {
@@ -111,22 +113,22 @@ FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, 
 
 FMI2_EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
-    NEED(c);
+    STATE(c, "fmi2EnterInitializationMode", S_INST);
     ((Inst *)c)->mode = M_INIT;
     return fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
-    NEED(c);
-    if (mb_refresh((Inst *)c) || mb_start_states((Inst *)c)) return fmi2Error;
+    STATE(c, "fmi2ExitInitializationMode", S_INIT);
+    if (mb_check_rules((Inst *)c) || mb_refresh((Inst *)c) || mb_start_states((Inst *)c)) return fmi2Error;
     ((Inst *)c)->mode = ((Inst *)c)->cs ? M_STEP : M_EVENT;
     return fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2Terminate(fmi2Component c)
 {
-    if (!c) return fmi2Error;
+    STATE(c, "fmi2Terminate", S_EVENT | S_CONT | S_STEP);
     ((Inst *)c)->mode = M_TERMINATED;
     return fmi2OK;
 }
@@ -142,7 +144,7 @@ FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[
 {
     size_t i;
     int have = 0;
-    NEED(c);
+    STATE(c, "fmi2GetReal", S_INIT | S_EVENT | S_CONT | S_STEP | S_TERM);
     for (i = 0; i < n; i++)
         if (mb_get((Inst *)c, vr[i], &value[i], &have)) return fmi2Error;
     return fmi2OK;
@@ -151,7 +153,7 @@ FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[
 FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real value[])
 {
     size_t i;
-    NEED(c);
+    STATE(c, "fmi2SetReal", S_INST | S_INIT | S_EVENT | S_CONT | S_STEP);
     for (i = 0; i < n; i++)
         if (mb_set((Inst *)c, vr[i], value[i])) return fmi2Error;
     return fmi2OK;
@@ -190,7 +192,7 @@ FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2V
 /* --- Model Exchange ---------------------------------------------------------------------- */
 FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c)
 {
-    NEED(c);
+    STATE(c, "fmi2EnterEventMode", S_EVENT | S_CONT);
     ((Inst *)c)->mode = M_EVENT;
     return fmi2OK;
 }
@@ -198,7 +200,7 @@ FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c)
 FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *e)
 {
     int changed = 0;
-    NEED(c);
+    STATE(c, "fmi2NewDiscreteStates", S_EVENT);
     if (!e) return fmi2Error;
     memset(e, 0, sizeof *e);
     if (mb_update((Inst *)c, &changed)) return fmi2Error;
@@ -209,7 +211,7 @@ FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *e)
 
 FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
 {
-    NEED(c);
+    STATE(c, "fmi2EnterContinuousTimeMode", S_EVENT);
     ((Inst *)c)->mode = M_CONT;
     return fmi2OK;
 }
@@ -219,7 +221,7 @@ FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean 
 {
     int event = 0;
     (void)noSetFMUStatePrior;
-    NEED(c);
+    STATE(c, "fmi2CompletedIntegratorStep", S_CONT);
     if (!enterEventMode || !terminate) return fmi2Error;
     if (mb_completed((Inst *)c, &event)) return fmi2Error;
     *enterEventMode = event;
@@ -229,39 +231,39 @@ FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean 
 
 FMI2_EXPORT fmi2Status fmi2SetTime(fmi2Component c, fmi2Real t)
 {
-    NEED(c);
+    STATE(c, "fmi2SetTime", S_EVENT | S_CONT);
     ((Inst *)c)->t = t;
     return fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
 {
-    NEED(c);
+    STATE(c, "fmi2SetContinuousStates", S_CONT);
     return OK(mb_set_x((Inst *)c, x, nx));
 }
 
 FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
 {
-    NEED(c);
+    STATE(c, "fmi2GetDerivatives", S_EVENT | S_CONT | S_TERM);
     return OK(mb_get_dx((Inst *)c, dx, nx));
 }
 
 FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t nz)
 {
     (void)z;
-    NEED(c);
+    STATE(c, "fmi2GetEventIndicators", S_INIT | S_EVENT | S_CONT | S_TERM);
     return nz == 0 ? fmi2OK : unsupported(c, "event indicators (this FMU has none)");
 }
 
 FMI2_EXPORT fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 {
-    NEED(c);
+    STATE(c, "fmi2GetContinuousStates", S_INIT | S_EVENT | S_CONT | S_TERM);
     return OK(mb_get_x((Inst *)c, x, nx));
 }
 
 FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 {
-    NEED(c);
+    STATE(c, "fmi2GetNominalsOfContinuousStates", S_INST | S_EVENT | S_CONT | S_TERM);
     return OK(mb_nominals((Inst *)c, x, nx));
 }
 
@@ -272,6 +274,7 @@ FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2B
     (void)noSetPrior;
     NEED(c);
     if (!s->cs) return unsupported(c, "fmi2DoStep in a Model Exchange instance");
+    STATE(c, "fmi2DoStep", S_STEP);
     if (fabs(t - s->t) > 1e-9 * (1.0 + fabs(t))) {
         say(s, 1, "fmi2DoStep: a step from t=%g, but the FMU is at t=%g", t, s->t);
         return fmi2Error;

@@ -53,6 +53,8 @@ static void fmi3_log(Inst *c, int error, const char *msg)
 
 #define NEED(c) do { if (!(c)) return fmi3Error; if (((Inst *)(c))->mode == M_ERROR) return fmi3Error; } while (0)
 #define OK(x) ((x) == 0 ? fmi3OK : fmi3Error)
+/* NEED, and the call fn allowed in the instance's mode (mask: fmu_rules.c's S_*) */
+#define STATE(c, fn, mask) do { NEED(c); if (mb_allowed((Inst *)(c), fn, mask)) return fmi3Error; } while (0)
 
 static fmi3Status unsupported(fmi3Instance c, const char *what)
 {
@@ -136,7 +138,7 @@ FMI3_EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean t
 {
     Inst *s = (Inst *)c;
     (void)stopDef; (void)tStop;
-    NEED(c);
+    STATE(c, "fmi3EnterInitializationMode", S_INST);
     s->t = t0;
     if (tolDef) {
         if (!(tol >= 1e-14 && tol < 1.0)) {
@@ -151,22 +153,22 @@ FMI3_EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean t
 
 FMI3_EXPORT fmi3Status fmi3ExitInitializationMode(fmi3Instance c)
 {
-    NEED(c);
-    if (mb_refresh((Inst *)c) || mb_start_states((Inst *)c)) return fmi3Error;
+    STATE(c, "fmi3ExitInitializationMode", S_INIT);
+    if (mb_check_rules((Inst *)c) || mb_refresh((Inst *)c) || mb_start_states((Inst *)c)) return fmi3Error;
     ((Inst *)c)->mode = ((Inst *)c)->cs ? M_STEP : M_EVENT;
     return fmi3OK;
 }
 
 FMI3_EXPORT fmi3Status fmi3EnterEventMode(fmi3Instance c)
 {
-    NEED(c);
+    STATE(c, "fmi3EnterEventMode", S_EVENT | S_CONT);
     ((Inst *)c)->mode = M_EVENT;
     return fmi3OK;
 }
 
 FMI3_EXPORT fmi3Status fmi3Terminate(fmi3Instance c)
 {
-    if (!c) return fmi3Error;
+    STATE(c, "fmi3Terminate", S_EVENT | S_CONT | S_STEP);
     ((Inst *)c)->mode = M_TERMINATED;
     return fmi3OK;
 }
@@ -183,7 +185,7 @@ FMI3_EXPORT fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference v
 {
     size_t i;
     int have = 0;
-    NEED(c);
+    STATE(c, "fmi3GetFloat64", S_INIT | S_EVENT | S_CONT | S_STEP | S_TERM);
     if (nv < nvr) { say((Inst *)c, 1, "fmi3GetFloat64: %zu values for %zu variables", nv, nvr); return fmi3Error; }
     for (i = 0; i < nvr; i++)
         if (mb_get((Inst *)c, vr[i], &v[i], &have)) return fmi3Error;
@@ -194,7 +196,7 @@ FMI3_EXPORT fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference v
                                       const fmi3Float64 v[], size_t nv)
 {
     size_t i;
-    NEED(c);
+    STATE(c, "fmi3SetFloat64", S_ANY);
     if (nv < nvr) { say((Inst *)c, 1, "fmi3SetFloat64: %zu values for %zu variables", nv, nvr); return fmi3Error; }
     for (i = 0; i < nvr; i++)
         if (mb_set((Inst *)c, vr[i], v[i])) return fmi3Error;
@@ -297,7 +299,7 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *upd
                                                 fmi3Boolean *nextDefined, fmi3Float64 *next)
 {
     int changed = 0;
-    NEED(c);
+    STATE(c, "fmi3UpdateDiscreteStates", S_EVENT);
     if (mb_update((Inst *)c, &changed)) return fmi3Error;
     if (update) *update = false;
     if (terminate) *terminate = false;
@@ -311,7 +313,7 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *upd
 /* --- Model Exchange ---------------------------------------------------------------------- */
 FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c)
 {
-    NEED(c);
+    STATE(c, "fmi3EnterContinuousTimeMode", S_EVENT);
     ((Inst *)c)->mode = M_CONT;
     return fmi3OK;
 }
@@ -321,7 +323,7 @@ FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean n
 {
     int event = 0;
     (void)noSetPrior;
-    NEED(c);
+    STATE(c, "fmi3CompletedIntegratorStep", S_CONT);
     if (!enterEventMode || !terminate) return fmi3Error;
     if (mb_completed((Inst *)c, &event)) return fmi3Error;
     *enterEventMode = event;
@@ -331,39 +333,39 @@ FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean n
 
 FMI3_EXPORT fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64 t)
 {
-    NEED(c);
+    STATE(c, "fmi3SetTime", S_EVENT | S_CONT);
     ((Inst *)c)->t = t;
     return fmi3OK;
 }
 
 FMI3_EXPORT fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t nx)
 {
-    NEED(c);
+    STATE(c, "fmi3SetContinuousStates", S_CONT);
     return OK(mb_set_x((Inst *)c, x, nx));
 }
 
 FMI3_EXPORT fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 dx[], size_t nx)
 {
-    NEED(c);
+    STATE(c, "fmi3GetContinuousStateDerivatives", S_INIT | S_EVENT | S_CONT | S_TERM);
     return OK(mb_get_dx((Inst *)c, dx, nx));
 }
 
 FMI3_EXPORT fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 z[], size_t nz)
 {
     (void)z;
-    NEED(c);
+    STATE(c, "fmi3GetEventIndicators", S_INIT | S_EVENT | S_CONT | S_TERM);
     return nz == 0 ? fmi3OK : unsupported(c, "event indicators (this FMU has none)");
 }
 
 FMI3_EXPORT fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t nx)
 {
-    NEED(c);
+    STATE(c, "fmi3GetContinuousStates", S_INIT | S_EVENT | S_CONT | S_TERM);
     return OK(mb_get_x((Inst *)c, x, nx));
 }
 
 FMI3_EXPORT fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t nx)
 {
-    NEED(c);
+    STATE(c, "fmi3GetNominalsOfContinuousStates", S_INIT | S_EVENT | S_CONT | S_TERM);
     return OK(mb_nominals((Inst *)c, x, nx));
 }
 
@@ -386,7 +388,7 @@ FMI3_EXPORT fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance c, size_t *n
 /* --- Co-Simulation ----------------------------------------------------------------------- */
 FMI3_EXPORT fmi3Status fmi3EnterStepMode(fmi3Instance c)
 {
-    NEED(c);
+    STATE(c, "fmi3EnterStepMode", S_INIT | S_EVENT);
     ((Inst *)c)->mode = M_STEP;
     return fmi3OK;
 }
@@ -404,6 +406,7 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, 
     (void)noSetPrior;
     NEED(c);
     if (!s->cs) return unsupported(c, "fmi3DoStep in a Model Exchange instance");
+    STATE(c, "fmi3DoStep", S_STEP);
     if (fabs(t - s->t) > 1e-9 * (1.0 + fabs(t))) {
         say(s, 1, "fmi3DoStep: a step from t=%g, but the FMU is at t=%g", t, s->t);
         return fmi3Error;

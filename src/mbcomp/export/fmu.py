@@ -12,7 +12,7 @@ What the FMU holds (see docs/design/fmu.md):
   of the standard's header; those this FMU does not support log and return an error), the
   FMI 3.0 ``buildDescription.xml``, and, for Co-Simulation, the C
   runtime's DOP853 (``mbrt.h``, ``mbrt_rk.c``, ``mbrt_dop853.c``: error control at the
-  experiment's tolerance, 1e-8 by default);
+  experiment's tolerance, by default the model description's);
 * ``binaries/x86_64-linux/<id>.so`` (3.0) or ``binaries/linux64/<id>.so`` (2.0) built with
   the system C compiler (libgcc linked statically, no dependency but libm and libc);
 * ``modelDescription.xml``: the parameters (units, descriptions), the continuous states
@@ -37,8 +37,12 @@ What the FMU holds (see docs/design/fmu.md):
 * FMU states: get, set, free, serialize and deserialize (``fmu_state.c``; both kinds, both
   versions): a Co-Simulation rollback and a state restored in another process continue bit for
   bit.
+* what an importer sees (``fmu_rules.c``, :mod:`mbcomp.export.rules`): the FMI state machine
+  enforced, mbcomp's parameter rules checked in C, messages naming variables, the model
+  description's tolerance as the default, the joint coordinates and speeds as outputs, named
+  units; a start value set on a state kept by the initialization (the model's guesses moved).
 
-Not yet: units of the outputs; directional derivatives.
+Not yet: directional derivatives.
 
 Examples
 --------
@@ -78,6 +82,7 @@ from ..errors import ModelError, Problem
 from ..modeling.model import Model
 from .description import (RUNTIME_C, build_description, model_description2, model_description3, output_name,
                           parameter_doc)
+from .rules import c_names, c_rules
 
 __all__ = ["export_fmu"]
 
@@ -118,7 +123,7 @@ def _refuse_modes(system):
 
 
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,
-               tolerance=1e-12, max_nodes=3_000_000):
+               tolerance=1e-12, max_nodes=3_000_000, tunable="nonzero"):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
 
     Parameters
@@ -142,12 +147,19 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     stop_time, tolerance : float
         The FMU's default experiment: end time (s) and the relative tolerance an importer's
         integrator is asked for (FMPy's CVODE on the slider-crank, 10 s: 3.7e-4 rad off at
-        1e-8, 1.4e-7 at 1e-12; hence the default).
+        1e-8, 1.4e-7 at 1e-12; hence the default); also the Co-Simulation integrator's
+        tolerance when the importer gives none.
+    tunable : {"nonzero", "all"}
+        Which numeric parameter entries are FMU parameters: the nonzero ones (default: the
+        zeros are folded into the program, a smaller and faster one), or every entry (zeros and
+        off-diagonal inertia terms too). The entries left out are listed in ``fixed``.
 
     Returns
     -------
     dict
-        ``states``, ``parameters``, ``outputs``, ``inputs`` (names), ``guid`` (the
+        ``states``, ``parameters``, ``outputs``, ``inputs`` (names), ``state_outputs`` (the
+        states that are outputs too), ``fixed`` (``{parameter entry: why it is no FMU
+        parameter}``), ``guid`` (the
         instantiation token), ``size`` (bytes), ``operations`` (of the programs),
         ``compiler``, ``model_identifier``.
 
@@ -161,34 +173,42 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
         A model the FMU cannot hold (a singular start, a drive law evaluated in Python).
     """
     cc, patterns = _check_request(model, fmi, kind, stop_time, tolerance, outputs)
+    if tunable not in ("nonzero", "all"):
+        raise ValueError(f"tunable={tunable!r}: use 'nonzero' (zeros folded into the program) or 'all'")
     path = pathlib.Path(path)
     name = name or path.stem
     ident = _identifier(name)
     system = assemble(model, params)
     _refuse_modes(system)
     init = initialize(system)
-    tr, prog, parts, n_work = _fun_program(system, max_nodes)
-    out_prog = _output_program(system, tr, max_nodes)
-    mech = _projection(system, tr, max_nodes)
+    keep = _kept(system) if tunable == "all" else ()
+    tr, prog, parts, n_work = _fun_program(system, max_nodes, keep)
+    out_prog = _output_program(system, tr, max_nodes, keep)
+    mech = _projection(system, tr, max_nodes, keep)
     select = _selection(system, init, mech, kind)
     layout = tr.layout
     pv = param_vector(system, layout)
     y0 = np.concatenate((init.q, init.u))
     pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
     states, x0, state_units = _states(system, init, select)
+    names = _variable_names(pnames, states, out_prog, tr.inputs, system)
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
+    souts = _state_outputs(system, states, patterns)
     describe = model_description2 if fmi == "2.0" else model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
-                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0)
+                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0,
+                   state_outputs=souts, nominals=_state_nominals(system, tr.layout, pv, y0, select))
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
     model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi)
+    model_c = _named(model_c, names, c_rules(system, layout), tolerance)
     _build(path, ident, fmi, cc, model_c, xml)
     outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
-    return dict(states=states, parameters=pnames, outputs=outs,
+    return dict(states=states, parameters=pnames, outputs=outs, state_outputs=[states[k] for k in souts],
+                fixed=_fixed(system, layout),
                 inputs=[i.name for i in tr.inputs], projects=mech.enabled and kind != "me",
                 selects_states=select.enabled, guid=guid, size=os.path.getsize(path),
                 operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
@@ -230,6 +250,25 @@ def _start_freedom(system):
     return flags + _c_ints("QDIR", qdir) + _c_ints("QDIRN", qdirn) + f"static const char *const YNAME[] = {{{quoted}}};\n"
 
 
+def _variable_names(pnames, states, out_prog, inputs, system):
+    """The name of every value reference, in the order ``fmu_core.c`` numbers them (an output
+    slot no variable declares: ``output <k>``)."""
+    outs = [f"output {k}" for k in range(out_prog.n_slots)]
+    taken = set(pnames)
+    for n, k in out_prog.variables:
+        outs[k] = output_name(n, taken)
+    starts = [f"start.{n}" for n in list(system.q_names) + list(system.u_names)]
+    return (list(pnames) + list(states) + [f"der({s})" for s in states] + ["time"] + outs
+            + [i.name for i in inputs] + starts + ["solver.tolerance"])
+
+
+def _named(model_c, names, rules, tolerance):
+    """``model_c`` with the variables' names, the parameter rules and the default tolerance
+    (the model description's) defined before the standard's functions are included."""
+    at = model_c.rindex('#include "fmi')
+    return model_c[:at] + f"#define DEFAULT_TOL {float(tolerance)!r}\n" + c_names(names) + rules + model_c[at:]
+
+
 def _check_request(model, fmi, kind, stop_time, tolerance, outputs):
     """``(C compiler, output patterns or None)`` for a request; a clear error otherwise."""
     if fmi not in ("2.0", "3.0"):
@@ -246,11 +285,36 @@ def _check_request(model, fmi, kind, stop_time, tolerance, outputs):
     return cc, None if outputs is None else ([outputs] if isinstance(outputs, str) else list(outputs))
 
 
-def _fun_program(system, max_nodes):
+def _kept(system):
+    """``(component, parameter)`` of every numeric parameter: all their entries FMU parameters."""
+    from ..codegen.tracing import parameter_entries
+
+    return tuple((path, name) for path, name, kind, val in parameter_entries(system)
+                 if kind in ("number", "law") and isinstance(val, (float, np.floating, np.ndarray)))
+
+
+def _fixed(system, layout):
+    """``{entry name: why it is no FMU parameter}`` of the numeric parameter entries the
+    program folds in (the export's log of what an importer cannot tune)."""
+    from ..codegen.tracing import parameter_entries
+
+    taken, fixed = {(p, n, None if i is None else tuple(int(k) for k in i)) for p, n, i in layout}, {}
+    for path, name, kind, val in parameter_entries(system):
+        if kind not in ("number", "law") or not isinstance(val, (float, np.floating, np.ndarray)):
+            continue
+        arr = np.asarray(val, dtype=float)
+        for idx in ([None] if arr.ndim == 0 else list(np.ndindex(*arr.shape))):
+            if (path, name, idx) not in taken:
+                entry = f"{path}.{name}" + ("" if idx is None else f"[{','.join(str(k + 1) for k in idx)}]")
+                fixed[entry] = "zero at export: folded into the program (export with tunable='all' to tune it)"
+    return fixed
+
+
+def _fun_program(system, max_nodes, keep=()):
     """The Lagrange right-hand side the FMU carries: ``(trace, Program, C parts, work size)``;
     a clear error for a law, a drive or a start position a program cannot hold."""
     try:
-        tr = trace(system, max_nodes, program="fun")
+        tr = trace(system, max_nodes, program="fun", keep=keep)
     except CodegenError as exc:  # a law the program cannot hold: the FMU cannot either
         raise ValueError(f"the model cannot be exported: {exc} -> or give that value from outside the FMU as an "
                          "mbcomp.Input('name', ...)") from None
@@ -295,6 +359,24 @@ def _states(system, init, select):
             list(topo.q_units) + list(topo.u_units))
 
 
+def _state_outputs(system, states, patterns):
+    """The indices of the states that are outputs too: the joint coordinates and speeds (not
+    D'Alembert's ``v[k]``, whose joint changes with the partition), those the output
+    ``patterns`` choose when given."""
+    from fnmatch import fnmatchcase
+
+    columns = set(system.q_names) | set(system.u_names)
+    return [k for k, s in enumerate(states)
+            if s in columns and (patterns is None or any(fnmatchcase(s, pat) for pat in patterns))]
+
+
+def _state_nominals(system, layout, pv, y0, select):
+    """The nominal values of the states (``_nominals`` of ``[q, u]``, the independent speeds'
+    of the first partition)."""
+    nom = _nominals(system, layout, pv, y0)
+    return np.concatenate((nom[:system.nq], nom[system.nq:][select.ind])) if select.enabled else nom
+
+
 def _nominals(system, layout, pv, y0):
     """The states' nominal values from the model's scales: a length coordinate the model's
     length (the largest length parameter, m), its speed that length per second, an angle
@@ -317,7 +399,7 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", "fmu_state.c", f"fmi{fmi[0]}.c"):
+        for f in ("fmu_core.c", "fmu_state.c", "fmu_rules.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)
@@ -379,7 +461,7 @@ def _selection(system, init, mech, kind):
     return SimpleNamespace(enabled=True, ind=np.asarray(ind, int), c=c)
 
 
-def _projection(system, tr_fun, max_nodes):
+def _projection(system, tr_fun, max_nodes, keep=()):
     """What a Co-Simulation step needs to project onto the constraint manifold after every
     accepted step (the runtime's ``mbrt_project``, as the compiled engine does): the
     evaluation program (constraints and their Jacobian) with its parameter program and
@@ -393,7 +475,7 @@ def _projection(system, tr_fun, max_nodes):
     if not (system.topology.cut or any(e.kind == "joint" and not e.comp.tree_edge for e in system.topology.edges)):
         return none
     seg = coordinate_map(system)
-    tr = trace(system, max_nodes, program="eval")
+    tr = trace(system, max_nodes, program="eval", keep=keep)
     if (seg is None or tr.drives or tr.layout != tr_fun.layout
             or [i.name for i in tr.inputs] != [i.name for i in tr_fun.inputs]):
         return none
@@ -421,13 +503,13 @@ def _projection(system, tr_fun, max_nodes):
     return SimpleNamespace(c=c, enabled=True)
 
 
-def _output_program(system, tr_fun, max_nodes):
+def _output_program(system, tr_fun, max_nodes, keep=()):
     """The result columns the FMU computes as outputs (mbcomp's post-processing program: joint
     reactions, multipliers, body positions, velocities and orientations, energies, residuals):
     its C (with its parameter program and the quaternion of a rotation), the defines the core
     reads, and ``variables``: ``(name, index in the outputs)`` of every column, then every
     body's quaternion (the caller leaves out the states)."""
-    tr = trace(system, max_nodes, program="outputs", baumgarte=True, hidden=False)
+    tr = trace(system, max_nodes, program="outputs", baumgarte=True, hidden=False, keep=keep)
     ok = ("outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
           and [i.name for i in tr.inputs] == [i.name for i in tr_fun.inputs])
     if not ok:  # a drive the program does not hold, or a singular trace point: no outputs

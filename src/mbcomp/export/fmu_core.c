@@ -47,6 +47,9 @@
 #define VR_IN (VR_OUT + NOV)
 #define VR_START (VR_IN + NIN) /* the start values of [q, u]: parameters */
 #define VR_TOL (VR_START + NX)  /* the Co-Simulation integrator's relative tolerance: a parameter */
+#ifndef DEFAULT_TOL
+#define DEFAULT_TOL 1e-8 /* the export writes the model description's DefaultExperiment tolerance */
+#endif
 
 enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_STEP, M_TERMINATED, M_ERROR };
 
@@ -99,6 +102,8 @@ static void say(Inst *c, int error, const char *fmt, ...)
     c->log(c, error, msg);
 }
 
+#include "fmu_rules.c"
+
 static void mb_reset(Inst *c)
 {
     memcpy(c->p, P0, sizeof(double) * (NP > 0 ? NP : 0));
@@ -124,7 +129,7 @@ static void mb_reset(Inst *c)
     c->t = 0.0;
     c->alpha = ALPHA;
     c->beta = BETA;
-    c->rtol = 1e-8;
+    c->rtol = DEFAULT_TOL;
     c->dirty = 1;
     c->mode = M_INSTANTIATED;
 }
@@ -185,9 +190,11 @@ static int mb_refresh(Inst *c)
     if (!rc) rc = mbcomp_eval_params(c->p, c->h3);
 #endif
     if (rc) {
-        say(c, 1, "the parameter values %s -> export the model again with these values",
+        char changed[400];
+        mb_changed_parameters(c, changed, sizeof changed);
+        say(c, 1, "the parameter values %s%s%s -> export the model again with these values",
             rc == 1 ? "change a decision taken when the program was generated (a parameter guard)"
-                    : "give a non-finite value");
+                    : "give a non-finite value", changed[0] ? "; changed from the export: " : "", changed);
         c->mode = M_ERROR;
         return -1;
     }
@@ -209,7 +216,7 @@ static int mb_derivatives(Inst *c)
     }
     for (i = 0; i < NX; i++) {
         if (!isfinite(c->dy[i])) {
-            say(c, 1, "the derivative of state %d is not finite at t=%g", i, c->t);
+            say(c, 1, "the derivative of %s is not finite at t=%g", mb_name((unsigned)(VR_X + i)), c->t);
             return -1;
         }
     }
@@ -349,6 +356,12 @@ static int mb_set_start(Inst *c, int i, double v)
     int k;
     if (!isfinite(v)) { say(c, 1, "the start value of %s set to %g: not finite", YNAME[i], v); return -1; }
     c->y0[i] = v;
+    c->y[i] = v;  /* read back as set until the initialization closes the constraints */
+#if SELECT
+    if (i < NQ) c->x[i] = v;
+    for (k = 0; k < NI; k++)
+        if (NQ + c->ind[k] == i) c->x[NQ + k] = v;
+#endif
     c->set[i] = 1;
     if (i < NQ) {
         for (k = 0; k < QDIRN[i]; k++) c->pfree[QDIR[i] + k] = 0;
@@ -363,14 +376,20 @@ static int mb_set(Inst *c, unsigned vr, double v)
 {
     if (vr < VR_X) {
         if (c->mode != M_INSTANTIATED && c->mode != M_INIT) {
-            say(c, 1, "parameter %u is fixed after initialization", vr);
+            say(c, 1, "%s is a parameter fixed after initialization", mb_name(vr));
             return -1;
         }
+        if (mb_check_value(c, vr, v)) return -1;
         c->p[vr] = v;
         c->dirty = 1;
         return 0;
     }
-    if (vr < VR_DX && (c->mode == M_INSTANTIATED || c->mode == M_INIT)) {  /* a state's start value */
+    if (vr < VR_DX && c->mode != M_INSTANTIATED && c->mode != M_INIT) {
+        say(c, 1, "the state %s can be set only before ExitInitializationMode (then by SetContinuousStates)",
+            mb_name(vr));
+        return -1;
+    }
+    if (vr < VR_DX) {  /* a state's start value, set before the run: kept by the initialization */
         int k = (int)(vr - VR_X);
 #if SELECT
         if (!c->cs && k >= NQ) return mb_set_start(c, NQ + IND0[k - NQ], v);
@@ -394,24 +413,31 @@ static int mb_set(Inst *c, unsigned vr, double v)
     if (vr < VR_DX) { c->y[vr - VR_X] = v; return 0; }
 #endif
     if (vr == VR_TOL) {
-        if (!(v >= 1e-14 && v < 1.0)) { say(c, 1, "the tolerance %g is out of range (1e-14 .. 1)", v); return -1; }
+        if (c->mode != M_INSTANTIATED && c->mode != M_INIT) {
+            say(c, 1, "%s is a parameter fixed after initialization", mb_name(vr));
+            return -1;
+        }
+        if (!(v >= 1e-14 && v < 1.0)) { say(c, 1, "%s = %g is out of range (1e-14 .. 1)", mb_name(vr), v); return -1; }
         c->rtol = v;
         c->tol_set = 1;
         return 0;
     }
     if (vr >= VR_START && vr < VR_START + NX) {
         if (c->mode != M_INSTANTIATED && c->mode != M_INIT) {
-            say(c, 1, "start values are fixed after initialization");
+            say(c, 1, "%s is a parameter fixed after initialization", mb_name(vr));
             return -1;
         }
         return mb_set_start(c, (int)(vr - VR_START), v);
     }
     if (vr >= VR_IN && vr < VR_IN + NIN) {
-        if (!isfinite(v)) { say(c, 1, "input %u set to a non-finite value", vr - VR_IN); return -1; }
+        if (!isfinite(v)) { say(c, 1, "the input %s set to a non-finite value", mb_name(vr)); return -1; }
         c->d[2 + (vr - VR_IN)] = v;
         return 0;
     }
-    say(c, 1, "the variable with value reference %u cannot be set", vr);
+    if (vr < (unsigned)NNAMES)
+        say(c, 1, "%s cannot be set (a derivative, the time or an output: the FMU computes it)", mb_name(vr));
+    else
+        say(c, 1, "no variable has the value reference %u", vr);
     return -1;
 }
 
