@@ -258,8 +258,8 @@ def test_fmu_and_results_read_one_table():
 
     system = mbcomp.assemble(_swing())
     table = column_units(system)
-    assert _column_units(system) == {k: unit_exponents(v) for k, v in table.items()}
-    assert _column_units(system)["hinge.w.der"] == {"s": -2, "rad": 1}
+    assert _column_units(system) == {k: (unit_exponents(v), v) for k, v in table.items()}
+    assert _column_units(system)["hinge.w.der"] == ({"s": -2, "rad": 1}, "rad/s^2")
 
 
 # ------------------------------------------------------------------------------------------
