@@ -164,11 +164,14 @@ def build_description(ident):
 
 
 def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                       experiment=(1.0, 1e-12), state_units=(), starts=()):
+                       experiment=(1.0, 1e-12), state_units=(), starts=(), dependencies=None):
     """FMI 3.0's ``modelDescription.xml``: the parameters (value references ``0..NP-1``), the
     states and their derivatives, the time, the outputs, the inputs and the start values, in
     the order the generated C (``fmi3.c``) numbers them; ``kind`` is ``"me"``, ``"cs"`` or
-    ``"both"``. :func:`mbcomp.export.fmu.export_fmu` calls it with what it built."""
+    ``"both"``. ``dependencies``: ``(der, out)`` of :func:`mbcomp.export.derivatives.structure`
+    (known positions per state derivative and per output slot); given, the FMU declares its
+    directional and adjoint derivatives and the dependencies of its outputs and derivatives.
+    :func:`mbcomp.export.fmu.export_fmu` calls it with what it built."""
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, state_units)
     defs["s"] = {"s": 1}
@@ -200,34 +203,59 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
     rows += _start_rows3(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs)
     der = [npar + nx + k for k in range(nx)]
     outs = [vr_out + k for _, k in outputs]
+    vr_in = vr_out + inputs[1]
+    dep_der, dep_out, provides = _dependencies3(dependencies, nx, npar, vr_in, len(der), [k for _, k in outputs])
     interfaces = ""
     if kind in ("me", "both"):
-        interfaces += f'  <ModelExchange modelIdentifier="{ident}" needsCompletedIntegratorStep="true"/>\n'
+        interfaces += (f'  <ModelExchange modelIdentifier="{ident}" needsCompletedIntegratorStep="true"'
+                       f'{provides}/>\n')
     if kind in ("cs", "both"):
         interfaces += (f'  <CoSimulation modelIdentifier="{ident}" canHandleVariableCommunicationStepSize="true" '
-                       f'hasEventMode="false"/>\n')
+                       f'hasEventMode="false"{provides}/>\n')
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="3.0" modelName="{escape(name)}" instantiationToken="{guid}" '
             f'generationTool="mbcomp {_version()}" variableNamingConvention="structured">\n'
             + interfaces + _unit_definitions(defs) + _experiment(experiment)
             + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
-            + "".join(f'    <Output valueReference="{v}"/>\n' for v in outs)
-            + "".join(f'    <ContinuousStateDerivative valueReference="{v}"/>\n' for v in der)
+            + "".join(f'    <Output valueReference="{v}"{d}/>\n' for v, d in zip(outs, dep_out))
+            + "".join(f'    <ContinuousStateDerivative valueReference="{v}"{d}/>\n' for v, d in zip(der, dep_der))
             + "".join(f'    <InitialUnknown valueReference="{v}"/>\n' for v in outs + der)
             + '  </ModelStructure>\n</fmiModelDescription>\n')
 
 
-def _interface(tag, ident):
+def _dependencies_attr(known):
+    """``dependencies="..."`` of the knowns ``known`` (value references or indices)."""
+    return f' dependencies="{" ".join(str(k) for k in known)}"'
+
+
+def _dependencies3(dependencies, nx, npar, vr_in, n_der, slots):
+    """FMI 3.0's dependency attributes of the state derivatives and of the outputs (slots),
+    and the capability attributes; empty without ``dependencies``."""
+    if dependencies is None:
+        return [""] * n_der, [""] * len(slots), ""
+    der, out = dependencies
+
+    def vr(pos):
+        return npar + pos if pos < nx else vr_in + pos - nx
+
+    return ([_dependencies_attr(vr(p) for p in d) for d in der], [_dependencies_attr(vr(p) for p in out[k])
+                                                                   for k in slots],
+            ' providesDirectionalDerivatives="true" providesAdjointDerivatives="true"')
+
+
+def _interface(tag, ident, derivatives=False):
     files = "".join(f'      <File name="{f}"/>\n' for f in (f"{ident}.c",) + RUNTIME_C)
     extra = ' canHandleVariableCommunicationStepSize="true"' if tag == "CoSimulation" else ""
+    extra += ' providesDirectionalDerivative="true"' if derivatives else ""
     return (f'  <{tag} modelIdentifier="{ident}" canNotUseMemoryManagementFunctions="true"{extra}>\n'
             f'    <SourceFiles>\n{files}    </SourceFiles>\n  </{tag}>\n')
 
 
 def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                       experiment=(1.0, 1e-12), state_units=(), starts=()):
+                       experiment=(1.0, 1e-12), state_units=(), starts=(), dependencies=None):
     """FMI 2.0's ``modelDescription.xml``: the variables of :func:`model_description3` (the
-    same value references; the time is no variable in 2.0) with 2.0's model structure."""
+    same value references; the time is no variable in 2.0) with 2.0's model structure
+    (``dependencies`` as there, as 1-based indices of the variables)."""
     nx, npar = len(states), len(pv)
     upar, usta, uder, defs = _units(system, layout, state_units)
 
@@ -262,14 +290,23 @@ def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid
     der = [npar + nx + k + 1 for k in range(nx)]
     outs = [npar + 2 * nx + j + 1 for j in range(len(outputs))]  # 1-based indices among the variables
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in sorted(outs + der))
-    out_list = "".join(f'      <Unknown index="{i}"/>\n' for i in outs)
+    dep_der, dep_out = [""] * nx, [""] * len(outs)
+    if dependencies is not None:
+        def index(pos):  # a state's or an input's 1-based index among the variables
+            return npar + pos + 1 if pos < nx else npar + 2 * nx + len(outputs) + pos - nx + 1
+
+        dep_der = [_dependencies_attr(index(p) for p in d) for d in dependencies[0]]
+        dep_out = [_dependencies_attr(index(p) for p in dependencies[1][k]) for _, k in outputs]
+    out_list = "".join(f'      <Unknown index="{i}"{d}/>\n' for i, d in zip(outs, dep_out))
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
             f'generationTool="mbcomp {_version()}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
-            + "".join(_interface(tag, ident) for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
+            + "".join(_interface(tag, ident, dependencies is not None)
+                      for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
                       if kind in (k, "both")) + _unit_definitions(defs) + _experiment(experiment)
             + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
             + '  <ModelStructure>\n' + (f'    <Outputs>\n{out_list}    </Outputs>\n' if outs else '')
-            + '    <Derivatives>\n' + "\n".join(f'      <Unknown index="{i}"/>' for i in der) + '\n    </Derivatives>\n'
+            + '    <Derivatives>\n' + "\n".join(f'      <Unknown index="{i}"{d}/>' for i, d in zip(der, dep_der))
+            + '\n    </Derivatives>\n'
             f'    <InitialUnknowns>\n{unknowns}\n    </InitialUnknowns>\n  </ModelStructure>\n'
             f'</fmiModelDescription>\n')

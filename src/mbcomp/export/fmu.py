@@ -175,13 +175,15 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
+    deriv = _derivatives(system, tr, out_prog, mech, select)
     describe = model_description2 if fmi == "2.0" else model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
-                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0)
+                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0,
+                   dependencies=deriv.structure)
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
-    model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi)
+    model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi, deriv.c)
     _build(path, ident, fmi, cc, model_c, xml)
     outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
     return dict(states=states, parameters=pnames, outputs=outs,
@@ -190,7 +192,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
                 operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
 
 
-def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
+def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi, deriv_c=""):
     """The FMU's model.c: sizes and start values as defines and tables, the generated
     programs (``fun``: the right-hand side's trace, program, C parts and work size; outputs,
     projection, state selection), then the standard's functions (``fmi2.c``/``fmi3.c``)."""
@@ -202,7 +204,7 @@ def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
             + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
             + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, tr.layout, pv, y0))
             + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
-            + f'\n#include "fmi{fmi[0]}.c"\n')
+            + deriv_c + f'\n#include "fmi{fmi[0]}.c"\n')
 
 
 def _check_request(model, fmi, kind, stop_time, tolerance, outputs):
@@ -275,7 +277,7 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", f"fmi{fmi[0]}.c"):
+        for f in ("fmu_core.c", "fmu_derivatives.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)
@@ -292,6 +294,20 @@ def _build(path, ident, fmi, cc, model_c, xml):
             for f in sorted(root.rglob("*")):
                 if f.is_file():
                     z.write(f, f.relative_to(root).as_posix())
+
+
+def _derivatives(system, tr, out_prog, mech, select):
+    """The exact derivatives' product programs (C) and the ``<ModelStructure>`` dependencies
+    (:mod:`mbcomp.export.derivatives`): ``structure`` is ``(der, out)``, known positions per
+    state derivative and per output slot."""
+    from .derivatives import derivative_programs, structure
+
+    ev, res = (mech.tr, mech.res) if select.enabled else (None, [])
+    nin = len(tr.inputs)
+    c = derivative_programs(tr, out_prog.tr, ev, res, system.nq, system.nu, nin)
+    st = structure(tr, out_prog.tr, ev, res, system.nq, system.nu, nin, select.enabled, out_prog.n_cols,
+                   out_prog.n_rot)
+    return SimpleNamespace(c=c, structure=(st.der, st.out))
 
 
 def _chosen(variables, patterns):
@@ -347,7 +363,7 @@ def _projection(system, tr_fun, max_nodes):
     from ..codegen.tracer import FIELDS
     from ..assembly.manifold import ACCEPT_FACTOR, POSITION_TOL
 
-    none = SimpleNamespace(c="#define MECH 0\n", enabled=False)
+    none = SimpleNamespace(c="#define MECH 0\n", enabled=False, tr=None, res=[])
     if not (system.topology.cut or any(e.kind == "joint" and not e.comp.tree_edge for e in system.topology.edges)):
         return none
     seg = coordinate_map(system)
@@ -376,7 +392,9 @@ def _projection(system, tr_fun, max_nodes):
          + "".join(f"#define OFF_{k.upper()} {offs[k]}\n" for k in ("M", "f", "Phi", "Phid", "C", "cb", "B", "Bb", "Psi"))
          + _c_ints("MECH_ROWS", rows) + _c_ints("MECH_SEG", seg.ravel())
          + "\n".join(parts) + "\n" + prog.c_params("mbcomp_eval_params"))
-    return SimpleNamespace(c=c, enabled=True)
+    ev = tr.groups["eval"]
+    res = [ev[offs["Phid"] + int(r)] for r in rows] + [ev[offs["Psi"] + r] for r in range(mn)]
+    return SimpleNamespace(c=c, enabled=True, tr=tr, res=res)
 
 
 def _output_program(system, tr_fun, max_nodes):
@@ -389,7 +407,7 @@ def _output_program(system, tr_fun, max_nodes):
     ok = ("outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
           and [i.name for i in tr.inputs] == [i.name for i in tr_fun.inputs])
     if not ok:  # a drive the program does not hold, or a singular trace point: no outputs
-        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0)
+        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0, tr=None, n_cols=0, n_rot=0)
     prog = Program(tr.graph, {"outputs": tr.groups["outputs"]}, guard_groups={"outputs": tr.guard_groups["outputs"]})
     parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", chunk, n_parts=lambda n: 1)
     cols, rots = list(tr.output_names), list(tr.rotation_paths)
@@ -398,7 +416,8 @@ def _output_program(system, tr_fun, max_nodes):
     defines = (f"#define NCOL {len(cols)}\n#define NROT {len(rots)}\n#define NH2 {max(len(prog.hoisted), 1)}\n"
                f"#define NW2 {max(n_work, 1)}\n")
     return SimpleNamespace(c=defines + "\n".join(parts) + "\n" + prog.c_params("mbcomp_outputs_params") + QUAT_C,
-                           variables=variables, n_ops=prog.n_ops("outputs"), n_slots=len(cols) + 4 * len(rots))
+                           variables=variables, n_ops=prog.n_ops("outputs"), n_slots=len(cols) + 4 * len(rots),
+                           tr=tr, n_cols=len(cols), n_rot=len(rots))
 
 
 #: the output program of a model whose outputs cannot be traced: none

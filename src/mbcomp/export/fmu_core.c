@@ -612,3 +612,5 @@ static int mb_update(Inst *c, int *changed)
 #endif
     return 0;
 }
+
+#include "fmu_derivatives.c" /* exact directional and adjoint derivatives */
