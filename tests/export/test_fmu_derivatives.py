@@ -272,3 +272,18 @@ def test_bad_calls_are_errors_naming_the_reference(fmu_file, fmi):
         with pytest.raises(FMICallException):
             f.fmu.getAdjointDerivative(f.ders[:1], f.knowns, [1.0])
         assert any("seed and" in m and "sensitivity values" in m for m in f.log), f.log
+
+
+def test_export_without_derivatives(tmp_path):
+    """``derivatives=False``: no capability or dependencies declared, and the derivative functions
+    are errors (the FMU is otherwise the same and still valid)."""
+    path = tmp_path / "plain.fmu"
+    assert export_fmu(pendulum_with_input(), path, derivatives=False)["derivatives"] is False
+    assert validate_fmu(str(path)) == []
+    with zipfile.ZipFile(path) as z:
+        text = z.read("modelDescription.xml").decode()
+    assert "providesDirectionalDerivatives" not in text and "dependencies=" not in text
+    f = Opened(path, "3.0")
+    with pytest.raises(FMICallException):
+        f.forward([1.0], unknowns=f.ders[:1], knowns=f.states[:1])
+    assert any("export it with derivatives=True" in m for m in f.log), f.log

@@ -34,7 +34,10 @@ What the FMU holds (see docs/design/fmu.md):
 * the start values of every coordinate and speed as parameters ``start.<name>``, projected
   onto the constraints at initialization when changed.
 
-Not yet: units of the outputs; FMU states and directional derivatives.
+* exact directional and adjoint derivatives (states and inputs as knowns) and the
+  ``<ModelStructure>`` dependencies (:mod:`mbcomp.export.derivatives`, ``fmu_derivatives.c``).
+
+Not yet: units of the outputs; FMU states; derivatives with respect to parameters.
 
 Examples
 --------
@@ -114,7 +117,7 @@ def _refuse_modes(system):
 
 
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,
-               tolerance=1e-12, max_nodes=3_000_000):
+               tolerance=1e-12, max_nodes=3_000_000, derivatives=True):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
 
     Parameters
@@ -139,12 +142,16 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
         The FMU's default experiment: end time (s) and the relative tolerance an importer's
         integrator is asked for (FMPy's CVODE on the slider-crank, 10 s: 3.7e-4 rad off at
         1e-8, 1.4e-7 at 1e-12; hence the default).
+    derivatives : bool
+        Carry the exact directional and adjoint derivatives and declare the dependencies
+        (default); False builds a smaller FMU faster (Andrews: 1.6 s and 166 kB instead of
+        4.7 s and 478 kB, the C compiler's time) whose derivative functions return an error.
 
     Returns
     -------
     dict
         ``states``, ``parameters``, ``outputs``, ``inputs`` (names), ``guid`` (the
-        instantiation token), ``size`` (bytes), ``operations`` (of the programs),
+        instantiation token), ``size`` (bytes), ``operations`` (of the programs), ``derivatives``,
         ``compiler``, ``model_identifier``.
 
     Raises
@@ -175,7 +182,8 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
-    deriv = _derivatives(system, tr, out_prog, mech, select)
+    deriv = (_derivatives(system, tr, out_prog, mech, select) if derivatives
+             else SimpleNamespace(c="", structure=None))
     describe = model_description2 if fmi == "2.0" else model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
@@ -188,7 +196,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
     return dict(states=states, parameters=pnames, outputs=outs,
                 inputs=[i.name for i in tr.inputs], projects=mech.enabled and kind != "me",
-                selects_states=select.enabled, guid=guid, size=os.path.getsize(path),
+                selects_states=select.enabled, derivatives=bool(derivatives), guid=guid, size=os.path.getsize(path),
                 operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
 
 

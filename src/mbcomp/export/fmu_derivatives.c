@@ -3,7 +3,8 @@
  * product programs (mbcomp.export.derivatives): mbd_fun_jvp/_vjp (the Lagrange right-hand side),
  * mbd_out_jvp/_vjp (the output program) and, with D'Alembert's states (SELECT), mbd_res_jvp/_vjp
  * (the velocity residual [dPhi/dt[rows]; Psi] of the constraints), each with its parameter
- * program (_params) and sizes (_NH, _NW). A product program differentiates with respect to
+ * program (_params) and sizes (_NH, _NW), and MBD_DERIVATIVES (without it, exported with
+ * derivatives=False, the derivative functions log and fail). A product program differentiates with respect to
  * [q, u, inputs] (NX + NIN numbers):
  *   jvp: d = [alpha, beta, inputs, dq, du, dinputs, eps = 0], out = the program's outputs' change
  *   vjp: d = [alpha, beta, inputs, weights (one per output)], out = the weights' gradient.
@@ -18,6 +19,7 @@
  * D'Alembert's projection and the KKT solve give the same accelerations on the constraints).
  * The quaternion outputs are differentiated through mbcomp_quat's own branch (mbd_quat_dual). */
 
+#ifdef MBD_DERIVATIVES
 #define MBD_NY (NX + NIN) /* what the product programs differentiate with respect to */
 #ifndef MBD_NRES
 #define MBD_NRES 0
@@ -363,3 +365,13 @@ static int mb_derivative(Inst *c, int adjoint, const unsigned *unk, size_t nunk,
     }
     return adjoint ? mb_adjoint(c, unk, nunk, kn, nkn, seed, sens) : mb_directional(c, unk, nunk, kn, nkn, seed, sens);
 }
+#else /* exported with derivatives=False: no product programs */
+static int mb_derivative(Inst *c, int adjoint, const unsigned *unk, size_t nunk, const unsigned *kn, size_t nkn,
+                         const double *seed, size_t nseed, double *sens, size_t nsens)
+{
+    (void)unk; (void)nunk; (void)kn; (void)nkn; (void)seed; (void)nseed; (void)sens; (void)nsens;
+    say(c, 1, "%s derivatives are not in this FMU: export it with derivatives=True",
+        adjoint ? "adjoint" : "directional");
+    return -1;
+}
+#endif
