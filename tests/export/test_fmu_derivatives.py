@@ -38,15 +38,15 @@ from mbcomp.export import export_fmu  # noqa: E402
 G, L, MASS = 9.81, 1.0, 2.0
 
 
-def pendulum_with_input():
+def pendulum_with_input(tau=None):
     """A 2 kg bob on a 1 m rod about a hinge (gravity 9.81 m/s^2 along -y), driven by the input
-    torque ``tau``: ``m L^2 w' = tau - m g L sin(phi)``."""
+    torque ``tau`` (or the law ``tau``): ``m L^2 w' = tau - m g L sin(phi)``."""
     m = mbcomp.Model()
     w = m.add("world", World())
     j = m.add("j", Revolute(phi0=0.5))
     rod = m.add("rod", FixedTranslation(r=(0, -L, 0)))
     bob = m.add("bob", PointMass(m=MASS))
-    motor = m.add("motor", Torque(tau=mbcomp.Input("tau", unit="N m", start=0.3)))
+    motor = m.add("motor", Torque(tau=mbcomp.Input("tau", unit="N m", start=0.3) if tau is None else tau))
     m.connect(w.frame_b, j.frame_a)
     m.connect(j.frame_b, rod.frame_a)
     m.connect(rod.frame_b, bob.frame_a)
@@ -287,3 +287,23 @@ def test_export_without_derivatives(tmp_path):
     with pytest.raises(FMICallException):
         f.forward([1.0], unknowns=f.ders[:1], knowns=f.states[:1])
     assert any("export it with derivatives=True" in m for m in f.log), f.log
+
+
+def test_time_dependent_unknowns_declare_all_knowns(tmp_path):
+    """A law of the time (the motor's ``tau(t, phi, w)``): the time is a known FMI 2.0 has no
+    variable for, so ``der(j.w)`` and the outputs that depend on the time declare no
+    ``dependencies`` ("all knowns"); ``der(j.phi) = w`` keeps its one; the derivatives still
+    match the differences, ``dw'/dw = -0.4 phi / (m L^2)`` included."""
+    m = pendulum_with_input(lambda t, phi, w: 0.3 * np.sin(2.0 * t) - 0.4 * w * phi)
+    for fmi in ("3.0", "2.0"):
+        path = tmp_path / f"timed{fmi[0]}.fmu"
+        export_fmu(m, path, fmi=fmi)
+        assert validate_fmu(str(path)) == []
+        f = Opened(path, fmi)
+        deps = {u.variable.name: u.dependencies for u in f.md.derivatives}
+        assert deps["der(j.w)"] is None and [d.name for d in deps["der(j.phi)"]] == ["j.w"]
+        J, Jc = f.jacobian(), f.central()
+        assert row_relative(J, Jc) < 1e-7
+        phi = f.get([f.vr["j.phi"]])[0]
+        dw = f.forward([1.0], unknowns=[f.vr["der(j.w)"]], knowns=[f.vr["j.w"]])[0]
+        assert abs(dw + 0.4 * phi / (MASS * L * L)) < 1e-12, dw

@@ -50,13 +50,14 @@ __all__ = ["cone_inputs", "derivative_programs", "structure"]
 
 def cone_inputs(graph, outputs):
     """Per output node: the set of ``(kind, index)`` of the input nodes (``"q"``, ``"u"``,
-    ``"d"``; parameters ``"p"`` left out) it depends on (an empty set for a number)."""
+    ``"d"``, the time ``"t"``; parameters ``"p"`` left out) it depends on (an empty set for a
+    number)."""
     keys, out = graph.keys, []
     for o in outputs:
         if type(o) is not Sym:
             out.append(set())
             continue
-        out.append({keys[i][1:] for i in cone(keys, [o.i]) if keys[i][0] == "in" and keys[i][1] in ("q", "u", "d")})
+        out.append({keys[i][1:] for i in cone(keys, [o.i]) if keys[i][0] == "in" and keys[i][1] in ("q", "u", "d", "t")})
     return out
 
 
@@ -159,6 +160,15 @@ def derivative_programs(tr_fun, tr_out, tr_eval, res_nodes, nq, nu, nin):
     return "#define MBD_DERIVATIVES 1\n" + c
 
 
+def _union(sets):
+    """The union of known-position sets, None (all knowns) if one of them is None."""
+    return None if any(s is None for s in sets) else set().union(*sets)
+
+
+def _sorted(s):
+    return None if s is None else sorted(s)
+
+
 def structure(tr_fun, tr_out, tr_eval, res_nodes, nq, nu, nin, select, n_cols, n_rot):
     """The dependencies of the unknowns on the knowns, as positions: ``(der, out)`` with
     ``der[k]`` the sorted known positions the derivative of state ``k`` depends on and
@@ -170,7 +180,9 @@ def structure(tr_fun, tr_out, tr_eval, res_nodes, nq, nu, nin, select, n_cols, n
     the nodes. With D'Alembert's states ``[q, v]`` (``select``: ``v`` any ``nu - m`` of the
     speeds, the partition changing at events), a speed in a cone stands for every ``v`` and
     for what the dependent speeds depend on (the residual's coordinates and inputs), and
-    every ``der(v[k])`` has the union of the speeds' rows' dependencies.
+    every ``der(v[k])`` has the union of the speeds' rows' dependencies. An unknown that
+    depends on the time has None (no ``dependencies`` attribute: "on all knowns"; FMI 2.0's
+    time is no variable to name).
     """
     ni = len(res_nodes) if select else 0
     nx = nq + (nu - ni if select else nu)
@@ -185,6 +197,8 @@ def structure(tr_fun, tr_out, tr_eval, res_nodes, nq, nu, nin, select, n_cols, n
         dep_speeds |= set(range(nq, nx))
 
     def known(s):
+        if ("t", 0) in s:  # the time is a known FMI 2.0 has no variable for: "depends on all"
+            return None
         out = set()
         for k, j in s:
             if k == "d" and j < 2:
@@ -197,15 +211,14 @@ def structure(tr_fun, tr_out, tr_eval, res_nodes, nq, nu, nin, select, n_cols, n
 
     fun = [known(s) for s in cone_inputs(tr_fun.graph, list(tr_fun.groups["fun"]))]
     if select:
-        speeds = set().union(*fun[nq:])
-        der = [sorted(fun[k]) for k in range(nq)] + [sorted(speeds)] * (nx - nq)
+        speeds = _union(fun[nq:])
+        der = [_sorted(fun[k]) for k in range(nq)] + [_sorted(speeds)] * (nx - nq)
     else:
-        der = [sorted(f) for f in fun]
+        der = [_sorted(f) for f in fun]
     out = []
     if tr_out is not None:
         rows = [known(s) for s in cone_inputs(tr_out.graph, list(tr_out.groups["outputs"]))]
-        out = [sorted(rows[k]) for k in range(n_cols)]
+        out = [_sorted(rows[k]) for k in range(n_cols)]
         for r in range(n_rot):
-            block = set().union(*rows[n_cols + 9 * r: n_cols + 9 * r + 9])
-            out += [sorted(block)] * 4
+            out += [_sorted(_union(rows[n_cols + 9 * r: n_cols + 9 * r + 9]))] * 4
     return SimpleNamespace(der=der, out=out, nx=nx)

@@ -224,8 +224,9 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
 
 
 def _dependencies_attr(known):
-    """``dependencies="..."`` of the knowns ``known`` (value references or indices)."""
-    return f' dependencies="{" ".join(str(k) for k in known)}"'
+    """``dependencies="..."`` of the knowns ``known`` (value references or indices); none for
+    None (the unknown depends on every known)."""
+    return "" if known is None else f' dependencies="{" ".join(str(k) for k in known)}"'
 
 
 def _dependencies3(dependencies, nx, npar, vr_in, n_der, slots):
@@ -238,8 +239,10 @@ def _dependencies3(dependencies, nx, npar, vr_in, n_der, slots):
     def vr(pos):
         return npar + pos if pos < nx else vr_in + pos - nx
 
-    return ([_dependencies_attr(vr(p) for p in d) for d in der], [_dependencies_attr(vr(p) for p in out[k])
-                                                                   for k in slots],
+    def attr(d):
+        return _dependencies_attr(None if d is None else [vr(p) for p in d])
+
+    return ([attr(d) for d in der], [attr(out[k]) for k in slots],
             ' providesDirectionalDerivatives="true" providesAdjointDerivatives="true"')
 
 
@@ -295,8 +298,11 @@ def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid
         def index(pos):  # a state's or an input's 1-based index among the variables
             return npar + pos + 1 if pos < nx else npar + 2 * nx + len(outputs) + pos - nx + 1
 
-        dep_der = [_dependencies_attr(index(p) for p in d) for d in dependencies[0]]
-        dep_out = [_dependencies_attr(index(p) for p in dependencies[1][k]) for _, k in outputs]
+        def attr(d):
+            return _dependencies_attr(None if d is None else [index(p) for p in d])
+
+        dep_der = [attr(d) for d in dependencies[0]]
+        dep_out = [attr(dependencies[1][k]) for _, k in outputs]
     out_list = "".join(f'      <Unknown index="{i}"{d}/>\n' for i, d in zip(outs, dep_out))
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
