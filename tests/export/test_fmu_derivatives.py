@@ -336,3 +336,19 @@ def test_derivatives_under_asan_ubsan(fmu_file, tmp_path):
                          env={"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
     assert run.returncode == 0, run.stdout + run.stderr[-3000:]
     assert run.stdout.count("bad calls refused: 5 of 5") == 2 and "runtime error" not in run.stderr, run.stdout
+
+
+def test_quaternion_at_its_sign_flip_is_refused(tmp_path):
+    """The spatial slider-crank starts with the rod turned half a turn: ``rod.Q.w`` is 6e-17, where
+    the output quaternion (scalar part >= 0) changes sign, so ``rod.Q.*`` have no derivative (an
+    error naming the output; central differences straddle a jump there); every other unknown
+    still matches the differences."""
+    path = tmp_path / "spatial.fmu"
+    export_fmu(load_model("models/spatial_slider_crank.py").build(), path)
+    f = Opened(path, "3.0")
+    assert abs(f.get([f.vr["rod.Q.w"]])[0]) < 1e-12
+    with pytest.raises(FMICallException):
+        f.forward([1.0], unknowns=[f.vr["rod.Q.x"]], knowns=f.states[:1])
+    assert any(f"output {f.vr['rod.Q.x']} is an orientation quaternion" in m for m in f.log), f.log
+    f.unknowns = [u for u in f.unknowns if u not in {f.vr[f"rod.Q.{c}"] for c in "wxyz"}]
+    assert row_relative(f.jacobian(), f.central()) < 1e-7

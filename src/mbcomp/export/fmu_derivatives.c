@@ -21,6 +21,8 @@
 
 #ifdef MBD_DERIVATIVES
 #define MBD_NY (NX + NIN) /* what the product programs differentiate with respect to */
+/* a quaternion output whose scalar part is this close to 0 is at its sign flip: no derivative */
+#define MBD_QUAT_FLIP 1e-12
 #ifndef MBD_NRES
 #define MBD_NRES 0
 #endif
@@ -202,6 +204,14 @@ static int mbd_prepare(Inst *c, const unsigned *unk, size_t nunk, const unsigned
     }
 #endif
     if ((*need & 2) && mb_outputs(c)) return -1;
+    for (i = 0; i < nunk; i++) { /* a quaternion whose scalar part is ~0: its sign flips there (w >= 0) */
+        int slot = pu[i] - NXS;
+        if (slot >= NCOL && fabs(c->ov[NCOL + 4 * ((slot - NCOL) / 4)]) <= MBD_QUAT_FLIP) {
+            say(c, 1, "output %u is an orientation quaternion whose scalar part is %g at t=%g: its sign flips here "
+                "(w >= 0), so it has no derivative", unk[i], c->ov[NCOL + 4 * ((slot - NCOL) / 4)], c->t);
+            return -1;
+        }
+    }
     return 0;
 }
 
