@@ -30,7 +30,12 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 HARNESS = r"""
 #include MODEL_C
 #include <time.h>
-static double now(void) { struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts); return ts.tv_sec + 1e-9 * ts.tv_nsec; }
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
 int main(void)
 {
     fmi3Instance c = fmi3InstantiateModelExchange("b", GUID, "", 0, 0, NULL, NULL);

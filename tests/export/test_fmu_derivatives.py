@@ -5,7 +5,8 @@ and adjoint programs, and the ``<ModelStructure>`` dependencies.
 Checked through FMPy against the FMU's own values: every column of the directional
 derivative (unit seeds) against central differences of the FMU's derivatives and outputs
 (Richardson-extrapolated; 1e-7 relative to the row's largest entry, or to 1e-3 of the
-Jacobian's largest for rows that are rounding noise; measured <= 9e-9, globally <= 2e-10); the adjoint identity ``<w, J v> = <J^T w, v>``
+Jacobian's largest for rows that are rounding noise; measured <= 9e-9, globally <= 2e-10);
+the adjoint identity ``<w, J v> = <J^T w, v>``
 (1e-12 of ``|w|^T |J| |v|``) and every row of the adjoint against the forward Jacobian; a pair
 the model description declares independent has derivative 0.0 exactly; closed forms for the
 pendulum (``dw'/dphi = -g cos(phi) / L``, ``dw'/dtau = 1/(m L^2)``). Models: the pendulum

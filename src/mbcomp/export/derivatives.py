@@ -45,7 +45,7 @@ from ..codegen.replay import replay
 from ..codegen.tangent import cone, tangent
 from ..codegen.toolchain import chunk
 
-__all__ = ["cone_inputs", "derivative_programs", "structure"]
+__all__ = ["NO_DERIVATIVE", "cone_inputs", "derivative_programs", "no_derivative", "structure"]
 
 
 def cone_inputs(graph, outputs):
@@ -57,7 +57,8 @@ def cone_inputs(graph, outputs):
         if type(o) is not Sym:
             out.append(set())
             continue
-        out.append({keys[i][1:] for i in cone(keys, [o.i]) if keys[i][0] == "in" and keys[i][1] in ("q", "u", "d", "t")})
+        out.append({keys[i][1:] for i in cone(keys, [o.i])
+                    if keys[i][0] == "in" and keys[i][1] in ("q", "u", "d", "t")})
     return out
 
 

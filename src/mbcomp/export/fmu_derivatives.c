@@ -123,11 +123,12 @@ static void mbd_quat_dual(const double *R, const double *dR, double *Q, double *
         MBD_PAIR(1, 3, +, p01, dp01);
         MBD_PAIR(2, 6, +, p02, dp02);
         MBD_PAIR(5, 7, +, p12, dp12);
-        switch (k) {
-        case 0: q[0] = big; q[1] = s21; q[2] = s02; q[3] = s10; dq[0] = dbig; dq[1] = ds21; dq[2] = ds02; dq[3] = ds10; break;
-        case 1: q[0] = s21; q[1] = big; q[2] = p01; q[3] = p02; dq[0] = ds21; dq[1] = dbig; dq[2] = dp01; dq[3] = dp02; break;
-        case 2: q[0] = s02; q[1] = p01; q[2] = big; q[3] = p12; dq[0] = ds02; dq[1] = dp01; dq[2] = dbig; dq[3] = dp12; break;
-        default: q[0] = s10; q[1] = p02; q[2] = p12; q[3] = big; dq[0] = ds10; dq[1] = dp02; dq[2] = dp12; dq[3] = dbig; break;
+        const double v[4][4] = {{big, s21, s02, s10}, {s21, big, p01, p02}, {s02, p01, big, p12}, {s10, p02, p12, big}};
+        const double dv[4][4] = {{dbig, ds21, ds02, ds10}, {ds21, dbig, dp01, dp02}, {ds02, dp01, dbig, dp12},
+                                 {ds10, dp02, dp12, dbig}};
+        for (j = 0; j < 4; ++j) { /* mbcomp_quat's switch on k, row by row */
+            q[j] = v[k][j];
+            dq[j] = dv[k][j];
         }
     }
 #undef MBD_PAIR
