@@ -251,12 +251,16 @@ def build_description(ident):
 
 
 def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                       experiment=(1.0, 1e-12), state_units=(), starts=(), state_outputs=(), nominals=None):
+                       experiment=(1.0, 1e-12), state_units=(), starts=(), state_outputs=(), nominals=None,
+                       dependencies=None):
     """FMI 3.0's ``modelDescription.xml``: the parameters (value references ``0..NP-1``), the
     states and their derivatives, the time, the outputs, the inputs and the start values, in
     the order the generated C (``fmi3.c``) numbers them; ``kind`` is ``"me"``, ``"cs"`` or
     ``"both"``; ``state_outputs``: the indices of the states that are outputs too (the joint
-    coordinates and speeds), ``nominals``: the states' nominal values.
+    coordinates and speeds), ``nominals``: the states' nominal values. ``dependencies``: ``(der,
+    out)`` of :func:`mbcomp.export.derivatives.structure` (known positions per state derivative
+    and per output slot); given, the FMU declares its directional and adjoint derivatives and the
+    dependencies of its outputs and derivatives (a state that is an output depends on itself).
     :func:`mbcomp.export.fmu.export_fmu` calls it with what it built."""
     nx, npar = len(states), len(pv)
     souts = sorted(state_outputs)
@@ -295,34 +299,65 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
     rows += _start_rows3(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs, experiment[1])
     der = [npar + nx + k for k in range(nx)]
     outs = [vr_out + k for _, k in outputs]
+    vr_in = vr_out + inputs[1]
+    dep_der, dep_out, provides = _dependencies3(dependencies, nx, npar, vr_in, len(der), [k for _, k in outputs])
     interfaces = ""
     if kind in ("me", "both"):
-        interfaces += f'  <ModelExchange modelIdentifier="{ident}" needsCompletedIntegratorStep="true"{_STATES}/>\n'
+        interfaces += (f'  <ModelExchange modelIdentifier="{ident}" needsCompletedIntegratorStep="true"'
+                       f'{_STATES}{provides}/>\n')
     if kind in ("cs", "both"):
         interfaces += (f'  <CoSimulation modelIdentifier="{ident}" canHandleVariableCommunicationStepSize="true" '
-                       f'hasEventMode="false"{_STATES}/>\n')
+                       f'hasEventMode="false"{_STATES}{provides}/>\n')
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="3.0" modelName="{escape(name)}" instantiationToken="{guid}" '
             f'generationTool="mbcomp {_version()}" variableNamingConvention="structured">\n'
             + interfaces + _unit_definitions(defs) + _experiment(experiment)
             + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n  <ModelStructure>\n'
-            + "".join(f'    <Output valueReference="{v}"/>\n' for v in [npar + k for k in souts] + outs)
-            + "".join(f'    <ContinuousStateDerivative valueReference="{v}"/>\n' for v in der)
+            + "".join(f'    <Output valueReference="{npar + k}"{_dependencies_attr([npar + k]) if provides else ""}/>\n'
+                      for k in souts)
+            + "".join(f'    <Output valueReference="{v}"{d}/>\n' for v, d in zip(outs, dep_out))
+            + "".join(f'    <ContinuousStateDerivative valueReference="{v}"{d}/>\n' for v, d in zip(der, dep_der))
             + "".join(f'    <InitialUnknown valueReference="{v}"/>\n' for v in outs + der)
             + '  </ModelStructure>\n</fmiModelDescription>\n')
 
 
-def _interface(tag, ident):
+def _dependencies_attr(known):
+    """``dependencies="..."`` of the knowns ``known`` (value references or indices); none for
+    None (the unknown depends on every known)."""
+    return "" if known is None else f' dependencies="{" ".join(str(k) for k in known)}"'
+
+
+def _dependencies3(dependencies, nx, npar, vr_in, n_der, slots):
+    """FMI 3.0's dependency attributes of the state derivatives and of the outputs (slots),
+    and the capability attributes; empty without ``dependencies``."""
+    if dependencies is None:
+        return [""] * n_der, [""] * len(slots), ""
+    der, out = dependencies
+
+    def vr(pos):
+        return npar + pos if pos < nx else vr_in + pos - nx
+
+    def attr(d):
+        return _dependencies_attr(None if d is None else [vr(p) for p in d])
+
+    return ([attr(d) for d in der], [attr(out[k]) for k in slots],
+            ' providesDirectionalDerivatives="true" providesAdjointDerivatives="true"')
+
+
+def _interface(tag, ident, derivatives=False):
     files = "".join(f'      <File name="{f}"/>\n' for f in (f"{ident}.c",) + RUNTIME_C)
     extra = ' canHandleVariableCommunicationStepSize="true"' if tag == "CoSimulation" else ""
+    extra += ' providesDirectionalDerivative="true"' if derivatives else ""
     return (f'  <{tag} modelIdentifier="{ident}" canNotUseMemoryManagementFunctions="true"{_STATES2}{extra}>\n'
             f'    <SourceFiles>\n{files}    </SourceFiles>\n  </{tag}>\n')
 
 
 def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
-                       experiment=(1.0, 1e-12), state_units=(), starts=(), state_outputs=(), nominals=None):
+                       experiment=(1.0, 1e-12), state_units=(), starts=(), state_outputs=(), nominals=None,
+                       dependencies=None):
     """FMI 2.0's ``modelDescription.xml``: the variables of :func:`model_description3` (the
-    same value references; the time is no variable in 2.0) with 2.0's model structure."""
+    same value references; the time is no variable in 2.0) with 2.0's model structure
+    (``dependencies`` as there, as 1-based indices of the variables)."""
     nx, npar = len(states), len(pv)
     souts = sorted(state_outputs)
     nominal = [f' nominal="{float(v)!r}"' for v in nominals] if nominals is not None else [""] * nx
@@ -361,14 +396,28 @@ def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid
     der = [npar + nx + k + 1 for k in range(nx)]
     outs = [npar + 2 * nx + j + 1 for j in range(len(outputs))]  # 1-based indices among the variables
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in sorted(outs + der))
-    out_list = "".join(f'      <Unknown index="{i}"/>\n' for i in [first_state + k for k in souts] + outs)
+    dep_der, dep_out = [""] * nx, [""] * len(outs)
+    if dependencies is not None:
+        def index(pos):  # a state's or an input's 1-based index among the variables
+            return npar + pos + 1 if pos < nx else npar + 2 * nx + len(outputs) + pos - nx + 1
+
+        def attr(d):
+            return _dependencies_attr(None if d is None else [index(p) for p in d])
+
+        dep_der = [attr(d) for d in dependencies[0]]
+        dep_out = [attr(dependencies[1][k]) for _, k in outputs]
+    itself = (lambda i: _dependencies_attr([i])) if dependencies is not None else (lambda i: "")
+    out_list = ("".join(f'      <Unknown index="{first_state + k}"{itself(first_state + k)}/>\n' for k in souts)
+                + "".join(f'      <Unknown index="{i}"{d}/>\n' for i, d in zip(outs, dep_out)))
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
             f'generationTool="mbcomp {_version()}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
-            + "".join(_interface(tag, ident) for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
+            + "".join(_interface(tag, ident, dependencies is not None)
+                      for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
                       if kind in (k, "both")) + _unit_definitions(defs) + _experiment(experiment)
             + '  <ModelVariables>\n' + "\n".join(rows) + '\n  </ModelVariables>\n'
             + '  <ModelStructure>\n' + (f'    <Outputs>\n{out_list}    </Outputs>\n' if out_list else '')
-            + '    <Derivatives>\n' + "\n".join(f'      <Unknown index="{i}"/>' for i in der) + '\n    </Derivatives>\n'
+            + '    <Derivatives>\n' + "\n".join(f'      <Unknown index="{i}"{d}/>' for i, d in zip(der, dep_der))
+            + '\n    </Derivatives>\n'
             f'    <InitialUnknowns>\n{unknowns}\n    </InitialUnknowns>\n  </ModelStructure>\n'
             f'</fmiModelDescription>\n')

@@ -187,7 +187,10 @@ FMI2_EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b
 FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
                                                     const fmi2ValueReference z[], size_t nz, const fmi2Real du[],
                                                     fmi2Real dz[])
-{ (void)u; (void)nu; (void)z; (void)nz; (void)du; (void)dz; return unsupported(c, "fmi2GetDirectionalDerivative"); }
+{
+    NEED(c); /* u: the unknowns (nu), z: the knowns (nz), du: the knowns' seed, dz: the unknowns' change */
+    return OK(mb_derivative((Inst *)c, 0, u, nu, z, nz, du, nz, dz, nu));
+}
 
 /* --- Model Exchange ---------------------------------------------------------------------- */
 FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c)

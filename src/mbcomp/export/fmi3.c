@@ -1,8 +1,8 @@
 /* mbcomp FMI 3.0 wrapper (Model Exchange and Co-Simulation) over the FMU core (fmu_core.c,
  * included before this file): the standard's functions, translated into the core's calls.
  * The types below are the standard's ABI, declared here from the FMI 3.0 specification so the
- * FMU carries no header of anyone else. Scheduled Execution, clocks, directional
- * derivatives and every non-Float64 type are not supported: those functions log and return
+ * FMU carries no header of anyone else. Scheduled Execution, clocks and every non-Float64
+ * type are not supported: those functions log and return
  * fmi3Error (a call with no variables is fine). */
 #include <stdbool.h>
 #include <stdint.h>
@@ -256,13 +256,17 @@ FMI3_EXPORT fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte b[
 FMI3_EXPORT fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference u[], size_t nu,
                                                     const fmi3ValueReference k[], size_t nk, const fmi3Float64 seed[],
                                                     size_t ns, fmi3Float64 sens[], size_t nsens)
-{ (void)u; (void)nu; (void)k; (void)nk; (void)seed; (void)ns; (void)sens; (void)nsens;
-  return unsupported(c, "fmi3GetDirectionalDerivative"); }
+{
+    NEED(c);
+    return OK(mb_derivative((Inst *)c, 0, u, nu, k, nk, seed, ns, sens, nsens));
+}
 FMI3_EXPORT fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference u[], size_t nu,
                                                 const fmi3ValueReference k[], size_t nk, const fmi3Float64 seed[],
                                                 size_t ns, fmi3Float64 sens[], size_t nsens)
-{ (void)u; (void)nu; (void)k; (void)nk; (void)seed; (void)ns; (void)sens; (void)nsens;
-  return unsupported(c, "fmi3GetAdjointDerivative"); }
+{
+    NEED(c);
+    return OK(mb_derivative((Inst *)c, 1, u, nu, k, nk, seed, ns, sens, nsens));
+}
 FMI3_EXPORT fmi3Status fmi3EnterConfigurationMode(fmi3Instance c) { return unsupported(c, "fmi3EnterConfigurationMode"); }
 FMI3_EXPORT fmi3Status fmi3ExitConfigurationMode(fmi3Instance c) { return unsupported(c, "fmi3ExitConfigurationMode"); }
 FMI3_EXPORT fmi3Status fmi3GetIntervalDecimal(fmi3Instance c, const fmi3ValueReference vr[], size_t n,

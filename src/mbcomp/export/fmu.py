@@ -41,8 +41,10 @@ What the FMU holds (see docs/design/fmu.md):
   enforced, mbcomp's parameter rules checked in C, messages naming variables, the model
   description's tolerance as the default, the joint coordinates and speeds as outputs, named
   units; a start value set on a state kept by the initialization (the model's guesses moved).
+* exact directional and adjoint derivatives (states and inputs as knowns) and the
+  ``<ModelStructure>`` dependencies (:mod:`mbcomp.export.derivatives`, ``fmu_derivatives.c``).
 
-Not yet: directional derivatives.
+Not yet: derivatives with respect to parameters; events (models with stops, contacts, friction).
 
 Examples
 --------
@@ -123,7 +125,7 @@ def _refuse_modes(system):
 
 
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,
-               tolerance=1e-12, max_nodes=3_000_000, tunable="nonzero"):
+               tolerance=1e-12, max_nodes=3_000_000, tunable="nonzero", derivatives=True):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
 
     Parameters
@@ -153,6 +155,10 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
         Which numeric parameter entries are FMU parameters: the nonzero ones (default: the
         zeros are folded into the program, a smaller and faster one), or every entry (zeros and
         off-diagonal inertia terms too). The entries left out are listed in ``fixed``.
+    derivatives : bool
+        Carry the exact directional and adjoint derivatives and declare the dependencies
+        (default); False builds a smaller FMU faster (Andrews: a third of the time and size,
+        ``bench/fmu_derivatives.py``) whose derivative functions return an error.
 
     Returns
     -------
@@ -160,7 +166,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
         ``states``, ``parameters``, ``outputs``, ``inputs`` (names), ``state_outputs`` (the
         states that are outputs too), ``fixed`` (``{parameter entry: why it is no FMU
         parameter}``), ``guid`` (the
-        instantiation token), ``size`` (bytes), ``operations`` (of the programs),
+        instantiation token), ``size`` (bytes), ``operations`` (of the programs), ``derivatives``,
         ``compiler``, ``model_identifier``.
 
     Raises
@@ -196,25 +202,28 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
     souts = _state_outputs(system, states, patterns)
+    deriv = (_derivatives(system, tr, out_prog, mech, select) if derivatives
+             else SimpleNamespace(c="", structure=None))
     describe = model_description2 if fmi == "2.0" else model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
                    experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0,
-                   state_outputs=souts, nominals=_state_nominals(system, tr.layout, pv, y0, select))
+                   state_outputs=souts, nominals=_state_nominals(system, tr.layout, pv, y0, select),
+                   dependencies=deriv.structure)
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
-    model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi)
+    model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi, deriv.c)
     model_c = _named(model_c, names, c_rules(system, layout), tolerance)
     _build(path, ident, fmi, cc, model_c, xml)
     outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
     return dict(states=states, parameters=pnames, outputs=outs, state_outputs=[states[k] for k in souts],
                 fixed=_fixed(system, layout),
                 inputs=[i.name for i in tr.inputs], projects=mech.enabled and kind != "me",
-                selects_states=select.enabled, guid=guid, size=os.path.getsize(path),
+                selects_states=select.enabled, derivatives=bool(derivatives), guid=guid, size=os.path.getsize(path),
                 operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
 
 
-def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
+def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi, deriv_c=""):
     """The FMU's model.c: sizes and start values as defines and tables, the generated
     programs (``fun``: the right-hand side's trace, program, C parts and work size; outputs,
     projection, state selection), then the standard's functions (``fmi2.c``/``fmi3.c``)."""
@@ -227,7 +236,7 @@ def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
             + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, tr.layout, pv, y0))
             + _start_freedom(system)
             + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
-            + f'\n#include "fmi{fmi[0]}.c"\n')
+            + deriv_c + f'\n#include "fmi{fmi[0]}.c"\n')
 
 
 def _start_freedom(system):
@@ -399,7 +408,7 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", "fmu_state.c", "fmu_rules.c", f"fmi{fmi[0]}.c"):
+        for f in ("fmu_core.c", "fmu_state.c", "fmu_rules.c", "fmu_derivatives.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)
@@ -416,6 +425,20 @@ def _build(path, ident, fmi, cc, model_c, xml):
             for f in sorted(root.rglob("*")):
                 if f.is_file():
                     z.write(f, f.relative_to(root).as_posix())
+
+
+def _derivatives(system, tr, out_prog, mech, select):
+    """The exact derivatives' product programs (C) and the ``<ModelStructure>`` dependencies
+    (:mod:`mbcomp.export.derivatives`): ``structure`` is ``(der, out)``, known positions per
+    state derivative and per output slot."""
+    from .derivatives import derivative_programs, structure
+
+    ev, res = (mech.tr, mech.res) if select.enabled else (None, [])
+    nin = len(tr.inputs)
+    c = derivative_programs(tr, out_prog.tr, ev, res, system.nq, system.nu, nin)
+    st = structure(tr, out_prog.tr, ev, res, system.nq, system.nu, nin, select.enabled, out_prog.n_cols,
+                   out_prog.n_rot)
+    return SimpleNamespace(c=c, structure=(st.der, st.out))
 
 
 def _chosen(variables, patterns):
@@ -471,7 +494,7 @@ def _projection(system, tr_fun, max_nodes, keep=()):
     from ..codegen.tracer import FIELDS
     from ..assembly.manifold import ACCEPT_FACTOR, POSITION_TOL
 
-    none = SimpleNamespace(c="#define MECH 0\n", enabled=False)
+    none = SimpleNamespace(c="#define MECH 0\n", enabled=False, tr=None, res=[])
     if not (system.topology.cut or any(e.kind == "joint" and not e.comp.tree_edge for e in system.topology.edges)):
         return none
     seg = coordinate_map(system)
@@ -500,7 +523,9 @@ def _projection(system, tr_fun, max_nodes, keep=()):
          + "".join(f"#define OFF_{k.upper()} {offs[k]}\n" for k in ("M", "f", "Phi", "Phid", "C", "cb", "B", "Bb", "Psi"))
          + _c_ints("MECH_ROWS", rows) + _c_ints("MECH_SEG", seg.ravel())
          + "\n".join(parts) + "\n" + prog.c_params("mbcomp_eval_params"))
-    return SimpleNamespace(c=c, enabled=True)
+    ev = tr.groups["eval"]
+    res = [ev[offs["Phid"] + int(r)] for r in rows] + [ev[offs["Psi"] + r] for r in range(mn)]
+    return SimpleNamespace(c=c, enabled=True, tr=tr, res=res)
 
 
 def _output_program(system, tr_fun, max_nodes, keep=()):
@@ -513,7 +538,7 @@ def _output_program(system, tr_fun, max_nodes, keep=()):
     ok = ("outputs" in tr.groups and not tr.drives and tr.layout == tr_fun.layout
           and [i.name for i in tr.inputs] == [i.name for i in tr_fun.inputs])
     if not ok:  # a drive the program does not hold, or a singular trace point: no outputs
-        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0)
+        return SimpleNamespace(c=_NO_OUTPUTS, variables=[], n_ops=0, n_slots=0, tr=None, n_cols=0, n_rot=0)
     prog = Program(tr.graph, {"outputs": tr.groups["outputs"]}, guard_groups={"outputs": tr.guard_groups["outputs"]})
     parts, n_work = prog.c_parts("outputs", "mbcomp_outputs", chunk, n_parts=lambda n: 1)
     cols, rots = list(tr.output_names), list(tr.rotation_paths)
@@ -522,7 +547,8 @@ def _output_program(system, tr_fun, max_nodes, keep=()):
     defines = (f"#define NCOL {len(cols)}\n#define NROT {len(rots)}\n#define NH2 {max(len(prog.hoisted), 1)}\n"
                f"#define NW2 {max(n_work, 1)}\n")
     return SimpleNamespace(c=defines + "\n".join(parts) + "\n" + prog.c_params("mbcomp_outputs_params") + QUAT_C,
-                           variables=variables, n_ops=prog.n_ops("outputs"), n_slots=len(cols) + 4 * len(rots))
+                           variables=variables, n_ops=prog.n_ops("outputs"), n_slots=len(cols) + 4 * len(rots),
+                           tr=tr, n_cols=len(cols), n_rot=len(rots))
 
 
 #: the output program of a model whose outputs cannot be traced: none

@@ -681,3 +681,4 @@ static int mb_update(Inst *c, int *changed)
 }
 
 #include "fmu_state.c"
+#include "fmu_derivatives.c" /* exact directional and adjoint derivatives */
