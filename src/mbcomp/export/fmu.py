@@ -72,6 +72,7 @@ from ..codegen.toolchain import HEADER, c_compiler, chunk
 from ..codegen.tracer import param_vector, trace
 from ..errors import ModelError, Problem
 from ..modeling.model import Model
+from . import fmu_events
 from .description import (RUNTIME_C, build_description, model_description2, model_description3, output_name,
                           parameter_doc)
 
@@ -101,16 +102,12 @@ def _c_ints(name, values):
 
 
 def _refuse_modes(system):
-    """A ``ValueError`` naming the components with modes (rigid stops, unilateral contacts,
-    stick/slip friction): the FMU's runtime locates no events, so it would run through a stop
-    as if it were not there."""
-    with_modes = [e.name for e in system.topology.edges
-                  if e.kind == "joint" and e.comp.modes(system.P[e.name]) is not None]
-    if with_modes:
-        raise ValueError(f"cannot export {', '.join(with_modes)}: components with events (rigid stops, unilateral "
-                         "contacts, stick/slip) need the driver's event location, which the FMU's runtime does not "
-                         "have yet; exported, the model would pass through them -> export without them (e.g. "
-                         "limits=None), or use a compliant stop (a flange force, which the FMU carries)")
+    """A ``ValueError`` naming the components with modes the FMU's events do not carry yet
+    (stick/slip friction, contacts with friction or rolling rows: :mod:`.fmu_events`), which
+    would otherwise run through as if they were not there; ``True`` when the model has modes
+    the FMU carries (frictionless one-sided contacts, rigid end stops)."""
+    contacts, stops = fmu_events.components(system)
+    return bool(contacts or stops)
 
 
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,
@@ -161,11 +158,12 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     name = name or path.stem
     ident = _identifier(name)
     system = assemble(model, params)
-    _refuse_modes(system)
-    init = initialize(system)
+    hybrid = _refuse_modes(system)
+    init = fmu_events.initial_state(system) if hybrid else initialize(system)
     tr, prog, parts, n_work = _fun_program(system, max_nodes)
     out_prog = _output_program(system, tr, max_nodes)
-    mech = _projection(system, tr, max_nodes)
+    hy = fmu_events.plan(system, tolerance, max_nodes, layout=tr.layout)  # the events and modes (fmu_events.c)
+    mech = SimpleNamespace(c="#define MECH 0\n", enabled=False) if hybrid else _projection(system, tr, max_nodes)
     select = _selection(system, init, mech, kind)
     layout = tr.layout
     pv = param_vector(system, layout)
@@ -173,27 +171,31 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     pnames = [f"{p}.{n}" if idx is None else f"{p}.{n}[{','.join(str(i + 1) for i in idx)}]" for p, n, idx in layout]
     states, x0, state_units = _states(system, init, select)
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
+    if hybrid:  # the output program evaluates the assembled system: only what no mode changes
+        out_prog.variables = fmu_events.hybrid_outputs(system, out_prog.variables)
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
     describe = model_description2 if fmi == "2.0" else model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
-                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0)
+                   experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0,
+                   events=(hy.indicators, hy.times))
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
-    model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi)
+    model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi, hy.c)
     _build(path, ident, fmi, cc, model_c, xml)
     outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
     return dict(states=states, parameters=pnames, outputs=outs,
                 inputs=[i.name for i in tr.inputs], projects=mech.enabled and kind != "me",
-                selects_states=select.enabled, guid=guid, size=os.path.getsize(path),
+                selects_states=select.enabled, events=hy.indicators, guid=guid, size=os.path.getsize(path),
                 operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
 
 
-def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
+def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi, events=""):
     """The FMU's model.c: sizes and start values as defines and tables, the generated
     programs (``fun``: the right-hand side's trace, program, C parts and work size; outputs,
-    projection, state selection), then the standard's functions (``fmi2.c``/``fmi3.c``)."""
+    projection, state selection, ``events``: :func:`.fmu_events.plan`'s), then the standard's
+    functions (``fmi2.c``/``fmi3.c``)."""
     tr, prog, parts, n_work = fun
     loops = bool(system.topology.cut)
     return (HEADER + f"#define NQ {system.nq}\n#define NU {system.nu}\n"
@@ -201,7 +203,7 @@ def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi):
             f"#define GUID \"{guid}\"\n#define ALPHA {ALPHA if loops else 0.0!r}\n#define BETA {BETA if loops else 0.0!r}\n"
             + f"#define NIN {len(tr.inputs)}\n" + _c_array("IN0", [i.start for i in tr.inputs])
             + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, tr.layout, pv, y0))
-            + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
+            + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c + events
             + f'\n#include "fmi{fmi[0]}.c"\n')
 
 
@@ -275,7 +277,7 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", f"fmi{fmi[0]}.c"):
+        for f in ("fmu_core.c", "fmu_events.h", "fmu_events.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)

@@ -48,6 +48,8 @@
 #define VR_START (VR_IN + NIN) /* the start values of [q, u]: parameters */
 #define VR_TOL (VR_START + NX)  /* the Co-Simulation integrator's relative tolerance: a parameter */
 
+#include "fmu_events.h"
+
 enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_STEP, M_TERMINATED, M_ERROR };
 
 typedef struct Inst Inst;
@@ -72,6 +74,9 @@ struct Inst {
     double y0[NX + 1]; /* the start values (parameters) */
     int starts_changed, tol_set; /* tol_set: the tolerance parameter was set (it wins over the experiment's) */
     double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
+#if HYBRID
+    mbev hy; /* the active set and what its events need (fmu_events.c) */
+#endif
 #if SELECT
     double x[NXS + 1], dx[NXS + 1], growth;
     int dep[MM + 1], ind[NI + 1], *iwork, x_dirty, event_due, repartitions;
@@ -121,6 +126,9 @@ static void mb_reset(Inst *c)
     c->rtol = 1e-8;
     c->dirty = 1;
     c->mode = M_INSTANTIATED;
+#if HYBRID
+    mbev_reset(c);
+#endif
 }
 
 /* a new instance (NULL when out of memory); the wrapper then sets log, logger, env */
@@ -178,6 +186,9 @@ static int mb_refresh(Inst *c)
 #if MECH
     if (!rc) rc = mbcomp_eval_params(c->p, c->h3);
 #endif
+#if HYBRID
+    if (!rc) rc = mbhy_eval_params(c->p, c->hy.h);
+#endif
     if (rc) {
         say(c, 1, "the parameter values %s -> export the model again with these values",
             rc == 1 ? "change a decision taken when the program was generated (a parameter guard)"
@@ -196,6 +207,9 @@ static int mb_derivatives(Inst *c)
     if (mb_refresh(c)) return -1;
     c->d[0] = c->alpha;
     c->d[1] = c->beta;
+#if HYBRID
+    return mbev_rhs(c, c->t, c->y, c->dy); /* the rows in force of the active set */
+#endif
     if (mbcomp_fun(c->y, c->y + NQ, c->t, c->d, c->h, c->p, c->w, c->dy)) {
         say(c, 1, "the right-hand side failed a guard at t=%g (a singular position, or a law's other branch): "
             "mbcomp's numeric path is not in the FMU", c->t);
@@ -213,6 +227,9 @@ static int mb_derivatives(Inst *c)
 static int mb_rhs(void *ctx, double t, const double *y, double *dydt)
 {
     Inst *c = (Inst *)ctx;
+#if HYBRID
+    return mbev_rhs(c, t, y, dydt);
+#endif
     return mbcomp_fun(y, y + NQ, t, c->d, c->h, c->p, c->w, dydt);
 }
 
@@ -243,6 +260,9 @@ static int mb_step(Inst *c, double h)
     mbrt_stats st;
     double t_end;
     int i, rc, written = 0;
+#if HYBRID
+    return mbev_step(c, h); /* the events located and acted on inside the step */
+#endif
     if (!(h >= 0.0) || !isfinite(h)) { say(c, 1, "a communication step of %g s", h); return -1; }
     if (h == 0.0) return 0;
     if (mb_refresh(c)) return -1;
@@ -286,6 +306,9 @@ static int mb_outputs(Inst *c)
    have is a per-call cache: bit 1 the derivatives, bit 2 the outputs are computed */
 static int mb_get(Inst *c, unsigned vr, double *v, int *have)
 {
+#if HYBRID
+    if (vr >= HY_VR) { int rc = mbev_get(c, vr, v); if (rc <= 0) return rc; }
+#endif
     if (vr >= VR_OUT && vr < VR_OUT + NOV) {
         if (!(*have & 2)) {
             if (mb_outputs(c)) return -1;
@@ -589,6 +612,9 @@ static int mb_completed(Inst *c, int *event)
 static int mb_update(Inst *c, int *changed)
 {
     *changed = 0;
+#if HYBRID
+    return mbev_act(c, -1, changed); /* the impacts and mode switches due */
+#endif
 #if SELECT
     if (c->event_due) {
         double norm = 0.0;
@@ -612,3 +638,5 @@ static int mb_update(Inst *c, int *changed)
 #endif
     return 0;
 }
+
+#include "fmu_events.c"

@@ -1,0 +1,199 @@
+"""FMUs with events (issue 33 item 1): unilateral contacts and rigid end stops exported with
+event indicators, Model Exchange's Event Mode acting on them and Co-Simulation locating them
+on its own DOP853's dense output.
+
+Every FMU is validated by FMPy and run by FMPy as Model Exchange (FMPy's CVODE finds the
+indicators' roots, the FMU acts in Event Mode) and as Co-Simulation (the FMU's own events);
+its events and states must be ``mbcomp.simulate``'s (rtol 1e-12, atol 1e-14): event times
+to 1e-9 s, states on the output grid to 1e-8. The FMU reports each component's last event
+time as an output (``events.<component>.time``), so the event times of both interfaces are
+read exactly, not from the output grid.
+
+Model Exchange's event times are bound by FMPy's CVODE, not by the FMU: the bouncing ball's
+32nd impact is 3e-8 s early at CVODE's rtol 1e-12 and 3e-10 s at 1e-14 (the error scales
+with the tolerance), hence these runs at 1e-14.
+"""
+import xml.etree.ElementTree as ET
+import zipfile
+
+import numpy as np
+import pytest
+
+import mbcomp
+from mbcomp.codegen import c_compiler
+
+from conftest import load_model, stop_pendulum
+
+fmpy = pytest.importorskip("fmpy")
+pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
+from fmpy.validation import validate_fmu  # noqa: E402
+
+from mbcomp.export import export_fmu  # noqa: E402
+
+VERSIONS = ["3.0", "2.0"]
+#: (model, end time (s), Co-Simulation output interval (s): shorter than the events' spacing)
+MODELS = {
+    "ball": (lambda: load_model("models/bouncing_ball.py").build(), 4.3, 2e-4),
+    "pendulum": (lambda: stop_pendulum(), 3.0, 1e-3),
+    "resting": (lambda: stop_pendulum(limits=(0.3, 3.0), e=0.5, phi0=1.2), 2.5, 1e-4),
+    "door": (lambda: load_model("models/door.py").build(), 8.0, 1e-3),
+}
+COMPONENT = {"ball": "ground", "pendulum": "hinge", "resting": "hinge", "door": "hinge"}
+STATES = {"ball": ["free.r.z", "free.v.z"], "pendulum": ["hinge.phi", "hinge.w"], "resting": ["hinge.phi", "hinge.w"],
+          "door": ["hinge.phi", "hinge.w"]}
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    """``{(model, fmi): path}``, exported once per module."""
+    root, out = tmp_path_factory.mktemp("fmu_events"), {}
+
+    def get(name, fmi):
+        if (name, fmi) not in out:
+            build, t_end, _ = MODELS[name]
+            out[name, fmi] = root / f"{name}{fmi[0]}.fmu"
+            export_fmu(build(), out[name, fmi], fmi=fmi, stop_time=t_end)
+        return out[name, fmi]
+    return get
+
+
+@pytest.fixture(scope="module")
+def reference():
+    """``{model: (event times (s), kinds, result on a 0.01 s grid)}`` of ``mbcomp.simulate``."""
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            build, t_end, _ = MODELS[name]
+            res = mbcomp.simulate(build(), t_end=t_end, rtol=1e-12, atol=1e-14, dt_out=0.01)
+            cache[name] = (np.array([e.time for e in res.events]), [e.kind for e in res.events], res)
+        return cache[name]
+    return get
+
+
+def _run(path, name, kind):
+    _, t_end, dt = MODELS[name]
+    comp = COMPONENT[name]
+    me = kind == "ModelExchange"
+    return fmpy.simulate_fmu(str(path), fmi_type=kind, stop_time=t_end, output_interval=0.01 if me else dt,
+                             relative_tolerance=1e-14 if me else 1e-12,
+                             output=STATES[name] + [f"events.{comp}.time", f"events.{comp}.{_indicator(name)}"])
+
+
+def _indicator(name):
+    return "normal" if name == "ball" else "lo"
+
+
+def _event_times(r, comp):
+    """The distinct last-event times the FMU reported (s), in order."""
+    t = r[f"events.{comp}.time"]
+    return np.unique(t[t >= 0.0])
+
+
+def _on_grid(r, res, var):
+    """The FMU's ``var`` at mbcomp's 0.01 s output times (the event points FMPy adds dropped)."""
+    t = r["time"]
+    out = []
+    for tk in res.time:
+        k = np.flatnonzero(np.abs(t - tk) < 1e-12)
+        out.append(r[var][k[-1]])
+    return np.array(out)
+
+
+@pytest.mark.parametrize("fmi", VERSIONS)
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("name", ["ball", "pendulum", "door"])
+def test_events_and_states_are_mbcomps(name, kind, fmi, made, reference):
+    """The bouncing ball's 32 impacts and its Zeno rest at 4.06 s (mbcomp's CHATTER rule), the
+    pendulum's rebounds on its lower stop and the door's on both of its stops: each event
+    where mbcomp.simulate has it (1e-9 s), the states on the grid to 1e-8."""
+    path = made(name, fmi)
+    assert validate_fmu(str(path)) == []
+    times, kinds, res = reference(name)
+    r = _run(path, name, kind)
+    got = _event_times(r, COMPONENT[name])
+    want = np.unique(times)  # an impact and the rest it ends in share their time
+    assert len(got) == len(want) >= 2
+    assert np.max(np.abs(got - want)) < 1e-9
+    for var in STATES[name]:
+        assert np.max(np.abs(_on_grid(r, res, var) - res[var])) < 1e-8, var
+    if name == "ball":
+        assert kinds[-1] == "rest" and kinds.count("impact") == 32
+        after = r["time"] > want[-1] + 1e-9
+        assert np.all(r["free.r.z"][after] == pytest.approx(0.1, abs=1e-12))  # on the ground: z = r
+        assert np.all(np.abs(r["free.v.z"][after]) < 1e-12)
+        assert np.all(r["events.ground.normal"][after] == pytest.approx(0.5 * 9.81, rel=1e-9))  # its weight, N
+
+
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_the_closed_form_bounce_times(fmi, made):
+    """The ball's impacts at ``t0 + 2 t0 e (1 - e^k) / (1 - e)``, ``t0 = sqrt(2 h0 / g)``; in
+    flight the indicator is the gap ``z - r`` (m)."""
+    r = _run(made("ball", fmi), "ball", "CoSimulation")
+    t0, e = np.sqrt(2 * 1.0 / 9.81), 0.8
+    k = np.arange(32)
+    assert np.max(np.abs(_event_times(r, "ground") - (t0 + 2 * t0 * e * (1 - e**k) / (1 - e)))) < 1e-12
+    flying = r["time"] < t0
+    assert np.allclose(r["events.ground.normal"][flying], r["free.r.z"][flying] - 0.1, atol=1e-15)
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_a_stop_chattering_to_rest_settles_where_mbcomp_does(kind, made, reference):
+    """A pendulum falling onto a stop at 0.3 rad against gravity: its rebounds accumulate and it
+    rests engaged, pressed by gravity's torque ``m g L sin(0.3)`` (the indicator, N m)."""
+    times, kinds, res = reference("resting")
+    assert kinds[-1] == "rest"
+    speeds = np.array([abs(e.detail.get("speed_before", 0.0)) for e in res.events if e.kind == "impact"])
+    r = _run(made("resting", "3.0"), "resting", kind)
+    got, want = _event_times(r, "hinge"), np.unique(times)
+    if kind == "CoSimulation":  # the FMU's own DOP853 and location; the last event of each step is seen
+        assert len(got) >= 15 and got[-1] == pytest.approx(want[-1], abs=1e-9)
+        assert np.max(np.min(np.abs(got[:, None] - want[None, :]), axis=1)) < 1e-9
+    else:
+        assert len(got) == len(want) == len(speeds)
+        # FMPy's CVODE: a rebound's time is its angle's error over its speed (the last ones at
+        # 1e-6 rad/s: 1e-7 s off for 1e-13 rad); to 1e-9 s where the speed is above 1e-3 rad/s
+        fast = speeds > 1e-3
+        assert fast.sum() >= 10 and np.max(np.abs(got - want)[fast]) < 1e-9
+        assert np.max(np.abs(got - want)) < 2e-7
+    after = r["time"] > times[-1] + 1e-9
+    assert np.all(np.abs(r["hinge.phi"][after] - 0.3) < 1e-12) and np.all(np.abs(r["hinge.w"][after]) < 1e-12)
+    assert np.allclose(r["events.hinge.lo"][after], 9.81 * np.sin(0.3), rtol=1e-9)
+
+
+def test_the_restitution_is_a_parameter(made):
+    """``ground.restitution`` tuned in the FMU to 0.5: the second impact at ``t0 (1 + 2 e)``."""
+    t0 = np.sqrt(2 / 9.81)
+    r = fmpy.simulate_fmu(str(made("ball", "3.0")), fmi_type="CoSimulation", stop_time=1.2, output_interval=1e-3,
+                          start_values={"ground.restitution": 0.5}, output=["events.ground.time"])
+    assert _event_times(r, "ground")[:2] == pytest.approx([t0, t0 * 2.0], abs=1e-12)
+
+
+@pytest.mark.parametrize("fmi", VERSIONS)
+def test_event_indicators_are_declared(fmi, made):
+    """FMI 3.0: an ``<EventIndicator>`` per indicator, each a continuous variable; FMI 2.0:
+    ``numberOfEventIndicators``. One per contact, two per stop."""
+    for name, n in (("ball", 1), ("pendulum", 2)):
+        with zipfile.ZipFile(made(name, fmi)) as z:
+            root = ET.fromstring(z.read("modelDescription.xml"))
+        if fmi == "3.0":
+            refs = [e.get("valueReference") for e in root.iter("EventIndicator")]
+            names = {v.get("valueReference"): v.get("name") for v in root.find("ModelVariables")}
+            assert len(refs) == n and all(names[v].startswith(f"events.{COMPONENT[name]}.") for v in refs)
+        else:
+            assert root.get("numberOfEventIndicators") == str(n)
+
+
+def test_modes_the_fmu_cannot_carry_are_refused_naming_the_component(tmp_path):
+    """Stick/slip friction has no FMU events yet: the export names the joint and the fix."""
+    from mbcomp.library import PointMass, Prismatic, SlidingFriction, World
+
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, -9.81, 0)))
+    j = m.add("slider", Prismatic(n=(1, 0, 0), s0=0.0, v0=1.0, friction=SlidingFriction(0.5, 0.4, 9.81)))
+    b = m.add("block", PointMass(m=1.0))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, b.frame_a)
+    with pytest.raises(ValueError, match=r"cannot export slider: .*StickSlip.* not supported by the FMU's events yet"):
+        export_fmu(m, tmp_path / "slider.fmu")
+    assert not (tmp_path / "slider.fmu").exists()
