@@ -155,7 +155,7 @@ static int hy_event_fn(void *ctx, double t, const double *y, double *g)
    mbcomp.assembly.kkt.project_state): 0, or -1 after logging */
 static int hy_consistent(Inst *c, double t, double *y)
 {
-    int it, i, j, l, nr;
+    int it, i, j, l, nr = 0;
     double norm = 0.0, *G = c->hy.G, *x = c->hy.rhs;
     for (it = 0; it <= 30; it++) {
         if (hy_eval(c, t, y)) return -1;
@@ -173,7 +173,7 @@ static int hy_consistent(Inst *c, double t, double *y)
         for (l = 0; l < NU; l++)
             for (i = 0; i < nr; i++) y[l] -= c->hy.C[i * NU + l] * x[i];
     }
-    if (norm > 1e-10) {
+    if (norm > 1e-10 || nr <= 0 || nr > HY_NR) {
         say(c, 1, "the state cannot be moved onto the rows in force at t=%g (|Phi| = %g)", t, norm);
         return -1;
     }
