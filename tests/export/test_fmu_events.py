@@ -1,4 +1,5 @@
-"""FMUs with events (issue 33 item 1): unilateral contacts and rigid end stops exported with
+"""FMUs with events (issue 33 item 1): unilateral contacts, rigid end stops and stick/slip
+friction exported with
 event indicators, Model Exchange's Event Mode acting on them and Co-Simulation locating them
 on its own DOP853's dense output.
 
@@ -37,10 +38,28 @@ MODELS = {
     "pendulum": (lambda: stop_pendulum(), 3.0, 1e-3),
     "resting": (lambda: stop_pendulum(limits=(0.3, 3.0), e=0.5, phi0=1.2), 2.5, 1e-4),
     "door": (lambda: load_model("models/door.py").build(), 8.0, 1e-3),
+    "block": (lambda: block(), 5.0, 1e-3),
 }
-COMPONENT = {"ball": "ground", "pendulum": "hinge", "resting": "hinge", "door": "hinge"}
+COMPONENT = {"ball": "ground", "pendulum": "hinge", "resting": "hinge", "door": "hinge", "block": "s"}
 STATES = {"ball": ["free.r.z", "free.v.z"], "pendulum": ["hinge.phi", "hinge.w"], "resting": ["hinge.phi", "hinge.w"],
-          "door": ["hinge.phi", "hinge.w"]}
+          "door": ["hinge.phi", "hinge.w"], "block": ["s.s", "s.v"]}
+
+
+def block(mu_s=0.3, mu_k=0.25, k=20.0, v0=2.0):
+    """A 2 kg block on a spring (k N/m) sliding on Coulomb friction (normal force its weight)
+    from s = 0 at v0 (m/s): it sticks at its turning point, breaks back at once (the spring
+    beats mu_s m g), and sticks for good when the spring no longer can."""
+    from mbcomp.library import Force, PointMass, Prismatic, SlidingFriction, World
+
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, -9.81)))
+    s = m.add("s", Prismatic(n=(1, 0, 0), s0=0.0, v0=v0, friction=SlidingFriction(mu_s, mu_k, normal=2.0 * 9.81)))
+    b = m.add("b", PointMass(m=2.0))
+    f = m.add("pull", Force(f=lambda t, s, v: -k * s))
+    m.connect(w.frame_b, s.frame_a)
+    m.connect(s.frame_b, b.frame_a)
+    m.connect(s.axis, f.flange_b)
+    return m
 
 
 @pytest.fixture(scope="module")
@@ -81,7 +100,7 @@ def _run(path, name, kind):
 
 
 def _indicator(name):
-    return "normal" if name == "ball" else "lo"
+    return {"ball": "normal", "block": "forward"}.get(name, "lo")
 
 
 def _event_times(r, comp):
@@ -102,11 +121,12 @@ def _on_grid(r, res, var):
 
 @pytest.mark.parametrize("fmi", VERSIONS)
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
-@pytest.mark.parametrize("name", ["ball", "pendulum", "door"])
+@pytest.mark.parametrize("name", ["ball", "pendulum", "door", "block"])
 def test_events_and_states_are_mbcomps(name, kind, fmi, made, reference):
     """The bouncing ball's 32 impacts and its Zeno rest at 4.06 s (mbcomp's CHATTER rule), the
-    pendulum's rebounds on its lower stop and the door's on both of its stops: each event
-    where mbcomp.simulate has it (1e-9 s), the states on the grid to 1e-8."""
+    pendulum's rebounds on its lower stop, the door's on both of its stops, the block's stick,
+    break-away and final stick: each event where mbcomp.simulate has it (1e-9 s), the states
+    on the grid to 1e-8."""
     path = made(name, fmi)
     assert validate_fmu(str(path)) == []
     times, kinds, res = reference(name)
@@ -123,6 +143,25 @@ def test_events_and_states_are_mbcomps(name, kind, fmi, made, reference):
         assert np.all(r["free.r.z"][after] == pytest.approx(0.1, abs=1e-12))  # on the ground: z = r
         assert np.all(np.abs(r["free.v.z"][after]) < 1e-12)
         assert np.all(r["events.ground.normal"][after] == pytest.approx(0.5 * 9.81, rel=1e-9))  # its weight, N
+    if name == "block":  # stuck for good: the spring's pull k s (N) within the static limit, the speed 0
+        after = r["time"] > want[-1] + 1e-9
+        assert np.all(r["s.v"][after] == 0.0) and abs(20.0 * r["s.s"][-1]) < 0.3 * 2.0 * 9.81
+        # the stuck row pushes k s against the spring: the margins F_s + k s and F_s - k s (N)
+        assert np.allclose(r["events.s.forward"][after], 0.3 * 2 * 9.81 + 20.0 * r["s.s"][after], rtol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_a_ball_started_on_the_ground_rests_there(kind, tmp_path):
+    """Open at the start with a zero gap and no speed (mbcomp's Events.start): it engages at
+    t = 0 and stays, its indicator its weight (N)."""
+    m = load_model("models/bouncing_ball.py").build(h0=0.0)
+    assert [e.kind for e in mbcomp.simulate(m, t_end=1.0).events] == ["engage"]
+    export_fmu(m, tmp_path / "ground.fmu")
+    r = fmpy.simulate_fmu(str(tmp_path / "ground.fmu"), fmi_type=kind, stop_time=1.0,
+                          output=["free.r.z", "events.ground.time", "events.ground.normal"])
+    # (Co-Simulation acts on the start's events in its first step: the time is 0 from then on)
+    assert np.all(r["free.r.z"] == pytest.approx(0.1, abs=1e-14)) and np.all(r["events.ground.time"][1:] == 0.0)
+    assert np.all(r["events.ground.normal"][1:] == pytest.approx(0.5 * 9.81, rel=1e-12))
 
 
 @pytest.mark.parametrize("fmi", VERSIONS)
@@ -185,15 +224,17 @@ def test_event_indicators_are_declared(fmi, made):
 
 
 def test_modes_the_fmu_cannot_carry_are_refused_naming_the_component(tmp_path):
-    """Stick/slip friction has no FMU events yet: the export names the joint and the fix."""
-    from mbcomp.library import PointMass, Prismatic, SlidingFriction, World
+    """A contact with friction (rolling and sliding) has no FMU events yet: the export names
+    the contact and the fix."""
+    from mbcomp.library import ContactFriction, RigidBody, SphereContact, World
 
     m = mbcomp.Model()
-    w = m.add("world", World(g=(0, -9.81, 0)))
-    j = m.add("slider", Prismatic(n=(1, 0, 0), s0=0.0, v0=1.0, friction=SlidingFriction(0.5, 0.4, 9.81)))
-    b = m.add("block", PointMass(m=1.0))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, b.frame_a)
-    with pytest.raises(ValueError, match=r"cannot export slider: .*StickSlip.* not supported by the FMU's events yet"):
-        export_fmu(m, tmp_path / "slider.fmu")
-    assert not (tmp_path / "slider.fmu").exists()
+    w = m.add("world", World(g=(0, 0, -9.81)))
+    b = m.add("ball", RigidBody(m=1.0, I=np.eye(3) * 0.004), free=True)
+    c = m.add("ground", SphereContact(r=0.1, unilateral=True, friction=ContactFriction(0.5, 0.3)))
+    m.connect(w.frame_b, c.frame_a)
+    m.connect(c.frame_b, b.frame_a)
+    with pytest.raises(ValueError, match=r"cannot export ground: .*SlidingContactModes.* not supported by the FMU's "
+                                         r"events yet"):
+        export_fmu(m, tmp_path / "rolling.fmu")
+    assert not (tmp_path / "rolling.fmu").exists()

@@ -107,11 +107,10 @@ def _c_ints(name, values):
 
 def _refuse_modes(system):
     """A ``ValueError`` naming the components with modes the FMU's events do not carry yet
-    (stick/slip friction, contacts with friction or rolling rows: :mod:`.fmu_events`), which
-    would otherwise run through as if they were not there; ``True`` when the model has modes
-    the FMU carries (frictionless one-sided contacts, rigid end stops)."""
-    contacts, stops = fmu_events.components(system)
-    return bool(contacts or stops)
+    (contacts with friction or rolling rows: :mod:`.fmu_events`), which would otherwise run
+    through as if they were not there; ``True`` when the model has modes the FMU carries
+    (frictionless one-sided contacts, rigid end stops, stick/slip friction on an axis)."""
+    return any(fmu_events.components(system))
 
 
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,

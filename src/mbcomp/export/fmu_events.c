@@ -9,7 +9,11 @@
  * Newton's restitution (C u+ + o = -e (C u- + o)), the rows in force held (C u+ + o = 0), as
  * mbcomp.assembly.impacts.impulse; o = dPhi/dt - C u. Indicators (each event is its
  * indicator falling through zero): an open contact's gap (m), a closed one's push (N); a free
- * stop's distances to its limits (rad or m), an engaged limit's push. */
+ * stop's distances to its limits (rad or m), an engaged limit's push; a stuck friction's
+ * margins F_s + push and F_s - push (N or N m), a slipping one's speed along its slip (the
+ * other indicator F_s). A stuck friction holds its rate (a row of value 0); a slipping one adds
+ * -+F_k to its joint's force. */
+#define HY_F0 (HY_NC + HY_NS) /* the first friction among the components */
 #if HYBRID
 
 static double hy_par(const Inst *c, int idx, double v) { return idx >= 0 ? c->p[idx] : v; }
@@ -27,7 +31,7 @@ static void mbev_reset(Inst *c)
     int k;
     memset(&c->hy, 0, sizeof c->hy);
     for (k = 0; k < HY_NCOMP; k++) {
-        c->hy.mode[k] = k < HY_NC ? HY_C_CLOSED0[k] : 0;
+        c->hy.mode[k] = k < HY_NC ? HY_C_CLOSED0[k] : k >= HY_F0 ? HY_F_MODE0[k - HY_F0] : 0;
         c->hy.last[k] = -1.0;
     }
     for (k = 0; k < HY_NZ; k++) c->hy.dir[k] = -1;
@@ -61,6 +65,13 @@ static void hy_add_row(Inst *c, const double *y, int k, int m)
         c->hy.phi[r] = c->hy.ev[HY_OFF_PHI + row];
         c->hy.phid[r] = c->hy.ev[HY_OFF_PHID + row];
         c->hy.bias[r] = c->hy.ev[HY_OFF_CB + row];
+    } else if (k >= HY_F0) { /* a stuck friction: its rate held */
+        int f = k - HY_F0;
+        for (j = 0; j < NU; j++) C[j] = 0.0;
+        C[HY_F_IU[f]] = 1.0;
+        c->hy.phi[r] = 0.0;
+        c->hy.phid[r] = y[NQ + HY_F_IU[f]];
+        c->hy.bias[r] = 0.0;
     } else {
         int s = k - HY_NC;
         double sign = m == 1 ? 1.0 : -1.0;
@@ -81,7 +92,7 @@ static void hy_rows(Inst *c, const double *y, int extra, int m_extra)
     c->hy.nr = 0;
     for (k = 0; k < HY_NCOMP; k++) {
         c->hy.row_of[k] = -1;
-        if (k != extra && c->hy.mode[k]) hy_add_row(c, y, k, c->hy.mode[k]);
+        if (k != extra && (k >= HY_F0 ? c->hy.mode[k] == 0 : c->hy.mode[k] != 0)) hy_add_row(c, y, k, c->hy.mode[k]);
     }
     if (extra >= 0) hy_add_row(c, y, extra, m_extra);
 }
@@ -112,6 +123,8 @@ static int hy_accel(Inst *c, double t, const double *y)
     if (hy_saddle(c, t)) return -1;
     n = NU + c->hy.nr;
     for (i = 0; i < NU; i++) c->hy.rhs[i] = c->hy.ev[HY_OFF_F + i];
+    for (i = 0; i < HY_NF; i++) /* a slipping friction's force on its speed */
+        if (c->hy.mode[HY_F0 + i]) c->hy.rhs[HY_F_IU[i]] += c->hy.mode[HY_F0 + i] == 1 ? -HY_F_KINETIC[i] : HY_F_KINETIC[i];
     for (i = 0; i < c->hy.nr; i++)
         c->hy.rhs[NU + i] = -c->hy.bias[i] - 2.0 * HY_ALPHA * c->hy.phid[i] - HY_BETA * HY_BETA * c->hy.phi[i];
     mbrt_lu_solve(n, c->hy.K, c->hy.piv, c->hy.rhs);
@@ -142,6 +155,12 @@ static int mbev_indicators(Inst *c, double t, const double *y, double *z)
         double q = y[HY_S_IQ[k]];
         z[HY_NC + 2 * k] = m == 1 ? -c->hy.lam[r] : q - hy_at(c, k, 1);
         z[HY_NC + 2 * k + 1] = m == 2 ? -c->hy.lam[r] : hy_at(c, k, 2) - q;
+    }
+    for (k = 0; k < HY_NF; k++) {
+        int m = c->hy.mode[HY_F0 + k], i = HY_NC + 2 * HY_NS + 2 * k;
+        double u = y[NQ + HY_F_IU[k]], push = m == 0 ? -c->hy.lam[c->hy.row_of[HY_F0 + k]] : 0.0;
+        z[i] = m == 0 ? HY_F_STATIC[k] + push : m == 1 ? u : HY_F_STATIC[k];
+        z[i + 1] = m == 0 ? HY_F_STATIC[k] - push : m == 2 ? -u : HY_F_STATIC[k];
     }
     return 0;
 }
@@ -256,7 +275,7 @@ static int hy_pulls(Inst *c, double t, const double *y, int *pulls)
     int k;
     if (mbev_indicators(c, t, y, c->hy.z)) return -1;
     *pulls = 0;
-    for (k = 0; k < HY_NCOMP; k++)
+    for (k = 0; k < HY_F0; k++) /* a stuck friction's row is bilateral up to its limit */
         if (c->hy.mode[k] && -c->hy.lam[c->hy.row_of[k]] < 0.0) *pulls = 1;
     return 0;
 }
@@ -269,7 +288,22 @@ static int hy_do_impact(Inst *c, int k, int lim, int *acted)
     int rests = 0, old = c->hy.mode[k], pulls = 0, m = k < HY_NC ? 1 : lim;
     memcpy(c->hy.ys, c->y, sizeof(double) * NX);
     if (hy_impact(c, t, c->hy.ys, k, m, &before, &after)) return -1;
-    if (!(before < 0.0)) return 0; /* not approaching: no impact (as mbcomp's _decide) */
+    if (!(before < 0.0)) { /* not approaching: no impact (mbcomp's _decide); at rest on it (a start
+                              touching, mbcomp's Events.start) it engages */
+        if (hy_rests(c, t, c->y, k, m, before, &rests)) return -1;
+        if (!rests) return 0;
+        *acted = 1;
+        c->hy.events++;
+        c->hy.last[k] = t;
+        c->hy.mode[k] = m;
+        memcpy(c->hy.ys, c->y, sizeof(double) * NX);
+        if (hy_consistent(c, t, c->y) || hy_pulls(c, t, c->y, &pulls)) return -1;
+        if (pulls) {
+            c->hy.mode[k] = old;
+            memcpy(c->y, c->hy.ys, sizeof(double) * NX);
+        }
+        return 0;
+    }
     memcpy(c->y, c->hy.ys, sizeof(double) * NX);
     *acted = 1;
     c->hy.events++;
@@ -289,19 +323,27 @@ static int hy_do_impact(Inst *c, int k, int lim, int *acted)
 }
 
 /* acts on indicator i at (c->t, c->y); force: it was located falling through zero */
+static int hy_switch(Inst *c, int k, int to, int *acted)
+{
+    c->hy.mode[k] = to;
+    c->hy.last[k] = c->t;
+    c->hy.events++;
+    *acted = 1;
+    return hy_consistent(c, c->t, c->y);
+}
+
 static int hy_act_on(Inst *c, int i, int force, int *acted)
 {
     int k = i < HY_NC ? i : HY_NC + (i - HY_NC) / 2, lim = i < HY_NC ? 1 : 1 + (i - HY_NC) % 2;
     int m = c->hy.mode[k];
     if (!force && !(c->hy.z[i] <= 0.0)) return 0;
-    if (m == 0) return hy_do_impact(c, k, lim, acted);
-    if (m == lim && (force || c->hy.z[i] < 0.0)) { /* a held row's push through zero: release */
-        c->hy.mode[k] = 0;
-        c->hy.last[k] = c->t;
-        c->hy.events++;
-        *acted = 1;
-        return hy_consistent(c, c->t, c->y);
+    if (k >= HY_F0) { /* stuck: break away the way the load drives (lim 1: forward); slipping: stick */
+        if (!force && !(c->hy.z[i] < 0.0)) return 0; /* a slip starts at zero speed, a margin at its limit */
+        if (m == 0) return hy_switch(c, k, lim, acted);
+        return m == lim ? hy_switch(c, k, 0, acted) : 0;
     }
+    if (m == 0) return hy_do_impact(c, k, lim, acted);
+    if (m == lim && (force || c->hy.z[i] < 0.0)) return hy_switch(c, k, 0, acted); /* a held row's push: release */
     return 0;
 }
 
@@ -313,11 +355,10 @@ static int mbev_act(Inst *c, int which, int *changed)
     int i, n, acted;
     *changed = 0;
     if (mb_refresh(c)) return -1;
-    if (which >= 0) {
+    if (which >= 0) { /* the located event, then what it brings about at once (a break-away) */
         acted = 0;
         if (mbev_indicators(c, c->t, c->y, c->hy.z) || hy_act_on(c, which, 1, &acted)) return -1;
         *changed = acted;
-        return 0;
     }
     for (n = 0; n < HY_MAX_EVENTS; n++) {
         acted = 0;
@@ -346,6 +387,10 @@ static int mbev_step(Inst *c, double h)
     c->d[1] = c->beta;
     for (i = 0; i < NX; i++) c->atol[i] = c->rtol * 1e-2 * NOMINAL[i];
     t_end = c->t + h;
+    if (!c->hy.started) { /* the start's events: touching, beyond a friction's limit */
+        if (mbev_act(c, -1, &changed)) { c->mode = M_ERROR; return -1; }
+        c->hy.started = 1;
+    }
     for (n = 0; n < HY_MAX_EVENTS; n++) {
         if (!(t_end > c->t)) return 0;
         memset(&st, 0, sizeof st);

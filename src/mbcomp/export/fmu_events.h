@@ -5,21 +5,23 @@
  * The generated model file defines, with HYBRID 1: HY_NC contacts and HY_NS stops, their
  * tables (HY_C_*: holonomic row in the evaluation, restitution, its parameter index or -1,
  * closed at the start; HY_S_*: q and u index, limits and restitution and their parameter
- * indices), the evaluation program mbhy_eval (HY_NH, HY_NW, HY_NOUT, HY_MH, HY_OFF_*),
+ * indices; HY_NF frictions, HY_F_*: q and u index, static and kinetic force, start mode), the
+ * evaluation program mbhy_eval (HY_NH, HY_NW, HY_NOUT, HY_MH, HY_OFF_*),
  * mbhy_eval_params, HY_REST (m or rad: a rebound rising less rests), HY_CHATTER, the
  * Baumgarte gains HY_ALPHA, HY_BETA and HY_VR, the first event variable's value reference. */
 #ifndef HYBRID
 #define HYBRID 0
 #endif
 #if HYBRID
-#define HY_NCOMP (HY_NC + HY_NS)   /* components with modes: contacts, then stops */
-#define HY_NZ (HY_NC + 2 * HY_NS)  /* event indicators: a contact's, a stop's two */
+#define HY_NCOMP (HY_NC + HY_NS + HY_NF) /* components with modes: contacts, stops, frictions */
+#define HY_NZ (HY_NC + 2 * HY_NS + 2 * HY_NF) /* event indicators: a contact's, a stop's two, a friction's two */
 #define HY_NR (HY_NCOMP + 1)       /* rows in force at most: one per component, an impact's */
 #define HY_NK (NU + HY_NR)
 #define HY_MAX_EVENTS 100000       /* events acted on in one DoStep or event iteration at most */
 
 typedef struct {
-    int mode[HY_NCOMP + 1];        /* contacts: 0 open, 1 closed; stops: 0 free, 1 lo, 2 hi */
+    int mode[HY_NCOMP + 1];        /* contacts: 0 open, 1 closed; stops: 0 free, 1 lo, 2 hi;
+                                      frictions: 0 stick, 1 slip+, 2 slip- */
     double hits[HY_NCOMP + 1][HY_CHATTER + 2]; /* the last impacts' times (s), oldest first */
     int nhits[HY_NCOMP + 1];
     double last[HY_NCOMP + 1];     /* time (s) of each component's last event, -1 before any */
@@ -31,6 +33,7 @@ typedef struct {
     double ud[NU + 1], lam[HY_NR + 1], z[HY_NZ + 1], ys[NX + 1];
     double evwork[3 * HY_NZ + NX + 1], yev[NX + 1];
     int dir[HY_NZ + 1], fresh;     /* Co-Simulation: the event acted on last, its function at zero */
+    int started;                   /* Co-Simulation: the start's events were acted on */
     long events;                   /* events acted on */
 } mbev;
 

@@ -40,7 +40,7 @@ from ..codegen.graph import CodegenError
 from ..codegen.printers import Program
 from ..codegen.toolchain import chunk
 from ..codegen.tracer import FIELDS, trace
-from ..modeling.events import AxisRow, ContactRow, EventRow, Impact, Switch
+from ..modeling.events import AxisRow, ContactRow, EventRow, Impact, StickRow, Switch
 
 __all__ = ["plan", "components", "hybrid_outputs", "initial_state", "VR_EVENTS", "REST_HEIGHT", "CHATTER"]
 
@@ -103,20 +103,41 @@ def _stop(system, e, modes):
     return e.q.start, e.u.start, float(lo), float(hi), float(modes.action("lo", "free").restitution)
 
 
+def _friction(system, e, modes):
+    """``(q index, u index, static, kinetic, start mode: 0 stick, 1 slip+, 2 slip-)`` of a
+    Coulomb friction's stick/slip modes on a 1-DOF joint's axis."""
+    rows = modes.rows("stick") if modes.has_force and not modes.slips else []
+    ok = (len(rows) == 1 and isinstance(rows[0], StickRow) and rows[0].sign == 1.0 and modes.start in
+          ("stick", "slip+", "slip-") and modes.rows("slip+") == [] == modes.rows("slip-")
+          and not modes.events(np.zeros(1), np.zeros(1), "stick")
+          and modes.events(np.zeros(1), np.ones(1), "slip+") == [("stick", 1.0, -1)]
+          and modes.events(np.zeros(1), -np.ones(1), "slip-") == [("stick", -1.0, 1)]
+          and modes.action("break+", "stick") == Switch("slip+") and modes.action("break-", "stick") == Switch("slip-")
+          and modes.action("stick", "slip+") == Switch("stick") == modes.action("stick", "slip-")
+          and modes.force("stick") == 0.0 and modes.force("slip+") == -modes.force("slip-") <= 0.0)
+    if not ok or e.drive or e.q.stop - e.q.start != 1:
+        _refuse(e.name, f"the modes of {type(e.comp).__name__} ({type(modes).__name__}: a force or rows other than a "
+                        "Coulomb friction's stick/slip+/slip-)")
+    return (e.q.start, e.u.start, float(rows[0].limit), float(-modes.force("slip+")),
+            ("stick", "slip+", "slip-").index(modes.start))
+
+
 def components(system):
-    """``(contacts, stops)``: ``[(name, row, restitution, closed at start)]`` and ``[(name, iq,
-    iu, lo, hi, restitution)]`` of the joints with modes; a ``ValueError`` naming any the FMU
-    cannot carry."""
-    contacts, stops = [], []
+    """``(contacts, stops, frictions)``: ``[(name, row, restitution, closed at start)]``,
+    ``[(name, iq, iu, lo, hi, restitution)]`` and ``[(name, iq, iu, static, kinetic, start
+    mode)]`` of the joints with modes; a ``ValueError`` naming any the FMU cannot carry."""
+    contacts, stops, frictions = [], [], []
     for e in system.topology.edges:
         modes = e.comp.modes(system.P[e.name]) if e.kind == "joint" else None
         if modes is None:
             continue
-        if e.comp.tree_edge:
+        if e.comp.tree_edge and modes.has_force:
+            frictions.append((e.name, *_friction(system, e, modes)))
+        elif e.comp.tree_edge:
             stops.append((e.name, *_stop(system, e, modes)))
         else:
             contacts.append((e.name, *_contact(system, e, modes)))
-    return contacts, stops
+    return contacts, stops, frictions
 
 
 def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
@@ -126,8 +147,8 @@ def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
     defines, tables and evaluation program ``fmu_events.c`` reads); ``tolerance`` sets the
     resting height (``REST_HEIGHT`` x 1e-2 ``tolerance``: the FMU's atol); ``layout``, the
     right-hand side's parameter layout, makes restitutions and limits tunable parameters."""
-    contacts, stops = components(system)
-    if not contacts and not stops:
+    contacts, stops, frictions = components(system)
+    if not contacts and not stops and not frictions:
         return SimpleNamespace(enabled=False, components=[], indicators=[], times=[], c="#define HYBRID 0\n")
     mine = {c[0] for c in contacts}
     if set(system.topology.cut) - mine or system.nonholonomic:
@@ -135,15 +156,18 @@ def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
         _refuse(", ".join(others), "a model with loops or rolling rows besides its one-sided contacts")
     tr = trace(system, max_nodes, program="eval")
     if tr.drives or not tr.qrate_identity or system.nq != system.nu:
-        _refuse(", ".join(mine | {s[0] for s in stops}), "a model with drives or coordinates whose rates are not "
+        _refuse(", ".join(mine | {s[0] for s in stops + frictions}), "a model with drives or coordinates whose "
+                "rates are not "
                 "its speeds (quaternions)")
     if layout is not None and tr.layout != layout:
         raise CodegenError("the evaluation program's parameters differ from the right-hand side's")
-    return SimpleNamespace(enabled=True, components=[c[0] for c in contacts] + [s[0] for s in stops],
+    names = [c[0] for c in contacts] + [s[0] for s in stops] + [f[0] for f in frictions]
+    return SimpleNamespace(enabled=True, components=names,
                            indicators=[f"events.{c[0]}.{_row_name(c[1], system)}" for c in contacts]
-                           + [f"events.{s[0]}.{k}" for s in stops for k in ("lo", "hi")],
-                           times=[f"events.{n}.time" for n in [c[0] for c in contacts] + [s[0] for s in stops]],
-                           c=_c(system, tr, contacts, stops, tolerance, max_nodes))
+                           + [f"events.{s[0]}.{k}" for s in stops for k in ("lo", "hi")]
+                           + [f"events.{f[0]}.{k}" for f in frictions for k in ("forward", "backward")],
+                           times=[f"events.{n}.time" for n in names],
+                           c=_c(system, tr, contacts, stops, frictions, tolerance))
 
 
 def _row_name(row, system):
@@ -160,7 +184,7 @@ def _tunable(layout, name, param, idx, value):
     return -1
 
 
-def _c(system, tr, contacts, stops, tolerance, max_nodes):
+def _c(system, tr, contacts, stops, frictions, tolerance):
     groups = {"eval": tr.groups["eval"]}
     prog = Program(tr.graph, groups, guard_groups={"eval": tr.guard_groups["eval"]})
     parts, n_work = prog.c_parts("eval", "mbhy_eval", chunk, n_parts=lambda n: 1)
@@ -191,6 +215,9 @@ def _c(system, tr, contacts, stops, tolerance, max_nodes):
             + dbls("HY_S_LO", [s[3] for s in stops]) + dbls("HY_S_HI", [s[4] for s in stops])
             + dbls("HY_S_E", [s[5] for s in stops]) + ints("HY_S_LOP", [p[0] for p in s_par])
             + ints("HY_S_HIP", [p[1] for p in s_par]) + ints("HY_S_EP", [p[2] for p in s_par])
+            + f"#define HY_NF {len(frictions)}\n" + ints("HY_F_IQ", [f[1] for f in frictions])
+            + ints("HY_F_IU", [f[2] for f in frictions]) + dbls("HY_F_STATIC", [f[3] for f in frictions])
+            + dbls("HY_F_KINETIC", [f[4] for f in frictions]) + ints("HY_F_MODE0", [f[5] for f in frictions])
             + "\n".join(parts) + "\n" + prog.c_params("mbhy_eval_params") + "\n")
 
 
