@@ -34,9 +34,9 @@ What the FMU holds (see docs/design/fmu.md):
 * the start values of every coordinate and speed as parameters ``start.<name>``, projected
   onto the constraints at initialization when changed.
 
-* a model with rigid end stops or frictionless one-sided contacts: event indicators, Event
-  Mode's impacts and mode switches, Co-Simulation locating its events (:mod:`.fmu_events`);
-  friction's modes are refused, naming the joint.
+* a model with rigid end stops, frictionless one-sided contacts or stick/slip friction on an
+  axis: event indicators, Event Mode's impacts and mode switches, Co-Simulation locating its
+  events (:mod:`.fmu_events`); a contact's friction is refused, naming the contact.
 
 Not yet: units of the outputs; FMU states and directional derivatives.
 

@@ -1,7 +1,7 @@
 """FMU events (issue 33 item 1): what a model with modes carries into its FMU.
 
 A model whose joints declare modes (:meth:`mbcomp.modeling.roles.Joint.modes`: unilateral
-contacts, rigid end stops) exports to an FMU whose C (``fmu_events.c``) keeps the active set
+contacts, rigid end stops, an axis's stick/slip friction) exports to an FMU whose C (``fmu_events.c``) keeps the active set
 (one mode per component), steps the system of the rows in force -- the assembled evaluation
 program's mass matrix, forces and rows, the rows of closed contacts and engaged stops held by
 the Lagrange index-1 solve with Baumgarte's gains -- and acts at events as the hybrid layer
@@ -11,15 +11,16 @@ rise ``REST_HEIGHT`` atol or a Zeno accumulation (``CHATTER`` shrinking interval
 the resting mode, the state then made consistent with its rows; a held row whose push falls
 through zero is released.
 
-Event indicators, one per contact and two per stop, are continuous: an open contact's gap (m)
-or a closed one's normal force (N), a free stop's distance to each limit (rad or m) or an
-engaged limit's push (N m or N). Every event is the indicator falling through zero. Model
+Event indicators, one per contact and two per stop or friction, are continuous: an open
+contact's gap (m) or a closed one's normal force (N), a free stop's distance to each limit
+(rad or m) or an engaged limit's push (N m or N), a stuck friction's margins to its break-away
+force or a slipping one's speed. Every event is the indicator falling through zero. Model
 Exchange acts in ``fmi3UpdateDiscreteStates``/``fmi2NewDiscreteStates`` and reports
 ``valuesOfContinuousStatesChanged``; Co-Simulation locates the events on its own DOP853's
 dense output (the runtime's ``mbrt_dop853_events``) inside ``DoStep`` and acts the same way.
 
-What is supported is read from the modes' declarations (:func:`plan`); anything else (stick/slip
-friction, contacts with friction or rolling rows, a model with loops besides its contacts,
+What is supported is read from the modes' declarations (:func:`components`); anything else
+(contacts with friction or rolling rows, a model with loops besides its contacts,
 coordinates whose rates are not the speeds) is refused naming the component.
 
 Examples
