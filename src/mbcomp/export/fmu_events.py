@@ -54,12 +54,12 @@ CHATTER = 30
 #: Baumgarte gains (1/s) of the rows in force (simulate's defaults)
 GAINS = (10.0, 10.0)
 
-_NOT_YET = ("export without it (e.g. limits=None, unilateral=False), or use a compliant stop (a flange force, "
-            "which the FMU carries)")
+_NOT_YET = ("export without it (e.g. limits=None, unilateral=False, friction=None), or use a compliant stop or "
+            "a regularized friction (flange forces, which the FMU carries)")
 
 
 def _refuse(name, why):
-    raise ValueError(f"cannot export {name}: {why} is not supported by the FMU's events yet -> {_NOT_YET}")
+    raise ValueError(f"cannot export {name}: {why}: not supported by the FMU's events yet -> {_NOT_YET}")
 
 
 def _contact(system, e, modes):
@@ -162,6 +162,8 @@ def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
                 "its speeds (quaternions)")
     if layout is not None and tr.layout != layout:
         raise CodegenError("the evaluation program's parameters differ from the right-hand side's")
+    if tr.inputs:
+        _refuse(", ".join(i.name for i in tr.inputs), "an mbcomp.Input in a model with modes")
     names = [c[0] for c in contacts] + [s[0] for s in stops] + [f[0] for f in frictions]
     return SimpleNamespace(enabled=True, components=names,
                            indicators=[f"events.{c[0]}.{_row_name(c[1], system)}" for c in contacts]
