@@ -47,6 +47,18 @@ def block(mu_s=0.3, mu_k=0.25, k=20.0, v0=2.0):
     return m
 
 
+def shaker():
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, -9.81)))
+    s = m.add("s", Prismatic(n=(1, 0, 0), s0=0.5, v0=0.0, limits=(-1.0, 1.0), restitution=0.0))
+    b = m.add("b", PointMass(m=2.0))
+    f = m.add("push", Force(f=lambda t, s, v: 10.0 * np.cos(t)))
+    m.connect(w.frame_b, s.frame_a)
+    m.connect(s.frame_b, b.frame_a)
+    m.connect(s.axis, f.flange_b)
+    return m
+
+
 #: name: (model, end time (s), Co-Simulation output interval (s), component, states)
 MODELS = {
     "ball": (lambda: mbcomp.load_model_file(ROOT / "models/bouncing_ball.py").build(), 4.3, 2e-4, "ground",
@@ -56,6 +68,7 @@ MODELS = {
     "door": (lambda: mbcomp.load_model_file(ROOT / "models/door.py").build(), 8.0, 1e-3, "hinge",
              ["hinge.phi", "hinge.w"]),
     "block": (block, 5.0, 1e-3, "s", ["s.s", "s.v"]),
+    "shaker": (shaker, 8.0, 1e-3, "s", ["s.s", "s.v"]),
 }
 
 

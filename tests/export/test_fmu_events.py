@@ -39,10 +39,11 @@ MODELS = {
     "resting": (lambda: stop_pendulum(limits=(0.3, 3.0), e=0.5, phi0=1.2), 2.5, 1e-4),
     "door": (lambda: load_model("models/door.py").build(), 8.0, 1e-3),
     "block": (lambda: block(), 5.0, 1e-3),
+    "shaker": (lambda: shaker(), 8.0, 1e-3),
 }
-COMPONENT = {"ball": "ground", "pendulum": "hinge", "resting": "hinge", "door": "hinge", "block": "s"}
+COMPONENT = {"ball": "ground", "pendulum": "hinge", "resting": "hinge", "door": "hinge", "block": "s", "shaker": "s"}
 STATES = {"ball": ["free.r.z", "free.v.z"], "pendulum": ["hinge.phi", "hinge.w"], "resting": ["hinge.phi", "hinge.w"],
-          "door": ["hinge.phi", "hinge.w"], "block": ["s.s", "s.v"]}
+          "door": ["hinge.phi", "hinge.w"], "block": ["s.s", "s.v"], "shaker": ["s.s", "s.v"]}
 
 
 def block(mu_s=0.3, mu_k=0.25, k=20.0, v0=2.0):
@@ -99,8 +100,25 @@ def _run(path, name, kind):
                              output=STATES[name] + [f"events.{comp}.time", f"events.{comp}.{_indicator(name)}"])
 
 
+def shaker():
+    """A 2 kg slider between stops at -1 and 1 m with e = 0, pushed by 10 cos(t) N: it lands
+    on a stop and stays, released when the push turns (its indicator, the stop's push, falls
+    through zero at t = pi/2 + k pi), and lands on the other."""
+    from mbcomp.library import Force, PointMass, Prismatic, World
+
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, -9.81)))
+    s = m.add("s", Prismatic(n=(1, 0, 0), s0=0.5, v0=0.0, limits=(-1.0, 1.0), restitution=0.0))
+    b = m.add("b", PointMass(m=2.0))
+    f = m.add("push", Force(f=lambda t, s, v: 10.0 * np.cos(t)))
+    m.connect(w.frame_b, s.frame_a)
+    m.connect(s.frame_b, b.frame_a)
+    m.connect(s.axis, f.flange_b)
+    return m
+
+
 def _indicator(name):
-    return {"ball": "normal", "block": "forward"}.get(name, "lo")
+    return {"ball": "normal", "block": "forward", "shaker": "hi"}.get(name, "lo")
 
 
 def _event_times(r, comp):
@@ -121,11 +139,11 @@ def _on_grid(r, res, var):
 
 @pytest.mark.parametrize("fmi", VERSIONS)
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
-@pytest.mark.parametrize("name", ["ball", "pendulum", "door", "block"])
+@pytest.mark.parametrize("name", ["ball", "pendulum", "door", "block", "shaker"])
 def test_events_and_states_are_mbcomps(name, kind, fmi, made, reference):
     """The bouncing ball's 32 impacts and its Zeno rest at 4.06 s (mbcomp's CHATTER rule), the
     pendulum's rebounds on its lower stop, the door's on both of its stops, the block's stick,
-    break-away and final stick: each event where mbcomp.simulate has it (1e-9 s), the states
+    break-away and final stick, the shaker's landings and releases at pi/2 + k pi: each event where mbcomp.simulate has it (1e-9 s), the states
     on the grid to 1e-8."""
     path = made(name, fmi)
     assert validate_fmu(str(path)) == []
@@ -143,6 +161,8 @@ def test_events_and_states_are_mbcomps(name, kind, fmi, made, reference):
         assert np.all(r["free.r.z"][after] == pytest.approx(0.1, abs=1e-12))  # on the ground: z = r
         assert np.all(np.abs(r["free.v.z"][after]) < 1e-12)
         assert np.all(r["events.ground.normal"][after] == pytest.approx(0.5 * 9.81, rel=1e-9))  # its weight, N
+    if name == "shaker":  # released where the push 10 cos(t) turns
+        assert got[[1, 3, 5]] == pytest.approx(np.pi / 2 + np.pi * np.arange(3), abs=1e-9)
     if name == "block":  # stuck for good: the spring's pull k s (N) within the static limit, the speed 0
         after = r["time"] > want[-1] + 1e-9
         assert np.all(r["s.v"][after] == 0.0) and abs(20.0 * r["s.s"][-1]) < 0.3 * 2.0 * 9.81

@@ -372,6 +372,23 @@ static int mbev_act(Inst *c, int which, int *changed)
     return -1;
 }
 
+/* Co-Simulation: an event located on the near side of its root (the indicator still above
+   zero: a push released, a margin broken a little early) is stepped across by the location
+   tolerance in its mode, so the next mode starts past the root (a released load that would
+   press again at once chattered at one instant): 0, or -1 after logging */
+static int hy_across(Inst *c, int which, double tol, double t_end)
+{
+    double t1 = fmin(c->t + tol, t_end);
+    int i;
+    if (mbev_indicators(c, c->t, c->y, c->hy.z)) return -1;
+    if (!(c->hy.z[which] > 0.0) || !(t1 > c->t)) return 0; /* crossed (or at zero): act here */
+    /* one Euler step of a tolerance's length (its error, (t1 - t)^2 |d2y/dt2| / 2, ~1e-24) */
+    if (mbev_rhs(c, c->t, c->y, c->dy)) return -1;
+    for (i = 0; i < NX; i++) c->y[i] += (t1 - c->t) * c->dy[i];
+    c->t = t1;
+    return 0;
+}
+
 /* Co-Simulation: from c->t by h with DOP853 at c->rtol, the events located on its dense
    output (mbrt_dop853_events) and acted on: 0, or -1 after logging */
 static int mbev_step(Inst *c, double h)
@@ -420,7 +437,7 @@ static int mbev_step(Inst *c, double h)
         }
         memcpy(c->y, c->hy.yev, sizeof(double) * NX);
         c->t = ev.t_event;
-        if (mbev_act(c, ev.which, &changed)) { c->mode = M_ERROR; return -1; }
+        if (hy_across(c, ev.which, ev.tol, t_end) || mbev_act(c, ev.which, &changed)) { c->mode = M_ERROR; return -1; }
         c->hy.fresh = ev.which;
     }
     say(c, 1, "chattering: %d events within the step from t=%g", HY_MAX_EVENTS, c->t);
