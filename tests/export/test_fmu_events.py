@@ -258,3 +258,17 @@ def test_modes_the_fmu_cannot_carry_are_refused_naming_the_component(tmp_path):
                                          r"events yet"):
         export_fmu(m, tmp_path / "rolling.fmu")
     assert not (tmp_path / "rolling.fmu").exists()
+
+
+def test_the_command_line_exports_the_bouncing_ball(tmp_path, reference):
+    """``mbcomp export models/bouncing_ball.py -o ball.fmu``: FMPy validates it and runs it as
+    Model Exchange and Co-Simulation with mbcomp.simulate's bounce times (1e-9 s)."""
+    from mbcomp.cli.main import main
+
+    path = tmp_path / "ball.fmu"
+    assert main(["export", load_model("models/bouncing_ball.py").__file__, "-o", str(path)]) == 0
+    assert validate_fmu(str(path)) == []
+    times = reference("ball")[0]
+    for kind in ("ModelExchange", "CoSimulation"):
+        got = _event_times(_run(path, "ball", kind), "ground")
+        assert len(got) == len(np.unique(times)) and np.max(np.abs(got - np.unique(times))) < 1e-9
