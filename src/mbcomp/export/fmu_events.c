@@ -170,42 +170,51 @@ static int hy_event_fn(void *ctx, double t, const double *y, double *g)
     return mbev_indicators((Inst *)ctx, t, y, g) ? 1 : 0;
 }
 
-/* y moved onto the rows in force (positions by Gauss-Newton, speeds by least squares, as
-   mbcomp.assembly.kkt.project_state): 0, or -1 after logging */
-static int hy_consistent(Inst *c, double t, double *y)
+/* x = (C C^T)^-1 b for the rows of the last hy_rows (b: nr values, x may be b): 0, or -1 */
+static int hy_gram_solve(Inst *c, double t, const double *b, double *x)
 {
-    int it, i, j, l, nr = 0;
-    double norm = 0.0, *G = c->hy.G, *x = c->hy.rhs;
-    for (it = 0; it <= 30; it++) {
-        if (hy_eval(c, t, y)) return -1;
-        hy_rows(c, y, -1, 0);
-        nr = c->hy.nr;
-        if (!nr) return 0;
-        for (norm = 0.0, i = 0; i < nr; i++) norm = fmax(norm, fabs(c->hy.phi[i]));
-        if (norm <= 1e-15 || it == 30) break;
-        for (i = 0; i < nr; i++)
-            for (j = 0; j < nr; j++)
-                for (G[i * nr + j] = 0.0, l = 0; l < NU; l++) G[i * nr + j] += c->hy.C[i * NU + l] * c->hy.C[j * NU + l];
-        if (mbrt_lu_factor(nr, G, c->hy.piv)) { say(c, 1, "the rows in force are dependent at t=%g", t); return -1; }
-        memcpy(x, c->hy.phi, sizeof(double) * nr);
-        mbrt_lu_solve(nr, G, c->hy.piv, x);
-        for (l = 0; l < NU; l++)
-            for (i = 0; i < nr; i++) y[l] -= c->hy.C[i * NU + l] * x[i];
-    }
-    if (norm > 1e-10 || nr <= 0 || nr > HY_NR) {
-        say(c, 1, "the state cannot be moved onto the rows in force at t=%g (|Phi| = %g)", t, norm);
-        return -1;
-    }
+    int i, j, l, nr = c->hy.nr;
+    double *G = c->hy.G;
+    if (nr <= 0 || nr > HY_NR) return -1;
     for (i = 0; i < nr; i++)
         for (j = 0; j < nr; j++)
             for (G[i * nr + j] = 0.0, l = 0; l < NU; l++) G[i * nr + j] += c->hy.C[i * NU + l] * c->hy.C[j * NU + l];
     if (mbrt_lu_factor(nr, G, c->hy.piv)) { say(c, 1, "the rows in force are dependent at t=%g", t); return -1; }
-    memcpy(x, c->hy.phid, sizeof(double) * nr);
+    memmove(x, b, sizeof(double) * nr);
     mbrt_lu_solve(nr, G, c->hy.piv, x);
+    return 0;
+}
+
+/* y moved onto the rows in force and, extra >= 0, component extra's row in mode m (positions by
+   Gauss-Newton; with speeds, the speeds by least squares, as mbcomp.assembly.kkt.project_state):
+   0, or -1 after logging */
+static int hy_project(Inst *c, double t, double *y, int extra, int m, int speeds)
+{
+    int it, i, l, nr = 0;
+    double norm = 0.0, *x = c->hy.rhs;
+    for (it = 0; it <= 30; it++) {
+        if (hy_eval(c, t, y)) return -1;
+        hy_rows(c, y, extra, m);
+        nr = c->hy.nr;
+        if (!nr) return 0;
+        for (norm = 0.0, i = 0; i < nr; i++) norm = fmax(norm, fabs(c->hy.phi[i]));
+        if (norm <= 1e-15 || it == 30) break;
+        if (hy_gram_solve(c, t, c->hy.phi, x)) return -1;
+        for (l = 0; l < NU; l++)
+            for (i = 0; i < nr; i++) y[l] -= c->hy.C[i * NU + l] * x[i];
+    }
+    if (norm > 1e-10) {
+        say(c, 1, "the state cannot be moved onto the rows in force at t=%g (|Phi| = %g)", t, norm);
+        return -1;
+    }
+    if (!speeds) return 0;
+    if (hy_gram_solve(c, t, c->hy.phid, x)) return -1;
     for (l = 0; l < NU; l++)
         for (i = 0; i < nr; i++) y[NQ + l] -= c->hy.C[i * NU + l] * x[i];
     return 0;
 }
+
+static int hy_consistent(Inst *c, double t, double *y) { return hy_project(c, t, y, -1, 0, 1); }
 
 /* the impact of component k closing its row (stops: limit lim) at (t, y): y's speeds become
    u+; *before, *after: the row's speed before and after (m/s or rad/s) */
@@ -309,6 +318,9 @@ static int hy_do_impact(Inst *c, int k, int lim, int *acted)
     c->hy.events++;
     c->hy.last[k] = t;
     hy_hit(c, k, t);
+    /* where the importer stepped past the touch (a fixed step: the body inside), the positions
+       back onto the row; a located event's 1e-15 m is moved as much (the speeds are the impact's) */
+    if (hy_project(c, t, c->y, k, m, 0)) return -1;
     if (hy_e(c, k) > 0.0 && hy_rests(c, t, c->y, k, m, after, &rests)) return -1;
     if (hy_e(c, k) == 0.0 || rests || hy_chattering(c, k)) {
         c->hy.mode[k] = m;
