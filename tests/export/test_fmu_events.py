@@ -305,3 +305,30 @@ def test_a_fixed_step_importer_cannot_sink_the_ball(made):
     t, z, v = r["time"], r["free.r.z"], r["free.v.z"]
     after = np.flatnonzero((np.diff(t) == 0.0) & (np.diff(np.sign(v)) > 0)) + 1  # an event reversing the fall
     assert len(after) >= 10 and np.all(z[after - 1] < 0.1) and np.allclose(z[after], 0.1, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_an_input_presses_a_slider_onto_a_stop_and_releases_it(kind, tmp_path):
+    """A 2 kg slider between stops at -1 and 1 m (e = 0) pushed by the FMU's input u: +10 N
+    lands it on the upper stop at sqrt(0.2) s, u turned to -10 N at 1 s releases it there (the
+    stop's push jumps below zero between two steps: Co-Simulation acts on it at the next step's
+    start, Model Exchange in the Event Mode FMPy's input event asks for) and it lands on the
+    lower stop at 1 + sqrt(0.8) s."""
+    from mbcomp.library import Force, PointMass, Prismatic, World
+
+    m = mbcomp.Model()
+    w = m.add("world", World(g=(0, 0, -9.81)))
+    s = m.add("s", Prismatic(n=(1, 0, 0), s0=0.5, v0=0.0, limits=(-1.0, 1.0), restitution=0.0))
+    b = m.add("b", PointMass(m=2.0))
+    f = m.add("push", Force(f=mbcomp.Input("u", unit="N", description="push")))
+    m.connect(w.frame_b, s.frame_a)
+    m.connect(s.frame_b, b.frame_a)
+    m.connect(s.axis, f.flange_b)
+    path = tmp_path / "slider.fmu"
+    assert export_fmu(m, path, stop_time=2.5)["inputs"] == ["u"] and validate_fmu(str(path)) == []
+    signal = np.array([(0.0, 10.0), (1.0, 10.0), (1.0, -10.0), (2.5, -10.0)], dtype=[("time", float), ("u", float)])
+    r = fmpy.simulate_fmu(str(path), fmi_type=kind, stop_time=2.5, input=signal, output=["s.s", "events.s.time"],
+                          output_interval=0.01 if kind == "ModelExchange" else 1e-3,
+                          relative_tolerance=1e-14 if kind == "ModelExchange" else 1e-12)
+    assert _event_times(r, "s") == pytest.approx([np.sqrt(0.2), 1.0, 1.0 + np.sqrt(0.8)], abs=1e-9)
+    assert r["s.s"][-1] == pytest.approx(-1.0, abs=1e-12)

@@ -416,10 +416,9 @@ static int mbev_step(Inst *c, double h)
     c->d[1] = c->beta;
     for (i = 0; i < NX; i++) c->atol[i] = c->rtol * 1e-2 * NOMINAL[i];
     t_end = c->t + h;
-    if (!c->hy.started) { /* the start's events: touching, beyond a friction's limit */
-        if (mbev_act(c, -1, &changed)) { c->mode = M_ERROR; return -1; }
-        c->hy.started = 1;
-    }
+    /* what is due at the step's start (the run's start: touching, beyond a friction's limit; an
+       input changed since the last step: a push turned) -- the runtime sees only crossings */
+    if (mbev_act(c, -1, &changed)) { c->mode = M_ERROR; return -1; }
     for (n = 0; n < HY_MAX_EVENTS; n++) {
         if (!(t_end > c->t)) return 0;
         memset(&st, 0, sizeof st);

@@ -33,7 +33,6 @@ typedef struct {
     double ud[NU + 1], lam[HY_NR + 1], z[HY_NZ + 1], ys[NX + 1];
     double evwork[3 * HY_NZ + NX + 1], yev[NX + 1];
     int dir[HY_NZ + 1], fresh;     /* Co-Simulation: the event acted on last, its function at zero */
-    int started;                   /* Co-Simulation: the start's events were acted on */
     long events;                   /* events acted on */
 } mbev;
 

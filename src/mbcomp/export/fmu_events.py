@@ -162,8 +162,6 @@ def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
                 "its speeds (quaternions)")
     if layout is not None and tr.layout != layout:
         raise CodegenError("the evaluation program's parameters differ from the right-hand side's")
-    if tr.inputs:
-        _refuse(", ".join(i.name for i in tr.inputs), "an mbcomp.Input in a model with modes")
     names = [c[0] for c in contacts] + [s[0] for s in stops] + [f[0] for f in frictions]
     return SimpleNamespace(enabled=True, components=names,
                            indicators=[f"events.{c[0]}.{_row_name(c[1], system)}" for c in contacts]
