@@ -207,10 +207,16 @@ static int hy_project(Inst *c, double t, double *y, int extra, int m, int speeds
         say(c, 1, "the state cannot be moved onto the rows in force at t=%g (|Phi| = %g)", t, norm);
         return -1;
     }
-    if (!speeds) return 0;
-    if (hy_gram_solve(c, t, c->hy.phid, x)) return -1;
-    for (l = 0; l < NU; l++)
-        for (i = 0; i < nr; i++) y[NQ + l] -= c->hy.C[i * NU + l] * x[i];
+    if (speeds) {
+        if (hy_gram_solve(c, t, c->hy.phid, x)) return -1;
+        for (l = 0; l < NU; l++)
+            for (i = 0; i < nr; i++) y[NQ + l] -= c->hy.C[i * NU + l] * x[i];
+    }
+    for (l = 0; l < NX; l++)
+        if (!isfinite(y[l])) {
+            say(c, 1, "moving the state onto the rows in force at t=%g gave a non-finite value", t);
+            return -1;
+        }
     return 0;
 }
 
