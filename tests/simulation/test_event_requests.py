@@ -58,14 +58,13 @@ def test_a_start_outside_the_stops_is_a_model_problem(joint, where):
         mbcomp.simulate(_arm(joint), t_end=0.1)
 
 
-def test_an_fmu_of_a_model_with_stops_is_refused(tmp_path):
-    """The FMU's runtime locates no events: exported, the door would swing through its stop.
-    The export says so, naming the hinge, instead of writing such an FMU."""
+def test_an_fmu_of_a_model_with_stops_carries_their_events(tmp_path):
+    """The door's FMU watches both of its stops: an event indicator per limit (issue 33; the
+    FMU's events against mbcomp's are tests/export/test_fmu_events.py)."""
     from conftest import load_model
 
-    with pytest.raises(ValueError, match=r"cannot export hinge: components with events .* pass through"):
-        mbcomp.export_fmu(load_model("models/door.py").build(), tmp_path / "door.fmu")
-    assert not (tmp_path / "door.fmu").exists()
+    info = mbcomp.export_fmu(load_model("models/door.py").build(), tmp_path / "door.fmu", kind="cs")
+    assert info["events"] == ["events.hinge.lo", "events.hinge.hi"] and (tmp_path / "door.fmu").exists()
 
 
 def test_evaluations_are_counted_over_every_mode():

@@ -252,7 +252,7 @@ def build_description(ident):
 
 def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
                        experiment=(1.0, 1e-12), state_units=(), starts=(), state_outputs=(), nominals=None,
-                       dependencies=None):
+                       dependencies=None, events=((), ())):
     """FMI 3.0's ``modelDescription.xml``: the parameters (value references ``0..NP-1``), the
     states and their derivatives, the time, the outputs, the inputs and the start values, in
     the order the generated C (``fmi3.c``) numbers them; ``kind`` is ``"me"``, ``"cs"`` or
@@ -261,7 +261,9 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
     out)`` of :func:`mbcomp.export.derivatives.structure` (known positions per state derivative
     and per output slot); given, the FMU declares its directional and adjoint derivatives and the
     dependencies of its outputs and derivatives (a state that is an output depends on itself).
-    :func:`mbcomp.export.fmu.export_fmu` calls it with what it built."""
+    ``events``: the event indicators' and last event times' names
+    (:func:`mbcomp.export.fmu_events.plan`). :func:`mbcomp.export.fmu.export_fmu` calls it
+    with what it built."""
     nx, npar = len(states), len(pv)
     souts = sorted(state_outputs)
     nominal = [f' nominal="{float(v)!r}"' for v in nominals] if nominals is not None else [""] * nx
@@ -301,6 +303,10 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
     outs = [vr_out + k for _, k in outputs]
     vr_in = vr_out + inputs[1]
     dep_der, dep_out, provides = _dependencies3(dependencies, nx, npar, vr_in, len(der), [k for _, k in outputs])
+    ev_rows, indicators, times = _event_rows(events)
+    rows += [r3 for r3, _ in ev_rows]
+    outs += times
+    dep_out += [""] * len(times)  # the last event times: discrete, no dependencies declared
     interfaces = ""
     if kind in ("me", "both"):
         interfaces += (f'  <ModelExchange modelIdentifier="{ident}" needsCompletedIntegratorStep="true"'
@@ -318,6 +324,7 @@ def model_description3(ident, name, system, layout, pnames, pv, states, y0, guid
             + "".join(f'    <Output valueReference="{v}"{d}/>\n' for v, d in zip(outs, dep_out))
             + "".join(f'    <ContinuousStateDerivative valueReference="{v}"{d}/>\n' for v, d in zip(der, dep_der))
             + "".join(f'    <InitialUnknown valueReference="{v}"/>\n' for v in outs + der)
+            + "".join(f'    <EventIndicator valueReference="{v}"/>\n' for v in indicators)
             + '  </ModelStructure>\n</fmiModelDescription>\n')
 
 
@@ -354,7 +361,7 @@ def _interface(tag, ident, derivatives=False):
 
 def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid, kind, outputs=(), inputs=((), 0),
                        experiment=(1.0, 1e-12), state_units=(), starts=(), state_outputs=(), nominals=None,
-                       dependencies=None):
+                       dependencies=None, events=((), ())):
     """FMI 2.0's ``modelDescription.xml``: the variables of :func:`model_description3` (the
     same value references; the time is no variable in 2.0) with 2.0's model structure
     (``dependencies`` as there, as 1-based indices of the variables)."""
@@ -395,6 +402,11 @@ def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid
     rows += _start_rows2(system, starts, vr_out + inputs[1] + len(inputs[0]), unit, defs, experiment[1])
     der = [npar + nx + k + 1 for k in range(nx)]
     outs = [npar + 2 * nx + j + 1 for j in range(len(outputs))]  # 1-based indices among the variables
+    ev_rows, indicators, times = _event_rows(events)
+    if times:
+        defs["s"] = {"s": 1}
+    outs += [len(rows) + 1 + j for j, (_, r2) in enumerate(ev_rows) if 'causality="output"' in r2]
+    rows += [r2 for _, r2 in ev_rows]
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in sorted(outs + der))
     dep_der, dep_out = [""] * nx, [""] * len(outs)
     if dependencies is not None:
@@ -411,7 +423,8 @@ def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid
                 + "".join(f'      <Unknown index="{i}"{d}/>\n' for i, d in zip(outs, dep_out)))
     return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(name)}" guid="{guid}" '
-            f'generationTool="mbcomp {_version()}" numberOfEventIndicators="0" variableNamingConvention="structured">\n'
+            f'generationTool="mbcomp {_version()}" numberOfEventIndicators="{len(indicators)}" '
+            'variableNamingConvention="structured">\n'
             + "".join(_interface(tag, ident, dependencies is not None)
                       for tag, k in (("ModelExchange", "me"), ("CoSimulation", "cs"))
                       if kind in (k, "both")) + _unit_definitions(defs) + _experiment(experiment)
@@ -421,3 +434,35 @@ def model_description2(ident, name, system, layout, pnames, pv, states, y0, guid
             + '\n    </Derivatives>\n'
             f'    <InitialUnknowns>\n{unknowns}\n    </InitialUnknowns>\n  </ModelStructure>\n'
             f'</fmiModelDescription>\n')
+
+
+_INDICATOR_DOC = ("event indicator (an event when it falls through zero): an open contact's gap (m) or a closed "
+                  "one's normal force (N); a free stop's distance to its limit (rad or m) or an engaged one's push")
+_TIME_DOC = "time of the component's last event (an impact or a release; -1 before any)"
+
+
+def _event_rows(events):
+    """``([(FMI 3.0 row, FMI 2.0 row)], indicator references, time references)`` of the event
+    variables ``events`` (indicator names, last-event-time names), numbered from
+    :data:`mbcomp.export.fmu_events.VR_EVENTS` as ``fmu_events.c`` reads them."""
+    from .fmu_events import VR_EVENTS
+
+    names, times = events
+    rows, ind, tvr = [], [], []
+    for k, n in enumerate(names):
+        vr = VR_EVENTS + k
+        ind.append(vr)
+        rows.append((f'    <Float64 name="{escape(n)}" valueReference="{vr}" causality="local" variability="continuous" '
+                     f'initial="calculated" description="{_INDICATOR_DOC}"/>',
+                     f'    <ScalarVariable name="{escape(n)}" valueReference="{vr}" causality="local" '
+                     f'variability="continuous" initial="calculated" description="{_INDICATOR_DOC}"><Real/>'
+                     f'</ScalarVariable>'))
+    for k, n in enumerate(times):
+        vr = VR_EVENTS + len(names) + k
+        tvr.append(vr)
+        rows.append((f'    <Float64 name="{escape(n)}" valueReference="{vr}" causality="output" variability="discrete" '
+                     f'initial="calculated" unit="s" description="{_TIME_DOC}"/>',
+                     f'    <ScalarVariable name="{escape(n)}" valueReference="{vr}" causality="output" '
+                     f'variability="discrete" initial="calculated" description="{_TIME_DOC}"><Real unit="s"/>'
+                     f'</ScalarVariable>'))
+    return rows, ind, tvr

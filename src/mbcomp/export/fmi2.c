@@ -253,9 +253,8 @@ FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t
 
 FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t nz)
 {
-    (void)z;
     STATE(c, "fmi2GetEventIndicators", S_INIT | S_EVENT | S_CONT | S_TERM);
-    return nz == 0 ? fmi2OK : unsupported(c, "event indicators (this FMU has none)");
+    return OK(mb_event_indicators((Inst *)c, z, nz));
 }
 
 FMI2_EXPORT fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)

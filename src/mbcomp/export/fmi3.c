@@ -356,9 +356,8 @@ FMI3_EXPORT fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Flo
 
 FMI3_EXPORT fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 z[], size_t nz)
 {
-    (void)z;
     STATE(c, "fmi3GetEventIndicators", S_INIT | S_EVENT | S_CONT | S_TERM);
-    return nz == 0 ? fmi3OK : unsupported(c, "event indicators (this FMU has none)");
+    return OK(mb_event_indicators((Inst *)c, z, nz));
 }
 
 FMI3_EXPORT fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t nx)
@@ -377,7 +376,7 @@ FMI3_EXPORT fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t *n)
 {
     NEED(c);
     if (!n) return fmi3Error;
-    *n = 0;
+    *n = MB_NZ;
     return fmi3OK;
 }
 

@@ -43,8 +43,11 @@ What the FMU holds (see docs/design/fmu.md):
   units; a start value set on a state kept by the initialization (the model's guesses moved).
 * exact directional and adjoint derivatives (states and inputs as knowns) and the
   ``<ModelStructure>`` dependencies (:mod:`mbcomp.export.derivatives`, ``fmu_derivatives.c``).
+* a model with rigid end stops, frictionless one-sided contacts or stick/slip friction on an
+  axis: event indicators, Event Mode's impacts and mode switches, Co-Simulation locating its
+  events (:mod:`.fmu_events`); a contact's friction is refused, naming the contact.
 
-Not yet: derivatives with respect to parameters; events (models with stops, contacts, friction).
+Not yet: derivatives with respect to parameters, and of a model with modes (its FMU says so).
 
 Examples
 --------
@@ -82,6 +85,7 @@ from ..codegen.toolchain import HEADER, c_compiler, chunk
 from ..codegen.tracer import param_vector, trace
 from ..errors import ModelError, Problem
 from ..modeling.model import Model
+from . import fmu_events
 from .description import (RUNTIME_C, build_description, model_description2, model_description3, output_name,
                           parameter_doc)
 from .rules import c_names, c_rules
@@ -112,16 +116,11 @@ def _c_ints(name, values):
 
 
 def _refuse_modes(system):
-    """A ``ValueError`` naming the components with modes (rigid stops, unilateral contacts,
-    stick/slip friction): the FMU's runtime locates no events, so it would run through a stop
-    as if it were not there."""
-    with_modes = [e.name for e in system.topology.edges
-                  if e.kind == "joint" and e.comp.modes(system.P[e.name]) is not None]
-    if with_modes:
-        raise ValueError(f"cannot export {', '.join(with_modes)}: components with events (rigid stops, unilateral "
-                         "contacts, stick/slip) need the driver's event location, which the FMU's runtime does not "
-                         "have yet; exported, the model would pass through them -> export without them (e.g. "
-                         "limits=None), or use a compliant stop (a flange force, which the FMU carries)")
+    """A ``ValueError`` naming the components with modes the FMU's events do not carry yet
+    (contacts with friction or rolling rows: :mod:`.fmu_events`), which would otherwise run
+    through as if they were not there; ``True`` when the model has modes the FMU carries
+    (frictionless one-sided contacts, rigid end stops, stick/slip friction on an axis)."""
+    return any(fmu_events.components(system))
 
 
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,
@@ -185,12 +184,14 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     name = name or path.stem
     ident = _identifier(name)
     system = assemble(model, params)
-    _refuse_modes(system)
-    init = initialize(system)
+    hybrid = _refuse_modes(system)
+    init = fmu_events.initial_state(system) if hybrid else initialize(system)
     keep = _kept(system) if tunable == "all" else ()
     tr, prog, parts, n_work = _fun_program(system, max_nodes, keep)
     out_prog = _output_program(system, tr, max_nodes, keep)
-    mech = _projection(system, tr, max_nodes, keep)
+    hy = fmu_events.plan(system, tolerance, max_nodes, layout=tr.layout)  # the events and modes (fmu_events.c)
+    mech = (SimpleNamespace(c="#define MECH 0\n", enabled=False) if hybrid
+            else _projection(system, tr, max_nodes, keep))
     select = _selection(system, init, mech, kind)
     layout = tr.layout
     pv = param_vector(system, layout)
@@ -199,34 +200,40 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     states, x0, state_units = _states(system, init, select)
     names = _variable_names(pnames, states, out_prog, tr.inputs, system)
     out_prog.variables = [(n, k) for n, k in out_prog.variables if n not in set(states)]
+    if hybrid:  # the output program evaluates the assembled system: only what no mode changes
+        out_prog.variables = fmu_events.hybrid_outputs(system, out_prog.variables)
     if patterns is not None:
         out_prog.variables = _chosen(out_prog.variables, patterns)
     souts = _state_outputs(system, states, patterns)
-    deriv = (_derivatives(system, tr, out_prog, mech, select) if derivatives
+    # a model with modes has other equations in each (fmu_events.c): no product programs of them yet
+    deriv = (_derivatives(system, tr, out_prog, mech, select) if derivatives and not hybrid
              else SimpleNamespace(c="", structure=None))
     describe = model_description2 if fmi == "2.0" else model_description3
     xml = describe(ident, name, system, layout, pnames, pv, states, x0, guid="@GUID@", kind=kind,
                    outputs=out_prog.variables, inputs=(tr.inputs, out_prog.n_slots),
                    experiment=(float(stop_time), float(tolerance)), state_units=state_units, starts=y0,
                    state_outputs=souts, nominals=_state_nominals(system, tr.layout, pv, y0, select),
-                   dependencies=deriv.structure)
+                   dependencies=deriv.structure, events=(hy.indicators, hy.times))
     guid = "{" + str(_uuid_of(xml)) + "}"
     xml = xml.replace("@GUID@", guid)
-    model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi, deriv.c)
+    model_c = _model_c(system, (tr, prog, parts, n_work), out_prog, mech, select, pv, y0, guid, fmi,
+                       hy.c + deriv.c)
     model_c = _named(model_c, names, c_rules(system, layout), tolerance)
     _build(path, ident, fmi, cc, model_c, xml)
     outs = [output_name(n, set(pnames)) for n, _ in out_prog.variables]
     return dict(states=states, parameters=pnames, outputs=outs, state_outputs=[states[k] for k in souts],
                 fixed=_fixed(system, layout),
                 inputs=[i.name for i in tr.inputs], projects=mech.enabled and kind != "me",
-                selects_states=select.enabled, derivatives=bool(derivatives), guid=guid, size=os.path.getsize(path),
+                selects_states=select.enabled, derivatives=deriv.structure is not None, events=hy.indicators,
+                guid=guid, size=os.path.getsize(path),
                 operations=prog.n_ops("fun") + out_prog.n_ops, compiler=cc, model_identifier=ident)
 
 
-def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi, deriv_c=""):
+def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi, extra_c=""):
     """The FMU's model.c: sizes and start values as defines and tables, the generated
     programs (``fun``: the right-hand side's trace, program, C parts and work size; outputs,
-    projection, state selection), then the standard's functions (``fmi2.c``/``fmi3.c``)."""
+    projection, state selection, ``events``: :func:`.fmu_events.plan`'s), then the standard's
+    functions (``fmi2.c``/``fmi3.c``)."""
     tr, prog, parts, n_work = fun
     loops = bool(system.topology.cut)
     return (HEADER + f"#define NQ {system.nq}\n#define NU {system.nu}\n"
@@ -236,7 +243,7 @@ def _model_c(system, fun, out_prog, mech, select, pv, y0, guid, fmi, deriv_c="")
             + _c_array("P0", pv) + _c_array("Y0", y0) + _c_array("NOMINAL", _nominals(system, tr.layout, pv, y0))
             + _start_freedom(system)
             + "\n".join(parts) + "\n" + prog.c_params("mbcomp_params") + "\n" + out_prog.c + mech.c + select.c
-            + deriv_c + f'\n#include "fmi{fmi[0]}.c"\n')
+            + extra_c + f'\n#include "fmi{fmi[0]}.c"\n')
 
 
 def _start_freedom(system):
@@ -408,7 +415,8 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", "fmu_state.c", "fmu_rules.c", "fmu_derivatives.c", f"fmi{fmi[0]}.c"):
+        for f in ("fmu_core.c", "fmu_events.h", "fmu_events.c", "fmu_state.c", "fmu_rules.c", "fmu_derivatives.c",
+                  f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)

@@ -51,6 +51,8 @@
 #define DEFAULT_TOL 1e-8 /* the export writes the model description's DefaultExperiment tolerance */
 #endif
 
+#include "fmu_events.h"
+
 enum { M_INSTANTIATED, M_INIT, M_EVENT, M_CONT, M_STEP, M_TERMINATED, M_ERROR };
 
 typedef struct Inst Inst;
@@ -78,6 +80,9 @@ struct Inst {
        (vfree): the model's guesses; a start value the importer sets is fixed (mbcomp's rule) */
     unsigned char pfree[NU + 1], vfree[NU + 1], set[NX + 1];
     double *work; /* Co-Simulation: mbrt_dop853_work_size(NX) doubles */
+#if HYBRID
+    mbev hy; /* the active set and what its events need (fmu_events.c) */
+#endif
 #if SELECT
     double x[NXS + 1], dx[NXS + 1], growth;
     int dep[MM + 1], ind[NI + 1], *iwork, x_dirty, event_due, repartitions;
@@ -132,6 +137,9 @@ static void mb_reset(Inst *c)
     c->rtol = DEFAULT_TOL;
     c->dirty = 1;
     c->mode = M_INSTANTIATED;
+#if HYBRID
+    mbev_reset(c);
+#endif
 }
 
 /* a new instance (NULL when out of memory); the wrapper then sets log, logger, env */
@@ -189,6 +197,9 @@ static int mb_refresh(Inst *c)
 #if MECH
     if (!rc) rc = mbcomp_eval_params(c->p, c->h3);
 #endif
+#if HYBRID
+    if (!rc) rc = mbhy_eval_params(c->p, c->hy.h);
+#endif
     if (rc) {
         char changed[400];
         mb_changed_parameters(c, changed, sizeof changed);
@@ -209,6 +220,9 @@ static int mb_derivatives(Inst *c)
     if (mb_refresh(c)) return -1;
     c->d[0] = c->alpha;
     c->d[1] = c->beta;
+#if HYBRID
+    return mbev_rhs(c, c->t, c->y, c->dy); /* the rows in force of the active set */
+#endif
     if (mbcomp_fun(c->y, c->y + NQ, c->t, c->d, c->h, c->p, c->w, c->dy)) {
         say(c, 1, "the right-hand side failed a guard at t=%g (a singular position, or a law's other branch): "
             "mbcomp's numeric path is not in the FMU", c->t);
@@ -226,6 +240,9 @@ static int mb_derivatives(Inst *c)
 static int mb_rhs(void *ctx, double t, const double *y, double *dydt)
 {
     Inst *c = (Inst *)ctx;
+#if HYBRID
+    return mbev_rhs(c, t, y, dydt);
+#endif
     return mbcomp_fun(y, y + NQ, t, c->d, c->h, c->p, c->w, dydt);
 }
 
@@ -256,6 +273,9 @@ static int mb_step(Inst *c, double h)
     mbrt_stats st;
     double t_end;
     int i, rc, written = 0;
+#if HYBRID
+    return mbev_step(c, h); /* the events located and acted on inside the step */
+#endif
     if (!(h >= 0.0) || !isfinite(h)) { say(c, 1, "a communication step of %g s", h); return -1; }
     if (h == 0.0) return 0;
     if (mb_refresh(c)) return -1;
@@ -299,6 +319,9 @@ static int mb_outputs(Inst *c)
    have is a per-call cache: bit 1 the derivatives, bit 2 the outputs are computed */
 static int mb_get(Inst *c, unsigned vr, double *v, int *have)
 {
+#if HYBRID
+    if (vr >= HY_VR) { int rc = mbev_get(c, vr, v); if (rc <= 0) return rc; }
+#endif
     if (vr >= VR_OUT && vr < VR_OUT + NOV) {
         if (!(*have & 2)) {
             if (mb_outputs(c)) return -1;
@@ -656,6 +679,9 @@ static int mb_completed(Inst *c, int *event)
 static int mb_update(Inst *c, int *changed)
 {
     *changed = 0;
+#if HYBRID
+    return mbev_act(c, -1, changed); /* the impacts and mode switches due */
+#endif
 #if SELECT
     if (c->event_due) {
         double norm = 0.0;
@@ -680,5 +706,6 @@ static int mb_update(Inst *c, int *changed)
     return 0;
 }
 
+#include "fmu_events.c"
 #include "fmu_state.c"
 #include "fmu_derivatives.c" /* exact directional and adjoint derivatives */

@@ -430,8 +430,13 @@ static int mb_derivative(Inst *c, int adjoint, const unsigned *unk, size_t nunk,
                          const double *seed, size_t nseed, double *sens, size_t nsens)
 {
     (void)unk; (void)nunk; (void)kn; (void)nkn; (void)seed; (void)nseed; (void)sens; (void)nsens;
+#if HYBRID
+    say(c, 1, "%s derivatives are not in this FMU: a model with modes (stops, contacts, friction) has none yet",
+        adjoint ? "adjoint" : "directional");
+#else
     say(c, 1, "%s derivatives are not in this FMU: export it with derivatives=True",
         adjoint ? "adjoint" : "directional");
+#endif
     return -1;
 }
 #endif

@@ -41,6 +41,12 @@ typedef struct {
     double x[NXS + 1], growth;
     int dep[MM + 1], ind[NI + 1], x_dirty, event_due, repartitions;
 #endif
+#if HYBRID
+    /* the active set and what the next events depend on (fmu_events.c): modes, the recent impacts'
+       times for the rest rule, each component's last event, Co-Simulation's located event */
+    int hy_mode[HY_NCOMP + 1], hy_nhits[HY_NCOMP + 1], hy_dir[HY_NZ + 1], hy_fresh;
+    double hy_hits[(HY_NCOMP + 1) * (HY_CHATTER + 2)], hy_last[HY_NCOMP + 1], hy_events;
+#endif
 } mb_state;
 
 static uint64_t mb_fnv(const unsigned char *b, size_t n)
@@ -136,6 +142,15 @@ static void mb_state_walk(mb_io *io, mb_state *s)
     io_int(io, &s->x_dirty, 1);
     io_int(io, &s->event_due, 1);
     io_int(io, &s->repartitions, 1);
+#endif
+#if HYBRID
+    io_int(io, s->hy_mode, HY_NCOMP);
+    io_int(io, s->hy_nhits, HY_NCOMP);
+    io_int(io, s->hy_dir, HY_NZ);
+    io_int(io, &s->hy_fresh, 1);
+    io_f64(io, s->hy_hits, (HY_NCOMP + 1) * (HY_CHATTER + 2));
+    io_f64(io, s->hy_last, HY_NCOMP);
+    io_f64(io, &s->hy_events, 1);
 #endif
 }
 
@@ -233,6 +248,21 @@ static void mb_state_take(const Inst *c, mb_state *s)
     s->event_due = c->event_due;
     s->repartitions = c->repartitions;
 #endif
+#if HYBRID
+    {
+        int k, j;
+        for (k = 0; k < HY_NCOMP; k++) {
+            s->hy_mode[k] = c->hy.mode[k];
+            s->hy_nhits[k] = c->hy.nhits[k];
+            s->hy_last[k] = c->hy.last[k];
+        }
+        for (k = 0; k <= HY_NCOMP; k++)
+            for (j = 0; j < HY_CHATTER + 2; j++) s->hy_hits[k * (HY_CHATTER + 2) + j] = c->hy.hits[k][j];
+        for (k = 0; k < HY_NZ; k++) s->hy_dir[k] = c->hy.dir[k] + 1; /* kept >= 0 (serialized unsigned) */
+        s->hy_fresh = c->hy.fresh + 1;
+        s->hy_events = (double)c->hy.events;
+    }
+#endif
 }
 
 /* GetFMUState: *handle NULL -> a new state; else the caller's earlier state, overwritten */
@@ -289,6 +319,21 @@ static int mb_state_set(Inst *c, const void *handle)
     c->x_dirty = s->x_dirty;
     c->event_due = s->event_due;
     c->repartitions = s->repartitions;
+#endif
+#if HYBRID
+    {
+        int k, j;
+        for (k = 0; k < HY_NCOMP; k++) {
+            c->hy.mode[k] = s->hy_mode[k];
+            c->hy.nhits[k] = s->hy_nhits[k];
+            c->hy.last[k] = s->hy_last[k];
+        }
+        for (k = 0; k <= HY_NCOMP; k++)
+            for (j = 0; j < HY_CHATTER + 2; j++) c->hy.hits[k][j] = s->hy_hits[k * (HY_CHATTER + 2) + j];
+        for (k = 0; k < HY_NZ; k++) c->hy.dir[k] = s->hy_dir[k] - 1;
+        c->hy.fresh = s->hy_fresh - 1;
+        c->hy.events = (long)s->hy_events;
+    }
 #endif
     c->dirty = 1; /* the hoisted values: recomputed from the parameters at the next use */
     return 0;
@@ -361,6 +406,20 @@ static int mb_state_check(Inst *c, const mb_state *s)
         say(c, 1, "DeserializeFMUState: the mode or a flag is out of range (a corrupted buffer)");
         return -1;
     }
+#if HYBRID
+    {
+        int k, ok = s->hy_fresh >= 0 && s->hy_fresh <= HY_NZ && isfinite(s->hy_events) && s->hy_events >= 0.0;
+        for (k = 0; k < HY_NCOMP; k++)
+            ok = ok && s->hy_mode[k] >= 0 && s->hy_mode[k] <= 2 && s->hy_nhits[k] >= 0 &&
+                 s->hy_nhits[k] <= HY_CHATTER + 2 && isfinite(s->hy_last[k]);
+        for (k = 0; k < HY_NZ; k++) ok = ok && s->hy_dir[k] >= 0 && s->hy_dir[k] <= 2;
+        for (k = 0; k < (HY_NCOMP + 1) * (HY_CHATTER + 2); k++) ok = ok && !isnan(s->hy_hits[k]);
+        if (!ok) {
+            say(c, 1, "DeserializeFMUState: a mode or an event record is out of range (a corrupted buffer)");
+            return -1;
+        }
+    }
+#endif
     {
         int k, flags_ok = 1;
         for (k = 0; k < NU; k++) flags_ok = flags_ok && s->pfree[k] <= 1 && s->vfree[k] <= 1;

@@ -1,0 +1,488 @@
+/* mbcomp FMU events: the active set of a model with modes, the system of its rows in force,
+ * its event indicators and the actions at its events (included at the end of fmu_core.c;
+ * declarations in fmu_events.h; Python: mbcomp/export/fmu_events.py).
+ *
+ * The rows in force are the closed contacts' rows (from the evaluation program) and the
+ * engaged stops' rows sign (q[iq] - at); the accelerations are the Lagrange index-1 solve
+ * [M C^T; C 0] [du/dt; lam] = [f; -c_b - 2 alpha dPhi/dt - beta^2 Phi], a row's push -lam.
+ * An impact closing a row solves [M C^T; C 0] [u+; -P] = [M u-; r], the impact row with
+ * Newton's restitution (C u+ + o = -e (C u- + o)), the rows in force held (C u+ + o = 0), as
+ * mbcomp.assembly.impacts.impulse; o = dPhi/dt - C u. Indicators (each event is its
+ * indicator falling through zero): an open contact's gap (m), a closed one's push (N); a free
+ * stop's distances to its limits (rad or m), an engaged limit's push; a stuck friction's
+ * margins F_s + push and F_s - push (N or N m), a slipping one's speed along its slip (the
+ * other indicator F_s). A stuck friction holds its rate (a row of value 0); a slipping one adds
+ * -+F_k to its joint's force. */
+#define HY_F0 (HY_NC + HY_NS) /* the first friction among the components */
+#if HYBRID
+
+static double hy_par(const Inst *c, int idx, double v) { return idx >= 0 ? c->p[idx] : v; }
+static double hy_e(const Inst *c, int k)
+{
+    return k < HY_NC ? hy_par(c, HY_C_EP[k], HY_C_E[k]) : hy_par(c, HY_S_EP[k - HY_NC], HY_S_E[k - HY_NC]);
+}
+static double hy_at(const Inst *c, int s, int lim)
+{
+    return lim == 1 ? hy_par(c, HY_S_LOP[s], HY_S_LO[s]) : hy_par(c, HY_S_HIP[s], HY_S_HI[s]);
+}
+
+static void mbev_reset(Inst *c)
+{
+    int k;
+    memset(&c->hy, 0, sizeof c->hy);
+    for (k = 0; k < HY_NCOMP; k++) {
+        c->hy.mode[k] = k < HY_NC ? HY_C_CLOSED0[k] : k >= HY_F0 ? HY_F_MODE0[k - HY_F0] : 0;
+        c->hy.last[k] = -1.0;
+    }
+    for (k = 0; k < HY_NZ; k++) c->hy.dir[k] = -1;
+    c->hy.fresh = -1;
+}
+
+/* the evaluation program at (t, y) into c->hy.ev: 0, or -1 after logging */
+static int hy_eval(Inst *c, double t, const double *y)
+{
+    int i;
+    if (mbhy_eval(y, y + NQ, t, c->d, c->hy.h, c->p, c->hy.w, c->hy.ev)) {
+        say(c, 1, "the evaluation failed a guard at t=%g (a singular position, or a law's other branch)", t);
+        return -1;
+    }
+    for (i = 0; i < HY_NOUT; i++)
+        if (!isfinite(c->hy.ev[i])) {
+            say(c, 1, "the evaluation gave a non-finite value (entry %d) at t=%g", i, t);
+            return -1;
+        }
+    return 0;
+}
+
+/* one row (C, Phi, dPhi/dt, c_b) of component k in its engaged mode `m`, appended */
+static void hy_add_row(Inst *c, const double *y, int k, int m)
+{
+    int j, r = c->hy.nr;
+    double *C = c->hy.C + r * NU;
+    if (k < HY_NC) {
+        int row = HY_C_ROW[k];
+        for (j = 0; j < NU; j++) C[j] = c->hy.ev[HY_OFF_C + row * NU + j];
+        c->hy.phi[r] = c->hy.ev[HY_OFF_PHI + row];
+        c->hy.phid[r] = c->hy.ev[HY_OFF_PHID + row];
+        c->hy.bias[r] = c->hy.ev[HY_OFF_CB + row];
+    } else if (k >= HY_F0) { /* a stuck friction: its rate held */
+        int f = k - HY_F0;
+        for (j = 0; j < NU; j++) C[j] = 0.0;
+        C[HY_F_IU[f]] = 1.0;
+        c->hy.phi[r] = 0.0;
+        c->hy.phid[r] = y[NQ + HY_F_IU[f]];
+        c->hy.bias[r] = 0.0;
+    } else {
+        int s = k - HY_NC;
+        double sign = m == 1 ? 1.0 : -1.0;
+        for (j = 0; j < NU; j++) C[j] = 0.0;
+        C[HY_S_IU[s]] = sign;
+        c->hy.phi[r] = sign * (y[HY_S_IQ[s]] - hy_at(c, s, m));
+        c->hy.phid[r] = sign * y[NQ + HY_S_IU[s]];
+        c->hy.bias[r] = 0.0;
+    }
+    c->hy.row_of[k] = r;
+    c->hy.nr = r + 1;
+}
+
+/* the rows in force at y (after hy_eval); extra >= 0: component extra's row in mode m_extra last */
+static void hy_rows(Inst *c, const double *y, int extra, int m_extra)
+{
+    int k;
+    c->hy.nr = 0;
+    for (k = 0; k < HY_NCOMP; k++) {
+        c->hy.row_of[k] = -1;
+        if (k != extra && (k >= HY_F0 ? c->hy.mode[k] == 0 : c->hy.mode[k] != 0)) hy_add_row(c, y, k, c->hy.mode[k]);
+    }
+    if (extra >= 0) hy_add_row(c, y, extra, m_extra);
+}
+
+/* K = [M C^T; C 0] of the rows in force, factored: 0, or -1 after logging */
+static int hy_saddle(Inst *c, double t)
+{
+    int i, j, n = NU + c->hy.nr;
+    double *K = c->hy.K;
+    for (i = 0; i < n * n; i++) K[i] = 0.0;
+    for (i = 0; i < NU; i++)
+        for (j = 0; j < NU; j++) K[i * n + j] = c->hy.ev[HY_OFF_M + i * NU + j];
+    for (i = 0; i < c->hy.nr; i++)
+        for (j = 0; j < NU; j++) K[(NU + i) * n + j] = K[j * n + NU + i] = c->hy.C[i * NU + j];
+    if (mbrt_lu_factor(n, K, c->hy.piv) != 0) {
+        say(c, 1, "the rows in force are dependent or the mass matrix is singular at t=%g", t);
+        return -1;
+    }
+    return 0;
+}
+
+/* du/dt and the multipliers at (t, y) in the current modes: 0, or -1 after logging */
+static int hy_accel(Inst *c, double t, const double *y)
+{
+    int i, n;
+    if (hy_eval(c, t, y)) return -1;
+    hy_rows(c, y, -1, 0);
+    if (hy_saddle(c, t)) return -1;
+    n = NU + c->hy.nr;
+    for (i = 0; i < NU; i++) c->hy.rhs[i] = c->hy.ev[HY_OFF_F + i];
+    for (i = 0; i < HY_NF; i++) /* a slipping friction's force on its speed */
+        if (c->hy.mode[HY_F0 + i]) c->hy.rhs[HY_F_IU[i]] += c->hy.mode[HY_F0 + i] == 1 ? -HY_F_KINETIC[i] : HY_F_KINETIC[i];
+    for (i = 0; i < c->hy.nr; i++)
+        c->hy.rhs[NU + i] = -c->hy.bias[i] - 2.0 * HY_ALPHA * c->hy.phid[i] - HY_BETA * HY_BETA * c->hy.phi[i];
+    mbrt_lu_solve(n, c->hy.K, c->hy.piv, c->hy.rhs);
+    for (i = 0; i < n; i++)
+        if (!isfinite(c->hy.rhs[i])) { say(c, 1, "the accelerations are not finite at t=%g", t); return -1; }
+    memcpy(c->hy.ud, c->hy.rhs, sizeof(double) * NU);
+    for (i = 0; i < c->hy.nr; i++) c->hy.lam[i] = c->hy.rhs[NU + i];
+    return 0;
+}
+
+static int mbev_rhs(Inst *c, double t, const double *y, double *dy)
+{
+    if (hy_accel(c, t, y)) return -1;
+    memcpy(dy, y + NQ, sizeof(double) * NU); /* dq/dt = u: the plan refuses other coordinates */
+    memcpy(dy + NQ, c->hy.ud, sizeof(double) * NU);
+    return 0;
+}
+
+/* the event indicators at (t, y) into z (HY_NZ) */
+static int mbev_indicators(Inst *c, double t, const double *y, double *z)
+{
+    int k;
+    if (hy_accel(c, t, y)) return -1;
+    for (k = 0; k < HY_NC; k++)
+        z[k] = c->hy.mode[k] ? -c->hy.lam[c->hy.row_of[k]] : c->hy.ev[HY_OFF_PHI + HY_C_ROW[k]];
+    for (k = 0; k < HY_NS; k++) {
+        int m = c->hy.mode[HY_NC + k], r = c->hy.row_of[HY_NC + k];
+        double q = y[HY_S_IQ[k]];
+        z[HY_NC + 2 * k] = m == 1 ? -c->hy.lam[r] : q - hy_at(c, k, 1);
+        z[HY_NC + 2 * k + 1] = m == 2 ? -c->hy.lam[r] : hy_at(c, k, 2) - q;
+    }
+    for (k = 0; k < HY_NF; k++) {
+        int m = c->hy.mode[HY_F0 + k], i = HY_NC + 2 * HY_NS + 2 * k;
+        double u = y[NQ + HY_F_IU[k]], push = m == 0 ? -c->hy.lam[c->hy.row_of[HY_F0 + k]] : 0.0;
+        z[i] = m == 0 ? HY_F_STATIC[k] + push : m == 1 ? u : HY_F_STATIC[k];
+        z[i + 1] = m == 0 ? HY_F_STATIC[k] - push : m == 2 ? -u : HY_F_STATIC[k];
+    }
+    return 0;
+}
+
+static int hy_event_fn(void *ctx, double t, const double *y, double *g)
+{
+    return mbev_indicators((Inst *)ctx, t, y, g) ? 1 : 0;
+}
+
+/* x = (C C^T)^-1 b for the rows of the last hy_rows (b: nr values, x may be b): 0, or -1 */
+static int hy_gram_solve(Inst *c, double t, const double *b, double *x)
+{
+    int i, j, l, nr = c->hy.nr;
+    double *G = c->hy.G;
+    if (nr <= 0 || nr > HY_NR) return -1;
+    for (i = 0; i < nr; i++)
+        for (j = 0; j < nr; j++)
+            for (G[i * nr + j] = 0.0, l = 0; l < NU; l++) G[i * nr + j] += c->hy.C[i * NU + l] * c->hy.C[j * NU + l];
+    if (mbrt_lu_factor(nr, G, c->hy.piv)) { say(c, 1, "the rows in force are dependent at t=%g", t); return -1; }
+    memmove(x, b, sizeof(double) * nr);
+    mbrt_lu_solve(nr, G, c->hy.piv, x);
+    return 0;
+}
+
+/* y moved onto the rows in force and, extra >= 0, component extra's row in mode m (positions by
+   Gauss-Newton; with speeds, the speeds by least squares, as mbcomp.assembly.kkt.project_state):
+   0, or -1 after logging */
+static int hy_project(Inst *c, double t, double *y, int extra, int m, int speeds)
+{
+    int it, i, l, nr = 0;
+    double norm = 0.0, *x = c->hy.rhs;
+    for (it = 0; it <= 30; it++) {
+        if (hy_eval(c, t, y)) return -1;
+        hy_rows(c, y, extra, m);
+        nr = c->hy.nr;
+        if (!nr) return 0;
+        for (norm = 0.0, i = 0; i < nr; i++) norm = fmax(norm, fabs(c->hy.phi[i]));
+        if (norm <= 1e-15 || it == 30) break;
+        if (hy_gram_solve(c, t, c->hy.phi, x)) return -1;
+        for (l = 0; l < NU; l++)
+            for (i = 0; i < nr; i++) y[l] -= c->hy.C[i * NU + l] * x[i];
+    }
+    if (norm > 1e-10) {
+        say(c, 1, "the state cannot be moved onto the rows in force at t=%g (|Phi| = %g)", t, norm);
+        return -1;
+    }
+    if (speeds) {
+        if (hy_gram_solve(c, t, c->hy.phid, x)) return -1;
+        for (l = 0; l < NU; l++)
+            for (i = 0; i < nr; i++) y[NQ + l] -= c->hy.C[i * NU + l] * x[i];
+    }
+    for (l = 0; l < NX; l++)
+        if (!isfinite(y[l])) {
+            say(c, 1, "moving the state onto the rows in force at t=%g gave a non-finite value", t);
+            return -1;
+        }
+    return 0;
+}
+
+static int hy_consistent(Inst *c, double t, double *y) { return hy_project(c, t, y, -1, 0, 1); }
+
+/* the impact of component k closing its row (stops: limit lim) at (t, y): y's speeds become
+   u+; *before, *after: the row's speed before and after (m/s or rad/s) */
+static int hy_impact(Inst *c, double t, double *y, int k, int lim, double *before, double *after)
+{
+    int i, j, n, last;
+    double e = hy_e(c, k), o;
+    if (hy_eval(c, t, y)) return -1;
+    hy_rows(c, y, k, lim);
+    if (hy_saddle(c, t)) return -1;
+    n = NU + c->hy.nr;
+    last = c->hy.nr - 1;
+    for (i = 0; i < NU; i++)
+        for (c->hy.rhs[i] = 0.0, j = 0; j < NU; j++) c->hy.rhs[i] += c->hy.ev[HY_OFF_M + i * NU + j] * y[NQ + j];
+    for (i = 0; i < c->hy.nr; i++) {
+        for (o = c->hy.phid[i], j = 0; j < NU; j++) o -= c->hy.C[i * NU + j] * y[NQ + j];
+        c->hy.rhs[NU + i] = i == last ? -e * c->hy.phid[i] - o : -o;
+        if (i == last) *before = c->hy.phid[i], *after = o;
+    }
+    mbrt_lu_solve(n, c->hy.K, c->hy.piv, c->hy.rhs);
+    for (i = 0; i < NU; i++) {
+        if (!isfinite(c->hy.rhs[i])) { say(c, 1, "the impact at t=%g gave non-finite speeds", t); return -1; }
+        y[NQ + i] = c->hy.rhs[i];
+        *after += c->hy.C[last * NU + i] * y[NQ + i];
+    }
+    return 0;
+}
+
+/* whether the rebound (the row's speed `after`) rises less than HY_REST against the row's
+   acceleration in the current modes (mbcomp.hybrid.events: _rests, _contact_rests) */
+static int hy_rests(Inst *c, double t, const double *y, int k, int lim, double after, int *rests)
+{
+    int j;
+    double acc;
+    if (hy_accel(c, t, y)) return -1;
+    hy_rows(c, y, k, lim); /* the row's values (the solve above is kept) */
+    for (acc = c->hy.bias[c->hy.nr - 1], j = 0; j < NU; j++) acc += c->hy.C[(c->hy.nr - 1) * NU + j] * c->hy.ud[j];
+    *rests = acc < 0.0 && after * after <= -2.0 * acc * HY_REST;
+    return 0;
+}
+
+/* mbcomp.hybrid.events._chattering: the last HY_CHATTER intervals between k's impacts each shrank */
+static int hy_chattering(Inst *c, int k)
+{
+    int i;
+    const double *h = c->hy.hits[k];
+    if (c->hy.nhits[k] < HY_CHATTER + 2) return 0;
+    for (i = 2; i < HY_CHATTER + 2; i++)
+        if (!(h[i] - h[i - 1] < h[i - 1] - h[i - 2])) return 0;
+    return 1;
+}
+
+static void hy_hit(Inst *c, int k, double t)
+{
+    int n = c->hy.nhits[k];
+    if (n == HY_CHATTER + 2) {
+        memmove(c->hy.hits[k], c->hy.hits[k] + 1, sizeof(double) * (HY_CHATTER + 1));
+        n--;
+    }
+    c->hy.hits[k][n] = t;
+    c->hy.nhits[k] = n + 1;
+}
+
+/* whether some engaged row would pull at (t, y) (mbcomp: an engaged row that would pull: stay) */
+static int hy_pulls(Inst *c, double t, const double *y, int *pulls)
+{
+    int k;
+    if (mbev_indicators(c, t, y, c->hy.z)) return -1;
+    *pulls = 0;
+    for (k = 0; k < HY_F0; k++) /* a stuck friction's row is bilateral up to its limit */
+        if (c->hy.mode[k] && -c->hy.lam[c->hy.row_of[k]] < 0.0) *pulls = 1;
+    return 0;
+}
+
+/* component k's impact (stops: at limit lim) at (c->t, c->y) if approaching: Newton's
+   restitution, then at rest (too small a rebound, e = 0, or a Zeno accumulation) engaged */
+static int hy_do_impact(Inst *c, int k, int lim, int *acted)
+{
+    double before = 0.0, after = 0.0, t = c->t;
+    int rests = 0, old = c->hy.mode[k], pulls = 0, m = k < HY_NC ? 1 : lim;
+    memcpy(c->hy.ys, c->y, sizeof(double) * NX);
+    if (hy_impact(c, t, c->hy.ys, k, m, &before, &after)) return -1;
+    if (!(before < 0.0)) { /* not approaching: no impact (mbcomp's _decide); at rest on it (a start
+                              touching, mbcomp's Events.start) it engages */
+        if (hy_rests(c, t, c->y, k, m, before, &rests)) return -1;
+        if (!rests) return 0;
+        *acted = 1;
+        c->hy.events++;
+        c->hy.last[k] = t;
+        c->hy.mode[k] = m;
+        memcpy(c->hy.ys, c->y, sizeof(double) * NX);
+        if (hy_consistent(c, t, c->y) || hy_pulls(c, t, c->y, &pulls)) return -1;
+        if (pulls) {
+            c->hy.mode[k] = old;
+            memcpy(c->y, c->hy.ys, sizeof(double) * NX);
+        }
+        return 0;
+    }
+    memcpy(c->y, c->hy.ys, sizeof(double) * NX);
+    *acted = 1;
+    c->hy.events++;
+    c->hy.last[k] = t;
+    hy_hit(c, k, t);
+    /* where the importer stepped past the touch (a fixed step: the body inside), the positions
+       back onto the row; a located event's 1e-15 m is moved as much (the speeds are the impact's) */
+    if (hy_project(c, t, c->y, k, m, 0)) return -1;
+    if (hy_e(c, k) > 0.0 && hy_rests(c, t, c->y, k, m, after, &rests)) return -1;
+    if (hy_e(c, k) == 0.0 || rests || hy_chattering(c, k)) {
+        c->hy.mode[k] = m;
+        memcpy(c->hy.ys, c->y, sizeof(double) * NX);
+        if (hy_consistent(c, t, c->y) || hy_pulls(c, t, c->y, &pulls)) return -1;
+        if (pulls) { /* engaged it would pull: it stays free */
+            c->hy.mode[k] = old;
+            memcpy(c->y, c->hy.ys, sizeof(double) * NX);
+        }
+    }
+    return hy_consistent(c, t, c->y);
+}
+
+/* acts on indicator i at (c->t, c->y); force: it was located falling through zero */
+static int hy_switch(Inst *c, int k, int to, int *acted)
+{
+    c->hy.mode[k] = to;
+    c->hy.last[k] = c->t;
+    c->hy.events++;
+    *acted = 1;
+    return hy_consistent(c, c->t, c->y);
+}
+
+static int hy_act_on(Inst *c, int i, int force, int *acted)
+{
+    int k = i < HY_NC ? i : HY_NC + (i - HY_NC) / 2, lim = i < HY_NC ? 1 : 1 + (i - HY_NC) % 2;
+    int m = c->hy.mode[k];
+    if (!force && !(c->hy.z[i] <= 0.0)) return 0;
+    if (k >= HY_F0) { /* stuck: break away the way the load drives (lim 1: forward); slipping: stick */
+        if (!force && !(c->hy.z[i] < 0.0)) return 0; /* a slip starts at zero speed, a margin at its limit */
+        if (m == 0) return hy_switch(c, k, lim, acted);
+        return m == lim ? hy_switch(c, k, 0, acted) : 0;
+    }
+    if (m == 0) return hy_do_impact(c, k, lim, acted);
+    if (m == lim && (force || c->hy.z[i] < 0.0)) return hy_switch(c, k, 0, acted); /* a held row's push: release */
+    return 0;
+}
+
+/* Event Mode: every event at (c->t, c->y) acted on (which >= 0: the indicator the
+   Co-Simulation step located; -1: every indicator at or below zero); *changed: the state or
+   the active set changed (the importer restarts its integrator) */
+static int mbev_act(Inst *c, int which, int *changed)
+{
+    int i, n, acted;
+    *changed = 0;
+    if (mb_refresh(c)) return -1;
+    if (which >= 0) { /* the located event, then what it brings about at once (a break-away) */
+        acted = 0;
+        if (mbev_indicators(c, c->t, c->y, c->hy.z) || hy_act_on(c, which, 1, &acted)) return -1;
+        *changed = acted;
+    }
+    for (n = 0; n < HY_MAX_EVENTS; n++) {
+        acted = 0;
+        if (mbev_indicators(c, c->t, c->y, c->hy.z)) return -1;
+        for (i = 0; i < HY_NZ && !acted; i++)
+            if (hy_act_on(c, i, 0, &acted)) return -1;
+        if (!acted) return 0;
+        *changed = 1;
+    }
+    say(c, 1, "chattering: %d events at t=%g without settling", HY_MAX_EVENTS, c->t);
+    return -1;
+}
+
+/* Co-Simulation: an event located on the near side of its root (the indicator still above
+   zero: a push released, a margin broken a little early) is stepped across by the location
+   tolerance in its mode, so the next mode starts past the root (a released load that would
+   press again at once chattered at one instant): 0, or -1 after logging */
+static int hy_across(Inst *c, int which, double tol, double t_end)
+{
+    double t1 = fmin(c->t + tol, t_end);
+    int i;
+    if (mbev_indicators(c, c->t, c->y, c->hy.z)) return -1;
+    if (!(c->hy.z[which] > 0.0) || !(t1 > c->t)) return 0; /* crossed (or at zero): act here */
+    /* one Euler step of a tolerance's length (its error, (t1 - t)^2 |d2y/dt2| / 2, ~1e-24) */
+    if (mbev_rhs(c, c->t, c->y, c->dy)) return -1;
+    for (i = 0; i < NX; i++) c->y[i] += (t1 - c->t) * c->dy[i];
+    c->t = t1;
+    return 0;
+}
+
+/* Co-Simulation: from c->t by h with DOP853 at c->rtol, the events located on its dense
+   output (mbrt_dop853_events) and acted on: 0, or -1 after logging */
+static int mbev_step(Inst *c, double h)
+{
+    mbrt_stats st;
+    mbrt_events ev;
+    double t_end;
+    int i, rc, n, changed, written = 0;
+    if (!(h >= 0.0) || !isfinite(h)) { say(c, 1, "a communication step of %g s", h); return -1; }
+    if (h == 0.0) return 0;
+    if (mb_refresh(c)) return -1;
+    c->d[0] = c->alpha;
+    c->d[1] = c->beta;
+    for (i = 0; i < NX; i++) c->atol[i] = c->rtol * 1e-2 * NOMINAL[i];
+    t_end = c->t + h;
+    /* what is due at the step's start (the run's start: touching, beyond a friction's limit; an
+       input changed since the last step: a push turned) -- the runtime sees only crossings */
+    if (mbev_act(c, -1, &changed)) { c->mode = M_ERROR; return -1; }
+    for (n = 0; n < HY_MAX_EVENTS; n++) {
+        if (!(t_end > c->t)) return 0;
+        memset(&st, 0, sizeof st);
+        memset(&ev, 0, sizeof ev);
+        ev.g = hy_event_fn;
+        ev.gctx = c;
+        ev.n_ev = HY_NZ;
+        ev.direction = c->hy.dir;
+        ev.tol = fmin(1e-12, c->rtol / 1000.0) * fmax(1.0, fabs(t_end));
+        ev.fresh = c->hy.fresh;
+        ev.work = c->hy.evwork;
+        ev.y_event = c->hy.yev;
+        ev.which = -1;
+        written = 0;
+        rc = mbrt_dop853_events(mb_rhs, NULL, c, NX, c->t, c->y, t_end, c->rtol, c->atol, 0.0, 0.0, 0, &t_end, 1,
+                                c->y_end, &written, c->work, &st, 0, &ev);
+        if (rc == MBRT_OK && written == 1) {
+            memcpy(c->y, c->y_end, sizeof(double) * NX);
+            c->t = t_end;
+            c->hy.fresh = -1;
+            return 0;
+        }
+        if (rc != MBRT_EVENT || ev.which < 0 || ev.which >= HY_NZ) {
+            say(c, 1, "the step from t=%g by %g s failed: %s", c->t, h, st.message);
+            c->mode = M_ERROR;
+            return -1;
+        }
+        memcpy(c->y, c->hy.yev, sizeof(double) * NX);
+        c->t = ev.t_event;
+        if (hy_across(c, ev.which, ev.tol, t_end) || mbev_act(c, ev.which, &changed)) { c->mode = M_ERROR; return -1; }
+        c->hy.fresh = ev.which;
+    }
+    say(c, 1, "chattering: %d events within the step from t=%g", HY_MAX_EVENTS, c->t);
+    c->mode = M_ERROR;
+    return -1;
+}
+
+/* the event variables: indicators (HY_VR ..) and each component's last event time (s) */
+static int mbev_get(Inst *c, unsigned vr, double *v)
+{
+    if (vr >= HY_VR && vr < HY_VR + HY_NZ) {
+        if (mb_refresh(c) || mbev_indicators(c, c->t, c->y, c->hy.z)) return -1;
+        *v = c->hy.z[vr - HY_VR];
+        return 0;
+    }
+    if (vr >= HY_VR + HY_NZ && vr < HY_VR + HY_NZ + HY_NCOMP) { *v = c->hy.last[vr - HY_VR - HY_NZ]; return 0; }
+    return 1;
+}
+#endif
+
+static int mb_event_indicators(Inst *c, double *z, size_t nz)
+{
+    if (nz != (size_t)MB_NZ || (nz && !z)) {
+        say(c, 1, "%zu event indicators asked for, %d exist", nz, MB_NZ);
+        return -1;
+    }
+#if HYBRID
+    if (nz && (mb_refresh(c) || mbev_indicators(c, c->t, c->y, z))) return -1;
+#endif
+    return 0;
+}

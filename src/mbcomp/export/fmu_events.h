@@ -1,0 +1,51 @@
+/* mbcomp FMU events: the instance's part of a model with modes (fmu_events.c; Python:
+ * mbcomp/export/fmu_events.py). Included by fmu_core.c before its instance struct; with
+ * HYBRID 0 (no modes) it declares nothing.
+ *
+ * The generated model file defines, with HYBRID 1: HY_NC contacts and HY_NS stops, their
+ * tables (HY_C_*: holonomic row in the evaluation, restitution, its parameter index or -1,
+ * closed at the start; HY_S_*: q and u index, limits and restitution and their parameter
+ * indices; HY_NF frictions, HY_F_*: q and u index, static and kinetic force, start mode), the
+ * evaluation program mbhy_eval (HY_NH, HY_NW, HY_NOUT, HY_MH, HY_OFF_*),
+ * mbhy_eval_params, HY_REST (m or rad: a rebound rising less rests), HY_CHATTER, the
+ * Baumgarte gains HY_ALPHA, HY_BETA and HY_VR, the first event variable's value reference. */
+#ifndef HYBRID
+#define HYBRID 0
+#endif
+#if HYBRID
+#define HY_NCOMP (HY_NC + HY_NS + HY_NF) /* components with modes: contacts, stops, frictions */
+#define HY_NZ (HY_NC + 2 * HY_NS + 2 * HY_NF) /* event indicators: a contact's, a stop's two, a friction's two */
+#define HY_NR (HY_NCOMP + 1)       /* rows in force at most: one per component, an impact's */
+#define HY_NK (NU + HY_NR)
+#define HY_MAX_EVENTS 100000       /* events acted on in one DoStep or event iteration at most */
+
+typedef struct {
+    int mode[HY_NCOMP + 1];        /* contacts: 0 open, 1 closed; stops: 0 free, 1 lo, 2 hi;
+                                      frictions: 0 stick, 1 slip+, 2 slip- */
+    double hits[HY_NCOMP + 1][HY_CHATTER + 2]; /* the last impacts' times (s), oldest first */
+    int nhits[HY_NCOMP + 1];
+    double last[HY_NCOMP + 1];     /* time (s) of each component's last event, -1 before any */
+    double h[HY_NH + 1], w[HY_NW + 1], ev[HY_NOUT + 1]; /* the evaluation program's */
+    double K[HY_NK * HY_NK + 1], rhs[HY_NK + 1], G[HY_NR * HY_NR + 1];
+    int piv[HY_NK + 1];
+    double C[HY_NR * NU + 1], phi[HY_NR + 1], phid[HY_NR + 1], bias[HY_NR + 1];
+    int nr, row_of[HY_NCOMP + 1];  /* rows in force; each component's row (-1: none) */
+    double ud[NU + 1], lam[HY_NR + 1], z[HY_NZ + 1], ys[NX + 1];
+    double evwork[3 * HY_NZ + NX + 1], yev[NX + 1];
+    int dir[HY_NZ + 1], fresh;     /* Co-Simulation: the event acted on last, its function at zero */
+    long events;                   /* events acted on */
+} mbev;
+
+struct Inst;
+static void mbev_reset(struct Inst *c);
+static int mbev_rhs(struct Inst *c, double t, const double *y, double *dy);
+static int mbev_step(struct Inst *c, double h);
+static int mbev_act(struct Inst *c, int which, int *changed);
+static int mbev_get(struct Inst *c, unsigned vr, double *v);
+#define MB_NZ HY_NZ
+#else
+#define MB_NZ 0
+#endif
+/* the event indicators (MB_NZ of them) at the instance's (t, y) into z[nz]: 0, or -1 after logging */
+struct Inst;
+static int mb_event_indicators(struct Inst *c, double *z, size_t nz);

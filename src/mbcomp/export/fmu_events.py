@@ -1,0 +1,247 @@
+"""FMU events (issue 33 item 1): what a model with modes carries into its FMU.
+
+A model whose joints declare modes (:meth:`mbcomp.modeling.roles.Joint.modes`: unilateral
+contacts, rigid end stops, an axis's stick/slip friction) exports to an FMU whose C (``fmu_events.c``) keeps the active set
+(one mode per component), steps the system of the rows in force -- the assembled evaluation
+program's mass matrix, forces and rows, the rows of closed contacts and engaged stops held by
+the Lagrange index-1 solve with Baumgarte's gains -- and acts at events as the hybrid layer
+does (:mod:`mbcomp.hybrid.events`): Newton's restitution with the impulse through the mass
+matrix along the contact's or stop's row, the other rows in force held; a rebound too small to
+rise ``REST_HEIGHT`` atol or a Zeno accumulation (``CHATTER`` shrinking intervals) settles in
+the resting mode, the state then made consistent with its rows; a held row whose push falls
+through zero is released.
+
+Event indicators, one per contact and two per stop or friction, are continuous: an open
+contact's gap (m) or a closed one's normal force (N), a free stop's distance to each limit
+(rad or m) or an engaged limit's push (N m or N), a stuck friction's margins to its break-away
+force or a slipping one's speed. Every event is the indicator falling through zero. Model
+Exchange acts in ``fmi3UpdateDiscreteStates``/``fmi2NewDiscreteStates`` and reports
+``valuesOfContinuousStatesChanged``; Co-Simulation locates the events on its own DOP853's
+dense output (the runtime's ``mbrt_dop853_events``) inside ``DoStep`` and acts the same way.
+
+What is supported is read from the modes' declarations (:func:`components`); anything else
+(contacts with friction or rolling rows, a model with loops besides its contacts,
+coordinates whose rates are not the speeds) is refused naming the component.
+
+Examples
+--------
+>>> import mbcomp
+>>> ball = mbcomp.load_model_file("models/bouncing_ball.py").build()
+>>> p = plan(mbcomp.assemble(ball))
+>>> p.enabled, p.indicators, p.components
+(True, ['events.ground.normal'], ['ground'])
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from ..codegen.graph import CodegenError
+from ..codegen.printers import Program
+from ..codegen.toolchain import chunk
+from ..codegen.tracer import FIELDS, trace
+from ..modeling.events import AxisRow, ContactRow, EventRow, Impact, StickRow, Switch
+
+__all__ = ["plan", "components", "hybrid_outputs", "initial_state", "VR_EVENTS", "REST_HEIGHT", "CHATTER"]
+
+#: the value reference of the first event indicator variable (FMI 3.0), far from the others
+VR_EVENTS = 1 << 30
+#: as the hybrid layer (mbcomp.hybrid.events): a rebound rising less than this times atol rests ...
+REST_HEIGHT = 10.0
+#: ... and this many successive shrinking intervals between a component's impacts are a Zeno accumulation
+CHATTER = 30
+#: Baumgarte gains (1/s) of the rows in force (simulate's defaults)
+GAINS = (10.0, 10.0)
+
+_NOT_YET = ("export without it (e.g. limits=None, unilateral=False, friction=None), or use a compliant stop or "
+            "a regularized friction (flange forces, which the FMU carries)")
+
+
+def _refuse(name, why):
+    raise ValueError(f"cannot export {name}: {why}: not supported by the FMU's events yet -> {_NOT_YET}")
+
+
+def _contact(system, e, modes):
+    """``(holonomic row index, restitution)`` of a frictionless one-sided contact's modes."""
+    p = system.P[e.name]
+    ok = (not modes.slips and not modes.has_force and modes.start in ("open", "closed")
+          and not modes.holds_rows("open") and modes.holds_rows("closed"))
+    evs = modes.events(np.zeros(0), np.zeros(0), "open") if ok else []
+    ok = ok and len(evs) == 1 and isinstance(evs[0][1], ContactRow) and evs[0][2] == -1
+    ok = ok and not modes.events(np.zeros(0), np.zeros(0), "closed")
+    ok = ok and modes.rows("closed") == [ContactRow(evs[0][1].name)] and modes.rows("open") == []
+    act = modes.action(evs[0][0], "open") if ok else None
+    ok = ok and isinstance(act, Impact) and act.engage == "closed" and modes.action("release", "closed") == Switch("open")
+    if not ok:
+        _refuse(e.name, f"the modes of {type(e.comp).__name__} ({type(modes).__name__}: friction, rolling or modes "
+                        "other than a one-sided contact's open/closed)")
+    if any(n.name == e.name for n in system.nonholonomic):
+        _refuse(e.name, "a contact with rolling rows (velocity constraints)")
+    names = list(system.constraint_names(all_rows=True))
+    row = f"{e.name}.{evs[0][1].name}"
+    if row not in names:
+        _refuse(e.name, f"a contact whose row {row!r} is not among the model's rows")
+    return names.index(row), float(act.restitution), modes.start == "closed"
+
+
+def _stop(system, e, modes):
+    """``(q index, u index, lo, hi, restitution)`` of a joint's rigid end stops."""
+    ok = (getattr(modes, "linear_events", False) and not modes.slips and not modes.has_force
+          and modes.start == "free")
+    rows = modes.event_rows("free") if ok else []
+    ok = ok and [(r.name, r.of, r.index, r.sign, r.direction) for r in rows if isinstance(r, EventRow)] == [
+        ("lo", "q", 0, 1.0, -1), ("hi", "q", 0, -1.0, -1)]
+    if ok:
+        lo, hi = rows[0].at, rows[1].at
+        ok = (modes.rows("lo") == [AxisRow("lo", 1.0, lo)] and modes.rows("hi") == [AxisRow("hi", -1.0, hi)]
+              and all(modes.action(k, "free") == Impact(modes.action(k, "free").restitution, engage=k)
+                      for k in ("lo", "hi"))
+              and modes.action("release", "lo") == Switch("free") == modes.action("release", "hi"))
+    if not ok or e.drive or e.q.stop - e.q.start != 1:
+        _refuse(e.name, f"the modes of {type(e.comp).__name__} ({type(modes).__name__}: stick/slip friction or modes "
+                        "other than end stops' free/lo/hi)")
+    return e.q.start, e.u.start, float(lo), float(hi), float(modes.action("lo", "free").restitution)
+
+
+def _friction(system, e, modes):
+    """``(q index, u index, static, kinetic, start mode: 0 stick, 1 slip+, 2 slip-)`` of a
+    Coulomb friction's stick/slip modes on a 1-DOF joint's axis."""
+    rows = modes.rows("stick") if modes.has_force and not modes.slips else []
+    ok = (len(rows) == 1 and isinstance(rows[0], StickRow) and rows[0].sign == 1.0 and modes.start in
+          ("stick", "slip+", "slip-") and modes.rows("slip+") == [] == modes.rows("slip-")
+          and not modes.events(np.zeros(1), np.zeros(1), "stick")
+          and modes.events(np.zeros(1), np.ones(1), "slip+") == [("stick", 1.0, -1)]
+          and modes.events(np.zeros(1), -np.ones(1), "slip-") == [("stick", -1.0, 1)]
+          and modes.action("break+", "stick") == Switch("slip+") and modes.action("break-", "stick") == Switch("slip-")
+          and modes.action("stick", "slip+") == Switch("stick") == modes.action("stick", "slip-")
+          and modes.force("stick") == 0.0 and modes.force("slip+") == -modes.force("slip-") <= 0.0)
+    if not ok or e.drive or e.q.stop - e.q.start != 1:
+        _refuse(e.name, f"the modes of {type(e.comp).__name__} ({type(modes).__name__}: a force or rows other than a "
+                        "Coulomb friction's stick/slip+/slip-)")
+    return (e.q.start, e.u.start, float(rows[0].limit), float(-modes.force("slip+")),
+            ("stick", "slip+", "slip-").index(modes.start))
+
+
+def components(system):
+    """``(contacts, stops, frictions)``: ``[(name, row, restitution, closed at start)]``,
+    ``[(name, iq, iu, lo, hi, restitution)]`` and ``[(name, iq, iu, static, kinetic, start
+    mode)]`` of the joints with modes; a ``ValueError`` naming any the FMU cannot carry."""
+    contacts, stops, frictions = [], [], []
+    for e in system.topology.edges:
+        modes = e.comp.modes(system.P[e.name]) if e.kind == "joint" else None
+        if modes is None:
+            continue
+        if e.comp.tree_edge and modes.has_force:
+            frictions.append((e.name, *_friction(system, e, modes)))
+        elif e.comp.tree_edge:
+            stops.append((e.name, *_stop(system, e, modes)))
+        else:
+            contacts.append((e.name, *_contact(system, e, modes)))
+    return contacts, stops, frictions
+
+
+def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
+    """What the FMU of ``system`` carries for its events: ``enabled`` (the model has modes),
+    ``components`` (names, contacts first), ``indicators`` (the event indicator variables'
+    names), ``times`` (the variables of each component's last event time) and ``c`` (the
+    defines, tables and evaluation program ``fmu_events.c`` reads); ``tolerance`` sets the
+    resting height (``REST_HEIGHT`` x 1e-2 ``tolerance``: the FMU's atol); ``layout``, the
+    right-hand side's parameter layout, makes restitutions and limits tunable parameters."""
+    contacts, stops, frictions = components(system)
+    if not contacts and not stops and not frictions:
+        return SimpleNamespace(enabled=False, components=[], indicators=[], times=[], c="#define HYBRID 0\n")
+    mine = {c[0] for c in contacts}
+    if set(system.topology.cut) - mine or system.nonholonomic:
+        others = sorted((set(system.topology.cut) - mine) | {e.name for e in system.nonholonomic})
+        _refuse(", ".join(others), "a model with loops or rolling rows besides its one-sided contacts")
+    tr = trace(system, max_nodes, program="eval")
+    if tr.drives or not tr.qrate_identity or system.nq != system.nu:
+        _refuse(", ".join(mine | {s[0] for s in stops + frictions}), "a model with drives or coordinates whose "
+                "rates are not "
+                "its speeds (quaternions)")
+    if layout is not None and tr.layout != layout:
+        raise CodegenError("the evaluation program's parameters differ from the right-hand side's")
+    names = [c[0] for c in contacts] + [s[0] for s in stops] + [f[0] for f in frictions]
+    return SimpleNamespace(enabled=True, components=names,
+                           indicators=[f"events.{c[0]}.{_row_name(c[1], system)}" for c in contacts]
+                           + [f"events.{s[0]}.{k}" for s in stops for k in ("lo", "hi")]
+                           + [f"events.{f[0]}.{k}" for f in frictions for k in ("forward", "backward")],
+                           times=[f"events.{n}.time" for n in names],
+                           c=_c(system, tr, contacts, stops, frictions, tolerance))
+
+
+def _row_name(row, system):
+    return list(system.constraint_names(all_rows=True))[row].rsplit(".", 1)[1]
+
+
+def _tunable(layout, name, param, idx, value):
+    """The parameter index (in the FMU's parameter vector) of ``name.param[idx]`` if it is a
+    parameter with this value, else -1 (then the value is compiled in)."""
+    for k, (path, pname, pidx) in enumerate(layout):
+        if path == name and pname == param and (pidx is None if idx is None else
+                                                 pidx is not None and tuple(int(i) for i in pidx) == idx):
+            return k
+    return -1
+
+
+def _c(system, tr, contacts, stops, frictions, tolerance):
+    groups = {"eval": tr.groups["eval"]}
+    prog = Program(tr.graph, groups, guard_groups={"eval": tr.guard_groups["eval"]})
+    parts, n_work = prog.c_parts("eval", "mbhy_eval", chunk, n_parts=lambda n: 1)
+    off, offs = 0, {}
+    for name in FIELDS:
+        offs[name] = off
+        off += int(np.prod(tr.shapes[name], dtype=int))
+    lay = tr.layout
+
+    def ints(name, vals):
+        return f"static const int {name}[] = {{{', '.join(str(int(v)) for v in vals) or '0'}}};\n"
+
+    def dbls(name, vals):
+        return f"static const double {name}[] = {{{', '.join(repr(float(v)) for v in vals) or '0.0'}}};\n"
+
+    c_par = [_tunable(lay, n, "restitution", None, e) for n, _, e, _ in contacts]
+    s_par = [(_tunable(lay, n, "limits", (0,), lo), _tunable(lay, n, "limits", (1,), hi),
+              _tunable(lay, n, "restitution", None, e)) for n, _, _, lo, hi, e in stops]
+    return (f"#define HYBRID 1\n#define HY_NC {len(contacts)}\n#define HY_NS {len(stops)}\n"
+            f"#define HY_NH {max(len(prog.hoisted), 1)}\n#define HY_NW {max(n_work, 1)}\n#define HY_NOUT {off}\n"
+            f"#define HY_MH {tr.shapes['Phi'][0] if tr.shapes['Phi'] else 0}\n"
+            f"#define HY_REST {REST_HEIGHT * 1e-2 * tolerance!r}\n#define HY_CHATTER {CHATTER}\n"
+            f"#define HY_ALPHA {GAINS[0]!r}\n#define HY_BETA {GAINS[1]!r}\n#define HY_VR {VR_EVENTS}\n"
+            + "".join(f"#define HY_OFF_{k.upper()} {offs[k]}\n" for k in ("M", "f", "Phi", "Phid", "C", "cb"))
+            + ints("HY_C_ROW", [c[1] for c in contacts]) + dbls("HY_C_E", [c[2] for c in contacts])
+            + ints("HY_C_EP", c_par) + ints("HY_C_CLOSED0", [c[3] for c in contacts])
+            + ints("HY_S_IQ", [s[1] for s in stops]) + ints("HY_S_IU", [s[2] for s in stops])
+            + dbls("HY_S_LO", [s[3] for s in stops]) + dbls("HY_S_HI", [s[4] for s in stops])
+            + dbls("HY_S_E", [s[5] for s in stops]) + ints("HY_S_LOP", [p[0] for p in s_par])
+            + ints("HY_S_HIP", [p[1] for p in s_par]) + ints("HY_S_EP", [p[2] for p in s_par])
+            + f"#define HY_NF {len(frictions)}\n" + ints("HY_F_IQ", [f[1] for f in frictions])
+            + ints("HY_F_IU", [f[2] for f in frictions]) + dbls("HY_F_STATIC", [f[3] for f in frictions])
+            + dbls("HY_F_KINETIC", [f[4] for f in frictions]) + ints("HY_F_MODE0", [f[5] for f in frictions])
+            + "\n".join(parts) + "\n" + prog.c_params("mbhy_eval_params") + "\n")
+
+
+def initial_state(system):
+    """The consistent start of a model with modes: contacts that start open initialized
+    without their rows (:func:`mbcomp.hybrid.contacts.initialize_in_modes`)."""
+    from ..hybrid.contacts import initialize_in_modes
+
+    return initialize_in_modes(system, 0.0)
+
+
+#: result columns whose values depend on the active set (accelerations, forces, multipliers,
+#: the rows' residuals, the impacts' losses): not outputs of an FMU with events
+_MODAL_UNITS = {"N", "N m", "m/s^2", "rad/s^2"}
+
+
+def hybrid_outputs(system, variables):
+    """The output columns ``variables`` (``(name, index)``) an FMU with events carries: those
+    that do not depend on the active set (positions, velocities, orientations, energies,
+    momenta); the output program evaluates the assembled system, whose contacts are closed."""
+    from ..assembly.column_units import column_units
+
+    units = column_units(system)
+    return [(n, k) for n, k in variables
+            if units.get(n) not in _MODAL_UNITS and not n.endswith(".der")
+            and not n.startswith(("lambda.", "residual.")) and n != "energy.impacts"]
