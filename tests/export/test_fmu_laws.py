@@ -55,7 +55,7 @@ def test_a_smooth_law_exports_and_runs_through_the_sign_changes_as_simulate(tmp_
         return -0.4 * np.tanh(w / 0.05) + 0.1 * abs(phi)
 
     path = tmp_path / "smooth.fmu"
-    export_fmu(torque_pendulum(smooth), path)
+    export_fmu(torque_pendulum(smooth), path, derivatives=False)
     ref = mbcomp.simulate(torque_pendulum(smooth), t_end=3.0, n_out=101, rtol=1e-11, atol=1e-13)
     assert np.ptp(np.sign(ref["hinge.w"])) == 2  # w changes sign: the tanh's both sides are taken
     r = fmpy.simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=3.0, output=["hinge.phi"],
