@@ -473,6 +473,22 @@ int main(void)
             double yf[4] = {2.0 * L, 0.0, 0.0, 0.0};
             CHECK(mbrt_project(&P, 0.0, yf, 1e-12, 0, 1e-9, &nrm, wk) == MBRT_MECH_NO_CONVERGENCE);
             CHECK(mbrt_project(&P, 0.0, yf, 1e-12, -1, 1e-9, &nrm, wk) == MBRT_MECH_BAD_ARGUMENT);
+            {   /* the free directions only (fixed start values kept): x and vx fixed, y and vy move */
+                unsigned char pfree[2] = {0, 1}, vfree[2] = {0, 1}, none[2] = {0, 0};
+                double ys[4] = {0.5 * L, -0.9 * L, 0.3, 0.2};
+                CHECK(mbrt_project_free(&P, 0.0, ys, pfree, vfree, 1e-12, 20, 1e-9, &nrm, wk) == MBRT_MECH_OK);
+                CHECK(ys[0] == 0.5 * L && ys[2] == 0.3 && fabs(ys[1] + sqrt(0.75) * L) < 1e-12);
+                CHECK(fabs(ys[0] * ys[2] + ys[1] * ys[3]) < 1e-12);
+                double ya[4] = {0.5 * L, -0.9 * L, 0.3, 0.2}, yb[4] = {0.5 * L, -0.9 * L, 0.3, 0.2};
+                CHECK(mbrt_project_free(&P, 0.0, ya, NULL, NULL, 1e-12, 8, 1e-9, &nrm, wk) == MBRT_MECH_OK);
+                CHECK(mbrt_project(&P, 0.0, yb, 1e-12, 8, 1e-9, &nrm, wk) == MBRT_MECH_OK);
+                CHECK(memcmp(ya, yb, sizeof ya) == 0);  /* NULL: every direction, mbrt_project's numbers */
+                double yn[4] = {0.5 * L, -0.9 * L, 0.3, 0.2};  /* nothing free: the rows have no solution */
+                CHECK(mbrt_project_free(&P, 0.0, yn, none, none, 1e-12, 8, 1e-9, &nrm, wk) == MBRT_MECH_SINGULAR);
+                double yo[4] = {2.0 * L, -0.1 * L, 0.0, 0.0};  /* x fixed beyond the circle: no closure */
+                CHECK(mbrt_project_free(&P, 0.0, yo, pfree, vfree, 1e-12, 20, 1e-9, &nrm, wk) != MBRT_MECH_OK);
+                CHECK(yo[0] == 2.0 * L && yo[1] == -0.1 * L);  /* y written only on success */
+            }
             free(wk);
             free(iw);
         }
