@@ -225,10 +225,14 @@ def test_the_command_line_exports_and_reports(tmp_path, capsys):
     from mbcomp.cli.main import main
 
     path, model_file = tmp_path / "crank.fmu", load_model("models/slider_crank.py").__file__
-    assert main(["export", model_file, "-o", str(path)]) == 0
+    assert main(["export", model_file, "-o", str(path), "-p", "rod_length=0.7"]) == 0
     out = capsys.readouterr().out
     assert "FMI 3.0 Model Exchange + Co-Simulation" in out and "crank.m" in out
     assert "states (4): crank_joint.phi, slider_joint.s, pin.phi, v[1]" in out  # D'Alembert's states
+    # build()'s arguments may change the structure, so the FMU bakes them in: the log names them,
+    # as given (-p) or as the file's defaults
+    fixed = next(line for line in out.splitlines() if line.startswith("fixed at export"))
+    assert "rod_length=0.7" in fixed and "crank_length=0.2" in fixed and "export again with -p" in fixed
     assert validate_fmu(str(path)) == []
     assert main(["export", model_file, "-o", str(tmp_path / "x2.fmu"), "--fmi", "2.0", "--kind", "cs"]) == 0
     assert "FMI 2.0 Co-Simulation" in capsys.readouterr().out

@@ -13,11 +13,12 @@ Examples
 """
 from __future__ import annotations
 
+import inspect
 import pathlib
 
-from .loader import check_output, load
+from .loader import check_output, load, split_params
 
-__all__ = ["cmd_export", "add_parser"]
+__all__ = ["cmd_export", "add_parser", "build_arguments"]
 
 
 def cmd_export(args):
@@ -40,10 +41,40 @@ def cmd_export(args):
     shown = ", ".join(info["outputs"][:12]) + (", ..." if len(info["outputs"]) > 12 else "")
     print(f"outputs ({len(info['outputs'])}): {shown or 'none'}")
     print(f"inputs ({len(info['inputs'])}): {', '.join(info['inputs']) or 'none'}")
+    built = build_arguments(mod, args.param)
+    if built:
+        print("fixed at export (build() arguments, which may change the model's structure; export again with "
+              f"-p name=value to change them): {', '.join(f'{k}={v!r}' for k, v in built.items())}")
     print(f"default experiment: 0 .. {stop:g} s at tolerance {args.tolerance:g}")
     print(f"program: {info['operations']} operations, built with {info['compiler']} "
           f"(binaries/{'x86_64-linux' if args.fmi == '3.0' else 'linux64'}/{info['model_identifier']}.so)")
     return 0
+
+
+def build_arguments(mod, pairs):
+    """``{name: value}`` of the model file's ``build()`` arguments as the export used them (its
+    defaults, those given by ``-p name=value`` instead): baked into the FMU, since a build()
+    argument may change the model's structure (a component more or less, a loop), which no FMU
+    parameter can.
+
+    Examples
+    --------
+    >>> import types
+    >>> mod = types.SimpleNamespace(build=lambda n=3, length=0.5, *, shape="box": None)
+    >>> build_arguments(mod, ["n=5"])
+    {'n': 5, 'length': 0.5, 'shape': 'box'}
+    """
+    given, _ = split_params(pairs, mod.build)
+    out = {}
+    for name, p in inspect.signature(mod.build).parameters.items():
+        if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
+            continue
+        if name in given:
+            out[name] = given[name]
+        elif p.default is not p.empty:
+            out[name] = p.default
+    out.update({k: v for k, v in given.items() if k not in out})  # taken by **kwargs
+    return out
 
 
 def add_parser(sub, common):
