@@ -19,6 +19,7 @@ from xml.sax.saxutils import escape
 from ..assembly.column_units import column_units
 from ..modeling.units import BASE as _BASE
 from ..modeling.units import unit_exponents
+from .fmu_events import VR_EVENTS
 
 __all__ = ["unit_exponents", "unit_name", "named_unit", "output_name", "parameter_doc", "column_doc", "state_doc",
            "build_description", "model_description3", "model_description2"]
@@ -445,8 +446,6 @@ def _event_rows(events):
     """``([(FMI 3.0 row, FMI 2.0 row)], indicator references, time references)`` of the event
     variables ``events`` (indicator names, last-event-time names), numbered from
     :data:`mbcomp.export.fmu_events.VR_EVENTS` as ``fmu_events.c`` reads them."""
-    from .fmu_events import VR_EVENTS
-
     names, times = events
     rows, ind, tvr = [], [], []
     for k, n in enumerate(names):

@@ -88,7 +88,7 @@ from ..modeling.model import Model
 from . import fmu_events
 from .description import (RUNTIME_C, build_description, model_description2, model_description3, output_name,
                           parameter_doc)
-from .rules import c_names, c_rules
+from .rules import c_names, c_rules, c_string
 
 __all__ = ["export_fmu"]
 
@@ -260,7 +260,7 @@ def _start_freedom(system):
         for i in range(e.q.start, e.q.stop):
             qdir[i], qdirn[i] = (e.u.start + i - e.q.start, 1) if same else (e.u.start, e.u.stop - e.u.start)
     names = list(system.q_names) + list(system.u_names)
-    quoted = ", ".join('"' + n.replace("\\", "\\\\").replace('"', '\\"') + '"' for n in names) or '""'
+    quoted = ", ".join(c_string(n) for n in names) or '""'
     flags = (f"static const unsigned char PFREE0[] = {{{', '.join(str(int(not f)) for f in qfix) or '0'}}};\n"
              f"static const unsigned char VFREE0[] = {{{', '.join(str(int(not f)) for f in ufix) or '0'}}};\n")
     return flags + _c_ints("QDIR", qdir) + _c_ints("QDIRN", qdirn) + f"static const char *const YNAME[] = {{{quoted}}};\n"

@@ -23,20 +23,24 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["c_names", "c_rules", "RULES"]
+from ..modeling.free_joint import rotation_matrix_problem
+from ..modeling.inertia import inertia_problem
+
+__all__ = ["c_names", "c_rules", "c_string", "RULES"]
 
 #: the rule kinds of the C table (fmu_rules.c's RULE_* constants), by Param.check text
 RULES = {"positive": 1, "nonnegative": 2, "nonzero": 3}
 INERTIA, ROTATION = 4, 5
 
 
-def _c_string(text):
+def c_string(text):
+    """``text`` as a C string literal (backslashes and quotes escaped)."""
     return '"' + str(text).replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
 def c_names(names):
     """``VAR_NAME[]``: the name of every value reference ``0 .. len(names) - 1`` as C."""
-    body = ", ".join(_c_string(n) for n in names) or '""'
+    body = ", ".join(c_string(n) for n in names) or '""'
     return f"#define NNAMES {len(names)}\nstatic const char *const VAR_NAME[] = {{{body}}};\n"
 
 
@@ -49,17 +53,13 @@ def _owner(comp, name):
 
 
 def _kind(par):
-    """The rule kind of a Param (0: finiteness only)."""
+    """The rule kind of a Param (0: finiteness only): its ``check`` text, or the framework's
+    check functions known by identity (an inertia tensor's, a rotation matrix's), never guessed
+    from a unit or a name."""
     check = par.check
     if isinstance(check, str):
         return RULES.get(check, 0)
-    if callable(check) and tuple(par.shape) == (3, 3):
-        unit = (par.unit or "").replace(" ", "").replace("*", "")
-        if unit in ("kgm^2", "kgm2"):
-            return INERTIA
-        if unit in ("1", ""):
-            return ROTATION
-    return 0
+    return {inertia_problem: INERTIA, rotation_matrix_problem: ROTATION}.get(check, 0)
 
 
 def c_rules(system, layout):
@@ -92,7 +92,7 @@ def c_rules(system, layout):
             consts.append(float(value.reshape(shape)[ix]) if shape else float(value[0]))
     n = len(kinds)
     ints = lambda v: ", ".join(str(int(x)) for x in v) or "0"  # noqa: E731
-    strs = lambda v: ", ".join(_c_string(x) for x in v) or '""'  # noqa: E731
+    strs = lambda v: ", ".join(c_string(x) for x in v) or '""'  # noqa: E731
     return (f"#define NRULE {n}\n"
             f"static const int RULE_KIND[] = {{{ints(kinds)}}};\n"
             f"static const int RULE_START[] = {{{ints(starts)}}};\n"
