@@ -38,6 +38,7 @@ Run::
     mbcomp simulate models/bicycle.py --animate bike.html        # pushed: SIMULATE_PARAMS
     mbcomp simulate models/bicycle.py -p v=5 -p roll0=0.05 --out bicycle.csv --plot bicycle.png
     mbcomp simulate models/bicycle.py -p v=3 -p roll0=0.05
+    mbcomp simulate models/bicycle.py -p h0=0.05 -p pitch0=0.05      # the falling bicycle
 
 The benchmark's linear analysis gives self-stability for 4.29 < v < 6.02 m/s (weave and
 capsize speeds, the paper's Table 2); see ``tests/test_bicycle.py`` for what the
@@ -57,8 +58,9 @@ SIMULATION = dict(t_end=10.0, rtol=1e-8, atol=1e-10, backend="python", n_out=501
 #: what ``mbcomp simulate models/bicycle.py`` shows unless -p says otherwise: a push of 0.5 rad/s
 #: in roll, so the self-stable bicycle leans, weaves and rights itself (build() itself starts
 #: upright, the operating point that linearization and ``mbcomp stability`` need), on wheels
-#: that may leave the ground: at ``-p v=2`` it falls over, the wheels lifting off and landing
-#: (``res.events``)
+#: that may leave the ground. At ``-p v=2`` it falls over and the run stops at the first lift-off,
+#: naming the wheel: rolling rows without friction cannot let go; ``-p h0=0.05 -p pitch0=0.05``
+#: drops it (``res.events``: the rear wheel lands, then the front one)
 SIMULATE_PARAMS = dict(roll_rate0=0.5, unilateral=True)
 
 DATA = pathlib.Path(__file__).resolve().parent / "data" / "bicycle_parameters.json"
@@ -123,13 +125,18 @@ def _fork_shapes(p):
             _tube(crown, top, color="red"), _tube(top + (-0.1, -0.25, 0), top + (-0.1, 0.25, 0), color="black")]
 
 
-def build(v=5.0, roll0=0.0, roll_rate0=0.0, unilateral=False, **overrides):
+def build(v=5.0, roll0=0.0, roll_rate0=0.0, unilateral=False, h0=0.0, pitch0=0.0, **overrides):
     """The benchmark bicycle moving straight at ``v`` (m/s, forward) with roll ``roll0``
     (rad) and roll rate ``roll_rate0`` (rad/s); ``overrides`` replace Table 1 entries by
     name (e.g. ``c=0.0``). ``unilateral``: the wheels lift off where their normal force would
     pull and land again (plastic impacts, ``restitution = 0``; :class:`DiskContact`'s
-    ``unilateral``), so a bicycle below its weave speed tumbles; the default keeps the
-    benchmark's bilateral contacts (linearization needs them)."""
+    ``unilateral``); the default keeps the benchmark's bilateral contacts (linearization
+    needs them). Without friction at the wheels a lift-off is a contradiction (the normal
+    force vanishes with a tangential one left), so ``v=2`` with a roll rate fails at its
+    first lift-off, naming the wheel. ``h0`` (m, with ``unilateral``): the falling bicycle,
+    dropped from ``h0`` above the ground with its nose pitched up by ``pitch0`` (rad, about
+    the rear contact point) so the rear wheel lands first, the front one after it; both
+    landings are perfectly rough (the wheels roll at once)."""
     p = parameters()
     unknown = sorted(set(overrides) - set(p))
     if unknown:
@@ -139,8 +146,11 @@ def build(v=5.0, roll0=0.0, roll_rate0=0.0, unilateral=False, **overrides):
     v, roll0, roll_rate0 = float(v), float(roll0), float(roll_rate0)
 
     # rigid roll about the ground line (the x axis) keeps both contact points where they are
-    R0 = rot_axis((1.0, 0.0, 0.0), roll0)
-    hub = R0 @ np.array([0.0, 0.0, -rR])
+    if h0 < 0.0 or (h0 > 0.0 and not unilateral) or (pitch0 and not h0 > 0.0):
+        raise ValueError(f"bicycle: h0={h0!r}, pitch0={pitch0!r}: a drop needs h0 > 0 m and unilateral=True (its "
+                         "wheels start in the air); pitch0 only with a drop")
+    R0 = rot_axis((0.0, 1.0, 0.0), float(pitch0)) @ rot_axis((1.0, 0.0, 0.0), roll0)
+    hub = R0 @ np.array([0.0, 0.0, -rR]) - np.array([0.0, 0.0, float(h0)])
     w_roll = np.array([roll_rate0, 0.0, 0.0])
 
     m = Model()
@@ -160,7 +170,7 @@ def build(v=5.0, roll0=0.0, roll_rate0=0.0, unilateral=False, **overrides):
     front_hub = m.add("front_hub", Revolute(n=(0, 1, 0), phi0=0.0, w0=-v / rF))
     front_wheel = m.add("front_wheel", RigidBody(m=p["mF"], I=_inertia(p["IFxx"], p["IFyy"], p["IFxx"])))
     ground_normal = (0.0, 0.0, -1.0)
-    one_sided = dict(unilateral=bool(unilateral), restitution=0.0)
+    one_sided = dict(unilateral=bool(unilateral), restitution=0.0, open0=bool(h0 > 0.0))
     rear_contact = m.add("rear_contact", DiskContact(r=rR, n=ground_normal, axis=(0, 1, 0), **one_sided))
     front_contact = m.add("front_contact", DiskContact(r=rF, n=ground_normal, axis=(0, 1, 0), **one_sided))
 

@@ -34,7 +34,13 @@ from ..assembly.kkt import accelerations
 from .active import open_joints, rows_in_force, start_modes, system_in_force, without_rows
 
 __all__ = ["contact_rows", "contact_impact", "initialize_in_modes", "event_value",
-           "contact_pushes", "tangent_force", "zero_open", "open_force_columns", "touching_at_start"]
+           "contact_pushes", "tangent_force", "zero_open", "open_force_columns", "touching_at_start",
+           "inward_gap_acceleration", "INWARD"]
+
+#: a contact let go whose gap accelerates into the surface by more than this fraction of the
+#: size of its acceleration terms (``|C_n| |du/dt| + |c_b,n|``) contradicts itself: see
+#: :func:`inward_gap_acceleration`
+INWARD = 1e-6
 
 
 def contact_rows(system, name, t, q, u, row="normal", jets=None):
@@ -99,6 +105,26 @@ def tangent_force(ev, mult, name):
     <mbcomp.assembly.system.MultibodySystem.row_multipliers>` at the evaluation ``ev``)."""
     rows = [r for e, names, _ in ev.local_nh if e.name == name for r in names]
     return np.array([-float(mult[name][r]) for r in rows])
+
+
+def inward_gap_acceleration(system, sysm, name, t, q, u):
+    """The gap acceleration (m/s^2) of contact ``name``, open in the mode's system ``sysm`` at
+    ``(t, q, u)``, where it points into the surface beyond rounding (below -:data:`INWARD`
+    times the size of its terms), else None.
+
+    A contact let go because it would pull (its push fell through zero) separates: with one
+    row (a point on a plane) the open gap's acceleration is the pull's own sign. With rolling
+    rows it need not be: their tangential force does not vanish with the normal one (a wheel
+    whose rows hold no slip needs an unbounded friction coefficient as ``N -> 0``), and once
+    open the body may accelerate into the surface -- closed it pulls, open it penetrates, no
+    mode is consistent (Painleve-like). A run must fail there, not fly the body through the
+    surface (its touch event, the gap falling *through* zero, cannot fire from a gap that
+    starts at zero and falls)."""
+    ud, _ = accelerations(sysm.evaluate(t, q, u))
+    cr = contact_rows(system, name, t, q, u)
+    a = float(cr.C[0] @ ud + cr.bias[0])
+    scale = float(np.linalg.norm(cr.C[0]) * np.linalg.norm(ud) + abs(cr.bias[0]))
+    return a if a < -INWARD * scale else None
 
 
 def contact_impact(system, name, t, q, u_minus, restitution, row="normal", friction=None):

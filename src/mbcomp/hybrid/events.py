@@ -52,10 +52,11 @@ import numpy as np
 from ..assembly.kkt import accelerations
 from ..errors import SimulationError
 from ..modeling.events import ContactRow, End, Impact, SlipSpeed, Switch
-from .contacts import contact_impact, contact_pushes, contact_rows, event_value, touching_at_start
+from .contacts import (contact_impact, contact_pushes, contact_rows, event_value, inward_gap_acceleration,
+                       touching_at_start)
 from ..solvers.locate import return_root, root, time_tolerance
 from ..assembly.conservation import impulse_work
-from .active import (SegmentStart, mode_rows, mode_system, rows_in_force, slipping_joints, start_modes,
+from .active import (SegmentStart, mode_rows, mode_system, open_joints, rows_in_force, slipping_joints, start_modes,
                      with_mode_forces)
 from .outcomes import Cut, EventRecord, Outcome
 from .stops import consistent, impact_speeds, row_push, row_values
@@ -109,7 +110,7 @@ class Events(CLoop, SlideEvents):
         self.stats = dict(events=0, event_evaluations=0, mode_changes=0)
         self.slip_dirs = {}  # {sliding contact: the unit direction (tangent coordinates) its slide started with}
         self.segments = []  # [SegmentStart]: the run's start and every event's next segment (the columns)
-        self._slip_keys, self._before, self._slip_peak = set(), None, {}
+        self._slip_keys, self._gap_keys, self._before, self._slip_peak = set(), set(), None, {}
         self.slide_worked, self.work_log, self._worked_to = 0.0, [], None  # the sliding friction's work (J)
 
     @property
@@ -166,6 +167,8 @@ class Events(CLoop, SlideEvents):
                     self._slip_peak[name] = max(self._slip_peak.get(name, 0.0), float(np.linalg.norm(v_t)))
                     out[("joint", name, ev_name)] = float(v_t @ self.slip_dirs[name])
                 else:
+                    if isinstance(value, ContactRow):  # an open contact's gap (m)
+                        self._gap_keys.add(("joint", name, ev_name))
                     out[("joint", name, ev_name)] = event_value(sysm, name, value, t, q, u)
             if declared.rows(mode):
                 rows = self._pushes(t, q, u) if rows is None else rows
@@ -220,6 +223,7 @@ class Events(CLoop, SlideEvents):
                 hits.append((self._returned(key, qu, t0, t1, d), key))
             elif _crossed(a, b, d):
                 hits.append((self._locate(key, qu, t0, t1, a, b), key))
+        self._not_inside(t0, t1, g1, hits)
         for t_e, key in sorted(hits):
             self._slide_work(run, qu, t_e)
             cut = self._decide(key, t_e, qu)
@@ -228,6 +232,17 @@ class Events(CLoop, SlideEvents):
         self._slide_work(run, qu, t1)
         self._g0 = g1
         return None
+
+    def _not_inside(self, t0, t1, g1, hits):
+        """Fail where an open contact's gap was below zero through a whole step ``[t0, t1]``
+        (values ``g1`` at its end; ``hits``: the crossings found in it): the body passed into
+        what it touches without the touch event (the gap falling through zero) firing."""
+        depth = REST_HEIGHT * self.atol
+        for key in self._gap_keys & set(g1):
+            if g1[key] < -depth and self._g0.get(key, 0.0) < -depth and key not in {k for _, k in hits}:
+                raise SimulationError(f"{key[1]}: open, it is {-g1[key]:.3g} m inside what it touches at t={t1:.9g} "
+                                      f"s (and was at t={t0:.9g} s) without having touched it: the body passes "
+                                      "through -> report this model: the run lost the contact's touch-down")
 
     def _located(self, run):
         """:meth:`check` of a stretch the C loop watched: the event it located (the stretch
@@ -464,6 +479,7 @@ class Events(CLoop, SlideEvents):
             q, u = consistent(new, t, q, u)
         self.slip_dirs = self._directions(t, q, u, modes, going_on)
         new = self.system_now(modes)
+        self._let_go_outward(t, q, u, new, modes)
         self.modes = modes
         self.segments.append(SegmentStart(float(t), dict(modes), dict(self.slip_dirs), self._before,
                                           np.concatenate((q, u))))
@@ -494,6 +510,7 @@ class Events(CLoop, SlideEvents):
         if modes != self.modes or form.system is not new or u is not u0:
             self.modes = modes
             q, u = consistent(new, t, q, u)
+            self._let_go_outward(t, q, u, new, modes)
             form = self.make_form(new)
             y0 = form.initial_state(t, q, u)
         self.segments = [SegmentStart(float(t), dict(self.modes), dict(self.slip_dirs), None, np.concatenate((q, u)))]
@@ -524,6 +541,23 @@ class Events(CLoop, SlideEvents):
             if settle is not None:
                 modes[who] = settle
         return u, modes
+
+    def _let_go_outward(self, t, q, u, sysm, modes):
+        """Fail where a contact let go at ``t`` (a ``release`` recorded there, open in ``modes``,
+        the system ``sysm``) would accelerate into what it touched
+        (:func:`~mbcomp.hybrid.contacts.inward_gap_acceleration`): no mode is consistent there."""
+        released = {r.component for r in self.records if r.time == t and r.kind == "release"}
+        for n in sorted(released & set(open_joints(self.system, modes))):
+            if self.system.edge(n).comp.tree_edge:
+                continue
+            a = inward_gap_acceleration(self.system, sysm, n, t, q, u)
+            if a is not None:
+                raise SimulationError(
+                    f"{n}: let go at t={t:.9g} s, but open it accelerates into what it touches ({a:.3g} m/s^2) while "
+                    "closed it would pull: its normal force fell to zero with its rolling rows still holding a "
+                    "tangential load (rows that never slip need an unbounded friction coefficient there), so no "
+                    "mode is consistent (a Painleve-like contradiction) -> give the contact Coulomb friction "
+                    "(friction=ContactFriction(mu_s, mu_k)) so it slides before it lifts off")
 
     def _stops_touching(self, t, q, u, tol):
         """``[(joint, event, action, None, value, speed)]`` of the stops free at the start whose
