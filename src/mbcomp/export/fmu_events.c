@@ -393,7 +393,7 @@ static int hy_lets_go(Inst *c, const int *before)
             un += c->hy.ud[j] * c->hy.ud[j];
         }
         if (a < -1e-6 * (sqrt(cn) * sqrt(un) + fabs(c->hy.ev[HY_OFF_CB + row]))) {
-            say(c, 1, "%s: its normal force vanished with a tangential force left at t=%.10g s: closed it would "
+            say(c, 1, "%s: its normal force vanished with a tangential force left at t=%.12g s: closed it would "
                 "pull, open it would accelerate into the surface (a = %.4g m/s^2) -- perfectly rough rolling rows "
                 "cannot let go there -> give the contact friction (friction=ContactFriction(mu_s, mu_k))",
                 HY_C_NAME[k], t, a);

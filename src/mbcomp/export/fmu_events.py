@@ -3,13 +3,19 @@
 A model whose joints declare modes (:meth:`mbcomp.modeling.roles.Joint.modes`: unilateral
 contacts, rigid end stops, an axis's stick/slip friction) exports to an FMU whose C (``fmu_events.c``) keeps the active set
 (one mode per component), steps the system of the rows in force -- the assembled evaluation
-program's mass matrix, forces and rows, the rows of closed contacts and engaged stops held by
-the Lagrange index-1 solve with Baumgarte's gains -- and acts at events as the hybrid layer
-does (:mod:`mbcomp.hybrid.events`): Newton's restitution with the impulse through the mass
-matrix along the contact's or stop's row, the other rows in force held; a rebound too small to
-rise ``REST_HEIGHT`` atol or a Zeno accumulation (``CHATTER`` shrinking intervals) settles in
-the resting mode, the state then made consistent with its rows; a held row whose push falls
-through zero is released.
+program's mass matrix, forces and rows, the rows of closed contacts (the normal row and the
+contact's rolling rows, velocity rows with velocity-level stabilization only) and engaged stops
+held by the Lagrange index-1 solve with Baumgarte's gains, ``dq/dt`` the coordinate rates
+(quaternions) -- and acts at events as the hybrid layer does (:mod:`mbcomp.hybrid.events`):
+Newton's restitution with the impulse through the mass matrix along the contact's normal row or
+the stop's row, the contact's rolling rows (perfectly rough) and the other rows in force held; a
+rebound too small to rise ``REST_HEIGHT`` atol or a Zeno accumulation (``CHATTER`` shrinking
+intervals) settles in the resting mode, the state then made consistent with its rows (positions
+through the coordinate map, ``mbrt_increment``); a held row whose push falls through zero is
+released. After every event closed contacts that would pull open, the most pulling first, and a
+closing row that would pull at once stays open; a contact let go whose gap would accelerate into
+its surface (the frictionless bicycle's wheel: perfectly rough rolling rows, Painleve-like) is
+an error naming it.
 
 Event indicators, one per contact and two per stop or friction, are continuous: an open
 contact's gap (m) or a closed one's normal force (N), a free stop's distance to each limit
@@ -20,8 +26,8 @@ Exchange acts in ``fmi3UpdateDiscreteStates``/``fmi2NewDiscreteStates`` and repo
 dense output (the runtime's ``mbrt_dop853_events``) inside ``DoStep`` and acts the same way.
 
 What is supported is read from the modes' declarations (:func:`components`); anything else
-(contacts with friction or rolling rows, a model with loops besides its contacts,
-coordinates whose rates are not the speeds) is refused naming the component.
+(contacts with friction, a model with loops or rolling rows besides its contacts, drives,
+coordinates that move neither additively nor as quaternions) is refused naming the component.
 
 Examples
 --------
