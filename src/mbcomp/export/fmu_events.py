@@ -74,7 +74,7 @@ def _contact(system, e, modes):
     contact's modes (its rolling rows, if any, held with the normal row while closed)."""
     if modes.slips:
         _refuse(e.name, f"the modes of {type(e.comp).__name__} ({type(modes).__name__}: a contact with friction, "
-                        "friction=ContactFriction(...): its stick/slip modes")
+                        "friction=ContactFriction(...), rolling and sliding)")
     ok = (not modes.has_force and modes.start in ("open", "closed")
           and not modes.holds_rows("open") and modes.holds_rows("closed"))
     evs = modes.events(np.zeros(0), np.zeros(0), "open") if ok else []
