@@ -12,7 +12,11 @@ case's physics (closed forms, invariants). The frictionless falling bicycle's fi
 Painleve-like (closed its rear wheel would pull, open it would fall into the ground): the FMU
 fails there with an error naming the contact, on both interfaces.
 """
+import os
 import re
+import shutil
+import subprocess
+import zipfile
 
 import numpy as np
 import pytest
@@ -226,7 +230,8 @@ def test_a_spinning_ball_bounces_rough_then_rests_rolling(kind, made, reference)
     v_roll = (M_BALL * R_BALL * VX + J_BALL * WY) / (M_BALL * R_BALL + J_BALL / R_BALL)
     after = r["time"] > want[-1] + 1e-9
     assert np.allclose(r["free.v.x"][after], v_roll, rtol=1e-10, atol=0)
-    assert np.allclose(r["free.r.z"][after], R_BALL, rtol=0, atol=1e-12) and np.all(np.abs(r["free.v.z"][after]) < 1e-12)
+    assert np.allclose(r["free.r.z"][after], R_BALL, rtol=0, atol=1e-12)
+    assert np.all(np.abs(r["free.v.z"][after]) < 1e-12)
 
 
 def _disk_invariants(r, k):
@@ -405,11 +410,6 @@ def test_the_events_c_is_clean_under_asan_and_ubsan(made, tmp_path):
     settling after each event) built with AddressSanitizer and UBSan: Co-Simulation to 1 s ends
     resting and rolling (z = r, v_x the rough landing's closed form), Model Exchange under an
     explicit Euler importer acts on its events; no error, no sanitizer report, no warning."""
-    import os
-    import shutil
-    import subprocess
-    import zipfile
-
     cc = c_compiler()
     probe = tmp_path / "probe.c"
     probe.write_text("int main(void) { return 0; }\n")
@@ -430,7 +430,8 @@ def test_the_events_c_is_clean_under_asan_and_ubsan(made, tmp_path):
     assert "fmu_events" not in res.stderr and "mbrt_mech" not in res.stderr, res.stderr[-3000:]  # no warning
     run = subprocess.run([str(exe), "1.0"], capture_output=True, text=True, timeout=300,
                          env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
-    assert run.returncode == 0 and "runtime error" not in run.stderr and "Sanitizer" not in run.stderr, run.stderr[-3000:]
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert "runtime error" not in run.stderr and "Sanitizer" not in run.stderr, run.stderr[-3000:]
     cs, me = (line.split() for line in run.stdout.strip().splitlines())
     y = np.array(cs[3:], float)  # [r, Q, v, w]
     assert cs[:2] == ["cs", "0"] and y[2] == pytest.approx(R_BALL, abs=1e-12) and abs(y[9]) < 1e-12

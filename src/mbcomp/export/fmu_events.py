@@ -246,7 +246,8 @@ def _c(system, tr, contacts, stops, frictions, tolerance):
             + f"static const char *const HY_C_NAME[] = {{{', '.join(c_string(c[0]) for c in contacts) or '0'}}};\n"
             f"#define HY_REST {REST_HEIGHT * 1e-2 * tolerance!r}\n#define HY_CHATTER {CHATTER}\n"
             f"#define HY_ALPHA {GAINS[0]!r}\n#define HY_BETA {GAINS[1]!r}\n#define HY_VR {VR_EVENTS}\n"
-            + "".join(f"#define HY_OFF_{k.upper()} {offs[k]}\n" for k in ("M", "f", "Phi", "Phid", "C", "cb", "B", "Bb", "Psi"))
+            + "".join(f"#define HY_OFF_{k.upper()} {offs[k]}\n"
+                      for k in ("M", "f", "Phi", "Phid", "C", "cb", "B", "Bb", "Psi"))
             + ints("HY_C_ROW", [c[1] for c in contacts]) + dbls("HY_C_E", [c[2] for c in contacts])
             + ints("HY_C_EP", c_par) + ints("HY_C_CLOSED0", [c[3] for c in contacts])
             + ints("HY_S_IQ", [s[1] for s in stops]) + ints("HY_S_IU", [s[2] for s in stops])
