@@ -25,7 +25,7 @@ import mbcomp
 from mbcomp.codegen import c_compiler
 from mbcomp.kinematics import rot_axis
 from mbcomp.library import (ContactFriction, DiskContact, FixedTranslation, FreeMotion, PlaneContact, RigidBody,
-                            SphereContact, World)
+                            SphereContact, World, WorldForce)
 
 from conftest import load_model
 
@@ -104,6 +104,24 @@ def overhanging_rod(theta=0.1):
     return md
 
 
+def lifted_ball():
+    """The ball rolling at VX m/s on the ground (closed at the start, w_y = VX / r) lifted by an
+    upward force 2 m g t (N): its normal force m g (1 - 2 t) falls through zero at 0.5 s, where
+    the contact lets go with no tangential force left (rolling uniformly needs none)."""
+    md = mbcomp.Model()
+    w = md.add("world", World(g=(0, 0, -G)))
+    free = md.add("free", FreeMotion(r0=(0, 0, R_BALL), v0=(VX, 0, 0), w0=(0, VX / R_BALL, 0)))
+    ball = md.add("ball", RigidBody(m=M_BALL, I=J_BALL * np.eye(3)))
+    c = md.add("ground", SphereContact(r=R_BALL, unilateral=True, restitution=0.0, open0=False))
+    lift = md.add("lift", WorldForce(f=lambda t, frame: (0.0, 0.0, 2.0 * M_BALL * G * t)))
+    md.connect(w.frame_b, free.frame_a)
+    md.connect(free.frame_b, ball.frame_a)
+    md.connect(w.frame_b, c.frame_a)
+    md.connect(c.frame_b, ball.frame_a)
+    md.connect(lift.frame_b, ball.frame_a)
+    return md
+
+
 def bicycle():
     return load_model("models/bicycle.py").build(v=2.0, roll_rate0=0.5, unilateral=True)
 
@@ -119,6 +137,8 @@ CASES = {
                                                      for a in axes]),
     "rod": (overhanging_rod, 0.6, 1e-3, ["a", "b"], ["free.r.x", "free.r.z", "free.Q.w", "free.Q.y", "free.v.z",
                                                       "free.w.y"]),
+    "lift": (lifted_ball, 1.0, 1e-3, ["ground"], ["free.r.x", "free.r.z", "free.Q.w", "free.Q.y", "free.v.x",
+                                                   "free.v.z", "free.w.y"]),
     "bicycle": (bicycle, 1.2, 1e-3, ["rear_contact", "front_contact"], []),
 }
 #: the bicycle's first release (s; mbcomp.simulate at rtol 1e-12): the frictionless rear wheel lets go
@@ -296,6 +316,20 @@ def test_a_landing_that_unloads_a_closed_contact_opens_it(kind, made, reference)
     qw, qy = r["free.Q.w"], r["free.Q.y"]
     a_height = r["free.r.z"] + 3.0 * qw * qy / (qw * qw + qy * qy)
     assert abs(a_height[0]) < 1e-12 and np.all(np.diff(a_height[after]) > 0.0)
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_a_rolling_ball_lifted_off_lets_go_where_its_normal_force_vanishes(kind, made, reference):
+    """The lifted ball lets go at 0.5 s (its normal force m g (1 - 2 t); FMPy's CVODE lands on
+    that linear root exactly, a push of 0.0: FMI's domain z <= 0 releases it), rises as
+    z = r + g (t - 0.5)^3 / 3 and keeps its speed and spin: a rolling contact's release without a
+    tangential force is no Painleve case."""
+    r = _run(made("lift"), "lift", kind)
+    _agrees(r, "lift", reference)
+    assert _event_times(r, ["ground"]) == pytest.approx([0.5], abs=1e-12)
+    t, after = r["time"], r["time"] > 0.5
+    assert np.allclose(r["free.r.z"][after], R_BALL + G * (t[after] - 0.5) ** 3 / 3, rtol=0, atol=1e-12)
+    assert np.allclose(r["free.v.x"], VX, rtol=1e-12) and np.allclose(r["free.w.y"], VX / R_BALL, rtol=1e-12)
 
 
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])

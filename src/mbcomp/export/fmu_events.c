@@ -484,7 +484,11 @@ static int hy_act_on(Inst *c, int i, int force, int *acted)
         return m == lim ? hy_switch(c, k, 0, acted) : 0;
     }
     if (m == 0) return hy_do_impact(c, k, lim, acted);
-    if (m == lim && (force || c->hy.z[i] < 0.0)) return hy_switch(c, k, 0, acted); /* a held row's push: release */
+    /* a held row's push: release when below zero, or at zero exactly (FMI's domain z <= 0: an
+       importer's root finding may land on a push linear in time at its root) unless the row
+       engaged at this instant */
+    if (m == lim && (force || c->hy.z[i] < 0.0 || (c->hy.z[i] == 0.0 && c->hy.last[k] != c->t)))
+        return hy_switch(c, k, 0, acted);
     return 0;
 }
 
