@@ -3,7 +3,7 @@
 The cases of tests/export/test_fmu_rolling_events.py: a ball (SphereContact, FreeMotion) dropped
 with backspin landing perfectly rough (e = 0), the same ball bouncing rough (e = 0.5) to rest,
 a leaning spinning disk (DiskContact) landing rough and rolling, and a rod on two point contacts
-whose landing end unloads the other (it opens). Each is exported (FMI 3.0 and 2.0) and run by
+whose landing end unloads the other (it opens), a rolling ball lifted off by a force 2 m g t. Each is exported (FMI 3.0 and 2.0) and run by
 FMPy as Model Exchange (CVODE at rtol 1e-14) and as Co-Simulation (the FMU's DOP853 at 1e-12);
 the reference is ``mbcomp.simulate(rtol=1e-12, atol=1e-14)``. Printed: mbcomp's and the FMU's
 event instants (Co-Simulation reports the last event of each output step), the largest event
@@ -21,7 +21,8 @@ import numpy as np
 import mbcomp
 from mbcomp.export import export_fmu
 from mbcomp.kinematics import rot_axis
-from mbcomp.library import DiskContact, FixedTranslation, FreeMotion, PlaneContact, RigidBody, SphereContact, World
+from mbcomp.library import (DiskContact, FixedTranslation, FreeMotion, PlaneContact, RigidBody, SphereContact, World,
+                            WorldForce)
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
@@ -36,6 +37,21 @@ def ball(e=0.0):
     md.connect(free.frame_b, b.frame_a)
     md.connect(w.frame_b, c.frame_a)
     md.connect(c.frame_b, b.frame_a)
+    return md
+
+
+def lifted():
+    md = mbcomp.Model()
+    w = md.add("world", World(g=(0, 0, -9.81)))
+    free = md.add("free", FreeMotion(r0=(0, 0, 0.1), v0=(2.0, 0, 0), w0=(0, 20.0, 0)))
+    b = md.add("ball", RigidBody(m=1.0, I=0.004 * np.eye(3)))
+    c = md.add("ground", SphereContact(r=0.1, unilateral=True, restitution=0.0, open0=False))
+    lift = md.add("lift", WorldForce(f=lambda t, frame: (0.0, 0.0, 2.0 * 9.81 * t)))
+    md.connect(w.frame_b, free.frame_a)
+    md.connect(free.frame_b, b.frame_a)
+    md.connect(w.frame_b, c.frame_a)
+    md.connect(c.frame_b, b.frame_a)
+    md.connect(lift.frame_b, b.frame_a)
     return md
 
 
@@ -77,6 +93,7 @@ MODELS = {
     "bounce": (lambda: ball(0.5), 1.0, 1e-3, ["ground"]),
     "disk": (disk, 1.5, 1e-3, ["contact"]),
     "rod": (rod, 0.6, 1e-3, ["a", "b"]),
+    "lift": (lifted, 1.0, 1e-3, ["ground"]),
 }
 
 
