@@ -117,9 +117,9 @@ def _c_ints(name, values):
 
 def _refuse_modes(system):
     """A ``ValueError`` naming the components with modes the FMU's events do not carry yet
-    (contacts with friction or rolling rows: :mod:`.fmu_events`), which would otherwise run
+    (contacts with friction: :mod:`.fmu_events`), which would otherwise run
     through as if they were not there; ``True`` when the model has modes the FMU carries
-    (frictionless one-sided contacts, rigid end stops, stick/slip friction on an axis)."""
+    (frictionless one-sided contacts, rolling or not, rigid end stops, stick/slip friction on an axis)."""
     return any(fmu_events.components(system))
 
 

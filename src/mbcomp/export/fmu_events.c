@@ -2,12 +2,18 @@
  * its event indicators and the actions at its events (included at the end of fmu_core.c;
  * declarations in fmu_events.h; Python: mbcomp/export/fmu_events.py).
  *
- * The rows in force are the closed contacts' rows (from the evaluation program) and the
+ * The rows in force are the closed contacts' rows (from the evaluation program: the normal
+ * row, then the contact's rolling rows B u = b, velocity rows with Phi 0 and rate Psi) and the
  * engaged stops' rows sign (q[iq] - at); the accelerations are the Lagrange index-1 solve
- * [M C^T; C 0] [du/dt; lam] = [f; -c_b - 2 alpha dPhi/dt - beta^2 Phi], a row's push -lam.
- * An impact closing a row solves [M C^T; C 0] [u+; -P] = [M u-; r], the impact row with
- * Newton's restitution (C u+ + o = -e (C u- + o)), the rows in force held (C u+ + o = 0), as
- * mbcomp.assembly.impacts.impulse; o = dPhi/dt - C u. Indicators (each event is its
+ * [M C^T; C 0] [du/dt; lam] = [f; -c_b - 2 alpha dPhi/dt - beta^2 Phi], a row's push -lam;
+ * dq/dt = qrate(q, u) (quaternions) or u.
+ * An impact closing a row solves [M C^T; C 0] [u+; -P] = [M u-; r], the impact row (a
+ * contact's normal row) with Newton's restitution (C u+ + o = -e (C u- + o)), the rows in force
+ * and the contact's rolling rows held (C u+ + o = 0: perfectly rough), as
+ * mbcomp.assembly.impacts.impulse; o = dPhi/dt - C u. After every event the active set settles
+ * as mbcomp's Events._segment: closed contacts that would pull open, the most pulling first; an
+ * engaged row that would pull at once stays free; a contact let go that would accelerate into
+ * its surface (rolling rows: Painleve-like) is an error naming it. Indicators (each event is its
  * indicator falling through zero): an open contact's gap (m), a closed one's push (N); a free
  * stop's distances to its limits (rad or m), an engaged limit's push; a stuck friction's
  * margins F_s + push and F_s - push (N or N m), a slipping one's speed along its slip (the
@@ -54,8 +60,28 @@ static int hy_eval(Inst *c, double t, const double *y)
     return 0;
 }
 
-/* one row (C, Phi, dPhi/dt, c_b) of component k in its engaged mode `m`, appended */
-static void hy_add_row(Inst *c, const double *y, int k, int m)
+/* a contact's rolling rows (velocity rows B u = b: Phi 0, the rate Psi, the bias B_b),
+   appended after its normal row */
+static void hy_add_rolling(Inst *c, int k)
+{
+#if HY_MN
+    int i, j, r;
+    for (i = HY_C_NH0[k]; i < HY_C_NH0[k] + HY_C_NHN[k]; i++) {
+        r = c->hy.nr++;
+        for (j = 0; j < NU; j++) c->hy.C[r * NU + j] = c->hy.ev[HY_OFF_B + i * NU + j];
+        c->hy.phi[r] = 0.0;
+        c->hy.phid[r] = c->hy.ev[HY_OFF_PSI + i];
+        c->hy.bias[r] = c->hy.ev[HY_OFF_BB + i];
+    }
+#else
+    (void)c;
+    (void)k;
+#endif
+}
+
+/* the rows (C, Phi, dPhi/dt, c_b) of component k in its engaged mode `m`, appended: a contact's
+   normal row, then its rolling rows unless hol (positions: the holonomic rows only) */
+static void hy_add_row(Inst *c, const double *y, int k, int m, int hol)
 {
     int j, r = c->hy.nr;
     double *C = c->hy.C + r * NU;
@@ -65,6 +91,10 @@ static void hy_add_row(Inst *c, const double *y, int k, int m)
         c->hy.phi[r] = c->hy.ev[HY_OFF_PHI + row];
         c->hy.phid[r] = c->hy.ev[HY_OFF_PHID + row];
         c->hy.bias[r] = c->hy.ev[HY_OFF_CB + row];
+        c->hy.row_of[k] = r;
+        c->hy.nr = r + 1;
+        if (!hol) hy_add_rolling(c, k);
+        return;
     } else if (k >= HY_F0) { /* a stuck friction: its rate held */
         int f = k - HY_F0;
         for (j = 0; j < NU; j++) C[j] = 0.0;
@@ -85,16 +115,19 @@ static void hy_add_row(Inst *c, const double *y, int k, int m)
     c->hy.nr = r + 1;
 }
 
-/* the rows in force at y (after hy_eval); extra >= 0: component extra's row in mode m_extra last */
-static void hy_rows(Inst *c, const double *y, int extra, int m_extra)
+/* the rows in force at y (after hy_eval; hol: the holonomic rows only); extra >= 0: component
+   extra's rows in mode m_extra last. At most HY_NCR + HY_NS + HY_NF rows (extra is not counted
+   twice): within HY_NR. */
+static void hy_rows(Inst *c, const double *y, int extra, int m_extra, int hol)
 {
     int k;
     c->hy.nr = 0;
     for (k = 0; k < HY_NCOMP; k++) {
         c->hy.row_of[k] = -1;
-        if (k != extra && (k >= HY_F0 ? c->hy.mode[k] == 0 : c->hy.mode[k] != 0)) hy_add_row(c, y, k, c->hy.mode[k]);
+        if (k != extra && (k >= HY_F0 ? c->hy.mode[k] == 0 : c->hy.mode[k] != 0))
+            hy_add_row(c, y, k, c->hy.mode[k], hol);
     }
-    if (extra >= 0) hy_add_row(c, y, extra, m_extra);
+    if (extra >= 0) hy_add_row(c, y, extra, m_extra, hol);
 }
 
 /* K = [M C^T; C 0] of the rows in force, factored: 0, or -1 after logging */
@@ -119,7 +152,7 @@ static int hy_accel(Inst *c, double t, const double *y)
 {
     int i, n;
     if (hy_eval(c, t, y)) return -1;
-    hy_rows(c, y, -1, 0);
+    hy_rows(c, y, -1, 0, 0);
     if (hy_saddle(c, t)) return -1;
     n = NU + c->hy.nr;
     for (i = 0; i < NU; i++) c->hy.rhs[i] = c->hy.ev[HY_OFF_F + i];
@@ -138,7 +171,19 @@ static int hy_accel(Inst *c, double t, const double *y)
 static int mbev_rhs(Inst *c, double t, const double *y, double *dy)
 {
     if (hy_accel(c, t, y)) return -1;
-    memcpy(dy, y + NQ, sizeof(double) * NU); /* dq/dt = u: the plan refuses other coordinates */
+#if HY_QRATE
+    {
+        int i;
+        if (mbhy_qrate(y, y + NQ, t, c->d, c->hy.h, c->p, c->hy.w, dy)) {
+            say(c, 1, "the coordinate rates failed a guard at t=%g", t);
+            return -1;
+        }
+        for (i = 0; i < NQ; i++)
+            if (!isfinite(dy[i])) { say(c, 1, "the coordinate rates are not finite at t=%g", t); return -1; }
+    }
+#else
+    memcpy(dy, y + NQ, sizeof(double) * NU); /* dq/dt = u */
+#endif
     memcpy(dy + NQ, c->hy.ud, sizeof(double) * NU);
     return 0;
 }
@@ -185,32 +230,38 @@ static int hy_gram_solve(Inst *c, double t, const double *b, double *x)
     return 0;
 }
 
-/* y moved onto the rows in force and, extra >= 0, component extra's row in mode m (positions by
-   Gauss-Newton; with speeds, the speeds by least squares, as mbcomp.assembly.kkt.project_state):
-   0, or -1 after logging */
+/* y moved onto the rows in force and, extra >= 0, component extra's rows in mode m (the
+   quaternions normalized, the positions by Gauss-Newton on the holonomic rows, q moved through
+   the coordinate map; with speeds, the speeds by least squares on every row, rolling rows too,
+   as mbcomp.assembly.kkt.project_state): 0, or -1 after logging */
 static int hy_project(Inst *c, double t, double *y, int extra, int m, int speeds)
 {
     int it, i, l, nr = 0;
     double norm = 0.0, *x = c->hy.rhs;
+    if (mbrt_increment(NQ, NU, HY_NSEG, HY_SEG, y, NULL, 1.0) != MBRT_MECH_OK) {
+        say(c, 1, "the coordinate map does not fit the coordinates (%d) and speeds (%d)", NQ, NU);
+        return -1;
+    }
     for (it = 0; it <= 30; it++) {
         if (hy_eval(c, t, y)) return -1;
-        hy_rows(c, y, extra, m);
+        hy_rows(c, y, extra, m, 1);
         nr = c->hy.nr;
-        if (!nr) return 0;
         for (norm = 0.0, i = 0; i < nr; i++) norm = fmax(norm, fabs(c->hy.phi[i]));
-        if (norm <= 1e-15 || it == 30) break;
+        if (!nr || norm <= 1e-15 || it == 30) break;
         if (hy_gram_solve(c, t, c->hy.phi, x)) return -1;
         for (l = 0; l < NU; l++)
-            for (i = 0; i < nr; i++) y[l] -= c->hy.C[i * NU + l] * x[i];
+            for (c->hy.du[l] = 0.0, i = 0; i < nr; i++) c->hy.du[l] += c->hy.C[i * NU + l] * x[i];
+        if (mbrt_increment(NQ, NU, HY_NSEG, HY_SEG, y, c->hy.du, -1.0) != MBRT_MECH_OK) return -1;
     }
     if (norm > 1e-10) {
         say(c, 1, "the state cannot be moved onto the rows in force at t=%g (|Phi| = %g)", t, norm);
         return -1;
     }
     if (speeds) {
-        if (hy_gram_solve(c, t, c->hy.phid, x)) return -1;
+        hy_rows(c, y, extra, m, 0); /* every row in force, at the last evaluation (y's positions) */
+        if (c->hy.nr && hy_gram_solve(c, t, c->hy.phid, x)) return -1;
         for (l = 0; l < NU; l++)
-            for (i = 0; i < nr; i++) y[NQ + l] -= c->hy.C[i * NU + l] * x[i];
+            for (i = 0; i < c->hy.nr; i++) y[NQ + l] -= c->hy.C[i * NU + l] * x[i];
     }
     for (l = 0; l < NX; l++)
         if (!isfinite(y[l])) {
@@ -223,16 +274,18 @@ static int hy_project(Inst *c, double t, double *y, int extra, int m, int speeds
 static int hy_consistent(Inst *c, double t, double *y) { return hy_project(c, t, y, -1, 0, 1); }
 
 /* the impact of component k closing its row (stops: limit lim) at (t, y): y's speeds become
-   u+; *before, *after: the row's speed before and after (m/s or rad/s) */
+   u+; *before, *after: the row's speed before and after (m/s or rad/s). A contact's impact row
+   is its normal row, its rolling rows held through it (perfectly rough), as the other rows in
+   force (mbcomp.hybrid.contacts.contact_impact). */
 static int hy_impact(Inst *c, double t, double *y, int k, int lim, double *before, double *after)
 {
     int i, j, n, last;
     double e = hy_e(c, k), o;
     if (hy_eval(c, t, y)) return -1;
-    hy_rows(c, y, k, lim);
+    hy_rows(c, y, k, lim, 0);
     if (hy_saddle(c, t)) return -1;
     n = NU + c->hy.nr;
-    last = c->hy.nr - 1;
+    last = c->hy.row_of[k];
     for (i = 0; i < NU; i++)
         for (c->hy.rhs[i] = 0.0, j = 0; j < NU; j++) c->hy.rhs[i] += c->hy.ev[HY_OFF_M + i * NU + j] * y[NQ + j];
     for (i = 0; i < c->hy.nr; i++) {
@@ -253,11 +306,12 @@ static int hy_impact(Inst *c, double t, double *y, int k, int lim, double *befor
    acceleration in the current modes (mbcomp.hybrid.events: _rests, _contact_rests) */
 static int hy_rests(Inst *c, double t, const double *y, int k, int lim, double after, int *rests)
 {
-    int j;
+    int j, r;
     double acc;
     if (hy_accel(c, t, y)) return -1;
-    hy_rows(c, y, k, lim); /* the row's values (the solve above is kept) */
-    for (acc = c->hy.bias[c->hy.nr - 1], j = 0; j < NU; j++) acc += c->hy.C[(c->hy.nr - 1) * NU + j] * c->hy.ud[j];
+    hy_rows(c, y, k, lim, 0); /* the row's values (the solve above is kept) */
+    r = c->hy.row_of[k];
+    for (acc = c->hy.bias[r], j = 0; j < NU; j++) acc += c->hy.C[r * NU + j] * c->hy.ud[j];
     *rests = acc < 0.0 && after * after <= -2.0 * acc * HY_REST;
     return 0;
 }
@@ -295,12 +349,89 @@ static int hy_pulls(Inst *c, double t, const double *y, int *pulls)
     return 0;
 }
 
+static int hy_engaged(int k, int m) { return k >= HY_F0 ? m == 0 : m != 0; }
+
+/* the contacts closed in `before` and closed still that would pull at (t, y), the state made
+   consistent with the current modes (on a copy), opened one at a time, the most pulling first:
+   a contact closing may unload another (the bicycle's front wheel landing lifts the rear one;
+   mbcomp.hybrid.events._open_pulling, each a release): 0, or -1 after logging */
+static int hy_open_pulling(Inst *c, double t, const int *before)
+{
+    int k, n, worst;
+    double p, least;
+    for (n = 0; n < HY_NC; n++) {
+        memcpy(c->hy.ys2, c->y, sizeof(double) * NX);
+        if (hy_consistent(c, t, c->hy.ys2) || mbev_indicators(c, t, c->hy.ys2, c->hy.z)) return -1;
+        for (worst = -1, least = 0.0, k = 0; k < HY_NC; k++)
+            if (before[k] && c->hy.mode[k] && (p = -c->hy.lam[c->hy.row_of[k]]) < least) least = p, worst = k;
+        if (worst < 0) return 0;
+        c->hy.mode[worst] = 0;
+        c->hy.last[worst] = t;
+        c->hy.events++;
+    }
+    return 0;
+}
+
+/* every contact let go at (c->t, c->y) (closed in `before`, open now) must leave: its gap's
+   acceleration a = C_n du/dt + c_b,n in the new modes not into the surface. Closed it would pull
+   (or its push vanished), open it would penetrate: a Painleve-like inconsistency of perfectly
+   rough rolling rows (the frictionless falling bicycle's wheel, its normal force gone with a
+   lateral force left), an error naming the contact: 0, or -1 after logging */
+static int hy_lets_go(Inst *c, const int *before)
+{
+    int k, j, row, done = 0;
+    double a, cn, un, cj, t = c->t;
+    for (k = 0; k < HY_NC; k++) {
+        if (!before[k] || c->hy.mode[k]) continue;
+        if (!done && hy_accel(c, t, c->y)) return -1;
+        done = 1;
+        row = HY_C_ROW[k];
+        for (a = c->hy.ev[HY_OFF_CB + row], cn = un = 0.0, j = 0; j < NU; j++) {
+            cj = c->hy.ev[HY_OFF_C + row * NU + j];
+            a += cj * c->hy.ud[j];
+            cn += cj * cj;
+            un += c->hy.ud[j] * c->hy.ud[j];
+        }
+        if (a < -1e-6 * (sqrt(cn) * sqrt(un) + fabs(c->hy.ev[HY_OFF_CB + row]))) {
+            say(c, 1, "%s: its normal force vanished with a tangential force left at t=%.12g s: closed it would "
+                "pull, open it would accelerate into the surface (a = %.4g m/s^2) -- perfectly rough rolling rows "
+                "cannot let go there -> give the contact friction (friction=ContactFriction(mu_s, mu_k))",
+                HY_C_NAME[k], t, a);
+            c->mode = M_ERROR;
+            return -1;
+        }
+    }
+    return 0;
+}
+
+/* the active set after an event at (c->t, c->y) from the modes `before` (mbcomp's
+   Events._segment): contacts closed before that now pull opened (hy_open_pulling); where the
+   event engaged a row and a held row still pulls, the modes `before` come back with the state
+   `back` (engaged it would pull: it stays free); the state made consistent, the contacts let go
+   checked (hy_lets_go): 0, or -1 after logging */
+static int hy_settle(Inst *c, const int *before, const double *back)
+{
+    int k, closing = 0, pulls = 0;
+    double t = c->t;
+    if (hy_open_pulling(c, t, before)) return -1;
+    for (k = 0; k < HY_NCOMP; k++) closing |= hy_engaged(k, c->hy.mode[k]) && !hy_engaged(k, before[k]);
+    if (hy_consistent(c, t, c->y)) return -1;
+    if (closing && hy_pulls(c, t, c->y, &pulls)) return -1;
+    if (pulls) {
+        memcpy(c->hy.mode, before, sizeof(int) * HY_NCOMP);
+        memcpy(c->y, back, sizeof(double) * NX);
+        if (hy_consistent(c, t, c->y)) return -1;
+    }
+    return hy_lets_go(c, before);
+}
+
 /* component k's impact (stops: at limit lim) at (c->t, c->y) if approaching: Newton's
    restitution, then at rest (too small a rebound, e = 0, or a Zeno accumulation) engaged */
 static int hy_do_impact(Inst *c, int k, int lim, int *acted)
 {
     double before = 0.0, after = 0.0, t = c->t;
-    int rests = 0, old = c->hy.mode[k], pulls = 0, m = k < HY_NC ? 1 : lim;
+    int rests = 0, m = k < HY_NC ? 1 : lim, modes[HY_NCOMP + 1];
+    memcpy(modes, c->hy.mode, sizeof(int) * HY_NCOMP);
     memcpy(c->hy.ys, c->y, sizeof(double) * NX);
     if (hy_impact(c, t, c->hy.ys, k, m, &before, &after)) return -1;
     if (!(before < 0.0)) { /* not approaching: no impact (mbcomp's _decide); at rest on it (a start
@@ -312,12 +443,7 @@ static int hy_do_impact(Inst *c, int k, int lim, int *acted)
         c->hy.last[k] = t;
         c->hy.mode[k] = m;
         memcpy(c->hy.ys, c->y, sizeof(double) * NX);
-        if (hy_consistent(c, t, c->y) || hy_pulls(c, t, c->y, &pulls)) return -1;
-        if (pulls) {
-            c->hy.mode[k] = old;
-            memcpy(c->y, c->hy.ys, sizeof(double) * NX);
-        }
-        return 0;
+        return hy_settle(c, modes, c->hy.ys);
     }
     memcpy(c->y, c->hy.ys, sizeof(double) * NX);
     *acted = 1;
@@ -328,28 +454,25 @@ static int hy_do_impact(Inst *c, int k, int lim, int *acted)
        back onto the row; a located event's 1e-15 m is moved as much (the speeds are the impact's) */
     if (hy_project(c, t, c->y, k, m, 0)) return -1;
     if (hy_e(c, k) > 0.0 && hy_rests(c, t, c->y, k, m, after, &rests)) return -1;
-    if (hy_e(c, k) == 0.0 || rests || hy_chattering(c, k)) {
-        c->hy.mode[k] = m;
-        memcpy(c->hy.ys, c->y, sizeof(double) * NX);
-        if (hy_consistent(c, t, c->y) || hy_pulls(c, t, c->y, &pulls)) return -1;
-        if (pulls) { /* engaged it would pull: it stays free */
-            c->hy.mode[k] = old;
-            memcpy(c->y, c->hy.ys, sizeof(double) * NX);
-        }
-    }
-    return hy_consistent(c, t, c->y);
+    if (hy_e(c, k) == 0.0 || rests || hy_chattering(c, k)) c->hy.mode[k] = m;
+    memcpy(c->hy.ys, c->y, sizeof(double) * NX);
+    return hy_settle(c, modes, c->hy.ys);
 }
 
-/* acts on indicator i at (c->t, c->y); force: it was located falling through zero */
+/* component k switched to mode `to` at (c->t, c->y): a release, a break-away, a stick */
 static int hy_switch(Inst *c, int k, int to, int *acted)
 {
+    int modes[HY_NCOMP + 1];
+    memcpy(modes, c->hy.mode, sizeof(int) * HY_NCOMP);
     c->hy.mode[k] = to;
     c->hy.last[k] = c->t;
     c->hy.events++;
     *acted = 1;
-    return hy_consistent(c, c->t, c->y);
+    memcpy(c->hy.ys, c->y, sizeof(double) * NX);
+    return hy_settle(c, modes, c->hy.ys);
 }
 
+/* acts on indicator i at (c->t, c->y); force: it was located falling through zero */
 static int hy_act_on(Inst *c, int i, int force, int *acted)
 {
     int k = i < HY_NC ? i : HY_NC + (i - HY_NC) / 2, lim = i < HY_NC ? 1 : 1 + (i - HY_NC) % 2;
@@ -361,7 +484,11 @@ static int hy_act_on(Inst *c, int i, int force, int *acted)
         return m == lim ? hy_switch(c, k, 0, acted) : 0;
     }
     if (m == 0) return hy_do_impact(c, k, lim, acted);
-    if (m == lim && (force || c->hy.z[i] < 0.0)) return hy_switch(c, k, 0, acted); /* a held row's push: release */
+    /* a held row's push: release when below zero, or at zero exactly (FMI's domain z <= 0: an
+       importer's root finding may land on a push linear in time at its root) unless the row
+       engaged at this instant */
+    if (m == lim && (force || c->hy.z[i] < 0.0 || (c->hy.z[i] == 0.0 && c->hy.last[k] != c->t)))
+        return hy_switch(c, k, 0, acted);
     return 0;
 }
 

@@ -3,19 +3,23 @@
  * HYBRID 0 (no modes) it declares nothing.
  *
  * The generated model file defines, with HYBRID 1: HY_NC contacts and HY_NS stops, their
- * tables (HY_C_*: holonomic row in the evaluation, restitution, its parameter index or -1,
- * closed at the start; HY_S_*: q and u index, limits and restitution and their parameter
- * indices; HY_NF frictions, HY_F_*: q and u index, static and kinetic force, start mode), the
- * evaluation program mbhy_eval (HY_NH, HY_NW, HY_NOUT, HY_MH, HY_OFF_*),
- * mbhy_eval_params, HY_REST (m or rad: a rebound rising less rests), HY_CHATTER, the
- * Baumgarte gains HY_ALPHA, HY_BETA and HY_VR, the first event variable's value reference. */
+ * tables (HY_C_*: holonomic (normal) row in the evaluation, first rolling row and their count
+ * (HY_C_NH0, HY_C_NHN), restitution, its parameter index or -1, closed at the start, name;
+ * HY_NCR: the contacts' rows in all; HY_S_*: q and u index, limits and restitution and their
+ * parameter indices; HY_NF frictions, HY_F_*: q and u index, static and kinetic force, start
+ * mode), the evaluation program mbhy_eval (HY_NH, HY_NW, HY_NOUT, HY_MH, HY_MN, HY_OFF_*),
+ * mbhy_eval_params, with HY_QRATE 1 the coordinate rates mbhy_qrate (dq/dt; else q' = u), the
+ * coordinate map HY_NSEG, HY_SEG (mbrt_mech's segments: how q moves along the speeds), HY_REST
+ * (m or rad: a rebound rising less rests), HY_CHATTER, the Baumgarte gains HY_ALPHA, HY_BETA
+ * and HY_VR, the first event variable's value reference. */
 #ifndef HYBRID
 #define HYBRID 0
 #endif
 #if HYBRID
 #define HY_NCOMP (HY_NC + HY_NS + HY_NF) /* components with modes: contacts, stops, frictions */
 #define HY_NZ (HY_NC + 2 * HY_NS + 2 * HY_NF) /* event indicators: a contact's, a stop's two, a friction's two */
-#define HY_NR (HY_NCOMP + 1)       /* rows in force at most: one per component, an impact's */
+#define HY_NR (HY_NCR + HY_NS + HY_NF + 1) /* rows in force at most: every component's rows (a
+                                      contact's normal and rolling rows), and one spare */
 #define HY_NK (NU + HY_NR)
 #define HY_MAX_EVENTS 100000       /* events acted on in one DoStep or event iteration at most */
 
@@ -30,7 +34,7 @@ typedef struct {
     int piv[HY_NK + 1];
     double C[HY_NR * NU + 1], phi[HY_NR + 1], phid[HY_NR + 1], bias[HY_NR + 1];
     int nr, row_of[HY_NCOMP + 1];  /* rows in force; each component's row (-1: none) */
-    double ud[NU + 1], lam[HY_NR + 1], z[HY_NZ + 1], ys[NX + 1];
+    double ud[NU + 1], lam[HY_NR + 1], z[HY_NZ + 1], ys[NX + 1], ys2[NX + 1], du[NU + 1];
     double evwork[3 * HY_NZ + NX + 1], yev[NX + 1];
     int dir[HY_NZ + 1], fresh;     /* Co-Simulation: the event acted on last, its function at zero */
     long events;                   /* events acted on */

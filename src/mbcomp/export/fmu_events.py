@@ -3,13 +3,19 @@
 A model whose joints declare modes (:meth:`mbcomp.modeling.roles.Joint.modes`: unilateral
 contacts, rigid end stops, an axis's stick/slip friction) exports to an FMU whose C (``fmu_events.c``) keeps the active set
 (one mode per component), steps the system of the rows in force -- the assembled evaluation
-program's mass matrix, forces and rows, the rows of closed contacts and engaged stops held by
-the Lagrange index-1 solve with Baumgarte's gains -- and acts at events as the hybrid layer
-does (:mod:`mbcomp.hybrid.events`): Newton's restitution with the impulse through the mass
-matrix along the contact's or stop's row, the other rows in force held; a rebound too small to
-rise ``REST_HEIGHT`` atol or a Zeno accumulation (``CHATTER`` shrinking intervals) settles in
-the resting mode, the state then made consistent with its rows; a held row whose push falls
-through zero is released.
+program's mass matrix, forces and rows, the rows of closed contacts (the normal row and the
+contact's rolling rows, velocity rows with velocity-level stabilization only) and engaged stops
+held by the Lagrange index-1 solve with Baumgarte's gains, ``dq/dt`` the coordinate rates
+(quaternions) -- and acts at events as the hybrid layer does (:mod:`mbcomp.hybrid.events`):
+Newton's restitution with the impulse through the mass matrix along the contact's normal row or
+the stop's row, the contact's rolling rows (perfectly rough) and the other rows in force held; a
+rebound too small to rise ``REST_HEIGHT`` atol or a Zeno accumulation (``CHATTER`` shrinking
+intervals) settles in the resting mode, the state then made consistent with its rows (positions
+through the coordinate map, ``mbrt_increment``); a held row whose push falls through zero is
+released. After every event closed contacts that would pull open, the most pulling first, and a
+closing row that would pull at once stays open; a contact let go whose gap would accelerate into
+its surface (the frictionless bicycle's wheel: perfectly rough rolling rows, Painleve-like) is
+an error naming it.
 
 Event indicators, one per contact and two per stop or friction, are continuous: an open
 contact's gap (m) or a closed one's normal force (N), a free stop's distance to each limit
@@ -20,8 +26,8 @@ Exchange acts in ``fmi3UpdateDiscreteStates``/``fmi2NewDiscreteStates`` and repo
 dense output (the runtime's ``mbrt_dop853_events``) inside ``DoStep`` and acts the same way.
 
 What is supported is read from the modes' declarations (:func:`components`); anything else
-(contacts with friction or rolling rows, a model with loops besides its contacts,
-coordinates whose rates are not the speeds) is refused naming the component.
+(contacts with friction, a model with loops or rolling rows besides its contacts, drives,
+coordinates that move neither additively nor as quaternions) is refused naming the component.
 
 Examples
 --------
@@ -42,6 +48,7 @@ from ..codegen.printers import Program
 from ..codegen.toolchain import chunk
 from ..codegen.tracer import FIELDS, trace
 from ..modeling.events import AxisRow, ContactRow, EventRow, Impact, StickRow, Switch
+from .rules import c_string
 
 __all__ = ["plan", "components", "hybrid_outputs", "initial_state", "VR_EVENTS", "REST_HEIGHT", "CHATTER"]
 
@@ -63,9 +70,12 @@ def _refuse(name, why):
 
 
 def _contact(system, e, modes):
-    """``(holonomic row index, restitution)`` of a frictionless one-sided contact's modes."""
-    p = system.P[e.name]
-    ok = (not modes.slips and not modes.has_force and modes.start in ("open", "closed")
+    """``(holonomic row index, restitution, closed at start)`` of a frictionless one-sided
+    contact's modes (its rolling rows, if any, held with the normal row while closed)."""
+    if modes.slips:
+        _refuse(e.name, f"the modes of {type(e.comp).__name__} ({type(modes).__name__}: a contact with friction, "
+                        "friction=ContactFriction(...), rolling and sliding)")
+    ok = (not modes.has_force and modes.start in ("open", "closed")
           and not modes.holds_rows("open") and modes.holds_rows("closed"))
     evs = modes.events(np.zeros(0), np.zeros(0), "open") if ok else []
     ok = ok and len(evs) == 1 and isinstance(evs[0][1], ContactRow) and evs[0][2] == -1
@@ -74,15 +84,30 @@ def _contact(system, e, modes):
     act = modes.action(evs[0][0], "open") if ok else None
     ok = ok and isinstance(act, Impact) and act.engage == "closed" and modes.action("release", "closed") == Switch("open")
     if not ok:
-        _refuse(e.name, f"the modes of {type(e.comp).__name__} ({type(modes).__name__}: friction, rolling or modes "
-                        "other than a one-sided contact's open/closed)")
-    if any(n.name == e.name for n in system.nonholonomic):
-        _refuse(e.name, "a contact with rolling rows (velocity constraints)")
+        _refuse(e.name, f"the modes of {type(e.comp).__name__} ({type(modes).__name__}: modes other than a "
+                        "one-sided contact's open/closed)")
     names = list(system.constraint_names(all_rows=True))
     row = f"{e.name}.{evs[0][1].name}"
     if row not in names:
         _refuse(e.name, f"a contact whose row {row!r} is not among the model's rows")
     return names.index(row), float(act.restitution), modes.start == "closed"
+
+
+def _rolling_rows(system, contacts):
+    """``[(first, count)]``: each contact's rolling rows (velocity constraints) among the
+    evaluation's nonholonomic rows ``B`` (count 0: none), read from an evaluation at the start
+    values; a ``ValueError`` naming the joints whose rolling rows are not a one-sided contact's."""
+    if not system.nonholonomic:
+        return [(0, 0)] * len(contacts)
+    ev = system.evaluate(0.0, system.default_q(), np.zeros(system.nu))
+    first, at = {}, 0
+    for e, rows, _ in ev.local_nh:
+        first[e.name] = (at, len(rows))
+        at += len(rows)
+    others = sorted(set(first) - {c[0] for c in contacts})
+    if others:
+        _refuse(", ".join(others), "a model with rolling rows besides its one-sided contacts'")
+    return [first.get(c[0], (0, 0)) for c in contacts]
 
 
 def _stop(system, e, modes):
@@ -151,24 +176,27 @@ def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
     contacts, stops, frictions = components(system)
     if not contacts and not stops and not frictions:
         return SimpleNamespace(enabled=False, components=[], indicators=[], times=[], c="#define HYBRID 0\n")
+    from ..codegen.engine import coordinate_map
+
     mine = {c[0] for c in contacts}
-    if set(system.topology.cut) - mine or system.nonholonomic:
-        others = sorted((set(system.topology.cut) - mine) | {e.name for e in system.nonholonomic})
-        _refuse(", ".join(others), "a model with loops or rolling rows besides its one-sided contacts")
+    if set(system.topology.cut) - mine:
+        _refuse(", ".join(sorted(set(system.topology.cut) - mine)), "a model with loops besides its one-sided contacts")
+    rolling = _rolling_rows(system, contacts)
     tr = trace(system, max_nodes, program="eval")
-    if tr.drives or not tr.qrate_identity or system.nq != system.nu:
-        _refuse(", ".join(mine | {s[0] for s in stops + frictions}), "a model with drives or coordinates whose "
-                "rates are not "
-                "its speeds (quaternions)")
+    seg = coordinate_map(system)
+    if tr.drives or seg is None:
+        _refuse(", ".join(sorted(mine | {s[0] for s in stops + frictions})), "a model with drives, or coordinates the "
+                "FMU cannot move along its speeds (a joint whose increment is neither additive nor a quaternion's)")
     if layout is not None and tr.layout != layout:
         raise CodegenError("the evaluation program's parameters differ from the right-hand side's")
     names = [c[0] for c in contacts] + [s[0] for s in stops] + [f[0] for f in frictions]
+    seg = np.asarray(seg, int).reshape(-1, 4) if len(seg) else np.zeros((0, 4), int)
     return SimpleNamespace(enabled=True, components=names,
                            indicators=[f"events.{c[0]}.{_row_name(c[1], system)}" for c in contacts]
                            + [f"events.{s[0]}.{k}" for s in stops for k in ("lo", "hi")]
                            + [f"events.{f[0]}.{k}" for f in frictions for k in ("forward", "backward")],
                            times=[f"events.{n}.time" for n in names],
-                           c=_c(system, tr, contacts, stops, frictions, tolerance))
+                           c=_c(system, tr, (contacts, rolling, seg), stops, frictions, tolerance))
 
 
 def _row_name(row, system):
@@ -186,9 +214,13 @@ def _tunable(layout, name, param, idx, value):
 
 
 def _c(system, tr, contacts, stops, frictions, tolerance):
-    groups = {"eval": tr.groups["eval"]}
-    prog = Program(tr.graph, groups, guard_groups={"eval": tr.guard_groups["eval"]})
+    contacts, rolling, seg = contacts
+    groups = {"eval": tr.groups["eval"], "qrate": tr.groups["qrate"]}
+    prog = Program(tr.graph, groups, guard_groups={k: tr.guard_groups[k] for k in groups})
     parts, n_work = prog.c_parts("eval", "mbhy_eval", chunk, n_parts=lambda n: 1)
+    if not tr.qrate_identity:  # dq/dt = qrate(q, u): quaternions
+        qparts, n_w = prog.c_parts("qrate", "mbhy_qrate", chunk, n_parts=lambda n: 1)
+        parts, n_work = parts + qparts, max(n_work, n_w)
     off, offs = 0, {}
     for name in FIELDS:
         offs[name] = off
@@ -207,9 +239,15 @@ def _c(system, tr, contacts, stops, frictions, tolerance):
     return (f"#define HYBRID 1\n#define HY_NC {len(contacts)}\n#define HY_NS {len(stops)}\n"
             f"#define HY_NH {max(len(prog.hoisted), 1)}\n#define HY_NW {max(n_work, 1)}\n#define HY_NOUT {off}\n"
             f"#define HY_MH {tr.shapes['Phi'][0] if tr.shapes['Phi'] else 0}\n"
+            f"#define HY_MN {tr.shapes['Psi'][0] if tr.shapes['Psi'] else 0}\n"
+            f"#define HY_NCR {sum(1 + n for _, n in rolling)}\n#define HY_QRATE {int(not tr.qrate_identity)}\n"
+            f"#define HY_NSEG {len(seg)}\n" + ints("HY_SEG", seg.ravel())
+            + ints("HY_C_NH0", [r[0] for r in rolling]) + ints("HY_C_NHN", [r[1] for r in rolling])
+            + f"static const char *const HY_C_NAME[] = {{{', '.join(c_string(c[0]) for c in contacts) or '0'}}};\n"
             f"#define HY_REST {REST_HEIGHT * 1e-2 * tolerance!r}\n#define HY_CHATTER {CHATTER}\n"
             f"#define HY_ALPHA {GAINS[0]!r}\n#define HY_BETA {GAINS[1]!r}\n#define HY_VR {VR_EVENTS}\n"
-            + "".join(f"#define HY_OFF_{k.upper()} {offs[k]}\n" for k in ("M", "f", "Phi", "Phid", "C", "cb"))
+            + "".join(f"#define HY_OFF_{k.upper()} {offs[k]}\n"
+                      for k in ("M", "f", "Phi", "Phid", "C", "cb", "B", "Bb", "Psi"))
             + ints("HY_C_ROW", [c[1] for c in contacts]) + dbls("HY_C_E", [c[2] for c in contacts])
             + ints("HY_C_EP", c_par) + ints("HY_C_CLOSED0", [c[3] for c in contacts])
             + ints("HY_S_IQ", [s[1] for s in stops]) + ints("HY_S_IU", [s[2] for s in stops])

@@ -302,6 +302,13 @@ int mbrt_project_free(const mbrt_mech *P, double t, double *y, const unsigned ch
                       const unsigned char *vfree, double tol, int max_iter, double accept, double *norm,
                       double *work);
 
+/* q (nq) moved by sign * du (nu) through the coordinate map of nseg segments seg (mbrt_mech's:
+ * MBRT_SEG_ADD adds, MBRT_SEG_QUAT turns the quaternion by the rotation vector and normalizes it;
+ * nseg = 0: q += sign du, nq == nu), as mbrt_project moves its positions; du = NULL normalizes the
+ * quaternions only.  MBRT_MECH_OK, or _BAD_ARGUMENT (no q, a map not covering nq and nu) with q
+ * untouched. */
+int mbrt_increment(int nq, int nu, int nseg, const int *seg, double *q, const double *du, double sign);
+
 /* ------------------------------------------------------------------ */
 /* Impacts acted on inside the C loop (mbrt_events.c; helper-30's block) */
 /* ------------------------------------------------------------------ */

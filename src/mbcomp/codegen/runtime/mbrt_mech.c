@@ -398,6 +398,20 @@ static void increment(const mbrt_mech *P, double *q, const double *du, double si
     }
 }
 
+int mbrt_increment(int nq, int nu, int nseg, const int *seg, double *q, const double *du, double sign)
+{
+    mbrt_mech P;
+    memset(&P, 0, sizeof P);
+    P.nq = nq;
+    P.nu = nu;
+    P.nseg = nseg;
+    P.seg = seg;
+    if (q == NULL || nq < 0 || nu < 0 || !map_ok(&P))
+        return MBRT_MECH_BAD_ARGUMENT;
+    increment(&P, q, du, sign);
+    return MBRT_MECH_OK;
+}
+
 int mbrt_project(const mbrt_mech *P, double t, double *y, double tol, int max_iter, double accept,
                  double *norm, double *work)
 {
