@@ -126,6 +126,19 @@ def bicycle():
     return load_model("models/bicycle.py").build(v=2.0, roll_rate0=0.5, unilateral=True)
 
 
+#: the falling bicycle: dropped from H_BIKE m at 5 m/s, nose up PITCH_BIKE rad about the rear contact point
+H_BIKE, PITCH_BIKE = 0.05, 0.05
+
+
+def falling_bicycle():
+    return load_model("models/bicycle.py").build(v=5.0, unilateral=True, h0=H_BIKE, pitch0=PITCH_BIKE)
+
+
+BIKE_STATES = ([f"free.r.{a}" for a in "xyz"] + [f"free.Q.{a}" for a in "wxyz"] + [f"free.{v}.{a}" for v in "vw"
+                                                                                      for a in "xyz"]
+               + [f"{j}.{v}" for j in ("rear_hub", "steer", "front_hub") for v in ("phi", "w")])
+
+
 #: (model, end time (s), Co-Simulation output interval (s), components, states compared)
 CASES = {
     "ball": (spinning_ball, 0.5, 1e-3, ["ground"], ["free.r.x", "free.r.z", "free.Q.y", "free.v.x", "free.v.z",
@@ -140,6 +153,7 @@ CASES = {
     "lift": (lifted_ball, 1.0, 1e-3, ["ground"], ["free.r.x", "free.r.z", "free.Q.w", "free.Q.y", "free.v.x",
                                                    "free.v.z", "free.w.y"]),
     "bicycle": (bicycle, 1.2, 1e-3, ["rear_contact", "front_contact"], []),
+    "falling": (falling_bicycle, 1.0, 1e-3, ["rear_contact", "front_contact"], BIKE_STATES),
 }
 #: the bicycle's first release (s; mbcomp.simulate at rtol 1e-12): the frictionless rear wheel lets go
 BICYCLE_RELEASE = 0.8941342891
@@ -355,6 +369,41 @@ def test_the_frictionless_bicycle_fails_where_its_rear_wheel_lets_go(kind, made)
     assert float(m.group(2)) < -0.1
     # where mbcomp.simulate has the release (Model Exchange: where FMPy's CVODE found the root)
     assert abs(float(m.group(1)) - BICYCLE_RELEASE) < 1e-9
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_the_falling_bicycle_lands_rear_wheel_first_and_rolls_on(kind, made, reference):
+    """The Whipple bicycle dropped 5 cm at 5 m/s, nose up 0.05 rad: quaternions, two wheels
+    with rolling rows, two rough landings. The rear wheel lands at sqrt(2 (h0 - r_R (1 - cos
+    0.05)) / g), the front one at 0.1379 s, both where mbcomp.simulate has them (1e-9 s), every
+    state on the grid to 1e-8; then the bicycle rolls on both wheels (their indicators, the
+    normal forces, positive)."""
+    want, events, _ = reference("falling")
+    assert [(e.component, e.kind) for e in events] == [("rear_contact", "impact"), ("rear_contact", "engage"),
+                                                       ("front_contact", "impact"), ("front_contact", "engage")]
+    r = _run(made("falling"), "falling", kind, extra=["events.rear_contact.normal", "events.front_contact.normal"])
+    _agrees(r, "falling", reference)
+    p = load_model("models/bicycle.py").parameters()
+    t_rear = np.sqrt(2 * (H_BIKE - p["rR"] * (1 - np.cos(PITCH_BIKE))) / p["g"])
+    assert abs(r["events.rear_contact.time"][-1] - t_rear) < 1e-9
+    after = r["time"] > want[-1] + 1e-9
+    assert np.all(r["events.rear_contact.normal"][after] > 0) and np.all(r["events.front_contact.normal"][after] > 0)
+
+
+def test_the_falling_bicycle_in_fmusim_too(made, reference):
+    """The second importer, Model Exchange (its CVODE at 1e-14) and Co-Simulation: both
+    landings where mbcomp.simulate has them (1e-9 s) and the end state to 1e-8."""
+    exe, why = fmusim_tool.fmusim()
+    if exe is None:
+        pytest.skip(why)
+    want, _, res = reference("falling")
+    for interface, tol in (("me", 1e-14), ("cs", 1e-12)):
+        r = fmusim_tool.run(made("falling"), interface, 1.0, ["events.rear_contact.time", "events.front_contact.time"]
+                            + BIKE_STATES, tolerance=tol, points=100)
+        got = _event_times(r, ["rear_contact", "front_contact"])
+        assert len(got) == len(want) == 2 and np.max(np.abs(got - want)) < 1e-9, interface
+        for var in BIKE_STATES:
+            assert abs(r[var][-1] - res[var][-1]) < 1e-8, (interface, var)
 
 
 def test_a_contact_with_friction_is_still_refused_naming_it(tmp_path):
