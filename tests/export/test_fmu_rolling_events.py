@@ -8,7 +8,7 @@ Newton's restitution on the normal row with the rolling rows held through it (pe
 map. Every FMU runs in FMPy as Model Exchange (its CVODE at rtol 1e-14 finding the indicators'
 roots) and as Co-Simulation (the FMU's own DOP853 locating them) against ``mbcomp.simulate``
 (rtol 1e-12, atol 1e-14): event times to 1e-9 s, states on the output grid to 1e-8, and each
-case's physics (closed forms, invariants). The frictionless falling bicycle's first release is
+case's physics (closed forms, invariants). The frictionless tumbling bicycle (v = 2 m/s)'s first release is
 Painleve-like (closed its rear wheel would pull, open it would fall into the ground): the FMU
 fails there with an error naming the contact, on both interfaces.
 """

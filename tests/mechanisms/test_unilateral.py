@@ -125,7 +125,7 @@ def test_a_spinning_ball_lands_with_a_perfectly_rough_impact():
 
 @pytest.mark.parametrize("rtol, formulation", [(1e-8, "lagrange"), (1e-12, "lagrange"), (1e-10, "dalembert")])
 def test_a_rough_wheel_cannot_lift_off_and_the_run_says_so(rtol, formulation):
-    """Rolling rows that never slip cannot let go: at the falling bicycle's first lift-off the
+    """Rolling rows that never slip cannot let go: at the tumbling bicycle's first lift-off (v = 2 m/s) the
     rear wheel's normal force is 0 with 34 N of lateral force left, so open the wheel would
     accelerate into the ground (0.85 m/s^2) and closed it would pull. The run fails there
     naming the wheel and the fix -- it once said "success" with the wheel 0.75 m inside the

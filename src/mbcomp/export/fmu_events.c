@@ -375,7 +375,7 @@ static int hy_open_pulling(Inst *c, double t, const int *before)
 /* every contact let go at (c->t, c->y) (closed in `before`, open now) must leave: its gap's
    acceleration a = C_n du/dt + c_b,n in the new modes not into the surface. Closed it would pull
    (or its push vanished), open it would penetrate: a Painleve-like inconsistency of perfectly
-   rough rolling rows (the frictionless falling bicycle's wheel, its normal force gone with a
+   rough rolling rows (the frictionless bicycle tumbling at v = 2 m/s: its wheel, its normal force gone with a
    lateral force left), an error naming the contact: 0, or -1 after logging */
 static int hy_lets_go(Inst *c, const int *before)
 {
