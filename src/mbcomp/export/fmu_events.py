@@ -166,26 +166,35 @@ def components(system):
     return contacts, stops, frictions
 
 
-def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
+def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None, user=None):
     """What the FMU of ``system`` carries for its events: ``enabled`` (the model has modes),
     ``components`` (names, contacts first), ``indicators`` (the event indicator variables'
     names), ``times`` (the variables of each component's last event time) and ``c`` (the
     defines, tables and evaluation program ``fmu_events.c`` reads); ``tolerance`` sets the
     resting height (``REST_HEIGHT`` x 1e-2 ``tolerance``: the FMU's atol); ``layout``, the
-    right-hand side's parameter layout, makes restitutions and limits tunable parameters."""
+    right-hand side's parameter layout, makes restitutions and limits tunable parameters;
+    ``user``: the user events' (:func:`mbcomp.export.fmu_user_events.plan`), carried by the
+    same C after the components' (a model without modes then takes this path too)."""
     contacts, stops, frictions = components(system)
-    if not contacts and not stops and not frictions:
+    user = user if user is not None else SimpleNamespace(indicators=[], times=[], c="")
+    if not contacts and not stops and not frictions and not user.indicators:
         return SimpleNamespace(enabled=False, components=[], indicators=[], times=[], c="#define HYBRID 0\n")
     from ..codegen.engine import coordinate_map
 
     mine = {c[0] for c in contacts}
+    if set(system.topology.cut) - mine and user.indicators:
+        loops = ", ".join(sorted(set(system.topology.cut) - mine))
+        raise ValueError(f"cannot export the user events ({', '.join(user.indicators)}) of a model with loops (closed "
+                         f"by {loops}): the FMU's event C steps loop-free models and one-sided contacts only -> "
+                         "run them with mbcomp.simulate(model, events=[...]), or export without events")
     if set(system.topology.cut) - mine:
         _refuse(", ".join(sorted(set(system.topology.cut) - mine)), "a model with loops besides its one-sided contacts")
     rolling = _rolling_rows(system, contacts)
     tr = trace(system, max_nodes, program="eval")
     seg = coordinate_map(system)
     if tr.drives or seg is None:
-        _refuse(", ".join(sorted(mine | {s[0] for s in stops + frictions})), "a model with drives, or coordinates the "
+        _refuse(", ".join(sorted(mine | {s[0] for s in stops + frictions}) or user.indicators), "a model with drives, "
+                "or coordinates the "
                 "FMU cannot move along its speeds (a joint whose increment is neither additive nor a quaternion's)")
     if layout is not None and tr.layout != layout:
         raise CodegenError("the evaluation program's parameters differ from the right-hand side's")
@@ -194,9 +203,10 @@ def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
     return SimpleNamespace(enabled=True, components=names,
                            indicators=[f"events.{c[0]}.{_row_name(c[1], system)}" for c in contacts]
                            + [f"events.{s[0]}.{k}" for s in stops for k in ("lo", "hi")]
-                           + [f"events.{f[0]}.{k}" for f in frictions for k in ("forward", "backward")],
-                           times=[f"events.{n}.time" for n in names],
-                           c=_c(system, tr, (contacts, rolling, seg), stops, frictions, tolerance))
+                           + [f"events.{f[0]}.{k}" for f in frictions for k in ("forward", "backward")]
+                           + list(user.indicators),
+                           times=[f"events.{n}.time" for n in names] + list(user.times),
+                           c=user.c + _c(system, tr, (contacts, rolling, seg), stops, frictions, tolerance))
 
 
 def _row_name(row, system):
