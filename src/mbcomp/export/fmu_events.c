@@ -590,6 +590,38 @@ static int hy_across(Inst *c, int which, double tol, double t_end)
     return 0;
 }
 
+#if HY_NUE
+/* Co-Simulation: each user event's side (1: above zero) at the start of a stretch, into
+   c->hy.ue_side (Model Exchange's record; Co-Simulation locates crossings instead) */
+static int hy_user_sides(Inst *c)
+{
+    int k;
+    if (mbev_indicators(c, c->t, c->y, c->hy.z)) return -1;
+    for (k = 0; k < HY_NUE; k++) c->hy.ue_side[k] = c->hy.z[HY_NZC + k] > 0.0;
+    return 0;
+}
+
+/* Co-Simulation: user event k, located on the near side of its root (still on its stretch's
+   start side, or at zero), stepped across by the location tolerance (Euler steps of
+   tolerance's length, as hy_across): the next stretch starts past it and does not find it
+   again (the runtime's `fresh` is the components' return through zero, not a user's) */
+static int hy_user_across(Inst *c, int k, double tol, double t_end)
+{
+    int i, n;
+    double z, t1;
+    for (n = 0; n < 8; n++) {
+        if (mbev_indicators(c, c->t, c->y, c->hy.z)) return -1;
+        z = c->hy.z[HY_NZC + k];
+        t1 = fmin(c->t + tol, t_end);
+        if ((z != 0.0 && (z > 0.0) != c->hy.ue_side[k]) || !(t1 > c->t)) return 0;
+        if (mbev_rhs(c, c->t, c->y, c->dy)) return -1;
+        for (i = 0; i < NX; i++) c->y[i] += (t1 - c->t) * c->dy[i];
+        c->t = t1;
+    }
+    return 0;
+}
+#endif
+
 /* Co-Simulation: from c->t by h with DOP853 at c->rtol, the events located on its dense
    output (mbrt_dop853_events) and acted on: 0, or -1 after logging */
 static int mbev_step(Inst *c, double h)
@@ -615,6 +647,9 @@ static int mbev_step(Inst *c, double h)
     if (mbev_act(c, -1, &changed)) { c->mode = M_ERROR; return -1; }
     for (n = 0; n < HY_MAX_EVENTS; n++) {
         if (!(t_end > c->t)) return 0;
+#if HY_NUE
+        if (hy_user_sides(c)) { c->mode = M_ERROR; return -1; }
+#endif
         memset(&st, 0, sizeof st);
         memset(&ev, 0, sizeof ev);
         ev.g = hy_event_fn;
@@ -648,6 +683,12 @@ static int mbev_step(Inst *c, double h)
         }
         c->hy.fresh = ev.which;
         if (c->hy.ended) return 0; /* a terminal user event: the step stops at it */
+#if HY_NUE
+        if (ev.which >= HY_NZC) { /* a user event: across it, found again only crossing back */
+            c->hy.fresh = -1;
+            if (hy_user_across(c, ev.which - HY_NZC, ev.tol, t_end)) { c->mode = M_ERROR; return -1; }
+        }
+#endif
     }
     say(c, 1, "chattering: %d events within the step from t=%g", HY_MAX_EVENTS, c->t);
     c->mode = M_ERROR;
