@@ -189,7 +189,7 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     name = name or path.stem
     ident = _identifier(name)
     system = assemble(model, params)
-    specs = fmu_user_events.check(events)
+    specs = fmu_user_events.check(events, system)  # and the joints whose events only end the run
     hybrid = _refuse_modes(system) or bool(specs)
     init = fmu_events.initial_state(system) if hybrid else initialize(system)
     keep = _kept(system) if tunable == "all" else ()

@@ -505,7 +505,7 @@ static void hy_user(Inst *c, int k, int force)
         fire = was >= 0 && side != was && (HY_UE_DIR[k] == 0 || (HY_UE_DIR[k] < 0) == (was == 1));
     }
     if (!fire) return;
-    c->hy.ue_last[k] = c->t;
+    c->hy.ue_last[HY_UE_SLOT[k]] = c->t;
     c->hy.ue_n[k]++;
     c->hy.events++;
     if (HY_UE_TERM[k] > 0 && c->hy.ue_n[k] >= HY_UE_TERM[k]) {
@@ -704,7 +704,7 @@ static int mbev_get(Inst *c, unsigned vr, double *v)
         return 0;
     }
     if (vr >= HY_VR + HY_NZ && vr < HY_VR + HY_NZ + HY_NCOMP) { *v = c->hy.last[vr - HY_VR - HY_NZ]; return 0; }
-    if (vr >= HY_VR + HY_NZ + HY_NCOMP && vr < HY_VR + HY_NZ + HY_NCOMP + HY_NUE) {
+    if (vr >= HY_VR + HY_NZ + HY_NCOMP && vr < HY_VR + HY_NZ + HY_NCOMP + HY_UE_NT) {
         *v = c->hy.ue_last[vr - HY_VR - HY_NZ - HY_NCOMP];
         return 0;
     }

@@ -21,6 +21,7 @@
 #define HY_NUE 0
 #endif
 #if !HY_NUE
+#define HY_UE_NT 0
 #define HY_UE_NH 1
 #define HY_UE_NW 1
 #endif
@@ -48,7 +49,8 @@ typedef struct {
     int dir[HY_NZ + 1], fresh;     /* Co-Simulation: the event acted on last, its function at zero */
     long events;                   /* events acted on */
     double ue_h[HY_UE_NH + 1], ue_w[HY_UE_NW + 1]; /* the user events' program's */
-    double ue_last[HY_NUE + 1];    /* each user event's last firing (s), -1 before any */
+    double ue_last[HY_NUE + 1];    /* each time slot's last firing (s), -1 before any (HY_UE_SLOT: a
+                                      joint's events share its slot) */
     int ue_n[HY_NUE + 1];          /* its firings */
     int ue_side[HY_NUE + 1];       /* Model Exchange: its side at the last Event Mode: 1 above zero,
                                       0 at or below, -1 not yet seen */

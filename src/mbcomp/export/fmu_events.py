@@ -47,10 +47,10 @@ from ..codegen.graph import CodegenError
 from ..codegen.printers import Program
 from ..codegen.toolchain import chunk
 from ..codegen.tracer import FIELDS, trace
-from ..modeling.events import AxisRow, ContactRow, EventRow, Impact, StickRow, Switch
+from ..modeling.events import AxisRow, ContactRow, End, EventRow, Impact, StickRow, Switch
 from .rules import c_string
 
-__all__ = ["plan", "components", "hybrid_outputs", "initial_state", "VR_EVENTS", "REST_HEIGHT", "CHATTER"]
+__all__ = ["plan", "components", "ending", "hybrid_outputs", "initial_state", "VR_EVENTS", "REST_HEIGHT", "CHATTER"]
 
 #: the value reference of the first event indicator variable (FMI 3.0), far from the others
 VR_EVENTS = 1 << 30
@@ -148,6 +148,27 @@ def _friction(system, e, modes):
             ("stick", "slip+", "slip-").index(modes.start))
 
 
+def _ends(e, modes):
+    """Whether every event of the joint's start mode ends the run (:class:`End`; a latch): no
+    rows, force or slip of its own, its events numbers of its own coordinates and speeds."""
+    if modes.has_force or modes.slips or modes.rows(modes.start) or not modes.holds_rows(modes.start):
+        return False
+    evs = modes.events(np.zeros(e.q.stop - e.q.start), np.zeros(e.u.stop - e.u.start), modes.start)
+    return bool(evs) and all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool)
+                             and isinstance(modes.action(n, modes.start), End) for n, v, _ in evs)
+
+
+def ending(system):
+    """``[(name, edge, modes)]``: the joints whose modes' every event ends the run (the FMU
+    carries them as terminal events: :mod:`mbcomp.export.fmu_user_events`)."""
+    out = []
+    for e in system.topology.edges:
+        modes = e.comp.modes(system.P[e.name]) if e.kind == "joint" else None
+        if modes is not None and _ends(e, modes):
+            out.append((e.name, e, modes))
+    return out
+
+
 def components(system):
     """``(contacts, stops, frictions)``: ``[(name, row, restitution, closed at start)]``,
     ``[(name, iq, iu, lo, hi, restitution)]`` and ``[(name, iq, iu, static, kinetic, start
@@ -155,7 +176,7 @@ def components(system):
     contacts, stops, frictions = [], [], []
     for e in system.topology.edges:
         modes = e.comp.modes(system.P[e.name]) if e.kind == "joint" else None
-        if modes is None:
+        if modes is None or _ends(e, modes):  # a joint that only ends the run: a terminal event
             continue
         if e.comp.tree_edge and modes.has_force:
             frictions.append((e.name, *_friction(system, e, modes)))

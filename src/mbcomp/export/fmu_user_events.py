@@ -43,6 +43,7 @@ from ..codegen.graph import CodegenError, Graph, Sym
 from ..codegen.printers import Program
 from ..codegen.toolchain import chunk
 from ..codegen.tracer import trace_point
+from .fmu_events import ending
 from .rules import c_string
 
 __all__ = ["check", "plan", "NONE_C"]
@@ -54,10 +55,33 @@ _FIX = ("write it with numpy functions (np.sin, np.sqrt, ...) and plain arithmet
         "no Python if on them), or run it with mbcomp.simulate(model, events=[f])")
 
 
-def check(events):
-    """The user events' specifications ``[SimpleNamespace(fn, name, direction, terminal)]``
-    (``terminal``: the firings that end the run, 0: never) from ``events`` (None or a list of
-    callables); a ``ValueError`` naming the function for a bad one."""
+def _code(f):
+    """The code object a function runs (a bound method's, a callable object's ``__call__``)."""
+    code = getattr(getattr(f, "__func__", f), "__code__", None)
+    return code if code is not None else getattr(getattr(type(f), "__call__", None), "__code__", None)
+
+
+def check(events, system=None):
+    """The events' specifications ``[SimpleNamespace(fn, name, direction, terminal,
+    indicator, time, code)]`` (``terminal``: the firings that end the run, 0: never): the user
+    events ``events`` (None or a list of callables; a ``ValueError`` naming the function for a
+    bad one), then, given ``system``, each event of the joints whose modes only end the run
+    (:func:`mbcomp.export.fmu_events.ending`: a latch), terminal, traced from its
+    ``Modes.events`` in its start mode."""
+    specs = _user(events)
+    for joint, e, modes in ending(system) if system is not None else []:
+        nq = system.nq
+        for k, (ev, _, direction) in enumerate(modes.events(np.zeros(e.q.stop - e.q.start),
+                                                            np.zeros(e.u.stop - e.u.start), modes.start)):
+            def fn(t, y, e=e, modes=modes, k=k, nq=nq):
+                return modes.events(y[e.q], y[nq + e.u.start:nq + e.u.stop], modes.start)[k][1]
+            specs.append(SimpleNamespace(fn=fn, name=f"{joint}.{ev}", direction=int(direction), terminal=1,
+                                         indicator=f"events.{joint}.{ev}", time=f"events.{joint}.time",
+                                         code=_code(type(modes).events)))
+    return specs
+
+
+def _user(events):
     if events is None:
         return []
     if callable(events) or isinstance(events, (str, bytes)):
@@ -86,7 +110,8 @@ def check(events):
         else:
             raise ValueError(f"event {name}: terminal={term!r} -> fix: True/False, or a positive count of firings "
                              "that ends the run")
-        specs.append(SimpleNamespace(fn=f, name=name, direction=int(direction), terminal=count))
+        specs.append(SimpleNamespace(fn=f, name=name, direction=int(direction), terminal=count,
+                                     indicator=f"events.user.{name}", time=f"events.user.{name}.time", code=_code(f)))
     return specs
 
 
@@ -102,11 +127,8 @@ def _traced(system, specs, max_nodes):
     t0, q0, u0 = trace_point(system)
     g = Graph(max_nodes)
     for e in specs:
-        code = getattr(getattr(e.fn, "__func__", e.fn), "__code__", None)
-        if code is None:
-            code = getattr(getattr(type(e.fn), "__call__", None), "__code__", None)
-        if code is not None:
-            _codes(code, g.law_codes, f"event {e.name}")
+        if e.code is not None:
+            _codes(e.code, g.law_codes, f"event {e.name}")
     outs = []
     with g:
         q = [g.input("q", k, v) for k, v in enumerate(q0)]
@@ -133,8 +155,9 @@ def _traced(system, specs, max_nodes):
 
 def plan(system, specs, max_nodes=3_000_000):
     """What the FMU carries for the user events ``specs`` (:func:`check`): ``indicators`` and
-    ``times`` (variable names) and ``c`` (``HY_NUE``, the tables ``HY_UE_DIR``,
-    ``HY_UE_TERM``, ``HY_UE_NAME`` and the program ``mbue_fun`` with ``mbue_params``)."""
+    ``times`` (variable names; a joint's events share one) and ``c`` (``HY_NUE``, the tables
+    ``HY_UE_DIR``, ``HY_UE_TERM``, ``HY_UE_NAME``, ``HY_UE_SLOT`` (each event's time among the
+    ``HY_UE_NT`` times) and the program ``mbue_fun`` with ``mbue_params``)."""
     if not specs:
         return SimpleNamespace(indicators=[], times=[], c=NONE_C)
     g, outs = _traced(system, specs, max_nodes)
@@ -153,10 +176,10 @@ def plan(system, specs, max_nodes=3_000_000):
     def ints(name, vals):
         return f"static const int {name}[] = {{{', '.join(str(int(v)) for v in vals) or '0'}}};\n"
 
-    c = (f"#define HY_NUE {len(specs)}\n#define HY_UE_NH {max(len(prog.hoisted), 1)}\n"
+    times = list(dict.fromkeys(e.time for e in specs))
+    c = (f"#define HY_NUE {len(specs)}\n#define HY_UE_NT {len(times)}\n#define HY_UE_NH {max(len(prog.hoisted), 1)}\n"
          f"#define HY_UE_NW {max(n_work, 1)}\n" + ints("HY_UE_DIR", [e.direction for e in specs])
-         + ints("HY_UE_TERM", [e.terminal for e in specs])
+         + ints("HY_UE_TERM", [e.terminal for e in specs]) + ints("HY_UE_SLOT", [times.index(e.time) for e in specs])
          + f"static const char *const HY_UE_NAME[] = {{{', '.join(c_string(e.name) for e in specs)}}};\n"
          + "\n".join(parts) + "\n" + prog.c_params("mbue_params") + "\n")
-    return SimpleNamespace(indicators=[f"events.user.{e.name}" for e in specs],
-                           times=[f"events.user.{e.name}.time" for e in specs], c=c)
+    return SimpleNamespace(indicators=[e.indicator for e in specs], times=times, c=c)
