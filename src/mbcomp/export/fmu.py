@@ -422,8 +422,8 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", "fmu_events.h", "fmu_events.c", "fmu_state.c", "fmu_rules.c", "fmu_derivatives.c",
-                  f"fmi{fmi[0]}.c"):
+        for f in ("fmu_core.c", "fmu_events.h", "fmu_events.c", "fmu_user_events.c", "fmu_state.c", "fmu_rules.c",
+                  "fmu_derivatives.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)

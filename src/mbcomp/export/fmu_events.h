@@ -64,6 +64,11 @@ static int mbev_rhs(struct Inst *c, double t, const double *y, double *dy);
 static int mbev_step(struct Inst *c, double h);
 static int mbev_act(struct Inst *c, int which, int *changed);
 static int mbev_get(struct Inst *c, unsigned vr, double *v);
+#if HY_NUE /* fmu_user_events.c */
+static void hy_user(struct Inst *c, int k, int force);
+static int hy_user_sides(struct Inst *c);
+static int hy_user_across(struct Inst *c, int k, double tol, double t_end);
+#endif
 #define MB_NZ HY_NZ
 #else
 #define MB_NZ 0

@@ -21,7 +21,7 @@
 #include <stdint.h>
 
 #define MB_STATE_MAGIC 0x6d62636fu /* a live state object of this FMU */
-#define MB_STATE_FORMAT 1u
+#define MB_STATE_FORMAT 2u
 #define MB_TOKEN_BYTES 64
 #define MB_NDIMS 10
 #define MB_HEAD_BYTES (8 + 8 + 8 + MB_TOKEN_BYTES + 8 * MB_NDIMS)
