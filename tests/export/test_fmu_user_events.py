@@ -109,7 +109,8 @@ def door():
 def made(tmp_path_factory):
     """The FMUs, exported once each on first use: ``made(key, fmi)``."""
     root, cache = tmp_path_factory.mktemp("user_events"), {}
-    models = {"fall": (free_fall, [floor]), "swing": (pendulum, [rising, second]), "door": (door, None)}
+    models = {"fall": (free_fall, [floor]), "swing": (pendulum, [rising, second]), "door": (door, None),
+              "clock": (pendulum, [clock])}
 
     def get(key, fmi="3.0"):
         if (key, fmi) not in cache:
@@ -170,6 +171,22 @@ def test_a_counted_terminal_event_and_a_rising_one_fire_where_simulate_records_t
     assert len(fired) == 2 and fired[0] == -1.0 and abs(fired[1] - rec["rising"][0]) < 1e-9
     seconds = np.unique(r["events.user.second.time"])
     assert abs(seconds[1] - rec["second"][0]) < 1e-9 and seconds[0] == -1.0
+
+
+def clock(t, y):  # linear in time: FMPy's CVODE lands exactly on its root, z = 0
+    return t - 0.3
+
+
+clock.terminal, clock.direction = True, 1
+
+
+@pytest.mark.parametrize("fmi,kind", RUNS)
+def test_a_rising_event_whose_root_the_importer_lands_on_exactly_fires_there(made, fmi, kind):
+    """``t - 0.3`` rising: CVODE stops at z = 0 exactly (FMI's domain z <= 0 not yet left); it
+    fires there as simulate's crossing (from below zero to at or above it) -- it did not, and the
+    Model Exchange run went on to its end."""
+    r = run(made("clock", fmi), fmi, kind, 1.0, ["j.phi"])
+    assert abs(r["time"][-1] - 0.3) < 1e-9, r["time"][-1]
 
 
 @pytest.mark.parametrize("fmi,kind", RUNS)

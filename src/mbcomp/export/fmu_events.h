@@ -52,8 +52,9 @@ typedef struct {
     double ue_last[HY_NUE + 1];    /* each time slot's last firing (s), -1 before any (HY_UE_SLOT: a
                                       joint's events share its slot) */
     int ue_n[HY_NUE + 1];          /* its firings */
-    int ue_side[HY_NUE + 1];       /* Model Exchange: its side at the last Event Mode: 1 above zero,
-                                      0 at or below, -1 not yet seen */
+    int ue_side[HY_NUE + 1];       /* Model Exchange: its side at the last Event Mode: 2 above zero,
+                                      1 at zero, 0 below, -1 not yet seen (Co-Simulation: at the
+                                      stretch's start) */
     int ended;                     /* a terminal user event fired: the simulation is over */
     int early_ok;                  /* FMI 3.0 Co-Simulation: the importer allows an early return */
 } mbev;

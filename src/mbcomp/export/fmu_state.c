@@ -433,7 +433,7 @@ static int mb_state_check(Inst *c, const mb_state *s)
                  s->hy_nhits[k] <= HY_CHATTER + 2 && isfinite(s->hy_last[k]);
         for (k = 0; k < HY_NZ; k++) ok = ok && s->hy_dir[k] >= 0 && s->hy_dir[k] <= 2;
         for (k = 0; k < HY_NUE; k++)
-            ok = ok && s->hy_ue_n[k] >= 0 && s->hy_ue_side[k] >= 0 && s->hy_ue_side[k] <= 2 && isfinite(s->hy_ue_last[k]);
+            ok = ok && s->hy_ue_n[k] >= 0 && s->hy_ue_side[k] >= 0 && s->hy_ue_side[k] <= 3 && isfinite(s->hy_ue_last[k]);
         ok = ok && s->hy_ended >= 0 && s->hy_ended <= 1;
         for (k = 0; k < (HY_NCOMP + 1) * (HY_CHATTER + 2); k++) ok = ok && !isnan(s->hy_hits[k]);
         if (!ok) {

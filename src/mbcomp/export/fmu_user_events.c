@@ -5,16 +5,22 @@
  * HY_UE_SLOT, HY_UE_NAME) a firing is recorded in its time slot and the terminal one (its count
  * reached) ends the simulation (c->hy.ended: the wrappers' terminateSimulation, fmi2Discard). */
 #if HYBRID && HY_NUE
+/* the side of a value: 0 below zero, 1 at zero, 2 above */
+static int hy_side(double z) { return z > 0.0 ? 2 : z == 0.0 ? 1 : 0; }
+
 /* user event k at (c->t, c->y) (its value in c->hy.z): force, Co-Simulation located it crossing
-   in its direction; else (Model Exchange) it fires when its side changed since the last Event
-   Mode in its direction (FMI's domains: z > 0 and z <= 0; mbcomp.hybrid.events._crossed). A
-   firing is recorded; the terminal one (its count reached) ends the simulation. */
+   in its direction; else (Model Exchange) it fires when it crossed since the last Event Mode in
+   its direction, as mbcomp.hybrid.events._crossed: falling from above zero to at or below it,
+   rising from below zero to at or above it -- an importer's root finding may land exactly on a
+   function linear in time at its root (t - 0.3 rising: FMPy's CVODE stopped at z = 0, and the
+   event never fired), and leaving zero afterwards is no second crossing. A firing is recorded;
+   the terminal one (its count reached) ends the simulation. */
 static void hy_user(Inst *c, int k, int force)
 {
-    int side = c->hy.z[HY_NZC + k] > 0.0, was = c->hy.ue_side[k], fire = force;
+    int side = hy_side(c->hy.z[HY_NZC + k]), was = c->hy.ue_side[k], fire = force, dir = HY_UE_DIR[k];
     if (!force && !c->cs) {
         c->hy.ue_side[k] = side;
-        fire = was >= 0 && side != was && (HY_UE_DIR[k] == 0 || (HY_UE_DIR[k] < 0) == (was == 1));
+        fire = (dir <= 0 && was == 2 && side <= 1) || (dir >= 0 && was == 0 && side >= 1);
     }
     if (!fire) return;
     c->hy.ue_last[HY_UE_SLOT[k]] = c->t;
@@ -26,13 +32,13 @@ static void hy_user(Inst *c, int k, int force)
     }
 }
 
-/* Co-Simulation: each user event's side (1: above zero) at the start of a stretch, into
+/* Co-Simulation: each user event's side (hy_side) at the start of a stretch, into
    c->hy.ue_side (Model Exchange's record; Co-Simulation locates crossings instead) */
 static int hy_user_sides(Inst *c)
 {
     int k;
     if (mbev_indicators(c, c->t, c->y, c->hy.z)) return -1;
-    for (k = 0; k < HY_NUE; k++) c->hy.ue_side[k] = c->hy.z[HY_NZC + k] > 0.0;
+    for (k = 0; k < HY_NUE; k++) c->hy.ue_side[k] = hy_side(c->hy.z[HY_NZC + k]);
     return 0;
 }
 
@@ -48,7 +54,7 @@ static int hy_user_across(Inst *c, int k, double tol, double t_end)
         if (mbev_indicators(c, c->t, c->y, c->hy.z)) return -1;
         z = c->hy.z[HY_NZC + k];
         t1 = fmin(c->t + tol, t_end);
-        if ((z != 0.0 && (z > 0.0) != c->hy.ue_side[k]) || !(t1 > c->t)) return 0;
+        if ((z != 0.0 && hy_side(z) != c->hy.ue_side[k]) || !(t1 > c->t)) return 0;
         if (mbev_rhs(c, c->t, c->y, c->dy)) return -1;
         for (i = 0; i < NX; i++) c->y[i] += (t1 - c->t) * c->dy[i];
         c->t = t1;
