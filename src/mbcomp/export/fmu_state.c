@@ -8,7 +8,7 @@
  * it: the name, the logger, pointers and work arrays (the hoisted values are recomputed from the
  * parameters: a restore marks them dirty; every Co-Simulation step starts DOP853 afresh).
  *
- * The serialized form (format 1): every number an unsigned 64-bit little-endian word (a double
+ * The serialized form (format 2: 2 added the user events' records): every number an unsigned 64-bit little-endian word (a double
  * by its bits, an int by its value), in this order --
  *   header:  the signature "mbcompFS" (8 bytes), the format, the total size in bytes, the FMU's
  *            instantiation token (64 bytes, NUL-padded), then cs, NQ, NU, NXS, NP, NIN, MM, NI,
