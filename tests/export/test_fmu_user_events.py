@@ -253,6 +253,36 @@ def test_after_the_terminal_event_a_further_step_is_refused(made):
     s.freeInstance()
 
 
+def test_model_exchange_terminates_at_the_event_and_refuses_to_go_on(made):
+    """An importer driving Model Exchange by hand: the mass moved below the floor, Event Mode says
+    terminateSimulation; continuous time mode is then refused with the reason."""
+    from ctypes import c_double
+
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Model
+
+    path = made("fall")
+    md = read_model_description(str(path))
+    s = FMU3Model(guid=md.guid, unzipDirectory=extract(str(path)),
+                  modelIdentifier=md.modelExchange.modelIdentifier, instanceName="fall")
+    messages = []
+    s.instantiate(loggingOn=True, logMessage=lambda *a: messages.append(a[-1].decode() if a[-1] else ""))
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    assert not s.updateDiscreteStates()[1]  # at the start (s = 1 m, above the floor): going on
+    s.enterContinuousTimeMode()
+    s.setTime(0.3)
+    s.setContinuousStates((c_double * 2)(FLOOR - 1e-3, -3.0), 2)
+    s.enterEventMode()
+    assert s.updateDiscreteStates()[1]  # fell through the floor: terminate
+    with pytest.raises(FMICallException):
+        s.enterContinuousTimeMode()
+    assert any("fmi3EnterContinuousTimeMode: the simulation ended there, at t=0.3" in m for m in messages), messages
+    s.terminate()
+    s.freeInstance()
+
+
 def untraceable(t, y):
     import math
     return math.sin(y[0])

@@ -216,6 +216,7 @@ FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *e)
 FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
 {
     STATE(c, "fmi2EnterContinuousTimeMode", S_EVENT);
+    if (mb_after_end((Inst *)c, "fmi2EnterContinuousTimeMode")) return fmi2Error; /* a terminal event */
     ((Inst *)c)->mode = M_CONT;
     return fmi2OK;
 }

@@ -321,6 +321,7 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *upd
 FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c)
 {
     STATE(c, "fmi3EnterContinuousTimeMode", S_EVENT);
+    if (mb_after_end((Inst *)c, "fmi3EnterContinuousTimeMode")) return fmi3Error; /* a terminal event */
     ((Inst *)c)->mode = M_CONT;
     return fmi3OK;
 }

@@ -578,11 +578,7 @@ static int mbev_step(Inst *c, double h)
     double t_end;
     int i, rc, n, changed, written = 0;
     if (!(h >= 0.0) || !isfinite(h)) { say(c, 1, "a communication step of %g s", h); return -1; }
-    if (c->hy.ended) {
-        say(c, 1, "a step from t=%.12g s: the simulation ended there (a terminal user event) -> terminate the "
-            "FMU (or reset it to run again)", c->t);
-        return -1;
-    }
+    if (mb_after_end(c, "a step")) return -1;
     if (h == 0.0) return 0;
     if (mb_refresh(c)) return -1;
     c->d[0] = c->alpha;

@@ -79,6 +79,8 @@ struct Inst;
 static int mb_event_indicators(struct Inst *c, double *z, size_t nz);
 /* whether a terminal user event ended the simulation (0 without events) */
 static int mb_ended(struct Inst *c);
+/* -1 after logging that `fn` is refused when the simulation ended, else 0 */
+static int mb_after_end(struct Inst *c, const char *fn);
 /* FMI 3.0 Co-Simulation: the importer allows an early return (a terminal user event's step
    then returns early at it); mb_early_return: whether the step just made did */
 static void mb_allow_early(struct Inst *c, int ok);

@@ -73,6 +73,14 @@ static int mb_ended(Inst *c)
 #endif
 }
 
+static int mb_after_end(Inst *c, const char *fn)
+{
+    if (!mb_ended(c)) return 0;
+    say(c, 1, "%s: the simulation ended there, at t=%.12g s (a terminal event) -> terminate the FMU (or reset it to "
+        "run again)", fn, c->t);
+    return -1;
+}
+
 static void mb_allow_early(Inst *c, int ok)
 {
 #if HYBRID
