@@ -140,6 +140,25 @@ def test_a_free_fall_ends_where_the_mass_falls_through_the_floor_at_its_closed_f
     assert np.all(r["s.s"][:-1] > FLOOR)
 
 
+@pytest.mark.parametrize("fmi", ["3.0", "2.0"])
+def test_the_free_fall_ends_at_the_floor_in_fmusim_too(made, fmi):
+    """The Reference-FMUs' fmusim, the second importer: Model Exchange (its CVODE at 1e-14) and
+    FMI 2.0 Co-Simulation (fmi2Discard, fmi2Terminated) end at sqrt(2 h / g) to 1e-9 s; FMI 3.0
+    Co-Simulation without an early return labels its last row with the communication point, the
+    values the event's."""
+    import fmusim_tool
+
+    exe, why = fmusim_tool.fmusim()
+    if exe is None:  # as tests/export/test_fmu_events.py: fmusim needs its build's system libraries
+        pytest.skip(why)
+    t_e = np.sqrt(2 * (S0 - FLOOR) / G)
+    for interface, tol in (("me", 1e-14), ("cs", 1e-12)):
+        r = fmusim_tool.run(made("fall", fmi), interface, 1.0, ["s.s", "s.v"], tolerance=tol, points=100)
+        end = np.ceil(t_e / 0.01) * 0.01 if (fmi, interface) == ("3.0", "cs") else t_e
+        assert abs(r["time"][-1] - end) < 1e-9, (fmi, interface, r["time"][-1] - end)
+        assert abs(r["s.s"][-1] - FLOOR) < 1e-8 and abs(r["s.v"][-1] + G * t_e) < 1e-8, (fmi, interface)
+
+
 def test_without_an_early_return_the_fmi3_step_still_stops_at_the_event(made):
     """FMPy not allowing an early return labels its last row with the communication point; the
     FMU's values are the event's, the run terminated there."""
