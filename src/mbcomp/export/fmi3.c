@@ -7,6 +7,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#define MB_EARLY_RETURN 1 /* fmi3DoStep may return early (a terminal user event: fmu_user_events.c) */
 #include "fmu_core.c"
 
 typedef void *fmi3Instance;

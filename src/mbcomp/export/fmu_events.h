@@ -83,5 +83,7 @@ static int mb_ended(struct Inst *c);
 static int mb_after_end(struct Inst *c, const char *fn);
 /* FMI 3.0 Co-Simulation: the importer allows an early return (a terminal user event's step
    then returns early at it); mb_early_return: whether the step just made did */
+#ifdef MB_EARLY_RETURN
 static void mb_allow_early(struct Inst *c, int ok);
 static int mb_early_return(struct Inst *c);
+#endif

@@ -81,6 +81,7 @@ static int mb_after_end(Inst *c, const char *fn)
     return -1;
 }
 
+#ifdef MB_EARLY_RETURN
 static void mb_allow_early(Inst *c, int ok)
 {
 #if HYBRID
@@ -100,6 +101,7 @@ static int mb_early_return(Inst *c)
     return 0;
 #endif
 }
+#endif
 
 static int mb_event_indicators(Inst *c, double *z, size_t nz)
 {
