@@ -57,3 +57,56 @@ def test_a_rollback_across_an_impact_and_a_state_in_another_instance_repeat_it_b
     for x in (s, other):
         x.terminate()
         x.freeInstance()
+
+
+def test_user_events_firings_and_termination_travel_with_the_state(tmp_path):
+    """A pendulum (2 kg, 1 m, released at 0.5 rad) with a rising event on its speed and a terminal
+    one counting two falls of its angle: a state saved after the first fall and the first rise
+    (1.2 s) carries the counts and last firings, so the restored run -- and another instance from
+    the serialized state -- terminates at the second fall bit for bit as the first run did (a lost
+    count would run on to the step's end); a state saved after the end restores the end: a further
+    step is refused."""
+    from fmpy.fmi1 import FMICallException
+    from mbcomp.library import FixedTranslation, PointMass, Revolute, World
+    import mbcomp
+
+    def rising(t, y):
+        return y[1]
+
+    def second(t, y):
+        return y[0]
+    rising.direction, second.terminal, second.direction = 1, 2, -1
+    m = mbcomp.Model()
+    w = m.add("world", World())
+    j = m.add("j", Revolute(phi0=0.5))
+    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    bob = m.add("bob", PointMass(m=2.0))
+    m.connect(w.frame_b, j.frame_a)
+    m.connect(j.frame_b, rod.frame_a)
+    m.connect(rod.frame_b, bob.frame_a)
+    path = tmp_path / "swing.fmu"
+    export_fmu(m, path, derivatives=False, events=[rising, second])
+    md, where = read_model_description(str(path)), extract(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    refs = [vr[n] for n in ("j.phi", "j.w", "events.user.rising.time", "events.user.second.time")]
+    s = slave(path, md, where)
+    for k in range(12):
+        s.doStep(0.1 * k, 0.1)
+    saved = s.getFMUState()
+    blob = s.serializeFMUState(saved)
+    first = s.doStep(1.2, 1.8)  # (event handling needed, terminate, early return, last successful time)
+    values = np.array(s.getFloat64(refs))
+    assert first[1] and 2.5 < first[3] < 2.6 and values[3] == first[3] and 1.0 < values[2] < 1.05
+    ended = s.getFMUState()
+    s.setFMUState(saved)
+    assert s.doStep(1.2, 1.8) == first and np.array_equal(values, np.array(s.getFloat64(refs)))
+    other = slave(path, md, where)
+    other.setFMUState(other.deserializeFMUState(blob))
+    assert other.doStep(1.2, 1.8) == first and np.array_equal(values, np.array(other.getFloat64(refs)))
+    fresh = slave(path, md, where)
+    fresh.setFMUState(fresh.deserializeFMUState(s.serializeFMUState(ended)))
+    with pytest.raises(FMICallException):
+        fresh.doStep(first[3], 0.1)
+    for x in (s, other, fresh):
+        x.terminate()
+        x.freeInstance()

@@ -207,6 +207,7 @@ FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *e)
     if (!e) return fmi2Error;
     memset(e, 0, sizeof *e);
     if (mb_update((Inst *)c, &changed)) return fmi2Error;
+    e->terminateSimulation = mb_ended((Inst *)c) != 0; /* a terminal user event fired */
     e->valuesOfContinuousStatesChanged = changed;
     e->nominalsOfContinuousStatesChanged = changed;
     return fmi2OK;
@@ -215,6 +216,7 @@ FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *e)
 FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
 {
     STATE(c, "fmi2EnterContinuousTimeMode", S_EVENT);
+    if (mb_after_end((Inst *)c, "fmi2EnterContinuousTimeMode")) return fmi2Error; /* a terminal event */
     ((Inst *)c)->mode = M_CONT;
     return fmi2OK;
 }
@@ -228,7 +230,7 @@ FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean 
     if (!enterEventMode || !terminate) return fmi2Error;
     if (mb_completed((Inst *)c, &event)) return fmi2Error;
     *enterEventMode = event;
-    *terminate = 0;
+    *terminate = mb_ended((Inst *)c) != 0;
     return fmi2OK;
 }
 
@@ -281,7 +283,8 @@ FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2B
         say(s, 1, "fmi2DoStep: a step from t=%g, but the FMU is at t=%g", t, s->t);
         return fmi2Error;
     }
-    return OK(mb_step(s, h));
+    if (mb_step(s, h)) return fmi2Error;
+    return mb_ended(s) ? fmi2Discard : fmi2OK; /* a terminal user event: stopped at it (fmi2LastSuccessfulTime) */
 }
 
 FMI2_EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
@@ -308,7 +311,7 @@ FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKin
 FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind k, fmi2Boolean *v)
 {
     NEED(c);
-    if (k == fmi2Terminated && v) { *v = 0; return fmi2OK; }
+    if (k == fmi2Terminated && v) { *v = mb_ended((Inst *)c) != 0; return fmi2OK; }
     return unsupported(c, "fmi2GetBooleanStatus of this kind");
 }
 FMI2_EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind k, fmi2String *v)

@@ -7,6 +7,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#define MB_EARLY_RETURN 1 /* fmi3DoStep may return early (a terminal user event: fmu_user_events.c) */
 #include "fmu_core.c"
 
 typedef void *fmi3Instance;
@@ -109,12 +110,15 @@ FMI3_EXPORT fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String
                                                      fmi3LogMessageCallback logMessage,
                                                      fmi3IntermediateUpdateCallback intermediateUpdate)
 {
-    (void)resources; (void)visible; (void)earlyReturn; (void)required; (void)nRequired; (void)intermediateUpdate;
+    fmi3Instance s;
+    (void)resources; (void)visible; (void)required; (void)nRequired; (void)intermediateUpdate;
     if (eventMode) {  /* the FMU declares hasEventMode="false" */
         if (logMessage) logMessage(env, fmi3Error, "logStatusError", "event mode is not supported by this FMU");
         return NULL;
     }
-    return instantiate(name, token, logging, env, logMessage, 1);
+    s = instantiate(name, token, logging, env, logMessage, 1);
+    if (s) mb_allow_early((Inst *)s, earlyReturn); /* a terminal user event's step returns early at it */
+    return s;
 }
 
 FMI3_EXPORT fmi3Instance fmi3InstantiateScheduledExecution(fmi3String name, fmi3String token, fmi3String resources,
@@ -306,7 +310,7 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *upd
     STATE(c, "fmi3UpdateDiscreteStates", S_EVENT);
     if (mb_update((Inst *)c, &changed)) return fmi3Error;
     if (update) *update = false;
-    if (terminate) *terminate = false;
+    if (terminate) *terminate = mb_ended((Inst *)c) != 0; /* a terminal user event fired */
     if (nominalsChanged) *nominalsChanged = changed;
     if (valuesChanged) *valuesChanged = changed;
     if (nextDefined) *nextDefined = false;
@@ -318,6 +322,7 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *upd
 FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c)
 {
     STATE(c, "fmi3EnterContinuousTimeMode", S_EVENT);
+    if (mb_after_end((Inst *)c, "fmi3EnterContinuousTimeMode")) return fmi3Error; /* a terminal event */
     ((Inst *)c)->mode = M_CONT;
     return fmi3OK;
 }
@@ -331,7 +336,7 @@ FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean n
     if (!enterEventMode || !terminate) return fmi3Error;
     if (mb_completed((Inst *)c, &event)) return fmi3Error;
     *enterEventMode = event;
-    *terminate = false;
+    *terminate = mb_ended((Inst *)c) != 0;
     return fmi3OK;
 }
 
@@ -416,8 +421,8 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 t, fmi3Float64 h, 
     }
     rc = mb_step(s, h);
     if (eventHandlingNeeded) *eventHandlingNeeded = false;
-    if (terminate) *terminate = false;
-    if (earlyReturn) *earlyReturn = false;
+    if (terminate) *terminate = !rc && mb_ended(s); /* a terminal user event: the step stopped at it */
+    if (earlyReturn) *earlyReturn = !rc && mb_early_return(s);
     if (lastSuccessfulTime) *lastSuccessfulTime = s->t;
     return OK(rc);
 }

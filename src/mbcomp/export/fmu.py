@@ -85,7 +85,7 @@ from ..codegen.toolchain import HEADER, c_compiler, chunk
 from ..codegen.tracer import param_vector, trace
 from ..errors import ModelError, Problem
 from ..modeling.model import Model
-from . import fmu_events
+from . import fmu_events, fmu_user_events
 from .description import (RUNTIME_C, build_description, model_description2, model_description3, output_name,
                           parameter_doc)
 from .rules import c_names, c_rules, c_string
@@ -124,7 +124,7 @@ def _refuse_modes(system):
 
 
 def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None, name=None, stop_time=1.0,
-               tolerance=1e-12, max_nodes=3_000_000, tunable="nonzero", derivatives=True):
+               tolerance=1e-12, max_nodes=3_000_000, tunable="nonzero", derivatives=True, events=None):
     """Write ``model`` as an FMU at ``path``; returns what went in (a dict).
 
     Parameters
@@ -158,6 +158,11 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
         Carry the exact directional and adjoint derivatives and declare the dependencies
         (default); False builds a smaller FMU faster (Andrews: a third of the time and size,
         ``bench/fmu_derivatives.py``) whose derivative functions return an error.
+    events : list of callables, optional
+        User events as :func:`mbcomp.simulate` takes them (``f(t, y)``, ``y = [q, u]``, with
+        ``terminal`` and ``direction``), traced into the FMU's C: the event indicators
+        ``events.user.<name>`` and outputs ``events.user.<name>.time``; a terminal one ends the
+        simulation (:mod:`.fmu_user_events`; a model with loops is refused).
 
     Returns
     -------
@@ -184,12 +189,14 @@ def export_fmu(model, path, *, fmi="3.0", kind="both", params=None, outputs=None
     name = name or path.stem
     ident = _identifier(name)
     system = assemble(model, params)
-    hybrid = _refuse_modes(system)
+    specs = fmu_user_events.check(events, system)  # and the joints whose events only end the run
+    hybrid = _refuse_modes(system) or bool(specs)
     init = fmu_events.initial_state(system) if hybrid else initialize(system)
     keep = _kept(system) if tunable == "all" else ()
     tr, prog, parts, n_work = _fun_program(system, max_nodes, keep)
     out_prog = _output_program(system, tr, max_nodes, keep)
-    hy = fmu_events.plan(system, tolerance, max_nodes, layout=tr.layout)  # the events and modes (fmu_events.c)
+    hy = fmu_events.plan(system, tolerance, max_nodes, layout=tr.layout,  # the events and modes (fmu_events.c)
+                         user=fmu_user_events.plan(system, specs, max_nodes))
     mech = (SimpleNamespace(c="#define MECH 0\n", enabled=False) if hybrid
             else _projection(system, tr, max_nodes, keep))
     select = _selection(system, init, mech, kind)
@@ -415,8 +422,8 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", "fmu_events.h", "fmu_events.c", "fmu_state.c", "fmu_rules.c", "fmu_derivatives.c",
-                  f"fmi{fmi[0]}.c"):
+        for f in ("fmu_core.c", "fmu_events.h", "fmu_events.c", "fmu_user_events.c", "fmu_state.c", "fmu_rules.c",
+                  "fmu_derivatives.c", f"fmi{fmi[0]}.c"):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)

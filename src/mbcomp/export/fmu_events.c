@@ -34,14 +34,23 @@ static double hy_at(const Inst *c, int s, int lim)
 
 static void mbev_reset(Inst *c)
 {
-    int k;
+    int k, early = c->hy.early_ok; /* the importer's choice at instantiation outlives a reset */
     memset(&c->hy, 0, sizeof c->hy);
+    c->hy.early_ok = early;
     for (k = 0; k < HY_NCOMP; k++) {
         c->hy.mode[k] = k < HY_NC ? HY_C_CLOSED0[k] : k >= HY_F0 ? HY_F_MODE0[k - HY_F0] : 0;
         c->hy.last[k] = -1.0;
     }
-    for (k = 0; k < HY_NZ; k++) c->hy.dir[k] = -1;
+    for (k = 0; k < HY_NZC; k++) c->hy.dir[k] = -1;
     c->hy.fresh = -1;
+#if HY_NUE
+    for (k = 0; k < HY_NUE; k++) {
+        c->hy.dir[HY_NZC + k] = HY_UE_DIR[k];
+        c->hy.ue_last[k] = -1.0;
+        c->hy.ue_side[k] = -1;
+    }
+    (void)mbue_params(c->p, c->hy.ue_h); /* the user events depend on no parameter: constants only */
+#endif
 }
 
 /* the evaluation program at (t, y) into c->hy.ev: 0, or -1 after logging */
@@ -207,6 +216,17 @@ static int mbev_indicators(Inst *c, double t, const double *y, double *z)
         z[i] = m == 0 ? HY_F_STATIC[k] + push : m == 1 ? u : HY_F_STATIC[k];
         z[i + 1] = m == 0 ? HY_F_STATIC[k] - push : m == 2 ? -u : HY_F_STATIC[k];
     }
+#if HY_NUE
+    if (mbue_fun(y, y + NQ, t, c->d, c->hy.ue_h, c->p, c->hy.ue_w, z + HY_NZC)) {
+        say(c, 1, "a user event's function failed a guard at t=%g", t);
+        return -1;
+    }
+    for (k = 0; k < HY_NUE; k++)
+        if (!isfinite(z[HY_NZC + k])) {
+            say(c, 1, "the user event %s is not finite at t=%g", HY_UE_NAME[k], t);
+            return -1;
+        }
+#endif
     return 0;
 }
 
@@ -472,6 +492,7 @@ static int hy_switch(Inst *c, int k, int to, int *acted)
     return hy_settle(c, modes, c->hy.ys);
 }
 
+
 /* acts on indicator i at (c->t, c->y); force: it was located falling through zero */
 static int hy_act_on(Inst *c, int i, int force, int *acted)
 {
@@ -492,6 +513,19 @@ static int hy_act_on(Inst *c, int i, int force, int *acted)
     return 0;
 }
 
+/* acts on indicator i: a component's (hy_act_on) or a user event's, which changes no state
+   (not an action the active set settles on) */
+static int hy_act(Inst *c, int i, int force, int *acted)
+{
+#if HY_NUE
+    if (i >= HY_NZC) {
+        hy_user(c, i - HY_NZC, force);
+        return 0;
+    }
+#endif
+    return hy_act_on(c, i, force, acted);
+}
+
 /* Event Mode: every event at (c->t, c->y) acted on (which >= 0: the indicator the
    Co-Simulation step located; -1: every indicator at or below zero); *changed: the state or
    the active set changed (the importer restarts its integrator) */
@@ -502,15 +536,15 @@ static int mbev_act(Inst *c, int which, int *changed)
     if (mb_refresh(c)) return -1;
     if (which >= 0) { /* the located event, then what it brings about at once (a break-away) */
         acted = 0;
-        if (mbev_indicators(c, c->t, c->y, c->hy.z) || hy_act_on(c, which, 1, &acted)) return -1;
+        if (mbev_indicators(c, c->t, c->y, c->hy.z) || hy_act(c, which, 1, &acted)) return -1;
         *changed = acted;
     }
     for (n = 0; n < HY_MAX_EVENTS; n++) {
         acted = 0;
         if (mbev_indicators(c, c->t, c->y, c->hy.z)) return -1;
-        for (i = 0; i < HY_NZ && !acted; i++)
-            if (hy_act_on(c, i, 0, &acted)) return -1;
-        if (!acted) return 0;
+        for (i = 0; i < HY_NZ && !acted && !c->hy.ended; i++)
+            if (hy_act(c, i, 0, &acted)) return -1;
+        if (!acted || c->hy.ended) return 0;
         *changed = 1;
     }
     say(c, 1, "chattering: %d events at t=%g without settling", HY_MAX_EVENTS, c->t);
@@ -534,6 +568,7 @@ static int hy_across(Inst *c, int which, double tol, double t_end)
     return 0;
 }
 
+
 /* Co-Simulation: from c->t by h with DOP853 at c->rtol, the events located on its dense
    output (mbrt_dop853_events) and acted on: 0, or -1 after logging */
 static int mbev_step(Inst *c, double h)
@@ -543,6 +578,7 @@ static int mbev_step(Inst *c, double h)
     double t_end;
     int i, rc, n, changed, written = 0;
     if (!(h >= 0.0) || !isfinite(h)) { say(c, 1, "a communication step of %g s", h); return -1; }
+    if (mb_after_end(c, "a step")) return -1;
     if (h == 0.0) return 0;
     if (mb_refresh(c)) return -1;
     c->d[0] = c->alpha;
@@ -554,6 +590,9 @@ static int mbev_step(Inst *c, double h)
     if (mbev_act(c, -1, &changed)) { c->mode = M_ERROR; return -1; }
     for (n = 0; n < HY_MAX_EVENTS; n++) {
         if (!(t_end > c->t)) return 0;
+#if HY_NUE
+        if (hy_user_sides(c)) { c->mode = M_ERROR; return -1; }
+#endif
         memset(&st, 0, sizeof st);
         memset(&ev, 0, sizeof ev);
         ev.g = hy_event_fn;
@@ -581,8 +620,18 @@ static int mbev_step(Inst *c, double h)
         }
         memcpy(c->y, c->hy.yev, sizeof(double) * NX);
         c->t = ev.t_event;
-        if (hy_across(c, ev.which, ev.tol, t_end) || mbev_act(c, ev.which, &changed)) { c->mode = M_ERROR; return -1; }
+        if ((ev.which < HY_NZC && hy_across(c, ev.which, ev.tol, t_end)) || mbev_act(c, ev.which, &changed)) {
+            c->mode = M_ERROR;
+            return -1;
+        }
         c->hy.fresh = ev.which;
+        if (c->hy.ended) return 0; /* a terminal user event: the step stops at it */
+#if HY_NUE
+        if (ev.which >= HY_NZC) { /* a user event: across it, found again only crossing back */
+            c->hy.fresh = -1;
+            if (hy_user_across(c, ev.which - HY_NZC, ev.tol, t_end)) { c->mode = M_ERROR; return -1; }
+        }
+#endif
     }
     say(c, 1, "chattering: %d events within the step from t=%g", HY_MAX_EVENTS, c->t);
     c->mode = M_ERROR;
@@ -598,18 +647,12 @@ static int mbev_get(Inst *c, unsigned vr, double *v)
         return 0;
     }
     if (vr >= HY_VR + HY_NZ && vr < HY_VR + HY_NZ + HY_NCOMP) { *v = c->hy.last[vr - HY_VR - HY_NZ]; return 0; }
+    if (vr >= HY_VR + HY_NZ + HY_NCOMP && vr < HY_VR + HY_NZ + HY_NCOMP + HY_UE_NT) {
+        *v = c->hy.ue_last[vr - HY_VR - HY_NZ - HY_NCOMP];
+        return 0;
+    }
     return 1;
 }
 #endif
 
-static int mb_event_indicators(Inst *c, double *z, size_t nz)
-{
-    if (nz != (size_t)MB_NZ || (nz && !z)) {
-        say(c, 1, "%zu event indicators asked for, %d exist", nz, MB_NZ);
-        return -1;
-    }
-#if HYBRID
-    if (nz && (mb_refresh(c) || mbev_indicators(c, c->t, c->y, z))) return -1;
-#endif
-    return 0;
-}
+#include "fmu_user_events.c" /* the user events: firing, Co-Simulation's crossing, the run's end */

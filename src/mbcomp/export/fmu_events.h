@@ -16,8 +16,18 @@
 #define HYBRID 0
 #endif
 #if HYBRID
+#ifndef HY_NUE /* user events (mbcomp/export/fmu_user_events.py): HY_NUE functions mbue_fun of (t, q, u),
+                  HY_UE_DIR their directions, HY_UE_TERM the firings that end the run (0: never) */
+#define HY_NUE 0
+#endif
+#if !HY_NUE
+#define HY_UE_NT 0
+#define HY_UE_NH 1
+#define HY_UE_NW 1
+#endif
 #define HY_NCOMP (HY_NC + HY_NS + HY_NF) /* components with modes: contacts, stops, frictions */
-#define HY_NZ (HY_NC + 2 * HY_NS + 2 * HY_NF) /* event indicators: a contact's, a stop's two, a friction's two */
+#define HY_NZC (HY_NC + 2 * HY_NS + 2 * HY_NF) /* the components' indicators: a contact's, a stop's two, a friction's two */
+#define HY_NZ (HY_NZC + HY_NUE) /* event indicators: the components', then the user events' */
 #define HY_NR (HY_NCR + HY_NS + HY_NF + 1) /* rows in force at most: every component's rows (a
                                       contact's normal and rolling rows), and one spare */
 #define HY_NK (NU + HY_NR)
@@ -38,6 +48,15 @@ typedef struct {
     double evwork[3 * HY_NZ + NX + 1], yev[NX + 1];
     int dir[HY_NZ + 1], fresh;     /* Co-Simulation: the event acted on last, its function at zero */
     long events;                   /* events acted on */
+    double ue_h[HY_UE_NH + 1], ue_w[HY_UE_NW + 1]; /* the user events' program's */
+    double ue_last[HY_NUE + 1];    /* each time slot's last firing (s), -1 before any (HY_UE_SLOT: a
+                                      joint's events share its slot) */
+    int ue_n[HY_NUE + 1];          /* its firings */
+    int ue_side[HY_NUE + 1];       /* Model Exchange: its side at the last Event Mode: 2 above zero,
+                                      1 at zero, 0 below, -1 not yet seen (Co-Simulation: at the
+                                      stretch's start) */
+    int ended;                     /* a terminal user event fired: the simulation is over */
+    int early_ok;                  /* FMI 3.0 Co-Simulation: the importer allows an early return */
 } mbev;
 
 struct Inst;
@@ -46,6 +65,11 @@ static int mbev_rhs(struct Inst *c, double t, const double *y, double *dy);
 static int mbev_step(struct Inst *c, double h);
 static int mbev_act(struct Inst *c, int which, int *changed);
 static int mbev_get(struct Inst *c, unsigned vr, double *v);
+#if HY_NUE /* fmu_user_events.c */
+static void hy_user(struct Inst *c, int k, int force);
+static int hy_user_sides(struct Inst *c);
+static int hy_user_across(struct Inst *c, int k, double tol, double t_end);
+#endif
 #define MB_NZ HY_NZ
 #else
 #define MB_NZ 0
@@ -53,3 +77,13 @@ static int mbev_get(struct Inst *c, unsigned vr, double *v);
 /* the event indicators (MB_NZ of them) at the instance's (t, y) into z[nz]: 0, or -1 after logging */
 struct Inst;
 static int mb_event_indicators(struct Inst *c, double *z, size_t nz);
+/* whether a terminal user event ended the simulation (0 without events) */
+static int mb_ended(struct Inst *c);
+/* -1 after logging that `fn` is refused when the simulation ended, else 0 */
+static int mb_after_end(struct Inst *c, const char *fn);
+/* FMI 3.0 Co-Simulation: the importer allows an early return (a terminal user event's step
+   then returns early at it); mb_early_return: whether the step just made did */
+#ifdef MB_EARLY_RETURN
+static void mb_allow_early(struct Inst *c, int ok);
+static int mb_early_return(struct Inst *c);
+#endif

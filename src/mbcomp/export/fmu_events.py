@@ -47,10 +47,10 @@ from ..codegen.graph import CodegenError
 from ..codegen.printers import Program
 from ..codegen.toolchain import chunk
 from ..codegen.tracer import FIELDS, trace
-from ..modeling.events import AxisRow, ContactRow, EventRow, Impact, StickRow, Switch
+from ..modeling.events import AxisRow, ContactRow, End, EventRow, Impact, StickRow, Switch
 from .rules import c_string
 
-__all__ = ["plan", "components", "hybrid_outputs", "initial_state", "VR_EVENTS", "REST_HEIGHT", "CHATTER"]
+__all__ = ["plan", "components", "ending", "hybrid_outputs", "initial_state", "VR_EVENTS", "REST_HEIGHT", "CHATTER"]
 
 #: the value reference of the first event indicator variable (FMI 3.0), far from the others
 VR_EVENTS = 1 << 30
@@ -148,6 +148,27 @@ def _friction(system, e, modes):
             ("stick", "slip+", "slip-").index(modes.start))
 
 
+def _ends(e, modes):
+    """Whether every event of the joint's start mode ends the run (:class:`End`; a latch): no
+    rows, force or slip of its own, its events numbers of its own coordinates and speeds."""
+    if modes.has_force or modes.slips or modes.rows(modes.start) or not modes.holds_rows(modes.start):
+        return False
+    evs = modes.events(np.zeros(e.q.stop - e.q.start), np.zeros(e.u.stop - e.u.start), modes.start)
+    return bool(evs) and all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool)
+                             and isinstance(modes.action(n, modes.start), End) for n, v, _ in evs)
+
+
+def ending(system):
+    """``[(name, edge, modes)]``: the joints whose modes' every event ends the run (the FMU
+    carries them as terminal events: :mod:`mbcomp.export.fmu_user_events`)."""
+    out = []
+    for e in system.topology.edges:
+        modes = e.comp.modes(system.P[e.name]) if e.kind == "joint" else None
+        if modes is not None and _ends(e, modes):
+            out.append((e.name, e, modes))
+    return out
+
+
 def components(system):
     """``(contacts, stops, frictions)``: ``[(name, row, restitution, closed at start)]``,
     ``[(name, iq, iu, lo, hi, restitution)]`` and ``[(name, iq, iu, static, kinetic, start
@@ -155,7 +176,7 @@ def components(system):
     contacts, stops, frictions = [], [], []
     for e in system.topology.edges:
         modes = e.comp.modes(system.P[e.name]) if e.kind == "joint" else None
-        if modes is None:
+        if modes is None or _ends(e, modes):  # a joint that only ends the run: a terminal event
             continue
         if e.comp.tree_edge and modes.has_force:
             frictions.append((e.name, *_friction(system, e, modes)))
@@ -166,26 +187,35 @@ def components(system):
     return contacts, stops, frictions
 
 
-def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
+def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None, user=None):
     """What the FMU of ``system`` carries for its events: ``enabled`` (the model has modes),
     ``components`` (names, contacts first), ``indicators`` (the event indicator variables'
     names), ``times`` (the variables of each component's last event time) and ``c`` (the
     defines, tables and evaluation program ``fmu_events.c`` reads); ``tolerance`` sets the
     resting height (``REST_HEIGHT`` x 1e-2 ``tolerance``: the FMU's atol); ``layout``, the
-    right-hand side's parameter layout, makes restitutions and limits tunable parameters."""
+    right-hand side's parameter layout, makes restitutions and limits tunable parameters;
+    ``user``: the user events' (:func:`mbcomp.export.fmu_user_events.plan`), carried by the
+    same C after the components' (a model without modes then takes this path too)."""
     contacts, stops, frictions = components(system)
-    if not contacts and not stops and not frictions:
+    user = user if user is not None else SimpleNamespace(indicators=[], times=[], c="")
+    if not contacts and not stops and not frictions and not user.indicators:
         return SimpleNamespace(enabled=False, components=[], indicators=[], times=[], c="#define HYBRID 0\n")
     from ..codegen.engine import coordinate_map
 
     mine = {c[0] for c in contacts}
+    if set(system.topology.cut) - mine and user.indicators:
+        loops = ", ".join(sorted(set(system.topology.cut) - mine))
+        raise ValueError(f"cannot export the user events ({', '.join(user.indicators)}) of a model with loops (closed "
+                         f"by {loops}): the FMU's event C steps loop-free models and one-sided contacts only -> "
+                         "run them with mbcomp.simulate(model, events=[...]), or export without events")
     if set(system.topology.cut) - mine:
         _refuse(", ".join(sorted(set(system.topology.cut) - mine)), "a model with loops besides its one-sided contacts")
     rolling = _rolling_rows(system, contacts)
     tr = trace(system, max_nodes, program="eval")
     seg = coordinate_map(system)
     if tr.drives or seg is None:
-        _refuse(", ".join(sorted(mine | {s[0] for s in stops + frictions})), "a model with drives, or coordinates the "
+        _refuse(", ".join(sorted(mine | {s[0] for s in stops + frictions}) or user.indicators), "a model with drives, "
+                "or coordinates the "
                 "FMU cannot move along its speeds (a joint whose increment is neither additive nor a quaternion's)")
     if layout is not None and tr.layout != layout:
         raise CodegenError("the evaluation program's parameters differ from the right-hand side's")
@@ -194,9 +224,10 @@ def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None):
     return SimpleNamespace(enabled=True, components=names,
                            indicators=[f"events.{c[0]}.{_row_name(c[1], system)}" for c in contacts]
                            + [f"events.{s[0]}.{k}" for s in stops for k in ("lo", "hi")]
-                           + [f"events.{f[0]}.{k}" for f in frictions for k in ("forward", "backward")],
-                           times=[f"events.{n}.time" for n in names],
-                           c=_c(system, tr, (contacts, rolling, seg), stops, frictions, tolerance))
+                           + [f"events.{f[0]}.{k}" for f in frictions for k in ("forward", "backward")]
+                           + list(user.indicators),
+                           times=[f"events.{n}.time" for n in names] + list(user.times),
+                           c=user.c + _c(system, tr, (contacts, rolling, seg), stops, frictions, tolerance))
 
 
 def _row_name(row, system):

@@ -8,7 +8,7 @@
  * it: the name, the logger, pointers and work arrays (the hoisted values are recomputed from the
  * parameters: a restore marks them dirty; every Co-Simulation step starts DOP853 afresh).
  *
- * The serialized form (format 1): every number an unsigned 64-bit little-endian word (a double
+ * The serialized form (format 2: 2 added the user events' records): every number an unsigned 64-bit little-endian word (a double
  * by its bits, an int by its value), in this order --
  *   header:  the signature "mbcompFS" (8 bytes), the format, the total size in bytes, the FMU's
  *            instantiation token (64 bytes, NUL-padded), then cs, NQ, NU, NXS, NP, NIN, MM, NI,
@@ -21,7 +21,7 @@
 #include <stdint.h>
 
 #define MB_STATE_MAGIC 0x6d62636fu /* a live state object of this FMU */
-#define MB_STATE_FORMAT 1u
+#define MB_STATE_FORMAT 2u
 #define MB_TOKEN_BYTES 64
 #define MB_NDIMS 10
 #define MB_HEAD_BYTES (8 + 8 + 8 + MB_TOKEN_BYTES + 8 * MB_NDIMS)
@@ -46,6 +46,9 @@ typedef struct {
        times for the rest rule, each component's last event, Co-Simulation's located event */
     int hy_mode[HY_NCOMP + 1], hy_nhits[HY_NCOMP + 1], hy_dir[HY_NZ + 1], hy_fresh;
     double hy_hits[(HY_NCOMP + 1) * (HY_CHATTER + 2)], hy_last[HY_NCOMP + 1], hy_events;
+    /* the user events: firings, Model Exchange's sides (+1), last firings, the run ended */
+    int hy_ue_n[HY_NUE + 1], hy_ue_side[HY_NUE + 1], hy_ended;
+    double hy_ue_last[HY_NUE + 1];
 #endif
 } mb_state;
 
@@ -151,6 +154,10 @@ static void mb_state_walk(mb_io *io, mb_state *s)
     io_f64(io, s->hy_hits, (HY_NCOMP + 1) * (HY_CHATTER + 2));
     io_f64(io, s->hy_last, HY_NCOMP);
     io_f64(io, &s->hy_events, 1);
+    io_int(io, s->hy_ue_n, HY_NUE);
+    io_int(io, s->hy_ue_side, HY_NUE);
+    io_int(io, &s->hy_ended, 1);
+    io_f64(io, s->hy_ue_last, HY_NUE);
 #endif
 }
 
@@ -261,6 +268,12 @@ static void mb_state_take(const Inst *c, mb_state *s)
         for (k = 0; k < HY_NZ; k++) s->hy_dir[k] = c->hy.dir[k] + 1; /* kept >= 0 (serialized unsigned) */
         s->hy_fresh = c->hy.fresh + 1;
         s->hy_events = (double)c->hy.events;
+        for (k = 0; k < HY_NUE; k++) {
+            s->hy_ue_n[k] = c->hy.ue_n[k];
+            s->hy_ue_side[k] = c->hy.ue_side[k] + 1;
+            s->hy_ue_last[k] = c->hy.ue_last[k];
+        }
+        s->hy_ended = c->hy.ended;
     }
 #endif
 }
@@ -333,6 +346,12 @@ static int mb_state_set(Inst *c, const void *handle)
         for (k = 0; k < HY_NZ; k++) c->hy.dir[k] = s->hy_dir[k] - 1;
         c->hy.fresh = s->hy_fresh - 1;
         c->hy.events = (long)s->hy_events;
+        for (k = 0; k < HY_NUE; k++) {
+            c->hy.ue_n[k] = s->hy_ue_n[k];
+            c->hy.ue_side[k] = s->hy_ue_side[k] - 1;
+            c->hy.ue_last[k] = s->hy_ue_last[k];
+        }
+        c->hy.ended = s->hy_ended;
     }
 #endif
     c->dirty = 1; /* the hoisted values: recomputed from the parameters at the next use */
@@ -413,6 +432,9 @@ static int mb_state_check(Inst *c, const mb_state *s)
             ok = ok && s->hy_mode[k] >= 0 && s->hy_mode[k] <= 2 && s->hy_nhits[k] >= 0 &&
                  s->hy_nhits[k] <= HY_CHATTER + 2 && isfinite(s->hy_last[k]);
         for (k = 0; k < HY_NZ; k++) ok = ok && s->hy_dir[k] >= 0 && s->hy_dir[k] <= 2;
+        for (k = 0; k < HY_NUE; k++)
+            ok = ok && s->hy_ue_n[k] >= 0 && s->hy_ue_side[k] >= 0 && s->hy_ue_side[k] <= 3 && isfinite(s->hy_ue_last[k]);
+        ok = ok && s->hy_ended >= 0 && s->hy_ended <= 1;
         for (k = 0; k < (HY_NCOMP + 1) * (HY_CHATTER + 2); k++) ok = ok && !isnan(s->hy_hits[k]);
         if (!ok) {
             say(c, 1, "DeserializeFMUState: a mode or an event record is out of range (a corrupted buffer)");
