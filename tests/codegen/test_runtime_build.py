@@ -140,6 +140,9 @@ def test_a_wheel_carries_the_runtime_under_the_keys_a_run_computes_and_builds_wi
     want = sorted(os.path.basename(o) for p in runtime_build.PARTS
                   for _, _, o in runtime_build.object_paths(c_compiler(), "", p))
     assert got == want
+    from mbcomp.export.fmu import FMU_SOURCES  # an installed mbcomp exports FMUs: their C is package data
+
+    assert {f"mbcomp/export/{f}" for f in FMU_SOURCES + ("fmi2.c", "fmi3.c")} <= set(names)
     false = subprocess.run(["which", "false"], capture_output=True, text=True).stdout.strip()
     names = _wheel(tmp_path / "b", dict(os.environ, CC=false))
     assert "mbcomp/codegen/runtime_build.py" in names and not [n for n in names if "/prebuilt/" in n]

@@ -94,6 +94,10 @@ __all__ = ["export_fmu"]
 
 HERE = pathlib.Path(__file__).resolve().parent
 #: the C runtime's files the FMU carries: Co-Simulation steps with its DOP853
+#: the C files of this package every FMU's sources carry (and the standard's fmi2.c or fmi3.c):
+#: package data, so an installed mbcomp has them (tests/codegen/test_runtime_build.py checks the wheel)
+FMU_SOURCES = ("fmu_core.c", "fmu_events.h", "fmu_events.c", "fmu_user_events.c", "fmu_state.c", "fmu_rules.c",
+               "fmu_derivatives.c")
 RUNTIME_DIR = pathlib.Path(__file__).resolve().parent.parent / "codegen" / "runtime"
 RUNTIME = ("mbrt.h", "mbrt_rk_internal.h", "mbrt_check.h") + RUNTIME_C
 #: Baumgarte gains (1/s) compiled into an FMU of a model with loops (as ``simulate``'s defaults)
@@ -422,8 +426,7 @@ def _build(path, ident, fmi, cc, model_c, xml):
         if fmi == "3.0":
             (root / "sources" / "buildDescription.xml").write_text(build_description(ident))
         (root / "sources" / f"{ident}.c").write_text(model_c)
-        for f in ("fmu_core.c", "fmu_events.h", "fmu_events.c", "fmu_user_events.c", "fmu_state.c", "fmu_rules.c",
-                  "fmu_derivatives.c", f"fmi{fmi[0]}.c"):
+        for f in FMU_SOURCES + (f"fmi{fmi[0]}.c",):
             shutil.copy(HERE / f, root / "sources" / f)
         for f in RUNTIME:
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)
