@@ -11,6 +11,10 @@ Co-Simulation (the FMU's DOP853), FMI 3.0 and 2.0, against ``mbcomp.simulate`` (
 atol 1e-14): event times to 1e-9 s, states on the 0.01 s grid to 1e-8, the loop's closure from
 the FMU's states (closed-form geometry) to 1e-9 throughout.
 """
+import os
+import subprocess
+import zipfile
+
 import numpy as np
 import pytest
 
@@ -176,13 +180,19 @@ def test_a_four_bar_lands_on_its_crank_stop_rests_and_is_released(kind, fmi, mad
     assert np.all(np.abs(r["crank_joint.phi"][landed] - 1.0) < 1e-12)
 
 
+@pytest.fixture(scope="module")
+def started():
+    """mbcomp.simulate's slider-crank started at phi0 = 0.5 rad: ``(event times (s), result)``."""
+    res = mbcomp.simulate(slider_crank(phi0=0.5), params=SLIDER, t_end=2.5, rtol=1e-12, atol=1e-14, dt_out=0.01)
+    return np.unique([e.time for e in res.events]), res
+
+
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
-def test_a_start_on_a_loop_coordinate_is_kept_with_the_loop_closed(kind, made):
+def test_a_start_on_a_loop_coordinate_is_kept_with_the_loop_closed(kind, made, started):
     """The importer sets the crank's start angle to 0.5 rad (the FMU's start is 0.3): the
     slider and the pin move to close the loop (their starts are the model's guesses) and the
     run is the model's with phi0 = 0.5 (mbcomp.simulate): events, states, the loop closed."""
-    res = mbcomp.simulate(slider_crank(phi0=0.5), params=SLIDER, t_end=2.5, rtol=1e-12, atol=1e-14, dt_out=0.01)
-    want = np.unique([e.time for e in res.events])
+    want, res = started
     r = _run(made("slider"), "slider", kind, start_values={"crank_joint.phi": 0.5})
     assert r["crank_joint.phi"][0] == 0.5
     _agrees(r, "slider", want, res)
@@ -224,3 +234,60 @@ def test_what_a_loop_cannot_carry_is_refused_naming_it(tmp_path):
                                          r"loop's rows at the start: not supported by the FMU's events yet"):
         export_fmu(m, tmp_path / "guard.fmu", derivatives=False)
     assert not list(tmp_path.iterdir())
+
+
+#: the rough ball's sanitizer harness (tests/export/test_fmu_rolling_events.py), the start values
+#: of the first two states (argv[2], argv[3]) set before the initialization when given
+START = r"""
+    if (argc > 2) { fmi3ValueReference vr = VR_X; fmi3Float64 v = atof(argv[2]); fmi3SetFloat64(c, &vr, 1, &v, 1); }
+    if (argc > 3) { fmi3ValueReference vr = VR_X + 1; fmi3Float64 v = atof(argv[3]); fmi3SetFloat64(c, &vr, 1, &v, 1); }
+    if (!c || fmi3EnterInitializationMode(c, 1, 1e-12, 0.0, 0, 0.0) || fmi3ExitInitializationMode(c)) {
+        if (c) fmi3FreeInstance(c);
+        return 2;
+    }"""
+
+
+def test_the_loop_events_c_is_clean_under_asan_and_ubsan(made, reference, started, tmp_path):
+    """The slider-crank's FMU C (the loop's rows in force, impacts through the loop, the
+    projection, the start values moved onto the loop) built with AddressSanitizer and UBSan:
+    Co-Simulation to 2.5 s ends where mbcomp.simulate does (1e-8), from the FMU's start and from
+    the crank's start set to 0.5 rad; Model Exchange under an explicit Euler importer acts on its
+    events; starts the loop cannot meet end the initialization with the error naming them; no
+    sanitizer report, no warning."""
+    from test_fmu_rolling_events import HARNESS, SAN_FLAGS
+
+    cc = c_compiler()
+    probe = tmp_path / "probe.c"
+    probe.write_text("int main(void) { return 0; }\n")
+    if subprocess.run([cc, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True).returncode:
+        pytest.skip("this compiler cannot build a sanitized program")
+    init = "    if (!c || fmi3EnterInitializationMode(c, 1, 1e-12, 0.0, 0, 0.0) || fmi3ExitInitializationMode(c)) return 2;"
+    assert init in HARNESS
+    src = tmp_path / "src"
+    with zipfile.ZipFile(made("slider")) as z:
+        z.extractall(src)
+    sources = src / "sources"
+    model_c = [p for p in sources.glob("*.c") if not p.name.startswith(("fmu_", "fmi", "mbrt_"))]
+    assert len(model_c) == 1
+    (sources / "harness.c").write_text(HARNESS.replace(init, START).replace("MODEL_C", model_c[0].name))
+    exe = tmp_path / "harness"
+    built = subprocess.run([cc, *SAN_FLAGS, "-std=c99", "-Wall", "-Wextra", str(sources / "harness.c"),
+                            *map(str, sources.glob("mbrt_*.c")), "-o", str(exe), "-lm"],
+                           capture_output=True, text=True, cwd=sources)
+    assert built.returncode == 0, built.stderr[-3000:]
+    assert "fmu_events" not in built.stderr and "fmu_core" not in built.stderr, built.stderr[-3000:]  # no warning
+    states = CASES["slider"][5]
+    for args, want in (((), reference("slider")[2]), (("0.5",), started[1]), (("0.5", "0.3"), None)):
+        run = subprocess.run([str(exe), "2.5", *args], capture_output=True, text=True, timeout=300,
+                             env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
+        assert "runtime error" not in run.stderr and "Sanitizer" not in run.stderr, run.stderr[-3000:]
+        if want is None:  # the crank at 0.5 rad and the slider at 0.3 m: out of the loop's reach
+            assert run.returncode == 2 and "the start values set (crank_joint.phi = 0.5, slider_joint.s = 0.3)" \
+                in run.stderr, run.stderr[-3000:]
+            continue
+        assert run.returncode == 0, run.stderr[-3000:]
+        cs, me = (line.split() for line in run.stdout.strip().splitlines())
+        assert cs[:2] == ["cs", "0"] and float(cs[2]) == pytest.approx(2.5, abs=1e-9)
+        y = dict(zip(states, map(float, cs[3:])))
+        assert all(abs(y[v] - want[v][-1]) < 1e-8 for v in states), (y, [want[v][-1] for v in states])
+        assert me[:2] == ["me", "0"] and int(me[3]) >= 3 and me[4] == "0"
