@@ -55,7 +55,8 @@ def four_bar_gap(r):
                     L2 * np.sin(a1) + L3 * np.sin(a2) - L4 * np.sin(a3))
 
 
-#: name: (model exported, parameters, end time (s), joint with the stop, loop residual, importer's starts, reference model)
+#: name: (model exported, parameters, end time (s), joint with the stop, loop residual, importer's starts,
+#: reference model)
 CASES = {
     "slider-crank": (slider_crank, SLIDER, 2.5, "slider_joint", slider_gap, None, slider_crank),
     "four-bar": (four_bar, CRANK, 3.0, "crank_joint", four_bar_gap, None, four_bar),
@@ -72,6 +73,7 @@ def main():
     import fmpy
 
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="fmu_loops_"))
+    kind_name = {"ModelExchange": "ME", "CoSimulation": "CS"}
     print(f"{'model':14s} {'fmi':4s} {'kind':3s} {'instants mbcomp':>15s} {'FMU':>4s} {'max |dt| (s)':>13s} "
           f"{'max |dy|':>9s} {'loop (m)':>9s}")
     for name, (build, params, t_end, joint, gap, starts, ref) in CASES.items():
@@ -89,8 +91,9 @@ def main():
                 got = np.unique(t[t >= 0.0])
                 err = np.max(np.min(np.abs(got[:, None] - want[None, :]), axis=1)) if len(got) else np.nan
                 dy = max(np.max(np.abs(on_grid(r, res, v) - res[v])) for v in info["states"])
-                print(f"{name:14s} {fmi:4s} {"ME" if me else "CS":3s} {len(want):15d} {len(got):4d} {err:13.2e} {dy:9.2e} "
-                      f"{np.max(np.abs(gap(r))):9.2e}")
+                loop = np.max(np.abs(gap(r)))
+                print(f"{name:14s} {fmi:4s} {kind_name[kind]:3s} {len(want):15d} {len(got):4d} {err:13.2e} {dy:9.2e} "
+                      f"{loop:9.2e}")
     return 0
 
 

@@ -73,7 +73,8 @@ def _four_bar_gap(r):
 #: (model, parameters, end time (s), Co-Simulation output interval (s), joint with the stop, states, loop gap)
 CASES = {
     "slider": (slider_crank, SLIDER, 2.5, 1e-3, "slider_joint",
-               ["crank_joint.phi", "slider_joint.s", "pin.phi", "crank_joint.w", "slider_joint.v", "pin.w"], _slider_gap),
+               ["crank_joint.phi", "slider_joint.s", "pin.phi", "crank_joint.w", "slider_joint.v", "pin.w"],
+               _slider_gap),
     "fourbar": (four_bar, CRANK, 3.0, 1e-3, "crank_joint",
                 ["crank_joint.phi", "coupler_joint.phi", "pin.phi", "crank_joint.w", "coupler_joint.w", "pin.w"],
                 _four_bar_gap),
@@ -289,7 +290,8 @@ def test_the_loop_events_c_is_clean_under_asan_and_ubsan(made, reference, starte
     probe.write_text("int main(void) { return 0; }\n")
     if subprocess.run([cc, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True).returncode:
         pytest.skip("this compiler cannot build a sanitized program")
-    init = "    if (!c || fmi3EnterInitializationMode(c, 1, 1e-12, 0.0, 0, 0.0) || fmi3ExitInitializationMode(c)) return 2;"
+    init = ("    if (!c || fmi3EnterInitializationMode(c, 1, 1e-12, 0.0, 0, 0.0) || fmi3ExitInitializationMode(c)) "
+            "return 2;")
     assert init in HARNESS
     src = tmp_path / "src"
     with zipfile.ZipFile(made("slider")) as z:
@@ -306,8 +308,8 @@ def test_the_loop_events_c_is_clean_under_asan_and_ubsan(made, reference, starte
     assert "fmu_events" not in built.stderr and "fmu_core" not in built.stderr, built.stderr[-3000:]  # no warning
     states = CASES["slider"][5]
     for args, want in (((), reference("slider")[2]), (("0.5",), started[1]), (("0.5", "0.3"), None)):
-        run = subprocess.run([str(exe), "2.5", *args], capture_output=True, text=True, timeout=300,
-                             env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
+        env = {**os.environ, "ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"}
+        run = subprocess.run([str(exe), "2.5", *args], capture_output=True, text=True, timeout=300, env=env)
         assert "runtime error" not in run.stderr and "Sanitizer" not in run.stderr, run.stderr[-3000:]
         if want is None:  # the crank at 0.5 rad and the slider at 0.3 m: out of the loop's reach
             assert run.returncode == 2 and "the start values set (crank_joint.phi = 0.5, slider_joint.s = 0.3)" \

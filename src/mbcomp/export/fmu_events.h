@@ -21,7 +21,8 @@
 #define HY_NCOMP (HY_NC + HY_NS + HY_NF) /* components with modes: contacts, stops, frictions */
 #define HY_NZ (HY_NC + 2 * HY_NS + 2 * HY_NF) /* event indicators: a contact's, a stop's two, a friction's two */
 #define HY_NR (HY_NPR + HY_NPN + HY_NCR + HY_NS + HY_NF + 1) /* rows in force at most: the permanent
-                                      rows, every component's rows (a contact's normal and rolling rows), and one spare */
+                                      rows, every component's rows (a contact's normal and rolling
+                                      rows), and one spare */
 #define HY_NK (NU + HY_NR)
 #define HY_MAX_EVENTS 100000       /* events acted on in one DoStep or event iteration at most */
 

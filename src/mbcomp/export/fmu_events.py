@@ -216,9 +216,10 @@ def components(system):
         if modes is None:
             continue
         if e.comp.tree_edge and e.name in system.topology.cut:
-            raise ValueError(f"cannot export {e.name}: the modes of {type(e.comp).__name__} ({type(modes).__name__}) act "
-                             f"on the joint's own coordinate, but {e.name} is the cut joint closing a loop (no coordinate "
-                             "of its own; mbcomp.simulate refuses it too) -> put them on another joint of the loop")
+            raise ValueError(f"cannot export {e.name}: the modes of {type(e.comp).__name__} ({type(modes).__name__}) "
+                             f"act on the joint's own coordinate, but {e.name} is the cut joint closing a loop (no "
+                             "coordinate of its own; mbcomp.simulate refuses it too) -> put them on another joint "
+                             "of the loop")
         if e.comp.tree_edge and modes.has_force:
             frictions.append((e.name, *_friction(system, e, modes)))
         elif e.comp.tree_edge:
