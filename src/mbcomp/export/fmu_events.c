@@ -341,14 +341,13 @@ static int hy_start_fails(Inst *c, double norm)
 static int mbev_start(Inst *c)
 {
     int it, i, l;
-    double norm = 0.0, last = HUGE_VAL, t = c->t, *y = c->y, *x = c->hy.rhs;
+    double norm = 0.0, speed = 0.0, t = c->t, *y = c->y, *x = c->hy.rhs;
     if (mbrt_increment(NQ, NU, HY_NSEG, HY_SEG, y, NULL, 1.0) != MBRT_MECH_OK) return hy_start_fails(c, NAN);
-    for (it = 0; it <= 60; it++) {
+    for (it = 0; it <= 60; it++) { /* to mbcomp's initialization's tolerance: starts that meet it stay */
         if (hy_eval(c, t, y)) return -1;
         hy_rows(c, y, -1, 0, 1);
         for (norm = 0.0, i = 0; i < c->hy.nr; i++) norm = fmax(norm, fabs(c->hy.phi[i]));
-        if (!c->hy.nr || norm <= 1e-15 || it == 60 || (norm <= 1e-10 && !(norm < 0.5 * last))) break;
-        last = norm;
+        if (!c->hy.nr || norm <= 1e-12 || it == 60) break;
         hy_free_columns(c, c->pfree);
         if (hy_gram_solve(c, t, c->hy.phi, x)) return hy_start_fails(c, norm);
         for (l = 0; l < NU; l++)
@@ -357,6 +356,8 @@ static int mbev_start(Inst *c)
     }
     if (!(norm <= 1e-10)) return hy_start_fails(c, norm);
     hy_rows(c, y, -1, 0, 0); /* every row in force, at the last evaluation (y's positions) */
+    for (i = 0; i < c->hy.nr; i++) speed = fmax(speed, fabs(c->hy.phid[i]));
+    if (!(speed > 1e-10)) c->hy.nr = 0; /* the speeds meet the rows already (1e-10): they stay */
     hy_free_columns(c, c->vfree);
     if (c->hy.nr && hy_gram_solve(c, t, c->hy.phid, x)) return hy_start_fails(c, norm);
     for (l = 0; l < NU; l++)
