@@ -581,6 +581,9 @@ static int mb_start_states(Inst *c)
             }
         }
 #endif
+#if HYBRID
+        if (mbev_start(c)) return -1; /* onto the rows in force in the start modes (fmu_events.c) */
+#endif
         c->starts_changed = 0;
     }
 #if SELECT

@@ -2,7 +2,9 @@
  * its event indicators and the actions at its events (included at the end of fmu_core.c;
  * declarations in fmu_events.h; Python: mbcomp/export/fmu_events.py).
  *
- * The rows in force are the closed contacts' rows (from the evaluation program: the normal
+ * The rows in force are the permanent rows (a loop's closure: its independent holonomic rows,
+ * and the velocity rows of joints that are no contacts with modes; hy_add_permanent), then the
+ * closed contacts' rows (from the evaluation program: the normal
  * row, then the contact's rolling rows B u = b, velocity rows with Phi 0 and rate Psi) and the
  * engaged stops' rows sign (q[iq] - at); the accelerations are the Lagrange index-1 solve
  * [M C^T; C 0] [du/dt; lam] = [f; -c_b - 2 alpha dPhi/dt - beta^2 Phi], a row's push -lam;
@@ -124,13 +126,42 @@ static void hy_add_row(Inst *c, const double *y, int k, int m, int hol)
     c->hy.nr = r + 1;
 }
 
+/* the rows always in force, appended (first): the loop closures' independent holonomic rows
+   (HY_P_ROWS: C, Phi, dPhi/dt, c_b from the evaluation), then unless hol the velocity rows of
+   the joints that are no contacts with modes (HY_P_NH: B u = b, Phi 0, the rate Psi, the bias B_b) */
+static void hy_add_permanent(Inst *c, int hol)
+{
+    int i, j, r, row;
+    for (i = 0; i < HY_NPR; i++) {
+        r = c->hy.nr++;
+        row = HY_P_ROWS[i];
+        for (j = 0; j < NU; j++) c->hy.C[r * NU + j] = c->hy.ev[HY_OFF_C + row * NU + j];
+        c->hy.phi[r] = c->hy.ev[HY_OFF_PHI + row];
+        c->hy.phid[r] = c->hy.ev[HY_OFF_PHID + row];
+        c->hy.bias[r] = c->hy.ev[HY_OFF_CB + row];
+    }
+#if HY_MN
+    for (i = 0; i < HY_NPN && !hol; i++) {
+        r = c->hy.nr++;
+        row = HY_P_NH[i];
+        for (j = 0; j < NU; j++) c->hy.C[r * NU + j] = c->hy.ev[HY_OFF_B + row * NU + j];
+        c->hy.phi[r] = 0.0;
+        c->hy.phid[r] = c->hy.ev[HY_OFF_PSI + row];
+        c->hy.bias[r] = c->hy.ev[HY_OFF_BB + row];
+    }
+#else
+    (void)hol;
+#endif
+}
+
 /* the rows in force at y (after hy_eval; hol: the holonomic rows only); extra >= 0: component
-   extra's rows in mode m_extra last. At most HY_NCR + HY_NS + HY_NF rows (extra is not counted
-   twice): within HY_NR. */
+   extra's rows in mode m_extra last; the permanent rows first. At most HY_NPR + HY_NPN + HY_NCR +
+   HY_NS + HY_NF rows (extra is not counted twice): within HY_NR. */
 static void hy_rows(Inst *c, const double *y, int extra, int m_extra, int hol)
 {
     int k;
     c->hy.nr = 0;
+    hy_add_permanent(c, hol);
     for (k = 0; k < HY_NCOMP; k++) {
         c->hy.row_of[k] = -1;
         if (k != extra && (k >= HY_F0 ? c->hy.mode[k] == 0 : c->hy.mode[k] != 0))
@@ -293,6 +324,69 @@ static int hy_project(Inst *c, double t, double *y, int extra, int m, int speeds
 
 static int hy_consistent(Inst *c, double t, double *y) { return hy_project(c, t, y, -1, 0, 1); }
 
+/* the columns of the rows of the last hy_rows that `free` (NU flags) does not let move, zeroed */
+static void hy_free_columns(Inst *c, const unsigned char *free)
+{
+    int i, j;
+    for (i = 0; i < c->hy.nr; i++)
+        for (j = 0; j < NU; j++)
+            if (!free[j]) c->hy.C[i * NU + j] = 0.0;
+}
+
+/* the start values the importer set and the model's fixed ones could not all hold: logged, -1 */
+static int hy_start_fails(Inst *c, double norm)
+{
+    char names[256];
+    size_t used = 0;
+    int i, w;
+    names[0] = '\0';
+    for (i = 0; i < NX && used + 2 < sizeof names; i++) {
+        if (!c->set[i]) continue;
+        w = snprintf(names + used, sizeof names - used, "%s%s = %g", used ? ", " : "", YNAME[i], c->y0[i]);
+        if (w < 0) break;
+        used += (size_t)w < sizeof names - used ? (size_t)w : sizeof names - used - 1;
+    }
+    say(c, 1, "the start values set (%s) and the model's fixed ones cannot all hold: the rows in force at the "
+        "start (the loops' closures, the closed contacts) cannot be met with them (|Phi| = %g) -> set fewer of "
+        "them, or values the mechanism can reach", used ? names : "none", norm);
+    return -1;
+}
+
+/* the importer's start values (c->y from c->y0) moved onto the rows in force in the start
+   modes -- the loops' closures, the closed contacts' rows -- the starts it set and the model's
+   fixed ones kept (the directions c->pfree, c->vfree do not move: mbcomp's consistent
+   initialization, as mbrt_project_free for a model without modes): the positions by Gauss-Newton
+   with minimum-norm steps in the free directions (through the coordinate map), then the speeds
+   by the least correction of the free ones: 0, or -1 after logging the starts set */
+static int mbev_start(Inst *c)
+{
+    int it, i, l;
+    double norm = 0.0, speed = 0.0, t = c->t, *y = c->y, *x = c->hy.rhs;
+    if (mbrt_increment(NQ, NU, HY_NSEG, HY_SEG, y, NULL, 1.0) != MBRT_MECH_OK) return hy_start_fails(c, NAN);
+    for (it = 0; it <= 60; it++) { /* to mbcomp's initialization's tolerance: starts that meet it stay */
+        if (hy_eval(c, t, y)) return -1;
+        hy_rows(c, y, -1, 0, 1);
+        for (norm = 0.0, i = 0; i < c->hy.nr; i++) norm = fmax(norm, fabs(c->hy.phi[i]));
+        if (!c->hy.nr || norm <= 1e-12 || it == 60) break;
+        hy_free_columns(c, c->pfree);
+        if (hy_gram_solve(c, t, c->hy.phi, x)) return hy_start_fails(c, norm);
+        for (l = 0; l < NU; l++)
+            for (c->hy.du[l] = 0.0, i = 0; i < c->hy.nr; i++) c->hy.du[l] += c->hy.C[i * NU + l] * x[i];
+        if (mbrt_increment(NQ, NU, HY_NSEG, HY_SEG, y, c->hy.du, -1.0) != MBRT_MECH_OK) return hy_start_fails(c, norm);
+    }
+    if (!(norm <= 1e-10)) return hy_start_fails(c, norm);
+    hy_rows(c, y, -1, 0, 0); /* every row in force, at the last evaluation (y's positions) */
+    for (i = 0; i < c->hy.nr; i++) speed = fmax(speed, fabs(c->hy.phid[i]));
+    if (!(speed > 1e-10)) c->hy.nr = 0; /* the speeds meet the rows already (1e-10): they stay */
+    hy_free_columns(c, c->vfree);
+    if (c->hy.nr && hy_gram_solve(c, t, c->hy.phid, x)) return hy_start_fails(c, norm);
+    for (l = 0; l < NU; l++)
+        for (i = 0; i < c->hy.nr; i++) y[NQ + l] -= c->hy.C[i * NU + l] * x[i];
+    for (l = 0; l < NX; l++)
+        if (!isfinite(y[l])) return hy_start_fails(c, norm);
+    return 0;
+}
+
 /* the impact of component k closing its row (stops: limit lim) at (t, y): y's speeds become
    u+; *before, *after: the row's speed before and after (m/s or rad/s). A contact's impact row
    is its normal row, its rolling rows held through it (perfectly rough), as the other rows in
@@ -451,6 +545,9 @@ static int hy_do_impact(Inst *c, int k, int lim, int *acted)
 {
     double before = 0.0, after = 0.0, t = c->t;
     int rests = 0, m = k < HY_NC ? 1 : lim, modes[HY_NCOMP + 1];
+    if (c->hy.last[k] == t) return 0; /* it acted at this instant (released with its push through zero: it
+                                         leaves, its speed onto the row zero to rounding -- the projection
+                                         onto a loop's rows leaves 1e-16 -- as a fresh event function in mbcomp) */
     memcpy(modes, c->hy.mode, sizeof(int) * HY_NCOMP);
     memcpy(c->hy.ys, c->y, sizeof(double) * NX);
     if (hy_impact(c, t, c->hy.ys, k, m, &before, &after)) return -1;

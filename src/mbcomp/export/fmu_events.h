@@ -11,7 +11,9 @@
  * mbhy_eval_params, with HY_QRATE 1 the coordinate rates mbhy_qrate (dq/dt; else q' = u), the
  * coordinate map HY_NSEG, HY_SEG (mbrt_mech's segments: how q moves along the speeds), HY_REST
  * (m or rad: a rebound rising less rests), HY_CHATTER, the Baumgarte gains HY_ALPHA, HY_BETA
- * and HY_VR, the first event variable's value reference. */
+ * and HY_VR, the first event variable's value reference; the rows always in force (loop
+ * closures and joints' velocity rows): HY_NPR holonomic rows HY_P_ROWS (indices into Phi, the
+ * independent ones) and HY_NPN nonholonomic rows HY_P_NH (indices into B). */
 #ifndef HYBRID
 #define HYBRID 0
 #endif
@@ -28,8 +30,9 @@
 #define HY_NCOMP (HY_NC + HY_NS + HY_NF) /* components with modes: contacts, stops, frictions */
 #define HY_NZC (HY_NC + 2 * HY_NS + 2 * HY_NF) /* the components' indicators: a contact's, a stop's two, a friction's two */
 #define HY_NZ (HY_NZC + HY_NUE) /* event indicators: the components', then the user events' */
-#define HY_NR (HY_NCR + HY_NS + HY_NF + 1) /* rows in force at most: every component's rows (a
-                                      contact's normal and rolling rows), and one spare */
+#define HY_NR (HY_NPR + HY_NPN + HY_NCR + HY_NS + HY_NF + 1) /* rows in force at most: the permanent
+                                      rows, every component's rows (a contact's normal and rolling
+                                      rows), and one spare */
 #define HY_NK (NU + HY_NR)
 #define HY_MAX_EVENTS 100000       /* events acted on in one DoStep or event iteration at most */
 
@@ -70,6 +73,7 @@ static void hy_user(struct Inst *c, int k, int force);
 static int hy_user_sides(struct Inst *c);
 static int hy_user_across(struct Inst *c, int k, double tol, double t_end);
 #endif
+static int mbev_start(struct Inst *c);
 #define MB_NZ HY_NZ
 #else
 #define MB_NZ 0

@@ -17,6 +17,15 @@ closing row that would pull at once stays open; a contact let go whose gap would
 its surface (the frictionless bicycle's wheel: perfectly rough rolling rows, Painleve-like) is
 an error naming it.
 
+A model with kinematic loops (a slider-crank whose slider hits an end stop, a four-bar with a
+stop on a hinge) carries its loops' closures as rows always in force, before the modes' rows:
+the independent ones of its cut joints' (and flange constraints') holonomic rows, as the
+consistent initialization chose them (``system.row_mask``: a planar loop of 3-D joints has
+dependent rows), and the velocity rows of nonholonomic joints that are no contacts with modes
+(:func:`_permanent_rows`); accelerations, impacts and the projection after an event hold them,
+and an importer's start values are moved onto them (the starts it set and the model's fixed
+ones kept, the guesses moved; start values the rows cannot meet are an error naming them).
+
 Event indicators, one per contact and two per stop or friction, are continuous: an open
 contact's gap (m) or a closed one's normal force (N), a free stop's distance to each limit
 (rad or m) or an engaged limit's push (N m or N), a stuck friction's margins to its break-away
@@ -26,8 +35,9 @@ Exchange acts in ``fmi3UpdateDiscreteStates``/``fmi2NewDiscreteStates`` and repo
 dense output (the runtime's ``mbrt_dop853_events``) inside ``DoStep`` and acts the same way.
 
 What is supported is read from the modes' declarations (:func:`components`); anything else
-(contacts with friction, a model with loops or rolling rows besides its contacts, drives,
-coordinates that move neither additively nor as quaternions) is refused naming the component.
+(contacts with friction, modes on a loop's cut joint, a contact, stop or friction whose row
+depends on a loop's rows, drives, coordinates that move neither additively nor as quaternions)
+is refused naming the component.
 
 Examples
 --------
@@ -104,10 +114,58 @@ def _rolling_rows(system, contacts):
     for e, rows, _ in ev.local_nh:
         first[e.name] = (at, len(rows))
         at += len(rows)
-    others = sorted(set(first) - {c[0] for c in contacts})
-    if others:
-        _refuse(", ".join(others), "a model with rolling rows besides its one-sided contacts'")
     return [first.get(c[0], (0, 0)) for c in contacts]
+
+
+def _permanent_rows(system, contacts, axes, init=None):
+    """``(holonomic, nonholonomic)``: the rows always in force, as indices into the evaluation's
+    ``Phi`` and ``B`` -- the loop closures (every holonomic row that is no one-sided contact's:
+    cut joints, flange constraints, contacts without modes), only those the consistent
+    initialization keeps as independent (``system.row_mask`` after :func:`initial_state`: a planar
+    loop of 3-D joints has dependent rows, which would make the saddle matrix singular), and the
+    velocity rows of the nonholonomic joints that are no contacts with modes. A ``ValueError``
+    names a contact closed at the start whose row the initialization found dependent on them, and
+    a contact, stop or friction (``axes``: ``(name, iq, iu, ...)``) whose row depends on them at
+    the start (the loop already holds what it would hold); ``init``: the consistent start (made
+    when not given)."""
+    names = list(system.constraint_names(all_rows=True))
+    mine = {c[0] for c in contacts}
+    hol = [i for i, n in enumerate(names) if n.rsplit(".", 1)[0] not in mine]
+    nh, at = [], 0
+    if system.nonholonomic:
+        for e, rows, _ in system.evaluate(0.0, system.default_q(), np.zeros(system.nu)).local_nh:
+            nh += [] if e.name in mine else list(range(at, at + len(rows)))
+            at += len(rows)
+    if not hol and not nh:
+        return [], []
+    from ..assembly.manifold import rank
+    from ..hybrid.contacts import initialize_in_modes
+
+    init = initialize_in_modes(system, 0.0) if init is None else init
+    mask = np.ones(len(names), bool) if init.row_mask is None else np.asarray(init.row_mask, bool)
+    for name, row, _, closed in contacts:
+        if closed and not mask[row]:
+            _refuse(name, f"a contact closed at the start whose row {names[row]!r} depends on the model's other rows "
+                          "(a loop's closure already holds it)")
+    hol = [i for i in hol if mask[i]]
+    ev = system.evaluate(0.0, init.q, init.u, masked=False)
+    held = np.vstack((ev.C[hol], ev.B[nh]))
+    r0 = rank(held)
+    for name, row, _, _ in contacts:
+        if rank(np.vstack((held, ev.C[row]))) <= r0:
+            _refuse(name, f"a contact whose row {names[row]!r} depends on the loop's rows at the start")
+    for name, _, iu, *_ in axes:
+        if rank(np.vstack((held, np.eye(system.nu)[iu]))) <= r0:
+            _refuse(name, "a stop or friction on a joint whose motion the loop's rows lock at the start")
+    return hol, nh
+
+
+def _c_permanent(hol, nh):
+    """The C tables of the rows always in force (``fmu_events.c``'s ``hy_add_permanent``)."""
+    def ints(name, vals):
+        return f"static const int {name}[] = {{{', '.join(str(int(v)) for v in vals) or '0'}}};\n"
+
+    return f"#define HY_NPR {len(hol)}\n#define HY_NPN {len(nh)}\n" + ints("HY_P_ROWS", hol) + ints("HY_P_NH", nh)
 
 
 def _stop(system, e, modes):
@@ -153,6 +211,8 @@ def _ends(e, modes):
     rows, force or slip of its own, its events numbers of its own coordinates and speeds."""
     if modes.has_force or modes.slips or modes.rows(modes.start) or not modes.holds_rows(modes.start):
         return False
+    if e.comp.tree_edge and e.q.stop == e.q.start:  # a joint cut to close a loop: no coordinates to watch
+        return False
     evs = modes.events(np.zeros(e.q.stop - e.q.start), np.zeros(e.u.stop - e.u.start), modes.start)
     return bool(evs) and all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool)
                              and isinstance(modes.action(n, modes.start), End) for n, v, _ in evs)
@@ -178,6 +238,11 @@ def components(system):
         modes = e.comp.modes(system.P[e.name]) if e.kind == "joint" else None
         if modes is None or _ends(e, modes):  # a joint that only ends the run: a terminal event
             continue
+        if e.comp.tree_edge and e.name in system.topology.cut:
+            raise ValueError(f"cannot export {e.name}: the modes of {type(e.comp).__name__} ({type(modes).__name__}) "
+                             f"act on the joint's own coordinate, but {e.name} is the cut joint closing a loop (no "
+                             "coordinate of its own; mbcomp.simulate refuses it too) -> put them on another joint "
+                             "of the loop")
         if e.comp.tree_edge and modes.has_force:
             frictions.append((e.name, *_friction(system, e, modes)))
         elif e.comp.tree_edge:
@@ -203,13 +268,7 @@ def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None, user=None):
     from ..codegen.engine import coordinate_map
 
     mine = {c[0] for c in contacts}
-    if set(system.topology.cut) - mine and user.indicators:
-        loops = ", ".join(sorted(set(system.topology.cut) - mine))
-        raise ValueError(f"cannot export the user events ({', '.join(user.indicators)}) of a model with loops (closed "
-                         f"by {loops}): the FMU's event C steps loop-free models and one-sided contacts only -> "
-                         "run them with mbcomp.simulate(model, events=[...]), or export without events")
-    if set(system.topology.cut) - mine:
-        _refuse(", ".join(sorted(set(system.topology.cut) - mine)), "a model with loops besides its one-sided contacts")
+    permanent = _permanent_rows(system, contacts, stops + frictions)
     rolling = _rolling_rows(system, contacts)
     tr = trace(system, max_nodes, program="eval")
     seg = coordinate_map(system)
@@ -227,7 +286,8 @@ def plan(system, tolerance=1e-12, max_nodes=3_000_000, layout=None, user=None):
                            + [f"events.{f[0]}.{k}" for f in frictions for k in ("forward", "backward")]
                            + list(user.indicators),
                            times=[f"events.{n}.time" for n in names] + list(user.times),
-                           c=user.c + _c(system, tr, (contacts, rolling, seg), stops, frictions, tolerance))
+                           c=user.c + _c(system, tr, (contacts, rolling, seg), stops, frictions, tolerance)
+                           + _c_permanent(*permanent))
 
 
 def _row_name(row, system):
@@ -293,10 +353,15 @@ def _c(system, tr, contacts, stops, frictions, tolerance):
 
 def initial_state(system):
     """The consistent start of a model with modes: contacts that start open initialized
-    without their rows (:func:`mbcomp.hybrid.contacts.initialize_in_modes`)."""
+    without their rows (:func:`mbcomp.hybrid.contacts.initialize_in_modes`); a ``ValueError``
+    naming a contact, stop or friction whose row depends on a loop's rows (before a program
+    holding them all is traced: it would be singular)."""
     from ..hybrid.contacts import initialize_in_modes
 
-    return initialize_in_modes(system, 0.0)
+    init = initialize_in_modes(system, 0.0)
+    contacts, stops, frictions = components(system)
+    _permanent_rows(system, contacts, stops + frictions, init)
+    return init
 
 
 #: result columns whose values depend on the active set (accelerations, forces, multipliers,
