@@ -30,11 +30,16 @@ import fmusim_tool  # noqa: E402
 MODELS = [("n_link_pendulum", 5.0, "joint3.phi"), ("slider_crank", 10.0, "crank_joint.phi"),
           ("four_bar", 1.0, "crank_joint.phi"), ("andrews", 0.03, "hinge_A_AG.phi"),
           ("rolling_disk", 2.0, "x.s"), ("bicycle", 2.0, "free.r.x"), ("bouncing_ball", 2.0, "free.r.z"),
-          ("door", 2.0, None)]
+          ("door", 2.0, None), ("falling_bicycle", 1.0, "free.r.z")]
+#: rows that build a model file with arguments: (file, build() arguments)
+VARIANTS = {"falling_bicycle": ("bicycle", dict(v=5.0, unilateral=True, h0=0.05, pitch0=0.05))}
 
 
 def load(name):
-    return mbcomp.load_model_file(os.path.join(ROOT, "models", f"{name}.py"))
+    """The model of a row: an object whose ``build()`` makes it."""
+    file, kwargs = VARIANTS.get(name, (name, {}))
+    mod = mbcomp.load_model_file(os.path.join(ROOT, "models", f"{file}.py"))
+    return type("Row", (), {"build": staticmethod(lambda: mod.build(**kwargs))})
 
 
 def deviation(r_time, r_var, ref, var):
