@@ -81,7 +81,7 @@ from ..assembly.system import assemble
 from ..codegen.graph import CodegenError
 from ..codegen.outputs import QUAT_C
 from ..codegen.printers import Program
-from ..codegen.toolchain import HEADER, c_compiler, chunk
+from ..codegen.toolchain import HEADER, c_compiler, chunk, compile_objects, runtime_directory
 from ..codegen.tracer import param_vector, trace
 from ..errors import ModelError, Problem
 from ..modeling.model import Model
@@ -416,6 +416,22 @@ def _nominals(system, layout, pv, y0):
     return np.maximum(np.abs(y0), [scale.get(u, 1.0) for u in units])
 
 
+#: the flags of an FMU's binary, its model file's and its runtime's objects alike (hidden
+#: visibility: two FMUs in one process do not share the runtime's symbols)
+FMU_FLAGS = ("-O2", "-fno-math-errno", "-fPIC", "-fvisibility=hidden")
+
+
+def _runtime_objects(cc):
+    """The object files of the runtime's C (``RUNTIME_C``) an FMU's binary links, compiled once
+    per machine (the runtime's directory, keyed by the source, its headers' text, the flags and
+    the compiler) instead of once per export: 0.7 s of gcc each time."""
+    headers = "".join((RUNTIME_DIR / f).read_text() for f in RUNTIME if f.endswith(".h"))
+    stamp = f"/* headers {hashlib.sha256(headers.encode()).hexdigest()} */\n"
+    units = [(f"fmu_{f[:-2]}", stamp + (RUNTIME_DIR / f).read_text(), FMU_FLAGS + (f"-I{RUNTIME_DIR}",))
+             for f in RUNTIME if f.endswith(".c")]
+    return compile_objects(cc, units, runtime_directory())[0]
+
+
 def _build(path, ident, fmi, cc, model_c, xml):
     """Lay out the FMU's files in a temporary folder, compile its binary, zip it to ``path``."""
     with tempfile.TemporaryDirectory(prefix="mbcomp-fmu-") as tmp:
@@ -432,9 +448,8 @@ def _build(path, ident, fmi, cc, model_c, xml):
             shutil.copy(RUNTIME_DIR / f, root / "sources" / f)
         (root / "modelDescription.xml").write_text(xml)
         lib = root / "binaries" / platform / f"{ident}.so"
-        cmd = [cc, "-O2", "-fno-math-errno", "-fPIC", "-shared", "-static-libgcc", "-fvisibility=hidden",
-               str(root / "sources" / f"{ident}.c"), *(str(root / "sources" / f) for f in RUNTIME if f.endswith(".c")),
-               "-o", str(lib), "-lm"]
+        cmd = [cc, *FMU_FLAGS, "-shared", "-static-libgcc", str(root / "sources" / f"{ident}.c"),
+               *_runtime_objects(cc), "-o", str(lib), "-lm"]
         res = subprocess.run(cmd, capture_output=True, text=True, cwd=root / "sources")
         if res.returncode != 0:
             raise CodegenError(f"building the FMU's binary failed ({' '.join(cmd[:3])} ...):\n{res.stderr[-2000:]}")
