@@ -11,9 +11,6 @@ Co-Simulation (the FMU's DOP853), FMI 3.0 and 2.0, against ``mbcomp.simulate`` (
 atol 1e-14): event times to 1e-9 s, states on the 0.01 s grid to 1e-8, the loop's closure from
 the FMU's states (closed-form geometry) to 1e-9 throughout.
 """
-import os
-import subprocess
-import zipfile
 
 import numpy as np
 import pytest
@@ -22,6 +19,8 @@ import mbcomp
 from mbcomp.codegen import c_compiler
 
 from conftest import load_model, load_module
+
+import sanitized
 
 fmpy = pytest.importorskip("fmpy")
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
@@ -283,34 +282,15 @@ def test_the_loop_events_c_is_clean_under_asan_and_ubsan(made, reference, starte
     the crank's start set to 0.5 rad; Model Exchange under an explicit Euler importer acts on its
     events; starts the loop cannot meet end the initialization with the error naming them; no
     sanitizer report, no warning."""
-    from test_fmu_rolling_events import HARNESS, SAN_FLAGS
+    from test_fmu_rolling_events import HARNESS
 
-    cc = c_compiler()
-    probe = tmp_path / "probe.c"
-    probe.write_text("int main(void) { return 0; }\n")
-    if subprocess.run([cc, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True).returncode:
-        pytest.skip("this compiler cannot build a sanitized program")
     init = ("    if (!c || fmi3EnterInitializationMode(c, 1, 1e-12, 0.0, 0, 0.0) || fmi3ExitInitializationMode(c)) "
             "return 2;")
     assert init in HARNESS
-    src = tmp_path / "src"
-    with zipfile.ZipFile(made("slider")) as z:
-        z.extractall(src)
-    sources = src / "sources"
-    model_c = [p for p in sources.glob("*.c") if not p.name.startswith(("fmu_", "fmi", "mbrt_"))]
-    assert len(model_c) == 1
-    (sources / "harness.c").write_text(HARNESS.replace(init, START).replace("MODEL_C", model_c[0].name))
-    exe = tmp_path / "harness"
-    built = subprocess.run([cc, *SAN_FLAGS, "-std=c99", "-Wall", "-Wextra", str(sources / "harness.c"),
-                            *map(str, sources.glob("mbrt_*.c")), "-o", str(exe), "-lm"],
-                           capture_output=True, text=True, cwd=sources)
-    assert built.returncode == 0, built.stderr[-3000:]
-    assert "fmu_events" not in built.stderr and "fmu_core" not in built.stderr, built.stderr[-3000:]  # no warning
+    exe = sanitized.build(made("slider"), HARNESS.replace(init, START), tmp_path, quiet=("fmu_events", "fmu_core"))
     states = CASES["slider"][5]
     for args, want in (((), reference("slider")[2]), (("0.5",), started[1]), (("0.5", "0.3"), None)):
-        env = {**os.environ, "ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"}
-        run = subprocess.run([str(exe), "2.5", *args], capture_output=True, text=True, timeout=300, env=env)
-        assert "runtime error" not in run.stderr and "Sanitizer" not in run.stderr, run.stderr[-3000:]
+        run = sanitized.run(exe, "2.5", *args)
         if want is None:  # the crank at 0.5 rad and the slider at 0.3 m: out of the loop's reach
             assert run.returncode == 2 and "the start values set (crank_joint.phi = 0.5, slider_joint.s = 0.3)" \
                 in run.stderr, run.stderr[-3000:]

@@ -12,11 +12,7 @@ case's physics (closed forms, invariants). The frictionless tumbling bicycle (v 
 Painleve-like (closed its rear wheel would pull, open it would fall into the ground): the FMU
 fails there with an error naming the contact, on both interfaces.
 """
-import os
 import re
-import shutil
-import subprocess
-import zipfile
 
 import numpy as np
 import pytest
@@ -30,6 +26,7 @@ from mbcomp.library import (ContactFriction, DiskContact, FixedTranslation, Free
 from conftest import load_model
 
 import fmusim_tool
+import sanitized
 
 fmpy = pytest.importorskip("fmpy")
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
@@ -435,8 +432,6 @@ def test_the_ball_in_fmusim_too(made, reference):
         assert r["free.v.x"][-1] == pytest.approx(0.5714285714285714, rel=1e-10), interface
 
 
-SAN_FLAGS = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-O1", "-g"]
-
 #: the FMU's own C (its model file includes fmu_core.c, fmu_events.c, fmi3.c) driven through FMI 3.0:
 #: Co-Simulation steps of 1 ms to t_end, then Model Exchange by explicit Euler (0.1 ms) entering Event
 #: Mode at every indicator's sign change; prints each run's end and the last state
@@ -493,31 +488,10 @@ def test_the_events_c_is_clean_under_asan_and_ubsan(made, tmp_path):
     settling after each event) built with AddressSanitizer and UBSan: Co-Simulation to 1 s ends
     resting and rolling (z = r, v_x the rough landing's closed form), Model Exchange under an
     explicit Euler importer acts on its events; no error, no sanitizer report, no warning."""
-    cc = c_compiler()
-    probe = tmp_path / "probe.c"
-    probe.write_text("int main(void) { return 0; }\n")
-    if subprocess.run([cc, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True).returncode:
-        pytest.skip("this compiler cannot build a sanitized program")
-    src = tmp_path / "src"
-    with zipfile.ZipFile(made("bounce")) as z:
-        z.extractall(src)
-    sources = src / "sources"
-    model_c = [p for p in sources.glob("*.c") if not p.name.startswith(("fmu_", "fmi", "mbrt_"))]
-    assert len(model_c) == 1
-    (sources / "harness.c").write_text(HARNESS.replace("MODEL_C", model_c[0].name))
-    exe = tmp_path / "harness"
-    res = subprocess.run([cc, *SAN_FLAGS, "-std=c99", "-Wall", "-Wextra", str(sources / "harness.c"),
-                          *map(str, sources.glob("mbrt_*.c")), "-o", str(exe), "-lm"],
-                         capture_output=True, text=True, cwd=sources)
-    assert res.returncode == 0, res.stderr[-3000:]
-    assert "fmu_events" not in res.stderr and "mbrt_mech" not in res.stderr, res.stderr[-3000:]  # no warning
-    run = subprocess.run([str(exe), "1.0"], capture_output=True, text=True, timeout=300,
-                         env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
+    run = sanitized.run(sanitized.build(made("bounce"), HARNESS, tmp_path, quiet=("fmu_events", "mbrt_mech")), 1.0)
     assert run.returncode == 0, run.stderr[-3000:]
-    assert "runtime error" not in run.stderr and "Sanitizer" not in run.stderr, run.stderr[-3000:]
     cs, me = (line.split() for line in run.stdout.strip().splitlines())
     y = np.array(cs[3:], float)  # [r, Q, v, w]
     assert cs[:2] == ["cs", "0"] and y[2] == pytest.approx(R_BALL, abs=1e-12) and abs(y[9]) < 1e-12
     assert y[7] == pytest.approx((M_BALL * R_BALL * VX + J_BALL * WY) / (M_BALL * R_BALL + J_BALL / R_BALL), rel=1e-10)
     assert me[:2] == ["me", "0"] and int(me[3]) >= 21 and me[4] == "0"
-    shutil.rmtree(src)

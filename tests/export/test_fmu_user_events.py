@@ -7,10 +7,6 @@ step stops at the event). Checked against closed forms (free fall: sqrt(2 h / g)
 ``mbcomp.simulate(model, events=[f])`` at rtol 1e-12: the run ends at the event to 1e-9 s and
 the states agree to 1e-8, under FMPy's ME (CVODE, rtol 1e-14) and CS, FMI 3.0 and 2.0.
 """
-import os
-import shutil
-import subprocess
-import zipfile
 
 import numpy as np
 import pytest
@@ -19,6 +15,8 @@ import mbcomp
 from mbcomp.codegen import c_compiler
 
 from conftest import stop_pendulum
+
+import sanitized
 
 fmpy = pytest.importorskip("fmpy")
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
@@ -384,7 +382,6 @@ def test_a_user_event_of_a_model_with_loops_ends_it_where_simulate_does(kind, ma
         assert abs(r[n][-1] - res[n][-1]) < 1e-8, n
 
 
-SAN_FLAGS = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-O1", "-g"]
 HARNESS = r"""
 #include "MODEL_C"
 static int errors;
@@ -445,29 +442,9 @@ def test_the_user_events_c_is_clean_under_asan_and_ubsan(made, swing, tmp_path):
     UBSan: Co-Simulation ends at the terminal event (simulate's time), a further step is refused,
     a saved state restored and freed; Model Exchange under an explicit Euler importer terminates
     near it; no error, no sanitizer report, no warning."""
-    cc = c_compiler()
-    probe = tmp_path / "probe.c"
-    probe.write_text("int main(void) { return 0; }\n")
-    if subprocess.run([cc, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True).returncode:
-        pytest.skip("this compiler cannot build a sanitized program")
-    src = tmp_path / "src"
-    with zipfile.ZipFile(made("swing")) as z:
-        z.extractall(src)
-    sources = src / "sources"
-    model_c = [p for p in sources.glob("*.c") if not p.name.startswith(("fmu_", "fmi", "mbrt_"))]
-    (sources / "harness.c").write_text(HARNESS.replace("MODEL_C", model_c[0].name))
-    exe = tmp_path / "harness"
-    res = subprocess.run([cc, *SAN_FLAGS, "-std=c99", "-Wall", "-Wextra", str(sources / "harness.c"),
-                          *map(str, sources.glob("mbrt_*.c")), "-o", str(exe), "-lm"],
-                         capture_output=True, text=True, cwd=sources)
-    assert res.returncode == 0, res.stderr[-3000:]
-    assert "fmu_" not in res.stderr and "fmi3.c" not in res.stderr, res.stderr[-3000:]  # no warning
-    out = subprocess.run([str(exe)], capture_output=True, text=True, timeout=300,
-                         env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1"})
+    out = sanitized.run(sanitized.build(made("swing"), HARNESS, tmp_path, quiet=("fmu_", "fmi3.c")))
     assert out.returncode == 0, out.stderr[-3000:]
-    assert "runtime error" not in out.stderr and "Sanitizer" not in out.stderr, out.stderr[-3000:]
     cs, me = (line.split() for line in out.stdout.strip().splitlines())
     assert cs[:3] == ["cs", "0", "1"] and cs[3] == "1" and abs(float(cs[4]) - swing.time[-1]) < 1e-9
     assert abs(float(cs[5]) - swing["j.phi"][-1]) < 1e-8
     assert me[:3] == ["me", "0", "1"] and abs(float(me[3]) - swing.time[-1]) < 1e-3 and me[4] == "0"
-    shutil.rmtree(src)
