@@ -214,12 +214,15 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
     _, links, children, root = _parse(path)
     notes = []
     names = _Names(notes)
+    # joints keep the file's names first (res["<joint>.phi"]); a link of the same name is renamed
+    free_name = names("root_joint", "joint") if floating else None
+    joint_names = {id(j): names(j.get("name"), "joint") for js in children.values() for j in js}
     model = Model()
     world = model.add("world", lib.World(g=np.asarray(gravity, dtype=float)))
     link_frame = {}  # link name -> the port that is its frame
     base = world.frame_b
     if floating:
-        free = model.add(names("root_joint", "joint"), lib.FreeMotion())
+        free = model.add(free_name, lib.FreeMotion())
         model.connect(world.frame_b, free.frame_a)
         base = free.frame_b
     _add_link(model, lib, links, root, base, link_frame, names, notes)
@@ -228,7 +231,8 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
         parent = stack.pop()
         for jel in children.get(parent, []):
             child = jel.find("child").get("link")
-            frame = _add_joint(model, lib, jel, link_frame[parent], names, notes, limits, damping)
+            frame = _add_joint(model, lib, jel, joint_names[id(jel)], link_frame[parent], names, notes, limits,
+                               damping)
             _add_link(model, lib, links, child, frame, link_frame, names, notes)
             stack.append(child)
     for el in ET.parse(str(path)).getroot():
@@ -252,7 +256,7 @@ def _add_link(model, lib, links, name, frame, link_frame, names, notes):
     link_frame[name] = body.frame_a
 
 
-def _add_joint(model, lib, jel, parent_frame, names, notes, limits, damping):
+def _add_joint(model, lib, jel, cname, parent_frame, names, notes, limits, damping):
     """The joint's components from ``parent_frame``; returns the port that is the child link's frame."""
     jname, kind = jel.get("name"), jel.get("type")
     xyz, R = _origin(jel)
@@ -260,10 +264,9 @@ def _add_joint(model, lib, jel, parent_frame, names, notes, limits, damping):
     rotated = not np.allclose(R, np.eye(3), rtol=0, atol=0)
     if kind == "fixed":
         off = lib.FixedRotation(r=xyz, R=R) if rotated else lib.FixedTranslation(r=xyz)
-        c = model.add(names(jname, "joint"), off)
+        c = model.add(cname, off)
         model.connect(parent_frame, c.frame_a)
         return c.frame_b
-    cname = names(jname, "joint")
     frame = parent_frame
     if rotated or xyz.any():
         off = lib.FixedRotation(r=xyz, R=R) if rotated else lib.FixedTranslation(r=xyz)
