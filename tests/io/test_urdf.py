@@ -124,3 +124,110 @@ def test_fixed_base_robot_matches_pinocchio(rel):
 def test_floating_base_robot_matches_pinocchio(rel):
     dM, db = _differences(os.path.join(ROBOTS, rel), floating=True)
     assert dM < 1e-10 and db < 1e-10, f"{rel}: mass matrix {dM:.1e}, bias forces {db:.1e} relative"
+
+
+PENDULUM = """<robot name="pendulum"><link name="base"/>
+<link name="arm"><inertial><mass value="{m}"/><origin xyz="0 0 -{l}"/>
+<inertia ixx="0.08" iyy="{Iyy}" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="hinge" type="continuous"><parent link="base"/><child link="arm"/><axis xyz="0 1 0"/></joint></robot>"""
+
+
+def _write(tmp_path, text, name="robot.urdf"):
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def test_pendulum_closed_form(tmp_path):
+    """A hinge about y with the centre of mass l below it: M = m l^2 + Iyy, f = -m g l sin(phi)
+    (phi > 0 turns z toward x, lifting the bob along +x: gravity pulls back)."""
+    m, l, Iyy, g = 2.0, 0.5, 0.07, 9.81
+    model = load_urdf(_write(tmp_path, PENDULUM.format(m=m, l=l, Iyy=Iyy)))
+    system = mbcomp.assemble(model)
+    assert system.q_names == ["hinge.phi"] and model.urdf_notes == []
+    for phi in (0.3, -1.2, 2.5):
+        ev = system.evaluate(0.0, np.array([phi]), np.array([0.7]))
+        assert ev.M[0, 0] == pytest.approx(m * l * l + Iyy, rel=1e-14)
+        assert ev.f[0] == pytest.approx(-m * g * l * np.sin(phi), rel=1e-13)
+
+
+ODD = """<robot name="odd">
+<link name="base"><inertial><mass value="3"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<link name="a-link"><inertial><origin xyz="0.1 -0.2 0.3" rpy="0.4 -0.7 1.1"/><mass value="1.5"/>
+<inertia ixx="0.03" iyy="0.05" izz="0.06" ixy="0.001" ixz="-0.002" iyz="0.003"/></inertial></link>
+<link name="slider"><inertial><origin xyz="0 0.05 0" rpy="1.0 0.2 -0.3"/><mass value="0.8"/>
+<inertia ixx="0.004" iyy="0.005" izz="0.006" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<link name="massless"/>
+<link name="tip"><inertial><mass value="0.2"/><inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="j-1" type="revolute"><parent link="base"/><child link="a-link"/><origin xyz="0.2 0 0.5" rpy="0.3 0.2 0.1"/>
+<axis xyz="0.6 0 0.8"/><limit lower="-1" upper="1" effort="1" velocity="1"/><dynamics damping="0.4" friction="0.1"/></joint>
+<joint name="slide" type="prismatic"><parent link="a-link"/><child link="slider"/><origin xyz="0 0.3 0" rpy="-0.5 0 0.9"/>
+<axis xyz="0 1 0"/><limit lower="-0.1" upper="0.2" effort="1" velocity="1"/><dynamics damping="2.0"/></joint>
+<joint name="weld" type="fixed"><parent link="slider"/><child link="massless"/><origin xyz="0 0 0.1" rpy="0 1.5 0"/></joint>
+<joint name="wrist" type="revolute"><parent link="massless"/><child link="tip"/><origin xyz="0.05 0 0"/>
+<limit lower="-1" upper="1" effort="1" velocity="1"/><mimic joint="j-1" multiplier="2"/></joint>
+<transmission name="t1"/></robot>"""
+
+
+def test_rotated_inertia_offsets_damping_and_names_match_pinocchio(tmp_path):
+    """Inertia given in a rotated inertial frame, rotated joint origins, an oblique axis, a
+    prismatic joint, a massless link behind a fixed joint, damping on both kinds of joint and
+    a joint name that is no identifier: the same M and bias forces as Pinocchio's model of the
+    same file, and the notes name what was left out or renamed."""
+    path = _write(tmp_path, ODD)
+    with pytest.warns(UserWarning, match="not imported"):
+        model = load_urdf(path)
+    system = mbcomp.assemble(model)
+    assert system.q_names == ["j_1.phi", "slide.s", "wrist.phi"]
+    notes = "\n".join(model.urdf_notes)
+    for said in ("'j-1': named 'j_1'", "'a-link': named 'a_link'", "'j-1': <dynamics friction>",
+                 "'wrist': <mimic> not imported", "<transmission> 't1'"):
+        assert said in notes
+    pm = pin.buildModelFromUrdf(path)
+    assert list(pm.damping) == [0.4, 2.0, 0.0]
+    dM, db = _differences(path, floating=False, n_states=5)
+    assert dM < 1e-12 and db < 1e-12, (dM, db)
+
+
+def test_damping_off_leaves_the_bias_of_pinocchio_without_damping(tmp_path):
+    path = _write(tmp_path, ODD)
+    with pytest.warns(UserWarning):
+        system = mbcomp.assemble(load_urdf(path, damping=False))
+    pm = pin.buildModelFromUrdf(path)
+    q, v = np.array([0.3, 0.05, -0.4]), np.array([0.5, -0.2, 1.0])
+    ev = system.evaluate(0.0, q, v)
+    bp = pin.rnea(pm, pm.createData(), q, v, np.zeros(3))
+    np.testing.assert_allclose(-ev.f, bp, rtol=1e-12, atol=1e-14)
+
+
+def test_limits_become_stops_only_when_asked(tmp_path):
+    path = _write(tmp_path, ODD)
+    with pytest.warns(UserWarning):
+        plain, stopped = load_urdf(path), load_urdf(path, limits=True)
+    assert plain["j_1"].p.limits is None and plain["slide"].p.limits is None
+    assert stopped["j_1"].p.limits.tolist() == [-1.0, 1.0]
+    assert stopped["slide"].p.limits.tolist() == [-0.1, 0.2]
+
+
+def test_rpy_is_fixed_axes_roll_pitch_yaw():
+    """URDF's rpy: roll about x, then pitch about y, then yaw about z, all fixed axes."""
+    from mbcomp.geometry.kinematics import rot_axis
+
+    r, p, y = 0.3, -0.8, 1.9
+    expect = rot_axis([0, 0, 1], y) @ rot_axis([0, 1, 0], p) @ rot_axis([1, 0, 0], r)
+    np.testing.assert_allclose(rpy_matrix((r, p, y)), expect, atol=1e-15)
+
+
+def test_bad_files_are_refused_with_the_reason(tmp_path):
+    with pytest.raises(ValueError, match="not <robot>"):
+        load_urdf(_write(tmp_path, "<sdf/>", "a.urdf"))
+    two_roots = "<robot name='x'><link name='a'/><link name='b'/></robot>"
+    with pytest.raises(ValueError, match="2 root links"):
+        load_urdf(_write(tmp_path, two_roots, "b.urdf"))
+    odd_kind = ODD.replace('type="prismatic"', 'type="screw"')
+    with pytest.raises(ValueError, match="'slide': type 'screw'"):
+        load_urdf(_write(tmp_path, odd_kind, "c.urdf"))
+
+
+def test_top_level_name():
+    assert mbcomp.load_urdf is load_urdf
