@@ -207,6 +207,14 @@ def test_limits_become_stops_only_when_asked(tmp_path):
     assert plain["j_1"].p.limits is None and plain["slide"].p.limits is None
     assert stopped["j_1"].p.limits.tolist() == [-1.0, 1.0]
     assert stopped["slide"].p.limits.tolist() == [-0.1, 0.2]
+    assert stopped["j_1"].p.phi0 is None  # 0 inside the limits: the file's zero position
+    shifted = ODD.replace('lower="-1" upper="1" effort="1" velocity="1"/><dynamics damping="0.4"',
+                          'lower="0.2" upper="0.8" effort="1" velocity="1"/><dynamics damping="0.4"')
+    with pytest.warns(UserWarning):
+        model = load_urdf(_write(tmp_path, shifted, "shifted.urdf"), limits=True)
+    assert model["j_1"].p.phi0 == pytest.approx(0.5)  # 0 is outside: a start no stop refuses
+    assert any("'j-1': starts at the middle of its limits" in n for n in model.urdf_notes)
+    assert mbcomp.assemble(model).evaluate(0.0, np.array([0.5, 0, 0]), np.zeros(3)).M.shape == (3, 3)
 
 
 def test_rpy_is_fixed_axes_roll_pitch_yaw():

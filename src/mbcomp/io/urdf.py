@@ -14,7 +14,8 @@ joint's coordinate):
   -> ``FreeMotion``. ``<axis>`` defaults to ``1 0 0``. Joint names are kept as component
   names (``res["shoulder_pan_joint.phi"]``); a name that is no Python identifier is
   sanitized (the change is listed in ``model.urdf_notes``).
-- ``<limit lower upper>``: the joint's stops (``limits``) only with ``limits=True``.
+- ``<limit lower upper>``: the joint's stops (``limits``) only with ``limits=True``; a joint
+  whose zero position lies outside them starts at their middle (noted).
 - ``<dynamics damping>``: a ``RotationalDamper`` (revolute, continuous) or a
   ``TranslationalSpringDamper`` with ``c = 0`` (prismatic) on the joint's flanges with
   ``damping=True`` (default); ``friction`` and ``<mimic>`` are not imported (listed).
@@ -120,10 +121,14 @@ def _joint_component(lib, kind, axis, jel, limits, name, notes):
         lo, hi = float(lim.get("lower")), float(lim.get("upper"))
         if lo < hi:
             stops = (lo, hi)
+    start = {}
+    if stops and not stops[0] <= 0.0 <= stops[1]:  # the file's zero position is outside its limits
+        start = {"phi0" if kind == "revolute" else "s0": 0.5 * (stops[0] + stops[1])}
+        notes.append(f"joint {name!r}: starts at the middle of its limits {stops} (0 is outside them)")
     if kind in ("revolute", "continuous"):
-        return lib.Revolute(n=axis, limits=stops) if stops else lib.Revolute(n=axis)
+        return lib.Revolute(n=axis, limits=stops, **start) if stops else lib.Revolute(n=axis)
     if kind == "prismatic":
-        return lib.Prismatic(n=axis, limits=stops) if stops else lib.Prismatic(n=axis)
+        return lib.Prismatic(n=axis, limits=stops, **start) if stops else lib.Prismatic(n=axis)
     if kind == "floating":
         return lib.FreeMotion()
     if kind == "planar":
