@@ -87,6 +87,15 @@ def _random_state(system, model, rng):
             Tdv[k:k + 3] = R @ np.cross(v[iv + 3:iv + 6], v[iv:iv + 3])  # d(R v_lin)/dt at fixed v_lin
             u[k:k + 6] = T[k:k + 6, iv:iv + 6] @ v[iv:iv + 6]
             continue
+        if nq == 4:  # planar about z: Pinocchio (x, y, cos, sin), in-plane velocity in the moving axes
+            x, y, a = rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-3, 3)
+            qp[iq:iq + 4], q[j:j + 3] = (x, y, np.cos(a), np.sin(a)), (x, y, a)
+            c, s = np.cos(a), np.sin(a)
+            T[k:k + 2, iv:iv + 2], T[k + 2, iv + 2] = ((c, -s), (s, c)), 1.0
+            vx, vy, w = v[iv:iv + 3]
+            Tdv[k:k + 2] = T[k:k + 2, iv:iv + 2] @ (-w * vy, w * vx)
+            u[k:k + 3] = T[k:k + 3, iv:iv + 3] @ v[iv:iv + 3]
+            continue
         a = rng.uniform(-3, 3)
         qp[iq:iq + nq] = a if nq == 1 else (np.cos(a), np.sin(a))  # nq 2: a continuous joint
         q[j], T[k, iv], u[k] = a, 1.0, v[iv]
@@ -239,3 +248,24 @@ def test_bad_files_are_refused_with_the_reason(tmp_path):
 
 def test_top_level_name():
     assert mbcomp.load_urdf is load_urdf
+
+
+PLANAR = """<robot name="puck"><link name="table"/>
+<link name="puck"><inertial><origin xyz="0.1 -0.05 0.02" rpy="0.2 0.1 0.4"/><mass value="2"/>
+<inertia ixx="0.02" iyy="0.03" izz="0.04" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<link name="arm"><inertial><origin xyz="0.3 0 0"/><mass value="0.5"/>
+<inertia ixx="0.001" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="slide_turn" type="planar"><parent link="table"/><child link="puck"/><origin xyz="0 0 0.1" rpy="0.3 0 0"/>
+<axis xyz="0 0 1"/></joint>
+<joint name="elbow" type="continuous"><parent link="puck"/><child link="arm"/><origin xyz="0.2 0 0"/>
+<axis xyz="0 1 0"/></joint></robot>"""
+
+
+def test_planar_joint_matches_pinocchio(tmp_path):
+    """A planar joint (plane tilted by its origin's roll) carrying a pendulum arm: mbcomp's
+    in-plane speeds are along the joint frame's axes, Pinocchio's along the moving axes."""
+    path = _write(tmp_path, PLANAR)
+    system, _ = _pair(path, False)
+    assert system.q_names == ["slide_turn.s_x", "slide_turn.s_y", "slide_turn.phi", "elbow.phi"]
+    dM, db = _differences(path, floating=False, n_states=5)
+    assert dM < 1e-12 and db < 1e-12, (dM, db)

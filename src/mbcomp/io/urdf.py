@@ -11,7 +11,8 @@ joint's coordinate):
 - ``<joint>``: its ``<origin>`` as a ``FixedTranslation`` (``FixedRotation`` when rotated) named
   ``<joint>_origin``, then ``revolute``/``continuous`` -> ``Revolute(n=axis)``, ``prismatic``
   -> ``Prismatic(n=axis)``, ``fixed`` -> the offset alone (named as the joint), ``floating``
-  -> ``FreeMotion``. ``<axis>`` defaults to ``1 0 0``. Joint names are kept as component
+  -> ``FreeMotion``, ``planar`` -> ``Planar(n=axis)`` (``s_x`` along the in-plane part of the
+  joint frame's x axis, else of its y axis). ``<axis>`` defaults to ``1 0 0``. Joint names are kept as component
   names (``res["shoulder_pan_joint.phi"]``); a name that is no Python identifier is
   sanitized (the change is listed in ``model.urdf_notes``).
 - ``<limit lower upper>``: the joint's stops (``limits``) only with ``limits=True``; a joint
@@ -131,8 +132,10 @@ def _joint_component(lib, kind, axis, jel, limits, name, notes):
         return lib.Prismatic(n=axis, limits=stops, **start) if stops else lib.Prismatic(n=axis)
     if kind == "floating":
         return lib.FreeMotion()
-    if kind == "planar":
-        return lib.Planar(n=axis)
+    if kind == "planar":  # <axis> is the plane's normal; s_x along the in-plane part of x (else of y)
+        n = axis / np.linalg.norm(axis)
+        e = np.eye(3)[0] if abs(n[0]) < 0.9 else np.eye(3)[1]
+        return lib.Planar(n=axis, n_x=e - (e @ n) * n)
     raise ValueError(f"URDF joint {name!r}: type {kind!r} is not one of revolute, continuous, prismatic, "
                      f"fixed, floating, planar -> fix the file")
 
