@@ -269,3 +269,28 @@ def test_planar_joint_matches_pinocchio(tmp_path):
     assert system.q_names == ["slide_turn.s_x", "slide_turn.s_y", "slide_turn.phi", "elbow.phi"]
     dM, db = _differences(path, floating=False, n_states=5)
     assert dM < 1e-12 and db < 1e-12, (dM, db)
+
+
+def test_a_joint_moving_no_mass_is_held_fixed_and_said(tmp_path):
+    """A hinge carrying only massless links would leave its angle undetermined (a zero row of
+    M): it is held at 0 as a fixed joint at its origin, and the notes say so; the rest keeps
+    Pinocchio's mass matrix (its row of that joint dropped)."""
+    sensor = ODD.replace('<transmission name="t1"/>', '<link name="camera"/><link name="lens"/>'
+                         '<joint name="pan" type="revolute"><parent link="tip"/><child link="camera"/>'
+                         '<origin xyz="0 0 0.2"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+                         '<joint name="lens_mount" type="fixed"><parent link="camera"/><child link="lens"/></joint>')
+    path = _write(tmp_path, sensor)
+    with pytest.warns(UserWarning, match="moves no mass"):
+        model = load_urdf(path)
+    system = mbcomp.assemble(model)
+    assert system.q_names == ["j_1.phi", "slide.s", "wrist.phi"]
+    pm = pin.buildModelFromUrdf(path)
+    assert pm.nv == 4  # Pinocchio keeps the hinge, with a zero row and column
+    q, v = np.array([0.3, 0.05, -0.4, 0.7]), np.array([0.5, -0.2, 1.0, 0.0])
+    Mp = pin.crba(pm, pm.createData(), q)
+    Mp = np.triu(Mp) + np.triu(Mp, 1).T
+    assert np.abs(Mp[3]).max() == 0.0
+    ev = system.evaluate(0.0, q[:3], v[:3])
+    np.testing.assert_allclose(ev.M, Mp[:3, :3], rtol=1e-12, atol=1e-15)
+    bp = pin.rnea(pm, pm.createData(), q, v, np.zeros(4)) + pm.damping * v
+    np.testing.assert_allclose(-ev.f, bp[:3], rtol=1e-12, atol=1e-14)

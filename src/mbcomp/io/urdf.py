@@ -15,6 +15,8 @@ joint's coordinate):
   joint frame's x axis, else of its y axis). ``<axis>`` defaults to ``1 0 0``. Joint names are kept as component
   names (``res["shoulder_pan_joint.phi"]``); a name that is no Python identifier is
   sanitized (the change is listed in ``model.urdf_notes``).
+- a moving joint with no mass beyond it (a sensor frame on a hinge): held at 0 as a fixed
+  joint (noted), since its motion would be undetermined.
 - ``<limit lower upper>``: the joint's stops (``limits``) only with ``limits=True``; a joint
   whose zero position lies outside them starts at their middle (noted).
 - ``<dynamics damping>``: a ``RotationalDamper`` (revolute, continuous) or a
@@ -234,13 +236,17 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
         model.connect(world.frame_b, free.frame_a)
         base = free.frame_b
     _add_link(model, lib, links, root, base, link_frame, names, notes)
+    carries = _carries_mass(links, children, root)
     stack = [root]
     while stack:
         parent = stack.pop()
         for jel in children.get(parent, []):
-            child = jel.find("child").get("link")
-            frame = _add_joint(model, lib, jel, joint_names[id(jel)], link_frame[parent], names, notes, limits,
-                               damping)
+            child, cname = jel.find("child").get("link"), joint_names[id(jel)]
+            if not carries[child] and jel.get("type") != "fixed":  # a moving joint with no mass beyond it:
+                notes.append(f"joint {jel.get('name')!r}: moves no mass (link {child!r} and beyond are "
+                             "massless): held at 0 as a fixed joint")  # its motion would be undetermined
+                jel = _as_fixed(jel)
+            frame = _add_joint(model, lib, jel, cname, link_frame[parent], names, notes, limits, damping)
             _add_link(model, lib, links, child, frame, link_frame, names, notes)
             stack.append(child)
     for el in ET.parse(str(path)).getroot():
@@ -251,6 +257,26 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
         warnings.warn(f"{path}: {len(notes)} URDF elements not imported or renamed (model.urdf_notes): "
                       + "; ".join(notes[:5]) + (" ..." if len(notes) > 5 else ""), UserWarning, stacklevel=2)
     return model
+
+
+def _carries_mass(links, children, root):
+    """``{link: whether it or a link beyond it has mass}``."""
+    out = {}
+
+    def visit(name):
+        below = [visit(j.find("child").get("link")) for j in children.get(name, [])]
+        out[name] = _inertial(links[name]) is not None or any(below)
+        return out[name]
+
+    visit(root)
+    return out
+
+
+def _as_fixed(jel):
+    """A copy of the joint element ``jel`` as a fixed joint at its origin (same name)."""
+    fixed = ET.Element("joint", {"name": jel.get("name"), "type": "fixed"})
+    fixed.extend(list(jel))
+    return fixed
 
 
 def _add_link(model, lib, links, name, frame, link_frame, names, notes):
