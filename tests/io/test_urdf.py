@@ -44,11 +44,19 @@ FIXED = ["ur_description/urdf/ur5_robot.urdf", "panda_description/urdf/panda.urd
          "z1_description/urdf/z1.urdf", "so_arm_description/urdf/so100.urdf",
          "finger_edu_description/robots/finger_edu.urdf",
          "double_pendulum_description/urdf/double_pendulum_continuous.urdf",
-         "talos_data/robots/talos_left_arm.urdf", "baxter_description/urdf/baxter.urdf"]
+         "talos_data/robots/talos_left_arm.urdf", "baxter_description/urdf/baxter.urdf",
+         "ur_description/urdf/ur5_gripper.urdf", "so_arm_description/urdf/so101.urdf",
+         "asr_twodof_description/urdf/TwoDofs.urdf", "tiago_pro_description/robots/tiago_pro.urdf",
+         "alex_description/urdf/alex_nub_hands.urdf"]
 FLOATING = ["a1_description/urdf/a1.urdf", "go2_description/urdf/go2.urdf", "solo_description/robots/solo12.urdf",
             "bolt_description/robots/bolt.urdf", "talos_data/robots/talos_reduced.urdf",
             "simple_humanoid_description/urdf/simple_humanoid.urdf", "g1_description/urdf/g1_29dof_rev_1_0.urdf",
-            "icub_description/robots/icub_reduced.urdf", "iris_description/robots/iris.urdf"]
+            "icub_description/robots/icub_reduced.urdf", "iris_description/robots/iris.urdf",
+            "romeo_description/urdf/romeo.urdf", "talos_data/robots/talos_full_v2.urdf",
+            "centauro_description/urdf/centauro.urdf", "human_description/robots/human.urdf",
+            "laikago_description/urdf/laikago.urdf", "solo_description/robots/solo.urdf",
+            "quadruped_description/urdf/quadruped.urdf", "hextilt_description/urdf/hextilt_flying_arm_5.urdf",
+            "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"]
 
 
 def _sanitized(name):
@@ -76,6 +84,10 @@ def _random_state(system, model, rng):
     for i in range(1, model.njoints):
         iq, nq, iv = model.idx_qs[i], model.nqs[i], model.idx_vs[i]
         name = "root_joint" if model.names[i] == "root_joint" else _sanitized(model.names[i])
+        if name not in first:  # held fixed by the import (it moves no mass): at 0, no speed, no column
+            qp[iq:iq + nq] = (0.0,) if nq == 1 else (1.0, 0.0)
+            v[iv] = 0.0
+            continue
         j, k = first.index(name), first_u.index(name)
         if nq == 7:  # free flyer: Pinocchio (x y z qx qy qz qw), velocities in base axes
             r, quat = rng.uniform(-1, 1, 3), rng.standard_normal(4)
@@ -239,6 +251,8 @@ def test_bad_files_are_refused_with_the_reason(tmp_path):
     with pytest.raises(ValueError, match="not <robot>"):
         load_urdf(_write(tmp_path, "<sdf/>", "a.urdf"))
     two_roots = "<robot name='x'><link name='a'/><link name='b'/></robot>"
+    with pytest.raises(ValueError, match="no links"):
+        load_urdf(_write(tmp_path, "<robot name='empty'/>", "e.urdf"))
     with pytest.raises(ValueError, match="2 root links"):
         load_urdf(_write(tmp_path, two_roots, "b.urdf"))
     odd_kind = ODD.replace('type="prismatic"', 'type="screw"')

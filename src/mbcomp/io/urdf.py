@@ -164,6 +164,8 @@ def _parse(path):
     if root.tag != "robot":
         raise ValueError(f"{path}: the root element is <{root.tag}>, not <robot> -> is it a URDF file?")
     links = {el.get("name"): el for el in root.findall("link")}
+    if not links:
+        raise ValueError(f"{path}: the robot defines no links -> is it an unexpanded xacro file?")
     joints = root.findall("joint")
     children = {}
     for j in joints:
