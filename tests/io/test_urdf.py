@@ -56,7 +56,8 @@ FLOATING = ["a1_description/urdf/a1.urdf", "go2_description/urdf/go2.urdf", "sol
             "centauro_description/urdf/centauro.urdf", "human_description/robots/human.urdf",
             "laikago_description/urdf/laikago.urdf", "solo_description/robots/solo.urdf",
             "quadruped_description/urdf/quadruped.urdf", "hextilt_description/urdf/hextilt_flying_arm_5.urdf",
-            "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"]
+            "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf", "iris_description/robots/iris_simple.urdf",
+            "hector_description/robots/quadrotor_base.urdf"]
 
 
 def _sanitized(name):
