@@ -282,6 +282,10 @@ def test_bad_files_are_refused_with_the_reason(tmp_path):
         load_urdf(_write(tmp_path, "<robot name='empty'/>", "e.urdf"))
     with pytest.raises(ValueError, match="2 root links"):
         load_urdf(_write(tmp_path, two_roots, "b.urdf"))
+    loop = ODD.replace('<transmission name="t1"/>', '<joint name="close" type="revolute"><parent link="base"/>'
+                       '<child link="tip"/></joint>')
+    with pytest.raises(ValueError, match=r"links \['tip'\] are the child of more than one joint"):
+        load_urdf(_write(tmp_path, loop, "d.urdf"))
     odd_kind = ODD.replace('type="prismatic"', 'type="screw"')
     with pytest.raises(ValueError, match="'slide': type 'screw'"):
         load_urdf(_write(tmp_path, odd_kind, "c.urdf"))

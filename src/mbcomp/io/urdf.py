@@ -174,7 +174,11 @@ def _parse(path):
             if ln not in links:
                 raise ValueError(f"{path}: joint {j.get('name')!r} names link {ln!r}, which the file does not define")
         children.setdefault(p, []).append(j)
-    child_links = {j.find("child").get("link") for j in joints}
+    child_links = [j.find("child").get("link") for j in joints]
+    twice = sorted({c for c in child_links if child_links.count(c) > 1})
+    if twice:
+        raise ValueError(f"{path}: links {twice} are the child of more than one joint (a closed loop): "
+                         "load_urdf reads trees only, loop-closing joints are not imported yet")
     roots = [n for n in links if n not in child_links]
     if len(roots) != 1:
         raise ValueError(f"{path}: {len(roots)} root links {roots} (a URDF tree has one) -> fix the file")
@@ -223,7 +227,7 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
     from mbcomp import library as lib
     from mbcomp.modeling.model import Model
 
-    _, links, children, root = _parse(path)
+    robot, links, children, root = _parse(path)
     notes = []
     names = _Names(notes)
     # joints keep the file's names first (res["<joint>.phi"]); a link of the same name is renamed
@@ -251,7 +255,7 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
             frame = _add_joint(model, lib, jel, cname, link_frame[parent], names, notes, limits, damping)
             _add_link(model, lib, links, child, frame, link_frame, names, notes)
             stack.append(child)
-    for el in ET.parse(str(path)).getroot():
+    for el in robot:
         if el.tag not in ("link", "joint", "material"):
             notes.append(f"<{el.tag}> {el.get('name', '')!r}: not imported".replace(" ''", ""))
     model.urdf_notes = notes
