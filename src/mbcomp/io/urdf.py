@@ -27,18 +27,20 @@ joint's coordinate):
 Whatever is not imported is listed, element by element, in ``model.urdf_notes`` (a list of
 strings) and summed up in one ``UserWarning``.
 """
-import math
 import re
 import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..geometry.rotations import euler_to_matrix
+
 __all__ = ["load_urdf", "rpy_matrix"]
 
 
 def rpy_matrix(rpy):
-    """The rotation matrix of URDF's roll-pitch-yaw angles: ``Rz(yaw) Ry(pitch) Rx(roll)``.
+    """The rotation matrix of URDF's roll-pitch-yaw angles: ``Rz(yaw) Ry(pitch) Rx(roll)``, the
+    yaw-pitch-roll sequence ``"321"`` of :func:`mbcomp.geometry.rotations.euler_to_matrix`.
 
     Parameters
     ----------
@@ -58,10 +60,7 @@ def rpy_matrix(rpy):
     [0.0, 1.0, 0.0]
     """
     r, p, y = (float(a) for a in rpy)
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                     [-sp, cp * sr, cp * cr]])
+    return euler_to_matrix("321", (y, p, r))
 
 
 def _vec(el, attr, default):
