@@ -507,10 +507,12 @@ static int hy_lets_go(Inst *c, const int *before)
             un += c->hy.ud[j] * c->hy.ud[j];
         }
         if (a < -1e-6 * (sqrt(cn) * sqrt(un) + fabs(c->hy.ev[HY_OFF_CB + row]))) {
-            say(c, 1, "%s: its normal force vanished with a tangential force left at t=%.12g s: closed it would "
-                "pull, open it would accelerate into the surface (a = %.4g m/s^2) -- perfectly rough rolling rows "
-                "cannot let go there -> give the contact friction (friction=ContactFriction(mu_s, mu_k))",
-                HY_C_NAME[k], t, a);
+            /* the words of mbcomp.hybrid.events.Events._let_go_outward */
+            say(c, 1, "%s: let go at t=%.12g s, but open it accelerates into what it touches (%.4g m/s^2) while "
+                "closed it would pull: its normal force fell to zero with its rolling rows still holding a "
+                "tangential load (rows that never slip need an unbounded friction coefficient there), so no mode "
+                "is consistent (a Painleve-like contradiction) -> give the contact Coulomb friction "
+                "(friction=ContactFriction(mu_s, mu_k)) so it slides before it lifts off", HY_C_NAME[k], t, a);
             c->mode = M_ERROR;
             return -1;
         }
