@@ -23,7 +23,10 @@ SRC = ROOT / "src" / "mbcomp"
 
 #: the pipeline, in import order; a module may import its own layer and the layers before it
 LAYERS = ["errors", "geometry", "modeling", "assembly", "formulations", "solvers", "codegen", "visual", "hybrid", "simulation",
-          "analysis", "export", "cli"]
+          "analysis", "export", "io", "cli"]
+#: layers that write models of library components, as a user's model file does (importing the
+#: library inside their functions, on call: importing them imports no library module)
+MODEL_AUTHORS = {"io": "the importers turn URDF/MJCF elements into library components"}
 #: the only imports against the pipeline's direction, each a public method that is a facade
 #: of a later stage (imported inside the method, on call): (importing file, imported module) -> why
 FACADES = {
@@ -91,7 +94,7 @@ def test_layers_import_only_downwards():
         for target, line, _ in _imports(path, parts):
             if not target:
                 continue
-            if target[0] == "library":
+            if target[0] == "library" and me not in MODEL_AUTHORS:
                 bad.append(f"{path.relative_to(ROOT)}:{line} imports the component library")
                 continue
             other = _layer(target)
