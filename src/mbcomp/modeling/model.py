@@ -171,6 +171,79 @@ class Model(Component):
 
         return draw_topology(self, path, params=params)
 
+    def remove(self, name: str) -> Component:
+        """Take the component at ``name`` (a dotted path into nested models) out of the model,
+        with every connection to its ports; return it, free to be added again.
+
+        Examples
+        --------
+        >>> from mbcomp import Model
+        >>> from mbcomp.library import World, Revolute
+        >>> m = Model(); w = m.add("world", World()); j = m.add("j", Revolute())
+        >>> m.connect(w.frame_b, j.frame_a)
+        >>> m.remove("j") is j, list(m.components()), j.parent
+        (True, ['world'], None)
+        """
+        head, _, rest = name.partition(".")
+        comp = self._components.get(head)
+        if comp is None or (rest and not isinstance(comp, Model)):
+            raise KeyError(f"{self.label()}: no component {name!r}; its components: {', '.join(self._components)}")
+        if rest:
+            gone = comp.remove(rest)
+        else:
+            gone = self._components.pop(head)
+            self._free.discard(head)
+            gone.name, gone.parent = None, None
+        self._connections = [(a, b) for a, b in self._connections
+                             if a.component is not gone and b.component is not gone]
+        return gone
+
+    def lock(self, joints, at=None) -> "Model":
+        """A new model with ``joints`` held still at ``at`` (this one is not changed): each
+        becomes a rigid connection under its name, so the bodies on both sides move as one
+        body -- fewer coordinates, their inertia merged (a humanoid's arm study without its
+        legs and fingers, as Pinocchio's ``buildReducedModel``). :func:`mbcomp.reduce` locks
+        every moving joint but those kept. Rules and what is dropped: :mod:`mbcomp.modeling.lock`.
+
+        Parameters
+        ----------
+        joints : str, Joint or sequence of them
+            The joints to lock, by path (``"arm.elbow"``) or as components of this model.
+        at : dict, optional
+            ``{joint: coordinates}`` (rad or m, in the joint's coordinate order; a scalar for a
+            1-DOF joint; a ``FreeMotion``'s ``r`` then its quaternion); a joint left out is
+            held at its start values (0 where none are given).
+
+        Returns
+        -------
+        Model
+            With :attr:`locked` and ``lock_notes`` (the elements dropped from the locked
+            joints' flanges, also said in one ``UserWarning``).
+
+        Examples
+        --------
+        >>> import mbcomp
+        >>> from mbcomp.library import World, Revolute, PointMass
+        >>> m = mbcomp.Model(); w = m.add("world", World())
+        >>> a = m.add("a", Revolute()); b = m.add("b", Revolute()); pa = m.add("pa", PointMass()); pb = m.add("pb", PointMass())
+        >>> m.connect(w.frame_b, a.frame_a); m.connect(a.frame_b, pa.frame_a)
+        >>> m.connect(pa.frame_a, b.frame_a); m.connect(b.frame_b, pb.frame_a)
+        >>> held = m.lock("a", at={"a": 0.2})
+        >>> mbcomp.assemble(held).q_names, held.locked, m.locked
+        (['b.phi'], {'a': {'phi': 0.2}}, {})
+        """
+        from .lock import lock
+
+        return lock(self, joints, at)
+
+    @property
+    def locked(self) -> dict:
+        """``{joint path: {coordinate: value}}`` of the joints :meth:`lock` held still (rad or
+        m; a quaternion's entries 1); empty for a model with none."""
+        from .lock import locked_joints
+
+        return locked_joints(self)
+
     def __getitem__(self, name):
         head, _, rest = name.partition(".")
         comp = self._components[head]
