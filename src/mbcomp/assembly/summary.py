@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..modeling.lock import Locked
 
 __all__ = ["summary", "dof_report", "observer"]
 
@@ -191,9 +192,11 @@ def summary(system, init=None):
         lines.append("constraint-only joints (contacts): " + ", ".join(
             f"{e.name} ({sum(1 for n in cut_rows if n.rsplit('.', 1)[0] == e.name)} holonomic + "
             f"{nh_rows.get(e.name, 0)} nonholonomic rows)" for e in constraint_only))
-    rig = [e.name for e in topo.edges if e.kind == "joint" and e.dof == 0 and e.comp.tree_edge]
+    rig = [e.name for e in topo.edges if e.kind == "joint" and e.dof == 0 and e.comp.tree_edge
+           and not isinstance(e.comp, Locked)]
     if rig:
         lines.append(f"rigid offsets merged into their bodies (no coordinates): {', '.join(rig)}")
+    lines += _locked_lines([e for e in topo.edges if isinstance(e.comp, Locked)])
     if topo.floating:
         lines.append("free bodies (implicit free joint from the world: FreeMotion, FreeTranslation for a lone point "
                      f"mass): {', '.join(f'{n} ({type(topo.edge(n).comp).__name__})' for n in topo.floating)}")
@@ -201,3 +204,16 @@ def summary(system, init=None):
         lines.append(f"open frames (rigid offsets ending in nothing, kept as marker frames): "
                      f"{', '.join(topo.open_frames)}")
     return "\n".join(lines)
+
+
+def _locked_lines(edges):
+    """``locked: N joints (...)`` and what was dropped with them (:meth:`mbcomp.Model.lock`)."""
+    if not edges:
+        return []
+    held = ", ".join(f"{e.name} ({e.comp.joint_class} at " + ", ".join(f"{n}={v:.6g}" for n, v in e.comp.held) + ")"
+                     for e in edges)
+    out = [f"locked: {len(edges)} joint{'s' * (len(edges) != 1)} held as rigid connections ({held})"]
+    dropped = [d for e in edges for d in e.comp.dropped]
+    if dropped:
+        out.append(f"dropped with the locks: {'; '.join(dropped)}")
+    return out

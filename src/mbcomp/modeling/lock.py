@@ -281,8 +281,7 @@ def _holders(flat, locked, at):
             probs.append(wrong)
             continue
         modes = joint.modes(joint.p)  # declared: stops, stick-slip friction
-        dropped = [f"its modes ({type(modes).__name__}: stops or friction on its own coordinate)"] \
-            if modes is not None else []
+        dropped = [f"{path}'s own modes ({type(modes).__name__}: its stops or friction)"] if modes is not None else []
         holders[path] = Locked(r=r, R=R, joint_class=type(joint).__name__, dropped=dropped,
                                held=zip((n for n, _ in joint.coordinates), q.tolist()),
                                speeds=[n for n, _ in joint.speeds])
@@ -317,7 +316,7 @@ def lock(model, joints, at=None):
         raise ModelError(probs, header="cannot lock")
     notes = list(getattr(model, "lock_notes", []))
     for path, lk in holders.items():
-        notes += [f"joint {path!r} locked: {d} end with it" for d in lk.dropped]
+        notes += [f"joint {path!r} locked: {d} no longer act" for d in lk.dropped]
         lk.dropped += tuple(why for why, held in dropped.values() if path in held)
     memo = {id(locked[p]): h for p, h in holders.items()}
     new = copy.deepcopy(model, memo)
