@@ -222,3 +222,34 @@ def test_lock_adds_nothing_to_a_model_it_cannot_lock():
         warnings.simplefilter("error")  # nothing dropped: no warning
         held = m.lock([])
     assert mbcomp.assemble(held).q_names == ["a.phi", "b.phi"] and held.locked == {}
+
+
+ARM_FILE = '''
+import mbcomp
+from mbcomp.library import World, Revolute, FixedTranslation, PointMass, RotationalDamper
+
+def build():
+    m = mbcomp.Model(); w = m.add("world", World())
+    a = m.add("a", Revolute(n=(0, 0, 1))); r1 = m.add("r1", FixedTranslation(r=(0.8, 0, 0)))
+    p1 = m.add("p1", PointMass(m=1.5)); b = m.add("b", Revolute(n=(0, 0, 1)))
+    r2 = m.add("r2", FixedTranslation(r=(0.5, 0, 0))); p2 = m.add("p2", PointMass(m=0.7))
+    d = m.add("damper", RotationalDamper(d=2.0))
+    m.connect(w.frame_b, a.frame_a); m.connect(a.frame_b, r1.frame_a); m.connect(r1.frame_b, p1.frame_a)
+    m.connect(r1.frame_b, b.frame_a); m.connect(b.frame_b, r2.frame_a); m.connect(r2.frame_b, p2.frame_a)
+    m.connect(b.support, d.flange_a); m.connect(b.axis, d.flange_b)
+    return m.lock("b", at={"b": 0.25})
+'''
+
+
+def test_mbcomp_info_says_what_was_locked(tmp_path, capsys):
+    from mbcomp.cli.main import main
+
+    path = tmp_path / "held_arm.py"
+    path.write_text(ARM_FILE)
+    with pytest.warns(UserWarning, match="damper"):
+        assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "coordinates (1 q, 1 speeds): a.phi" in out
+    assert "locked: 1 joint held as rigid connections (b (Revolute at phi=0.25))" in out
+    assert "dropped with the locks: RotationalDamper 'damper' on locked b: dropped" in out
+    assert "rigid offsets merged into their bodies (no coordinates): r1, r2\n" in out  # the lock said once, as a lock
