@@ -253,3 +253,24 @@ def test_mbcomp_info_says_what_was_locked(tmp_path, capsys):
     assert "locked: 1 joint held as rigid connections (b (Revolute at phi=0.25))" in out
     assert "dropped with the locks: RotationalDamper 'damper' on locked b: dropped" in out
     assert "rigid offsets merged into their bodies (no coordinates): r1, r2\n" in out  # the lock said once, as a lock
+
+
+def test_a_joint_inside_a_nested_model_is_locked_by_its_path():
+    """The arm as a sub-model ``robot`` of a scene: ``scene.lock("robot.b")`` holds the elbow
+    (the damper on it, in the sub-model, dropped); locking the sub-model itself gives a model
+    standing alone, the scene left as it was."""
+    scene = mbcomp.Model()
+    robot = scene.add("robot", _arm())
+    d = robot.add("damper", RotationalDamper(d=2.0))
+    robot.connect(robot["b"].support, d.flange_a)
+    robot.connect(robot["b"].axis, d.flange_b)
+    with pytest.warns(UserWarning, match="RotationalDamper 'robot.damper' on locked robot.b: dropped"):
+        held = scene.lock("robot.b", at={"robot.b": 0.4})
+    assert held.locked == {"robot.b": {"phi": 0.4}} and "damper" not in held["robot"].components()
+    ev = mbcomp.assemble(held).evaluate(0.0, np.zeros(1), np.zeros(1))
+    assert ev.M[0, 0] == pytest.approx(_composite(0.4), rel=1e-14)
+    with pytest.warns(UserWarning, match="RotationalDamper 'damper' on locked b"):
+        alone = robot.lock(robot["b"], at={robot["b"]: 0.4})
+    assert alone.parent is None and alone.locked == {"b": {"phi": 0.4}}
+    assert mbcomp.assemble(alone).evaluate(0.0, np.zeros(1), np.zeros(1)).M[0, 0] == pytest.approx(_composite(0.4))
+    assert robot.parent is scene and "damper" in robot.components() and scene.locked == {}

@@ -229,15 +229,17 @@ def _on_flanges(flat, locked):
     """What hangs on the locked joints' flanges: ``(dropped, rotors, problems)``, with
     ``dropped`` ``{path: (why, the locked joints it was on)}``, ``rotors`` ``{path: (inertia, joint path, port)}``."""
     find, parent = _flange_groups(flat)
+    path_of = {id(c): p for p, c in flat.components.items()}  # paths in the model being locked (maybe nested)
     owner = {}  # group -> [(joint path, port name)]
     for x in list(parent):
         if x.component.role == "joint":
-            owner.setdefault(find(x), []).append((x.component.path, x.name))
-    touched = {find(x) for x in list(parent) if x.component.role == "joint" and x.component.path in locked}
+            owner.setdefault(find(x), []).append((path_of[id(x.component)], x.name))
+    touched = {find(x) for x in list(parent)
+               if x.component.role == "joint" and path_of[id(x.component)] in locked}
     elements = {}  # path -> (component, [its flange ports])
     for x in list(parent):
         if find(x) in touched and x.component.role != "joint":
-            elements.setdefault(x.component.path, (x.component, []))
+            elements.setdefault(path_of[id(x.component)], (x.component, []))
     for path, (comp, ports) in elements.items():
         ports.extend(x for x in list(parent) if x.component is comp)
     dropped, rotors, probs = {}, {}, []
@@ -269,8 +271,9 @@ def _holders(flat, locked, at):
     holders, probs = {}, []
     at = dict(at or {})
     keys = {}
+    path_of = {id(c): p for p, c in flat.components.items()}
     for k in at:
-        path = k if isinstance(k, str) else getattr(k, "path", repr(k))
+        path = k if isinstance(k, str) else path_of.get(id(k), repr(k))
         keys[path] = at[k]
         if path not in locked:
             probs.append(Problem(f"at[{path!r}]", "gives coordinates of a joint not being locked",
@@ -319,6 +322,8 @@ def lock(model, joints, at=None):
         notes += [f"joint {path!r} locked: {d} no longer act" for d in lk.dropped]
         lk.dropped += tuple(why for why, held in dropped.values() if path in held)
     memo = {id(locked[p]): h for p, h in holders.items()}
+    if model.parent is not None:  # a model nested in another: its copy stands alone (the enclosing one is not copied)
+        memo[id(model.parent)] = None
     new = copy.deepcopy(model, memo)
     for path, h in holders.items():  # the lock takes the joint's place: its name, its owner's copy
         h.name, h.parent = locked[path].name, memo[id(locked[path].parent)]
