@@ -1,6 +1,6 @@
 """``Model.lock`` and ``mbcomp.reduce``: joints held as rigid connections, what hangs on their
 flanges, the errors. Closed forms on small library models; the real robots against
-Pinocchio's ``buildReducedModel`` are in ``tests/io/test_lock.py`` (one basename per test module: pytest imports them by it).
+Pinocchio's ``buildReducedModel`` are in ``tests/io/test_lock.py``.
 
 The arm of these tests: a hinge ``a`` about z at the world origin, a point mass ``m1`` at
 ``L1`` along x, a hinge ``b`` about z there, a point mass ``m2`` at ``L2`` along x beyond it.

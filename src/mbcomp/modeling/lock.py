@@ -263,6 +263,9 @@ def _on_flanges(flat, locked):
             what = "its force acts inside the rigid body the lock makes" if comp.role == "flange_force" else \
                 "the lock holds every flange it ties"
             dropped[path] = (f"{kind} {path!r} on locked {', '.join(held)}: dropped ({what})", held)
+        else:  # a role with flanges this module has no rule for: refused rather than left on a flange that is gone
+            probs.append(Problem(path, f"a {kind} (role {comp.role!r}) is on the flanges of locked {', '.join(held)}, "
+                                       "and locking has no rule for that role", f"remove {path} before locking"))
     return dropped, rotors, probs
 
 
@@ -382,7 +385,8 @@ def reduce(model, keep, at=None):
     >>> import mbcomp
     >>> from mbcomp.library import World, Revolute, PointMass
     >>> m = mbcomp.Model(); w = m.add("world", World())
-    >>> a = m.add("a", Revolute()); b = m.add("b", Revolute()); pa = m.add("pa", PointMass()); pb = m.add("pb", PointMass())
+    >>> a = m.add("a", Revolute()); b = m.add("b", Revolute())
+    >>> pa = m.add("pa", PointMass()); pb = m.add("pb", PointMass())
     >>> m.connect(w.frame_b, a.frame_a); m.connect(a.frame_b, pa.frame_a)
     >>> m.connect(pa.frame_a, b.frame_a); m.connect(b.frame_b, pb.frame_a)
     >>> mbcomp.assemble(mbcomp.reduce(m, keep=["b"])).q_names

@@ -225,7 +225,8 @@ class Model(Component):
         >>> import mbcomp
         >>> from mbcomp.library import World, Revolute, PointMass
         >>> m = mbcomp.Model(); w = m.add("world", World())
-        >>> a = m.add("a", Revolute()); b = m.add("b", Revolute()); pa = m.add("pa", PointMass()); pb = m.add("pb", PointMass())
+        >>> a = m.add("a", Revolute()); b = m.add("b", Revolute())
+        >>> pa = m.add("pa", PointMass()); pb = m.add("pb", PointMass())
         >>> m.connect(w.frame_b, a.frame_a); m.connect(a.frame_b, pa.frame_a)
         >>> m.connect(pa.frame_a, b.frame_a); m.connect(b.frame_b, pb.frame_a)
         >>> held = m.lock("a", at={"a": 0.2})
