@@ -47,6 +47,8 @@ def test_locked_elbow_is_one_composite_body(beta):
     held = _arm().lock(["b"], at={"b": beta})
     system = mbcomp.assemble(held)
     assert system.q_names == ["a.phi"]
+    links = system.topology.links  # what the recursive algorithms (CRBA, RNEA, ABA) walk: one composite body
+    assert links.n == 1 and [e.name for e in links.edges] == ["a"] and mbcomp.assemble(_arm()).topology.links.n == 2
     ev = system.evaluate(0.0, np.array([0.4]), np.array([1.3]))
     assert ev.M[0, 0] == pytest.approx(_composite(beta), rel=1e-14)
     assert ev.f[0] == pytest.approx(0.0, abs=1e-13)  # no gravity, one rigid body turning about a fixed axis
