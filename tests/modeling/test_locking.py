@@ -88,6 +88,7 @@ def test_locked_columns_keep_the_joints_names_and_the_reaction_holds_the_elbow()
     assert res.status == "success"
     np.testing.assert_array_equal(res["b.phi"], beta)
     np.testing.assert_array_equal(res["b.w"], 0.0)
+    assert (res.units["b.phi"], res.units["b.w"], res.units["b.tau.z"]) == ("rad", "rad/s", "N m")
     # at t = 0 (rest, phi = 0): the composite's angular acceleration from gravity's moment about a
     alpha = -9.81 * (M1 * L1 + M2 * (L1 + L2 * np.cos(beta))) / _composite(beta)
     e = L2 * np.array([np.cos(beta), np.sin(beta), 0.0])  # elbow -> outer mass

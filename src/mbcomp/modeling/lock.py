@@ -77,6 +77,12 @@ class Locked(Joint):
         The held joint's speed names (zero columns).
     dropped : sequence of str
         What was dropped with the lock (for the summary).
+    units : dict, optional
+        ``{column suffix: unit}`` of the held coordinates and speeds (the joint's declared
+        units: the result's and the FMU's column units, :attr:`output_units`).
+
+    Its pose is its parameters ``r`` and ``R``, runtime values as any rigid offset's; the
+    held columns record the coordinates it was locked at.
 
     Examples
     --------
@@ -91,8 +97,9 @@ class Locked(Joint):
     R = Param(np.eye(3), unit="1", shape=(3, 3), check=rotation_matrix_problem,
               doc="orientation of frame_b: frame_b -> frame_a")
 
-    def __init__(self, joint_class="Joint", held=(), speeds=(), dropped=(), **values):
+    def __init__(self, joint_class="Joint", held=(), speeds=(), dropped=(), units=None, **values):
         super().__init__(**values)
+        self.output_units = dict(units or {})
         self.joint_class = str(joint_class)
         self.held = tuple((str(n), float(v)) for n, v in held)
         self.held_speeds = tuple(str(n) for n in speeds)
@@ -290,7 +297,7 @@ def _holders(flat, locked, at):
         dropped = [f"{path}'s own modes ({type(modes).__name__}: its stops or friction)"] if modes is not None else []
         holders[path] = Locked(r=r, R=R, joint_class=type(joint).__name__, dropped=dropped,
                                held=zip((n for n, _ in joint.coordinates), q.tolist()),
-                               speeds=[n for n, _ in joint.speeds])
+                               speeds=[n for n, _ in joint.speeds], units=dict(joint.coordinates + joint.speeds))
     return holders, probs
 
 
