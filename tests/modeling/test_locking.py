@@ -190,7 +190,7 @@ def test_errors_name_the_joint_and_the_fix():
         m.lock("p1")
     with pytest.raises(ModelError, match=r"r1: is a rigid offset \(FixedTranslation\): it has no coordinates"):
         m.lock("r1")
-    with pytest.raises(ModelError, match=r"at\['b'\]: has 2 values, the Revolute has 1 coordinates \(phi\)"):
+    with pytest.raises(ModelError, match=r"at\['b'\]: has 2 values, the Revolute has 1 coordinate \(phi\)"):
         m.lock("b", at={"b": [0.1, 0.2]})
     with pytest.raises(ModelError, match=r"at\['a'\]: gives coordinates of a joint not being locked"):
         m.lock("b", at={"a": 0.1})

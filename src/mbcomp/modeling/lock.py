@@ -155,7 +155,7 @@ def locked_joints(model):
 
 def _names_problem(flat, name, what):
     """The problem of a name that is no component of ``flat``: close names listed."""
-    joints = [p for p, c in flat.components.items() if c.role == "joint"]
+    joints = list(moving_joints(flat))
     close = difflib.get_close_matches(name, joints, n=5, cutoff=0.5)
     hint = f"did you mean {', '.join(map(repr, close))}?" if close else \
         f"the model's joints: {', '.join(joints[:12])}{' ...' if len(joints) > 12 else ''}"
@@ -204,7 +204,7 @@ def _pose(path, joint, value):
         q = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
         if q.size != joint.nq:
             return None, None, None, Problem(f"at[{path!r}]", f"has {q.size} value{'s' * (q.size != 1)}, the "
-                                             f"{type(joint).__name__} has {joint.nq} coordinates ({', '.join(names)})",
+                                             f"{type(joint).__name__} has {joint.nq} coordinate{'s' * (joint.nq != 1)} ({', '.join(names)})",
                                              f"give {joint.nq} value{'s' * (joint.nq != 1)}, in that order")
         if not np.isfinite(q).all():
             return None, None, None, Problem(f"at[{path!r}]", f"{q.tolist()} is not finite", "give finite values")
