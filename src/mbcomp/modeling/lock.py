@@ -203,9 +203,10 @@ def _pose(path, joint, value):
     else:
         q = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
         if q.size != joint.nq:
+            plural = "s" * (joint.nq != 1)
             return None, None, None, Problem(f"at[{path!r}]", f"has {q.size} value{'s' * (q.size != 1)}, the "
-                                             f"{type(joint).__name__} has {joint.nq} coordinate{'s' * (joint.nq != 1)} ({', '.join(names)})",
-                                             f"give {joint.nq} value{'s' * (joint.nq != 1)}, in that order")
+                                             f"{type(joint).__name__} has {joint.nq} coordinate{plural} "
+                                             f"({', '.join(names)})", f"give {joint.nq} value{plural}, in that order")
         if not np.isfinite(q).all():
             return None, None, None, Problem(f"at[{path!r}]", f"{q.tolist()} is not finite", "give finite values")
     R, r = joint.relative(q, joint.p)
