@@ -222,6 +222,8 @@ def solve_speeds(A, res, u, columns=None, *, minimum_norm=False):
         return u
     cols = slice(None) if columns is None else columns
     Ac = A[:, cols]
+    if not Ac.size:  # no speed may change (a mechanism without freedom): nothing to correct
+        return u
     if Ac.shape[0] == Ac.shape[1] and not minimum_norm:
         try:
             u[cols] -= np.linalg.solve(Ac, res)

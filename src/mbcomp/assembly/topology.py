@@ -304,7 +304,25 @@ class Topology(Rebinding):
         if probs:
             raise ModelError(probs)
         self._coordinates()
+        probs = self._rigid_contacts()
+        if probs:
+            raise ModelError(probs)
         self.rotors = rotor_nodes(self)
+
+    def _rigid_contacts(self):
+        """A constraint-only joint (a contact) whose two frames are one rigid link (both
+        fixed to the world, or moved by the same joint): its rows can never change and the
+        force it carries is undetermined (a ball held fixed and touching the floor: the hold
+        and the floor share its weight in any proportion)."""
+        link_of, probs = self.links.link_of, []
+        for e in self.edges:
+            if e.kind == "joint" and not e.comp.tree_edge and link_of.get(e.node_a, -2) == link_of.get(e.node_b, -3):
+                k = link_of[e.node_a]
+                where = "the world" if k < 0 else f"one rigid link (moved by {self.links.edges[k].name})"
+                probs.append(Problem(e.name, f"both frames this {type(e.comp).__name__} joins are fixed to {where}: "
+                                     "it can never move, and the force it carries is undetermined",
+                                     "remove it, or give a body it touches freedom (a joint between its two sides)"))
+        return probs
 
     def _flanges(self, flanges):
         """Which joint axis each flange node belongs to, and which joint each drive drives;
