@@ -1,10 +1,18 @@
-"""Triangle meshes from files: ASCII STL, binary STL and Wavefront OBJ.
+"""Triangle meshes from files: ASCII STL, binary STL, Wavefront OBJ and COLLADA (``.dae``).
 
 :func:`read_mesh` returns the vertices (in the file's units) and the triangles of a file; the
 scene scales them by the :class:`~mbcomp.modeling.shapes.Mesh`'s ``scale``. STL repeats a
 vertex in every triangle that uses it, so its vertices are merged when their coordinates are
 equal; an OBJ's vertices are kept as listed. Polygons of an OBJ are fanned into triangles
-(``f 1 2 3 4`` -> ``1 2 3``, ``1 3 4``).
+(``f 1 2 3 4`` -> ``1 2 3``, ``1 3 4``). STL and OBJ are read here; COLLADA through trimesh
+and pycollada, optional (``pip install mbcomp[meshes]``): its scene's node transforms are
+applied and its ``<unit meter="...">`` turns its coordinates into metres, so :func:`read_mesh`
+gives a COLLADA file's vertices in m. Its ``<up_axis>`` is ignored, as ROS's viewers (RViz,
+Gazebo, MoveIt's geometric_shapes) ignore it: robot description files are drawn that way, and
+a ``Y_UP`` file of a robot package would otherwise be turned by 90 degrees.
+
+A file is read once per process while it is unchanged (its path, size and modification time
+are the key): a URDF's loader checks its meshes and the scene draws them without reading again.
 
 Examples
 --------
@@ -19,33 +27,51 @@ from __future__ import annotations
 
 import os
 import struct
+import xml.etree.ElementTree as ET
+from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["read_mesh"]
+__all__ = ["read_mesh", "MeshReaderMissing"]
+
+#: the install that reads COLLADA files
+MESHES_FIX = "pip install mbcomp[meshes] (trimesh and pycollada)"
+
+
+class MeshReaderMissing(ImportError):
+    """A mesh file's format needs an optional package that is not installed (COLLADA: trimesh
+    and pycollada); the message names the file and the install.
+
+    Examples
+    --------
+    >>> issubclass(MeshReaderMissing, ImportError)
+    True
+    """
 
 
 def read_mesh(path, component=None):
-    """The vertices and triangles of an STL (ASCII or binary) or OBJ file.
+    """The vertices and triangles of an STL (ASCII or binary), OBJ or COLLADA file.
 
     Parameters
     ----------
     path : str or os.PathLike
-        The file; ``.stl`` or ``.obj`` (any case).
+        The file; ``.stl``, ``.obj`` or ``.dae`` (any case).
     component : str, optional
         The component whose shape it is, named in the errors.
 
     Returns
     -------
-    vertices : ndarray (n, 3) float64
-        Coordinates in the file's units.
-    faces : ndarray (m, 3) int
+    vertices : ndarray (n, 3) float64, read-only
+        Coordinates in the file's units (a COLLADA file's in m, by its ``<unit>``).
+    faces : ndarray (m, 3) int, read-only
         Indices into ``vertices`` (0-based), counter-clockwise as the file gives them.
 
     Raises
     ------
     FileNotFoundError
         The file does not exist (naming the path and the component).
+    MeshReaderMissing
+        A ``.dae`` file without trimesh and pycollada installed (naming the install).
     ValueError
         An unknown suffix, an empty file, or a malformed line (naming the file and the line).
 
@@ -64,20 +90,72 @@ def read_mesh(path, component=None):
     if not os.path.isfile(path):
         raise FileNotFoundError(f"{where}mesh file {path!r} not found (from {os.getcwd()!r}) -> give an existing "
                                 ".stl or .obj file, an absolute path or one relative to the working directory")
+    st = os.stat(path)
+    try:
+        return _read(os.path.abspath(path), st.st_size, st.st_mtime_ns)
+    except (ValueError, MeshReaderMissing) as e:  # the cached reader names no component
+        raise type(e)(f"{where}{e}") from None
+
+
+@lru_cache(maxsize=256)
+def _read(path, size, mtime_ns):
+    """The arrays of one version of a file (read-only: the cache hands out the same ones)."""
     ext = os.path.splitext(path)[1].lower()
-    with open(path, "rb") as f:
-        data = f.read()
-    name = f"{where}mesh file {path!r}"
-    if ext == ".stl":
-        vertices, faces = _binary_stl(data, name) if _is_binary_stl(data) else _ascii_stl(data, name)
-    elif ext == ".obj":
-        vertices, faces = _obj(data, name)
+    name = f"mesh file {path!r}"
+    if ext == ".dae":
+        vertices, faces = _collada(path, name)
     else:
-        raise ValueError(f"{name}: unknown suffix {ext or '(none)'!r} -> a mesh is an .stl or .obj file")
+        with open(path, "rb") as f:
+            data = f.read()
+        if ext == ".stl":
+            vertices, faces = _binary_stl(data, name) if _is_binary_stl(data) else _ascii_stl(data, name)
+        elif ext == ".obj":
+            vertices, faces = _obj(data, name)
+        else:
+            raise ValueError(f"{name}: unknown suffix {ext or '(none)'!r} -> a mesh is an .stl, .obj or .dae file")
     if len(faces) == 0:
         raise ValueError(f"{name} has no triangles (it is empty or holds no facets / f lines) -> export the "
                          "part again as STL or OBJ")
+    vertices, faces = np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int64)
+    vertices.flags.writeable = faces.flags.writeable = False
     return vertices, faces
+
+
+def _collada(path, name):
+    """A COLLADA file's triangles in m: its nodes' transforms applied (trimesh), times its
+    ``<unit meter>``; its ``<up_axis>`` ignored (see the module's notes)."""
+    try:
+        import collada  # noqa: F401  (trimesh reads COLLADA through it)
+        import trimesh
+    except ImportError:
+        raise MeshReaderMissing(f"{name}: reading COLLADA (.dae) needs trimesh and pycollada -> "
+                                f"{MESHES_FIX}, or convert the file to STL or OBJ") from None
+    try:
+        scene = trimesh.load(path, force="scene", process=False)
+        mesh = scene.to_geometry() if len(scene.geometry) else None
+    except Exception as e:  # pycollada's and trimesh's many error types: a broken file  # noqa: BLE001
+        raise ValueError(f"{name}: not a readable COLLADA file ({type(e).__name__}: {str(e)[:200]}) -> export "
+                         "the part again") from None
+    if mesh is None or not hasattr(mesh, "faces") or len(mesh.faces) == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    return np.asarray(mesh.vertices, dtype=float) * _collada_unit(path, name), np.asarray(mesh.faces)
+
+
+def _collada_unit(path, name):
+    """Metres per unit of a COLLADA file: ``<asset><unit meter="...">``, 1 when absent."""
+    try:
+        for _, el in ET.iterparse(path, events=("end",)):
+            tag = el.tag.rsplit("}", 1)[-1]
+            if tag == "unit":
+                unit = float(el.get("meter", "1"))
+                if not (np.isfinite(unit) and unit > 0):
+                    raise ValueError(f"{name}: <unit meter={el.get('meter')!r}> is no positive length")
+                return unit
+            if tag == "asset":  # the asset (first in the file) is over: no unit given
+                return 1.0
+    except ET.ParseError as e:
+        raise ValueError(f"{name}: not a readable COLLADA file (XML: {e})") from None
+    return 1.0
 
 
 def _is_binary_stl(data):
