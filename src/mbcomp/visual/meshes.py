@@ -32,7 +32,7 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["read_mesh", "MeshReaderMissing"]
+__all__ = ["read_mesh", "MeshReaderMissing", "cluster"]
 
 #: the install that reads COLLADA files
 MESHES_FIX = "pip install mbcomp[meshes] (trimesh and pycollada)"
@@ -156,6 +156,54 @@ def _collada_unit(path, name):
     except ET.ParseError as e:
         raise ValueError(f"{name}: not a readable COLLADA file (XML: {e})") from None
     return 1.0
+
+
+def cluster(vertices, faces, cell):
+    """A coarser mesh by vertex clustering: the vertices in each cube of edge ``cell`` (m)
+    merged into their mean, the triangles that collapse (two corners in one cube) and repeats
+    dropped. Details below ``cell`` go; the shape at the scale of ``cell`` stays (every kept
+    vertex moves less than ``cell * sqrt(3)``). Pictures use it with ``cell`` about a pixel.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+    cell : float
+        Edge of the clustering cubes, in the units of ``vertices``; ``cell <= 0`` keeps the mesh.
+
+    Returns
+    -------
+    vertices : (k, 3) float
+    faces : (l, 3) int
+        Each kept triangle turned as it was.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.001, 0.001, 0]])
+    >>> f = np.array([[0, 1, 2], [3, 1, 2], [0, 1, 3]])
+    >>> cv, cf = cluster(v, f, 0.01); len(cv), len(cf)    # vertex 3 merges into vertex 0
+    (3, 1)
+    """
+    vertices, faces = np.asarray(vertices, dtype=float), np.asarray(faces, dtype=np.int64)
+    if cell <= 0 or len(faces) == 0:
+        return vertices, faces
+    keys = np.floor((vertices - vertices.min(axis=0)) / cell).astype(np.int64)
+    _, inverse = np.unique(keys, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    counts = np.bincount(inverse)
+    merged = np.zeros((len(counts), 3))
+    np.add.at(merged, inverse, vertices)
+    merged /= counts[:, None]
+    f = inverse[faces]
+    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])]
+    if len(f):
+        _, first = np.unique(np.sort(f, axis=1), axis=0, return_index=True)
+        f = f[np.sort(first)]
+    used = np.unique(f)
+    renumber = np.full(len(merged), -1, dtype=np.int64)
+    renumber[used] = np.arange(len(used))
+    return merged[used], renumber[f]
 
 
 def _is_binary_stl(data):
