@@ -132,14 +132,14 @@ def resolve_mesh(filename, urdf_dir, package_dirs=()):
         if filename.startswith(scheme):
             pkg, _, rest = filename[len(scheme):].lstrip("/").partition("/")
             for root in _package_roots(pkg, urdf_dir, package_dirs):
-                candidate = os.path.join(root, rest)
+                candidate = os.path.abspath(os.path.join(root, rest))
                 if os.path.isfile(candidate):
-                    return os.path.abspath(candidate)
+                    return candidate
             return None
     if filename.startswith("file://"):
         filename = filename[len("file://"):]
-    candidate = filename if os.path.isabs(filename) else os.path.join(urdf_dir, filename)
-    return os.path.abspath(candidate) if os.path.isfile(candidate) else None
+    candidate = os.path.abspath(os.path.join(urdf_dir, filename))  # an absolute filename stays itself
+    return candidate if os.path.isfile(candidate) else None
 
 
 class _Reader:
