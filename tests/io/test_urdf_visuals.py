@@ -246,6 +246,30 @@ def test_a_collada_files_unit_and_node_transform_give_metres(tmp_path):
     assert np.array_equal(read_mesh(tmp_path / "y.dae")[0], vertices)
 
 
+BROKEN_EFFECT = """<library_effects><effect id="fx"><profile_COMMON>
+    <newparam sid="tex-sampler"><sampler2D><source>missing-surface</source></sampler2D></newparam>
+    <technique sid="common"><phong><diffuse><texture texture="tex-sampler" texcoord="UVMap"/></diffuse></phong>
+    </technique></profile_COMMON></effect></library_effects>
+  <library_materials><material id="mat" name="mat"><instance_effect url="#fx"/></material></library_materials>
+  <library_geometries>"""
+
+
+def test_a_collada_geometry_with_a_broken_material_is_still_read(tmp_path):
+    """pycollada drops a geometry whose bound material names a missing texture (ANYmal's foot):
+    its triangles are read without the materials, the node's transform kept."""
+    trimesh = pytest.importorskip("trimesh", reason="trimesh is not installed (pip install mbcomp[meshes])")
+    pytest.importorskip("collada", reason="pycollada is not installed (pip install mbcomp[meshes])")
+    text = _dae((1.0, 2.0, 3.0), 0.5, shift=(4.0, 0.0, 0.0)).replace("<library_geometries>", BROKEN_EFFECT)
+    text = text.replace('<triangles count="12">', '<triangles count="12" material="m">').replace(
+        '<instance_geometry url="#box"/>', '<instance_geometry url="#box"><bind_material><technique_common>'
+        '<instance_material symbol="m" target="#mat"/></technique_common></bind_material></instance_geometry>')
+    (tmp_path / "broken_material.dae").write_text(text)
+    assert not len(trimesh.load(tmp_path / "broken_material.dae", force="scene").geometry)  # trimesh alone: none
+    vertices, faces = read_mesh(tmp_path / "broken_material.dae")
+    assert len(faces) == 12 and np.allclose([vertices.min(axis=0), vertices.max(axis=0)],
+                                            [(2.0, 0, 0), (2.5, 1.0, 1.5)], rtol=0, atol=1e-15)
+
+
 def test_a_collada_mesh_without_its_reader_is_noted_with_the_install(tmp_path, monkeypatch):
     (tmp_path / "part.dae").write_text(_dae((1.0, 1.0, 1.0), 1.0))
     monkeypatch.setitem(sys.modules, "collada", None)  # as if pycollada were not installed

@@ -25,6 +25,7 @@ Examples
 """
 from __future__ import annotations
 
+import io
 import os
 import struct
 import xml.etree.ElementTree as ET
@@ -132,6 +133,8 @@ def _collada(path, name):
                                 f"{MESHES_FIX}, or convert the file to STL or OBJ") from None
     try:
         scene = trimesh.load(path, force="scene", process=False)
+        if not len(scene.geometry):  # pycollada drops a geometry whose material is broken: read it without
+            scene = trimesh.load(io.BytesIO(_without_materials(path)), file_type="dae", force="scene", process=False)
         mesh = scene.to_geometry() if len(scene.geometry) else None
     except Exception as e:  # pycollada's and trimesh's many error types: a broken file  # noqa: BLE001
         raise ValueError(f"{name}: not a readable COLLADA file ({type(e).__name__}: {str(e)[:200]}) -> export "
@@ -139,6 +142,16 @@ def _collada(path, name):
     if mesh is None or not hasattr(mesh, "faces") or len(mesh.faces) == 0:
         return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
     return np.asarray(mesh.vertices, dtype=float) * _collada_unit(path, name), np.asarray(mesh.faces)
+
+
+def _without_materials(path):
+    """A COLLADA file's text without its ``<bind_material>`` elements (the triangles stay): an
+    effect that names a missing texture (ANYmal's foot) otherwise drops its geometry."""
+    root = ET.parse(path).getroot()
+    for parent in root.iter():
+        for child in [c for c in parent if c.tag.rsplit("}", 1)[-1] == "bind_material"]:
+            parent.remove(child)
+    return ET.tostring(root)
 
 
 def _collada_unit(path, name):
