@@ -270,6 +270,24 @@ def test_a_collada_geometry_with_a_broken_material_is_still_read(tmp_path):
                                             [(2.0, 0, 0), (2.5, 1.0, 1.5)], rtol=0, atol=1e-15)
 
 
+def test_a_collada_meshs_own_colour_unless_the_urdf_gives_a_material(tmp_path):
+    pytest.importorskip("trimesh", reason="trimesh is not installed (pip install mbcomp[meshes])")
+    pytest.importorskip("collada", reason="pycollada is not installed (pip install mbcomp[meshes])")
+    effect = BROKEN_EFFECT.replace('<newparam sid="tex-sampler"><sampler2D><source>missing-surface</source></sampler2D>'
+                                   '</newparam>', "").replace(
+        '<texture texture="tex-sampler" texcoord="UVMap"/>', "<color>0.2 0.4 0.6 1</color>")
+    text = _dae((1.0, 1.0, 1.0), 1.0).replace("<library_geometries>", effect)
+    text = text.replace('<triangles count="12">', '<triangles count="12" material="m">').replace(
+        '<instance_geometry url="#box"/>', '<instance_geometry url="#box"><bind_material><technique_common>'
+        '<instance_material symbol="m" target="#mat"/></technique_common></bind_material></instance_geometry>')
+    (tmp_path / "blue.dae").write_text(text)
+    model = _load(_mesh_robot(tmp_path / "r.urdf", "blue.dae"))
+    assert model["arm"].look.shape[0].color == "#336699"  # 0.2, 0.4, 0.6 of 255
+    (tmp_path / "r2.urdf").write_text((tmp_path / "r.urdf").read_text().replace(
+        "</geometry>", '</geometry><material name="m"><color rgba="1 0 0 1"/></material>'))
+    assert _load(tmp_path / "r2.urdf")["arm"].look.shape[0].color == "#ff0000"
+
+
 def test_a_collada_mesh_without_its_reader_is_noted_with_the_install(tmp_path, monkeypatch):
     (tmp_path / "part.dae").write_text(_dae((1.0, 1.0, 1.0), 1.0))
     monkeypatch.setitem(sys.modules, "collada", None)  # as if pycollada were not installed

@@ -8,7 +8,8 @@ visual's ``<origin xyz rpy>``):
   :class:`~mbcomp.modeling.shapes.Cylinder` (along the visual's z axis, centred, as URDF's),
   ``<sphere radius>`` -> :class:`~mbcomp.modeling.shapes.Sphere`, ``<mesh filename scale>`` ->
   :class:`~mbcomp.modeling.shapes.Mesh` (one scale factor per axis; STL, OBJ and, with
-  ``pip install mbcomp[meshes]``, COLLADA);
+  ``pip install mbcomp[meshes]``, COLLADA, drawn in the colour of its largest part unless the
+  visual gives a material);
 - ``<material>``: its ``<color rgba>`` (given in the visual, or by name from a material defined
   at the robot's top level or earlier in the file) is the shape's colour and opacity.
 
@@ -38,7 +39,7 @@ import numpy as np
 
 from ..geometry.rotations import euler_to_matrix
 from ..modeling.shapes import Box, Cylinder, Mesh, Sphere, rgb
-from ..visual.meshes import MeshReaderMissing, read_mesh
+from ..visual.meshes import MeshReaderMissing, mesh_color, read_mesh
 
 __all__ = ["link_visuals", "resolve_mesh", "materials", "hide_glyphs"]
 
@@ -163,6 +164,8 @@ class _Reader:
         try:
             shape = Mesh(path, scale=scale, **placement)
             read_mesh(path)
+            if "color" not in placement and mesh_color(path) is not None:  # the file's own colour
+                shape = shape.placed(color=mesh_color(path))
         except MeshReaderMissing:
             self.no_reader.append(link)
             return None

@@ -33,7 +33,7 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["read_mesh", "MeshReaderMissing", "cluster"]
+__all__ = ["read_mesh", "mesh_color", "MeshReaderMissing", "cluster"]
 
 #: the install that reads COLLADA files
 MESHES_FIX = "pip install mbcomp[meshes] (trimesh and pycollada)"
@@ -90,21 +90,41 @@ def read_mesh(path, component=None):
     where = f"{component}: " if component else ""
     if not os.path.isfile(path):
         raise FileNotFoundError(f"{where}mesh file {path!r} not found (from {os.getcwd()!r}) -> give an existing "
-                                ".stl or .obj file, an absolute path or one relative to the working directory")
+                                ".stl, .obj or .dae file, an absolute path or one relative to the working directory")
     st = os.stat(path)
     try:
-        return _read(os.path.abspath(path), st.st_size, st.st_mtime_ns)
+        return _read(os.path.abspath(path), st.st_size, st.st_mtime_ns)[:2]
     except (ValueError, MeshReaderMissing) as e:  # the cached reader names no component
         raise type(e)(f"{where}{e}") from None
 
 
+def mesh_color(path):
+    """The colour a mesh file gives its largest part, ``"#rrggbb"``, or ``None`` (STL and OBJ
+    files: none read). A COLLADA file's materials colour its parts; the colour covering the
+    largest area stands for the file (a scene draws a shape in one colour).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "tri.obj")
+    >>> _ = open(path, "w").write("v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf 1 2 3\\n")
+    >>> mesh_color(path) is None
+    True
+    """
+    path = os.fspath(path)
+    st = os.stat(path)
+    return _read(os.path.abspath(path), st.st_size, st.st_mtime_ns)[2]
+
+
 @lru_cache(maxsize=256)
 def _read(path, size, mtime_ns):
-    """The arrays of one version of a file (read-only: the cache hands out the same ones)."""
+    """The arrays (read-only: the cache hands out the same ones) and the colour of one version of
+    a file."""
     ext = os.path.splitext(path)[1].lower()
     name = f"mesh file {path!r}"
+    color = None
     if ext == ".dae":
-        vertices, faces = _collada(path, name)
+        vertices, faces, color = _collada(path, name)
     else:
         with open(path, "rb") as f:
             data = f.read()
@@ -119,12 +139,12 @@ def _read(path, size, mtime_ns):
                          "part again as STL or OBJ")
     vertices, faces = np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int64)
     vertices.flags.writeable = faces.flags.writeable = False
-    return vertices, faces
+    return vertices, faces, color
 
 
 def _collada(path, name):
     """A COLLADA file's triangles in m: its nodes' transforms applied (trimesh), times its
-    ``<unit meter>``; its ``<up_axis>`` ignored (see the module's notes)."""
+    ``<unit meter>``; its ``<up_axis>`` ignored (see the module's notes); and its main colour."""
     try:
         import collada  # noqa: F401  (trimesh reads COLLADA through it)
         import trimesh
@@ -140,8 +160,24 @@ def _collada(path, name):
         raise ValueError(f"{name}: not a readable COLLADA file ({type(e).__name__}: {str(e)[:200]}) -> export "
                          "the part again") from None
     if mesh is None or not hasattr(mesh, "faces") or len(mesh.faces) == 0:
-        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
-    return np.asarray(mesh.vertices, dtype=float) * _collada_unit(path, name), np.asarray(mesh.faces)
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), None
+    return (np.asarray(mesh.vertices, dtype=float) * _collada_unit(path, name), np.asarray(mesh.faces),
+            _main_color(scene.geometry.values()))
+
+
+def _main_color(parts):
+    """``"#rrggbb"`` of the material colour covering the largest area of trimesh ``parts``."""
+    area = {}
+    for g in parts:
+        visual = getattr(g, "visual", None)
+        material = getattr(visual, "material", None)
+        try:
+            rgba = material.main_color if material is not None else visual.main_color
+            key = "#" + "".join(f"{int(c):02x}" for c in np.asarray(rgba)[:3])
+        except (AttributeError, TypeError, ValueError):
+            continue
+        area[key] = area.get(key, 0.0) + float(g.area)
+    return max(area, key=area.get) if area else None
 
 
 def _without_materials(path):
