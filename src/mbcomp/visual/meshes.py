@@ -33,7 +33,7 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["read_mesh", "mesh_color", "MeshReaderMissing", "cluster"]
+__all__ = ["read_mesh", "mesh_color", "clear_cache", "MeshReaderMissing", "cluster"]
 
 #: the install that reads COLLADA files
 MESHES_FIX = "pip install mbcomp[meshes] (trimesh and pycollada)"
@@ -114,6 +114,17 @@ def mesh_color(path):
     path = os.fspath(path)
     st = os.stat(path)
     return _read(os.path.abspath(path), st.st_size, st.st_mtime_ns)[2]
+
+
+def clear_cache():
+    """Forget every mesh read: the next :func:`read_mesh` reads its file again (a file is
+    otherwise read once while its size and modification time stay; a benchmark's cold read).
+
+    Examples
+    --------
+    >>> clear_cache()
+    """
+    _read.cache_clear()
 
 
 @lru_cache(maxsize=256)
