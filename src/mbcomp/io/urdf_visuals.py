@@ -22,6 +22,15 @@ load (once per file: the scene reuses it), so that a mesh that cannot be found o
 note in ``model.urdf_notes`` -- never an error: visuals do not change the motion. A link whose
 visuals all fail keeps the library's default look of its body.
 
+Where the shapes hang (:func:`mbcomp.io.urdf.load_urdf`): a link with mass is a ``RigidBody``
+whose ``frame_a`` is the link frame, so its shapes are its ``shape=``. A massless link has no
+body; its frame is a port of the component that carries it (the joint, the joint's origin
+offset, the world). A shape can ride on any component's frame port, but giving that component
+``shape=`` would replace its own look and mix the link into the joint; a body of zero mass
+would enter the dynamics. So the link gets a *marker*: a ``FixedTranslation`` of length 0 named
+as the link, on its frame, carrying its shapes -- no coordinate, no mass, no constraint.
+The joints' and offsets' own glyphs are hidden when the file has visuals (:func:`hide_glyphs`).
+
 Examples
 --------
 >>> import xml.etree.ElementTree as ET
