@@ -23,6 +23,7 @@ joint's coordinate):
   ``TranslationalSpringDamper`` with ``c = 0`` (prismatic) on the joint's flanges with
   ``damping=True`` (default); ``friction`` and ``<mimic>`` are not imported (listed).
 - gravity: ``World(g=gravity)``, ``(0, 0, -9.81)`` m/s^2 by default (URDF carries none).
+- ``<visual>``: the link's shapes (:mod:`mbcomp.io.urdf_visuals`), with ``visuals=True``.
 
 Whatever is not imported is listed, element by element, in ``model.urdf_notes`` (a list of
 strings) and summed up in one ``UserWarning``.
@@ -34,6 +35,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..geometry.rotations import euler_to_matrix
+from .urdf_visuals import hide_glyphs, link_visuals
 
 __all__ = ["load_urdf", "rpy_matrix"]
 
@@ -184,7 +186,8 @@ def _parse(path):
     return root, links, children, roots[0]
 
 
-def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, damping=True):
+def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, damping=True, visuals=True,
+              package_dirs=()):
     """A :class:`~mbcomp.Model` of library components from a URDF file (a tree robot).
 
     Parameters
@@ -202,6 +205,14 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
     damping : bool
         Model ``<dynamics damping>`` of revolute and prismatic joints by a damper named
         ``<joint>_damping`` (N m s/rad or N s/m) on the joint's flanges.
+    visuals : bool
+        Draw each link as its ``<visual>`` elements say (:mod:`mbcomp.io.urdf_visuals`: boxes,
+        cylinders, spheres, meshes; a massless link's on a component named as the link, a
+        ``FixedTranslation`` of length 0 on its frame); False: the library's default looks,
+        no mesh file read (faster).
+    package_dirs : iterable of str
+        Where ``package://`` mesh names are searched first (each a package's directory or one
+        holding packages), as Pinocchio's ``package_dirs``.
 
     Returns
     -------
@@ -240,7 +251,8 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
         free = model.add(free_name, lib.FreeMotion())
         model.connect(world.frame_b, free.frame_a)
         base = free.frame_b
-    _add_link(model, lib, links, root, base, link_frame, names, notes)
+    looks = link_visuals(robot, path, package_dirs, notes) if visuals else {}
+    _add_link(model, lib, links, root, base, link_frame, names, notes, looks)
     carries = _carries_mass(links, children, root)
     stack = [root]
     while stack:
@@ -252,11 +264,13 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
                              "massless): held at 0 as a fixed joint")  # its motion would be undetermined
                 jel = _as_fixed(jel)
             frame = _add_joint(model, lib, jel, cname, link_frame[parent], names, notes, limits, damping)
-            _add_link(model, lib, links, child, frame, link_frame, names, notes)
+            _add_link(model, lib, links, child, frame, link_frame, names, notes, looks)
             stack.append(child)
     for el in robot:
         if el.tag not in ("link", "joint", "material"):
             notes.append(f"<{el.tag}> {el.get('name', '')!r}: not imported".replace(" ''", ""))
+    if looks:  # the robot is drawn as its file says: no joint glyphs in or across its meshes
+        hide_glyphs(model)
     model.urdf_notes = notes
     if notes:
         warnings.warn(f"{path}: {len(notes)} URDF elements not imported or renamed (model.urdf_notes): "
@@ -284,13 +298,16 @@ def _as_fixed(jel):
     return fixed
 
 
-def _add_link(model, lib, links, name, frame, link_frame, names, notes):
+def _add_link(model, lib, links, name, frame, link_frame, names, notes, looks):
     mp = _inertial(links[name])
     if mp is None:
         link_frame[name] = frame
+        if looks.get(name):  # a massless link's visuals: on a marker, a rigid offset of length 0 on its frame
+            marker = model.add(names(name, "link"), lib.FixedTranslation(r=(0.0, 0.0, 0.0), shape=looks[name]))
+            model.connect(frame, marker.frame_a)
         return
     m, r_cm, I = mp
-    body = model.add(names(name, "link"), lib.RigidBody(m=m, r_cm=r_cm, I=I))
+    body = model.add(names(name, "link"), lib.RigidBody(m=m, r_cm=r_cm, I=I, shape=looks.get(name)))
     model.connect(frame, body.frame_a)
     link_frame[name] = body.frame_a
 

@@ -221,16 +221,20 @@ class Sphere(Shape):
 
 @dataclass(frozen=True)
 class Mesh(Shape):
-    """A triangle mesh: from an STL (ASCII or binary) or OBJ file (``path``), or given inline
-    (``vertices`` (n, 3) and ``faces`` (m, 3) indices, 0-based), its coordinates times
-    ``scale`` in m, in the shape's axes. A file is read when a scene is built
-    (:func:`mbcomp.visual.meshes.read_mesh`); a missing file is reported then with its path.
-    :meth:`from_grid` triangulates a grid of points (a patch of a surface).
+    """A triangle mesh: from an STL (ASCII or binary), OBJ or COLLADA (``.dae``, read through
+    the optional trimesh and pycollada: ``pip install mbcomp[meshes]``) file (``path``), or given
+    inline (``vertices`` (n, 3) and ``faces`` (m, 3) indices, 0-based), its coordinates times
+    ``scale`` in m, in the shape's axes. ``scale`` is one factor or three, one per axis (a
+    URDF's ``scale="0.001 0.001 0.001"``); a negative factor mirrors the mesh. A file is read
+    when a scene is built (:func:`mbcomp.visual.meshes.read_mesh`); a missing file is reported
+    then with its path. :meth:`from_grid` triangulates a grid of points (a patch of a surface).
 
     Examples
     --------
     >>> Mesh("part.stl", scale=1e-3).scale
     0.001
+    >>> Mesh("left_leg.dae", scale=(1, -1, 1)).scale
+    (1.0, -1.0, 1.0)
     >>> tri = Mesh(vertices=[(0, 0, 0), (1, 0, 0), (0, 1, 0)], faces=[(0, 1, 2)], opacity=0.5)
     >>> vertices, faces = tri.triangles(); vertices.shape, faces.tolist()
     ((3, 3), [[0, 1, 2]])
@@ -249,11 +253,11 @@ class Mesh(Shape):
         super().__init__(**placement)
 
     def _check(self):
-        object.__setattr__(self, "scale", _positive(self.scale, "scale", "Mesh"))
+        object.__setattr__(self, "scale", _scale(self.scale))
         if self.vertices is None and self.faces is None:
-            if not str(self.path).lower().endswith((".stl", ".obj")):
-                raise ValueError(f"Mesh: path={self.path!r} must be an .stl or .obj file (or give vertices= and "
-                                 "faces=)")
+            if not str(self.path).lower().endswith(MESH_SUFFIXES):
+                raise ValueError(f"Mesh: path={self.path!r} must be an .stl, .obj or .dae file (or give vertices= "
+                                 "and faces=)")
             return
         if self.path:
             raise ValueError("Mesh: give either a path or vertices= and faces=, not both")
@@ -272,13 +276,29 @@ class Mesh(Shape):
         if not self.inline:
             raise ValueError(f"Mesh({self.path!r}) is read from its file by the scene -> use "
                              "mbcomp.visual.meshes.read_mesh")
-        return np.array(self.vertices, dtype=float) * self.scale, np.array(self.faces, dtype=np.int64)
+        return self.scaled(np.array(self.vertices, dtype=float), np.array(self.faces, dtype=np.int64))
+
+    def scaled(self, vertices, faces):
+        """``(vertices * scale, faces)``: the mesh's coordinates (its file's units) in m, each
+        axis times its factor; a mirror (an odd number of negative factors) turns the faces'
+        corners the other way, so they stay counter-clockwise seen from outside.
+
+        Examples
+        --------
+        >>> v, f = Mesh("part.stl", scale=(2, -1, 1)).scaled(np.ones((3, 3)), np.array([[0, 1, 2]]))
+        >>> v[0].tolist(), f.tolist()
+        ([2.0, -1.0, 1.0], [[0, 2, 1]])
+        """
+        factors = np.broadcast_to(np.asarray(self.scale, dtype=float), (3,))
+        faces = np.asarray(faces)
+        return np.asarray(vertices, dtype=float) * factors, (faces[:, [0, 2, 1]] if np.prod(factors) < 0 else faces)
 
     def geometry(self):
         """The type and, for a file, its path and scale (the scene writes the triangles)."""
         if self.inline:
             return {"type": "mesh", "vertices": len(self.vertices), "faces": len(self.faces)}
-        return {"type": "mesh", "path": self.path, "scale": self.scale}
+        return {"type": "mesh", "path": self.path, "scale": list(self.scale) if isinstance(self.scale, tuple)
+                else self.scale}
 
     @classmethod
     def from_grid(cls, points, **placement):
@@ -309,6 +329,22 @@ class Mesh(Shape):
         renumber = np.full(len(flat), -1)
         renumber[used] = np.arange(len(used))
         return cls(vertices=flat[used], faces=renumber[faces], **placement)
+
+
+#: the mesh files :class:`Mesh` takes (any case): STL, Wavefront OBJ, COLLADA
+MESH_SUFFIXES = (".stl", ".obj", ".dae")
+
+
+def _scale(value):
+    """A mesh's ``scale``: one nonzero factor (a float) or three (a tuple), finite."""
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        v = np.zeros(0)
+    if v.shape not in ((), (3,)) or not np.all(np.isfinite(v)) or not np.all(v != 0):
+        raise ValueError(f"Mesh: scale={value!r} must be one nonzero finite number or three (one per axis; "
+                         "negative mirrors)")
+    return float(v) if v.shape == () else tuple(float(x) for x in v)
 
 
 def _inline_mesh(vertices, faces):

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..geometry.kinematics import quat_to_matrix
 from ..modeling.shapes import Box, Cylinder, Grid, Helix, Mesh, Rod, Sphere
+from .meshes import cluster
 from .scene import mesh_triangles
 
 __all__ = ["Drawn", "frame_geometry", "pose_at", "film_times", "write_picture", "write_film"]
@@ -42,6 +43,11 @@ __all__ = ["Drawn", "frame_geometry", "pose_at", "film_times", "write_picture", 
 SIDES, BANDS, SECTORS = 16, 8, 12
 #: picture size (inch) and resolution (dots per inch): 640 x 480 pixels
 FIGSIZE, DPI = (6.4, 4.8), 100
+#: file meshes are drawn coarsened by vertex clustering (:func:`~mbcomp.visual.meshes.cluster`) in
+#: cubes of ``scene.scale / MESH_CELLS`` (about a pixel), coarser (x1.5 at a time, up to
+#: ``scene.scale / 30``) until the picture holds at most MESH_FACES of their triangles: a robot's
+#: meshes have 10^5 triangles, which matplotlib draws in seconds a frame
+MESH_CELLS, MESH_FACES = 300, 40000
 
 
 @dataclass(frozen=True)
@@ -231,12 +237,28 @@ def _span(shape, a, b):
 # the scene at a time
 
 
+def _coarse_meshes(scene):
+    """``{(path, scale): (vertices, faces)}`` of the scene's file meshes, coarsened for a picture
+    (:data:`MESH_CELLS`, :data:`MESH_FACES`)."""
+    full = {}
+    for v in scene.visuals:
+        if isinstance(v.shape, Mesh) and not v.shape.inline and (v.shape.path, v.shape.scale) not in full:
+            full[(v.shape.path, v.shape.scale)] = mesh_triangles(v.shape, v.component)
+    cell = scene.scale / MESH_CELLS
+    while True:
+        out = {k: cluster(*vf, cell) for k, vf in full.items()}
+        if sum(len(f) for _, f in out.values()) <= MESH_FACES or cell * 1.5 > scene.scale / 30:
+            return out
+        cell *= 1.5
+
+
 class _Geometry:
     """A scene's shapes in their own axes, read once (meshes, grids), and its trails' paths at
     every output; :meth:`at` places them at a time."""
 
     def __init__(self, scene):
         self.scene, meshes = scene, {}
+        meshes = _coarse_meshes(scene)
         self.local = [None if isinstance(v.shape, (Helix, Rod)) else _local(v, meshes) for v in scene.visuals]
         self.paths = [np.array([scene.point(tr["link"], tr["r"], k) for k in range(len(scene.time))])
                       for tr in scene.trails]

@@ -167,8 +167,7 @@ def mesh_triangles(shape, component=None):
         return shape.triangles()
     from .meshes import read_mesh
 
-    vertices, faces = read_mesh(shape.path, component=component)
-    return vertices * shape.scale, faces
+    return shape.scaled(*read_mesh(shape.path, component=component))
 
 
 def build_scene(res, system=None, hide=(), trails=(), color_by=None, title=None):
