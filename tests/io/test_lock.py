@@ -50,7 +50,7 @@ CASES = {
 def _load(rel, floating):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # the import's notes of what it leaves out
-        return load_urdf(os.path.join(ROBOTS, rel), floating=floating)
+        return load_urdf(os.path.join(ROBOTS, rel), floating=floating, visuals=False)
 
 
 def _held_values(model, names, rng):

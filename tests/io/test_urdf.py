@@ -66,10 +66,11 @@ def _sanitized(name):
 
 @functools.lru_cache(maxsize=None)
 def _pair(path, floating):
-    """(mbcomp system, Pinocchio model) of one file, built once per test module run."""
+    """(mbcomp system, Pinocchio model) of one file, built once per test module run (no visual
+    shapes: the meshes change no dynamics and tests/io/test_urdf_visuals.py reads them)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # the notes of what is not imported
-        system = mbcomp.assemble(load_urdf(path, floating=floating))
+        system = mbcomp.assemble(load_urdf(path, floating=floating, visuals=False))
     model = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer()) if floating else pin.buildModelFromUrdf(path)
     return system, model
 
