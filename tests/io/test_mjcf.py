@@ -47,12 +47,26 @@ def _pair(path, armature=False):
         warnings.simplefilter("ignore", UserWarning)
         model = load_mjcf(path, armature=armature)
     system = mbcomp.assemble(model)
-    mj = mujoco.MjModel.from_xml_path(path)
+    mj = _compiled(path)
     mj.opt.density = mj.opt.viscosity = 0.0
     mj.tendon_stiffness[:] = mj.tendon_damping[:] = 0.0  # tendons are not imported (noted)
     if not armature:
         mj.dof_armature[:] = 0.0
     return model, system, mj
+
+
+def _compiled(path):
+    """MuJoCo's model of ``path``, compiled in a scratch directory (MuJoCo writes its warnings,
+    e.g. settotalmass's deprecation, to MUJOCO_LOG.TXT in the working directory)."""
+    import tempfile
+
+    here = os.getcwd()
+    with tempfile.TemporaryDirectory() as scratch:
+        os.chdir(scratch)
+        try:
+            return mujoco.MjModel.from_xml_path(os.path.abspath(os.path.join(here, path)))
+        finally:
+            os.chdir(here)
 
 
 def _layout(model, system, mj):
@@ -151,3 +165,164 @@ def test_forward_dynamics_matches_mujoco(name):
     d = _forward_difference(os.path.join(SUITE, name + ".xml"))
     print(f"{name}: qacc {d:.1e}")
     assert d < 1e-9, f"{name}: accelerations {d:.1e} relative"
+
+
+def _write(tmp_path, text, name="model.xml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def _load(path, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return load_mjcf(path, **kw)
+
+
+DEFAULTS = """<mujoco><default><joint damping="1" axis="0 1 0"/><geom density="500"/>
+  <default class="leg"><joint stiffness="4"/><geom type="box" size=".1 .2 .3"/>
+    <default class="foot"><geom density="2000"/></default></default></default>
+<worldbody><body name="thigh" childclass="leg" pos="0 0 2"><joint name="hip"/><geom/>
+  <body name="foot" pos="0 0 -1"><joint name="ankle" damping="3"/><geom class="foot" pos="0.1 0 0"/></body>
+</body></worldbody></mujoco>"""
+
+
+def test_default_classes_are_inherited_as_mujoco_reads_them(tmp_path):
+    """``childclass`` gives the thigh's geom the class ``leg`` (a box of density 500 from
+    ``main``: 500 * 8 * 0.1 * 0.2 * 0.3 = 24 kg); ``foot`` inherits the box and overrides the
+    density (96 kg); the ankle keeps ``leg``'s stiffness 4 and overrides ``main``'s damping 1
+    with 3; axes along y from ``main``."""
+    path = _write(tmp_path, DEFAULTS)
+    model = _load(path)
+    assert model["thigh"].p.m == pytest.approx(24.0, rel=1e-14)
+    assert model["foot"].p.m == pytest.approx(96.0, rel=1e-14)
+    assert model["foot"].p.r_cm.tolist() == [0.1, 0.0, 0.0]
+    assert (model["hip_spring"].p.c, model["hip_spring"].p.d) == (4.0, 1.0)
+    assert (model["ankle_spring"].p.c, model["ankle_spring"].p.d) == (4.0, 3.0)
+    assert model["ankle"].p.n.tolist() == [0.0, 1.0, 0.0]
+    dM, df = _differences(path, n_states=3)
+    assert dM < 1e-13 and df < 1e-13, (dM, df)
+
+
+ORIENTED = """<mujoco><compiler {compiler}/><worldbody>
+<body name="b" pos="0.1 0.2 0.3" {spec}><joint type="slide" axis="1 0 0"/><geom type="box" size=".1 .2 .3"/></body>
+</worldbody></mujoco>"""
+
+
+@pytest.mark.parametrize("compiler, spec", [
+    ('angle="degree"', 'euler="10 -20 130"'), ('angle="degree" eulerseq="XYZ"', 'euler="10 -20 130"'),
+    ('angle="radian" eulerseq="zyx"', 'euler="0.3 1.1 -2.0"'), ('eulerseq="ZyX"', 'euler="40 -75 12"'),
+    ('', 'axisangle="1 2 -1 160"'), ('angle="radian"', 'axisangle="0 0 3 1.0"'),
+    ('', 'xyaxes="1 1 0 -1 2 0.5"'), ('', 'zaxis="0.3 -1 0.2"'), ('', 'zaxis="0 0 -1"'),
+    ('', 'quat="0.5 0.1 -0.7 0.2"')])
+def test_orientations_are_mujocos(tmp_path, compiler, spec):
+    """Every way MJCF orients a frame, with degrees (MuJoCo's default) and radians, intrinsic
+    (lowercase) and extrinsic (uppercase) Euler sequences: the body's world orientation at
+    qpos0 equals MuJoCo's ``xmat`` to rounding."""
+    path = _write(tmp_path, ORIENTED.format(compiler=compiler, spec=spec))
+    frame = body_frames(_load(path))["b"]
+    mj = _compiled(path)
+    d = mujoco.MjData(mj)
+    mujoco.mj_kinematics(mj, d)
+    np.testing.assert_allclose(frame.R0, d.xmat[1].reshape(3, 3), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(frame.p0, d.xpos[1], rtol=0, atol=1e-15)
+
+
+CAPSULE = """<mujoco><worldbody><body name="rod"><joint name="pivot" axis="1 0 0"/>
+<geom type="capsule" fromto="0 0 0 0 0 {L}" size="{r}" density="{rho}"/></body></worldbody></mujoco>"""
+
+
+def test_fromto_capsule_mass_properties_closed_form(tmp_path):
+    """A capsule from the origin up z: a cylinder of length L and two hemispheres of radius
+    r. Each hemisphere has mass m_h, centroid 3r/8 beyond the cylinder's end and transverse
+    inertia 83/320 m_h r^2 about its centroid (the textbook values, not MuJoCo's expression),
+    so about the pivot at the origin the moment is I_cm + m (L/2)^2 -- M of the hinge."""
+    L, r, rho = 0.7, 0.09, 800.0
+    path = _write(tmp_path, CAPSULE.format(L=L, r=r, rho=rho))
+    model = _load(path)
+    m_c, m_h = rho * np.pi * r * r * L, rho * 2.0 * np.pi * r ** 3 / 3.0
+    across = m_c * (3 * r * r + L * L) / 12 + 2 * m_h * (83 / 320 * r * r + (L / 2 + 3 * r / 8) ** 2)
+    along = m_c * r * r / 2 + 2 * m_h * 2 * r * r / 5
+    body = model["rod"].p
+    assert body.m == pytest.approx(m_c + 2 * m_h, rel=1e-14)
+    np.testing.assert_allclose(body.r_cm, (0, 0, L / 2), atol=1e-16)
+    np.testing.assert_allclose(np.diag(body.I), (across, across, along), rtol=1e-13)
+    ev = mbcomp.assemble(model).evaluate(0.0, np.array([0.4]), np.array([0.0]))
+    assert ev.M[0, 0] == pytest.approx(across + body.m * (L / 2) ** 2, rel=1e-13)
+    assert ev.f[0] == pytest.approx(9.81 * body.m * L / 2 * np.sin(0.4), rel=1e-13)  # z up, tipped over
+
+
+TWO_JOINTS = """<mujoco><option gravity="0.5 -2 -9"/><worldbody><body name="base" pos="0 0 1" euler="20 0 0">
+<joint name="swing" pos="0.1 0 0.2" axis="0 1 0.5" ref="30" stiffness="3" springref="10" damping="0.2"/>
+<joint name="slide" type="slide" axis="1 0 1" ref="0.1" stiffness="5" springref="0.3"/>
+<joint name="turn" pos="-0.2 0.1 0" axis="1 0 0"/>
+<geom type="box" size=".2 .1 .05" pos="0.3 0 0" euler="0 30 10"/><geom type="sphere" size=".07" pos="-.2 .1 0"/>
+<body name="ball" pos="0.4 0 -0.3"><joint name="knob" type="ball" pos="0 0.05 0"/>
+<geom type="ellipsoid" size=".1 .05 .2" pos="0 0 -.1" quat="0.9 0.1 0.3 0"/>
+<body name="tip" pos="0 0 -.3"><joint name="last" axis="0 0 1"/><geom type="cylinder" fromto="0 0 0 0.1 0.1 -0.2" size=".03"/>
+</body></body></body></worldbody></mujoco>"""
+
+
+def test_a_body_with_three_joints_and_a_ball_matches_mujoco(tmp_path):
+    """A hinge off the body's origin with ``ref`` and a spring, a slide with ``ref``, another
+    hinge at another anchor, all in one body (MuJoCo applies them in order at the body), then
+    a ball joint off its body's origin and a hinge beyond it: mbcomp's coordinates are
+    MuJoCo's qpos (refs included), and M and f agree with MuJoCo's at random states."""
+    path = _write(tmp_path, TWO_JOINTS)
+    model = _load(path)
+    system = mbcomp.assemble(model)
+    assert [n for n in system.q_names if not n.startswith("knob")] == ["swing.phi", "slide.s", "turn.phi", "last.phi"]
+    assert model["swing"].p.phi0 == pytest.approx(np.pi / 6) and model["slide"].p.s0 == 0.1  # qpos0 = ref
+    dM, df = _differences(path, n_states=5)
+    assert dM < 1e-13 and df < 1e-13, (dM, df)
+
+
+ARMATURE = """<mujoco><worldbody>
+<body name="cart"><joint name="rail" type="slide" axis="1 0 0"/><geom type="box" size=".2 .1 .1"/>
+  <body name="pole" pos="0 0 .1"><joint name="hinge" axis="0 1 0" armature="0.3" damping="0.1"/>
+  <geom type="capsule" fromto="0 0 0 0.1 0 0.6" size=".04"/></body></body>
+<body name="wheel" pos="1 0 0"><joint name="axle" axis="0.6 0 0.8" armature="0.05"/>
+  <geom type="cylinder" size=".3 .02" pos="0.1 0 0"/></body></worldbody></mujoco>"""
+
+
+def test_armature_on_hinges_whose_carrier_does_not_turn_is_mujocos(tmp_path):
+    """A hinge on the ground and a hinge on a slider: the rotor on the absolute rate turns at
+    the joint's own rate, so mbcomp's M equals MuJoCo's M *with* its armature (0.3 and 0.05
+    on the diagonal), and without the rotors it is short of exactly that."""
+    path = _write(tmp_path, ARMATURE)
+    dM, df = _differences(path, n_states=4, armature=True)
+    assert dM < 1e-13 and df < 1e-13, (dM, df)
+    model, system, mj = _pair(path, True)
+    plain = mbcomp.assemble(_load(path, armature=False))
+    assert plain.u_names == system.u_names
+    q, u = np.array([0.3, -0.4, 1.2]), np.array([0.5, 2.0, -1.0])
+    gap = system.evaluate(0.0, q, u).M - plain.evaluate(0.0, q, u).M
+    J = {"rail.v": 0.0, "hinge.w": 0.3, "axle.w": 0.05}
+    np.testing.assert_allclose(gap, np.diag([J[n] for n in system.u_names]), atol=1e-14)
+
+
+@needs_suite
+def test_armature_on_a_turning_carrier_is_on_the_absolute_rate():
+    """Cheetah's thigh, shin and foot hinges (armature 0.1) ride on bodies turning about the
+    same axis: mbcomp's rotor J (n . w_b)^2 / 2 is MuJoCo's M without armature plus
+    J c c^T per hinge, c = n . (the hinge body's angular Jacobian), from MuJoCo's own
+    Jacobians -- not MuJoCo's J e_k e_k^T (the difference this import states)."""
+    path = os.path.join(SUITE, "cheetah.xml")
+    model, system, mj = _pair(path, True)
+    bare = _pair(path, False)[2]
+    layout = _layout(model, system, mj)
+    qpos, qvel, q, u, P = _random_state(layout, mj, np.random.default_rng(7))
+    M_rotors = P.T @ system.evaluate(0.0, q, u).M @ P
+    d = mujoco.MjData(bare)
+    d.qpos[:] = qpos
+    mujoco.mj_forward(bare, d)
+    expect = _full_mass_matrix(bare, d)
+    for k in range(mj.njnt):
+        if mj.jnt_type[k] == mujoco.mjtJoint.mjJNT_HINGE and mj.dof_armature[mj.jnt_dofadr[k]] > 0:
+            jacr = np.zeros((3, mj.nv))
+            mujoco.mj_jacBody(bare, d, None, jacr, mj.jnt_bodyid[k])
+            c = d.xaxis[k] @ jacr
+            expect += mj.dof_armature[mj.jnt_dofadr[k]] * np.outer(c, c)
+    np.testing.assert_allclose(M_rotors, expect, rtol=0, atol=1e-12 * np.abs(expect).max())
+    with_armature = _full_mass_matrix(mj, d)
+    assert np.abs(M_rotors - with_armature).max() > 0.01  # MuJoCo's own term differs: said, not hidden
