@@ -326,3 +326,84 @@ def test_armature_on_a_turning_carrier_is_on_the_absolute_rate():
     np.testing.assert_allclose(M_rotors, expect, rtol=0, atol=1e-12 * np.abs(expect).max())
     with_armature = _full_mass_matrix(mj, d)
     assert np.abs(M_rotors - with_armature).max() > 0.01  # MuJoCo's own term differs: said, not hidden
+
+
+NOTED = """<mujoco model="noted"><include file="parts.xml"/>
+<option density="1.2"/>
+<worldbody><light name="sun" pos="0 0 3"/>
+<body name="arm" pos="0 0 1"><joint name="shoulder" axis="0 1 0" frictionloss="0.5" armature="0.01"/>
+  <geom type="capsule" fromto="0 0 0 0 0 -0.5" size="0.05" material="red"/><site name="tip" pos="0 0 -.5"/>
+  <body name="fore" pos="0 0 -.5"><joint name="elbow" type="slide" axis="0 0 1" armature="0.2"/>
+  <geom type="sphere" size=".1" rgba="0 0 1 0.5"/></body></body></worldbody>
+<tendon><fixed name="t"><joint joint="shoulder" coef="1"/></fixed></tendon>
+<equality><connect name="loop" body1="arm" body2="fore" anchor="0 0 0"/></equality>
+<actuator><motor name="m1" joint="shoulder" gear="50"/><position name="p1" joint="elbow" kp="20"/></actuator>
+<sensor><jointpos joint="shoulder"/><jointvel joint="shoulder"/><touch site="tip"/></sensor>
+</mujoco>"""
+PARTS = """<mujoco><asset><material name="red" rgba="1 0 0 1"/></asset></mujoco>"""
+
+
+def test_what_is_not_imported_is_said(tmp_path):
+    """Actuators one by one with their gains, sensors and tendons grouped, the equality as
+    "not imported yet", the fluid forces, frictionloss (friction=False) and a slide's armature;
+    one UserWarning; the include's material colours the capsule."""
+    _write(tmp_path, PARTS, "parts.xml")
+    path = _write(tmp_path, NOTED)
+    with pytest.warns(UserWarning, match="MJCF elements not imported"):
+        model = load_mjcf(path)
+    notes = "\n".join(model.mjcf_notes)
+    for said in ("actuator <motor> 'm1' on joint 'shoulder' (gear=50)", "actuator <position> 'p1' on joint 'elbow' (kp=20)",
+                 "3 sensors (1 jointpos, 1 jointvel, 1 touch): not imported", "1 tendons (1 fixed): not imported",
+                 "equality <connect> 'loop' (arm, fore): not imported yet", "<option density=1.2>: fluid forces",
+                 "joint 'shoulder': frictionloss=0.5 not imported (friction=False)",
+                 "joint 'elbow': armature=0.2 not imported (a slide joint has no rotor element)",
+                 "1 light, 1 site: not imported"):
+        assert said in notes, said
+    shapes = model["arm"].look.shape
+    assert [type(s).__name__ for s in shapes] == ["Cylinder", "Sphere", "Sphere"]
+    assert shapes[0].color == "#ff0000" and shapes[0].length == pytest.approx(0.5)
+    assert model["fore"].look.shape[0].opacity == 0.5
+    with pytest.warns(UserWarning):
+        rubbing = load_mjcf(path, friction=True)
+    assert rubbing["shoulder"].p.friction.static == 0.5
+    frame = body_frames(model)["fore"]
+    assert frame.p0.tolist() == [0.0, 0.0, 0.5] and frame.port == model["fore"].frame_a
+
+
+def test_bad_files_are_refused_with_the_fix(tmp_path):
+    def refused(text, match, name="bad.xml"):
+        with pytest.raises(ValueError, match=match):
+            _load(_write(tmp_path, text, name))
+
+    refused("<robot name='r'/>", "not <mujoco> -> is it an MJCF")
+    refused("<mujoco><include file='gone.xml'/><worldbody/></mujoco>", r"<include file='gone.xml'>: no such file")
+    body = "<mujoco><worldbody><body name='b'>{}<geom size='.1'/></body></worldbody></mujoco>"
+    refused(body.format("<joint name='j' type='screw'/>"), "joint 'j' of body 'b': type 'screw' is not one of hinge")
+    refused("<mujoco><worldbody><body name='b'><joint name='j'/><geom size='.1' mass='0'/></body></worldbody></mujoco>",
+            "body 'b': joint 'j' moves no mass")
+    refused("<mujoco><worldbody><body name='a'><geom size='.1'/><body name='b'><freejoint/><geom size='.1'/></body>"
+            "</body></worldbody></mujoco>", "body 'b': a free joint must be the only joint of a child of the worldbody")
+    refused(body.format("<joint/>").replace("<geom size='.1'/>", "<geom type='mesh' mesh='m'/>"),
+            "a mesh geom carrying mass .* give its body an <inertial>")
+    refused(body.format("<joint euler='0 0 1' quat='1 0 0 0'/>").replace("<body name='b'>", "<body name='b' euler='1 0 0' quat='1 0 0 0'>"),
+            "orientation given twice")
+    refused(body.format("<joint class='nope'/>"), "class 'nope' is not defined")
+    refused(body.format("<joint range='1 -1'/>"), "give lower < upper")
+
+
+def test_limits_become_stops_only_when_asked(tmp_path):
+    """``range`` (degrees) with autolimits: the hinge's stops in rad with ``limits=True``; a
+    ``ref`` outside the range starts the joint at the range's middle (noted)."""
+    text = ("<mujoco><worldbody><body name='b'><joint name='j' range='-30 60' ref='{ref}'/>"
+            "<geom type='box' size='.1 .1 .1' pos='0.2 0 0'/></body></worldbody></mujoco>")
+    plain = _load(_write(tmp_path, text.format(ref=0)))
+    assert plain["j"].p.limits is None
+    stopped = _load(_write(tmp_path, text.format(ref=0)), limits=True)
+    np.testing.assert_allclose(stopped["j"].p.limits, np.deg2rad([-30, 60]), rtol=1e-15)
+    with pytest.warns(UserWarning, match="starts at the middle of its range"):
+        outside = load_mjcf(_write(tmp_path, text.format(ref=90)), limits=True)
+    assert outside["j"].p.phi0 == pytest.approx(np.deg2rad(15))
+
+
+def test_top_level_name():
+    assert mbcomp.load_mjcf is load_mjcf
