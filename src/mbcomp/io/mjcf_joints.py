@@ -54,7 +54,7 @@ class JointSpec:
     >>> from mbcomp.io.mjcf_joints import joint_spec
     >>> c = Compiler(ET.fromstring("<mujoco/>"), ".")
     >>> j = joint_spec({"range": "-90 90", "axis": "0 2 0"}, "knee", c, "joint 'knee'")
-    >>> j.kind, j.axis.tolist(), [round(x, 6) for x in j.range]
+    >>> j.kind, j.axis.tolist(), [round(float(x), 6) for x in j.range]
     ('hinge', [0.0, 1.0, 0.0], [-1.570796, 1.570796])
     """
 
