@@ -115,7 +115,7 @@ def _walk(root, compiler, defaults):
     return bodies, [(g.get("name"), defaults.attributes(g, "main")) for g in world.findall("geom")]
 
 
-def _mass_properties(b, compiler):
+def _mass_properties(b, compiler, meshes):
     """``(m, r_cm, I)`` of a body (body frame) or None, and its GeomFrames."""
     frames = [(gname, geom_frame(a, compiler, f"geom {gname or '(unnamed)'!r} of body {b.name!r}"))
               for gname, a in b.geoms]
@@ -127,8 +127,8 @@ def _mass_properties(b, compiler):
     parts = []
     for gname, g in frames:
         if lo <= int(float(g.attrs.get("group", 0))) <= hi:
-            m, I = geom_mass(g, f"geom {gname or '(unnamed)'!r} of body {b.name!r}")
-            parts.append((m, I, g.pos, g.R))
+            m, I, c = geom_mass(g, f"geom {gname or '(unnamed)'!r} of body {b.name!r}", meshes)
+            parts.append((m, g.R @ I @ g.R.T, g.pos + g.R @ c))
     return body_mass_properties(parts), frames
 
 
@@ -209,17 +209,17 @@ def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, arma
     compiler = Compiler(root, os.path.dirname(os.path.abspath(os.fspath(path))))
     defaults = Defaults(root)
     bodies, world_geoms = _walk(root, compiler, defaults)
+    mats, meshes = materials_and_meshes(root, compiler, defaults)
     frames = {}
     props = {}
     for b in bodies:
-        props[id(b)], frames[id(b)] = _mass_properties(b, compiler)
+        props[id(b)], frames[id(b)] = _mass_properties(b, compiler, meshes)
     props = scaled_total(props, compiler)
     _check_moving_mass(bodies, props)
     notes = []
     names = ComponentNames(notes)
     joint_names = {id(b): [names(n, "joint") for n, _ in b.joints] for b in bodies}
     opts = {"limits": limits, "damping": damping, "springs": springs, "armature": armature, "friction": friction}
-    mats, meshes = materials_and_meshes(root, compiler, defaults)
     model = Model()
     world_shapes = [s for gname, a in world_geoms
                     for s in geom_shapes(geom_frame(a, compiler, f"world geom {gname!r}"), mats, meshes,
