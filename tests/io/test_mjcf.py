@@ -332,6 +332,8 @@ def test_armature_on_a_turning_carrier_is_on_the_absolute_rate():
             c = d.xaxis[k] @ jacr
             expect += mj.dof_armature[mj.jnt_dofadr[k]] * np.outer(c, c)
     np.testing.assert_allclose(M_rotors, expect, rtol=0, atol=1e-12 * np.abs(expect).max())
+    assert any(n.startswith("armature of 6 hinges on turning bodies (bthigh, bshin, bfoot, fthigh") for n in
+               model.mjcf_notes)
     with_armature = _full_mass_matrix(mj, d)
     assert np.abs(M_rotors - with_armature).max() > 0.01  # MuJoCo's own term differs: said, not hidden
 

@@ -225,12 +225,15 @@ def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, arma
                     for s in geom_shapes(geom_frame(a, compiler, f"world geom {gname!r}"), mats, meshes,
                                          f"world geom {gname!r}", notes)]
     world = model.add("world", lib.World(g=_gravity(root, gravity), **({"shape": world_shapes} if world_shapes else {})))
-    out = {}
+    out, specs = {}, {}
     for b in bodies:
         parent = world.frame_b if b.parent is None else out[b.parent.name].port
-        port = _add_body(model, lib, b, parent, props[id(b)], frames[id(b)], joint_names[id(b)], compiler,
-                         opts, names, notes, (mats, meshes))
+        specs[id(b)] = [joint_spec(a, jn, compiler, f"joint {n!r} of body {b.name!r}")
+                        for (n, a), jn in zip(b.joints, joint_names[id(b)])]
+        port = _add_body(model, lib, b, parent, props[id(b)], frames[id(b)], specs[id(b)], opts, names, notes,
+                         (mats, meshes))
         out[b.name] = BodyFrame(port=port, R0=b.R0, p0=b.p0)
+    notes += _armature_note(bodies, specs, armature)
     import_equalities(root, model, out, notes)
     notes += model_notes(root, bodies)
     model.mjcf_notes, model.mjcf_bodies = notes, out
@@ -241,9 +244,8 @@ def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, arma
     return model
 
 
-def _add_body(model, lib, b, parent, mp, frames, jnames, compiler, opts, names, notes, assets):
+def _add_body(model, lib, b, parent, mp, frames, specs, opts, names, notes, assets):
     """One body's offset, joints and rigid body from its parent's frame; returns its frame port."""
-    specs = [joint_spec(a, jn, compiler, f"joint {n!r} of body {b.name!r}") for (n, a), jn in zip(b.joints, jnames)]
     free = [j for j in specs if j.kind == "free"]
     if free and (len(specs) > 1 or b.parent is not None):
         raise ValueError(f"MJCF body {b.name!r}: a free joint must be the only joint of a child of the worldbody "
@@ -270,6 +272,28 @@ def _add_body(model, lib, b, parent, mp, frames, jnames, compiler, opts, names, 
         c = model.add(names(bname, "body"), lib.FixedTranslation(**look))
         model.connect(port, c.frame_a)
     return port
+
+
+def _armature_note(bodies, specs, armature):
+    """One note for the hinges' armature: all of them when ``armature=False``; else those whose
+    rotor rides on a body that may turn (a hinge, ball or free joint before it), where the
+    rotor on the absolute rate is not MuJoCo's term."""
+    turning, listed = {}, []
+    for b in bodies:
+        turns = b.parent is not None and turning[id(b.parent)]
+        for j in specs[id(b)]:
+            if j.kind == "hinge" and j.armature > 0.0 and (turns or not armature):
+                listed.append(j.name)
+            turns = turns or j.kind in ("hinge", "ball", "free")
+        turning[id(b)] = turns
+    if not listed:
+        return []
+    which = ", ".join(listed[:6]) + (", ..." if len(listed) > 6 else "")
+    if not armature:
+        return [f"armature of {len(listed)} hinges ({which}): not imported (armature=False)"]
+    return [f"armature of {len(listed)} hinges on turning bodies ({which}): a rotor on the joint's absolute rate "
+            "n . w, MuJoCo's armature is on its own rate qdot (M differs by J (n . w_carrier) terms; "
+            "load_mjcf(armature=False) leaves it out)"]
 
 
 def body_frames(model):

@@ -143,9 +143,8 @@ def _passive(model, lib, j, joint, opts, names, notes):
         if j.kind == "hinge" and opts["armature"]:
             rotor = model.add(names(f"{j.name}_armature", "joint armature"), lib.Inertia(J=j.armature))
             model.connect(rotor.flange, joint.axis)
-        else:
-            notes.append(f"joint {j.name!r}: armature={j.armature:g} not imported"
-                         + (" (armature=False)" if j.kind == "hinge" else f" (a {j.kind} joint has no rotor element)"))
+        elif j.kind != "hinge":  # hinges left out by armature=False: one note for all (io/mjcf.py)
+            notes.append(f"joint {j.name!r}: armature={j.armature:g} not imported (a {j.kind} joint has no rotor element)")
 
 
 def add_joints(model, lib, specs, port, opts, names, notes, pose=None):
