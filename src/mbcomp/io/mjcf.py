@@ -157,6 +157,22 @@ def _gravity(root, gravity):
     return g
 
 
+def _read(path):
+    """The file read: ``(root, compiler, bodies, world geoms, (materials, meshes), {body: geom
+    frames}, {body: (m, r_cm, I) or None})``, the masses scaled and checked."""
+    root = read_tree(path)
+    compiler = Compiler(root, os.path.dirname(os.path.abspath(os.fspath(path))))
+    defaults = Defaults(root)
+    bodies, world_geoms = _walk(root, compiler, defaults)
+    mats, meshes = materials_and_meshes(root, compiler, defaults)
+    frames, props = {}, {}
+    for b in bodies:
+        props[id(b)], frames[id(b)] = _mass_properties(b, compiler, meshes)
+    props = scaled_total(props, compiler)
+    _check_moving_mass(bodies, props)
+    return root, compiler, bodies, world_geoms, (mats, meshes), frames, props
+
+
 def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, armature=True, friction=False):
     """A :class:`~mbcomp.Model` of library components from an MJCF (MuJoCo) file.
 
@@ -205,17 +221,7 @@ def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, arma
     from mbcomp import library as lib
     from mbcomp.modeling.model import Model
 
-    root = read_tree(path)
-    compiler = Compiler(root, os.path.dirname(os.path.abspath(os.fspath(path))))
-    defaults = Defaults(root)
-    bodies, world_geoms = _walk(root, compiler, defaults)
-    mats, meshes = materials_and_meshes(root, compiler, defaults)
-    frames = {}
-    props = {}
-    for b in bodies:
-        props[id(b)], frames[id(b)] = _mass_properties(b, compiler, meshes)
-    props = scaled_total(props, compiler)
-    _check_moving_mass(bodies, props)
+    root, compiler, bodies, world_geoms, (mats, meshes), frames, props = _read(path)
     notes = []
     names = ComponentNames(notes)
     joint_names = {id(b): [names(n, "joint") for n, _ in b.joints] for b in bodies}
