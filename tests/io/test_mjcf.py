@@ -457,3 +457,28 @@ def test_mesh_geom_mass_properties_are_mujocos(tmp_path, extra, tol):
     assert model["b"].p.m == pytest.approx(700 * 0.5 * 0.3 * 0.2 * 0.1 * scale + sphere, rel=1e-6)  # float32 file
     dM, df = _differences(path, n_states=3)
     assert dM < tol and df < tol, (dM, df)
+
+
+INERTIALS = """<mujoco><compiler inertiafromgeom="{fromgeom}" boundmass="0.3" boundinertia="0.002" settotalmass="7"/>
+<worldbody><body name="a"><joint name="j1" axis="0 1 0"/><geom type="box" size=".1 .2 .05" pos="0 0 -.2"/>
+<inertial pos="0.1 0 -0.3" mass="2" fullinertia="0.05 0.04 0.03 0.001 -0.002 0.003"/>
+<body name="b" pos="0 0.1 -0.5"><joint name="j2" axis="1 0 0"/><geom type="sphere" size=".02"/>
+<inertial pos="0 0 -0.2" quat="0.8 0.3 -0.1 0.2" mass="0.1" diaginertia="0.001 0.003 0.004"/>
+<body name="c" pos="0 0 -0.4"><joint name="j3" type="slide" axis="0 0 1"/><geom type="cylinder" size=".05 .1"/>
+</body></body></body></worldbody></mujoco>"""
+
+
+@pytest.mark.parametrize("fromgeom", ["auto", "true"])
+def test_inertial_elements_bounds_and_total_mass_are_mujocos(tmp_path, fromgeom):
+    """``<inertial>`` with a full tensor and with a rotated diagonal one, or the geoms instead
+    (``inertiafromgeom="true"``), ``boundmass``/``boundinertia`` raising the light bodies and
+    ``settotalmass`` scaling all: MuJoCo's M and f. With ``inertiafromgeom="false"`` the
+    slider's body (geoms, no ``<inertial>``) has no mass: refused, naming it."""
+    path = _write(tmp_path, INERTIALS.format(fromgeom=fromgeom))
+    with pytest.raises(ValueError, match="body 'c': joint 'j3' moves no mass"):
+        _load(_write(tmp_path, INERTIALS.format(fromgeom="false").replace('boundmass="0.3" boundinertia="0.002"', ""),
+                     "false.xml"))
+    model = _load(path)
+    assert sum(model[n].p.m for n in ("a", "b", "c")) == pytest.approx(7.0, rel=1e-14)
+    dM, df = _differences(path, n_states=3)
+    assert dM < 1e-12 and df < 1e-12, (dM, df)
