@@ -482,3 +482,18 @@ def test_inertial_elements_bounds_and_total_mass_are_mujocos(tmp_path, fromgeom)
     assert sum(model[n].p.m for n in ("a", "b", "c")) == pytest.approx(7.0, rel=1e-14)
     dM, df = _differences(path, n_states=3)
     assert dM < 1e-12 and df < 1e-12, (dM, df)
+
+
+def test_unnamed_and_odd_names(tmp_path):
+    """Unnamed bodies and joints get generated names; a name that is no identifier is
+    sanitized and said; a body sharing its joint's name is ``<name>_body``."""
+    text = ("<mujoco><worldbody><body><joint/><geom size='.1' pos='0 0 -1'/>"
+            "<body name='fore-arm' pos='0 0 -1'><joint name='fore-arm' type='slide'/><joint/><geom size='.1'/></body>"
+            "</body></worldbody></mujoco>")
+    model = _load(_write(tmp_path, text))
+    system = mbcomp.assemble(model)
+    assert system.q_names == ["body1_joint1.phi", "fore_arm.s", "fore_arm_joint2.phi"]
+    assert model.mjcf_joints == ["body1_joint1", "fore_arm", "fore_arm_joint2"]
+    assert model["fore_arm_body"].p.m == pytest.approx(1000 * 4 / 3 * np.pi * 0.001, rel=1e-14)
+    assert "joint 'fore-arm': named 'fore_arm' in the model" in "\n".join(model.mjcf_notes)
+    assert set(body_frames(model)) == {"body1", "fore-arm"}
