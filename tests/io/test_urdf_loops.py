@@ -1,0 +1,211 @@
+"""URDF with loop-closing joints, mimic joints and joint friction: exact closures and couplings.
+
+The mechanisms are planar in the x-z plane with hinges about y; a hinge's angle ``phi`` turns
+the link's x axis to ``e(phi) = (cos phi, 0, -sin phi)`` (URDF's rotation about +y). Files are
+written with full-precision numbers so that the file's zero position closes every loop.
+"""
+import warnings
+
+import numpy as np
+import pytest
+from scipy.special import ellipj, ellipk
+
+import mbcomp
+from mbcomp.io.urdf import load_urdf
+
+
+def e(phi):
+    return np.array([np.cos(phi), 0.0, -np.sin(phi)])
+
+
+def angle_of(v):
+    """The angle ``phi`` with ``v = |v| e(phi)`` (v in the x-z plane)."""
+    return np.arctan2(-v[2], v[0])
+
+
+def wrap(a):
+    return np.angle(np.exp(1j * np.asarray(a)))
+
+
+def fourbar_angles(th2, a, b, c, d, th4_near):
+    """Coupler and rocker angles of the four-bar ground ``d`` (from O2 = 0 to O4 = (d, 0, 0)),
+    crank ``a`` at angle ``th2``, coupler ``b``, rocker ``c``: B on the circles about A and O4,
+    the assembly branch nearest ``th4_near``."""
+    A, O4 = a * e(th2), np.array([d, 0.0, 0.0])
+    D = O4 - A
+    L = np.linalg.norm(D)
+    x = (b * b - c * c + L * L) / (2 * L)
+    h = np.sqrt(b * b - x * x)
+    u = D / L
+    n = np.array([u[2], 0.0, -u[0]])
+    best = []
+    for s in (1.0, -1.0):
+        B = A + x * u + s * h * n
+        th3, th4 = angle_of(B - A), angle_of(B - O4)
+        best.append((abs(wrap(th4 - th4_near)), th3, th4))
+    return min(best)[1:]
+
+
+def _f(x):
+    return repr(float(x))
+
+
+def link(name, m=0.0, length=0.0, Iyy=None):
+    """A link of mass ``m`` as a bar along its x axis (centre of mass at ``length/2``)."""
+    if m == 0.0:
+        return f'<link name="{name}"/>'
+    Iyy = m * length * length / 12 if Iyy is None else Iyy
+    return (f'<link name="{name}"><inertial><origin xyz="{_f(length / 2)} 0 0"/><mass value="{_f(m)}"/>'
+            f'<inertia ixx="1e-4" iyy="{_f(Iyy)}" izz="{_f(Iyy + 1e-4)}" ixy="0" ixz="0" iyz="0"/></inertial></link>')
+
+
+def joint(name, kind, parent, child, xyz=(0, 0, 0), pitch=0.0, axis="0 1 0", extra=""):
+    return (f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{" ".join(map(_f, xyz))}" rpy="0 {_f(pitch)} 0"/><axis xyz="{axis}"/>{extra}</joint>')
+
+
+def fourbar(a, b, c, d, th2, th4_near, masses=(1.0, 2.0, 1.5), closing="revolute"):
+    """A four-bar as URDF: ground -> crank -> coupler (-> its massless tip at B), ground -> rocker,
+    and the joint ``close`` from the rocker's end to the coupler's tip, which has a parent
+    already: it closes the loop. The file's zero position is the mechanism at crank angle th2."""
+    th3, th4 = fourbar_angles(th2, a, b, c, d, th4_near)
+    text = "\n".join([
+        '<robot name="fourbar">', link("ground"), link("crank", masses[0], a), link("coupler", masses[1], b),
+        link("rocker", masses[2], c), link("coupler_tip"),
+        joint("crank_joint", "continuous", "ground", "crank", pitch=th2),
+        joint("coupler_joint", "continuous", "crank", "coupler", (a, 0, 0), th3 - th2),
+        joint("tip", "fixed", "coupler", "coupler_tip", (b, 0, 0)),
+        joint("rocker_joint", "continuous", "ground", "rocker", (d, 0, 0), th4),
+        joint("close", closing, "rocker", "coupler_tip", (c, 0, 0), th3 - th4), "</robot>"])
+    return text, th3, th4
+
+
+def _write(tmp_path, text, name="robot.urdf"):
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def _run(model, t_end=10.0, **kw):
+    return mbcomp.simulate(model, t_end=t_end, n_out=1001, stabilization="projection", rtol=1e-10, atol=1e-12, **kw)
+
+
+def test_grashof_fourbar_closed_by_a_revolute_follows_freudenstein(tmp_path):
+    """A crank-rocker four-bar (s + l = 1.3 <= p + q = 1.8, the crank shortest) swinging under
+    gravity for 10 s: the loop stays closed (residual < 1e-10) and the rocker's angle is the
+    closed-form one of the crank's at every output; the planar loop's redundant rows (3 of the
+    cut hinge's 5) are found and named."""
+    a, b, c, d, th2_0 = 0.3, 1.0, 0.8, 1.0, 1.2
+    text, th3_0, th4_0 = fourbar(a, b, c, d, th2_0, 1.5)
+    model = load_urdf(_write(tmp_path, text))
+    assert model.urdf_notes == []
+    system = mbcomp.assemble(model)
+    summary = system.summary()
+    assert "degrees of freedom: 1" in summary and "3 constraint rows are redundant" in summary
+    assert len(system.topology.cut) == 1 and "5 constraint rows, rank 2" in summary
+    res = _run(model)
+    assert np.max(res["residual.position"]) < 1e-10
+    th2, th4 = th2_0 + res["crank_joint.phi"], th4_0 + res["rocker_joint.phi"]
+    assert np.ptp(th2) > 0.4  # it moves
+    worst, near = 0.0, th4_0
+    for t2, t4 in zip(th2, th4):
+        _, near = fourbar_angles(t2, a, b, c, d, near)
+        worst = max(worst, abs(wrap(near - t4)))
+    assert worst < 1e-9, worst
+
+
+def test_parallelogram_keeps_its_coupler_level_and_swings_as_an_exact_pendulum(tmp_path):
+    """A parallelogram (crank = rocker, coupler = ground) released from rest 1 rad off hanging:
+    the coupler only translates (its orientation is the start's to 1e-10), and the crank is a
+    pendulum of constant inertia ``J = 2 J_p + m_c a^2`` and moment ``g a (m_r + m_c)``:
+    ``psi(t) = 2 arcsin(k sn(K - w t, k))``, ``k = sin(psi_0 / 2)``."""
+    a, d, m_r, m_c, g, psi0 = 0.5, 0.8, 1.0, 2.0, 9.81, 1.0
+    th2 = np.pi / 2 + psi0
+    text, th3_0, th4_0 = fourbar(a, d, a, d, th2, th2, masses=(m_r, m_c, m_r))
+    assert abs(wrap(th4_0 - th2)) < 1e-14 and abs(th3_0) < 1e-14
+    model = load_urdf(_write(tmp_path, text))
+    res = _run(model, t_end=5.0)
+    assert np.max(res["residual.position"]) < 1e-10
+    Q = np.stack([res[f"coupler.Q.{k}"] for k in "wxyz"], axis=1)
+    assert np.abs(np.abs(Q @ Q[0]) - 1.0).max() < 1e-10  # the same orientation throughout
+    J = 2 * (m_r * a * a / 12 + m_r * a * a / 4) + m_c * a * a
+    w = np.sqrt(g * a * (m_r + m_c) / J)
+    k = np.sin(psi0 / 2)
+    sn = ellipj(ellipk(k * k) - w * res["time"], k * k)[0]
+    psi = 2 * np.arcsin(k * sn)
+    assert np.abs(th2 + res["crank_joint.phi"] - np.pi / 2 - psi).max() < 1e-7
+
+
+def fivebar(l1, l2, d, th1, th2, closing='<loop_joint name="close" type="continuous">'):
+    """A five-bar (a planar 2-DOF parallel manipulator): ground pivots at 0 and (d, 0, 0), two
+    proximal links l1 at angles th1, th2, two distal links l2 meeting at P; the closure at P
+    written as a ``<loop_joint>`` (Drake's convention: frames on link1 and link2)."""
+    A1, A2 = l1 * e(th1), np.array([d, 0, 0]) + l1 * e(th2)
+    D = A2 - A1
+    L = np.linalg.norm(D)
+    h = np.sqrt(l2 * l2 - L * L / 4)
+    P = A1 + D / 2 + h * np.array([D[2], 0, -D[0]]) / L  # the elbow-up branch
+    p1, p2 = angle_of(P - A1), angle_of(P - A2)
+    text = "\n".join([
+        '<robot name="fivebar">', link("ground"), link("prox1", 1.0, l1), link("prox2", 1.0, l1),
+        link("dist1", 0.7, l2), link("dist2", 0.7, l2),
+        joint("q1", "continuous", "ground", "prox1", pitch=th1),
+        joint("q2", "continuous", "ground", "prox2", (d, 0, 0), th2),
+        joint("e1", "continuous", "prox1", "dist1", (l1, 0, 0), p1 - th1),
+        joint("e2", "continuous", "prox2", "dist2", (l1, 0, 0), p2 - th2),
+        f'{closing}<link1 link="dist1" xyz="{_f(l2)} 0 0"/>'
+        f'<link2 link="dist2" xyz="{_f(l2)} 0 0" rpy="0 {_f(p1 - p2)} 0"/><axis xyz="0 1 0"/></loop_joint>',
+        "</robot>"])
+    return text
+
+
+def test_fivebar_closed_by_a_loop_joint_element_conserves_energy(tmp_path):
+    """A five-bar closed at its tip by Drake's ``<loop_joint>`` (a hinge): 2 degrees of freedom,
+    3 redundant rows; over 10 s under gravity without damping the loop stays closed to 1e-10 and
+    the energy is conserved; the two distal links' ends coincide (checked on the body poses)."""
+    l1, l2, d = 0.4, 0.6, 0.3
+    model = load_urdf(_write(tmp_path, fivebar(l1, l2, d, 1.9, 1.2)))
+    system = mbcomp.assemble(model)
+    assert "degrees of freedom: 2" in system.summary() and "3 constraint rows are redundant" in system.summary()
+    res = _run(model)
+    assert np.max(res["residual.position"]) < 1e-10
+    E = res["energy.total"]
+    assert np.ptp(res["energy.kinetic"]) > 0.5 and np.abs(E - E[0]).max() < 1e-8 * np.abs(res["energy.kinetic"]).max()
+    ends = []
+    for body in ("dist1", "dist2"):
+        r = np.stack([res[f"{body}.r.{k}"] for k in "xyz"], axis=1)
+        Q = np.stack([res[f"{body}.Q.{k}"] for k in "wxyz"], axis=1)
+        x = np.stack([1 - 2 * (Q[:, 2] ** 2 + Q[:, 3] ** 2), 2 * (Q[:, 1] * Q[:, 2] + Q[:, 0] * Q[:, 3]),
+                      2 * (Q[:, 1] * Q[:, 3] - Q[:, 0] * Q[:, 2])], axis=1)  # the body's x axis, world frame
+        ends.append(r + l2 * x)
+    assert np.abs(ends[0] - ends[1]).max() < 1e-10
+
+
+def test_a_spherical_closure_of_a_planar_loop_has_one_redundant_row(tmp_path):
+    """The same five-bar closed by a point coincidence (``type="spherical"``, mbcomp's extension
+    for a ball loop joint): 3 rows, one of them (out of the plane) redundant; the motion is the
+    hinge-closed one's (to the integration tolerance) since the planar motion needs no more."""
+    l1, l2, d = 0.4, 0.6, 0.3
+    hinge = load_urdf(_write(tmp_path, fivebar(l1, l2, d, 1.9, 1.2), "h.urdf"))
+    ball = load_urdf(_write(tmp_path, fivebar(l1, l2, d, 1.9, 1.2, '<loop_joint name="close" type="spherical">'),
+                            "b.urdf"))
+    summary = mbcomp.assemble(ball).summary()
+    assert "degrees of freedom: 2" in summary and "1 constraint rows are redundant" in summary
+    rh, rb = _run(hinge, t_end=2.0), _run(ball, t_end=2.0)
+    assert np.max(rb["residual.position"]) < 1e-10
+    assert np.abs(rh["q1.phi"] - rb["q1.phi"]).max() < 1e-7 and np.abs(rh["q2.phi"] - rb["q2.phi"]).max() < 1e-7
+
+
+def test_loop_joint_extras_are_noted_and_a_bad_loop_element_refused(tmp_path):
+    text = fivebar(0.4, 0.6, 0.3, 1.9, 1.2).replace('<link2 link="dist2"', '<link2 link="nowhere"')
+    with pytest.raises(ValueError, match=r"<loop_joint> 'close': <link2 link=...> must name a link"):
+        load_urdf(_write(tmp_path, text))
+    a, b, c, d = 0.3, 1.0, 0.8, 1.0
+    text, _, _ = fourbar(a, b, c, d, 1.2, 1.5)
+    text = text.replace('type="revolute"><parent link="rocker"/><child link="coupler_tip"/>',
+                        'type="revolute"><parent link="rocker"/><child link="coupler_tip"/>'
+                        '<dynamics damping="0.3"/><limit lower="-1" upper="1" effort="1" velocity="1"/>')
+    with pytest.warns(UserWarning, match="it closes a loop"):
+        model = load_urdf(_write(tmp_path, text, "extras.urdf"), limits=True)
+    assert any("'close': <dynamics damping>" in n for n in model.urdf_notes)
+    assert any("'close': <limit> not made stops" in n for n in model.urdf_notes)
