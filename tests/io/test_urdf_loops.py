@@ -209,3 +209,156 @@ def test_loop_joint_extras_are_noted_and_a_bad_loop_element_refused(tmp_path):
         model = load_urdf(_write(tmp_path, text, "extras.urdf"), limits=True)
     assert any("'close': <dynamics damping>" in n for n in model.urdf_notes)
     assert any("'close': <limit> not made stops" in n for n in model.urdf_notes)
+
+
+GRIPPER = """<robot name="gripper">
+<link name="palm"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<link name="wrist"><inertial><origin xyz="0.02 0.01 0.1"/><mass value="0.8"/>
+<inertia ixx="0.004" iyy="0.005" izz="0.003" ixy="0.0002" ixz="0" iyz="0"/></inertial></link>
+<link name="left"><inertial><origin xyz="0.05 0 0.02"/><mass value="0.2"/>
+<inertia ixx="0.0004" iyy="0.0005" izz="0.0003" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<link name="right"><inertial><origin xyz="0.05 0 -0.01"/><mass value="0.3"/>
+<inertia ixx="0.0004" iyy="0.0006" izz="0.0003" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<link name="jaw1"><inertial><origin xyz="0 0.03 0"/><mass value="0.25"/>
+<inertia ixx="0.0002" iyy="0.0002" izz="0.0002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<link name="jaw2"><inertial><origin xyz="0 -0.02 0.01"/><mass value="0.15"/>
+<inertia ixx="0.0002" iyy="0.0003" izz="0.0002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="tilt" type="continuous"><parent link="palm"/><child link="wrist"/><origin xyz="0 0 0.1" rpy="0.3 0 0"/>
+<axis xyz="1 0 0"/></joint>
+<joint name="finger1" type="revolute"><parent link="wrist"/><child link="left"/><origin xyz="0 0.04 0.2"/>
+<axis xyz="0 0.6 0.8"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+<joint name="finger2" type="revolute"><parent link="wrist"/><child link="right"/><origin xyz="0 -0.04 0.2" rpy="0 0.2 0"/>
+<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/><mimic joint="finger1" multiplier="-1.5" offset="0.1"/></joint>
+<joint name="slide1" type="prismatic"><parent link="wrist"/><child link="jaw1"/><origin xyz="0.03 0 0.25"/>
+<axis xyz="0.8 0 0.6"/><limit lower="-0.1" upper="0.1" effort="1" velocity="1"/></joint>
+<joint name="slide2" type="prismatic"><parent link="wrist"/><child link="jaw2"/><origin xyz="-0.03 0 0.25" rpy="0 0 0.5"/>
+<axis xyz="1 0 0"/><limit lower="-0.1" upper="0.1" effort="1" velocity="1"/><mimic joint="slide1" multiplier="-0.5" offset="0.01"/></joint>
+</robot>"""
+
+
+def _mimics(path):
+    """``{joint: (leader, multiplier, offset)}`` of a file's mimic joints."""
+    import xml.etree.ElementTree as ET
+
+    out = {}
+    for j in ET.parse(path).getroot().findall("joint"):
+        m = j.find("mimic")
+        if m is not None:
+            out[j.get("name")] = (m.get("joint"), float(m.get("multiplier", 1)), float(m.get("offset", 0)))
+    return out
+
+
+def test_mimic_joints_follow_their_leaders_exactly(tmp_path):
+    """``q = multiplier q_leader + offset`` over a 3 s run of a gripper under gravity (a revolute
+    pair through an IdealGear, a prismatic pair and a revolute following a prismatic leader
+    through a JointCoupling), to 1e-10; the couplings are named ``<joint>_mimic``."""
+    text = GRIPPER.replace("</robot>", '<link name="thumb"><inertial><origin xyz="0.04 0 0"/><mass value="0.1"/>'
+                           '<inertia ixx="0.0001" iyy="0.0001" izz="0.0001" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+                           '<joint name="thumb_joint" type="continuous"><parent link="wrist"/><child link="thumb"/>'
+                           '<origin xyz="0 0 0.3"/><axis xyz="0 1 0"/><mimic joint="slide1" multiplier="3"/></joint></robot>')
+    path = _write(tmp_path, text)
+    model = load_urdf(path, gravity=(0.0, -9.81, -3.0))
+    assert type(model["finger2_mimic"]).__name__ == "IdealGear"
+    assert type(model["slide2_mimic"]).__name__ == "JointCoupling"
+    assert type(model["thumb_joint_mimic"]).__name__ == "JointCoupling"
+    res = _run(model, t_end=3.0)
+    moved = 0.0
+    for name, (leader, mult, off) in _mimics(path).items():
+        coord = "s" if name.startswith("slide") else "phi"
+        lead = res[f"{leader}.{'s' if leader.startswith('slide') else 'phi'}"]
+        moved = max(moved, np.ptp(lead))
+        assert np.abs(res[f"{name}.{coord}"] - (mult * lead + off)).max() < 1e-10, name
+    assert moved > 0.1
+
+
+def _reduced(system, path, pm, q_pin, v_pin):
+    """mbcomp's mass matrix and bias forces in Pinocchio's independent speeds (the mimic joints
+    dropped): ``u = G v`` with ``G[mimic, leader] = multiplier``; ``M_red = G^T M G``,
+    ``b_red = -G^T f`` (``G`` is constant)."""
+    mimics = _mimics(path)
+    q, u = np.zeros(len(system.q_names)), np.zeros(len(system.u_names))
+    G = np.zeros((len(u), pm.nv))
+    for k, (qn, un) in enumerate(zip(system.q_names, system.u_names)):
+        joint = qn.split(".")[0]
+        lead, mult, off = mimics.get(joint, (joint, 1.0, 0.0))
+        i = pm.getJointId(lead)
+        iq = pm.idx_qs[i]
+        a = q_pin[iq] if pm.nqs[i] == 1 else np.arctan2(q_pin[iq + 1], q_pin[iq])  # nq 2: a continuous joint
+        q[k] = mult * a + off
+        G[k, pm.idx_vs[i]] = mult
+    u = G @ v_pin
+    ev = system.evaluate(0.0, q, u)
+    return G.T @ ev.M @ G, -G.T @ ev.f
+
+
+@pytest.mark.parametrize("robot", ["gripper", "panda"])
+def test_mimic_matches_pinocchio_reduced_model(tmp_path, robot):
+    """Pinocchio's model with ``mimic=True`` (the mimic joints without their own speeds): its
+    mass matrix and bias forces (``rnea``: no joint damping, so none imported either) equal
+    mbcomp's reduced by the couplings, to 1e-12."""
+    pin = pytest.importorskip("pinocchio", reason="Pinocchio is not installed (the reference engine of this check)")
+    if robot == "panda":
+        from test_urdf import ROBOTS
+        if ROBOTS is None:
+            pytest.skip("example-robot-data is not installed (pip install mbcomp[robots])")
+        path = f"{ROBOTS}/panda_description/urdf/panda.urdf"
+    else:
+        path = _write(tmp_path, GRIPPER)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        system = mbcomp.assemble(load_urdf(path, damping=False))
+    pm = pin.buildModelFromUrdf(path, mimic=True)
+    data = pm.createData()
+    rng = np.random.default_rng(46)
+    for _ in range(4):
+        qp, vp = pin.neutral(pm), rng.standard_normal(pm.nv)
+        for i in range(1, pm.njoints):
+            a, iq = rng.uniform(-0.1, 0.1), pm.idx_qs[i]
+            if pm.nqs[i] == 1:
+                qp[iq] = a
+            elif pm.nqs[i] == 2:
+                qp[iq:iq + 2] = np.cos(a), np.sin(a)
+        M, b = _reduced(system, path, pm, qp, vp)
+        Mp = pin.crba(pm, data, qp)
+        Mp = np.triu(Mp) + np.triu(Mp, 1).T
+        bp = pin.rnea(pm, data, qp, vp, np.zeros(pm.nv))
+        assert np.abs(M - Mp).max() < 1e-12 * np.abs(Mp).max()
+        assert np.abs(b - bp).max() < 1e-12 * np.abs(bp).max()
+
+
+PENDULUM = """<robot name="pendulum"><link name="base"/>
+<link name="arm"><inertial><mass value="{m}"/><origin xyz="0 0 -{l}"/>
+<inertia ixx="0.02" iyy="{Iyy}" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="hinge" type="continuous"><parent link="base"/><child link="arm"/><origin rpy="0 {phi0} 0"/>
+<axis xyz="0 1 0"/><dynamics friction="{f}"/></joint></robot>"""
+
+
+def test_joint_friction_holds_below_break_away_and_slips_above(tmp_path):
+    """A pendulum held by its bearing's Coulomb friction ``f`` at ``phi0`` from hanging (the
+    file's zero position): with ``m g l sin(phi0) < f`` it stays at rest, stuck; above, it slips
+    at once, with the closed-form start acceleration ``-(m g l sin(phi0) - f) / J`` and the
+    work of friction ``f |phi - 0|`` in the energy balance while it turns one way."""
+    m, l, Iyy, g, f = 2.0, 0.5, 0.03, 9.81, 4.0
+    J = Iyy + m * l * l
+    below = np.arcsin(0.9 * f / (m * g * l))
+    held = load_urdf(_write(tmp_path, PENDULUM.format(m=m, l=l, Iyy=Iyy, phi0=below, f=f)), friction=True)
+    res = mbcomp.simulate(held, t_end=1.0)
+    assert np.abs(res["hinge.phi"]).max() == 0.0 and res["hinge.sticking"].min() == 1.0
+    assert res["hinge.friction"][0] == pytest.approx(m * g * l * np.sin(below), rel=1e-12)  # holds gravity
+    above = 0.8
+    model = load_urdf(_write(tmp_path, PENDULUM.format(m=m, l=l, Iyy=Iyy, phi0=above, f=f), "slip.urdf"),
+                      friction=True)
+    res = mbcomp.simulate(model, t_end=0.2, n_out=201, rtol=1e-10, atol=1e-12)
+    assert res["hinge.sticking"].max() == 0.0 and res["hinge.friction"][0] == f
+    assert res["hinge.w.der"][0] == pytest.approx(-(m * g * l * np.sin(above) - f) / J, rel=1e-12)
+    phi, w = res["hinge.phi"], res["hinge.w"]
+    turning = w < 0.0
+    work = J * w ** 2 / 2 - m * g * l * (np.cos(above + phi) - np.cos(above)) + f * np.abs(phi)
+    assert turning[1:].all() and np.abs(work).max() < 1e-9
+
+
+def test_joint_friction_is_noted_when_off(tmp_path):
+    with pytest.warns(UserWarning, match="friction"):
+        model = load_urdf(_write(tmp_path, PENDULUM.format(m=2, l=0.5, Iyy=0.03, phi0=0.5, f=4.0)))
+    assert model["hinge"].p.friction is None
+    assert any("'hinge': <dynamics friction=4> not imported (friction=False)" in n for n in model.urdf_notes)
