@@ -59,6 +59,14 @@ FLOATING = ["a1_description/urdf/a1.urdf", "go2_description/urdf/go2.urdf", "sol
             "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf", "iris_description/robots/iris_simple.urdf",
             "hector_description/robots/quadrotor_base.urdf"]
 
+#: robots whose links' inertias no real body has (a principal moment above the sum of the other
+#: two): imported with inertia="as_given", as Pinocchio takes them
+AS_GIVEN_FIXED = ["allegro_hand_description/urdf/allegro_left_hand.urdf", "pr2_description/urdf/pr2.urdf",
+                  "tiago_description/robots/tiago.urdf"]
+AS_GIVEN_FLOATING = ["go1_description/urdf/go1.urdf", "hyq_description/robots/hyq_no_sensors.urdf",
+                     "anymal_b_simple_description/robots/anymal.urdf", "b1_description/urdf/b1.urdf",
+                     "romeo_description/urdf/romeo_small.urdf"]
+
 
 def _sanitized(name):
     return re.sub(r"\W", "_", name)
@@ -66,10 +74,11 @@ def _sanitized(name):
 
 @functools.lru_cache(maxsize=None)
 def _pair(path, floating):
-    """(mbcomp system, Pinocchio model) of one file, built once per test module run."""
+    """(mbcomp system, Pinocchio model) of one file, built once per test module run; the mimic
+    joints free (Pinocchio's default), the inertias as the file gives them (as Pinocchio's)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # the notes of what is not imported
-        system = mbcomp.assemble(load_urdf(path, floating=floating, mimic=False))
+        system = mbcomp.assemble(load_urdf(path, floating=floating, mimic=False, inertia="as_given"))
     model = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer()) if floating else pin.buildModelFromUrdf(path)
     return system, model
 
@@ -154,21 +163,21 @@ def _forward_difference(path, floating, n_states=2):
 
 
 @needs_robots
-@pytest.mark.parametrize("rel", FIXED[:6] + FLOATING[:6])
+@pytest.mark.parametrize("rel", FIXED[:6] + FLOATING[:6] + AS_GIVEN_FIXED[:1] + AS_GIVEN_FLOATING[:2])
 def test_forward_dynamics_matches_pinocchio(rel):
-    d = _forward_difference(os.path.join(ROBOTS, rel), floating=rel in FLOATING)
+    d = _forward_difference(os.path.join(ROBOTS, rel), floating=rel in FLOATING + AS_GIVEN_FLOATING)
     assert d < 1e-10, f"{rel}: accelerations {d:.1e} relative"
 
 
 @needs_robots
-@pytest.mark.parametrize("rel", FIXED)
+@pytest.mark.parametrize("rel", FIXED + AS_GIVEN_FIXED)
 def test_fixed_base_robot_matches_pinocchio(rel):
     dM, db = _differences(os.path.join(ROBOTS, rel), floating=False)
     assert dM < 1e-10 and db < 1e-10, f"{rel}: mass matrix {dM:.1e}, bias forces {db:.1e} relative"
 
 
 @needs_robots
-@pytest.mark.parametrize("rel", FLOATING)
+@pytest.mark.parametrize("rel", FLOATING + AS_GIVEN_FLOATING)
 def test_floating_base_robot_matches_pinocchio(rel):
     dM, db = _differences(os.path.join(ROBOTS, rel), floating=True)
     assert dM < 1e-10 and db < 1e-10, f"{rel}: mass matrix {dM:.1e}, bias forces {db:.1e} relative"
@@ -343,3 +352,17 @@ def test_a_joint_moving_no_mass_is_held_fixed_and_said(tmp_path):
     np.testing.assert_allclose(ev.M, Mp[:3, :3], rtol=1e-12, atol=1e-15)
     bp = pin.rnea(pm, pm.createData(), q, v, np.zeros(4)) + pm.damping * v
     np.testing.assert_allclose(-ev.f, bp[:3], rtol=1e-12, atol=1e-14)
+
+
+@needs_robots
+def test_impossible_inertias_are_refused_naming_the_link_and_the_option():
+    """go1's links have inertias no real body has: refused by default, naming the link and
+    ``inertia="as_given"``; with it, imported with one note per such link."""
+    path = os.path.join(ROBOTS, AS_GIVEN_FLOATING[0])
+    with pytest.raises(ValueError, match=r"link '\w+': principal moments .* inertia='as_given'"):
+        load_urdf(path, floating=True)
+    with pytest.warns(UserWarning):
+        model = load_urdf(path, floating=True, inertia="as_given")
+    taken = [n for n in model.urdf_notes if "taken as given" in n]
+    unchecked = [c for c in model.components().values() if type(c).__name__ == "UncheckedRigidBody"]
+    assert taken and len(unchecked) == len(taken)
