@@ -38,7 +38,7 @@ __all__ = [
     "Box", "Cylinder", "Sphere", "Mesh", "Helix", "Rod", "Grid",
     "assemble", "simulate", "Result", "equations", "linearize", "steady_states", "sweep",
     "load_model_file", "load_model", "export_fmu", "Input", "study", "Uniform", "Normal", "gradient",
-    "fit", "batch", "load_urdf",
+    "fit", "batch", "load_urdf", "load_mjcf",
 ]
 
 
@@ -65,6 +65,9 @@ def __getattr__(name):  # lazy: keep "import mbcomp" light and free of cycles wi
     if name == "load_urdf":  # a URDF robot as a Model of library components
         from .io.urdf import load_urdf
         return load_urdf
+    if name == "load_mjcf":  # an MJCF (MuJoCo) model as a Model of library components
+        from .io.mjcf import load_mjcf
+        return load_mjcf
     if name == "Input":  # an external signal standing where a law is given
         from .modeling.inputs import Input
         return Input

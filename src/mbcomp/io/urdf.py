@@ -27,7 +27,6 @@ joint's coordinate):
 Whatever is not imported is listed, element by element, in ``model.urdf_notes`` (a list of
 strings) and summed up in one ``UserWarning``.
 """
-import re
 import warnings
 import xml.etree.ElementTree as ET
 
@@ -35,6 +34,7 @@ import numpy as np
 
 from ..geometry.rotations import euler_to_matrix
 from ..modeling.inertia import inertia_problem
+from .names import ComponentNames as _Names
 
 __all__ = ["load_urdf", "rpy_matrix"]
 
@@ -94,26 +94,6 @@ def _inertial(link):
     if m == 0.0 and not Ii.any():
         return None
     return m, r_cm, R @ Ii @ R.T
-
-
-class _Names:
-    """Component names: the file's names where they are identifiers, else sanitized (noted)."""
-
-    def __init__(self, notes):
-        self.notes, self.used = notes, set()
-
-    def __call__(self, name, what):
-        new = re.sub(r"\W", "_", name)
-        if not new or new[0].isdigit():
-            new = "_" + new
-        base, k = new, 1
-        while new in self.used or new == "world":
-            k += 1
-            new = f"{base}_{k}"
-        if new != name:
-            self.notes.append(f"{what} {name!r}: named {new!r} in the model (component names are identifiers)")
-        self.used.add(new)
-        return new
 
 
 def _stops(kind, jel, limits):

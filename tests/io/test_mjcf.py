@@ -1,0 +1,409 @@
+"""MJCF import checked against MuJoCo: mass matrices, bias forces and accelerations of dm-control's models.
+
+mbcomp's equations are ``M du/dt = f``; MuJoCo's ``M qacc = qfrc_passive - qfrc_bias +
+qfrc_actuator + qfrc_constraint`` with ``qfrc_bias = C(q, v) v + g(q)``. The models are
+compiled by MuJoCo from the same file (mbcomp reads it without MuJoCo), then compared with
+MuJoCo's fluid forces (``opt.density``, ``opt.viscosity``) set to 0 and, unless said, its
+armature removed (``dof_armature = 0``, and ``load_mjcf(armature=False)``: mbcomp's rotor is on
+the absolute rate, see :mod:`mbcomp.io.mjcf_joints`); the joints' springs and dampers are in
+``f``, so ``f = -qfrc_bias + qfrc_spring + qfrc_damper``. The states are the same numbers:
+mbcomp's hinge and slide coordinates are MuJoCo's ``qpos`` (``ref`` included), a ball's and a
+free joint's quaternion is MuJoCo's (w x y z), their speeds MuJoCo's ``qvel`` (a ball's
+angular velocity in body axes; a free joint's linear velocity in world axes, angular in body
+axes), matched by joint name (``model.mjcf_joints``, MuJoCo's joint order).
+"""
+import functools
+import os
+import warnings
+
+import numpy as np
+import pytest
+
+import mbcomp
+from mbcomp.io.mjcf import body_frames, load_mjcf
+
+mujoco = pytest.importorskip("mujoco", reason="MuJoCo is not installed (the reference engine of these checks)")
+
+
+def _suite_dir():
+    try:
+        import dm_control
+    except ImportError:
+        return None
+    return os.path.join(os.path.dirname(dm_control.__file__), "suite")
+
+
+SUITE = _suite_dir()
+needs_suite = pytest.mark.skipif(SUITE is None, reason="dm-control is not installed (pip install mbcomp[robots])")
+
+MODELS = ["pendulum", "cartpole", "acrobot", "cheetah", "walker", "hopper", "reacher", "finger", "swimmer",
+          "point_mass", "ball_in_cup", "fish", "humanoid", "quadruped", "manipulator", "stacker", "humanoid_CMU"]
+
+
+@functools.lru_cache(maxsize=None)
+def _pair(path, armature=False):
+    """(mbcomp model, system, MuJoCo model) of one file, fluid off, armature off unless asked."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        model = load_mjcf(path, armature=armature)
+    system = mbcomp.assemble(model)
+    mj = _compiled(path)
+    mj.opt.density = mj.opt.viscosity = 0.0
+    mj.tendon_stiffness[:] = mj.tendon_damping[:] = 0.0  # tendons are not imported (noted)
+    if not armature:
+        mj.dof_armature[:] = 0.0
+    return model, system, mj
+
+
+def _compiled(path):
+    """MuJoCo's model of ``path``, compiled in a scratch directory (MuJoCo writes its warnings,
+    e.g. settotalmass's deprecation, to MUJOCO_LOG.TXT in the working directory)."""
+    import tempfile
+
+    here = os.getcwd()
+    with tempfile.TemporaryDirectory() as scratch:
+        os.chdir(scratch)
+        try:
+            return mujoco.MjModel.from_xml_path(os.path.abspath(os.path.join(here, path)))
+        finally:
+            os.chdir(here)
+
+
+def _layout(model, system, mj):
+    """For each MuJoCo joint: its type, qpos and dof addresses and mbcomp's q and u indices."""
+    out = []
+    for k, cname in enumerate(model.mjcf_joints):
+        q = [i for i, n in enumerate(system.q_names) if n.split(".")[0] == cname]
+        u = [i for i, n in enumerate(system.u_names) if n.split(".")[0] == cname]
+        out.append((int(mj.jnt_type[k]), int(mj.jnt_qposadr[k]), int(mj.jnt_dofadr[k]), q, u))
+    return out
+
+
+def _random_state(layout, mj, rng):
+    """Equal states: MuJoCo's (qpos, qvel) and mbcomp's (q, u), and the permutation ``u = P qvel``."""
+    qpos, qvel = mj.qpos0.copy(), rng.standard_normal(mj.nv)
+    nq = sum(len(q) for *_, q, _ in layout)
+    q, P = np.zeros(nq), np.zeros((sum(len(u) for *_, u in layout), mj.nv))
+    for typ, qa, da, qi, ui in layout:
+        if typ == mujoco.mjtJoint.mjJNT_FREE:
+            quat = rng.standard_normal(4)
+            qpos[qa:qa + 7] = np.r_[rng.uniform(-1, 1, 3), quat / np.linalg.norm(quat)]
+        elif typ == mujoco.mjtJoint.mjJNT_BALL:
+            quat = rng.standard_normal(4)
+            qpos[qa:qa + 4] = quat / np.linalg.norm(quat)
+        else:
+            qpos[qa] = qpos[qa] + rng.uniform(-1.5, 1.5)
+        width = len(ui)
+        q[qi] = qpos[qa:qa + len(qi)]
+        P[ui, da:da + width] = np.eye(width)
+    return qpos, qvel, q, P @ qvel, P
+
+
+def _mujoco_terms(mj, qpos, qvel):
+    d = mujoco.MjData(mj)
+    d.qpos[:], d.qvel[:] = qpos, qvel
+    mujoco.mj_forward(mj, d)
+    return _full_mass_matrix(mj, d), -d.qfrc_bias + d.qfrc_spring + d.qfrc_damper
+
+
+def _full_mass_matrix(mj, d):
+    M = np.zeros((mj.nv, mj.nv))
+    if hasattr(d, "qM"):  # MuJoCo 3: mj_fullM(m, dst, qM)
+        mujoco.mj_fullM(mj, M, d.qM)
+    else:  # MuJoCo 4: mj_fullM(m, d, dst)
+        mujoco.mj_fullM(mj, d, M)
+    return M
+
+
+def _differences(path, n_states=3, armature=False):
+    """Largest relative differences of M and of f over random states."""
+    model, system, mj = _pair(path, armature)
+    layout = _layout(model, system, mj)
+    rng = np.random.default_rng(34)
+    dM = df = 0.0
+    for _ in range(n_states):
+        qpos, qvel, q, u, P = _random_state(layout, mj, rng)
+        ev = system.evaluate(0.0, q, u)
+        M, f = _mujoco_terms(mj, qpos, qvel)
+        dM = max(dM, np.abs(P.T @ ev.M @ P - M).max() / np.abs(M).max())
+        df = max(df, np.abs(P.T @ ev.f - f).max() / np.abs(f).max())
+    return dM, df
+
+
+def _forward_difference(path, n_states=2):
+    """Largest relative difference of mbcomp's accelerations (articulated-body solve) and
+    MuJoCo's ``qacc`` with contacts and constraints (limits, friction loss, equalities) off."""
+    from mbcomp.assembly.recursive import lagrange_accelerations
+
+    model, system, mj = _pair(path)
+    mj.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_CONSTRAINT \
+        | mujoco.mjtDisableBit.mjDSBL_ACTUATION
+    layout = _layout(model, system, mj)
+    rng = np.random.default_rng(35)
+    worst = 0.0
+    for _ in range(n_states):
+        qpos, qvel, q, u, P = _random_state(layout, mj, rng)
+        d = mujoco.MjData(mj)
+        d.qpos[:], d.qvel[:] = qpos, qvel
+        mujoco.mj_forward(mj, d)
+        ud = lagrange_accelerations(system, 0.0, q, u)
+        worst = max(worst, np.abs(P.T @ ud - d.qacc).max() / np.abs(d.qacc).max())
+    return worst
+
+
+@needs_suite
+@pytest.mark.parametrize("name", MODELS)
+def test_suite_model_matches_mujoco(name):
+    dM, df = _differences(os.path.join(SUITE, name + ".xml"))
+    print(f"{name}: nv {_pair(os.path.join(SUITE, name + '.xml'))[2].nv}, M {dM:.1e}, f {df:.1e}")
+    assert dM < 1e-9 and df < 1e-9, f"{name}: mass matrix {dM:.1e}, bias forces {df:.1e} relative"
+
+
+@needs_suite
+@pytest.mark.parametrize("name", ["cartpole", "cheetah", "humanoid", "quadruped"])
+def test_forward_dynamics_matches_mujoco(name):
+    d = _forward_difference(os.path.join(SUITE, name + ".xml"))
+    print(f"{name}: qacc {d:.1e}")
+    assert d < 1e-9, f"{name}: accelerations {d:.1e} relative"
+
+
+def _write(tmp_path, text, name="model.xml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def _load(path, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return load_mjcf(path, **kw)
+
+
+DEFAULTS = """<mujoco><default><joint damping="1" axis="0 1 0"/><geom density="500"/>
+  <default class="leg"><joint stiffness="4"/><geom type="box" size=".1 .2 .3"/>
+    <default class="foot"><geom density="2000"/></default></default></default>
+<worldbody><body name="thigh" childclass="leg" pos="0 0 2"><joint name="hip"/><geom/>
+  <body name="foot" pos="0 0 -1"><joint name="ankle" damping="3"/><geom class="foot" pos="0.1 0 0"/></body>
+</body></worldbody></mujoco>"""
+
+
+def test_default_classes_are_inherited_as_mujoco_reads_them(tmp_path):
+    """``childclass`` gives the thigh's geom the class ``leg`` (a box of density 500 from
+    ``main``: 500 * 8 * 0.1 * 0.2 * 0.3 = 24 kg); ``foot`` inherits the box and overrides the
+    density (96 kg); the ankle keeps ``leg``'s stiffness 4 and overrides ``main``'s damping 1
+    with 3; axes along y from ``main``."""
+    path = _write(tmp_path, DEFAULTS)
+    model = _load(path)
+    assert model["thigh"].p.m == pytest.approx(24.0, rel=1e-14)
+    assert model["foot"].p.m == pytest.approx(96.0, rel=1e-14)
+    assert model["foot"].p.r_cm.tolist() == [0.1, 0.0, 0.0]
+    assert (model["hip_spring"].p.c, model["hip_spring"].p.d) == (4.0, 1.0)
+    assert (model["ankle_spring"].p.c, model["ankle_spring"].p.d) == (4.0, 3.0)
+    assert model["ankle"].p.n.tolist() == [0.0, 1.0, 0.0]
+    dM, df = _differences(path, n_states=3)
+    assert dM < 1e-13 and df < 1e-13, (dM, df)
+
+
+ORIENTED = """<mujoco><compiler {compiler}/><worldbody>
+<body name="b" pos="0.1 0.2 0.3" {spec}><joint type="slide" axis="1 0 0"/><geom type="box" size=".1 .2 .3"/></body>
+</worldbody></mujoco>"""
+
+
+@pytest.mark.parametrize("compiler, spec", [
+    ('angle="degree"', 'euler="10 -20 130"'), ('angle="degree" eulerseq="XYZ"', 'euler="10 -20 130"'),
+    ('angle="radian" eulerseq="zyx"', 'euler="0.3 1.1 -2.0"'), ('eulerseq="ZyX"', 'euler="40 -75 12"'),
+    ('', 'axisangle="1 2 -1 160"'), ('angle="radian"', 'axisangle="0 0 3 1.0"'),
+    ('', 'xyaxes="1 1 0 -1 2 0.5"'), ('', 'zaxis="0.3 -1 0.2"'), ('', 'zaxis="0 0 -1"'),
+    ('', 'quat="0.5 0.1 -0.7 0.2"')])
+def test_orientations_are_mujocos(tmp_path, compiler, spec):
+    """Every way MJCF orients a frame, with degrees (MuJoCo's default) and radians, intrinsic
+    (lowercase) and extrinsic (uppercase) Euler sequences: the body's world orientation at
+    qpos0 equals MuJoCo's ``xmat`` to rounding."""
+    path = _write(tmp_path, ORIENTED.format(compiler=compiler, spec=spec))
+    frame = body_frames(_load(path))["b"]
+    mj = _compiled(path)
+    d = mujoco.MjData(mj)
+    mujoco.mj_kinematics(mj, d)
+    np.testing.assert_allclose(frame.R0, d.xmat[1].reshape(3, 3), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(frame.p0, d.xpos[1], rtol=0, atol=1e-15)
+
+
+CAPSULE = """<mujoco><worldbody><body name="rod"><joint name="pivot" axis="1 0 0"/>
+<geom type="capsule" fromto="0 0 0 0 0 {L}" size="{r}" density="{rho}"/></body></worldbody></mujoco>"""
+
+
+def test_fromto_capsule_mass_properties_closed_form(tmp_path):
+    """A capsule from the origin up z: a cylinder of length L and two hemispheres of radius
+    r. Each hemisphere has mass m_h, centroid 3r/8 beyond the cylinder's end and transverse
+    inertia 83/320 m_h r^2 about its centroid (the textbook values, not MuJoCo's expression),
+    so about the pivot at the origin the moment is I_cm + m (L/2)^2 -- M of the hinge."""
+    L, r, rho = 0.7, 0.09, 800.0
+    path = _write(tmp_path, CAPSULE.format(L=L, r=r, rho=rho))
+    model = _load(path)
+    m_c, m_h = rho * np.pi * r * r * L, rho * 2.0 * np.pi * r ** 3 / 3.0
+    across = m_c * (3 * r * r + L * L) / 12 + 2 * m_h * (83 / 320 * r * r + (L / 2 + 3 * r / 8) ** 2)
+    along = m_c * r * r / 2 + 2 * m_h * 2 * r * r / 5
+    body = model["rod"].p
+    assert body.m == pytest.approx(m_c + 2 * m_h, rel=1e-14)
+    np.testing.assert_allclose(body.r_cm, (0, 0, L / 2), atol=1e-16)
+    np.testing.assert_allclose(np.diag(body.I), (across, across, along), rtol=1e-13)
+    ev = mbcomp.assemble(model).evaluate(0.0, np.array([0.4]), np.array([0.0]))
+    assert ev.M[0, 0] == pytest.approx(across + body.m * (L / 2) ** 2, rel=1e-13)
+    assert ev.f[0] == pytest.approx(9.81 * body.m * L / 2 * np.sin(0.4), rel=1e-13)  # z up, tipped over
+
+
+TWO_JOINTS = """<mujoco><option gravity="0.5 -2 -9"/><worldbody><body name="base" pos="0 0 1" euler="20 0 0">
+<joint name="swing" pos="0.1 0 0.2" axis="0 1 0.5" ref="30" stiffness="3" springref="10" damping="0.2"/>
+<joint name="slide" type="slide" axis="1 0 1" ref="0.1" stiffness="5" springref="0.3"/>
+<joint name="turn" pos="-0.2 0.1 0" axis="1 0 0"/>
+<geom type="box" size=".2 .1 .05" pos="0.3 0 0" euler="0 30 10"/><geom type="sphere" size=".07" pos="-.2 .1 0"/>
+<body name="ball" pos="0.4 0 -0.3"><joint name="knob" type="ball" pos="0 0.05 0"/>
+<geom type="ellipsoid" size=".1 .05 .2" pos="0 0 -.1" quat="0.9 0.1 0.3 0"/>
+<body name="tip" pos="0 0 -.3"><joint name="last" axis="0 0 1"/><geom type="cylinder" fromto="0 0 0 0.1 0.1 -0.2" size=".03"/>
+</body></body></body></worldbody></mujoco>"""
+
+
+def test_a_body_with_three_joints_and_a_ball_matches_mujoco(tmp_path):
+    """A hinge off the body's origin with ``ref`` and a spring, a slide with ``ref``, another
+    hinge at another anchor, all in one body (MuJoCo applies them in order at the body), then
+    a ball joint off its body's origin and a hinge beyond it: mbcomp's coordinates are
+    MuJoCo's qpos (refs included), and M and f agree with MuJoCo's at random states."""
+    path = _write(tmp_path, TWO_JOINTS)
+    model = _load(path)
+    system = mbcomp.assemble(model)
+    assert [n for n in system.q_names if not n.startswith("knob")] == ["swing.phi", "slide.s", "turn.phi", "last.phi"]
+    assert model["swing"].p.phi0 == pytest.approx(np.pi / 6) and model["slide"].p.s0 == 0.1  # qpos0 = ref
+    dM, df = _differences(path, n_states=5)
+    assert dM < 1e-13 and df < 1e-13, (dM, df)
+
+
+ARMATURE = """<mujoco><worldbody>
+<body name="cart"><joint name="rail" type="slide" axis="1 0 0"/><geom type="box" size=".2 .1 .1"/>
+  <body name="pole" pos="0 0 .1"><joint name="hinge" axis="0 1 0" armature="0.3" damping="0.1"/>
+  <geom type="capsule" fromto="0 0 0 0.1 0 0.6" size=".04"/></body></body>
+<body name="wheel" pos="1 0 0"><joint name="axle" axis="0.6 0 0.8" armature="0.05"/>
+  <geom type="cylinder" size=".3 .02" pos="0.1 0 0"/></body></worldbody></mujoco>"""
+
+
+def test_armature_on_hinges_whose_carrier_does_not_turn_is_mujocos(tmp_path):
+    """A hinge on the ground and a hinge on a slider: the rotor on the absolute rate turns at
+    the joint's own rate, so mbcomp's M equals MuJoCo's M *with* its armature (0.3 and 0.05
+    on the diagonal), and without the rotors it is short of exactly that."""
+    path = _write(tmp_path, ARMATURE)
+    dM, df = _differences(path, n_states=4, armature=True)
+    assert dM < 1e-13 and df < 1e-13, (dM, df)
+    model, system, mj = _pair(path, True)
+    plain = mbcomp.assemble(_load(path, armature=False))
+    assert plain.u_names == system.u_names
+    q, u = np.array([0.3, -0.4, 1.2]), np.array([0.5, 2.0, -1.0])
+    gap = system.evaluate(0.0, q, u).M - plain.evaluate(0.0, q, u).M
+    J = {"rail.v": 0.0, "hinge.w": 0.3, "axle.w": 0.05}
+    np.testing.assert_allclose(gap, np.diag([J[n] for n in system.u_names]), atol=1e-14)
+
+
+@needs_suite
+def test_armature_on_a_turning_carrier_is_on_the_absolute_rate():
+    """Cheetah's thigh, shin and foot hinges (armature 0.1) ride on bodies turning about the
+    same axis: mbcomp's rotor J (n . w_b)^2 / 2 is MuJoCo's M without armature plus
+    J c c^T per hinge, c = n . (the hinge body's angular Jacobian), from MuJoCo's own
+    Jacobians -- not MuJoCo's J e_k e_k^T (the difference this import states)."""
+    path = os.path.join(SUITE, "cheetah.xml")
+    model, system, mj = _pair(path, True)
+    bare = _pair(path, False)[2]
+    layout = _layout(model, system, mj)
+    qpos, qvel, q, u, P = _random_state(layout, mj, np.random.default_rng(7))
+    M_rotors = P.T @ system.evaluate(0.0, q, u).M @ P
+    d = mujoco.MjData(bare)
+    d.qpos[:] = qpos
+    mujoco.mj_forward(bare, d)
+    expect = _full_mass_matrix(bare, d)
+    for k in range(mj.njnt):
+        if mj.jnt_type[k] == mujoco.mjtJoint.mjJNT_HINGE and mj.dof_armature[mj.jnt_dofadr[k]] > 0:
+            jacr = np.zeros((3, mj.nv))
+            mujoco.mj_jacBody(bare, d, None, jacr, mj.jnt_bodyid[k])
+            c = d.xaxis[k] @ jacr
+            expect += mj.dof_armature[mj.jnt_dofadr[k]] * np.outer(c, c)
+    np.testing.assert_allclose(M_rotors, expect, rtol=0, atol=1e-12 * np.abs(expect).max())
+    with_armature = _full_mass_matrix(mj, d)
+    assert np.abs(M_rotors - with_armature).max() > 0.01  # MuJoCo's own term differs: said, not hidden
+
+
+NOTED = """<mujoco model="noted"><include file="parts.xml"/>
+<option density="1.2"/>
+<worldbody><light name="sun" pos="0 0 3"/>
+<body name="arm" pos="0 0 1"><joint name="shoulder" axis="0 1 0" frictionloss="0.5" armature="0.01"/>
+  <geom type="capsule" fromto="0 0 0 0 0 -0.5" size="0.05" material="red"/><site name="tip" pos="0 0 -.5"/>
+  <body name="fore" pos="0 0 -.5"><joint name="elbow" type="slide" axis="0 0 1" armature="0.2"/>
+  <geom type="sphere" size=".1" rgba="0 0 1 0.5"/></body></body></worldbody>
+<tendon><fixed name="t"><joint joint="shoulder" coef="1"/></fixed></tendon>
+<equality><connect name="loop" body1="arm" body2="fore" anchor="0 0 0"/></equality>
+<actuator><motor name="m1" joint="shoulder" gear="50"/><position name="p1" joint="elbow" kp="20"/></actuator>
+<sensor><jointpos joint="shoulder"/><jointvel joint="shoulder"/><touch site="tip"/></sensor>
+</mujoco>"""
+PARTS = """<mujoco><asset><material name="red" rgba="1 0 0 1"/></asset></mujoco>"""
+
+
+def test_what_is_not_imported_is_said(tmp_path):
+    """Actuators one by one with their gains, sensors and tendons grouped, the equality as
+    "not imported yet", the fluid forces, frictionloss (friction=False) and a slide's armature;
+    one UserWarning; the include's material colours the capsule."""
+    _write(tmp_path, PARTS, "parts.xml")
+    path = _write(tmp_path, NOTED)
+    with pytest.warns(UserWarning, match="MJCF elements not imported"):
+        model = load_mjcf(path)
+    notes = "\n".join(model.mjcf_notes)
+    for said in ("actuator <motor> 'm1' on joint 'shoulder' (gear=50)", "actuator <position> 'p1' on joint 'elbow' (kp=20)",
+                 "3 sensors (1 jointpos, 1 jointvel, 1 touch): not imported", "1 tendons (1 fixed): not imported",
+                 "equality <connect> 'loop' (arm, fore): not imported yet", "<option density=1.2>: fluid forces",
+                 "joint 'shoulder': frictionloss=0.5 not imported (friction=False)",
+                 "joint 'elbow': armature=0.2 not imported (a slide joint has no rotor element)",
+                 "1 light, 1 site: not imported"):
+        assert said in notes, said
+    shapes = model["arm"].look.shape
+    assert [type(s).__name__ for s in shapes] == ["Cylinder", "Sphere", "Sphere"]
+    assert shapes[0].color == "#ff0000" and shapes[0].length == pytest.approx(0.5)
+    assert model["fore"].look.shape[0].opacity == 0.5
+    with pytest.warns(UserWarning):
+        rubbing = load_mjcf(path, friction=True)
+    assert rubbing["shoulder"].p.friction.static == 0.5
+    frame = body_frames(model)["fore"]
+    assert frame.p0.tolist() == [0.0, 0.0, 0.5] and frame.port == model["fore"].frame_a
+
+
+def test_bad_files_are_refused_with_the_fix(tmp_path):
+    def refused(text, match, name="bad.xml"):
+        with pytest.raises(ValueError, match=match):
+            _load(_write(tmp_path, text, name))
+
+    refused("<robot name='r'/>", "not <mujoco> -> is it an MJCF")
+    refused("<mujoco><include file='gone.xml'/><worldbody/></mujoco>", r"<include file='gone.xml'>: no such file")
+    body = "<mujoco><worldbody><body name='b'>{}<geom size='.1'/></body></worldbody></mujoco>"
+    refused(body.format("<joint name='j' type='screw'/>"), "joint 'j' of body 'b': type 'screw' is not one of hinge")
+    refused("<mujoco><worldbody><body name='b'><joint name='j'/><geom size='.1' mass='0'/></body></worldbody></mujoco>",
+            "body 'b': joint 'j' moves no mass")
+    refused("<mujoco><worldbody><body name='a'><geom size='.1'/><body name='b'><freejoint/><geom size='.1'/></body>"
+            "</body></worldbody></mujoco>", "body 'b': a free joint must be the only joint of a child of the worldbody")
+    refused(body.format("<joint/>").replace("<geom size='.1'/>", "<geom type='mesh' mesh='m'/>"),
+            "a mesh geom carrying mass .* give its body an <inertial>")
+    refused(body.format("<joint euler='0 0 1' quat='1 0 0 0'/>").replace("<body name='b'>", "<body name='b' euler='1 0 0' quat='1 0 0 0'>"),
+            "orientation given twice")
+    refused(body.format("<joint class='nope'/>"), "class 'nope' is not defined")
+    refused(body.format("<joint range='1 -1'/>"), "give lower < upper")
+
+
+def test_limits_become_stops_only_when_asked(tmp_path):
+    """``range`` (degrees) with autolimits: the hinge's stops in rad with ``limits=True``; a
+    ``ref`` outside the range starts the joint at the range's middle (noted)."""
+    text = ("<mujoco><worldbody><body name='b'><joint name='j' range='-30 60' ref='{ref}'/>"
+            "<geom type='box' size='.1 .1 .1' pos='0.2 0 0'/></body></worldbody></mujoco>")
+    plain = _load(_write(tmp_path, text.format(ref=0)))
+    assert plain["j"].p.limits is None
+    stopped = _load(_write(tmp_path, text.format(ref=0)), limits=True)
+    np.testing.assert_allclose(stopped["j"].p.limits, np.deg2rad([-30, 60]), rtol=1e-15)
+    with pytest.warns(UserWarning, match="starts at the middle of its range"):
+        outside = load_mjcf(_write(tmp_path, text.format(ref=90)), limits=True)
+    assert outside["j"].p.phi0 == pytest.approx(np.deg2rad(15))
+
+
+def test_top_level_name():
+    assert mbcomp.load_mjcf is load_mjcf
