@@ -1,0 +1,143 @@
+"""MJCF ``<equality>`` constraints as exact loop closures (cut joints), with MuJoCo's geometry.
+
+MuJoCo holds its equality constraints softly (``solref``/``solimp``: a stiff spring-damper
+solved each step, so a loop drifts open by the constraint's violation); mbcomp closes each as
+a cut joint with exact rows (:func:`mbcomp.io.loops.close_loop`), placed as MuJoCo's compiler
+places them (``m.eq_data``) at ``qpos0`` (every body where the file puts it,
+:class:`mbcomp.io.mjcf.BodyFrame`):
+
+- ``<connect body1 body2 anchor>``: ``anchor`` (m) is a point in ``body1``'s frame; the point
+  of ``body2`` (the world when omitted) is where that anchor is at ``qpos0``, so the file's
+  pose closes the loop. -> a ``Spherical`` between the two points (kind ``"point"``).
+- ``<weld body1 body2 relpose anchor torquescale>``: ``body2``'s point ``anchor`` (its frame)
+  sits at ``relpose``'s position in ``body1``'s frame with ``body2``'s axes at ``relpose``'s
+  quaternion (``w x y z``) from ``body1``'s; when ``relpose``'s quaternion is zero (its
+  default) both are those at ``qpos0``. -> a ``Weld`` (kind ``"weld"``); ``torquescale="0"``
+  (no rotational residual) is a ``connect`` at the anchor.
+
+The joint is named as the equality (``connect<k>``/``weld<k>`` when unnamed, ``k`` its
+position in the file); its rigid offsets ``<name>_a``, ``<name>_b``. ``solref``, ``solimp``
+(softness) and ``torquescale``'s weighting do not apply to an exact closure (noted where given).
+Not imported (noted, the loop stays open): inactive equalities (``active="false"``), site-based
+ones (``site1``/``site2``), and the ``joint``, ``tendon`` and ``flex`` kinds.
+"""
+import numpy as np
+
+from ..geometry.kinematics import quat_to_matrix
+from .loops import close_loop
+from .mjcf_frames import numbers
+from .names import ComponentNames
+
+__all__ = ["add_equalities"]
+
+_SOFT = ("solref", "solimp")
+
+
+def _frame(model, bodies, name, what):
+    """``(port, R0, p0)`` of an MJCF body (the world when ``name`` is None or ``"world"``)."""
+    if name is None or name == "world":
+        return model["world"].frame_b, np.eye(3), np.zeros(3)
+    b = bodies.get(name)
+    if b is None:
+        raise ValueError(f"MJCF {what}: body {name!r} is not a body of the file -> fix the name")
+    return b.port, np.asarray(b.R0, dtype=float), np.asarray(b.p0, dtype=float)
+
+
+def _relpose(el, what):
+    """``(pos, R)`` of a weld's ``relpose`` or None when its quaternion is zero (the default)."""
+    if el.get("relpose") is None:
+        return None
+    v = numbers(el.get("relpose"), 7, f"{what} relpose")
+    quat = np.asarray(v[3:], dtype=float)
+    if not np.any(quat):
+        return None
+    return np.asarray(v[:3], dtype=float), quat_to_matrix(quat / np.linalg.norm(quat))
+
+
+def _closure(el, model, bodies, what):
+    """``(kind, frame_a, frame_b, pose_a, pose_b)`` of a ``connect`` or ``weld`` element."""
+    (pa, Ra, ra), (pb, Rb, rb) = (_frame(model, bodies, el.get(k), what) for k in ("body1", "body2"))
+    anchor = np.asarray(numbers(el.get("anchor", "0 0 0"), 3, f"{what} anchor"), dtype=float)
+    if el.tag == "connect":  # body2's point: where body1's anchor is at qpos0
+        return "point", pa, pb, (anchor, np.eye(3)), (Rb.T @ (ra + Ra @ anchor - rb), np.eye(3))
+    rel = _relpose(el, what)
+    if rel is None:  # body2's anchor point in body1's frame and the relative axes, at qpos0
+        rel = Ra.T @ (rb + Rb @ anchor - ra), Ra.T @ Rb
+    if float(el.get("torquescale", 1.0)) == 0.0:  # no rotational residual: the anchors coincide
+        return "point", pa, pb, (rel[0], np.eye(3)), (anchor, np.eye(3))
+    return "weld", pa, pb, rel, (anchor, np.eye(3))
+
+
+def _skipped(el):
+    """Why an equality element is not imported, or None."""
+    if el.tag not in ("connect", "weld"):
+        return f"the {el.tag!r} kind is not imported yet"
+    if el.get("active", "true") == "false":
+        return "inactive (active=false)"
+    if el.get("site1") or el.get("site2"):
+        return "site-based equalities are not imported yet"
+    if el.get("body1") is None:
+        return "no body1"
+    return None
+
+
+def add_equalities(root, model, bodies, notes):
+    """Close every ``<equality><connect>`` and ``<weld>`` of the MJCF ``root`` in ``model`` by
+    an exact cut joint (module notes); the rest is listed in ``notes``.
+
+    Parameters
+    ----------
+    root : xml.etree.ElementTree.Element
+        The file's ``<mujoco>`` element (includes spliced).
+    model : Model
+        The model :func:`mbcomp.io.mjcf.load_mjcf` builds (its world named ``world``).
+    bodies : dict
+        MJCF body name -> :class:`mbcomp.io.mjcf.BodyFrame` (frame port, pose at ``qpos0``).
+    notes : list of str
+        Where what is not imported, or imported differently, is said.
+
+    Returns
+    -------
+    list of str
+        The names of the closing joints added.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import mbcomp
+    >>> text = '''<mujoco><worldbody>
+    ...   <body name="arm"><joint name="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 1 0 0" size="0.05"/>
+    ...     <body name="link" pos="1 0 0"><joint name="knee" axis="0 1 0"/>
+    ...       <geom type="capsule" fromto="0 0 0 0 0 -1" size="0.05"/></body></body></worldbody>
+    ...   <equality><connect name="pin" body1="link" anchor="0 0 -1"/></equality></mujoco>'''
+    >>> path = os.path.join(tempfile.mkdtemp(), "loop.xml")
+    >>> _ = open(path, "w").write(text)
+    >>> system = mbcomp.assemble(mbcomp.load_mjcf(path))
+    >>> system.topology.cut, "degrees of freedom: 0" in system.summary()
+    (['pin'], True)
+    """
+    names = ComponentNames(notes)
+    names.used.update(model.components())
+    added, k = [], 0
+    for sec in root.findall("equality"):
+        for el in sec:
+            k += 1
+            label = el.get("name") or f"{el.tag}{k}"
+            what = f"equality <{el.tag}> {label!r}"
+            why = _skipped(el)
+            if why:
+                ties = [el.get(t) for t in ("body1", "body2", "joint1", "joint2", "site1", "site2", "tendon1")
+                        if el.get(t)]
+                notes.append(f"{what} ({', '.join(ties)}): not imported: {why} (the loop it closes stays open)")
+                continue
+            kind, fa, fb, pose_a, pose_b = _closure(el, model, bodies, what)
+            soft = [a for a in _SOFT if el.get(a) is not None]
+            if el.get("torquescale") is not None and float(el.get("torquescale")) not in (0.0, 1.0):
+                soft.append("torquescale")
+            if soft:
+                notes.append(f"{what}: closed exactly ({', '.join(soft)}: MuJoCo's softness, not applied)")
+            name = names(label, "equality")
+            close_loop(model, name, kind, fa, fb, pose_a, pose_b,
+                       offset_names=(names(f"{name}_a", "loop frame"), names(f"{name}_b", "loop frame")))
+            added.append(name)
+    return added
