@@ -1,4 +1,4 @@
-"""URDF import: ``load_urdf(path) -> Model`` of library bodies, joints and rigid offsets.
+"""URDF import: ``load_urdf(path) -> Model`` of library bodies, joints and rigid offsets, with loops.
 
 What it maps (URDF frames: every link has a frame; a joint's ``<origin>`` places the joint
 frame in the parent link's frame; the child link's frame is the joint frame moved by the
@@ -21,8 +21,44 @@ joint's coordinate):
   whose zero position lies outside them starts at their middle (noted).
 - ``<dynamics damping>``: a ``RotationalDamper`` (revolute, continuous) or a
   ``TranslationalSpringDamper`` with ``c = 0`` (prismatic) on the joint's flanges with
-  ``damping=True`` (default); ``friction`` and ``<mimic>`` are not imported (listed).
+  ``damping=True`` (default); ``<dynamics friction>``: the joint's exact Coulomb friction
+  (``CoulombBearing`` N m, ``SlidingFriction`` N: stick/slip events) with ``friction=True``,
+  else listed (not combined with stops on one joint: listed).
+- ``<mimic joint multiplier offset>``: ``q = multiplier q_leader + offset`` held exactly by a
+  flange constraint ``<joint>_mimic`` (``IdealGear(ratio=multiplier)`` between two rotational
+  joints, ``JointCoupling`` otherwise); its rows keep displacements from the start values, so
+  the offset is the mimic joint's start value ``multiplier q_leader0 + offset``. With
+  ``mimic=False`` the joint moves freely (listed), as in Pinocchio's default.
+- inertias no real body has (a principal moment above the sum of the other two, or
+  negative): refused naming the link, or with ``inertia="as_given"`` imported as given
+  (``UncheckedRigidBody``, listed per link), as Pinocchio takes them.
 - gravity: ``World(g=gravity)``, ``(0, 0, -9.81)`` m/s^2 by default (URDF carries none).
+
+Closed loops (mbcomp's convention; URDF itself describes trees only). Two ways of writing a
+loop-closing joint are read, both documented elsewhere and both written by hand easily:
+
+1. a ``<joint>`` whose ``<child>`` link is already the child of an earlier joint in the file
+   (the form of ROS's ``urdf`` issue #13 and Pinocchio's issue #1274): the first joint naming
+   a link as its child places the link (the tree); each later one closes a loop with the
+   joint's own meaning -- the child link's frame is the joint frame (``<origin>`` in the
+   parent link's frame) moved by the joint's coordinate. The child link's frame must then lie
+   on the closing joint: a fixed, massless "tip" link on the closed body is the idiom;
+2. a ``<loop_joint name type>`` element with ``<link1 link xyz rpy/>``, ``<link2 link xyz
+   rpy/>`` and ``<axis xyz/>`` (Drake's URDF extension): the frame ``xyz rpy`` on ``link1``
+   and the one on ``link2`` are joined by the joint, its axis in ``link1``'s frame.
+
+The closing joint's ``type``: ``revolute``/``continuous`` -> a hinge, ``prismatic`` -> a
+slider, ``fixed`` -> a weld, ``spherical`` or ``ball`` (mbcomp's extension: URDF has no ball
+joint) -> a point coincidence; it becomes a cut joint with exact rows
+(:func:`mbcomp.io.loops.close_loop`), named as in the file; which joint of the loop the
+topology cuts is its choice, and redundant rows (a planar loop) are found and explained by
+``mbcomp.assemble(model).summary()``. Its limits, damping, friction and mimic are not imported
+(listed). The file's zero position should close every loop; else initialization assembles
+the mechanism from it. Chosen because form 1 needs no new element (a tree parser sees a
+link with two parents and stops, rather than silently dropping the loop) and form 2 is the
+one extension element an existing parser (Drake's) reads; URDF+ (Chignoli et al., 2024)
+adds ``<loop>`` elements and coupling constraints to the same effect but no parser of it is
+installed here to check the reading against.
 
 Whatever is not imported is listed, element by element, in ``model.urdf_notes`` (a list of
 strings) and summed up in one ``UserWarning``.
