@@ -137,7 +137,7 @@ class UncheckedRigidBody(RigidBody):
     >>> I = np.diag([0.01, 0.01, 0.03])        # 0.01 + 0.01 < 0.03: no real body has it
     >>> UncheckedRigidBody(m=1.0, I=I).problems()  # no problem reported
     []
-    >>> RigidBody(m=1.0, I=I).problems()[0].message[:50]
+    >>> RigidBody(m=1.0, I=I).problems()[0].what[:50]
     'parameter principal moments 0.01, 0.01, 0.03 kg m^'
     """
 
