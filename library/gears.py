@@ -119,7 +119,7 @@ class JointCoupling(FlangeConstraint):
     flange_a = Flange("the coupled (following) joint's axis (a Revolute's or a Prismatic's)")
     flange_b = Flange("the leading joint's axis (a Revolute's or a Prismatic's)")
     ratio = Param(1.0, unit="1", doc="s_a / s_b (1, m/rad or rad/m by the axes' kinds)", check="nonzero")
-    output_units = {"f_a": "N m or N", "f_b": "N m or N"}
+    output_units = {}  # f_a, f_b: N m on a rotational axis, N on a translational one (known per connection only)
 
     def rows(self, flanges, p):
         return [("mesh", flanges["flange_a"] - p.ratio * flanges["flange_b"])]
