@@ -230,6 +230,9 @@ def _parse(path):
                                  "the file -> fix the file")
         loops.append(lj)
     roots = [n for n in links if n not in parent_of]
+    if not roots:
+        raise ValueError(f"{path}: 0 root links: every link is the child of a joint (a loop through the root?) "
+                         "-> write the joint that closes that loop as a <loop_joint> (module notes)")
     if len(roots) != 1:
         raise ValueError(f"{path}: {len(roots)} root links {roots} (a URDF tree has one) -> fix the file")
     unreached = sorted(set(links) - _below(children, roots[0]))
