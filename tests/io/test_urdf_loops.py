@@ -362,3 +362,23 @@ def test_joint_friction_is_noted_when_off(tmp_path):
         model = load_urdf(_write(tmp_path, PENDULUM.format(m=2, l=0.5, Iyy=0.03, phi0=0.5, f=4.0)))
     assert model["hinge"].p.friction is None
     assert any("'hinge': <dynamics friction=4> not imported (friction=False)" in n for n in model.urdf_notes)
+
+
+SLIDER = """<robot name="sled"><link name="rail"/>
+<link name="block"><inertial><mass value="{m}"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>
+</inertial></link><joint name="slide" type="prismatic"><parent link="rail"/><child link="block"/><axis xyz="1 0 0"/>
+<limit lower="-5" upper="5" effort="1" velocity="1"/><dynamics friction="{f}"/></joint></robot>"""
+
+
+def test_prismatic_friction_decelerates_at_f_over_m_and_sticks(tmp_path):
+    """A block pushed along a horizontal rail at 2 m/s with sliding friction f (N): it slows at
+    exactly ``f / m``, stops at ``t = m v0 / f`` after ``m v0^2 / (2 f)`` and stays stuck."""
+    m, f, v0 = 2.0, 3.0, 2.0
+    model = load_urdf(_write(tmp_path, SLIDER.format(m=m, f=f)), friction=True)
+    res = mbcomp.simulate(model, t_end=2.0, n_out=201, params={"slide.v0": v0}, rtol=1e-10, atol=1e-12)
+    t, v, s = res["time"], res["slide.v"], res["slide.s"]
+    t_stop = m * v0 / f
+    moving = t < t_stop - 1e-9
+    assert np.abs(v[moving] - (v0 - f / m * t[moving])).max() < 1e-9
+    assert np.abs(v[t > t_stop + 1e-9]).max() < 1e-12 and res["slide.sticking"][-1] == 1.0
+    assert s[-1] == pytest.approx(m * v0 ** 2 / (2 * f), abs=1e-9)
