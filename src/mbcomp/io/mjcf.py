@@ -115,7 +115,7 @@ def _walk(root, compiler, defaults):
     return bodies, [(g.get("name"), defaults.attributes(g, "main")) for g in world.findall("geom")]
 
 
-def _mass_properties(b, compiler):
+def _mass_properties(b, compiler, meshes):
     """``(m, r_cm, I)`` of a body (body frame) or None, and its GeomFrames."""
     frames = [(gname, geom_frame(a, compiler, f"geom {gname or '(unnamed)'!r} of body {b.name!r}"))
               for gname, a in b.geoms]
@@ -127,8 +127,8 @@ def _mass_properties(b, compiler):
     parts = []
     for gname, g in frames:
         if lo <= int(float(g.attrs.get("group", 0))) <= hi:
-            m, I = geom_mass(g, f"geom {gname or '(unnamed)'!r} of body {b.name!r}")
-            parts.append((m, I, g.pos, g.R))
+            m, I, c = geom_mass(g, f"geom {gname or '(unnamed)'!r} of body {b.name!r}", meshes)
+            parts.append((m, g.R @ I @ g.R.T, g.pos + g.R @ c))
     return body_mass_properties(parts), frames
 
 
@@ -155,6 +155,22 @@ def _gravity(root, gravity):
             if flag.get("gravity") == "disable":
                 g = np.zeros(3)
     return g
+
+
+def _read(path):
+    """The file read: ``(root, compiler, bodies, world geoms, (materials, meshes), {body: geom
+    frames}, {body: (m, r_cm, I) or None})``, the masses scaled and checked."""
+    root = read_tree(path)
+    compiler = Compiler(root, os.path.dirname(os.path.abspath(os.fspath(path))))
+    defaults = Defaults(root)
+    bodies, world_geoms = _walk(root, compiler, defaults)
+    mats, meshes = materials_and_meshes(root, compiler, defaults)
+    frames, props = {}, {}
+    for b in bodies:
+        props[id(b)], frames[id(b)] = _mass_properties(b, compiler, meshes)
+    props = scaled_total(props, compiler)
+    _check_moving_mass(bodies, props)
+    return root, compiler, bodies, world_geoms, (mats, meshes), frames, props
 
 
 def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, armature=True, friction=False):
@@ -205,32 +221,25 @@ def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, arma
     from mbcomp import library as lib
     from mbcomp.modeling.model import Model
 
-    root = read_tree(path)
-    compiler = Compiler(root, os.path.dirname(os.path.abspath(os.fspath(path))))
-    defaults = Defaults(root)
-    bodies, world_geoms = _walk(root, compiler, defaults)
-    frames = {}
-    props = {}
-    for b in bodies:
-        props[id(b)], frames[id(b)] = _mass_properties(b, compiler)
-    props = scaled_total(props, compiler)
-    _check_moving_mass(bodies, props)
+    root, compiler, bodies, world_geoms, (mats, meshes), frames, props = _read(path)
     notes = []
     names = ComponentNames(notes)
     joint_names = {id(b): [names(n, "joint") for n, _ in b.joints] for b in bodies}
     opts = {"limits": limits, "damping": damping, "springs": springs, "armature": armature, "friction": friction}
-    mats, meshes = materials_and_meshes(root, compiler, defaults)
     model = Model()
     world_shapes = [s for gname, a in world_geoms
                     for s in geom_shapes(geom_frame(a, compiler, f"world geom {gname!r}"), mats, meshes,
                                          f"world geom {gname!r}", notes)]
     world = model.add("world", lib.World(g=_gravity(root, gravity), **({"shape": world_shapes} if world_shapes else {})))
-    out = {}
+    out, specs = {}, {}
     for b in bodies:
         parent = world.frame_b if b.parent is None else out[b.parent.name].port
-        port = _add_body(model, lib, b, parent, props[id(b)], frames[id(b)], joint_names[id(b)], compiler,
-                         opts, names, notes, (mats, meshes))
+        specs[id(b)] = [joint_spec(a, jn, compiler, f"joint {n!r} of body {b.name!r}")
+                        for (n, a), jn in zip(b.joints, joint_names[id(b)])]
+        port = _add_body(model, lib, b, parent, props[id(b)], frames[id(b)], specs[id(b)], opts, names, notes,
+                         (mats, meshes))
         out[b.name] = BodyFrame(port=port, R0=b.R0, p0=b.p0)
+    notes += _armature_note(bodies, specs, armature)
     import_equalities(root, model, out, notes)
     notes += model_notes(root, bodies)
     model.mjcf_notes, model.mjcf_bodies = notes, out
@@ -241,9 +250,8 @@ def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, arma
     return model
 
 
-def _add_body(model, lib, b, parent, mp, frames, jnames, compiler, opts, names, notes, assets):
+def _add_body(model, lib, b, parent, mp, frames, specs, opts, names, notes, assets):
     """One body's offset, joints and rigid body from its parent's frame; returns its frame port."""
-    specs = [joint_spec(a, jn, compiler, f"joint {n!r} of body {b.name!r}") for (n, a), jn in zip(b.joints, jnames)]
     free = [j for j in specs if j.kind == "free"]
     if free and (len(specs) > 1 or b.parent is not None):
         raise ValueError(f"MJCF body {b.name!r}: a free joint must be the only joint of a child of the worldbody "
@@ -270,6 +278,28 @@ def _add_body(model, lib, b, parent, mp, frames, jnames, compiler, opts, names, 
         c = model.add(names(bname, "body"), lib.FixedTranslation(**look))
         model.connect(port, c.frame_a)
     return port
+
+
+def _armature_note(bodies, specs, armature):
+    """One note for the hinges' armature: all of them when ``armature=False``; else those whose
+    rotor rides on a body that may turn (a hinge, ball or free joint before it), where the
+    rotor on the absolute rate is not MuJoCo's term."""
+    turning, listed = {}, []
+    for b in bodies:
+        turns = b.parent is not None and turning[id(b.parent)]
+        for j in specs[id(b)]:
+            if j.kind == "hinge" and j.armature > 0.0 and (turns or not armature):
+                listed.append(j.name)
+            turns = turns or j.kind in ("hinge", "ball", "free")
+        turning[id(b)] = turns
+    if not listed:
+        return []
+    which = ", ".join(listed[:6]) + (", ..." if len(listed) > 6 else "")
+    if not armature:
+        return [f"armature of {len(listed)} hinges ({which}): not imported (armature=False)"]
+    return [f"armature of {len(listed)} hinges on turning bodies ({which}): a rotor on the joint's absolute rate "
+            "n . w, MuJoCo's armature is on its own rate qdot (M differs by J (n . w_carrier) terms; "
+            "load_mjcf(armature=False) leaves it out)"]
 
 
 def body_frames(model):

@@ -18,8 +18,9 @@ attribute when given; its inertia about its centre, in its own axes, is the soli
 midpoint, z along the segment (the shortest rotation from z), half length ``|to - from| / 2``
 (size[1] of a capsule or cylinder, size[2] of a box or ellipsoid). A body's geoms in the
 compiler's ``inertiagrouprange`` sum to its mass, centre of mass and inertia about it (body
-axes, the parallel-axis theorem). Mesh geoms carrying mass are refused (their volume
-integrals are not computed yet): give the body an ``<inertial>``.
+axes, the parallel-axis theorem). A mesh geom weighs its mesh's volume and moments
+(:mod:`mbcomp.io.mjcf_mesh`); other shapes carrying mass (height fields, SDFs) are refused:
+give the body an ``<inertial>``.
 """
 import numpy as np
 
@@ -103,8 +104,10 @@ def _volume_inertia(kind, s):
     return 0.0, np.zeros(3)
 
 
-def geom_mass(g, what):
-    """``(m kg, principal inertia kg m^2 in the geom's axes)`` of :class:`GeomFrame` ``g``."""
+def geom_mass(g, what, meshes=None):
+    """``(m kg, inertia (3, 3) kg m^2 about the geom's centre of mass, that centre (3,) m)`` of
+    :class:`GeomFrame` ``g``, both in the geom's axes (``meshes``: the mesh assets,
+    :func:`~mbcomp.io.mjcf_shapes.materials_and_meshes`)."""
     a = g.attrs
     if a.get("shellinertia", "false") == "true":
         raise ValueError(f"MJCF {what}: shellinertia='true' (a hollow geom's inertia) is not read -> "
@@ -112,34 +115,43 @@ def geom_mass(g, what):
     mass = float(a["mass"]) if "mass" in a else None
     density = float(a.get("density", 1000.0))
     if (mass == 0.0) or (mass is None and density == 0.0):
-        return 0.0, np.zeros(3)
+        return 0.0, np.zeros((3, 3)), np.zeros(3)
+    if g.kind == "mesh" and (meshes or {}).get(a.get("mesh")) is not None:
+        from .mjcf_mesh import mesh_volume_inertia
+
+        info = meshes[a["mesh"]]
+        vol, com, unit = mesh_volume_inertia(info["path"], info["scale"], info["refpos"], info["refquat"],
+                                             info["method"], what)
+        rho = mass / vol if mass is not None else density
+        return rho * vol, rho * unit, com
     if g.kind in ("mesh", "sdf", "hfield"):
         raise ValueError(f"MJCF {what}: a {g.kind} geom carrying mass (density {density:g}"
                          + (f", mass {mass:g}" if mass is not None else "") + "): its volume integrals are not "
                          "computed yet -> give its body an <inertial>, or mass='0' to the geom (or "
                          "inertiagrouprange leaving its group out)")
     if g.kind not in _SIZES:
-        return 0.0, np.zeros(3)  # planes and other unbounded shapes: no volume, no mass (as in MuJoCo)
+        return 0.0, np.zeros((3, 3)), np.zeros(3)  # planes and other unbounded shapes: no volume, no mass (as in MuJoCo)
     if np.any(g.size[:_SIZES[g.kind]] <= 0.0):
         raise ValueError(f"MJCF {what}: a {g.kind} needs {_SIZES[g.kind]} positive sizes, got "
                          f"{g.size[:_SIZES[g.kind]].tolist()} -> fix size= (or fromto=)")
     vol, per_kg = _volume_inertia(g.kind, g.size)
     m = mass if mass is not None else density * vol
-    return m, m * per_kg
+    return m, np.diag(m * per_kg), np.zeros(3)
 
 
 def body_mass_properties(parts):
-    """``(m, r_cm, I)`` of geoms ``[(m, principal I, pos, R)]``: the total mass (kg), its centre
-    (m, body coordinates) and the inertia about it (kg m^2, body axes); ``None`` when massless."""
+    """``(m, r_cm, I)`` of geoms ``[(m, I about the geom's centre of mass in body axes, that
+    centre in body coordinates)]``: the total mass (kg), its centre (m, body coordinates) and
+    the inertia about it (kg m^2, body axes); ``None`` when massless."""
     parts = [p for p in parts if p[0] > 0.0]
     if not parts:
         return None
     m = sum(p[0] for p in parts)
     c = sum(p[0] * p[2] for p in parts) / m
     I = np.zeros((3, 3))
-    for mi, Ii, pos, R in parts:
+    for mi, Ii, pos in parts:
         d = pos - c
-        I += (R * Ii) @ R.T + mi * ((d @ d) * np.eye(3) - np.outer(d, d))
+        I += Ii + mi * ((d @ d) * np.eye(3) - np.outer(d, d))
     return m, c, 0.5 * (I + I.T)
 
 

@@ -54,7 +54,7 @@ class JointSpec:
     >>> from mbcomp.io.mjcf_joints import joint_spec
     >>> c = Compiler(ET.fromstring("<mujoco/>"), ".")
     >>> j = joint_spec({"range": "-90 90", "axis": "0 2 0"}, "knee", c, "joint 'knee'")
-    >>> j.kind, j.axis.tolist(), [round(x, 6) for x in j.range]
+    >>> j.kind, j.axis.tolist(), [round(float(x), 6) for x in j.range]
     ('hinge', [0.0, 1.0, 0.0], [-1.570796, 1.570796])
     """
 
@@ -84,7 +84,7 @@ def joint_spec(attrs, name, compiler, what):
             raise ValueError(f"MJCF {what}: limited with range={attrs.get('range', '0 0')!r} -> give lower < upper")
     return JointSpec(name=name, kind=kind, pos=numbers(attrs.get("pos", "0 0 0"), 3, f"{what} pos"),
                      axis=axis / (np.linalg.norm(axis) or 1.0), range=rng, limited=limited == "true",
-                     springdamper="springdamper" in attrs, ball_range="range" in attrs and kind == "ball", **f)
+                     springdamper=bool(np.all(numbers(attrs.get("springdamper", "0 0"), 2, f"{what} springdamper") > 0)), ball_range="range" in attrs and kind == "ball", **f)
 
 
 class _Chain:
@@ -128,8 +128,9 @@ def _passive(model, lib, j, joint, opts, names, notes):
     """Spring, damper and armature on a hinge's or slide's flanges."""
     c = j.stiffness if opts["springs"] else 0.0
     d = j.damping if opts["damping"] else 0.0
-    if j.springdamper:
+    if j.springdamper:  # MuJoCo sets stiffness and damping from M at qpos0 instead of the values given
         notes.append(f"joint {j.name!r}: springdamper (stiffness and damping from a time constant) not imported")
+        c = d = 0.0
     if c > 0.0 or d > 0.0:
         if j.kind == "hinge":
             law = lib.RotationalSpringDamper(c=c, d=d, phi_rel0=j.springref) if c > 0.0 else lib.RotationalDamper(d=d)
@@ -142,9 +143,8 @@ def _passive(model, lib, j, joint, opts, names, notes):
         if j.kind == "hinge" and opts["armature"]:
             rotor = model.add(names(f"{j.name}_armature", "joint armature"), lib.Inertia(J=j.armature))
             model.connect(rotor.flange, joint.axis)
-        else:
-            notes.append(f"joint {j.name!r}: armature={j.armature:g} not imported"
-                         + (" (armature=False)" if j.kind == "hinge" else f" (a {j.kind} joint has no rotor element)"))
+        elif j.kind != "hinge":  # hinges left out by armature=False: one note for all (io/mjcf.py)
+            notes.append(f"joint {j.name!r}: armature={j.armature:g} not imported (a {j.kind} joint has no rotor element)")
 
 
 def add_joints(model, lib, specs, port, opts, names, notes, pose=None):

@@ -22,7 +22,8 @@ _GREY = "0.5 0.5 0.5 1"
 
 
 def materials_and_meshes(root, compiler, defaults):
-    """``({material: rgba (4,)}, {mesh name: (file path, scale (3,))})`` of the ``<asset>`` sections."""
+    """``({material: rgba (4,)}, {mesh name: {path, scale, refpos, refquat, method}})`` of the
+    ``<asset>`` sections (a mesh's file under ``<compiler meshdir>``, its ``inertia`` as ``method``)."""
     mats, meshes = {}, {}
     for asset in root.findall("asset"):
         for el in asset.findall("material"):
@@ -35,7 +36,11 @@ def materials_and_meshes(root, compiler, defaults):
             if f is None:
                 continue
             name = el.get("name") or os.path.splitext(os.path.basename(f))[0]
-            meshes[name] = (os.path.join(compiler.meshdir, f), numbers(a.get("scale", "1 1 1"), 3, f"mesh {name!r} scale"))
+            meshes[name] = {"path": os.path.join(compiler.meshdir, f),
+                            "scale": numbers(a.get("scale", "1 1 1"), 3, f"mesh {name!r} scale"),
+                            "refpos": numbers(a.get("refpos", "0 0 0"), 3, f"mesh {name!r} refpos"),
+                            "refquat": numbers(a.get("refquat", "1 0 0 0"), 4, f"mesh {name!r} refquat"),
+                            "method": a.get("inertia", "legacy")}
     return mats, meshes
 
 
@@ -110,7 +115,10 @@ def _mesh(g, meshes, place, what, notes):
     if name not in meshes:
         notes.append(f"{what}: mesh {name!r} has no <mesh file> asset: not drawn")
         return []
-    path, scale = meshes[name]
+    path, scale = meshes[name]["path"], meshes[name]["scale"]
+    if np.any(meshes[name]["refpos"]) or not np.array_equal(meshes[name]["refquat"], (1, 0, 0, 0)):
+        notes.append(f"{what}: mesh {os.path.basename(path)!r} with refpos/refquat not drawn")
+        return []
     if not path.lower().endswith((".stl", ".obj")) or not np.allclose(scale, scale[0]):
         notes.append(f"{what}: mesh {os.path.basename(path)!r} (scale {scale.tolist()}) not drawn: STL or OBJ "
                      "files with a uniform scale are")
