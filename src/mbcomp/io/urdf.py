@@ -275,20 +275,14 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
         Model ``<dynamics damping>`` of revolute and prismatic joints by a damper named
         ``<joint>_damping`` (N m s/rad or N s/m) on the joint's flanges.
     friction : bool
-        Model ``<dynamics friction>`` of revolute and prismatic joints as the joint's exact
-        Coulomb friction (stick/slip events: ``CoulombBearing(torque_max=friction)`` N m,
-        ``SlidingFriction`` of ``friction`` N); off by default (noted), as the events change
-        the run (``res["<joint>.sticking"]``, ``res["<joint>.friction"]``).
+        Model ``<dynamics friction>`` as the joint's exact Coulomb friction (stick/slip events,
+        ``res["<joint>.sticking"]``); off by default (noted): the events change the run.
     mimic : bool
-        Make each ``<mimic joint multiplier offset>`` a flange constraint holding
-        ``q = multiplier q_leader + offset`` exactly (``IdealGear`` or ``JointCoupling`` named
-        ``<joint>_mimic``; the offset is in the start values); off: the joint moves freely
-        (noted), as in Pinocchio's ``buildModelFromUrdf(path, mimic=False)``.
+        Hold each ``<mimic>`` exactly by a flange constraint ``<joint>_mimic``; off: the joint
+        moves freely (noted), as in Pinocchio's default.
     inertia : {"check", "as_given"}
-        ``"check"``: a link whose inertia no real body has (a principal moment above the sum
-        of the other two, or negative) is refused, naming the link; ``"as_given"``: it is
-        imported as the file gives it (``UncheckedRigidBody``, noted per link), as Pinocchio
-        does.
+        Refuse a link whose inertia no real body has, naming it; or import it as given
+        (``UncheckedRigidBody``, noted per link), as Pinocchio does.
 
     Returns
     -------
@@ -330,11 +324,28 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
         free = model.add(free_name, lib.FreeMotion())
         model.connect(world.frame_b, free.frame_a)
         base = free.frame_b
-    bodies = _Bodies(lib, links, inertia, path, notes)
+    opts = {"limits": limits, "damping": damping, "friction": friction,
+            "starts": _mimic_starts(tree, limits) if mimic else {}}
+    held = _add_tree(model, lib, _Bodies(lib, links, inertia, path, notes), (links, children, root, loops), base,
+                     joint_names, link_frame, opts, names, notes)
+    _couple_mimics(model, lib, tree, joint_names, held, names, notes, mimic)
+    _close_loops(model, loops, link_frame, joint_names, names, notes, limits)
+    for el in robot:
+        if el.tag not in ("link", "joint", "material", "loop_joint"):
+            notes.append(f"<{el.tag}> {el.get('name', '')!r}: not imported".replace(" ''", ""))
+    model.urdf_notes = notes
+    if notes:
+        warnings.warn(f"{path}: {len(notes)} URDF elements not imported or renamed (model.urdf_notes): "
+                      + "; ".join(notes[:5]) + (" ..." if len(notes) > 5 else ""), UserWarning, stacklevel=2)
+    return model
+
+
+def _add_tree(model, lib, bodies, parsed, base, joint_names, link_frame, opts, names, notes):
+    """The links and tree joints from the root link on ``base``, parents first; fills
+    ``link_frame`` and returns the names of the joints held fixed (they move no mass)."""
+    links, children, root, loops = parsed
     _add_link(model, bodies, links, root, base, link_frame, names, notes)
     carries = _carries_mass(links, children, root, _loop_links(loops))
-    starts = _mimic_starts(tree, limits) if mimic else {}
-    opts = {"limits": limits, "damping": damping, "friction": friction}
     held, stack = set(), [root]
     while stack:
         parent = stack.pop()
@@ -346,19 +357,10 @@ def load_urdf(path, floating=False, gravity=(0.0, 0.0, -9.81), limits=False, dam
                 held.add(jel.get("name"))
                 jel = _as_fixed(jel)
             frame = _add_joint(model, lib, jel, cname, link_frame[parent], names, notes, opts,
-                               starts.get(jel.get("name")))
+                               opts["starts"].get(jel.get("name")))
             _add_link(model, bodies, links, child, frame, link_frame, names, notes)
             stack.append(child)
-    _couple_mimics(model, lib, tree, joint_names, held, names, notes, mimic)
-    _close_loops(model, loops, link_frame, joint_names, names, notes, limits)
-    for el in robot:
-        if el.tag not in ("link", "joint", "material", "loop_joint"):
-            notes.append(f"<{el.tag}> {el.get('name', '')!r}: not imported".replace(" ''", ""))
-    model.urdf_notes = notes
-    if notes:
-        warnings.warn(f"{path}: {len(notes)} URDF elements not imported or renamed (model.urdf_notes): "
-                      + "; ".join(notes[:5]) + (" ..." if len(notes) > 5 else ""), UserWarning, stacklevel=2)
-    return model
+    return held
 
 
 def _carries_mass(links, children, root, pinned=()):
