@@ -382,3 +382,67 @@ def test_prismatic_friction_decelerates_at_f_over_m_and_sticks(tmp_path):
     assert np.abs(v[moving] - (v0 - f / m * t[moving])).max() < 1e-9
     assert np.abs(v[t > t_stop + 1e-9]).max() < 1e-12 and res["slide.sticking"][-1] == 1.0
     assert s[-1] == pytest.approx(m * v0 ** 2 / (2 * f), abs=1e-9)
+
+
+def _pose_matrix(xyz, rpy):
+    from mbcomp.io.urdf import rpy_matrix
+
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = rpy_matrix(rpy), xyz
+    return T
+
+
+def _rpy_of(R):
+    """URDF's roll, pitch, yaw of ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (|pitch| < pi/2)."""
+    return np.arctan2(R[2, 1], R[2, 2]), -np.arcsin(R[2, 0]), np.arctan2(R[1, 0], R[0, 0])
+
+
+SPATIAL_LINK = ('<link name="{0}"><inertial><origin xyz="0.1 0.05 -0.02"/><mass value="1"/>'
+                '<inertia ixx="0.02" iyy="0.03" izz="0.04" ixy="0.001" ixz="0" iyz="0"/></inertial></link>')
+
+
+def _origin_attrs(xyz, rpy):
+    return f'xyz="{" ".join(map(_f, xyz))}" rpy="{" ".join(map(_f, rpy))}"'
+
+
+@pytest.mark.parametrize("form", ["joint", "loop_joint"])
+@pytest.mark.parametrize("kind", ["fixed", "revolute", "spherical"])
+def test_spatial_closures_sit_where_the_file_puts_them(tmp_path, form, kind):
+    """A spatial robot of two branches (rotated origins, an oblique axis) joined by a closing
+    joint written so that the file's zero position closes it: every row of the loop vanishes
+    there (to 1e-12) for both forms and three kinds, whichever joint the topology cuts; the same
+    file with the closing frame 1 cm off does not close (the check reads the frames)."""
+    rng = np.random.default_rng(7)
+    o = {k: (rng.uniform(-0.5, 0.5, 3), rng.uniform(-1.2, 1.2, 3)) for k in ("a1", "a2", "b1", "c")}
+    T_a2 = _pose_matrix(*o["a1"]) @ _pose_matrix(*o["a2"])  # the links' frames at the zero position
+    T_c = T_a2 @ _pose_matrix(*o["c"])  # the closing joint's frame: on link a2 at o["c"]
+    T_rel = np.linalg.inv(_pose_matrix(*o["b1"])) @ T_c  # ... in link b1's frame
+    rel_rpy = _rpy_of(T_rel[:3, :3])
+    np.testing.assert_allclose(_pose_matrix(T_rel[:3, 3], rel_rpy), T_rel, atol=1e-13)
+
+    def origin(key, axis):
+        return (f'<origin {_origin_attrs(*o[key])}/><axis xyz="{axis}"/>')
+
+    def robot(shift):
+        at_b1 = _origin_attrs(T_rel[:3, 3] + shift, rel_rpy)
+        text = ('<robot name="spatial"><link name="base"/>' + "".join(SPATIAL_LINK.format(n) for n in ("a1", "a2", "b1"))
+                + '<joint name="j1" type="revolute"><parent link="base"/><child link="a1"/>' + origin("a1", "0 0 1")
+                + '</joint><joint name="j2" type="revolute"><parent link="a1"/><child link="a2"/>'
+                + origin("a2", "0.6 0 0.8") + '</joint><joint name="k1" type="revolute"><parent link="base"/>'
+                '<child link="b1"/>' + origin("b1", "0 1 0") + "</joint>")
+        if form == "joint":  # a massless tip on a2 at the closing frame, then b1 -> tip: tip has a parent
+            return text + ('<link name="tip"/><joint name="tip_mount" type="fixed"><parent link="a2"/>'
+                           f'<child link="tip"/><origin {_origin_attrs(*o["c"])}/></joint>'
+                           f'<joint name="close" type="{kind}"><parent link="b1"/><child link="tip"/>'
+                           f'<origin {at_b1}/><axis xyz="0 0 1"/></joint></robot>')
+        return text + (f'<loop_joint name="close" type="{kind}"><link1 link="a2" {_origin_attrs(*o["c"])}/>'
+                       f'<link2 link="b1" {at_b1}/><axis xyz="0 0 1"/></loop_joint></robot>')
+
+    def worst_row(text, name):
+        system = mbcomp.assemble(load_urdf(_write(tmp_path, text, name)))
+        assert len(system.topology.cut) == 1
+        rows = system.evaluate_rows(0.0, system.default_q(), np.zeros(len(system.u_names)))
+        return np.abs(rows.Phi).max()
+
+    assert worst_row(robot(np.zeros(3)), "closed.urdf") < 1e-12
+    assert worst_row(robot(np.array([0.01, 0.0, 0.0])), "open.urdf") > 1e-3
