@@ -19,7 +19,10 @@ The joint is named as the equality (``connect<k>``/``weld<k>`` when unnamed, ``k
 position in the file); its rigid offsets ``<name>_a``, ``<name>_b``. ``solref``, ``solimp``
 (softness) and ``torquescale``'s weighting do not apply to an exact closure (noted where given).
 Not imported (noted, the loop stays open): inactive equalities (``active="false"``), site-based
-ones (``site1``/``site2``), and the ``joint``, ``tendon`` and ``flex`` kinds.
+ones (``site1``/``site2``), and the ``joint``, ``tendon`` and ``flex`` kinds. Not handled yet: a
+closure on a body with a free joint -- the topology cuts the free joint (it has the most
+freedom), whose start pose ``load_mjcf`` fixes, and initialization refuses fixed starts on a
+multi-DOF cut joint (they would have to be ``Guess`` values).
 """
 import numpy as np
 
