@@ -446,3 +446,23 @@ def test_spatial_closures_sit_where_the_file_puts_them(tmp_path, form, kind):
 
     assert worst_row(robot(np.zeros(3)), "closed.urdf") < 1e-12
     assert worst_row(robot(np.array([0.01, 0.0, 0.0])), "open.urdf") > 1e-3
+
+
+def test_what_friction_and_mimic_cannot_model_is_said(tmp_path):
+    """Stops and friction on one joint (not combined yet): the friction is listed, the stops
+    kept; a mimic of a joint the file does not have, and a mimic with multiplier 0, are listed
+    and the joint moves freely; with mimic=False every mimic is listed."""
+    with pytest.warns(UserWarning, match="friction"):
+        model = load_urdf(_write(tmp_path, SLIDER.format(m=2.0, f=3.0)), friction=True, limits=True)
+    assert model["slide"].p.friction is None and model["slide"].p.limits.tolist() == [-5.0, 5.0]
+    assert any("'slide': <dynamics friction=3> not imported (stops and friction" in n for n in model.urdf_notes)
+    odd = GRIPPER.replace('<mimic joint="finger1" multiplier="-1.5" offset="0.1"/>', '<mimic joint="nowhere"/>') \
+        .replace('multiplier="-0.5" offset="0.01"', 'multiplier="0"')
+    with pytest.warns(UserWarning, match="mimic"):
+        model = load_urdf(_write(tmp_path, odd, "odd.urdf"))
+    notes = "\n".join(model.urdf_notes)
+    assert "'finger2': <mimic> not imported: its leader 'nowhere' is not a moving tree joint" in notes
+    assert "'slide2': <mimic> not imported: multiplier 0" in notes
+    assert not any(name.endswith("_mimic") for name in model.components())
+    system = mbcomp.assemble(model)
+    assert "finger2.phi" in system.q_names and "degrees of freedom: 5" in system.summary()
