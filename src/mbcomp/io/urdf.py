@@ -44,8 +44,9 @@ loop-closing joint are read, both documented elsewhere and both written by hand 
    parent link's frame) moved by the joint's coordinate. The child link's frame must then lie
    on the closing joint: a fixed, massless "tip" link on the closed body is the idiom;
 2. a ``<loop_joint name type>`` element with ``<link1 link xyz rpy/>``, ``<link2 link xyz
-   rpy/>`` and ``<axis xyz/>`` (Drake's URDF extension): the frame ``xyz rpy`` on ``link1``
-   and the one on ``link2`` are joined by the joint, its axis in ``link1``'s frame.
+   rpy/>`` and ``<axis xyz/>`` (Drake's URDF extension, read there as a hinge about ``axis``
+   whatever its type): the frame ``xyz rpy`` on ``link1`` and the one on ``link2`` are joined
+   by the joint, its axis in ``link1``'s frame; mbcomp reads its ``type`` as below.
 
 The closing joint's ``type``: ``revolute``/``continuous`` -> a hinge, ``prismatic`` -> a
 slider, ``fixed`` -> a weld, ``spherical`` or ``ball`` (mbcomp's extension: URDF has no ball
