@@ -137,12 +137,12 @@ def _differences(path, n_states=3, armature=False):
     return dM, df
 
 
-def _forward_difference(path, n_states=2):
+def _forward_difference(path, n_states=2, armature=False):
     """Largest relative difference of mbcomp's accelerations (articulated-body solve) and
     MuJoCo's ``qacc`` with contacts and constraints (limits, friction loss, equalities) off."""
     from mbcomp.assembly.recursive import lagrange_accelerations
 
-    model, system, mj = _pair(path)
+    model, system, mj = _pair(path, armature)
     mj = copy.copy(mj)  # the cached model keeps its constraints
     mj.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_CONSTRAINT \
         | mujoco.mjtDisableBit.mjDSBL_ACTUATION
@@ -300,6 +300,7 @@ def test_armature_on_hinges_whose_carrier_does_not_turn_is_mujocos(tmp_path):
     path = _write(tmp_path, ARMATURE)
     dM, df = _differences(path, n_states=4, armature=True)
     assert dM < 1e-13 and df < 1e-13, (dM, df)
+    assert _forward_difference(path, armature=True) < 1e-13  # the rotors in the articulated-body solve
     model, system, mj = _pair(path, True)
     plain = mbcomp.assemble(_load(path, armature=False))
     assert plain.u_names == system.u_names
@@ -457,3 +458,69 @@ def test_mesh_geom_mass_properties_are_mujocos(tmp_path, extra, tol):
     assert model["b"].p.m == pytest.approx(700 * 0.5 * 0.3 * 0.2 * 0.1 * scale + sphere, rel=1e-6)  # float32 file
     dM, df = _differences(path, n_states=3)
     assert dM < tol and df < tol, (dM, df)
+
+
+INERTIALS = """<mujoco><compiler inertiafromgeom="{fromgeom}" boundmass="0.3" boundinertia="0.002" settotalmass="7"/>
+<worldbody><body name="a"><joint name="j1" axis="0 1 0"/><geom type="box" size=".1 .2 .05" pos="0 0 -.2"/>
+<inertial pos="0.1 0 -0.3" mass="2" fullinertia="0.05 0.04 0.03 0.001 -0.002 0.003"/>
+<body name="b" pos="0 0.1 -0.5"><joint name="j2" axis="1 0 0"/><geom type="sphere" size=".02"/>
+<inertial pos="0 0 -0.2" quat="0.8 0.3 -0.1 0.2" mass="0.1" diaginertia="0.001 0.003 0.004"/>
+<body name="c" pos="0 0 -0.4"><joint name="j3" type="slide" axis="0 0 1"/><geom type="cylinder" size=".05 .1"/>
+</body></body></body></worldbody></mujoco>"""
+
+
+@pytest.mark.parametrize("fromgeom", ["auto", "true"])
+def test_inertial_elements_bounds_and_total_mass_are_mujocos(tmp_path, fromgeom):
+    """``<inertial>`` with a full tensor and with a rotated diagonal one, or the geoms instead
+    (``inertiafromgeom="true"``), ``boundmass``/``boundinertia`` raising the light bodies and
+    ``settotalmass`` scaling all: MuJoCo's M and f. With ``inertiafromgeom="false"`` the
+    slider's body (geoms, no ``<inertial>``) has no mass: refused, naming it."""
+    path = _write(tmp_path, INERTIALS.format(fromgeom=fromgeom))
+    with pytest.raises(ValueError, match="body 'c': joint 'j3' moves no mass"):
+        _load(_write(tmp_path, INERTIALS.format(fromgeom="false").replace('boundmass="0.3" boundinertia="0.002"', ""),
+                     "false.xml"))
+    model = _load(path)
+    assert sum(model[n].p.m for n in ("a", "b", "c")) == pytest.approx(7.0, rel=1e-14)
+    dM, df = _differences(path, n_states=3)
+    assert dM < 1e-12 and df < 1e-12, (dM, df)
+
+
+def test_unnamed_and_odd_names(tmp_path):
+    """Unnamed bodies and joints get generated names; a name that is no identifier is
+    sanitized and said; a body sharing its joint's name is ``<name>_body``."""
+    text = ("<mujoco><worldbody><body><joint/><geom size='.1' pos='0 0 -1'/>"
+            "<body name='fore-arm' pos='0 0 -1'><joint name='fore-arm' type='slide'/><joint/><geom size='.1'/></body>"
+            "</body></worldbody></mujoco>")
+    model = _load(_write(tmp_path, text))
+    system = mbcomp.assemble(model)
+    assert system.q_names == ["body1_joint1.phi", "fore_arm.s", "fore_arm_joint2.phi"]
+    assert model.mjcf_joints == ["body1_joint1", "fore_arm", "fore_arm_joint2"]
+    assert model["fore_arm_body"].p.m == pytest.approx(1000 * 4 / 3 * np.pi * 0.001, rel=1e-14)
+    assert "joint 'fore-arm': named 'fore_arm' in the model" in "\n".join(model.mjcf_notes)
+    assert set(body_frames(model)) == {"body1", "fore-arm"}
+
+
+def _generated(tmp_path, name):
+    """dm-control's models made by code (the swimmer of 6 links, a 3-body LQR chain): their XML
+    and included files written to ``tmp_path``."""
+    import importlib
+
+    module = importlib.import_module(f"dm_control.suite.{name}")
+    xml, assets = module.get_model_and_assets(6) if name == "swimmer" else \
+        module.get_model_and_assets(3, 2, np.random.RandomState(5))
+    for rel, data in assets.items():
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_bytes(data)
+    path = tmp_path / f"{name}.xml"
+    path.write_bytes(xml if isinstance(xml, bytes) else xml.encode())
+    return str(path)
+
+
+@needs_suite
+@pytest.mark.filterwarnings("ignore::UserWarning")  # dm-control's viewer finds no display
+@pytest.mark.parametrize("name", ["swimmer", "lqr"])
+def test_generated_suite_models_match_mujoco(tmp_path, name):
+    path = _generated(tmp_path, name)
+    dM, df = _differences(path)
+    assert dM < 1e-9 and df < 1e-9, f"{name}: mass matrix {dM:.1e}, bias forces {df:.1e} relative"
+    assert _forward_difference(path) < 1e-9

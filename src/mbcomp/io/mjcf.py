@@ -10,9 +10,12 @@ MuJoCo's model files read without MuJoCo (``xml.etree``), as MuJoCo's compiler r
   ``FixedTranslation``) ``<body>_offset`` from its parent's frame, its joints
   (:mod:`mbcomp.io.mjcf_joints`), then a ``RigidBody`` named as the body (``<body>_body`` where
   a joint has its name) with the mass properties of ``<inertial>`` or of its geoms, exactly as
-  MuJoCo computes them (:mod:`mbcomp.io.mjcf_inertia`), and its geoms as shapes
-  (:mod:`mbcomp.io.mjcf_shapes`). A body without mass and joints adds no body: its frame is
-  the offset's. A joint with no mass beyond it is refused (its motion is undetermined).
+  MuJoCo computes them (:mod:`mbcomp.io.mjcf_inertia`, meshes :mod:`mbcomp.io.mjcf_mesh`),
+  and its geoms as shapes (:mod:`mbcomp.io.mjcf_shapes`). A free body is a ``FreeMotion``
+  from the world starting at the file's pose. A body without mass adds no ``RigidBody``
+  (its frame is its last joint's or its offset's; its shapes, if any, ride on a zero
+  ``FixedTranslation`` named as the body). A joint with no mass beyond it is refused (its
+  motion would be undetermined).
 - names: component names follow body and joint names (``res["slider.s"]``,
   ``res["hinge_1.phi"]``); unnamed ones are ``body<k>`` and ``<body>_joint<k>``; names that are
   no identifiers are sanitized (noted).

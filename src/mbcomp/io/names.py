@@ -33,9 +33,7 @@ class ComponentNames:
 
     def __call__(self, name, what):
         """The component name of the file's ``name`` (an element of kind ``what``: "joint", "link", ...)."""
-        new = re.sub(r"\W", "_", name)
-        if not new or new[0].isdigit():
-            new = "_" + new
+        new = self.sanitized(name)
         base, k = new, 1
         while new in self.used or new == "world":
             k += 1
@@ -45,6 +43,12 @@ class ComponentNames:
         self.used.add(new)
         return new
 
+    @staticmethod
+    def sanitized(name):
+        """``name`` as an identifier (non-word characters -> ``_``, a leading digit prefixed with ``_``)."""
+        new = re.sub(r"\W", "_", name)
+        return "_" + new if not new or new[0].isdigit() else new
+
     def taken(self, name):
-        """Whether ``name`` is a component name given already."""
-        return name in self.used
+        """Whether ``name`` (sanitized) is a component name given already."""
+        return self.sanitized(name) in self.used
