@@ -98,8 +98,8 @@ def _full_M(mj, d):
 def _tree_matches_mujoco(path, mj, n_states=5):
     """Largest relative differences of the tree's M and bias forces (the file without its
     ``<equality>``: mbcomp may cut another joint of a loop than MuJoCo's equality) against
-    MuJoCo's at random hinge states (every joint a hinge with ref 0: MuJoCo's qpos is mbcomp's
-    q, in MuJoCo's joint order)."""
+    MuJoCo's at random states (every joint a hinge or a slide: MuJoCo's qpos is mbcomp's q, in
+    MuJoCo's joint order)."""
     text = open(path).read()
     tree = path.replace(".xml", "_tree.xml")
     with open(tree, "w") as f:
@@ -107,7 +107,8 @@ def _tree_matches_mujoco(path, mj, n_states=5):
     system = mbcomp.assemble(load_mjcf(tree))
     assert system.topology.cut == []
     d = mujoco.MjData(mj)
-    order = [system.q_names.index(f"{mj.joint(i).name}.phi") for i in range(mj.njnt)]
+    coord = {int(mujoco.mjtJoint.mjJNT_HINGE): "phi", int(mujoco.mjtJoint.mjJNT_SLIDE): "s"}
+    order = [system.q_names.index(f"{mj.joint(i).name}.{coord[int(mj.jnt_type[i])]}") for i in range(mj.njnt)]
     rng = np.random.default_rng(46)
     dM = db = 0.0
     for _ in range(n_states):
@@ -263,10 +264,49 @@ def test_what_is_not_closed_is_said(tmp_path):
         model = load_mjcf(_write(tmp_path, text))
     notes = "\n".join(model.mjcf_notes)
     for said in ("equality <connect> 'off' (coupler): not imported: inactive",
-                 "equality <joint> 'lock' (crank_joint): not imported: the 'joint' kind is not imported yet",
-                 "equality <weld> 'soft': closed exactly (solref: MuJoCo's softness, not applied)",
+                 "equality <joint> 'lock' (crank_joint): not imported: no joint2",
+                 "equality <weld> 'soft': held exactly (solref: MuJoCo's softness, not applied)",
                  "equality <connect> 'sites' (s1, s2): not imported: site-based"):
         assert said in notes, said
     bad = fourbar_xml().replace('body1="rocker"', 'body1="nobody"')
     with pytest.raises(ValueError, match="equality <connect> 'ground_pin': body 'nobody' is not a body"):
         load_mjcf(_write(tmp_path, bad, "bad.xml"))
+
+
+FINGERS = """<mujoco model="fingers"><compiler angle="radian"/>
+<option timestep="0.0005" integrator="RK4" gravity="0 -4 -9.81"><flag contact="disable"/></option>
+<worldbody><body name="palm" pos="0 0 1" euler="0.3 0 0"><geom type="box" size="0.1 0.05 0.02" mass="1"/>
+ <body name="left" pos="-0.05 0 0"><joint name="finger_l" axis="0 1 0"/>
+  <geom type="capsule" fromto="0 0 0 0 0 -0.12" size="0.01" mass="0.1"/></body>
+ <body name="right" pos="0.05 0 0" euler="0 0 0.4"><joint name="finger_r" axis="0 1 0" ref="0.2"/>
+  <geom type="capsule" fromto="0 0 0 0.02 0 -0.12" size="0.01" mass="0.12"/></body>
+ <body name="plunger" pos="0 0 -0.05"><joint name="plunge" type="slide" axis="0 0.6 -0.8"/>
+  <geom type="box" size="0.02 0.02 0.02" mass="0.2"/></body></body></worldbody>
+<equality><joint name="mirror" joint1="finger_r" joint2="finger_l" polycoef="0 -1.5 0 0 0"/>
+<joint name="drive" joint1="plunge" joint2="finger_l" polycoef="0 0.05 0 0 0"/></equality></mujoco>"""
+
+
+def test_linear_joint_equalities_couple_exactly_and_match_mujoco(tmp_path):
+    """``<joint>`` equalities with a linear ``polycoef`` between two hinges (an IdealGear; one
+    hinge with ``ref``: the phase is qpos0's) and a slide on a hinge (a JointCoupling): over
+    10 s ``y - y0 = a1 (x - x0)`` holds to 1e-10 in mbcomp, where MuJoCo's soft rows give way
+    by what its solref lets them (light fingers: ~3e-2 rad at the default 0.02 s); as MuJoCo's
+    rows stiffen (solref 0.002 s) its motion comes to mbcomp's (the semantics are the same)."""
+    path = _write(tmp_path, FINGERS)
+    model = load_mjcf(path)
+    assert type(model["mirror"]).__name__ == "IdealGear" and type(model["drive"]).__name__ == "JointCoupling"
+    mj = mujoco.MjModel.from_xml_path(path)
+    dM, db = _tree_matches_mujoco(path, mj)
+    assert dM < 1e-12 and db < 1e-12, (dM, db)
+    res = _mbcomp_run(model)
+    left = res["finger_l.phi"]
+    ours = max(np.abs(res["finger_r.phi"] - 0.2 + 1.5 * left).max(), np.abs(res["plunge.s"] - 0.05 * left).max())
+    assert np.ptp(left) > 0.1 and ours < 1e-10
+    apart = []
+    for solref in (None, "0.002 1"):
+        text = FINGERS if solref is None else FINGERS.replace('0 0 0"/>', f'0 0 0" solref="{solref}"/>')
+        qpos, _ = _mujoco_run(mujoco.MjModel.from_xml_string(text))
+        theirs = max(np.abs(qpos[:, 1] - 0.2 + 1.5 * qpos[:, 0]).max(), np.abs(qpos[:, 2] - 0.05 * qpos[:, 0]).max())
+        assert theirs > 1e4 * ours, (ours, theirs)
+        apart.append(np.abs(qpos[:, 0] - left).max())
+    assert apart[1] < 0.1 * apart[0] and apart[1] < 0.05 * np.ptp(left), apart

@@ -9,6 +9,11 @@ places them (``m.eq_data``) at ``qpos0`` (every body where the file puts it,
 - ``<connect body1 body2 anchor>``: ``anchor`` (m) is a point in ``body1``'s frame; the point
   of ``body2`` (the world when omitted) is where that anchor is at ``qpos0``, so the file's
   pose closes the loop. -> a ``Spherical`` between the two points (kind ``"point"``).
+- ``<joint joint1 joint2 polycoef>`` with a linear polynomial (``polycoef="0 a1 0 0 0"``):
+  MuJoCo's ``y - y0 = a1 (x - x0)`` between ``joint1`` (``y``) and ``joint2`` (``x``) from their
+  ``qpos0`` values, exactly the row of a flange constraint named as the equality
+  (``IdealGear(ratio=a1)`` between hinges, ``JointCoupling`` otherwise), whose phase is the
+  joints' start values (``ref``, as ``qpos0``);
 - ``<weld body1 body2 relpose anchor torquescale>``: ``body2``'s point ``anchor`` (its frame)
   sits at ``relpose``'s position in ``body1``'s frame with ``body2``'s axes at ``relpose``'s
   quaternion (``w x y z``) from ``body1``'s; when ``relpose``'s quaternion is zero (its
@@ -19,11 +24,14 @@ The joint is named as the equality (``connect<k>``/``weld<k>`` when unnamed, ``k
 position in the file); its rigid offsets ``<name>_a``, ``<name>_b``. ``solref``, ``solimp``
 (softness) and ``torquescale``'s weighting do not apply to an exact closure (noted where given).
 Not imported (noted, the loop stays open): inactive equalities (``active="false"``), site-based
-ones (``site1``/``site2``), and the ``joint``, ``tendon`` and ``flex`` kinds. Not handled yet: a
+ones (``site1``/``site2``), ``joint`` equalities with a constant or nonlinear term or without
+``joint2``, and the ``tendon`` and ``flex`` kinds. Not handled yet: a
 closure on a body with a free joint -- the topology cuts the free joint (it has the most
 freedom), whose start pose ``load_mjcf`` fixes, and initialization refuses fixed starts on a
 multi-DOF cut joint (they would have to be ``Guess`` values).
 """
+import re
+
 import numpy as np
 
 from ..geometry.kinematics import quat_to_matrix
@@ -71,8 +79,45 @@ def _closure(el, model, bodies, what):
     return "weld", pa, pb, rel, (anchor, np.eye(3))
 
 
-def _skipped(el):
+def _joint_of(model, name):
+    """The 1-DOF joint component of the MJCF joint ``name`` (its component name: the file's,
+    sanitized as :class:`mbcomp.io.names.ComponentNames` does), or None."""
+    if name is None:
+        return None
+    cname = re.sub(r"\W", "_", name)
+    comp = model.components().get("_" + cname if cname[:1].isdigit() else cname)
+    return comp if getattr(comp, "axis_kind", None) in ("rotational", "translational") else None
+
+
+def _linear_coupling(el):
+    """Why a ``<joint>`` equality is not a linear coupling of two joints, or None."""
+    coef = numbers(el.get("polycoef", "0 1 0 0 0"), 5, f"equality <joint> {el.get('name')!r} polycoef")
+    if el.get("joint2") is None:
+        return "no joint2 (it would hold joint1 at a constant)"
+    if coef[0] != 0.0 or np.any(coef[2:]) or coef[1] == 0.0:
+        return f"polycoef {' '.join(f'{c:g}' for c in coef)} is not linear through qpos0 (only '0 a1 0 0 0', a1 != 0)"
+    return None
+
+
+def _couple_joints(el, model, name, lib):
+    """A ``<joint>`` equality's flange constraint ``name``: ``joint1 - y0 = a1 (joint2 - x0)``."""
+    a, b = _joint_of(model, el.get("joint1")), _joint_of(model, el.get("joint2"))
+    ratio = float(numbers(el.get("polycoef", "0 1 0 0 0"), 5)[1])
+    both_hinges = a.axis_kind == b.axis_kind == "rotational"
+    g = model.add(name, lib.IdealGear(ratio=ratio) if both_hinges else lib.JointCoupling(ratio=ratio))
+    model.connect(g.flange_a, a.axis)
+    model.connect(g.flange_b, b.axis)
+
+
+def _skipped(el, model):
     """Why an equality element is not imported, or None."""
+    if el.tag == "joint":
+        if el.get("active", "true") == "false":
+            return "inactive (active=false)"
+        for key in ("joint1", "joint2"):
+            if el.get(key) is not None and _joint_of(model, el.get(key)) is None:
+                return f"{key} {el.get(key)!r} is not a hinge or slide of the model"
+        return _linear_coupling(el)
     if el.tag not in ("connect", "weld"):
         return f"the {el.tag!r} kind is not imported yet"
     if el.get("active", "true") == "false":
@@ -102,7 +147,7 @@ def add_equalities(root, model, bodies, notes):
     Returns
     -------
     list of str
-        The names of the closing joints added.
+        The names of the closing joints (and joint couplings) added.
 
     Examples
     --------
@@ -119,6 +164,8 @@ def add_equalities(root, model, bodies, notes):
     >>> system.topology.cut, "degrees of freedom: 0" in system.summary()
     (['pin'], True)
     """
+    from mbcomp import library as lib
+
     names = ComponentNames(notes)
     names.used.update(model.components())
     added, k = [], 0
@@ -127,20 +174,23 @@ def add_equalities(root, model, bodies, notes):
             k += 1
             label = el.get("name") or f"{el.tag}{k}"
             what = f"equality <{el.tag}> {label!r}"
-            why = _skipped(el)
+            why = _skipped(el, model)
             if why:
                 ties = [el.get(t) for t in ("body1", "body2", "joint1", "joint2", "site1", "site2", "tendon1")
                         if el.get(t)]
                 notes.append(f"{what} ({', '.join(ties)}): not imported: {why} (the loop it closes stays open)")
                 continue
-            kind, fa, fb, pose_a, pose_b = _closure(el, model, bodies, what)
             soft = [a for a in _SOFT if el.get(a) is not None]
             if el.get("torquescale") is not None and float(el.get("torquescale")) not in (0.0, 1.0):
                 soft.append("torquescale")
             if soft:
-                notes.append(f"{what}: closed exactly ({', '.join(soft)}: MuJoCo's softness, not applied)")
+                notes.append(f"{what}: held exactly ({', '.join(soft)}: MuJoCo's softness, not applied)")
             name = names(label, "equality")
+            added.append(name)
+            if el.tag == "joint":
+                _couple_joints(el, model, name, lib)
+                continue
+            kind, fa, fb, pose_a, pose_b = _closure(el, model, bodies, what)
             close_loop(model, name, kind, fa, fb, pose_a, pose_b,
                        offset_names=(names(f"{name}_a", "loop frame"), names(f"{name}_b", "loop frame")))
-            added.append(name)
     return added
