@@ -310,3 +310,28 @@ def test_linear_joint_equalities_couple_exactly_and_match_mujoco(tmp_path):
         assert theirs > 1e4 * ours, (ours, theirs)
         apart.append(np.abs(qpos[:, 0] - left).max())
     assert apart[1] < 0.1 * apart[0] and apart[1] < 0.05 * np.ptp(left), apart
+
+
+FREE = """<mujoco><option><flag contact="disable"/></option><worldbody>
+<body name="arm" pos="0 0 1"><joint name="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.02" mass="1"/></body>
+<body name="ball" pos="0.5 0 1"><freejoint name="float"/><geom type="sphere" size="0.05" mass="0.5"/></body>
+</worldbody><equality><weld body1="arm" body2="ball"/></equality></mujoco>"""
+
+
+def test_a_free_body_welded_runs_with_its_pose_as_a_guess(tmp_path):
+    """A free body welded to a hinged arm: the free joint is the cut joint; the note names the
+    fix (its start pose as a Guess), with which the arm swings with the ball as one body: the
+    loop closed to 1e-10 and the hinge's angle that of the arm with the ball attached."""
+    with pytest.warns(UserWarning, match="free joint 'float' closes the loop"):
+        model = load_mjcf(_write(tmp_path, FREE))
+    system = mbcomp.assemble(model)
+    assert system.topology.cut == ["float"]
+    guess = {"float.r0": mbcomp.Guess(np.array(model["float"].p.r0)),
+             "float.R0": mbcomp.Guess(np.array(model["float"].p.R0))}
+    res = mbcomp.simulate(model, t_end=1.0, params=guess, stabilization="projection", rtol=1e-10, atol=1e-12)
+    assert np.max(res["residual.position"]) < 1e-10
+    rigid = """<mujoco><worldbody><body name="arm" pos="0 0 1"><joint name="hinge" axis="0 1 0"/>
+<geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.02" mass="1"/><geom type="sphere" pos="0.5 0 0" size="0.05" mass="0.5"/>
+</body></worldbody></mujoco>"""
+    one = mbcomp.simulate(load_mjcf(_write(tmp_path, rigid, "rigid.xml")), t_end=1.0, rtol=1e-10, atol=1e-12)
+    assert np.ptp(one["hinge.phi"]) > 1.0 and np.abs(res["hinge.phi"] - one["hinge.phi"]).max() < 1e-7

@@ -25,10 +25,11 @@ position in the file); its rigid offsets ``<name>_a``, ``<name>_b``. ``solref``,
 (softness) and ``torquescale``'s weighting do not apply to an exact closure (noted where given).
 Not imported (noted, the loop stays open): inactive equalities (``active="false"``), site-based
 ones (``site1``/``site2``), ``joint`` equalities with a constant or nonlinear term or without
-``joint2``, and the ``tendon`` and ``flex`` kinds. Not handled yet: a
-closure on a body with a free joint -- the topology cuts the free joint (it has the most
-freedom), whose start pose ``load_mjcf`` fixes, and initialization refuses fixed starts on a
-multi-DOF cut joint (they would have to be ``Guess`` values).
+``joint2``, and the ``tendon`` and ``flex`` kinds. A closure on a body with a free joint is
+made, and noted: the topology cuts that free joint (it has the most freedom), whose start
+pose ``load_mjcf`` fixes, and initialization refuses fixed starts on a multi-DOF cut joint; the
+note names the fix, the pose as a ``Guess`` (``simulate(model, params={"<joint>.r0":
+mbcomp.Guess(r0), "<joint>.R0": mbcomp.Guess(R0)})``).
 """
 import re
 
@@ -107,6 +108,20 @@ def _couple_joints(el, model, name, lib):
     g = model.add(name, lib.IdealGear(ratio=ratio) if both_hinges else lib.JointCoupling(ratio=ratio))
     model.connect(g.flange_a, a.axis)
     model.connect(g.flange_b, b.axis)
+
+
+def _free_joint(root, body):
+    """The component name of the free joint of MJCF body ``body`` (load_mjcf's name: the
+    file's, else ``<body>_joint<k>``; sanitized), or None."""
+    for b in root.iter("body"):
+        if b.get("name") != body:
+            continue
+        joints = [j for j in b if j.tag in ("joint", "freejoint")]
+        for k, j in enumerate(joints):
+            if j.tag == "freejoint" or j.get("type") == "free":
+                name = re.sub(r"\W", "_", j.get("name") or f"{body}_joint{k + 1}")
+                return "_" + name if name[:1].isdigit() else name
+    return None
 
 
 def _skipped(el, model):
@@ -191,6 +206,9 @@ def add_equalities(root, model, bodies, notes):
                 _couple_joints(el, model, name, lib)
                 continue
             kind, fa, fb, pose_a, pose_b = _closure(el, model, bodies, what)
+            for free in filter(None, (_free_joint(root, el.get(b)) for b in ("body1", "body2"))):
+                notes.append(f"{what}: the free joint {free!r} closes the loop; give its start pose as a Guess to "
+                             f"simulate: params={{'{free}.r0': mbcomp.Guess(r0), '{free}.R0': mbcomp.Guess(R0)}}")
             close_loop(model, name, kind, fa, fb, pose_a, pose_b,
                        offset_names=(names(f"{name}_a", "loop frame"), names(f"{name}_b", "loop frame")))
     return added
