@@ -39,7 +39,7 @@ def _offset(model, lib, name, frame, pose):
 
 
 def close_loop(model, name, kind, frame_a, frame_b, pose_a=None, pose_b=None, axis=(1.0, 0.0, 0.0),
-               offset_names=None):
+               offset_names=None, R0=None):
     """Close a kinematic loop of ``model``: a cut joint ``name`` between two frames.
 
     Parameters
@@ -59,6 +59,10 @@ def close_loop(model, name, kind, frame_a, frame_b, pose_a=None, pose_b=None, ax
         Hinge or slider axis in the joint's frame_a coordinates (``"hinge"``, ``"slider"``).
     offset_names : (str, str) or None
         Names of the two rigid offsets; default ``<name>_a``, ``<name>_b``.
+    R0 : (3, 3) or None
+        ``"point"``: the joint's frame_b axes relative to its frame_a axes in the mechanism's
+        start pose (frame_b -> frame_a), as a ``Guess`` start of the ``Spherical`` (used where
+        the topology keeps it in the tree: it places the bodies beyond it); None: the identity.
 
     Returns
     -------
@@ -80,7 +84,7 @@ def close_loop(model, name, kind, frame_a, frame_b, pose_a=None, pose_b=None, ax
     >>> type(c).__name__, mbcomp.assemble(m).topology.cut
     ('Spherical', ['pin'])
     """
-    from mbcomp import library as lib
+    from mbcomp import Guess, library as lib
 
     if kind not in LOOP_KINDS:
         raise ValueError(f"loop closure {name!r}: kind {kind!r} is not one of {sorted(LOOP_KINDS)}")
@@ -88,7 +92,7 @@ def close_loop(model, name, kind, frame_a, frame_b, pose_a=None, pose_b=None, ax
     a = _offset(model, lib, na, frame_a, pose_a)
     b = _offset(model, lib, nb, frame_b, pose_b)
     if kind == "point":
-        joint = lib.Spherical()
+        joint = lib.Spherical() if R0 is None else lib.Spherical(R0=Guess(np.asarray(R0, dtype=float)))
     elif kind == "weld":
         joint = lib.Weld()
     elif kind == "hinge":

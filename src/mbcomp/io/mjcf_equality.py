@@ -8,7 +8,9 @@ places them (``m.eq_data``) at ``qpos0`` (every body where the file puts it,
 
 - ``<connect body1 body2 anchor>``: ``anchor`` (m) is a point in ``body1``'s frame; the point
   of ``body2`` (the world when omitted) is where that anchor is at ``qpos0``, so the file's
-  pose closes the loop. -> a ``Spherical`` between the two points (kind ``"point"``).
+  pose closes the loop. -> a ``Spherical`` between the two points (kind ``"point"``), its
+  start orientation the bodies' relative one at ``qpos0`` (a ``Guess``: where the topology
+  keeps the ball in the tree and cuts another joint of the loop, it places body2's side).
 - ``<joint joint1 joint2 polycoef>`` with a linear polynomial (``polycoef="0 a1 0 0 0"``):
   MuJoCo's ``y - y0 = a1 (x - x0)`` between ``joint1`` (``y``) and ``joint2`` (``x``) from their
   ``qpos0`` values, exactly the row of a flange constraint named as the equality
@@ -67,17 +69,18 @@ def _relpose(el, what):
 
 
 def _closure(el, model, bodies, what):
-    """``(kind, frame_a, frame_b, pose_a, pose_b)`` of a ``connect`` or ``weld`` element."""
+    """``(kind, frame_a, frame_b, pose_a, pose_b, R0)`` of a ``connect`` or ``weld`` element
+    (``R0``: a point closure's body2 axes relative to body1's at qpos0, or as the weld's pose)."""
     (pa, Ra, ra), (pb, Rb, rb) = (_frame(model, bodies, el.get(k), what) for k in ("body1", "body2"))
     anchor = np.asarray(numbers(el.get("anchor", "0 0 0"), 3, f"{what} anchor"), dtype=float)
     if el.tag == "connect":  # body2's point: where body1's anchor is at qpos0
-        return "point", pa, pb, (anchor, np.eye(3)), (Rb.T @ (ra + Ra @ anchor - rb), np.eye(3))
+        return "point", pa, pb, (anchor, np.eye(3)), (Rb.T @ (ra + Ra @ anchor - rb), np.eye(3)), Ra.T @ Rb
     rel = _relpose(el, what)
     if rel is None:  # body2's anchor point in body1's frame and the relative axes, at qpos0
         rel = Ra.T @ (rb + Rb @ anchor - ra), Ra.T @ Rb
     if float(el.get("torquescale", 1.0)) == 0.0:  # no rotational residual: the anchors coincide
-        return "point", pa, pb, (rel[0], np.eye(3)), (anchor, np.eye(3))
-    return "weld", pa, pb, rel, (anchor, np.eye(3))
+        return "point", pa, pb, (rel[0], np.eye(3)), (anchor, np.eye(3)), rel[1]
+    return "weld", pa, pb, rel, (anchor, np.eye(3)), None
 
 
 def _joint_of(model, name):
@@ -205,10 +208,10 @@ def add_equalities(root, model, bodies, notes):
             if el.tag == "joint":
                 _couple_joints(el, model, name, lib)
                 continue
-            kind, fa, fb, pose_a, pose_b = _closure(el, model, bodies, what)
+            kind, fa, fb, pose_a, pose_b, R0 = _closure(el, model, bodies, what)
             for free in filter(None, (_free_joint(root, el.get(b)) for b in ("body1", "body2"))):
                 notes.append(f"{what}: the free joint {free!r} closes the loop; give its start pose as a Guess to "
                              f"simulate: params={{'{free}.r0': mbcomp.Guess(r0), '{free}.R0': mbcomp.Guess(R0)}}")
-            close_loop(model, name, kind, fa, fb, pose_a, pose_b,
+            close_loop(model, name, kind, fa, fb, pose_a, pose_b, R0=R0,
                        offset_names=(names(f"{name}_a", "loop frame"), names(f"{name}_b", "loop frame")))
     return added
