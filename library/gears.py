@@ -101,9 +101,11 @@ class JointCoupling(FlangeConstraint):
     the start values), URDF's ``<mimic>`` where :class:`IdealGear` (rotational) does not apply.
 
     ``flange_a``, ``flange_b`` on the axes of Revolutes (rad) or Prismatics (m), either kind on
-    either side; ``ratio`` is then in 1, m/rad or rad/m. The flows satisfy
-    ``f_b = -ratio f_a`` (no power lost: ``f_a v_a + f_b v_b = 0``). An offset between the
-    coordinates is the joints' start values (``s_a0 = ratio s_b0 + offset``).
+    either side; ``ratio`` is then in 1, m/rad or rad/m. The torque or force it puts on
+    ``flange_a`` is ``f_a = -lambda`` (the result column ``lambda.<name>.mesh``; N m or N by the
+    axis, so no output columns of its own), on ``flange_b`` ``f_b = -ratio f_a`` (no power lost:
+    ``f_a v_a + f_b v_b = 0``). An offset between the coordinates is the joints' start values
+    (``s_a0 = ratio s_b0 + offset``).
 
     Examples
     --------
@@ -119,15 +121,9 @@ class JointCoupling(FlangeConstraint):
     flange_a = Flange("the coupled (following) joint's axis (a Revolute's or a Prismatic's)")
     flange_b = Flange("the leading joint's axis (a Revolute's or a Prismatic's)")
     ratio = Param(1.0, unit="1", doc="s_a / s_b (1, m/rad or rad/m by the axes' kinds)", check="nonzero")
-    output_units = {}  # f_a, f_b: N m on a rotational axis, N on a translational one (known per connection only)
 
     def rows(self, flanges, p):
         return [("mesh", flanges["flange_a"] - p.ratio * flanges["flange_b"])]
-
-    def outputs(self, t, states, p, flows):
-        """The torque or force on each axis: ``f_a`` and ``f_b`` (N m on a rotational axis, N on a
-        translational one)."""
-        return {"f_a": flows["flange_a"], "f_b": flows["flange_b"]}
 
 
 class IdealPulley(FlangeConstraint):
