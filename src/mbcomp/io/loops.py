@@ -81,8 +81,9 @@ def close_loop(model, name, kind, frame_a, frame_b, pose_a=None, pose_b=None, ax
     >>> j = m.add("hinge", Revolute(n=(0, 0, 1))); b = m.add("arm", RigidBody(m=1.0, r_cm=(0.5, 0, 0), I=np.eye(3) * 0.01))
     >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, b.frame_a)
     >>> c = close_loop(m, "pin", "point", w.frame_b, b.frame_a, pose_a=((1.0, 0, 0), np.eye(3)), pose_b=((1.0, 0, 0), np.eye(3)))
-    >>> type(c).__name__, mbcomp.assemble(m).topology.cut
-    ('Spherical', ['pin'])
+    >>> system = mbcomp.assemble(m)
+    >>> type(c).__name__, system.topology.cut, "degrees of freedom: 0" in system.summary()
+    ('Spherical', ['pin'], True)
     """
     from mbcomp import Guess, library as lib
 
