@@ -329,11 +329,8 @@ def body_frames(model):
 
 def import_equalities(root, model, bodies, notes):
     """The ``<equality>`` constraints of the MJCF ``root`` into ``model`` (``bodies``: the
-    :func:`body_frames` mapping). Not imported yet: each is listed in ``notes`` by kind, name
-    and the bodies or joints it ties (the loop stays open)."""
-    for sec in root.findall("equality"):
-        for el in sec:
-            ties = [el.get(k) for k in ("body1", "body2", "joint1", "joint2", "site1", "site2", "tendon1")
-                    if el.get(k)]
-            notes.append(f"equality <{el.tag}> {el.get('name', '(unnamed)')!r} ({', '.join(ties)}): not imported yet "
-                         "(the loop it closes stays open)")
+    :func:`body_frames` mapping): ``connect`` and ``weld`` as exact cut joints
+    (:mod:`mbcomp.io.mjcf_equality`); the others listed in ``notes`` (the loop stays open)."""
+    from .mjcf_equality import add_equalities
+
+    add_equalities(root, model, bodies, notes)
