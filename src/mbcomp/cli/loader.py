@@ -24,21 +24,20 @@ import inspect
 import os
 import pathlib
 
-from ..modeling import loader as model_files
-from ..modeling.loader import build_model
+from ..modeling.loader import build_model, load_model_file
 from .params import build_value, describe_parameters, parse_value
 from .robots import is_robot_file, robot_module
 
-__all__ = ["parse_value", "load_model_file", "split_params", "load", "call_build", "check_output"]
+__all__ = ["parse_value", "load_model_file", "model_module", "split_params", "load", "call_build", "check_output"]
 
 
-def load_model_file(path):
-    """The model file ``path`` as a module (:func:`mbcomp.load_model_file`), or the robot
-    description ``path`` (``.urdf``, MJCF ``.xml``) as one whose ``build`` is its loader
-    (:func:`mbcomp.cli.robots.robot_module`)."""
+def model_module(path):
+    """What every command loads: the model file ``path`` as a module
+    (:func:`mbcomp.load_model_file`), or the robot description ``path`` (``.urdf``, MJCF
+    ``.xml``) as one whose ``build`` is its loader (:func:`mbcomp.cli.robots.robot_module`)."""
     if is_robot_file(path):
         return robot_module(path)
-    return model_files.load_model_file(path)
+    return load_model_file(path)
 
 
 def takes(build, name):
@@ -79,7 +78,7 @@ def load(args, defaults=None):
     ``defaults`` names a dict the model file may set of build() values the command uses where
     ``-p`` gives none (``SIMULATE_PARAMS``: what ``mbcomp simulate`` shows, e.g. the bicycle
     with a push, while ``build()`` itself and the other commands keep the file's defaults)."""
-    mod = load_model_file(args.model)
+    mod = model_module(args.model)
     build_kw, runtime = split_params(args.param, mod.build)
     if defaults:
         given = dict(getattr(mod, defaults, None) or {})

@@ -44,7 +44,7 @@ import sys
 import numpy as np
 
 from ..simulation.endings import sigterm_interrupts
-from .loader import check_output, load_model_file, split_params, takes
+from .loader import check_output, model_module, split_params, takes
 from .messages import EXIT_SIGNAL
 from .params import build_value, describe_parameters, parse_value
 
@@ -179,7 +179,7 @@ def cmd_study(args):
     check_output(args.out, "--out")
     check_output(args.plot, "--plot")
     metrics = dict(parse_metric(m) for m in args.metric or [])
-    mod = load_model_file(args.model)
+    mod = model_module(args.model)
     grid = _grid(args, mod)
     x, y = _axes(args, grid, metrics)
     sim = dict(getattr(mod, "SIMULATION", {}))
