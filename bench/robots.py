@@ -105,14 +105,15 @@ def mjcf_loader():
     return load_mjcf, ""
 
 
-def load(path, floating):
-    """mbcomp's model of the file (the import's notes silenced: ``mbcomp info`` lists them)."""
+def load(path, floating, armature=True):
+    """mbcomp's model of the file (the import's notes silenced: ``mbcomp info`` lists them);
+    ``armature=False``: an MJCF's armature left out (the cross-check's model)."""
     import mbcomp
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         if path.endswith(".xml"):
-            return mjcf_loader()[0](path)
+            return mjcf_loader()[0](path, armature=armature)
         return mbcomp.load_urdf(path, floating=floating)
 
 
@@ -268,14 +269,17 @@ def pinocchio_state(system, model, q, u):
     return qp, v, T, Tdv
 
 
-def mujoco_state(system, m, q, u):
+def mujoco_state(system, m, names, q, u):
     """MuJoCo's ``(qpos, qvel)`` of mbcomp's ``(q, u)`` and the permutation ``P`` of speeds
-    (``u = P qvel``), or None when a joint does not map (hinge, slide, free)."""
+    (``u = P qvel``), with ``names`` mbcomp's joint of each MuJoCo joint; None when a joint does
+    not map. Hinge and slide coordinates are MuJoCo's ``qpos`` (``ref`` included), free and ball
+    joints' quaternions (w x y z) and speeds too (a free joint's linear velocity in world axes,
+    angular velocities in body axes)."""
     qj, uj = _joint_of(system.q_names), _joint_of(system.u_names)
     qpos, qvel, P = np.zeros(m.nq), np.zeros(m.nv), np.zeros((system.nu, m.nv))
-    size = {0: (7, 6), 2: (1, 1), 3: (1, 1)}
-    for i in range(m.njnt):
-        name, kind = m.joint(i).name.replace("-", "_"), int(m.jnt_type[i])
+    size = {0: (7, 6), 1: (4, 3), 2: (1, 1), 3: (1, 1)}
+    for i, name in enumerate(names):
+        kind = int(m.jnt_type[i])
         if name not in qj or kind not in size:
             return None
         j, k, a, d = qj.index(name), uj.index(name), m.jnt_qposadr[i], m.jnt_dofadr[i]
@@ -322,7 +326,8 @@ class Mbcomp:
         from mbcomp.codegen import compile_system
         from mbcomp.formulations import LagrangeIndex1
 
-        self.system = compile_system(mbcomp.assemble(load(path, floating)), "c", lazy=False, verify=False)
+        self.model = load(path, floating)
+        self.system = compile_system(mbcomp.assemble(self.model), "c", lazy=False, verify=False)
         self.q, self.u = start_state(self.system)
         self.y = np.r_[self.q, self.u]
         slow = LagrangeIndex1(self.system).fun
@@ -363,6 +368,31 @@ def pinocchio_row(mb, path, floating, row):
     row["pin fd"] = per_call(lambda: pin.aba(model, data, qp, v, tau))
 
 
+def mbcomp_reference(path):
+    """``(system, q, u, M, du/dt)`` of the MJCF without armature, numerically, at a random state."""
+    import mbcomp
+    from mbcomp.formulations import LagrangeIndex1
+
+    system = mbcomp.assemble(load(path, True, armature=False))
+    q, u = start_state(system)
+    return system, q, u, system.evaluate(0.0, q, u).M, LagrangeIndex1(system).fun(0.0, np.r_[q, u])[system.nq:]
+
+
+def mujoco_check(system, m, names, d, row, q, u, M_mb, ud):
+    """``err M mj`` and ``err a mj`` of mbcomp's ``M`` and ``du/dt`` at ``(q, u)`` against MuJoCo's."""
+    import mujoco
+
+    state = mujoco_state(system, m, names, q, u)
+    if state is None:
+        return
+    d.qpos[:], d.qvel[:], P = state
+    mujoco.mj_forward(m, d)
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    row["err M mj"] = relative(P.T @ M_mb @ P, M)
+    row["err a mj"] = relative(ud, P @ d.qacc)
+
+
 def mujoco_row(mb, path, floating, root_dir, row):
     """MuJoCo's build, cross-check and per-call costs into ``row``."""
     import mujoco
@@ -373,17 +403,19 @@ def mujoco_row(mb, path, floating, root_dir, row):
         return
     row["mj build"], row["mj nv"] = seconds, m.nv
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
+    m.opt.density = m.opt.viscosity = 0.0  # fluid forces and tendons: not imported by mbcomp (noted)
+    m.tendon_stiffness[:] = m.tendon_damping[:] = 0.0
+    names = getattr(mb.model, "mjcf_joints", None) or [m.joint(i).name.replace("-", "_") for i in range(m.njnt)]
     d = mujoco.MjData(m)
-    state = mujoco_state(mb.system, m, mb.q, mb.u)
-    if state is not None:
-        d.qpos[:], d.qvel[:], P = state
-        mujoco.mj_forward(m, d)
-        M = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(m, d, M)
-        row["err M mj"] = relative(P.T @ mb.M @ P, M)
-        row["err a mj"] = relative(mb.ud, P @ d.qacc)
+    if path.endswith(".xml"):  # armature: mbcomp's rotor turns at the absolute rate, MuJoCo's term at the
+        ref = mbcomp_reference(path)  # joint's: compared without it (tests/io/test_mjcf.py's convention)
+        armature = m.dof_armature.copy()
+        m.dof_armature[:] = 0.0
+        mujoco_check(ref[0], m, names, d, row, *ref[1:])
+        m.dof_armature[:] = armature
     else:
-        d.qpos[:] = m.qpos0
+        mujoco_check(mb.system, m, names, d, row, mb.q, mb.u, mb.M, mb.ud)
+    d.qpos[:], d.qvel[:] = m.qpos0, 0.0
     M = np.zeros((m.nv, m.nv))
 
     def mass_and_bias():
@@ -427,7 +459,8 @@ def print_tables(rows):
           f"{'warm/pin':>9}{'warm/mj':>8}  mujoco input")
     for r in rows:
         print(f"{r['robot']:<16}{r['dof']:>4}{_cell(r, 'mb numeric', width=12)}{_cell(r, 'mb cold')}"
-              f"{_cell(r, 'mb warm')}{_cell(r, 'pin build')}{_cell(r, 'mj build')}{_ratio(r, 'mb warm', 'pin build', 9)}"
+              f"{_cell(r, 'mb warm')}{_cell(r, 'pin build')}{_cell(r, 'mj build')}"
+              f"{_ratio(r, 'mb warm', 'pin build', 9)}"
               f"{_ratio(r, 'mb warm', 'mj build', 8)}  {r.get('mujoco input', '-')}")
     print("\nper call from Python, microseconds (CPU, median of 5 batches); ratios mbcomp / peer")
     print(f"{'':<20}{'--- M + bias ---':^44}{'--- forward dynamics ---':^44}")

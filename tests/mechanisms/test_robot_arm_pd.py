@@ -17,7 +17,7 @@ from scipy.optimize import root
 import mbcomp
 from mbcomp.cli import main
 
-from conftest import ROOT, load_model
+from conftest import load_model
 
 ARM = load_model("models/robot_arm_pd.py")
 SETTLE = dict(t_end=12.0, rtol=1e-11, atol=1e-12, n_out=3)

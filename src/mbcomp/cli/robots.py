@@ -27,6 +27,7 @@ Examples
 """
 from __future__ import annotations
 
+import functools
 import importlib
 from collections import Counter
 import inspect
@@ -38,7 +39,7 @@ import xml.etree.ElementTree as ET
 
 from ..errors import ModelError, Problem
 
-__all__ = ["SUFFIXES", "is_robot_file", "robot_module", "import_notes"]
+__all__ = ["SUFFIXES", "is_robot_file", "robot_module", "portable_build", "import_notes"]
 
 #: the file suffixes read as robot descriptions instead of Python model files
 SUFFIXES = (".urdf", ".xml")
@@ -121,6 +122,12 @@ def robot_module(path):
     mod.__doc__ = f"The {kind} robot {p.name}, read by {load.__module__}.{load.__name__}."
     mod.build = _bound(load, str(p))
     return mod
+
+
+def portable_build(path):
+    """The robot file's loader with the file bound, ``functools.partial(load_urdf, path)``: a
+    ``build(**kw)`` that pickles, for what runs in worker processes (``mbcomp study``)."""
+    return functools.partial(_loader(path)[0], str(pathlib.Path(path).resolve()))
 
 
 def _bound(load, path):

@@ -45,6 +45,7 @@ import numpy as np
 
 from ..simulation.endings import sigterm_interrupts
 from .loader import check_output, model_module, split_params, takes
+from .robots import is_robot_file, portable_build
 from .messages import EXIT_SIGNAL
 from .params import build_value, describe_parameters, parse_value
 
@@ -205,7 +206,8 @@ def _run(args, grid, t_end, metrics, sim, executor):
     from ..analysis.study import StudyInterrupted, study
 
     try:
-        res = study(str(pathlib.Path(args.model).resolve()), grid, t_end=t_end, metrics=metrics, samples=args.samples,
+        source = portable_build(args.model) if is_robot_file(args.model) else str(pathlib.Path(args.model).resolve())
+        res = study(source, grid, t_end=t_end, metrics=metrics, samples=args.samples,
                     seed=args.seed, executor=executor, chunk=args.chunk, progress=not args.quiet, **sim)
     except StudyInterrupted as exc:
         return exc.result, exc
