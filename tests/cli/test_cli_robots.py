@@ -154,3 +154,19 @@ def test_neither_urdf_nor_mjcf_nor_xml_is_a_clear_error(tmp_path, capsys):
     assert "is not well-formed XML" in capsys.readouterr().err
     assert main(["info", str(tmp_path / "missing.urdf")]) == 2
     assert "the robot file does not exist" in capsys.readouterr().err
+
+
+@needs_ur5
+def test_study_runs_a_urdf_in_worker_processes(tmp_path, capsys):
+    """``mbcomp study`` sends the robot file to its workers: the fixed-base arm falls (its elbow
+    turns), the floating one falls freely as a whole -- no joint turns (the equivalence
+    principle: gravity alone accelerates every link alike)."""
+    out = tmp_path / "s.csv"
+    assert main(["study", UR5, "--grid", "floating=false,true", "--metric", "peak=max(abs(elbow_joint.phi))",
+                 "--t-end", "0.5", "--rtol", "1e-11", "--atol", "1e-12", "--executor", "processes", "--workers", "2",
+                 "--out", str(out), "-q"]) == 0
+    with open(out) as fh:
+        rows = list(csv.reader(fh))
+    head = rows[0]
+    data = {r[head.index("floating")]: float(r[head.index("peak")]) for r in rows[1:]}
+    assert data["False"] > 0.5 and data["True"] < 1e-9, data

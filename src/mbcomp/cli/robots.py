@@ -27,7 +27,6 @@ Examples
 """
 from __future__ import annotations
 
-import functools
 import importlib
 from collections import Counter
 import inspect
@@ -125,9 +124,21 @@ def robot_module(path):
 
 
 def portable_build(path):
-    """The robot file's loader with the file bound, ``functools.partial(load_urdf, path)``: a
-    ``build(**kw)`` that pickles, for what runs in worker processes (``mbcomp study``)."""
-    return functools.partial(_loader(path)[0], str(pathlib.Path(path).resolve()))
+    """The robot file's ``build(**kw)`` as an object that pickles (the file's absolute path and
+    nothing else), for what runs in worker processes (``mbcomp study``); the loader's summary
+    warning is not repeated in every worker (the notes stay on the model)."""
+    _loader(path)  # a file that is no robot description fails here, before any worker starts
+    return _PortableBuild(str(pathlib.Path(path).resolve()))
+
+
+class _PortableBuild:
+    def __init__(self, path):
+        self.path = path
+
+    def __call__(self, **kw):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            return _loader(self.path)[0](self.path, **kw)
 
 
 def _bound(load, path):
