@@ -28,7 +28,8 @@ per call: median of 5 batches of ~0.05 s each, from Python as a user calls each)
   into its model; MuJoCo: loading (and compiling) the file, meshes included where it reads them
   (its asset cache disabled, so that repeated builds decode them again as a first build does);
 * **M + bias**: mbcomp's compiled evaluation (``system.evaluate(t, q, u)``: ``M`` and ``f``,
-  the evaluation program, which also gives every body's state), ``pin.crba`` + ``pin.rnea``
+  the evaluation program, which also gives every body's state; ``prog``: that program alone,
+  one ``ctypes`` call without the ``Evaluation`` object around it), ``pin.crba`` + ``pin.rnea``
   (zero acceleration), MuJoCo's ``mj_fwdPosition`` + ``mj_fwdVelocity`` + ``mj_fullM``;
 * **forward dynamics**: mbcomp's right-hand side ``f(t, y) -> dy/dt`` as the integrators call
   it (the thin C extension, ``codegen/thin.py``), ``pin.aba`` (with the joints' damping torque),
@@ -138,17 +139,23 @@ def child_build(path, floating):
 
 
 def mbcomp_builds(path, floating, cold=True):
-    """``{numeric, cold, warm}`` CPU seconds, each build in a fresh Python process."""
+    """``{numeric, cold, warm}`` CPU seconds, each build in a fresh Python process (warm and
+    numeric: medians of three)."""
     cache = tempfile.mkdtemp(prefix="mbcomp_robots_")
     out = {}
     for label in (("cold", "warm") if cold else ("warm0", "warm")):
-        r = subprocess.run([sys.executable, __file__, "--child", path, str(int(floating))], capture_output=True,
-                           text=True, env={**os.environ, "MBCOMP_CACHE": cache})
-        if r.returncode:
-            raise RuntimeError(f"{path}: the build process failed: {r.stderr.strip()[-400:]}")
-        got = json.loads(r.stdout.strip().splitlines()[-1])
-        out[label], out["numeric"] = got["compiled"], got["numeric"]
+        got = [_child(path, floating, cache) for _ in range(1 if label != "warm" else 3)]
+        out[label] = float(np.median([g["compiled"] for g in got]))
+        out["numeric"] = float(np.median([g["numeric"] for g in got]))
     return out
+
+
+def _child(path, floating, cache):
+    r = subprocess.run([sys.executable, str(HERE / "robots.py"), "--child", path, str(int(floating))],
+                       capture_output=True, text=True, env={**os.environ, "MBCOMP_CACHE": cache})
+    if r.returncode:
+        raise RuntimeError(f"{path}: the build process failed: {r.stderr.strip()[-400:]}")
+    return json.loads(r.stdout.strip().splitlines()[-1])
 
 
 def batch_seconds(f, target=0.2):
@@ -342,6 +349,11 @@ class Mbcomp:
         ev = self.system.evaluate(0.0, self.q, self.u)
         return ev.M, ev.f
 
+    def program(self):
+        """The evaluation program alone (one ``ctypes`` call: ``M``, ``f`` and the bodies' states
+        as one flat vector), without the :class:`Evaluation` built around it."""
+        return self.system.evaluator.bound.run(0.0, self.q, self.u)
+
     def forward(self):
         return self.rhs(0.0, self.y)
 
@@ -431,6 +443,7 @@ def measure(label, path, floating, root_dir, args):
     row = {"robot": label, "floating": floating, "nq": mb.system.nq, "dof": mb.system.nu, "rhs": mb.rhs_kind}
     row.update({f"mb {k}": v for k, v in mbcomp_builds(path, floating, cold=not args.no_cold).items()})
     row["mb M+b"] = per_call(mb.mass_and_bias)
+    row["mb M+b prog"] = per_call(mb.program)
     row["mb fd"] = per_call(mb.forward)
     if "pinocchio" not in args.skip:
         pinocchio_row(mb, path, floating, row)
@@ -463,10 +476,11 @@ def print_tables(rows):
               f"{_ratio(r, 'mb warm', 'pin build', 9)}"
               f"{_ratio(r, 'mb warm', 'mj build', 8)}  {r.get('mujoco input', '-')}")
     print("\nper call from Python, microseconds (CPU, median of 5 batches); ratios mbcomp / peer")
-    print(f"{'':<20}{'--- M + bias ---':^44}{'--- forward dynamics ---':^44}")
-    print(f"{'robot':<16}{'dof':>4}" + f"{'mbcomp':>8}{'pin':>8}{'mujoco':>8}{'/pin':>10}{'/mj':>10}" * 2)
+    print("(prog: mbcomp's evaluation program alone, one ctypes call, without the Evaluation object)")
+    print(f"{'':<20}{'--- M + bias ---':^52}{'--- forward dynamics ---':^44}")
+    print(f"{'robot':<16}{'dof':>4}{'prog':>8}" + f"{'mbcomp':>8}{'pin':>8}{'mujoco':>8}{'/pin':>10}{'/mj':>10}" * 2)
     for r in rows:
-        cells = ""
+        cells = _cell(r, "mb M+b prog", 1e6, "{:.2f}", 8)
         for k in ("M+b", "fd"):
             cells += (_cell(r, f"mb {k}", 1e6, "{:.2f}", 8) + _cell(r, f"pin {k}", 1e6, "{:.2f}", 8)
                       + _cell(r, f"mj {k}", 1e6, "{:.2f}", 8) + _ratio(r, f"mb {k}", f"pin {k}", 10)
@@ -540,6 +554,7 @@ def main(argv=None):
     if args.child:
         return child_build(args.child[0], bool(int(args.child[1])))
     robots, root = robot_list(args)
+    os.chdir(tempfile.mkdtemp(prefix="mbcomp_robots_cwd_"))  # MuJoCo writes MUJOCO_LOG.TXT where it runs
     rows = []
     for label, path, floating in robots:
         print(f"{label}: {os.path.basename(path)}{' (floating base)' if floating else ''} ...", flush=True)
