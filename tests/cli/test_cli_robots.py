@@ -170,3 +170,14 @@ def test_study_runs_a_urdf_in_worker_processes(tmp_path, capsys):
     head = rows[0]
     data = {r[head.index("floating")]: float(r[head.index("peak")]) for r in rows[1:]}
     assert data["False"] > 0.5 and data["True"] < 1e-9, data
+
+
+@needs_ur5
+def test_bench_on_workers_refuses_a_robot_file_naming_the_fix(tmp_path, capsys):
+    """``mbcomp bench --executor`` sends the model file's path to its workers, which read
+    Python model files only: refused before any work, with the way out."""
+    assert main(["bench", UR5, "--executor", "processes", "--out", str(tmp_path / "b.csv"),
+                 "--plot", str(tmp_path / "b.png")]) == 2
+    err = capsys.readouterr().err
+    assert "a robot file (URDF) is no Python model file" in err and "run without --executor" in err
+    assert not (tmp_path / "b.csv").exists()

@@ -45,9 +45,9 @@ import numpy as np
 
 from ..simulation.endings import sigterm_interrupts
 from .loader import check_output, model_module, split_params, takes
-from .robots import is_robot_file, portable_build
 from .messages import EXIT_SIGNAL
 from .params import build_value, describe_parameters, parse_value
+from .robots import is_robot_file, portable_build
 
 __all__ = ["cmd_study", "parse_grid", "add_parser"]
 
