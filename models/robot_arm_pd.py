@@ -47,7 +47,7 @@ URDF = pathlib.Path(__file__).resolve().parent / "data" / "robot_arm.urdf"
 JOINTS = ("base_yaw", "shoulder", "elbow", "wrist")
 LINKS = ("column", "upper_arm", "forearm", "hand")
 
-SIMULATION = dict(t_end=5.0, rtol=1e-8, atol=1e-10)
+SIMULATION = dict(t_end=5.0, rtol=1e-8, atol=1e-10, n_out=20001)  # the PD laws' power sampled finely enough for the energy balance
 
 
 def build(target=(0.5, 0.8, -0.6, 0.4), kp=(40.0, 80.0, 40.0, 10.0), kd=(8.0, 12.0, 3.0, 0.15),
