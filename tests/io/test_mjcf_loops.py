@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import mbcomp
+from mbcomp.geometry.kinematics import quat_to_matrix
 from mbcomp.io.mjcf import load_mjcf
 
 mujoco = pytest.importorskip("mujoco", reason="MuJoCo is not installed (the reference engine of these checks)")
@@ -318,23 +319,55 @@ FREE = """<mujoco><option><flag contact="disable"/></option><worldbody>
 </worldbody><equality><weld body1="arm" body2="ball"/></equality></mujoco>"""
 
 
-def test_a_free_body_welded_runs_with_its_pose_as_a_guess(tmp_path):
-    """A free body welded to a hinged arm: the free joint is the cut joint; the note names the
-    fix (its start pose as a Guess), with which the arm swings with the ball as one body: the
-    loop closed to 1e-10 and the hinge's angle that of the arm with the ball attached."""
-    with pytest.warns(UserWarning, match="free joint 'float' closes the loop"):
-        model = load_mjcf(_write(tmp_path, FREE))
+def test_a_free_body_welded_runs_as_loaded(tmp_path):
+    """A free body welded to a hinged arm: the free joint lies on the loop, so the topology cuts
+    it and a cut joint has no coordinates to hold fixed starts; load_mjcf gives its start pose
+    as a Guess (the file's pose closes the loop: nothing moves), and the model runs as loaded:
+    the loop closed to 1e-10 and the hinge's angle that of the arm with the ball attached."""
+    model = load_mjcf(_write(tmp_path, FREE))
     system = mbcomp.assemble(model)
     assert system.topology.cut == ["float"]
-    guess = {"float.r0": mbcomp.Guess(np.array(model["float"].p.r0)),
-             "float.R0": mbcomp.Guess(np.array(model["float"].p.R0))}
-    res = mbcomp.simulate(model, t_end=1.0, params=guess, stabilization="projection", rtol=1e-10, atol=1e-12)
+    assert isinstance(model["float"].p.r0, mbcomp.Guess) and isinstance(model["float"].p.R0, mbcomp.Guess)
+    res = mbcomp.simulate(model, t_end=1.0, stabilization="projection", rtol=1e-10, atol=1e-12)
     assert np.max(res["residual.position"]) < 1e-10
     rigid = """<mujoco><worldbody><body name="arm" pos="0 0 1"><joint name="hinge" axis="0 1 0"/>
 <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.02" mass="1"/><geom type="sphere" pos="0.5 0 0" size="0.05" mass="0.5"/>
 </body></worldbody></mujoco>"""
     one = mbcomp.simulate(load_mjcf(_write(tmp_path, rigid, "rigid.xml")), t_end=1.0, rtol=1e-10, atol=1e-12)
     assert np.ptp(one["hinge.phi"]) > 1.0 and np.abs(res["hinge.phi"] - one["hinge.phi"]).max() < 1e-7
+
+
+#: a floating pelvis whose leg closes a loop below it (Cassie's shape): the free joint is on no loop
+FLOATING_LEG = """<mujoco><option><flag contact="disable"/></option><worldbody>
+<body name="pelvis" pos="0 0 1"><freejoint name="root"/><geom type="box" size="0.1 0.1 0.05" mass="5"/>
+ <body name="thigh" pos="0 0 -0.05"><joint name="hip" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -0.4" size="0.02" mass="1"/>
+  <body name="shin" pos="0 0 -0.4"><joint name="knee" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -0.4" size="0.02" mass="1"/></body></body>
+ <body name="rod" pos="0.1 0 -0.05"><joint name="rod_hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -0.5" size="0.01" mass="0.2"/></body>
+</body></worldbody><equality><connect name="achilles" body1="rod" body2="shin" anchor="0 0 -0.5"/></equality></mujoco>"""
+
+
+def test_a_floating_base_above_a_leg_loop_keeps_its_fixed_start_pose(tmp_path):
+    """The free joint of a pelvis whose leg closes a loop below it is on no loop: its start
+    pose stays fixed (not a Guess), the loop's own joint is cut, and the robot falls freely with
+    its leg swinging: its centre of mass falls on a parabola of exactly g while the loop stays
+    closed."""
+    model = load_mjcf(_write(tmp_path, FLOATING_LEG))
+    assert not isinstance(model["root"].p.r0, mbcomp.Guess)
+    system = mbcomp.assemble(model)
+    assert "root" not in system.topology.cut and "achilles" in system.topology.cut
+    res = mbcomp.simulate(model, t_end=0.5, params={"hip.w0": 2.0}, stabilization="projection", rtol=1e-10,
+                          atol=1e-12, n_out=11)
+    assert res.status == "success" and np.max(res["residual.position"]) < 1e-10
+    z_cm = 0.0
+    for b in ("pelvis", "thigh", "shin", "rod"):
+        Q = np.stack([res[f"{b}.Q.{c}"] for c in "wxyz"], axis=1)
+        r_cm = np.asarray(model[b].p.r_cm, dtype=float)
+        z_cm = z_cm + model[b].p.m * (res[f"{b}.r.z"] + np.array([quat_to_matrix(q) @ r_cm for q in Q])[:, 2])
+    total = sum(model[b].p.m for b in ("pelvis", "thigh", "shin", "rod"))
+    assert np.ptp(res["knee.phi"]) > 0.1  # the leg swings (its start rate), the loop moving its other joints
+    c2, c1, c0 = np.polyfit(res.time, z_cm / total, 2)  # the centre of mass: a parabola of curvature -g
+    assert abs(c2 + 0.5 * 9.81) < 1e-8
+    assert np.abs(np.polyval((c2, c1, c0), res.time) - z_cm / total).max() < 1e-9
 
 
 ROD = """<mujoco><compiler angle="radian"/><option timestep="0.0005" integrator="RK4"><flag contact="disable"/></option>

@@ -113,20 +113,6 @@ def _couple_joints(el, model, name, lib):
     model.connect(g.flange_b, b.axis)
 
 
-def _free_joint(root, body):
-    """The component name of the free joint of MJCF body ``body`` (load_mjcf's name: the
-    file's, else ``<body>_joint<k>``; sanitized), or None."""
-    for b in root.iter("body"):
-        if b.get("name") != body:
-            continue
-        joints = [j for j in b if j.tag in ("joint", "freejoint")]
-        for k, j in enumerate(joints):
-            if j.tag == "freejoint" or j.get("type") == "free":
-                name = re.sub(r"\W", "_", j.get("name") or f"{body}_joint{k + 1}")
-                return "_" + name if name[:1].isdigit() else name
-    return None
-
-
 def _skipped(el, model):
     """Why an equality element is not imported, or None."""
     if el.tag == "joint":
@@ -145,6 +131,60 @@ def _skipped(el, model):
     if el.get("body1") is None:
         return "no body1"
     return None
+
+
+def free_joints_on_loops(root, parents, free):
+    """The bodies among ``free`` whose free joint lies on a loop a ``connect`` or ``weld`` of
+    ``root`` closes: the body still reaches the world when its own free joint is taken away.
+
+    The topology cuts such a free joint (it has the most freedom in the loop), and a cut joint
+    has no coordinates to hold fixed start values; its start pose is then a
+    :class:`~mbcomp.Guess` (``load_mjcf`` gives the file's pose, which closes the loop: nothing
+    moves). A free joint on no loop (a floating robot whose legs close loops below it) keeps
+    its fixed start pose.
+
+    Parameters
+    ----------
+    root : xml.etree.ElementTree.Element
+        The MJCF's ``<mujoco>`` element (includes read).
+    parents : dict
+        Body name -> its parent body's name (``None`` for a child of the worldbody).
+    free : iterable of str
+        The bodies with a free joint (children of the worldbody).
+
+    Returns
+    -------
+    set of str
+
+    Examples
+    --------
+    >>> import xml.etree.ElementTree as ET
+    >>> root = ET.fromstring('<mujoco><equality><weld body1="arm" body2="ball"/></equality></mujoco>')
+    >>> sorted(free_joints_on_loops(root, {"arm": None, "ball": None, "box": None}, ["ball", "box"]))
+    ['ball']
+    """
+    ties = [(el.get("body1"), el.get("body2")) for sec in root.findall("equality") for el in sec
+            if el.tag in ("connect", "weld") and el.get("body1") and _skipped(el, None) is None]
+    free, out = set(free), set()
+    for cut in free:
+        up = {}
+
+        def find(x):
+            while up.get(x, x) != x:
+                x = up[x]
+            return x
+
+        def join(a, b):
+            up[find(a)] = find(b)
+
+        for body, parent in parents.items():
+            if body != cut:  # every tree joint but this free one (a free body's parent is the world)
+                join(body, parent)
+        for a, b in ties:
+            join(a, b)  # body2 omitted (None): the world
+        if find(cut) == find(None):
+            out.add(cut)
+    return out
 
 
 def add_equalities(root, model, bodies, notes):
@@ -209,9 +249,6 @@ def add_equalities(root, model, bodies, notes):
                 _couple_joints(el, model, name, lib)
                 continue
             kind, fa, fb, pose_a, pose_b, R0 = _closure(el, model, bodies, what)
-            for free in filter(None, (_free_joint(root, el.get(b)) for b in ("body1", "body2"))):
-                notes.append(f"{what}: the free joint {free!r} closes the loop; give its start pose as a Guess to "
-                             f"simulate: params={{'{free}.r0': mbcomp.Guess(r0), '{free}.R0': mbcomp.Guess(R0)}}")
             close_loop(model, name, kind, fa, fb, pose_a, pose_b, R0=R0,
                        offset_names=(names(f"{name}_a", "loop frame"), names(f"{name}_b", "loop frame")))
     return added
