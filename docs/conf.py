@@ -51,7 +51,6 @@ myst_enable_extensions = ["dollarmath"]
 # numpydoc renders the docstrings (mbcomp's are numpydoc throughout)
 autosummary_generate = True
 autosummary_imported_members = False
-autodoc_default_options = {"members": False}
 autodoc_typehints = "none"
 numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
