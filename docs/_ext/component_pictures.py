@@ -194,16 +194,24 @@ def picture_key(cls):
 
 
 def draw(cls, path):
-    """Stage ``cls``, simulate an instant and write its picture to ``path``."""
+    """Stage ``cls``, simulate an instant and write its picture to ``path``; an error when
+    the picture would not show the component (its stage hides it, or it draws nothing)."""
     import warnings
 
     import mbcomp
+    from mbcomp.visual.render import frame_geometry, write_picture
+    from mbcomp.visual.scene import build_scene
 
     model, hidden = stage(cls)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = mbcomp.simulate(model, t_end=1e-3, n_out=2, backend="numeric")
-    return res.snapshot(os.fspath(path), t=0.0, hide=hidden, title=cls.__name__)
+    scene = build_scene(res, hide=hidden, title=cls.__name__)
+    shown = {d.component.split(".")[0] for d in frame_geometry(scene, 0.0)}
+    if not shown or shown & set(hidden):
+        raise RuntimeError(f"the picture of {cls.__name__} would show {sorted(shown) or 'nothing'}, not the "
+                           f"component alone: fix its stage in docs/_ext/component_pictures.py")
+    return write_picture(scene, os.fspath(path), t=0.0)
 
 
 def picture(cls, cache_dir):
