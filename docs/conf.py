@@ -61,7 +61,7 @@ sphinx_gallery_conf = {
     "examples_dirs": ["../examples"],
     "gallery_dirs": ["auto_examples"],
     "filename_pattern": r"/plot_",
-    "subsection_order": ["../examples/tutorials", "../examples/models"],
+    "subsection_order": ["../examples/tutorials", "../examples/models", "*"],  # "*": any other folder
     "within_subsection_order": "FileNameSortKey",
     "image_scrapers": ("matplotlib",),
     "download_all_examples": False,
