@@ -30,10 +30,8 @@ pytestmark = pytest.mark.skipif(bool(MISSING), reason=f"the docs extra is not in
 GENERATED = ("_build", "auto_examples", "generated", "sg_execution_times.rst", "__pycache__")
 
 
-@pytest.fixture(scope="module")
-def site(tmp_path_factory):
-    """``(html folder, stderr)`` of the site built from a copy of docs/ and examples/."""
-    tree = tmp_path_factory.mktemp("site")
+def build_site(tree):
+    """``(html folder, stderr)`` of the site built from a copy of docs/ and examples/ in ``tree``."""
     for name in ("docs", "examples"):
         shutil.copytree(ROOT / name, tree / name, ignore=shutil.ignore_patterns(*GENERATED))
     cache = pathlib.Path(tempfile.gettempdir()) / f"mbcomp-docs-pictures-{os.getuid()}"
@@ -53,8 +51,17 @@ def _text(path):
     return html.unescape(re.sub(r"<[^>]+>", " ", path.read_text()))
 
 
-def test_the_site_builds_without_a_warning(site):
-    out, stderr = site
+def test_the_site_builds_with_a_page_per_public_name_and_component_and_their_pictures(tmp_path):
+    """One test, so that the build runs once under ``pytest -n 2`` (tests of one file may go
+    to both workers)."""
+    out, stderr = build_site(tmp_path)
+    check_pages(out, stderr)
+    check_api_pages(out)
+    check_library_pages(out)
+    check_pictures(out)
+
+
+def check_pages(out, stderr):
     assert "WARNING" not in stderr and "ERROR" not in stderr, stderr[-3000:]
     for page in ("index", "getting-started", "components", "concepts/formulations", "concepts/solvers",
                  "concepts/singular", "concepts/events", "concepts/fmu", "concepts/studies",
@@ -64,8 +71,7 @@ def test_the_site_builds_without_a_warning(site):
         assert (out / f"{page}.html").is_file(), f"no page {page}.html"
 
 
-def test_every_public_name_has_an_api_page(site):
-    out, _ = site
+def check_api_pages(out):
     missing = [n for n in mbcomp.__all__ if not (out / "api" / "generated" / f"mbcomp.{n}.html").is_file()]
     assert not missing, f"no API page for mbcomp.{missing}: add them to docs/api/index.rst"
     # a class's page documents its methods: Model.connect, Result.to_csv with its example
@@ -99,8 +105,7 @@ def _components():
             if isinstance(getattr(library, n), type) and issubclass(getattr(library, n), mbcomp.Component)}
 
 
-def test_every_library_component_has_a_page_with_its_parameters_units_and_ports(site):
-    out, _ = site
+def check_library_pages(out):
     components = _components()
     assert len(components) >= 45
     for name, cls in components.items():
@@ -115,10 +120,9 @@ def test_every_library_component_has_a_page_with_its_parameters_units_and_ports(
             assert port in rows and rows[port][0].startswith(type(decl).__name__), f"{name}: port {port} is not listed"
 
 
-def test_the_components_that_draw_themselves_have_their_picture(site):
+def check_pictures(out):
     from matplotlib.image import imread
 
-    out, _ = site
     drawn = 0
     for name, cls in _components().items():
         draws = cls.visuals is not mbcomp.Component.visuals or name in ("RollingDisk", "RollingSphere")
