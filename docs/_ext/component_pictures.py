@@ -229,6 +229,9 @@ def picture(cls, cache_dir):
         try:
             draw(cls, tmp)
             shutil.move(tmp, path)  # whole files only: a parallel build never reads half a picture
+            for stale in cache_dir.glob(f"{cls.__name__}-*.png"):  # the pictures of earlier sources
+                if stale != path:
+                    stale.unlink(missing_ok=True)
         finally:
             if os.path.exists(tmp):
                 os.unlink(tmp)
