@@ -516,8 +516,7 @@ class MultibodySystem:
             V -= m * (self.g @ (J.r + rho))
         for node, Iw, _ in rotors(self, jets):
             T += 0.5 * jets[node].w @ Iw @ jets[node].w
-        for k, Jr in reflected_rotors(self):
-            T += 0.5 * Jr * ev.u[k] ** 2
+        T += sum(0.5 * Jr * ev.u[k] ** 2 for k, Jr in reflected_rotors(self))  # rotors on a joint's own rate
         for path, comp, ports in self.topology.forces:
             V += comp.potential({pn: self.frame_state(jets[n]) for pn, n in ports.items()}, self.P[path])
         for path, comp in self.topology.flange_elements:
