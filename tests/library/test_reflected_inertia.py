@@ -30,7 +30,7 @@ M1, M2, L1, L2, J, G = 1.5, 0.8, 0.7, 0.5, 0.3, 9.81
 Q0, U0 = (0.4, -0.9), (1.3, -2.1)
 
 
-def pendulum(rotor="reflected", N=None, q0=Q0, u0=U0):
+def pendulum(rotor="reflected", N=None, q0=Q0, u0=U0, J=J):
     """The double pendulum; ``rotor``: "reflected" (ReflectedInertia on j2), "absolute"
     (Inertia on j2), "geared" (``Inertia(J / N^2)`` on a shaft on link 1 geared to j2 by
     ``IdealGear(ratio=N)``) or None."""
@@ -235,3 +235,27 @@ def test_locking_the_joint_drops_its_reflected_rotor_and_says_so():
     q, u = np.array([0.3]), np.array([1.0])
     assert mbcomp.assemble(held).evaluate(0.0, q, u).M == pytest.approx(mbcomp.assemble(bare).evaluate(0.0, q, u).M,
                                                                       rel=1e-15)
+
+
+def test_the_symbolic_equations_have_the_rotor_on_the_diagonal():
+    """``mbcomp.equations`` (sympy): M and the kinetic energy are the closed form's, with the
+    rotor's ``J w2^2 / 2`` alone (numbers as exact rationals)."""
+    import sympy
+
+    eq = mbcomp.equations(pendulum())
+    at = {eq.q[0]: sympy.Rational(2, 5), eq.q[1]: sympy.Rational(-9, 10), eq.u[0]: sympy.Rational(13, 10),
+          eq.u[1]: sympy.Rational(-21, 10)}
+    M, _ = closed_form(np.array(Q0), np.array(U0))
+    np.testing.assert_allclose(np.array(eq.M.subs(at), dtype=float), M, rtol=1e-15)
+    T = 0.5 * np.array(U0) @ M @ np.array(U0)
+    assert abs(float(eq.T.subs(at)) - T) < 1e-14 * T
+
+
+def test_the_sensitivity_to_the_rotors_inertia_is_the_finite_difference():
+    """The forward sensitivity ``d th2(1 s) / d J`` (exact derivative programs of the traced
+    rotor) against a central difference of two runs."""
+    res = mbcomp.simulate(pendulum(), t_end=1.0, rtol=1e-11, atol=1e-11, sensitivities=["motor.J"])
+    h = 1e-5
+    ends = [mbcomp.simulate(pendulum(J=J + d), t_end=1.0, rtol=1e-12, atol=1e-12)["j2.phi"][-1] for d in (h, -h)]
+    fd = (ends[0] - ends[1]) / (2 * h)
+    assert abs(fd) > 1.0 and abs(res.sensitivity("j2.phi", "motor.J")[-1] - fd) < 1e-6 * abs(fd)
