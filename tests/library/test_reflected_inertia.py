@@ -22,8 +22,9 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 from mbcomp.assembly.recursive import generalized_momenta, lagrange_accelerations, tree_evaluation, tree_pass
+from mbcomp import Flange
 from mbcomp.errors import ModelError
-from mbcomp.library import (FixedTranslation, IdealGear, Inertia, PointMass, PrescribedMotion, Prismatic,
+from mbcomp.library import (Cylindrical, FixedTranslation, IdealGear, Inertia, PointMass, PrescribedMotion, Prismatic,
                             ReflectedInertia, ReflectedMass, Revolute, RigidBody, World)
 
 M1, M2, L1, L2, J, G = 1.5, 0.8, 0.7, 0.5, 0.3, 9.81
@@ -223,6 +224,19 @@ def test_a_reflected_rotor_without_a_joint_speed_of_its_own_is_refused_with_the_
     rot = m.add("motor", ReflectedMass(m=1.0))
     m.connect(rot.flange, m["j2"].axis)
     assert "ReflectedMass" in _problems(m)  # a reflected mass on a hinge: the wrong kind of axis
+
+    class Geared(Cylindrical):
+        """A cylindrical joint with a turning axis flange: two speeds."""
+
+        axis = Flange("the turning axis", optional=True)
+        axis_kind = "rotational"
+
+    m = mbcomp.Model()
+    w, j, b = m.add("world", World()), m.add("j", Geared()), m.add("b", RigidBody())
+    rot = m.add("motor", ReflectedInertia(J=0.1))
+    m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, b.frame_a); m.connect(rot.flange, j.axis)
+    said = _problems(m)
+    assert "on j (Geared), a joint of 2 speeds" in said and "put it on a 1-DOF joint's axis" in said
 
 
 def test_locking_the_joint_drops_its_reflected_rotor_and_says_so():
