@@ -4,14 +4,15 @@ Importable as ``mbcomp.library``. Every class here is an example of a role contr
 (:mod:`mbcomp.roles`); user libraries are written the same way.
 """
 from .sources import World, Fixed
-from .parts import FixedTranslation, FixedRotation, RigidBody, PointMass
+from .parts import FixedTranslation, FixedRotation, RigidBody, PointMass, UncheckedRigidBody
 from .joints import Revolute, Prismatic, Cylindrical, Spherical, Weld, FreeMotion
 from .compound_joints import Universal, Planar
 from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
 from .contact import DiskContact, SphereContact, RollingDisk, RollingSphere
 from .plane_contact import PlaneContact
 from .rods import SphericalSpherical, UniversalSpherical
-from .gears import IdealGear, RackPinion, Belt, Inertia, PlanetaryGear, IdealPulley, ReflectedInertia, ReflectedMass
+from .gears import (IdealGear, RackPinion, Belt, Inertia, PlanetaryGear, IdealPulley, JointCoupling, ReflectedInertia,
+                    ReflectedMass)
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
 from .sensors import RelativeSensor, AbsoluteSensor, AbsoluteAngles, CutForceAndTorque
@@ -35,4 +36,5 @@ __all__ = [
     "IdealPulley",
     "ReflectedInertia", "ReflectedMass",
     "ElasticStop",
+    "JointCoupling", "UncheckedRigidBody",
 ]

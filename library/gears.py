@@ -20,8 +20,8 @@ from mbcomp import Box, Cylinder, FlangeConstraint, FlangeInertia, Flange, Model
 from mbcomp.modeling.shapes import STEEL, z_to
 from .joints import Revolute
 
-__all__ = ["IdealGear", "RackPinion", "IdealPulley", "Belt", "Inertia", "ReflectedInertia", "ReflectedMass",
-           "PlanetaryGear"]
+__all__ = ["IdealGear", "RackPinion", "IdealPulley", "Belt", "Inertia", "PlanetaryGear", "JointCoupling",
+           "ReflectedInertia", "ReflectedMass"]
 
 
 class IdealGear(FlangeConstraint):
@@ -97,6 +97,36 @@ class RackPinion(FlangeConstraint):
     def outputs(self, t, states, p, flows):
         """The pinion's torque ``tau_a`` (N m) and the rack's force ``f_b`` (N)."""
         return {"tau_a": flows["flange_a"], "f_b": flows["flange_b"]}
+
+
+class JointCoupling(FlangeConstraint):
+    """Two 1-DOF joint axes of any kind moving together: ``s_a = ratio s_b`` (displacements from
+    the start values), URDF's ``<mimic>`` where :class:`IdealGear` (rotational) does not apply.
+
+    ``flange_a``, ``flange_b`` on the axes of Revolutes (rad) or Prismatics (m), either kind on
+    either side; ``ratio`` is then in 1, m/rad or rad/m. The torque or force it puts on
+    ``flange_a`` is ``f_a = -lambda`` (the result column ``lambda.<name>.mesh``; N m or N by the
+    axis, so no output columns of its own), on ``flange_b`` ``f_b = -ratio f_a`` (no power lost:
+    ``f_a v_a + f_b v_b = 0``). An offset between the coordinates is the joints' start values
+    (``s_a0 = ratio s_b0 + offset``).
+
+    Examples
+    --------
+    Two fingers of a gripper on one slide: the second mirrors the first.
+
+    >>> from mbcomp.library import JointCoupling
+    >>> from mbcomp.roles import FlangeSum
+    >>> c = JointCoupling(ratio=-1.0)
+    >>> c.rows({"flange_a": FlangeSum({"flange_a": 1.0}), "flange_b": FlangeSum({"flange_b": 1.0})}, c.p)
+    [('mesh', 1.0*flange_a + 1.0*flange_b)]
+    """
+
+    flange_a = Flange("the coupled (following) joint's axis (a Revolute's or a Prismatic's)")
+    flange_b = Flange("the leading joint's axis (a Revolute's or a Prismatic's)")
+    ratio = Param(1.0, unit="1", doc="s_a / s_b (1, m/rad or rad/m by the axes' kinds)", check="nonzero")
+
+    def rows(self, flanges, p):
+        return [("mesh", flanges["flange_a"] - p.ratio * flanges["flange_b"])]
 
 
 class IdealPulley(FlangeConstraint):

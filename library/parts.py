@@ -113,6 +113,38 @@ class RigidBody(Body):
         return cls(m=mp.m, r_cm=np.array(mp.r_cm), I=np.array(mp.I))
 
 
+def _symmetric(I):
+    """The check of an inertia taken as given: symmetric (to 1e-12 relative), nothing more."""
+    I = np.asarray(I, dtype=float)
+    if not np.allclose(I, I.T, atol=1e-12 * max(1.0, np.abs(I).max())):
+        return "inertia tensor is not symmetric"
+    return None
+
+
+class UncheckedRigidBody(RigidBody):
+    """A :class:`RigidBody` whose inertia ``I`` is taken as given: only its symmetry is checked,
+    not the triangle inequality of its principal moments nor their sign.
+
+    For imported robot files whose links' inertias no real mass distribution has (rounded or
+    hand-written values; ``mbcomp.load_urdf(..., inertia="as_given")``), to reproduce what
+    engines that do not check them compute. The mass matrix stays positive definite as long
+    as the robot's composite inertias are (initialization checks it as for any model).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mbcomp.library import RigidBody, UncheckedRigidBody
+    >>> I = np.diag([0.01, 0.01, 0.03])        # 0.01 + 0.01 < 0.03: no real body has it
+    >>> UncheckedRigidBody(m=1.0, I=I).problems()  # no problem reported
+    []
+    >>> RigidBody(m=1.0, I=I).problems()[0].what[:50]
+    'parameter principal moments 0.01, 0.01, 0.03 kg m^'
+    """
+
+    I = Param(np.zeros((3, 3)), unit="kg m^2", shape=(3, 3), check=_symmetric,
+              doc="inertia about the centre of mass, frame_a axes (taken as given: symmetric, else unchecked)")
+
+
 class PointMass(Body):
     """A particle of mass ``m`` at the origin of frame_a (no rotational inertia).
 

@@ -344,7 +344,7 @@ NOTED = """<mujoco model="noted"><include file="parts.xml"/>
   <body name="fore" pos="0 0 -.5"><joint name="elbow" type="slide" axis="0 0 1" armature="0.2"/>
   <geom type="sphere" size=".1" rgba="0 0 1 0.5"/></body></body></worldbody>
 <tendon><fixed name="t"><joint joint="shoulder" coef="1"/></fixed></tendon>
-<equality><connect name="loop" body1="arm" body2="fore" anchor="0 0 0"/></equality>
+<equality><tendon name="loop" tendon1="t"/></equality>
 <actuator><motor name="m1" joint="shoulder" gear="50"/><position name="p1" joint="elbow" kp="20"/></actuator>
 <sensor><jointpos joint="shoulder"/><jointvel joint="shoulder"/><touch site="tip"/></sensor>
 </mujoco>"""
@@ -363,7 +363,7 @@ def test_what_is_not_imported_is_said(tmp_path):
     notes = "\n".join(model.mjcf_notes)
     for said in ("actuator <motor> 'm1' on joint 'shoulder' (gear=50)", "actuator <position> 'p1' on joint 'elbow' (kp=20)",
                  "3 sensors (1 jointpos, 1 jointvel, 1 touch): not imported", "1 tendons (1 fixed): not imported",
-                 "equality <connect> 'loop' (arm, fore): not imported yet", "<option density=1.2>: fluid forces",
+                 "equality <tendon> 'loop' (t): not imported", "<option density=1.2>: fluid forces",
                  "joint 'shoulder': frictionloss=0.5 not imported (friction=False)",
                  "1 light, 1 site: not imported"):
         assert said in notes, said

@@ -59,6 +59,14 @@ FLOATING = ["a1_description/urdf/a1.urdf", "go2_description/urdf/go2.urdf", "sol
             "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf", "iris_description/robots/iris_simple.urdf",
             "hector_description/robots/quadrotor_base.urdf"]
 
+#: robots whose links' inertias no real body has (a principal moment above the sum of the other
+#: two): imported with inertia="as_given", as Pinocchio takes them
+AS_GIVEN_FIXED = ["allegro_hand_description/urdf/allegro_left_hand.urdf", "pr2_description/urdf/pr2.urdf",
+                  "tiago_description/robots/tiago.urdf"]
+AS_GIVEN_FLOATING = ["go1_description/urdf/go1.urdf", "hyq_description/robots/hyq_no_sensors.urdf",
+                     "anymal_b_simple_description/robots/anymal.urdf", "b1_description/urdf/b1.urdf",
+                     "romeo_description/urdf/romeo_small.urdf"]
+
 
 def _sanitized(name):
     return re.sub(r"\W", "_", name)
@@ -66,11 +74,12 @@ def _sanitized(name):
 
 @functools.lru_cache(maxsize=None)
 def _pair(path, floating):
-    """(mbcomp system, Pinocchio model) of one file, built once per test module run (no visual
-    shapes: the meshes change no dynamics and tests/io/test_urdf_visuals.py reads them)."""
+    """(mbcomp system, Pinocchio model) of one file, built once per test module run; the mimic
+    joints free (Pinocchio's default), the inertias as the file gives them (as Pinocchio's), no
+    visual shapes (the meshes change no dynamics; tests/io/test_urdf_visuals.py reads them)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # the notes of what is not imported
-        system = mbcomp.assemble(load_urdf(path, floating=floating, visuals=False))
+        system = mbcomp.assemble(load_urdf(path, floating=floating, mimic=False, inertia="as_given", visuals=False))
     model = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer()) if floating else pin.buildModelFromUrdf(path)
     return system, model
 
@@ -155,21 +164,21 @@ def _forward_difference(path, floating, n_states=2):
 
 
 @needs_robots
-@pytest.mark.parametrize("rel", FIXED[:6] + FLOATING[:6])
+@pytest.mark.parametrize("rel", FIXED[:6] + FLOATING[:6] + AS_GIVEN_FIXED[:1] + AS_GIVEN_FLOATING[:2])
 def test_forward_dynamics_matches_pinocchio(rel):
-    d = _forward_difference(os.path.join(ROBOTS, rel), floating=rel in FLOATING)
+    d = _forward_difference(os.path.join(ROBOTS, rel), floating=rel in FLOATING + AS_GIVEN_FLOATING)
     assert d < 1e-10, f"{rel}: accelerations {d:.1e} relative"
 
 
 @needs_robots
-@pytest.mark.parametrize("rel", FIXED)
+@pytest.mark.parametrize("rel", FIXED + AS_GIVEN_FIXED)
 def test_fixed_base_robot_matches_pinocchio(rel):
     dM, db = _differences(os.path.join(ROBOTS, rel), floating=False)
     assert dM < 1e-10 and db < 1e-10, f"{rel}: mass matrix {dM:.1e}, bias forces {db:.1e} relative"
 
 
 @needs_robots
-@pytest.mark.parametrize("rel", FLOATING)
+@pytest.mark.parametrize("rel", FLOATING + AS_GIVEN_FLOATING)
 def test_floating_base_robot_matches_pinocchio(rel):
     dM, db = _differences(os.path.join(ROBOTS, rel), floating=True)
     assert dM < 1e-10 and db < 1e-10, f"{rel}: mass matrix {dM:.1e}, bias forces {db:.1e} relative"
@@ -225,12 +234,12 @@ def test_rotated_inertia_offsets_damping_and_names_match_pinocchio(tmp_path):
     same file, and the notes name what was left out or renamed."""
     path = _write(tmp_path, ODD)
     with pytest.warns(UserWarning, match="not imported"):
-        model = load_urdf(path)
+        model = load_urdf(path, mimic=False)
     system = mbcomp.assemble(model)
     assert system.q_names == ["j_1.phi", "slide.s", "wrist.phi"]
     notes = "\n".join(model.urdf_notes)
-    for said in ("'j-1': named 'j_1'", "'a-link': named 'a_link'", "'j-1': <dynamics friction>",
-                 "'wrist': <mimic> not imported", "<transmission> 't1'"):
+    for said in ("'j-1': named 'j_1'", "'a-link': named 'a_link'", "'j-1': <dynamics friction=0.1> not imported "
+                 "(friction=False)", "'wrist': <mimic> not imported (mimic=False", "<transmission> 't1'"):
         assert said in notes
     pm = pin.buildModelFromUrdf(path)
     assert list(pm.damping) == [0.4, 2.0, 0.0]
@@ -241,7 +250,7 @@ def test_rotated_inertia_offsets_damping_and_names_match_pinocchio(tmp_path):
 def test_damping_off_leaves_the_bias_of_pinocchio_without_damping(tmp_path):
     path = _write(tmp_path, ODD)
     with pytest.warns(UserWarning):
-        system = mbcomp.assemble(load_urdf(path, damping=False))
+        system = mbcomp.assemble(load_urdf(path, damping=False, mimic=False))
     pm = pin.buildModelFromUrdf(path)
     q, v = np.array([0.3, 0.05, -0.4]), np.array([0.5, -0.2, 1.0])
     ev = system.evaluate(0.0, q, v)
@@ -283,10 +292,14 @@ def test_bad_files_are_refused_with_the_reason(tmp_path):
         load_urdf(_write(tmp_path, "<robot name='empty'/>", "e.urdf"))
     with pytest.raises(ValueError, match="2 root links"):
         load_urdf(_write(tmp_path, two_roots, "b.urdf"))
-    loop = ODD.replace('<transmission name="t1"/>', '<joint name="close" type="revolute"><parent link="base"/>'
+    loop = ODD.replace('<transmission name="t1"/>', '<joint name="close" type="planar"><parent link="base"/>'
                        '<child link="tip"/></joint>')
-    with pytest.raises(ValueError, match=r"links \['tip'\] are the child of more than one joint"):
+    with pytest.raises(ValueError, match="'close': type 'planar' cannot close a loop"):
         load_urdf(_write(tmp_path, loop, "d.urdf"))
+    cycle = two_roots.replace("</robot>", '<joint name="ab" type="fixed"><parent link="a"/><child link="b"/></joint>'
+                              '<joint name="ba" type="fixed"><parent link="b"/><child link="a"/></joint></robot>')
+    with pytest.raises(ValueError, match="0 root links"):
+        load_urdf(_write(tmp_path, cycle, "f.urdf"))
     odd_kind = ODD.replace('type="prismatic"', 'type="screw"')
     with pytest.raises(ValueError, match="'slide': type 'screw'"):
         load_urdf(_write(tmp_path, odd_kind, "c.urdf"))
@@ -340,3 +353,17 @@ def test_a_joint_moving_no_mass_is_held_fixed_and_said(tmp_path):
     np.testing.assert_allclose(ev.M, Mp[:3, :3], rtol=1e-12, atol=1e-15)
     bp = pin.rnea(pm, pm.createData(), q, v, np.zeros(4)) + pm.damping * v
     np.testing.assert_allclose(-ev.f, bp[:3], rtol=1e-12, atol=1e-14)
+
+
+@needs_robots
+def test_impossible_inertias_are_refused_naming_the_link_and_the_option():
+    """go1's links have inertias no real body has: refused by default, naming the link and
+    ``inertia="as_given"``; with it, imported with one note per such link."""
+    path = os.path.join(ROBOTS, AS_GIVEN_FLOATING[0])
+    with pytest.raises(ValueError, match=r"link '\w+': principal moments .* inertia='as_given'"):
+        load_urdf(path, floating=True)
+    with pytest.warns(UserWarning):
+        model = load_urdf(path, floating=True, inertia="as_given")
+    taken = [n for n in model.urdf_notes if "taken as given" in n]
+    unchecked = [c for c in model.components().values() if type(c).__name__ == "UncheckedRigidBody"]
+    assert taken and len(unchecked) == len(taken)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import pathlib
 
-from .loader import check_output, load_model_file, split_params
+from .loader import check_output, model_module, split_params
 
 __all__ = ["cmd_bench", "add_parser"]
 
@@ -40,7 +40,11 @@ def cmd_bench(args):
     png = args.plot or f"{name}_work_precision.png"
     check_output(out, "--out")
     check_output(png, "--plot")
-    mod = load_model_file(args.model)
+    mod = model_module(args.model)
+    if args.executor not in (None, "serial") and getattr(mod, "ROBOT_FORMAT", None):
+        raise ValueError(f"--executor {args.executor}: the workers read the model file by its path, and a robot file "
+                         f"({mod.ROBOT_FORMAT}) is no Python model file -> run without --executor, or write a model "
+                         "file whose build() returns mbcomp.load_urdf(...) / load_mjcf(...)")
     build_kw, runtime = split_params(args.param, mod.build)
     combos = _select(wp.default_combos(), args.combos) if args.combos else wp.default_combos()
     tols = [float(x) for x in args.tols.split(",")] if args.tols else None

@@ -4,6 +4,8 @@ The summary describes the assembled system without changing it
 (:func:`mbcomp.assembly.summary.summary`). ``--graph topo.svg`` also draws it: the spanning
 tree, the cut joints with their rows, the coordinates
 (:func:`mbcomp.visual.topology_drawing.draw_topology`; ``.svg``, ``.png`` or ``.pdf``).
+A robot file (``mbcomp info robot.urdf``, :mod:`mbcomp.cli.robots`) also gets a short list of
+what its import left out or renamed (``model.urdf_notes``).
 
 Examples
 --------
@@ -18,6 +20,7 @@ from __future__ import annotations
 import pathlib
 
 from .loader import check_output, load
+from .robots import import_notes
 
 __all__ = ["cmd_info", "add_parser"]
 
@@ -34,6 +37,8 @@ def cmd_info(args):
     _, model, runtime = load(args)
     system = assemble(model, runtime)
     print(system.summary())
+    for line in import_notes(model):
+        print(line)
     if graph is not None:
         draw_topology(system, graph, title=pathlib.Path(args.model).stem)
         print(f"topology drawn to {graph}")

@@ -5,6 +5,8 @@ component parameter at run time when it has one (``-p spring.c=200``: nothing is
 re-derived). A build() value is parsed into the kind its default declares (a number, a
 boolean, a list of numbers, a string; :mod:`mbcomp.cli.params`), a component value into a
 number, boolean, list or the text itself (:func:`parse_value`); the component checks it.
+A robot description (``.urdf``, MJCF ``.xml``) is a model file whose build() is its loader
+(:mod:`mbcomp.cli.robots`): ``-p floating=true`` goes to ``load_urdf`` as ``-p m=2`` to a build().
 
 Errors are ``ValueError`` (a :class:`~mbcomp.errors.ModelError` is one) with the fix in the
 message; :func:`mbcomp.cli.main.main` prints them as ``mbcomp: ...`` and exits 2.
@@ -24,8 +26,18 @@ import pathlib
 
 from ..modeling.loader import build_model, load_model_file
 from .params import build_value, describe_parameters, parse_value
+from .robots import is_robot_file, robot_module
 
-__all__ = ["parse_value", "load_model_file", "split_params", "load", "call_build", "check_output"]
+__all__ = ["parse_value", "load_model_file", "model_module", "split_params", "load", "call_build", "check_output"]
+
+
+def model_module(path):
+    """What every command loads: the model file ``path`` as a module
+    (:func:`mbcomp.load_model_file`), or the robot description ``path`` (``.urdf``, MJCF
+    ``.xml``) as one whose ``build`` is its loader (:func:`mbcomp.cli.robots.robot_module`)."""
+    if is_robot_file(path):
+        return robot_module(path)
+    return load_model_file(path)
 
 
 def takes(build, name):
@@ -52,7 +64,8 @@ def split_params(pairs, build):
         if "." in k:
             runtime[k] = parse_value(v)
         elif not takes(build, k):
-            raise ValueError(f"-p {k}={v}: build() takes no parameter {k}; it takes: {describe_parameters(build)} "
+            who = getattr(build, "who", "build()")  # a robot file's: its loader, e.g. load_urdf()
+            raise ValueError(f"-p {k}={v}: {who} takes no parameter {k}; it takes: {describe_parameters(build)} "
                              "-> fix: use one of these names, or component.param=value for a component parameter")
         else:
             build_kw[k] = build_value(build, k, v)
@@ -65,7 +78,7 @@ def load(args, defaults=None):
     ``defaults`` names a dict the model file may set of build() values the command uses where
     ``-p`` gives none (``SIMULATE_PARAMS``: what ``mbcomp simulate`` shows, e.g. the bicycle
     with a push, while ``build()`` itself and the other commands keep the file's defaults)."""
-    mod = load_model_file(args.model)
+    mod = model_module(args.model)
     build_kw, runtime = split_params(args.param, mod.build)
     if defaults:
         given = dict(getattr(mod, defaults, None) or {})

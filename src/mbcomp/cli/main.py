@@ -54,7 +54,8 @@ EXIT_FAILED = 1
 
 def _common(p):
     """The arguments every command takes: the model file and ``-p NAME=VALUE``."""
-    p.add_argument("model", help="model file defining build(**params) -> Model")
+    p.add_argument("model", help="model file defining build(**params) -> Model, or a robot file (.urdf, MJCF .xml) "
+                                 "whose loader's keywords -p sets (mbcomp.cli.robots)")
     p.add_argument("-p", "--param", action="append", metavar="NAME=VALUE",
                    help="build() argument, or component.param runtime value (repeatable)")
 

@@ -26,7 +26,7 @@ import sys
 import numpy as np
 
 from ..errors import SimulationError
-from .loader import call_build, check_output, load_model_file, split_params
+from .loader import call_build, check_output, model_module, split_params
 from .messages import one_line
 from .sweep import stability_sweep, sweep_on_executor
 
@@ -77,7 +77,7 @@ def _stability(args):
 
     check_output(args.out, "--out")
     check_output(args.plot, "--plot")
-    mod = load_model_file(args.model)
+    mod = model_module(args.model)
     build_kw, runtime = split_params(args.param, mod.build)
     title = pathlib.Path(args.model).name
     steady = None

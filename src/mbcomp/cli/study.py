@@ -44,9 +44,10 @@ import sys
 import numpy as np
 
 from ..simulation.endings import sigterm_interrupts
-from .loader import check_output, load_model_file, split_params, takes
+from .loader import check_output, model_module, split_params, takes
 from .messages import EXIT_SIGNAL
 from .params import build_value, describe_parameters, parse_value
+from .robots import is_robot_file, portable_build
 
 __all__ = ["cmd_study", "parse_grid", "add_parser"]
 
@@ -179,7 +180,7 @@ def cmd_study(args):
     check_output(args.out, "--out")
     check_output(args.plot, "--plot")
     metrics = dict(parse_metric(m) for m in args.metric or [])
-    mod = load_model_file(args.model)
+    mod = model_module(args.model)
     grid = _grid(args, mod)
     x, y = _axes(args, grid, metrics)
     sim = dict(getattr(mod, "SIMULATION", {}))
@@ -205,7 +206,8 @@ def _run(args, grid, t_end, metrics, sim, executor):
     from ..analysis.study import StudyInterrupted, study
 
     try:
-        res = study(str(pathlib.Path(args.model).resolve()), grid, t_end=t_end, metrics=metrics, samples=args.samples,
+        source = portable_build(args.model) if is_robot_file(args.model) else str(pathlib.Path(args.model).resolve())
+        res = study(source, grid, t_end=t_end, metrics=metrics, samples=args.samples,
                     seed=args.seed, executor=executor, chunk=args.chunk, progress=not args.quiet, **sim)
     except StudyInterrupted as exc:
         return exc.result, exc

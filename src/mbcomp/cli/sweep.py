@@ -24,7 +24,7 @@ import pathlib
 import numpy as np
 
 from ..errors import ModelError, SimulationError
-from .loader import call_build, load_model_file, takes
+from .loader import call_build, model_module, takes
 from .messages import dominant_eigenvalues, one_line
 
 __all__ = ["stability_sweep", "sweep_on_executor", "parse_sweep", "Sweep"]
@@ -262,7 +262,7 @@ _MODULES = {}
 
 def _module_at(path):
     if path not in _MODULES:
-        _MODULES[path] = load_model_file(path)
+        _MODULES[path] = model_module(path)
     return _MODULES[path]
 
 

@@ -22,9 +22,9 @@ MuJoCo's model files read without MuJoCo (``xml.etree``), as MuJoCo's compiler r
 
 Whatever is not imported is listed in ``model.mjcf_notes`` (a list of strings) and summed up
 in one ``UserWarning``: actuators one by one with their gains, the rest grouped (sensors,
-tendons, contact pairs and excludes, sites, cameras, lights, fluid forces); ``<equality>``
-constraints are listed as "not imported yet" by :func:`import_equalities`, the one place
-that turns them into components. :func:`body_frames` gives each body's frame port and its
+tendons, contact pairs and excludes, sites, cameras, lights, fluid forces). ``<equality>``
+``connect`` and ``weld`` become exact cut joints, linear ``joint`` equalities flange couplings
+(:func:`import_equalities`, :mod:`mbcomp.io.mjcf_equality`); the others are listed. :func:`body_frames` gives each body's frame port and its
 world pose at ``qpos0`` (what loop-closing joints connect to).
 """
 import os
@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .mjcf_equality import add_equalities, free_joints_on_loops
 from .mjcf_frames import Compiler, Defaults, numbers, orientation, read_tree
 from .mjcf_inertia import body_mass_properties, geom_frame, geom_mass, inertial_element, scaled_total
 from .mjcf_joints import add_joints, joint_spec
@@ -234,11 +235,14 @@ def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, arma
                     for s in geom_shapes(geom_frame(a, compiler, f"world geom {gname!r}"), mats, meshes,
                                          f"world geom {gname!r}", notes)]
     world = model.add("world", lib.World(g=_gravity(root, gravity), **({"shape": world_shapes} if world_shapes else {})))
-    out, specs = {}, {}
+    specs = {id(b): [joint_spec(a, jn, compiler, f"joint {n!r} of body {b.name!r}")
+                     for (n, a), jn in zip(b.joints, joint_names[id(b)])] for b in bodies}
+    # a free joint on a loop an equality closes is cut: its start pose a Guess (the file's closes the loop)
+    opts["loose"] = free_joints_on_loops(root, {b.name: b.parent and b.parent.name for b in bodies},
+                                         [b.name for b in bodies if any(j.kind == "free" for j in specs[id(b)])])
+    out = {}
     for b in bodies:
         parent = world.frame_b if b.parent is None else out[b.parent.name].port
-        specs[id(b)] = [joint_spec(a, jn, compiler, f"joint {n!r} of body {b.name!r}")
-                        for (n, a), jn in zip(b.joints, joint_names[id(b)])]
         port = _add_body(model, lib, b, parent, props[id(b)], frames[id(b)], specs[id(b)], opts, names, notes,
                          (mats, meshes))
         out[b.name] = BodyFrame(port=port, R0=b.R0, p0=b.p0)
@@ -267,7 +271,7 @@ def _add_body(model, lib, b, parent, mp, frames, specs, opts, names, notes, asse
         model.connect(parent, c.frame_a)
         port = c.frame_b
     if specs:
-        port = add_joints(model, lib, specs, port, opts, names, notes, pose=(b.R, b.pos))
+        port = add_joints(model, lib, specs, port, opts, names, notes, pose=(b.R, b.pos), loose=b.name in opts["loose"])
     shapes = [s for gname, g in frames
               for s in geom_shapes(g, *assets, f"geom {gname or '(unnamed)'!r} of body {b.name!r}", notes)]
     look = {"shape": shapes} if shapes else {}
@@ -316,11 +320,6 @@ def body_frames(model):
 
 def import_equalities(root, model, bodies, notes):
     """The ``<equality>`` constraints of the MJCF ``root`` into ``model`` (``bodies``: the
-    :func:`body_frames` mapping). Not imported yet: each is listed in ``notes`` by kind, name
-    and the bodies or joints it ties (the loop stays open)."""
-    for sec in root.findall("equality"):
-        for el in sec:
-            ties = [el.get(k) for k in ("body1", "body2", "joint1", "joint2", "site1", "site2", "tendon1")
-                    if el.get(k)]
-            notes.append(f"equality <{el.tag}> {el.get('name', '(unnamed)')!r} ({', '.join(ties)}): not imported yet "
-                         "(the loop it closes stays open)")
+    :func:`body_frames` mapping): ``connect`` and ``weld`` as exact cut joints
+    (:mod:`mbcomp.io.mjcf_equality`); the others listed in ``notes`` (the loop stays open)."""
+    add_equalities(root, model, bodies, notes)

@@ -26,6 +26,7 @@ joint's armature is not imported (noted): the reflected elements need a joint of
 import numpy as np
 
 from ..geometry.kinematics import rot_axis
+from ..modeling.component import Guess
 from .mjcf_frames import numbers
 
 __all__ = ["JointSpec", "joint_spec", "add_joints"]
@@ -145,14 +146,16 @@ def _passive(model, lib, j, joint, opts, names, notes):
         model.connect(rotor.flange, joint.axis)
 
 
-def add_joints(model, lib, specs, port, opts, names, notes, pose=None):
+def add_joints(model, lib, specs, port, opts, names, notes, pose=None, loose=False):
     """The components of one body's joints from ``port`` (the body's offset frame; the world
-    frame for a free joint, which starts at ``pose = (R, p)``, the body's pose in the file);
+    frame for a free joint, which starts at ``pose = (R, p)``, the body's pose in the file, a
+    :class:`~mbcomp.Guess` when ``loose``: a free joint on a loop, which the topology cuts);
     returns the port that is the body's frame."""
     chain = _Chain(model, port, names)
     for j in specs:
         if j.kind == "free":
-            chain.add(j.name, lib.FreeMotion(r0=pose[1], R0=pose[0]))
+            start = (Guess(np.array(pose[1])), Guess(np.array(pose[0]))) if loose else (pose[1], pose[0])
+            chain.add(j.name, lib.FreeMotion(r0=start[0], R0=start[1]))
             if j.stiffness or j.damping or j.armature:
                 notes.append(f"joint {j.name!r}: stiffness, damping and armature of a free joint not imported")
             continue
