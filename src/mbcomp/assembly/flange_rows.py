@@ -136,9 +136,13 @@ def flange_constraint_edges(topo, members):
 
 
 def geared_joints(topo):
-    """Names of the joints whose axis a flange constraint ties or a reflected rotor turns (kept
-    in the spanning tree where the model allows)."""
-    return {v[0] for fr in topo.flange_rows for v in fr.ports.values() if v is not None} | reflected_joints(topo)
+    """``{joint name: how much its spanning-tree weight is lowered}`` for the joints whose axis
+    a flange constraint ties (0.25: kept in the tree before plain joints of as many speeds) or
+    a reflected rotor turns (1.5: it needs the joint's own speed, so the joint comes before
+    rigid offsets and welds, and a loop is cut elsewhere wherever it can be)."""
+    out = {v[0]: 0.25 for fr in topo.flange_rows for v in fr.ports.values() if v is not None}
+    out.update({name: out.get(name, 0.0) + 1.5 for name in reflected_joints(topo)})
+    return out
 
 
 def cut_rotational(topo):

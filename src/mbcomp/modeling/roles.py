@@ -518,8 +518,10 @@ class FlangeInertia(Component):
     kinetic energy ``J s_dot^2 / 2``, which adds ``J`` to the mass matrix's diagonal entry of
     the joint's speed and nothing else (no force: ``J`` is constant). Its torque ``-J s_ddot``
     acts inside the joint (the gearbox's output on frame_b, the housing's reaction on frame_a),
-    so the joint's reaction carries it. It needs a tree joint of one speed's ``axis`` flange
-    (rotational: ``J`` in kg m^2; translational, a reflected mass: kg; ``axis_kind`` None).
+    so the joint's reaction carries it. It needs the ``axis`` flange of a joint with one speed
+    of its own (not driven; the topology keeps such a joint in the spanning tree wherever a loop
+    can be cut elsewhere): ``J`` in kg m^2 on a rotational axis, kg on a translational one (a
+    reflected mass; the class's ``axis_kind`` says which).
     """
 
     role = "flange_inertia"
