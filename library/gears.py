@@ -217,7 +217,9 @@ class Inertia(FlangeInertia):
     On a moving carrier its kinetic energy is ``J (n . w)^2 / 2`` with ``w`` the absolute
     angular velocity; ``gyroscopic=True`` also puts the gyroscopic moment
     ``w x (J n (n . w))`` on the carrying frame (a spinning rotor on a turning body), which
-    ``False`` drops (it does no work: the energy is the same).
+    ``False`` drops (it does no work: the energy is the same). A rotor geared to the joint by a
+    large ratio (on the joint's own rate ``J s_dot^2 / 2``, MuJoCo's armature) is
+    :class:`ReflectedInertia`.
 
     Examples
     --------
