@@ -274,3 +274,17 @@ def test_the_sensitivity_to_the_rotors_inertia_is_the_finite_difference():
     ends = [mbcomp.simulate(pendulum(J=J + d), t_end=1.0, rtol=1e-12, atol=1e-12)["j2.phi"][-1] for d in (h, -h)]
     fd = (ends[0] - ends[1]) / (2 * h)
     assert abs(fd) > 1.0 and abs(res.sensitivity("j2.phi", "motor.J")[-1] - fd) < 1e-6 * abs(fd)
+
+
+def test_two_reflected_rotors_on_one_joint_add():
+    """Two rotors ``J / 3`` and ``2 J / 3`` on j2 are one of ``J``: dense M, CRBA and the
+    articulated-body pivot alike."""
+    m = pendulum(None)
+    for name, Jk in (("motor_a", J / 3), ("motor_b", 2 * J / 3)):
+        m.connect(m.add(name, ReflectedInertia(J=Jk)).flange, m["j2"].axis)
+    s = mbcomp.assemble(m)
+    q, u = STATES[2]
+    M, f = closed_form(q, u)
+    np.testing.assert_allclose(s.evaluate(0.0, q, u).M, M, rtol=1e-14)
+    np.testing.assert_allclose(tree_evaluation(s, 0.0, q, u).M, M, rtol=1e-14)
+    np.testing.assert_allclose(lagrange_accelerations(s, 0.0, q, u), np.linalg.solve(M, f), rtol=1e-12)

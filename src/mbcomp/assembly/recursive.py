@@ -151,8 +151,14 @@ class TreePass:
     def pivot_extra(self, i):
         """The reflected rotors' inertia on link ``i``'s own speeds: ``[(its column among them,
         J)]`` (added to the articulated-body pivot ``D`` of that joint, as to ``M``'s diagonal)."""
-        cols = self.links.cols[i]
-        return [(k - cols.start, J) for k, J in self.reflected if cols.start <= k < cols.stop]
+        if not self.reflected:
+            return []
+        if "reflected" not in self._columns:  # summed by speed column (two rotors on one axis), made once
+            at = self._columns["reflected"] = {}
+            for k, J in self.reflected:
+                at[k] = at[k] + J if k in at else J
+        at, cols = self._columns["reflected"], self.links.cols[i]
+        return [(k - cols.start, at[k]) for k in range(cols.start, cols.stop) if k in at]
 
     def columns(self, nu):
         """:func:`speed_columns` of this pass, made once (the same arrays again: read, never written)."""
