@@ -22,6 +22,7 @@ from __future__ import annotations
 from ..modeling.component import Component, PortRef
 from ..errors import ModelError, Problem
 from .fingerprint import model_structure
+from .lock import lock, locked_joints
 from .roles import MissingFlange
 
 __all__ = ["Model", "FlatModel", "is_rigid_offset"]
@@ -233,16 +234,12 @@ class Model(Component):
         >>> mbcomp.assemble(held).q_names, held.locked, m.locked
         (['b.phi'], {'a': {'phi': 0.2}}, {})
         """
-        from .lock import lock
-
         return lock(self, joints, at)
 
     @property
     def locked(self) -> dict:
         """``{joint path: {coordinate: value}}`` of the joints :meth:`lock` held still (rad or
         m; a quaternion's entries 1); empty for a model with none."""
-        from .lock import locked_joints
-
         return locked_joints(self)
 
     def __getitem__(self, name):
