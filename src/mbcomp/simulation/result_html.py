@@ -1,6 +1,7 @@
 """A run's summary as HTML: what a notebook shows for a ``Result`` (``_repr_html_``).
 
-The summary holds the status and its message, the solver's scalar statistics, a small table
+The summary holds the status and its message, the solver's scalar statistics (folded in a
+``<details>`` element), a small table
 (the first and last :data:`EDGE_ROWS` output times of a few columns: those
 :meth:`~mbcomp.result.Result.default_plot_names` picks, at most :data:`MAX_COLUMNS`, headed
 with their units) and the first :data:`MAX_EVENTS` events. Numbers in the table are written
@@ -109,8 +110,9 @@ def result_html(res):
     span = f"t = {number(res.time[0])} .. {number(res.time[-1])} s" if n else "no output rows"
     parts.append(f"<div>{n} output times, {len(res.names)} columns; {html.escape(span)}</div>")
     stats = _scalar_stats(res.stats)
-    if stats:
-        parts.append(table_html(["statistic", "value"], stats))
+    if stats:  # folded: a run's statistics are many; a click opens them
+        parts.append(f"<details><summary>{len(stats)} statistics</summary>{table_html(['statistic', 'value'], stats)}"
+                     "</details>")
     if n:
         names = _columns(res)
         header = ["time [s]"] + [f"{c} [{res.units[c]}]" if c in res.units else c for c in names]
