@@ -14,7 +14,8 @@ imported on call, their absence an ``ImportError`` naming ``pip install mbcomp[d
   each once: what a grid of value lists gives), each parameter is a dimension whose
   coordinate holds its values in the grid's order, and each metric (and ``status``,
   ``message``, ``cpu_time``) a variable over them, so ``ds["top"].sel({"j.w0": 2.0})`` picks a
-  slice. Otherwise (a Monte Carlo sample, a list of runs, a study stopped part way) the
+  slice (one parameter whose values differ run to run is a grid of one dimension). Otherwise
+  (a Monte Carlo sample of several parameters, a list of runs, a study stopped part way) the
   dimension is ``run`` and the parameters are coordinates along it. The Dataset's attrs hold
   the scalar statistics.
 
