@@ -82,9 +82,10 @@ def test_missing_pandas_names_the_extra(res, monkeypatch):
 def read_mat4(path):
     """``{name: 2-D array}`` of a MAT v4 file, read with struct from the format's description:
     per matrix a header of five int32 (type M*1000 + O*100 + P*10 + T, rows, columns, imaginary
-    flag, name length), the name (NUL-terminated), then rows*columns values column by column."""
+    flag, name length), the name (NUL-terminated), then rows*columns values column by column;
+    and ``{name: type}``."""
     kinds = {0: "d", 1: "f", 2: "i", 3: "h", 4: "H", 5: "B"}
-    out, raw, at = {}, open(path, "rb").read(), 0
+    out, types, raw, at = {}, {}, open(path, "rb").read(), 0
     while at < len(raw):
         mopt, rows, cols, imag, namelen = struct.unpack_from("<5i", raw, at)
         at += 20
@@ -98,8 +99,8 @@ def read_mat4(path):
         at += size
         matrix = np.array(flat).reshape(cols, rows).T  # stored column by column
         assert t in (0, 1), "numeric (0) or text (1) matrices"
-        out[name] = matrix  # text: character codes
-    return out
+        out[name], types[name] = matrix, mopt  # text: character codes
+    return out, types
 
 
 def strings(matrix, transposed):
@@ -132,9 +133,10 @@ def columns_of(mat):
 
 def test_mat_file_reads_back_with_a_reader_from_the_format(res, tmp_path):
     path = res.to_mat(tmp_path / "run.mat")
-    mat = read_mat4(path)
+    mat, types = read_mat4(path)
     assert list(mat) == ["Aclass", "name", "description", "dataInfo", "data_1", "data_2"]  # the order OM writes
-    assert mat["dataInfo"].dtype.kind == "i" and mat["data_2"].dtype == np.float64
+    # what OpenModelica's reader demands: text as uint8 (51), dataInfo int32 (20), data float64 (0); Aclass 4 x 11
+    assert list(types.values()) == [51, 51, 51, 20, 0, 0] and mat["Aclass"].shape == (4, 11)
     time, cols = columns_of(mat)
     assert np.array_equal(time, res.time) and list(cols) == res.names
     for name, (values, description, block) in cols.items():

@@ -23,6 +23,8 @@ variable by variable) holds six matrices, written in this order with
 ``data_2`` (float64, one row per trajectory, one column per output time)
     Row 1 is the time; then every other column.
 
+The matrix types are those OpenModelica's reader checks: text as uint8 characters (MAT type
+51), ``dataInfo`` int32 (20), ``data_1``/``data_2`` float64 (0); ``Aclass`` is 4 x 11.
 Values are written as float64, bit for bit the result's. A column is constant when all its
 values are equal (NaNs included); it is then read back, as every reader does, as that value
 at every time.
