@@ -108,7 +108,7 @@ def cmd_simulate(args):
 
 
 #: what ``--out`` writes, by the file's suffix
-OUT_KINDS = {".csv": "CSV", ".mat": "Modelica result file (MAT v4)", ".nc": "netCDF"}
+OUT_KINDS = {".csv": "CSV", ".mat": "Modelica result file", ".nc": "netCDF"}
 
 
 def out_kind(path):
@@ -124,15 +124,15 @@ def out_kind(path):
     ...     out_kind("run.txt")
     ... except ValueError as exc:
     ...     print(exc)
-    --out run.txt: unknown suffix '.txt' -> fix: name the file .csv (CSV), .mat (Modelica result file (MAT v4)) or .nc (netCDF)
+    --out run.txt: unknown suffix '.txt' -> fix: name the file .csv, .mat or .nc (CSV, Modelica result file, netCDF)
     """
     if path is None:
         return None
     suffix = pathlib.Path(path).suffix.lower()
     if suffix not in OUT_KINDS:
-        known = ", ".join(f"{k} ({v})" for k, v in list(OUT_KINDS.items())[:-1])
-        last = ", ".join(f"{k} ({v})" for k, v in list(OUT_KINDS.items())[-1:])
-        raise ValueError(f"--out {path}: unknown suffix {suffix or '(none)'!r} -> fix: name the file {known} or {last}")
+        *first, last = OUT_KINDS
+        raise ValueError(f"--out {path}: unknown suffix {suffix or '(none)'!r} -> fix: name the file "
+                         f"{', '.join(first)} or {last} ({', '.join(OUT_KINDS.values())})")
     if suffix == ".nc":
         from ..simulation.result_tables import need
 
@@ -278,9 +278,9 @@ def add_parser(sub, common):
                    help="at a singular position (the constraint Jacobian losing rank): stop there (default) or "
                         "pass through it and report each passage")
     s.add_argument("--n-out", dest="n_out", type=int, help="number of output points")
-    s.add_argument("--out", help="write results to this file, the kind by its suffix: .csv, .mat (a Modelica result file "
-                   "that OMEdit, Dymola and DyMat read) or .nc (netCDF, needs xarray); also the partial results of a run "
-                   "that stops early")
+    s.add_argument("--out", help="write results to this file, the kind by its suffix: .csv, .mat (a Modelica "
+                   "result file that OMEdit, Dymola and DyMat read) or .nc (netCDF, needs xarray); also the partial "
+                   "results of a run that stops early")
     s.add_argument("--csv-units", action="store_true",
                    help="write each CSV column's unit in its header: 'crank.phi [rad]'")
     s.add_argument("--plot", help="write a plot to this PNG file")
