@@ -145,3 +145,35 @@ def test_a_notebook_shows_them(res, tmp_path):
     assert Parsed(out[1]["text/html"]).tables[1][-1][0] == repr(float(res.time[-1]))
     assert Parsed(out[3]["text/html"]).iframes[0]["srcdoc"].startswith("<!DOCTYPE html>")
     assert elapsed < 60
+
+
+def test_inline_player_plays_in_a_browser(res, tmp_path):
+    """The iframe in a host page (what a notebook's page is to it): the player starts and draws the
+    bob where the run has it at the end, with no console error (skipped without Chromium)."""
+    import os
+    import shutil
+
+    sync = pytest.importorskip("playwright.sync_api")
+    chromium = "/usr/bin/chromium" if os.path.exists("/usr/bin/chromium") else shutil.which("chromium")
+    if chromium is None:
+        pytest.skip("no Chromium (apt-get install chromium)")
+    host = tmp_path / "notebook.html"
+    host.write_text("<!DOCTYPE html><html><body><h1>a notebook</h1>" + res.animate(title="pendulum")._repr_html_()
+                    + "</body></html>", encoding="utf-8")
+    with sync.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium, args=["--headless", "--no-sandbox", "--disable-gpu",
+                                                                    "--no-first-run", "--disable-background-networking"])
+        try:
+            page = browser.new_page()
+            errors = []
+            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+            page.goto(host.as_uri())
+            frame = page.frames[1]
+            frame.wait_for_function("window.mbcomp !== undefined", timeout=20000)
+            frame.evaluate("window.mbcomp.ready")
+            assert frame.evaluate("window.mbcomp.duration()") == res.time[-1] - res.time[0]
+            frame.evaluate(f"window.mbcomp.setTime({float(res.time[-1])!r})")
+            pose = frame.evaluate("window.mbcomp.bodyPose('bob')")
+        finally:
+            browser.close()
+    assert pose["r"] == [res["bob.r.x"][-1], res["bob.r.y"][-1], res["bob.r.z"][-1]] and errors == []
