@@ -118,7 +118,7 @@ def mjcf_loader():
 
 def load(path, floating, armature=True):
     """mbcomp's model of the file (the import's notes silenced: ``mbcomp info`` lists them);
-    ``armature=False``: an MJCF's armature left out (the cross-check's model)."""
+    ``armature=False``: an MJCF's armature left out."""
     import mbcomp
 
     with warnings.catch_warnings():
@@ -390,16 +390,6 @@ def pinocchio_row(mb, path, floating, row):
     row["pin fd"] = per_call(lambda: pin.aba(model, data, qp, v, tau))
 
 
-def mbcomp_reference(path):
-    """``(system, q, u, M, du/dt)`` of the MJCF without armature, numerically, at a random state."""
-    import mbcomp
-    from mbcomp.formulations import LagrangeIndex1
-
-    system = mbcomp.assemble(load(path, True, armature=False))
-    q, u = start_state(system)
-    return system, q, u, system.evaluate(0.0, q, u).M, LagrangeIndex1(system).fun(0.0, np.r_[q, u])[system.nq:]
-
-
 def mujoco_check(system, m, names, d, row, q, u, M_mb, ud):
     """``err M mj`` and ``err a mj`` of mbcomp's ``M`` and ``du/dt`` at ``(q, u)`` against MuJoCo's."""
     import mujoco
@@ -429,14 +419,7 @@ def mujoco_row(mb, path, floating, root_dir, row):
     m.tendon_stiffness[:] = m.tendon_damping[:] = 0.0
     names = getattr(mb.model, "mjcf_joints", None) or [m.joint(i).name.replace("-", "_") for i in range(m.njnt)]
     d = mujoco.MjData(m)
-    if path.endswith(".xml"):  # armature: mbcomp's rotor turns at the absolute rate, MuJoCo's term at the
-        ref = mbcomp_reference(path)  # joint's: compared without it (tests/io/test_mjcf.py's convention)
-        armature = m.dof_armature.copy()
-        m.dof_armature[:] = 0.0
-        mujoco_check(ref[0], m, names, d, row, *ref[1:])
-        m.dof_armature[:] = armature
-    else:
-        mujoco_check(mb.system, m, names, d, row, mb.q, mb.u, mb.M, mb.ud)
+    mujoco_check(mb.system, m, names, d, row, mb.q, mb.u, mb.M, mb.ud)  # armature too (ReflectedInertia)
     d.qpos[:], d.qvel[:] = m.qpos0, 0.0
     M = np.zeros((m.nv, m.nv))
 

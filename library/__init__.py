@@ -11,7 +11,8 @@ from .forces import Spring, Damper, SpringDamper, WorldForce, WorldTorque
 from .contact import DiskContact, SphereContact, RollingDisk, RollingSphere
 from .plane_contact import PlaneContact
 from .rods import SphericalSpherical, UniversalSpherical
-from .gears import IdealGear, RackPinion, Belt, Inertia, PlanetaryGear, IdealPulley, JointCoupling
+from .gears import (IdealGear, RackPinion, Belt, Inertia, PlanetaryGear, IdealPulley, JointCoupling, ReflectedInertia,
+                    ReflectedMass)
 from .axis import (RotationalSpring, RotationalDamper, RotationalSpringDamper,
                    TranslationalSpringDamper, Torque, Force, PrescribedMotion)
 from .sensors import RelativeSensor, AbsoluteSensor, AbsoluteAngles, CutForceAndTorque
@@ -33,6 +34,7 @@ __all__ = [
     "IdealGear", "RackPinion", "Belt", "Inertia", "PlanetaryGear",
     "MotorTorque",
     "IdealPulley",
+    "ReflectedInertia", "ReflectedMass",
     "ElasticStop",
     "JointCoupling", "UncheckedRigidBody",
 ]

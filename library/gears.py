@@ -10,7 +10,9 @@ column, ``<name>.tau_a`` etc.; ideal transmissions neither store nor dissipate e
 ``sum flow * rate = 0``. The multiplier is ``lambda.<name>.mesh``.
 
 :class:`Inertia` is a rotor on a rotational joint axis (:class:`~mbcomp.roles.FlangeInertia`),
-and :class:`PlanetaryGear` a sun-carrier-ring set built from these (a ``Model``).
+:class:`ReflectedInertia` and :class:`ReflectedMass` a rotor seen through a large gear ratio on
+a joint's own rate (MuJoCo's armature), and :class:`PlanetaryGear` a sun-carrier-ring set built
+from these (a ``Model``).
 """
 import numpy as np
 
@@ -18,7 +20,8 @@ from mbcomp import Box, Cylinder, FlangeConstraint, FlangeInertia, Flange, Model
 from mbcomp.modeling.shapes import STEEL, z_to
 from .joints import Revolute
 
-__all__ = ["IdealGear", "RackPinion", "IdealPulley", "Belt", "Inertia", "PlanetaryGear", "JointCoupling"]
+__all__ = ["IdealGear", "RackPinion", "IdealPulley", "Belt", "Inertia", "PlanetaryGear", "JointCoupling",
+           "ReflectedInertia", "ReflectedMass"]
 
 
 class IdealGear(FlangeConstraint):
@@ -214,7 +217,9 @@ class Inertia(FlangeInertia):
     On a moving carrier its kinetic energy is ``J (n . w)^2 / 2`` with ``w`` the absolute
     angular velocity; ``gyroscopic=True`` also puts the gyroscopic moment
     ``w x (J n (n . w))`` on the carrying frame (a spinning rotor on a turning body), which
-    ``False`` drops (it does no work: the energy is the same).
+    ``False`` drops (it does no work: the energy is the same). A rotor geared to the joint by a
+    large ratio (on the joint's own rate ``J s_dot^2 / 2``, MuJoCo's armature) is
+    :class:`ReflectedInertia`.
 
     Examples
     --------
@@ -248,6 +253,82 @@ class Inertia(FlangeInertia):
         R = z_to(n)
         return [Cylinder(r, r / 4, R=R, frame="flange", color="darkgrey"),
                 Box((1.9 * r, 0.15 * r, 0.3 * r), R=R, frame="flange", color="silver")]
+
+
+class _Reflected(FlangeInertia):
+    """A rotor (or mass) reflected onto its joint's own rate: ``reflected`` True."""
+
+    flange = Flange("a 1-DOF tree joint's axis flange (the joint's own rate: no support flange)")
+
+    def reflected(self, p):
+        return True
+
+
+class ReflectedInertia(_Reflected):
+    """A motor's rotor seen through a gearbox of large ratio: ``J s_dot^2 / 2`` on a rotational
+    joint's own rate (MuJoCo's hinge ``armature``).
+
+    A rotor of inertia ``J_r`` (kg m^2) on the joint's frame_a (the motor's housing) geared to
+    frame_b by ``N`` turns at ``n . w_a + N s_dot`` (rad/s); its energy
+    ``J_r (n . w_a + N s_dot)^2 / 2`` tends to ``N^2 J_r s_dot^2 / 2`` as ``N`` grows, the cross
+    terms with the carrier's rate ``n . w_a`` fading as ``1 / N``. This element is that limit
+    with ``J = N^2 J_r``: it adds ``J`` to the mass matrix's diagonal entry of the joint's speed
+    and nothing else (no gyroscopic or carrier terms), exactly MuJoCo's armature. Its torque
+    ``-J s_ddot`` acts through the gearbox inside the joint: the joint's reaction on frame_b
+    about its axis carries it (``<joint>.tau`` along ``n``), frame_a feels the opposite. It
+    needs the ``axis`` flange of a 1-speed joint in the spanning tree, not driven (a
+    :class:`~mbcomp.library.Revolute`); a locked joint drops it (it turns at the locked rate,
+    zero). :class:`Inertia` is the rotor turning with frame_b instead (``J (n . w_b)^2 / 2``).
+
+    Examples
+    --------
+    A pendulum of inertia ``I = m l^2`` about its hinge with a reflected rotor ``J``: the
+    rotor slows it to ``(I + J) phi_ddot = -m g l sin(phi)``.
+
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass, ReflectedInertia
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
+    >>> j = m.add("j", Revolute(phi0=0.5)); rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
+    >>> bob = m.add("bob", PointMass(m=2.0)); motor = m.add("motor", ReflectedInertia(J=0.5))
+    >>> m.connect(w.frame_b, j.frame_a); m.connect(j.frame_b, rod.frame_a); m.connect(rod.frame_b, bob.frame_a)
+    >>> m.connect(motor.flange, j.axis)
+    >>> ev = mbcomp.assemble(m).evaluate(0.0, np.array([0.5]), np.array([1.0]))
+    >>> float(ev.M[0, 0]), round(float(ev.f[0] / ev.M[0, 0]), 9)   # m l^2 + J, -m g l sin(phi) / (m l^2 + J)
+    (2.5, -3.762531627)
+    """
+
+    J = Param(1.0, unit="kg m^2", doc="reflected inertia N^2 J_rotor on the joint's own rate", check="positive")
+
+    def rotor(self, p):
+        return p.J, False
+
+
+class ReflectedMass(_Reflected):
+    """:class:`ReflectedInertia` on a translational joint: ``m s_dot^2 / 2`` on a slider's own
+    rate (MuJoCo's slide ``armature``: a rotor driving a screw or belt, seen as a mass).
+
+    Adds ``m`` to the mass matrix's diagonal entry of the joint's speed and nothing else; its
+    force ``-m s_ddot`` acts inside the joint (the joint's reaction on frame_b along ``n``
+    carries it). Needs the ``axis`` flange of a 1-speed tree joint (a
+    :class:`~mbcomp.library.Prismatic`), not driven; a locked joint drops it.
+
+    Examples
+    --------
+    >>> import numpy as np, mbcomp
+    >>> from mbcomp.library import World, Prismatic, PointMass, ReflectedMass
+    >>> m = mbcomp.Model(); w = m.add("world", World(g=(0, -9.81, 0)))
+    >>> s = m.add("s", Prismatic(n=(0, 1, 0))); load = m.add("load", PointMass(m=3.0))
+    >>> screw = m.add("screw", ReflectedMass(m=1.0))
+    >>> m.connect(w.frame_b, s.frame_a); m.connect(s.frame_b, load.frame_a); m.connect(screw.flange, s.axis)
+    >>> round(float(mbcomp.simulate(m, t_end=1.0)["s.v"][-1]), 9)   # -m g t / (m + m_reflected)
+    -7.3575
+    """
+
+    axis_kind = "translational"
+    m = Param(1.0, unit="kg", doc="reflected mass on the joint's own rate", check="positive")
+
+    def rotor(self, p):
+        return p.m, False
 
 
 class PlanetaryGear(Model):

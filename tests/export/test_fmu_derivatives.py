@@ -34,6 +34,7 @@ fmpy = pytest.importorskip("fmpy")
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
 from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
+import sanitized  # noqa: E402
 from fmpy.fmi2 import FMU2Model  # noqa: E402
 from fmpy.fmi3 import FMU3Model, FMU3Slave  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
@@ -347,7 +348,7 @@ def test_time_dependent_unknowns_declare_all_knowns(tmp_path):
         assert abs(dw + 0.4 * phi / (MASS * L * L)) < 1e-12, dw
 
 
-SAN_FLAGS = ["-g", "-O1", "-fsanitize=address,undefined", "-fno-sanitize-recover=undefined", "-fno-omit-frame-pointer"]
+SAN_FLAGS = sanitized.SAN_FLAGS
 
 
 def test_derivatives_under_asan_ubsan(fmu_file, tmp_path):
@@ -355,9 +356,7 @@ def test_derivatives_under_asan_ubsan(fmu_file, tmp_path):
     solve) with a C harness calling every derivative, ME and CS, and bad calls, under
     AddressSanitizer (leaks too) + UndefinedBehaviorSanitizer; the adjoint identity to 1e-12."""
     cc = c_compiler()
-    probe = tmp_path / "probe.c"
-    probe.write_text("int main(void) { return 0; }\n")
-    if subprocess.run([cc, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True).returncode:
+    if not sanitized.usable(tmp_path):
         pytest.skip("AddressSanitizer/UBSan not usable here")
     with zipfile.ZipFile(fmu_file("slider_crank", "3.0")) as z:
         z.extractall(tmp_path / "fmu")
@@ -365,7 +364,7 @@ def test_derivatives_under_asan_ubsan(fmu_file, tmp_path):
     ident = next((tmp_path / "fmu" / "binaries" / "x86_64-linux").glob("*.so")).stem
     harness = pathlib.Path(__file__).with_name("fmu_derivatives_harness.c")
     cmd = [cc, *SAN_FLAGS, f'-DMODEL_C="{ident}.c"', f"-I{src}", str(harness),
-           *map(str, sorted(src.glob("mbrt_*.c"))), "-o", str(tmp_path / "h"), "-lm"]
+           *sanitized.runtime_objects(src), "-o", str(tmp_path / "h"), "-lm"]
     res = subprocess.run(cmd, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr[-3000:]
     run = subprocess.run([str(tmp_path / "h")], capture_output=True, text=True, timeout=300,

@@ -31,6 +31,7 @@ from fmpy import read_model_description  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
 from fmu_state_child import Instance, hexes  # noqa: E402
+import sanitized  # noqa: E402
 from mbcomp.export import export_fmu  # noqa: E402
 
 VERSIONS = ["3.0", "2.0"]
@@ -280,7 +281,7 @@ def test_the_model_description_declares_the_capabilities(fmi, fmu):
     assert xml.count(f'canGetAndSet{spelled}="true"') == 2 and xml.count(f'canSerialize{spelled}="true"') == 2
 
 
-SAN_FLAGS = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-O1", "-g"]
+SAN_FLAGS = sanitized.SAN_FLAGS
 
 #: the harness: the FMU's own C (its model file includes fmu_core.c, fmu_state.c, fmi3.c) driven
 #: through the FMI 3.0 functions: Co-Simulation rollback and serialization, a Model Exchange
@@ -369,10 +370,7 @@ def test_the_state_code_is_clean_under_asan_and_ubsan(name, fmu, tmp_path):
     built with AddressSanitizer and UBSan: rollback and serialization bit-identical, every
     truncation and every single-byte corruption of a serialized state refused (no read past a
     buffer, no undefined behaviour), the Model Exchange state restored, nothing leaked."""
-    cc = c_compiler()
-    probe = tmp_path / "probe.c"
-    probe.write_text("int main(void) { return 0; }\n")
-    if subprocess.run([cc, *SAN_FLAGS, str(probe), "-o", str(tmp_path / "probe")], capture_output=True).returncode:
+    if not sanitized.usable(tmp_path):
         pytest.skip("this compiler cannot build a sanitized program")
     src = tmp_path / "src"
     with zipfile.ZipFile(fmu(name, "3.0")) as z:
@@ -383,10 +381,10 @@ def test_the_state_code_is_clean_under_asan_and_ubsan(name, fmu, tmp_path):
                and not p.name.startswith("mbrt_")]
     assert len(model_c) == 1
     (src / "sources" / "harness.c").write_text(HARNESS.replace("MODEL_C", model_c[0].name))
-    runtime = [str(p) for p in (src / "sources").glob("mbrt_*.c")]
     exe = tmp_path / "harness"
-    res = subprocess.run([cc, *SAN_FLAGS, "-std=c99", "-Wall", "-Wextra", str(src / "sources" / "harness.c"), *runtime,
-                          "-o", str(exe), "-lm"], capture_output=True, text=True, cwd=src / "sources")
+    res = subprocess.run([c_compiler(), *SAN_FLAGS, "-std=c99", "-Wall", "-Wextra", str(src / "sources" / "harness.c"),
+                          *sanitized.runtime_objects(src / "sources"), "-o", str(exe), "-lm"],
+                         capture_output=True, text=True, cwd=src / "sources")
     assert res.returncode == 0, res.stderr[-3000:]
     assert "fmu_state.c" not in res.stderr  # no warning in the state code
     run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=600,

@@ -3,9 +3,10 @@
 mbcomp's equations are ``M du/dt = f``; MuJoCo's ``M qacc = qfrc_passive - qfrc_bias +
 qfrc_actuator + qfrc_constraint`` with ``qfrc_bias = C(q, v) v + g(q)``. The models are
 compiled by MuJoCo from the same file (mbcomp reads it without MuJoCo), then compared with
-MuJoCo's fluid forces (``opt.density``, ``opt.viscosity``) set to 0 and, unless said, its
-armature removed (``dof_armature = 0``, and ``load_mjcf(armature=False)``: mbcomp's rotor is on
-the absolute rate, see :mod:`mbcomp.io.mjcf_joints`); the joints' springs and dampers are in
+MuJoCo's fluid forces (``opt.density``, ``opt.viscosity``) set to 0 and the hinges' and
+slides' armature on both sides (mbcomp's ``ReflectedInertia``/``ReflectedMass``, see
+:mod:`mbcomp.io.mjcf_joints`; cheetah, walker, hopper, humanoid, quadruped, humanoid_CMU and
+dog have it on their hinges, the others none); the joints' springs and dampers are in
 ``f``, so ``f = -qfrc_bias + qfrc_spring + qfrc_damper``. The states are the same numbers:
 mbcomp's hinge and slide coordinates are MuJoCo's ``qpos`` (``ref`` included), a ball's and a
 free joint's quaternion is MuJoCo's (w x y z), their speeds MuJoCo's ``qvel`` (a ball's
@@ -42,8 +43,9 @@ MODELS = ["pendulum", "cartpole", "acrobot", "cheetah", "walker", "hopper", "rea
 
 
 @functools.lru_cache(maxsize=None)
-def _pair(path, armature=False):
-    """(mbcomp model, system, MuJoCo model) of one file, fluid off, armature off unless asked."""
+def _pair(path, armature=True):
+    """(mbcomp model, system, MuJoCo model) of one file, fluid off; ``armature=False``: off on
+    both sides."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         model = load_mjcf(path, armature=armature)
@@ -122,7 +124,7 @@ def _full_mass_matrix(mj, d):
     return M
 
 
-def _differences(path, n_states=3, armature=False):
+def _differences(path, n_states=3, armature=True):
     """Largest relative differences of M and of f over random states."""
     model, system, mj = _pair(path, armature)
     layout = _layout(model, system, mj)
@@ -137,7 +139,7 @@ def _differences(path, n_states=3, armature=False):
     return dM, df
 
 
-def _forward_difference(path, n_states=2, armature=False):
+def _forward_difference(path, n_states=2, armature=True):
     """Largest relative difference of mbcomp's accelerations (articulated-body solve) and
     MuJoCo's ``qacc`` with contacts and constraints (limits, friction loss, equalities) off."""
     from mbcomp.assembly.recursive import lagrange_accelerations
@@ -286,57 +288,116 @@ def test_a_body_with_three_joints_and_a_ball_matches_mujoco(tmp_path):
 
 
 ARMATURE = """<mujoco><worldbody>
-<body name="cart"><joint name="rail" type="slide" axis="1 0 0"/><geom type="box" size=".2 .1 .1"/>
+<body name="cart"><joint name="rail" type="slide" axis="1 0 0" armature="0.7"/><geom type="box" size=".2 .1 .1"/>
   <body name="pole" pos="0 0 .1"><joint name="hinge" axis="0 1 0" armature="0.3" damping="0.1"/>
-  <geom type="capsule" fromto="0 0 0 0.1 0 0.6" size=".04"/></body></body>
+  <geom type="capsule" fromto="0 0 0 0.1 0 0.6" size=".04"/>
+    <body name="tip" pos="0.1 0 0.6"><joint name="wrist" axis="0 1 0.5" armature="0.02"/>
+    <geom type="box" size=".05 .1 .2" pos="0 0 .2"/></body></body></body>
 <body name="wheel" pos="1 0 0"><joint name="axle" axis="0.6 0 0.8" armature="0.05"/>
   <geom type="cylinder" size=".3 .02" pos="0.1 0 0"/></body></worldbody></mujoco>"""
 
 
-def test_armature_on_hinges_whose_carrier_does_not_turn_is_mujocos(tmp_path):
-    """A hinge on the ground and a hinge on a slider: the rotor on the absolute rate turns at
-    the joint's own rate, so mbcomp's M equals MuJoCo's M *with* its armature (0.3 and 0.05
-    on the diagonal), and without the rotors it is short of exactly that."""
+def test_armature_of_hinges_and_slides_is_mujocos(tmp_path):
+    """A slide's armature (a reflected mass), hinges on the ground, on a slider and on a
+    turning pole (``wrist``: its carrier turns about a part of its axis, where a rotor turning
+    with the body would add ``J (n . w_pole)`` cross terms): mbcomp's M, f and accelerations are
+    MuJoCo's *with* its armature, and the elements add exactly ``diag(armature)`` to ``M``."""
     path = _write(tmp_path, ARMATURE)
-    dM, df = _differences(path, n_states=4, armature=True)
+    dM, df = _differences(path, n_states=4)
     assert dM < 1e-13 and df < 1e-13, (dM, df)
-    assert _forward_difference(path, armature=True) < 1e-13  # the rotors in the articulated-body solve
-    model, system, mj = _pair(path, True)
+    assert _forward_difference(path) < 1e-13  # the reflected rotors on the articulated-body pivots
+    model, system, mj = _pair(path)
+    assert type(model["rail_armature"]).__name__ == "ReflectedMass"
+    assert type(model["wrist_armature"]).__name__ == "ReflectedInertia"
     plain = mbcomp.assemble(_load(path, armature=False))
     assert plain.u_names == system.u_names
-    q, u = np.array([0.3, -0.4, 1.2]), np.array([0.5, 2.0, -1.0])
+    q, u = np.array([0.3, -0.4, 0.8, 1.2]), np.array([0.5, 2.0, -1.5, -1.0])
     gap = system.evaluate(0.0, q, u).M - plain.evaluate(0.0, q, u).M
-    J = {"rail.v": 0.0, "hinge.w": 0.3, "axle.w": 0.05}
-    np.testing.assert_allclose(gap, np.diag([J[n] for n in system.u_names]), atol=1e-14)
+    J = {"rail.v": 0.7, "hinge.w": 0.3, "wrist.w": 0.02, "axle.w": 0.05}
+    np.testing.assert_allclose(gap, np.diag([J[n] for n in system.u_names]), rtol=0, atol=1e-14)
 
 
 @needs_suite
-def test_armature_on_a_turning_carrier_is_on_the_absolute_rate():
-    """Cheetah's thigh, shin and foot hinges (armature 0.1) ride on bodies turning about the
-    same axis: mbcomp's rotor J (n . w_b)^2 / 2 is MuJoCo's M without armature plus
-    J c c^T per hinge, c = n . (the hinge body's angular Jacobian), from MuJoCo's own
-    Jacobians -- not MuJoCo's J e_k e_k^T (the difference this import states)."""
-    path = os.path.join(SUITE, "cheetah.xml")
-    model, system, mj = _pair(path, True)
-    bare = _pair(path, False)[2]
+@pytest.mark.parametrize("name", ["cheetah", "humanoid"])
+def test_dropping_the_armature_fails_the_comparison(name):
+    """The suite comparisons are not blind to armature: mbcomp without it (armature=False)
+    against MuJoCo with it misses exactly ``diag(dof_armature)`` in ``M``, far above the
+    comparisons' 1e-9, and its accelerations differ; the import says it left it out."""
+    path = os.path.join(SUITE, name + ".xml")
+    model, system, mj = _pair(path)
+    bare = _pair(path, False)
     layout = _layout(model, system, mj)
     qpos, qvel, q, u, P = _random_state(layout, mj, np.random.default_rng(7))
-    M_rotors = P.T @ system.evaluate(0.0, q, u).M @ P
-    d = mujoco.MjData(bare)
-    d.qpos[:] = qpos
-    mujoco.mj_forward(bare, d)
-    expect = _full_mass_matrix(bare, d)
-    for k in range(mj.njnt):
-        if mj.jnt_type[k] == mujoco.mjtJoint.mjJNT_HINGE and mj.dof_armature[mj.jnt_dofadr[k]] > 0:
-            jacr = np.zeros((3, mj.nv))
-            mujoco.mj_jacBody(bare, d, None, jacr, mj.jnt_bodyid[k])
-            c = d.xaxis[k] @ jacr
-            expect += mj.dof_armature[mj.jnt_dofadr[k]] * np.outer(c, c)
-    np.testing.assert_allclose(M_rotors, expect, rtol=0, atol=1e-12 * np.abs(expect).max())
-    assert any(n.startswith("armature of 6 hinges on turning bodies (bthigh, bshin, bfoot, fthigh") for n in
-               model.mjcf_notes)
-    with_armature = _full_mass_matrix(mj, d)
-    assert np.abs(M_rotors - with_armature).max() > 0.01  # MuJoCo's own term differs: said, not hidden
+    M_mj, _ = _mujoco_terms(mj, qpos, qvel)
+    M_bare = P.T @ bare[1].evaluate(0.0, q, u).M @ P
+    np.testing.assert_allclose(M_mj - M_bare, np.diag(mj.dof_armature), rtol=0, atol=1e-12 * np.abs(M_mj).max())
+    assert np.abs(M_mj - M_bare).max() / np.abs(M_mj).max() > 1e-4
+    assert any(n.startswith("armature of ") and n.endswith("not imported (armature=False)")
+               for n in bare[0].mjcf_notes)
+
+
+@needs_suite
+def test_the_compiled_program_carries_the_armature():
+    """Humanoid (21 hinges with armature) through the generated C programs: the evaluation's
+    M and the Lagrange right-hand side (the articulated-body solve traced, the armature on its
+    pivots) against MuJoCo's M and qacc with constraints off, as the numeric paths are."""
+    from mbcomp.codegen import compile_system
+
+    path = os.path.join(SUITE, "humanoid.xml")
+    model, system, mj = _pair(path)
+    mj = copy.copy(mj)
+    mj.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT | mujoco.mjtDisableBit.mjDSBL_ACTUATION
+    fast = compile_system(system, "c")
+    qpos, qvel, q, u, P = _random_state(_layout(model, system, mj), mj, np.random.default_rng(36))
+    d = mujoco.MjData(mj)
+    d.qpos[:], d.qvel[:] = qpos, qvel
+    mujoco.mj_forward(mj, d)
+    M = _full_mass_matrix(mj, d)
+    assert np.abs(P.T @ fast.evaluate(0.0, q, u).M @ P - M).max() < 1e-12 * np.abs(M).max()
+    ud = fast.evaluator.lagrange_fun(0.0, np.concatenate((q, u)), 0.0, 0.0)[len(q):]
+    assert np.abs(P.T @ ud - d.qacc).max() < 1e-9 * np.abs(d.qacc).max()
+
+
+GRIPPER = """<mujoco><compiler angle="radian"/>
+<option timestep="0.0005" integrator="RK4"><flag contact="disable"/></option><worldbody>
+<body name="palm" pos="0 0 1"><geom type="box" size="0.2 0.05 0.02" mass="1"/>
+ <body name="link_a" euler="0 2.27 0"><joint name="hinge_a" axis="0 1 0" armature="0.02"/>
+  <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.015" mass="0.4"/>
+  <body name="jaw" pos="0.5 0 0" euler="0 -2.27 0"><joint name="jaw_a" axis="0 1 0" armature="0.03"/>
+   <geom type="box" pos="0.15 0 -0.05" size="0.15 0.03 0.05" mass="0.8"/></body></body>
+ <body name="link_b" pos="0.3 0 0" euler="0 2.27 0"><joint name="hinge_b" axis="0 1 0" armature="0.04"/>
+  <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.015" mass="0.4"/>
+  <body name="knuckle" pos="0.5 0 0" euler="0 -2.27 0"><joint name="jaw_b" axis="0 1 0" armature="0.05"/>
+   <geom type="box" pos="0 0 -0.05" size="0.03 0.03 0.05" mass="0.3"/></body></body></body>
+</worldbody><equality><weld name="grip" body1="jaw" body2="knuckle"/></equality></mujoco>"""
+
+
+def test_armature_on_every_joint_of_a_loop_keeps_them_in_the_tree(tmp_path):
+    """A parallelogram closed by a weld (a 0-DOF closure, kept in the tree before any hinge)
+    with armature on all four hinges: the reflected rotors need their joints' own speeds, so
+    the topology cuts a rigid offset instead of a hinge (jaw_b then a reversed tree joint). A
+    run keeps the loop closed and the energy, and follows MuJoCo's (armature on, its weld
+    soft) to MuJoCo's softness (6e-4 rad over a 1.4 rad swing), where the same run without
+    armature is 0.9 rad off."""
+    path = _write(tmp_path, GRIPPER)
+    model = _load(path)
+    system = mbcomp.assemble(model)
+    assert system.topology.cut == ["knuckle_offset"] and len(system.u_names) == 4
+    t_end = 2.0
+    res = mbcomp.simulate(model, t_end=t_end, n_out=201, rtol=1e-10, atol=1e-12, stabilization="projection")
+    E = res["energy.total"]
+    assert np.ptp(E) < 1e-8 * np.abs(E).max() and np.max(res["residual.position"]) < 1e-10
+    mj = _compiled(path)
+    d = mujoco.MjData(mj)
+    theirs = []
+    for k in range(int(round(t_end / mj.opt.timestep)) + 1):
+        if k % 20 == 0:  # every 0.01 s
+            theirs.append(d.qpos[0])
+        mujoco.mj_step(mj, d)
+    gap = np.abs(np.array(theirs) - res["hinge_a.phi"]).max()
+    bare = mbcomp.simulate(_load(path, armature=False), t_end=t_end, n_out=201, rtol=1e-10, atol=1e-12,
+                           stabilization="projection")
+    assert np.ptp(theirs) > 0.5 and gap < 2e-3 and np.abs(np.array(theirs) - bare["hinge_a.phi"]).max() > 100 * gap
 
 
 NOTED = """<mujoco model="noted"><include file="parts.xml"/>
@@ -356,7 +417,8 @@ PARTS = """<mujoco><asset><material name="red" rgba="1 0 0 1"/></asset></mujoco>
 
 def test_what_is_not_imported_is_said(tmp_path):
     """Actuators one by one with their gains, sensors and tendons grouped, the equality as
-    "not imported yet", the fluid forces, frictionloss (friction=False) and a slide's armature;
+    "not imported yet", the fluid forces and frictionloss (friction=False); a slide's armature
+    is imported (a reflected mass);
     one UserWarning; the include's material colours the capsule."""
     _write(tmp_path, PARTS, "parts.xml")
     path = _write(tmp_path, NOTED)
@@ -367,9 +429,9 @@ def test_what_is_not_imported_is_said(tmp_path):
                  "3 sensors (1 jointpos, 1 jointvel, 1 touch): not imported", "1 tendons (1 fixed): not imported",
                  "equality <tendon> 'loop' (t): not imported", "<option density=1.2>: fluid forces",
                  "joint 'shoulder': frictionloss=0.5 not imported (friction=False)",
-                 "joint 'elbow': armature=0.2 not imported (a slide joint has no rotor element)",
                  "1 light, 1 site: not imported"):
         assert said in notes, said
+    assert "armature" not in notes and model["elbow_armature"].p.m == 0.2 and model["shoulder_armature"].p.J == 0.01
     shapes = model["arm"].look.shape
     assert [type(s).__name__ for s in shapes] == ["Cylinder", "Sphere", "Sphere"]
     assert shapes[0].color == "#ff0000" and shapes[0].length == pytest.approx(0.5)

@@ -374,6 +374,45 @@ class StudyResult:
                 w.writerow([_cell(self._data[c][i]) for c in self.columns])
         return path
 
+    def to_dataframe(self):
+        """The table as a ``pandas.DataFrame``: one row per run (index ``run``), the parameters,
+        metrics, ``status``, ``message`` and ``cpu_time`` as columns, failed runs kept with their
+        status; ``df.attrs``: ``parameters``, ``metrics``, ``stats``
+        (:func:`mbcomp.analysis.study_tables.to_dataframe`). Needs pandas
+        (``pip install mbcomp[data]``).
+
+        Examples
+        --------
+        >>> rows = [{"k": 1.0, "y": 2.0, "status": "success", "message": "", "cpu_time": 0.0}]
+        >>> StudyResult(["k"], ["y"], rows, [{"k": 1.0}], None, {}).to_dataframe().loc[0, "y"]
+        np.float64(2.0)
+        """
+        from .study_tables import to_dataframe
+
+        return to_dataframe(self)
+
+    def to_xarray(self):
+        """The table as an ``xarray.Dataset``: for a full grid the parameters are dimensions
+        (``ds["metric"].sel({"j.w0": 2.0})``), else a ``run`` dimension with the parameters
+        as coordinates (:func:`mbcomp.analysis.study_tables.to_xarray`). Needs xarray.
+
+        Examples
+        --------
+        >>> rows = [{"k": v, "y": 2 * v, "status": "success", "message": "", "cpu_time": 0.0} for v in (1.0, 3.0)]
+        >>> ds = StudyResult(["k"], ["y"], rows, [{"k": 1.0}, {"k": 3.0}], None, {}).to_xarray()
+        >>> ds["y"].dims, float(ds["y"].sel(k=3.0))
+        (('k',), 6.0)
+        """
+        from .study_tables import to_xarray
+
+        return to_xarray(self)
+
+    def _repr_html_(self):
+        """The study's summary in a notebook (:func:`mbcomp.analysis.study_tables.study_html`)."""
+        from .study_tables import study_html
+
+        return study_html(self)
+
     def plot(self, x, y, path=None):
         """``y`` against ``x`` (columns), failed runs marked; saved to ``path`` when given."""
         from .study_plots import line_plot

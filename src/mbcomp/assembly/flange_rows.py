@@ -29,6 +29,10 @@ row kept is ``c(s) - c(s0) = 0`` (``s0``: the flanges' start coordinates).
 
 A :class:`~mbcomp.modeling.roles.FlangeInertia` is a rotor ``J n n^T`` on the frame its flange
 moves: :func:`rotors` lists them for the mass matrix, the forces, the reactions and the energy.
+A reflected one (its ``reflected`` True: MuJoCo's armature) turns at its tree joint's own speed
+``u_k``: :func:`reflected_rotors` lists ``(k, J)`` for ``M[k, k] += J``, the momenta and the
+energy; it puts no wrench on a frame (its torque ``-J du_k/dt`` acts inside the joint, so the
+joint's reaction carries it).
 
 Examples
 --------
@@ -51,14 +55,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import Problem
+from ..errors import ModelError, Problem
 from ..geometry.kinematics import cross
 from ..modeling.component import PortRef
 from ..modeling.roles import FlangeSum
 from .jets import ScalarJet
 
 __all__ = ["FlangeRows", "flange_constraint_edges", "flange_starts", "flange_rows", "flange_flows", "rotors",
-           "rotor_nodes"]
+           "rotor_nodes", "reflected_rotors", "reflected_joints"]
 
 
 @dataclass
@@ -132,8 +136,13 @@ def flange_constraint_edges(topo, members):
 
 
 def geared_joints(topo):
-    """Names of the joints whose axis a flange constraint ties (kept in the spanning tree)."""
-    return {v[0] for fr in topo.flange_rows for v in fr.ports.values() if v is not None}
+    """``{joint name: how much its spanning-tree weight is lowered}`` for the joints whose axis
+    a flange constraint ties (0.25: kept in the tree before plain joints of as many speeds) or
+    a reflected rotor turns (1.5: it needs the joint's own speed, so the joint comes before
+    rigid offsets and welds, and a loop is cut elsewhere wherever it can be)."""
+    out = {v[0]: 0.25 for fr in topo.flange_rows for v in fr.ports.values() if v is not None}
+    out.update({name: out.get(name, 0.0) + 1.5 for name in reflected_joints(topo)})
+    return out
 
 
 def cut_rotational(topo):
@@ -238,25 +247,81 @@ def flange_states(system, fr, jets, t, q, u):
             for pn, v in fr.ports.items()}
 
 
+def _rotor_owner(topo, comp):
+    """``(edge name, "axis" | "support")`` of the joint flange a rotor is on, or None."""
+    pname = next(n for n, port in comp.ports().items() if port.kind == "flange")
+    return topo.flange_owner.get(topo.flange_of[PortRef(comp, pname, "flange")])
+
+
+def reflected_joints(topo):
+    """Names of the joints whose axis carries a reflected rotor (kept in the spanning tree
+    where the model allows: the rotor needs the joint's own speed)."""
+    out = set()
+    for path, comp in topo.flange_inertias:
+        owner = _rotor_owner(topo, comp)
+        if owner is not None and comp.reflected(comp.p):
+            out.add(owner[0])
+    return out
+
+
+def _reflected_problem(topo, path, comp, e, port):
+    """Why a reflected rotor cannot sit where it is (None when it can): it needs the axis of a
+    joint with one speed of its own (a tree joint, not driven)."""
+    kind = type(comp).__name__
+    if port != "axis":
+        why, fix = f"is on {e.name}'s support flange, which does not turn", f"connect it to {e.name}.axis"
+    elif e.drive:
+        why, fix = (f"is on {e.name}, whose motion {e.drive} prescribes (no speed of its own)",
+                    "use Inertia (a rotor on frame_b: the drive's effort carries it), or remove the drive")
+    elif e.name in topo.cut:
+        why, fix = (f"is on {e.name}, which closes a kinematic loop (no speed of its own)",
+                    f"keep {e.name} in the spanning tree: cut another joint of the loop")
+    elif e.u.stop - e.u.start != 1:
+        why, fix = (f"is on {e.name} ({type(e.comp).__name__}), a joint of {e.u.stop - e.u.start} speeds",
+                    "put it on a 1-DOF joint's axis (Revolute, Prismatic)")
+    else:
+        return None
+    return Problem(path, f"the {kind} turns at its joint's own rate, but it {why}", fix)
+
+
 def rotor_nodes(topo):
     """``[(path, comp, node, edge name)]`` of every rotor (:class:`FlangeInertia`) of ``topo``:
-    the frame its flange moves (the joint's frame_b on ``axis``, frame_a on ``support``)."""
-    out = []
+    the frame its flange moves (the joint's frame_b on ``axis``, frame_a on ``support``).
+    Raises :class:`~mbcomp.errors.ModelError` for a reflected rotor on no joint speed of its own."""
+    out, probs = [], []
     for path, comp in topo.flange_inertias:
-        pname = next(n for n, port in comp.ports().items() if port.kind == "flange")
-        owner = topo.flange_owner.get(topo.flange_of[PortRef(comp, pname, "flange")])
+        owner = _rotor_owner(topo, comp)
         if owner is None:
             continue  # reported by the topology
         e = topo.edge(owner[0])
+        if comp.reflected(comp.p):
+            probs.append(_reflected_problem(topo, path, comp, e, owner[1]))
         out.append((path, comp, e.node_b if owner[1] == "axis" else e.node_a, e.name))
+    probs = [p for p in probs if p is not None]
+    if probs:
+        raise ModelError(probs)
+    return out
+
+
+def reflected_rotors(system):
+    """``[(speed column, J)]`` of the reflected rotors (:meth:`FlangeInertia.reflected`): each
+    turns at its tree joint's own speed ``u_k`` (kinetic energy ``J u_k^2 / 2``), so it adds
+    ``J`` (kg m^2 or kg) to ``M[k, k]`` and nothing to the forces."""
+    out = []
+    for path, comp, node, ename in system.topology.rotors:
+        if comp.reflected(system.P[path]):
+            out.append((system.edge(ename).u.start, comp.rotor(system.P[path])[0]))
     return out
 
 
 def rotors(system, jets):
     """``[(node, Iw, gyroscopic)]``: each rotor's inertia ``J n n^T`` (kg m^2, world axes) on
-    the frame node it turns with, and whether its gyroscopic moment acts."""
+    the frame node it turns with, and whether its gyroscopic moment acts (reflected rotors:
+    :func:`reflected_rotors`)."""
     out = []
     for path, comp, node, ename in system.topology.rotors:
+        if comp.reflected(system.P[path]):
+            continue
         e = system.edge(ename)
         J, gyro = comp.rotor(system.P[path])
         n = e.comp.axis_world(jets[e.node_a].R, system.P[ename])

@@ -71,7 +71,7 @@ import numpy as np
 from .evaluation import Evaluation
 from .jets import FrameJet, is_traced
 from .body_stack import skews, spatial_inertias
-from .flange_rows import rotor_wrench, rotors
+from .flange_rows import reflected_rotors, rotor_wrench, rotors
 from .pivots import PIVOT_TOL, Pivot, SingularTree, ball_pivot, chol_solve, cholesky, lower_product
 from .topology import ROOT
 from ..geometry.kinematics import cross, skew
@@ -132,6 +132,9 @@ class TreePass:
     bodies : list of tuple
         ``(link, m, c, Iw)`` of every body on a link: its link, mass (kg), centre of mass
         (m) and inertia about it (kg m^2), world -- what the inertias were summed from.
+    reflected : list of tuple
+        ``(speed column, J)`` of the reflected rotors (kg m^2 or kg on the joint's own speed:
+        :func:`~mbcomp.assembly.flange_rows.reflected_rotors`), on ``M``'s diagonal.
     """
 
     def __init__(self, links, jets, S, I, W, dt, t=0.0, q=None, Jw=None, r=None, bodies=()):
@@ -143,6 +146,19 @@ class TreePass:
         self.Jw = [None] * len(S) if Jw is None else Jw
         self.r = [None] * len(S) if r is None else r
         self._columns = {}  # speed_columns by nu: asked by the inertia check, the CRBA and the scale
+        self.reflected = []
+
+    def pivot_extra(self, i):
+        """The reflected rotors' inertia on link ``i``'s own speeds: ``[(its column among them,
+        J)]`` (added to the articulated-body pivot ``D`` of that joint, as to ``M``'s diagonal)."""
+        if not self.reflected:
+            return []
+        if "reflected" not in self._columns:  # summed by speed column (two rotors on one axis), made once
+            at = self._columns["reflected"] = {}
+            for k, J in self.reflected:
+                at[k] = at[k] + J if k in at else J
+        at, cols = self._columns["reflected"], self.links.cols[i]
+        return [(k - cols.start, at[k]) for k in range(cols.start, cols.stop) if k in at]
 
     def columns(self, nu):
         """:func:`speed_columns` of this pass, made once (the same arrays again: read, never written)."""
@@ -284,7 +300,9 @@ def tree_pass(system, t, q, u, forces=True):
         i = links.link_of.get(node, -1)
         if i >= 0:
             W[i] = W[i] + np.concatenate((T + cross(jets[node].r, F), F))
-    return TreePass(links, jets, S, I, W, dt, t, q, Jw, r, bodies)
+    tp = TreePass(links, jets, S, I, W, dt, t, q, Jw, r, bodies)
+    tp.reflected = reflected_rotors(system)
+    return tp
 
 
 def _summed(links, vals):
@@ -318,6 +336,8 @@ def generalized_momenta(tp, u, nu):
     out = np.zeros(nu, tp.dt)
     for i, H in enumerate(_summed(links, [tp.I[i] @ V[i] for i in range(links.n)])):
         out[links.cols[i]] = tp.S[i].T @ H
+    for k, J in tp.reflected:  # a reflected rotor: J u_k
+        out[k] = out[k] + J * u[k]
     return out
 
 
@@ -356,6 +376,14 @@ def _speed_columns(tp, nu):
 
 
 def mass_matrix(tp, nu):
+    """:func:`composite_inertia` plus the reflected rotors' ``J`` on the diagonal."""
+    M = composite_inertia(tp, nu)
+    for k, J in tp.reflected:
+        M[k, k] = M[k, k] + J
+    return M
+
+
+def composite_inertia(tp, nu):
     """``M`` by the composite-rigid-body algorithm: ``M[i, j] = S_i^T I^C_j S_j`` for ``i`` an
     ancestor of (or equal to) ``j``, zero between links on different branches. On numbers,
     every block at once: ``S^T F`` (``F_j = I^C_j S_j``) kept where :func:`ancestry` holds
@@ -456,7 +484,10 @@ def articulated(tp):
             piv[i] = ball_pivot(IA[i], tp.Jw[i], tp.r[i], what)
         else:
             U[i] = IA[i] @ tp.S[i]
-            piv[i] = Pivot(lower_product(tp.S[i], U[i]), U[i], what, dense=p < 0)
+            D = lower_product(tp.S[i], U[i])
+            for a, J in tp.pivot_extra(i):  # a reflected rotor: J on its joint's own speed
+                D[a, a] = D[a, a] + J
+            piv[i] = Pivot(D, U[i], what, dense=p < 0)
         if p >= 0:
             IA[p] = IA[p] + IA[i] - piv[i].passed(U[i])
     return U, piv

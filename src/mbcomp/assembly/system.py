@@ -49,7 +49,7 @@ from ..assembly.topology import ROOT, Topology
 from .body_stack import kane_terms
 from .plan import topology_of
 from .evaluation import Evaluation, Rows, completed, cut_rows
-from .flange_rows import flange_rows, flange_starts, rotor_wrench, rotors
+from .flange_rows import flange_rows, flange_starts, reflected_rotors, rotor_wrench, rotors
 
 __all__ = ["assemble", "MultibodySystem", "Evaluation", "NumericEvaluator"]
 
@@ -418,6 +418,8 @@ class MultibodySystem:
             J = jets[node]
             M = M + J.Jw.T @ Iw @ J.Jw
             f = f - J.Jw.T @ rotor_wrench(J, Iw, gyro)
+        for k, Jr in reflected_rotors(self):  # on a joint's own rate: J u_k^2 / 2, no force
+            M[k, k] = M[k, k] + Jr
         return M, f
 
     def evaluate_numeric(self, t, q, u, masked=True) -> Evaluation:
@@ -514,6 +516,7 @@ class MultibodySystem:
             V -= m * (self.g @ (J.r + rho))
         for node, Iw, _ in rotors(self, jets):
             T += 0.5 * jets[node].w @ Iw @ jets[node].w
+        T += sum(0.5 * Jr * ev.u[k] ** 2 for k, Jr in reflected_rotors(self))  # rotors on a joint's own rate
         for path, comp, ports in self.topology.forces:
             V += comp.potential({pn: self.frame_state(jets[n]) for pn, n in ports.items()}, self.P[path])
         for path, comp in self.topology.flange_elements:

@@ -378,8 +378,7 @@ class Topology(Rebinding):
         q0, qf, u0, uf = e.comp.start(e.comp.p)
         if any(qf) or any(uf):
             w -= 0.5
-        if e.name in self._geared:  # a geared angle measured on a cut joint would wrap
-            w -= 0.25
+        w -= self._geared.get(e.name, 0.0)  # a geared angle cut would wrap; a reflected rotor needs the speed
         return w
 
     def _spanning_tree(self):

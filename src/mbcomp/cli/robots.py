@@ -21,7 +21,7 @@ Examples
 >>> _ = open(path, "w").write(text)
 >>> import inspect
 >>> list(inspect.signature(robot_module(path).build).parameters)
-['floating', 'gravity', 'limits', 'damping']
+['floating', 'gravity', 'limits', 'damping', 'friction', 'mimic', 'inertia', 'visuals', 'package_dirs']
 >>> robot_module(path).build(gravity=(0, 0, -1.62)).components()["world"].p.g.tolist()
 [0.0, 0.0, -1.62]
 """

@@ -6,7 +6,11 @@ build() values this command uses where no ``-p`` gives them (the bicycle's push,
 ``mbcomp simulate models/bicycle.py`` shows it weave; ``build()`` and the other commands
 keep build()'s own defaults); options given on the command line win.
 
-Results are never lost: ``--out`` and ``--plot`` are checked before the model is even
+``--out FILE`` writes the results in the kind its suffix names: ``.csv``, ``.mat`` (a Modelica
+result file: OMEdit, Dymola, DyMat; :meth:`mbcomp.result.Result.to_mat`) or ``.nc`` (netCDF
+through xarray; :meth:`mbcomp.result.Result.to_xarray`); another suffix is bad input.
+
+Results are never lost: ``--out`` (its suffix too) and ``--plot`` are checked before the model is even
 loaded (:func:`~mbcomp.cli.loader.check_output`), so a mistyped directory fails at once, not
 after an hour of integration; a run that stops early (failed, or interrupted by Ctrl-C /
 SIGTERM: ``status == "interrupted"``; or a budget, ``--max-time`` / ``--max-steps``, that ran
@@ -42,7 +46,8 @@ from ..errors import SimulationInterrupted
 from .loader import check_output, load
 from .messages import EXIT_SIGNAL
 
-__all__ = ["cmd_simulate", "add_parser", "OPTIONS", "EXIT_INTERRUPTED", "EXIT_BUDGET"]
+__all__ = ["cmd_simulate", "add_parser", "OPTIONS", "EXIT_INTERRUPTED", "EXIT_BUDGET", "OUT_KINDS", "out_kind",
+           "write_out"]
 
 #: command-line options passed on to :func:`mbcomp.simulate` (overriding the file's SIMULATION)
 OPTIONS = ("t_end", "rtol", "atol", "method", "stabilization", "formulation", "n_out", "index", "h", "backend",
@@ -63,6 +68,7 @@ def cmd_simulate(args):
     from ..simulation.driver import simulate
 
     check_output(args.out, "--out")
+    out_kind(args.out)
     check_output(args.plot, "--plot")
     check_output(args.animate, "--animate")
     look = _look_options(args)
@@ -83,8 +89,7 @@ def cmd_simulate(args):
     if args.sensitivity:
         _sensitivity_columns(res)
     if args.out:
-        res.to_csv(args.out, units=args.csv_units)
-        print(f"wrote {args.out} ({len(res.names) + 1} columns, {len(res.time)} rows)")
+        write_out(res, args.out, csv_units=args.csv_units)
     if args.plot:
         try:
             res.plot(args.plot_vars, path=args.plot, title=pathlib.Path(args.model).name)
@@ -100,6 +105,56 @@ def cmd_simulate(args):
             return EXIT_USAGE
         print(f"wrote {args.animate}")
     return _stopped_early(res, args, stopped)
+
+
+#: what ``--out`` writes, by the file's suffix
+OUT_KINDS = {".csv": "CSV", ".mat": "Modelica result file", ".nc": "netCDF"}
+
+
+def out_kind(path):
+    """The kind of file ``--out`` writes to ``path``, by its suffix (checked before the run): ``".csv"``,
+    ``".mat"`` (a Modelica result file: :meth:`mbcomp.result.Result.to_mat`) or ``".nc"`` (netCDF through
+    xarray, which must be installed: checked here too).
+
+    Examples
+    --------
+    >>> out_kind("run.MAT"), out_kind(None)
+    ('.mat', None)
+    >>> try:
+    ...     out_kind("run.txt")
+    ... except ValueError as exc:
+    ...     print(exc)
+    --out run.txt: unknown suffix '.txt' -> fix: name the file .csv, .mat or .nc (CSV, Modelica result file, netCDF)
+    """
+    if path is None:
+        return None
+    suffix = pathlib.Path(path).suffix.lower()
+    if suffix not in OUT_KINDS:
+        *first, last = OUT_KINDS
+        raise ValueError(f"--out {path}: unknown suffix {suffix or '(none)'!r} -> fix: name the file "
+                         f"{', '.join(first)} or {last} ({', '.join(OUT_KINDS.values())})")
+    if suffix == ".nc":
+        from ..simulation.result_tables import need
+
+        try:
+            need("xarray")
+        except ImportError as exc:
+            raise ValueError(f"--out {path}: {exc}") from None
+    return suffix
+
+
+def write_out(res, path, csv_units=False):
+    """Write the run to ``path`` in the kind its suffix names (:func:`out_kind`) and say so."""
+    kind = out_kind(path)
+    if kind == ".mat":
+        res.to_mat(path)
+    elif kind == ".nc":
+        from ..simulation.result_tables import write_netcdf
+
+        write_netcdf(res.to_xarray(), path)
+    else:
+        res.to_csv(path, units=csv_units)
+    print(f"wrote {path} ({OUT_KINDS[kind]}: {len(res.names) + 1} columns, {len(res.time)} rows)")
 
 
 def _sensitivity_columns(res):
@@ -223,7 +278,9 @@ def add_parser(sub, common):
                    help="at a singular position (the constraint Jacobian losing rank): stop there (default) or "
                         "pass through it and report each passage")
     s.add_argument("--n-out", dest="n_out", type=int, help="number of output points")
-    s.add_argument("--out", help="write results to this CSV file (also the partial results of a run that stops early)")
+    s.add_argument("--out", help="write results to this file, the kind by its suffix: .csv, .mat (a Modelica "
+                   "result file that OMEdit, Dymola and DyMat read) or .nc (netCDF, needs xarray); also the partial "
+                   "results of a run that stops early")
     s.add_argument("--csv-units", action="store_true",
                    help="write each CSV column's unit in its header: 'crank.phi [rad]'")
     s.add_argument("--plot", help="write a plot to this PNG file")

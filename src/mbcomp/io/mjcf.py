@@ -194,9 +194,9 @@ def load_mjcf(path, gravity=None, limits=False, damping=True, springs=True, arma
         Model ``damping`` and ``stiffness``/``springref`` of hinges and slides as spring-dampers
         on the joints' flanges.
     armature : bool
-        A hinge's ``armature`` as a rotor ``Inertia(J)`` on its axis (see
-        :mod:`mbcomp.io.mjcf_joints`: exact where the carrying body does not turn about the
-        axis; MuJoCo's term is on the joint's own rate).
+        A hinge's or slide's ``armature`` as a ``ReflectedInertia``/``ReflectedMass`` on its
+        axis: ``armature`` on ``M``'s diagonal, exactly MuJoCo's term (see
+        :mod:`mbcomp.io.mjcf_joints`; a ball's or free joint's is not imported, noted).
     friction : bool
         A joint's ``frictionloss`` as its Coulomb friction with stick/slip events. Off by
         default: MuJoCo's friction loss is a soft constraint solved each step, mbcomp's
@@ -288,25 +288,12 @@ def _add_body(model, lib, b, parent, mp, frames, specs, opts, names, notes, asse
 
 
 def _armature_note(bodies, specs, armature):
-    """One note for the hinges' armature: all of them when ``armature=False``; else those whose
-    rotor rides on a body that may turn (a hinge, ball or free joint before it), where the
-    rotor on the absolute rate is not MuJoCo's term."""
-    turning, listed = {}, []
-    for b in bodies:
-        turns = b.parent is not None and turning[id(b.parent)]
-        for j in specs[id(b)]:
-            if j.kind == "hinge" and j.armature > 0.0 and (turns or not armature):
-                listed.append(j.name)
-            turns = turns or j.kind in ("hinge", "ball", "free")
-        turning[id(b)] = turns
-    if not listed:
+    """One note for the hinges' and slides' armature left out by ``armature=False``."""
+    listed = [j.name for b in bodies for j in specs[id(b)] if j.kind in ("hinge", "slide") and j.armature > 0.0]
+    if armature or not listed:
         return []
     which = ", ".join(listed[:6]) + (", ..." if len(listed) > 6 else "")
-    if not armature:
-        return [f"armature of {len(listed)} hinges ({which}): not imported (armature=False)"]
-    return [f"armature of {len(listed)} hinges on turning bodies ({which}): a rotor on the joint's absolute rate "
-            "n . w, MuJoCo's armature is on its own rate qdot (M differs by J (n . w_carrier) terms; "
-            "load_mjcf(armature=False) leaves it out)"]
+    return [f"armature of {len(listed)} hinges and slides ({which}): not imported (armature=False)"]
 
 
 def body_frames(model):

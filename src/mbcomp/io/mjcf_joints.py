@@ -17,11 +17,11 @@ Passive forces on hinges and slides (on the joint's ``support``/``axis`` flanges
 ``range`` with ``limited`` (or ``autolimits``) -> the joint's stops with ``limits=True``.
 ``frictionloss`` -> ``Revolute(friction=CoulombBearing(torque_max))`` /
 ``Prismatic(friction=SlidingFriction(1, normal=frictionloss))`` with ``friction=True``.
-``armature`` on a hinge -> ``Inertia(J)`` on the axis flange (``<joint>_armature``): a rotor on
-the joint's *absolute* angular rate ``n . w_b``. MuJoCo adds ``armature`` to ``M``'s diagonal
-(the joint's *own* rate ``qdot``); both agree where the body carrying the hinge does not turn
-about its axis (a hinge on the ground or on a slider), and differ by the cross terms
-``J (n . w_a) qdot`` otherwise -- no library element holds MuJoCo's term exactly yet (noted).
+``armature`` on a hinge -> ``ReflectedInertia(J)``, on a slide -> ``ReflectedMass(m)``, on the
+axis flange (``<joint>_armature``): kinetic energy ``armature qdot^2 / 2`` on the joint's own
+rate, which adds ``armature`` to ``M``'s diagonal exactly as MuJoCo does (a rotor seen through
+a large gear ratio; ``load_mjcf(armature=False)`` leaves it out, noted). A ball's or free
+joint's armature is not imported (noted): the reflected elements need a joint of one speed.
 """
 import numpy as np
 
@@ -140,12 +140,10 @@ def _passive(model, lib, j, joint, opts, names, notes):
         el = model.add(names(f"{j.name}_{'spring' if c > 0.0 else 'damping'}", "joint spring"), law)
         model.connect(joint.support, el.flange_a)
         model.connect(joint.axis, el.flange_b)
-    if j.armature > 0.0:
-        if j.kind == "hinge" and opts["armature"]:
-            rotor = model.add(names(f"{j.name}_armature", "joint armature"), lib.Inertia(J=j.armature))
-            model.connect(rotor.flange, joint.axis)
-        elif j.kind != "hinge":  # hinges left out by armature=False: one note for all (io/mjcf.py)
-            notes.append(f"joint {j.name!r}: armature={j.armature:g} not imported (a {j.kind} joint has no rotor element)")
+    if j.armature > 0.0 and opts["armature"]:  # left out by armature=False: one note for all (io/mjcf.py)
+        rotor = lib.ReflectedInertia(J=j.armature) if j.kind == "hinge" else lib.ReflectedMass(m=j.armature)
+        rotor = model.add(names(f"{j.name}_armature", "joint armature"), rotor)
+        model.connect(rotor.flange, joint.axis)
 
 
 def add_joints(model, lib, specs, port, opts, names, notes, pose=None, loose=False):
@@ -166,7 +164,8 @@ def add_joints(model, lib, specs, port, opts, names, notes, pose=None, loose=Fal
             chain.at = j.pos
             chain.add(j.name, lib.Spherical())
             if j.stiffness or j.damping or j.armature or j.ball_range:
-                notes.append(f"joint {j.name!r}: stiffness, damping, armature and range of a ball joint not imported")
+                notes.append(f"joint {j.name!r}: stiffness, damping, armature and range of a ball joint not imported "
+                             "(the reflected armature elements need a joint of one speed)")
             continue
         kw, start = _stops(lib, j, opts, notes)
         if j.kind == "hinge":

@@ -20,7 +20,8 @@ never from names:
 * a :class:`~mbcomp.modeling.roles.Drive` on a locked joint is an error naming both: it
   prescribes motion the lock forbids (remove the drive, or keep the joint);
 * a :class:`~mbcomp.modeling.roles.FlangeInertia` (a rotor) on a locked joint stays, as a
-  :class:`HeldRotor` body of inertia ``J n n^T`` on the frame it turned with;
+  :class:`HeldRotor` body of inertia ``J n n^T`` on the frame it turned with; a reflected one
+  (turning at the joint's own rate, which the lock makes zero: MuJoCo's armature) is dropped and said;
 * the joint's own modes (stops, stick-slip friction: :meth:`~mbcomp.modeling.roles.Joint.modes`)
   end with it (said).
 
@@ -264,6 +265,9 @@ def _on_flanges(flat, locked):
             probs.append(Problem(path, f"the {kind} ties locked {', '.join(held)} to kept {', '.join(kept)}: the "
                                        "lock would hold or load the kept joint through it",
                                  f"lock {', '.join(kept)} too, or keep {', '.join(held)} free"))
+        elif comp.role == "flange_inertia" and comp.reflected(comp.p):
+            dropped[path] = (f"{kind} {path!r} on locked {', '.join(held)}: dropped (it turns at the joint's own "
+                             "rate, which the lock makes zero)", held)
         elif comp.role == "flange_inertia":
             port = next(name for x in ports for j, name in owner.get(find(x), []) if j in locked)
             rotors[path] = (comp, held[0], port)

@@ -22,6 +22,7 @@ from __future__ import annotations
 from ..modeling.component import Component, PortRef
 from ..errors import ModelError, Problem
 from .fingerprint import model_structure
+from .lock import lock, locked_joints
 from .roles import MissingFlange
 
 __all__ = ["Model", "FlatModel", "is_rigid_offset"]
@@ -171,6 +172,19 @@ class Model(Component):
 
         return draw_topology(self, path, params=params)
 
+    def _repr_html_(self):
+        """The assembled topology drawn inline in a notebook (:meth:`draw`'s picture as SVG,
+        made in memory); a model that does not assemble shows why, in one paragraph."""
+        import html
+
+        from ..visual.topology_drawing import topology_svg
+
+        try:
+            return f'<div class="mbcomp-model">{topology_svg(self)}</div>'
+        except ValueError as exc:  # a ModelError: a model still being built; say why there is no picture
+            return (f"<p><b>mbcomp Model</b> with {len(self.components())} components: no topology drawing "
+                    f"({html.escape(type(exc).__name__)}: {html.escape(str(exc))})</p>")
+
     def remove(self, name: str) -> Component:
         """Take the component at ``name`` (a dotted path into nested models) out of the model,
         with every connection to its ports; return it, free to be added again.
@@ -233,16 +247,12 @@ class Model(Component):
         >>> mbcomp.assemble(held).q_names, held.locked, m.locked
         (['b.phi'], {'a': {'phi': 0.2}}, {})
         """
-        from .lock import lock
-
         return lock(self, joints, at)
 
     @property
     def locked(self) -> dict:
         """``{joint path: {coordinate: value}}`` of the joints :meth:`lock` held still (rad or
         m; a quaternion's entries 1); empty for a model with none."""
-        from .lock import locked_joints
-
         return locked_joints(self)
 
     def __getitem__(self, name):

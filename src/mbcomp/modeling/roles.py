@@ -512,12 +512,30 @@ class FlangeInertia(Component):
     angular velocity. With ``gyroscopic`` the carrying frame also feels the gyroscopic moment
     ``w x (J n (n . w))``; without it, the moment is dropped (it does no work, so the energy
     is unchanged). On an axis fixed in the world both are a body of axial inertia ``J``.
+
+    A *reflected* rotor (:meth:`reflected` True: a motor's rotor seen through a gearbox of
+    large ratio, MuJoCo's joint ``armature``) instead turns at its joint's own rate ``s_dot``:
+    kinetic energy ``J s_dot^2 / 2``, which adds ``J`` to the mass matrix's diagonal entry of
+    the joint's speed and nothing else (no force: ``J`` is constant). Its torque ``-J s_ddot``
+    acts inside the joint (the gearbox's output on frame_b, the housing's reaction on frame_a),
+    so the joint's reaction carries it. It needs the ``axis`` flange of a joint with one speed
+    of its own (not driven; the topology keeps such a joint in the spanning tree wherever a loop
+    can be cut elsewhere): ``J`` in kg m^2 on a rotational axis, kg on a translational one (a
+    reflected mass; the class's ``axis_kind`` says which).
     """
 
     role = "flange_inertia"
     axis_kind = "rotational"
 
     def rotor(self, p):
-        """Return ``(J, gyroscopic)``: axial inertia (kg m^2) and whether the gyroscopic moment
-        acts on the carrying frame."""
+        """Return ``(J, gyroscopic)``: axial inertia (kg m^2; a reflected mass on a translational
+        axis: kg) and whether the gyroscopic moment acts on the carrying frame (False for a
+        reflected rotor)."""
         raise NotImplementedError
+
+    def reflected(self, p):
+        """Whether the rotor turns at its joint's own rate ``s_dot`` (kinetic energy
+        ``J s_dot^2 / 2``, a rotor reflected through a gear: MuJoCo's armature) instead of with
+        the frame its flange moves (False, the default). Declared by the class, never inferred
+        from values."""
+        return False

@@ -99,14 +99,17 @@ class Result:
         state["system"] = None  # laws and compiled programs need not pickle; the columns do
         return state
 
-    def animate(self, path, hide=(), trails=(), color_by=None, fps=25, speed=1.0, title=None):
+    def animate(self, path=None, hide=(), trails=(), color_by=None, fps=25, speed=1.0, title=None):
         """Write the run as an animation: ``.html`` a self-contained 3-D player (three.js
-        inlined; opens offline), ``.gif`` or ``.mp4`` a film through matplotlib's writers.
+        inlined; opens offline), ``.gif`` or ``.mp4`` a film through matplotlib's writers;
+        with no ``path``, the player to show inline in a notebook.
 
         Parameters
         ----------
-        path : str or os.PathLike
-            The file; its suffix picks the kind.
+        path : str or os.PathLike, optional
+            The file; its suffix picks the kind. ``None``: return an
+            :class:`~mbcomp.visual.inline.InlinePlayer`, which a notebook shows as the player
+            (``_repr_html_``: the page in an ``<iframe srcdoc=...>``) and ``.save(path)`` writes.
         hide : iterable of str
             Glob patterns of components not drawn (``"*_joint"``).
         trails : iterable of str
@@ -122,8 +125,8 @@ class Result:
 
         Returns
         -------
-        str
-            ``path``.
+        str or InlinePlayer
+            ``path``; the inline player when no path is given.
 
         Examples
         --------
@@ -136,7 +139,13 @@ class Result:
         >>> out = res.animate(os.path.join(tempfile.mkdtemp(), "pendulum.html"), trails=["bob"])
         >>> os.path.getsize(out) < 5e6
         True
+        >>> res.animate(trails=["bob"])._repr_html_().startswith("<iframe srcdoc=")  # in a notebook: the player
+        True
         """
+        if path is None:
+            from ..visual.inline import inline_player
+
+            return inline_player(self, hide=hide, trails=trails, color_by=color_by, speed=speed, title=title)
         from ..visual.animation import animate
 
         return animate(self, path, hide=hide, trails=trails, color_by=color_by, fps=fps, speed=speed, title=title)
@@ -251,6 +260,76 @@ class Result:
             for row in zip(*cols):
                 w.writerow([f"{x:.12g}" for x in row])
         return path
+
+    def to_dataframe(self, columns=None):
+        """The run as a ``pandas.DataFrame``: index ``time`` (s), one column per result column;
+        units in ``df.attrs["units"]`` (``{column: unit}``, ``"time": "s"``), and ``status``,
+        ``message``, ``stats``, ``events`` in ``df.attrs``
+        (:func:`mbcomp.simulation.result_tables.to_dataframe`). Needs pandas
+        (``pip install mbcomp[data]``).
+
+        Parameters
+        ----------
+        columns : list of str, optional
+            The columns to keep (default: all); a name that is no column is a ``KeyError``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from mbcomp.result import Result
+        >>> r = Result(np.array([0.0, 1.0]), {"j.phi": np.array([0.0, 2.0])}, units={"j.phi": "rad"})
+        >>> df = r.to_dataframe()
+        >>> float(df.loc[1.0, "j.phi"]), df.attrs["units"]["j.phi"], df.attrs["status"]
+        (2.0, 'rad', 'success')
+        """
+        from .result_tables import to_dataframe
+
+        return to_dataframe(self, columns)
+
+    def to_xarray(self, columns=None):
+        """The run as an ``xarray.Dataset``: dimension ``time`` (s), each column a variable with
+        ``attrs["units"]``; the run's ``status``, ``message``, ``stats.<name>`` and ``events``
+        in the Dataset's attrs (:func:`mbcomp.simulation.result_tables.to_xarray`). Needs
+        xarray (``pip install mbcomp[data]``).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from mbcomp.result import Result
+        >>> ds = Result(np.array([0.0, 1.0]), {"j.phi": np.array([0.0, 2.0])}, units={"j.phi": "rad"}).to_xarray()
+        >>> ds["j.phi"].attrs["units"], ds.attrs["status"], ds.sizes["time"]
+        ('rad', 'success', 2)
+        """
+        from .result_tables import to_xarray
+
+        return to_xarray(self, columns)
+
+    def to_mat(self, path, columns=None):
+        """Write the run as a Modelica result file (the MAT v4 layout OpenModelica and Dymola
+        write: ``Aclass``, ``name``, ``description``, ``dataInfo``, ``data_1``, ``data_2``), which
+        OMEdit, DyMat and OMPython read (:mod:`mbcomp.simulation.modelica_mat`). Columns constant
+        over the run go to ``data_1``, the others to ``data_2``; each description ends with the
+        column's unit in brackets. Returns ``path``.
+
+        Examples
+        --------
+        >>> import numpy as np, os, tempfile, scipy.io
+        >>> from mbcomp.result import Result
+        >>> r = Result(np.array([0.0, 1.0]), {"j.phi": np.array([0.0, 2.0])}, units={"j.phi": "rad"})
+        >>> f = scipy.io.loadmat(r.to_mat(os.path.join(tempfile.mkdtemp(), "r.mat")))
+        >>> f["data_2"].tolist()
+        [[0.0, 1.0], [0.0, 2.0]]
+        """
+        from .modelica_mat import write_mat
+
+        return write_mat(self, path, columns)
+
+    def _repr_html_(self):
+        """The run's summary in a notebook: status, statistics, the first and last rows of a
+        few columns, the events (:func:`mbcomp.simulation.result_html.result_html`)."""
+        from .result_html import result_html
+
+        return result_html(self)
 
     def plot(self, patterns=None, path=None, title=None):
         """Plot columns against time, one panel each; save to ``path`` (PNG) if given.

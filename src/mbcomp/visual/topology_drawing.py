@@ -33,7 +33,7 @@ import numpy as np
 from ..assembly.topology import ROOT
 from .topology_layout import gear_routes, layout, routes, tree_label_points
 
-__all__ = ["topology_graph", "draw_topology", "check_suffix", "SUFFIXES"]
+__all__ = ["topology_graph", "draw_topology", "topology_svg", "check_suffix", "SUFFIXES"]
 
 #: the file formats :func:`draw_topology` writes (matplotlib's, chosen by the suffix)
 SUFFIXES = (".svg", ".png", ".pdf")
@@ -489,3 +489,40 @@ def draw_topology(model_or_system, path, params=None, title=None, init=None):
     with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": "mbcomp-topology"}):
         fig.savefig(path, format=suffix[1:], dpi=130, metadata=metadata)
     return path
+
+
+def topology_svg(model_or_system, params=None, title=None):
+    """The drawing of :func:`draw_topology` as SVG text, made in memory (no file): what a
+    notebook shows for a model (:meth:`mbcomp.Model._repr_html_`). The text starts at the
+    ``<svg`` element (no XML prolog), so it can be put inline in an HTML page.
+
+    Parameters
+    ----------
+    model_or_system : Model or MultibodySystem
+        A model (assembled here) or an assembled system (not changed).
+    params : dict, optional
+        Parameter overrides ``{"comp.param": value}`` for the assembly.
+    title : str, optional
+        Put before the DOF in the title.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import mbcomp
+    >>> svg = topology_svg(mbcomp.load_model_file("models/slider_crank.py").build())
+    >>> svg.startswith("<svg") and 'id="cut-rod_joint"' in svg
+    True
+    """
+    import io
+
+    import matplotlib
+
+    fig = _figure(topology_graph(_system(model_or_system, params)), title)
+    buffer = io.StringIO()
+    with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": "mbcomp-topology"}):
+        fig.savefig(buffer, format="svg", dpi=130, metadata={"Date": None})
+    text = buffer.getvalue()
+    return text[text.index("<svg"):]
