@@ -118,14 +118,16 @@ def mjcf_loader():
 
 def load(path, floating, armature=True):
     """mbcomp's model of the file (the import's notes silenced: ``mbcomp info`` lists them);
-    ``armature=False``: an MJCF's armature left out."""
+    ``armature=False``: an MJCF's armature left out. A URDF's mimic joints move freely, as in
+    the peers' models (Pinocchio's default, MuJoCo's URDF reader): mbcomp's default holds them
+    by a flange constraint, which changes the accelerations (Panda's and Talos's fingers)."""
     import mbcomp
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         if path.endswith(".xml"):
             return mjcf_loader()[0](path, armature=armature)
-        return mbcomp.load_urdf(path, floating=floating)
+        return mbcomp.load_urdf(path, floating=floating, mimic=False)
 
 
 # ------------------------------------------------------------------------------------------
