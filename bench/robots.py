@@ -120,14 +120,16 @@ def load(path, floating, armature=True):
     """mbcomp's model of the file (the import's notes silenced: ``mbcomp info`` lists them);
     ``armature=False``: an MJCF's armature left out. A URDF's mimic joints move freely, as in
     the peers' models (Pinocchio's default, MuJoCo's URDF reader): mbcomp's default holds them
-    by a flange constraint, which changes the accelerations (Panda's and Talos's fingers)."""
+    by a flange constraint, which changes the accelerations (Panda's and Talos's fingers). No
+    visual shapes: the build is the dynamics model's, as ``pin.buildModelFromUrdf``'s (reading
+    the meshes is ``bench/robot_visuals.py``'s)."""
     import mbcomp
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         if path.endswith(".xml"):
             return mjcf_loader()[0](path, armature=armature)
-        return mbcomp.load_urdf(path, floating=floating, mimic=False)
+        return mbcomp.load_urdf(path, floating=floating, mimic=False, visuals=False)
 
 
 # ------------------------------------------------------------------------------------------
