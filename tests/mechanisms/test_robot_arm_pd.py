@@ -114,7 +114,7 @@ def test_gravity_compensation_settles_at_the_target_exactly():
 def test_mbcomp_simulate_runs_the_model_file(tmp_path, capsys):
     out = tmp_path / "arm.csv"
     assert main(["simulate", "models/robot_arm_pd.py", "-p", "gravity_compensation=true", "--t-end", "8",
-                 "--out", str(out), "-q"]) == 0
+                 "--n-out", "81", "--out", str(out), "-q"]) == 0
     assert "status: success" in capsys.readouterr().out
     with open(out) as fh:
         rows = list(csv.reader(fh))
