@@ -2,13 +2,12 @@
 
 Each sphinx-gallery script ends with ``CHECKS = {label: (error, tolerance)}`` -- its numbers
 against a closed form, a published reference or an independent integration -- which it prints
-and asserts; here each script runs (``runpy``, in a temporary folder, matplotlib's Agg backend)
+and asserts; here each script runs (as sphinx-gallery runs it, in a temporary folder, matplotlib's Agg backend)
 and the test asserts that it ended and that every shown error is within its tolerance. A model
 file in ``models/`` without its gallery script fails :func:`test_every_model_has_a_gallery_script`.
 """
 import os
 import pathlib
-import runpy
 
 import numpy as np
 import pytest
@@ -45,6 +44,16 @@ def test_gallery_folders_hold_what_sphinx_gallery_needs():
         assert len(lines[1]) >= len(lines[0]), f"{script}: the title's underline is shorter than the title"
 
 
+def _run(path):
+    """Execute a script as sphinx-gallery does: its code in a fresh namespace named
+    ``__main__`` (functions it defines pickle by value, for Dask's workers), with ``__file__``
+    set, while ``sys.modules["__main__"]`` stays this process's (``runpy`` would make the
+    script the main module, which the worker processes Dask spawns import again)."""
+    ns = {"__name__": "__main__", "__file__": os.fspath(path), "__builtins__": __builtins__}
+    exec(compile(path.read_text(), os.fspath(path), "exec"), ns)
+    return ns
+
+
 @pytest.mark.parametrize("script", SCRIPTS)
 def test_gallery_script(script, tmp_path, monkeypatch):
     import matplotlib
@@ -54,7 +63,7 @@ def test_gallery_script(script, tmp_path, monkeypatch):
 
     monkeypatch.chdir(tmp_path)
     try:
-        ns = runpy.run_path(os.fspath(EXAMPLES / script), run_name="__main__")
+        ns = _run(EXAMPLES / script)
     finally:
         plt.close("all")
     checks = ns.get("CHECKS")
