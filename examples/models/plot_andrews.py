@@ -15,11 +15,12 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "andrews.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=301))
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 for name, joint in mod.COORDINATES.items():
     ax.plot(res.time * 1e3, np.mod(res[f"{joint}.phi"] + np.pi, 2 * np.pi) - np.pi, label=name)
 ax.set_xlabel("t (ms)")
@@ -28,7 +29,7 @@ ax.legend(fontsize=7, ncol=4)
 
 # %%
 # The mechanism at the end of the run (animation: ``andrews.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("andrews.png")))
 ax.set_axis_off()
 res.animate("andrews.html")

@@ -19,7 +19,8 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "bicycle.py")
 res = mbcomp.simulate(mod.build(v=5.0, roll_rate0=0.05), **mod.SIMULATION)
 print(res.status, "|", res.stats["steps"], "steps")
@@ -38,7 +39,7 @@ shapes = np.c_[np.exp(capsize * t), np.exp(weave.real * t) * np.cos(weave.imag *
                np.exp(weave.real * t) * np.sin(weave.imag * t)]
 amplitudes = np.linalg.lstsq(shapes, res["roll"][late], rcond=None)[0]
 fit = shapes @ amplitudes
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 axs[0].plot(res.time, res["roll"], label="roll")
 axs[0].plot(res.time, res["steer_angle"], label="steer")
 axs[0].set_ylabel("angle (rad)")
@@ -51,7 +52,7 @@ axs[1].legend(fontsize=8)
 
 # %%
 # The bicycle at the end of the run (animation: ``bicycle.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bicycle.png")))
 ax.set_axis_off()
 res.animate("bicycle.html")

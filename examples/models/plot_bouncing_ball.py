@@ -19,7 +19,8 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "bouncing_ball.py")
 res = mbcomp.simulate(mod.build(), t_end=4.5, rtol=1e-10, atol=1e-12, n_out=601)
 h0, e, g = 1.0, 0.8, 9.81
@@ -30,7 +31,7 @@ closed = t0 + 2 * t0 * e * (1 - e ** k) / (1 - e)
 print(f"{len(impacts)} impacts, then {res.events[-1].kind} at {res.events[-1].time:.6f} s "
       f"(t_inf = {t0 * (1 + 2 * e / (1 - e)):.6f} s)")
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["ball.r.z"] - 0.1, label="height of the lowest point")
 ax.plot(closed, 0 * closed, "x", label="closed-form impact times")
 ax.set_xlabel("t (s)")
@@ -39,7 +40,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The ball at the end of the run (animation: ``bouncing_ball.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bouncing_ball.png", t=0.3)))
 ax.set_axis_off()
 res.animate("bouncing_ball.html")

@@ -17,14 +17,15 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "bowling.py")
 res = mbcomp.simulate(mod.build(mu_k=0.2), **dict(mod.SIMULATION, t_end=2.0, n_out=201))
 ref = mod.reference(t_end=2.0, mu_k=0.2)
 sticks = [ev.time for ev in res.events if ev.kind != "impact"]
 print("events:", [(ev.kind, round(ev.time, 9)) for ev in res.events], " t* =", round(ref["t_roll"], 9))
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["ball.v.x"], label="centre speed (m/s)")
 ax.plot(res.time, -0.109 * res["ball.w.y"], label="r w (m/s)")
 ax.axvline(ref["t_roll"], color="gray", lw=0.8, label="t* (closed form)")
@@ -33,7 +34,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The ball at the end of the run (animation: ``bowling.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bowling.png")))
 ax.set_axis_off()
 res.animate("bowling.html")

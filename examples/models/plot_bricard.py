@@ -16,12 +16,13 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "bricard.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, t_end=3.0, n_out=301))
 angles = [n for n in res.names if n.startswith("joint") and n.endswith(".phi")]
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 for n in angles:
     axs[0].plot(res.time, res[n], lw=0.8, label=n)
 axs[0].set_ylabel("angle (rad)")
@@ -32,7 +33,7 @@ axs[1].set_xlabel("t (s)")
 
 # %%
 # The linkage at the end of the run (animation: ``bricard.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bricard.png")))
 ax.set_axis_off()
 res.animate("bricard.html")

@@ -14,12 +14,13 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "chain_3d.py")
 res = mbcomp.simulate(mod.build(N=4), **dict(mod.SIMULATION, n_out=201))
 E, Hy = res["energy.total"], res["angular_momentum.y"]
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 axs[0].plot(res.time, E - E[0], label="E - E(0) (J)")
 axs[0].plot(res.time, Hy - Hy[0], label="H_y - H_y(0) (kg m^2/s)")
 axs[0].legend(fontsize=8)
@@ -29,7 +30,7 @@ axs[1].legend(fontsize=8)
 
 # %%
 # The chain at the end of the run (animation: ``chain_3d.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("chain_3d.png")))
 ax.set_axis_off()
 res.animate("chain_3d.html")

@@ -15,14 +15,15 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "door.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=401))
 ref = mod.reference()
 impacts = [ev.time for ev in res.events if ev.kind == "impact"]
 print("impacts (s):", np.round(impacts, 9), " reference:", ref["impacts"])
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["hinge.phi"])
 ax.plot(ref["impacts"], [0.0] * len(ref["impacts"]), "x", label="closed-form impacts")
 ax.set_xlabel("t (s)")
@@ -31,7 +32,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The door at the end of the run (animation: ``door.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("door.png")))
 ax.set_axis_off()
 res.animate("door.html")

@@ -21,7 +21,8 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex1_5_falling_box.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 
@@ -29,7 +30,7 @@ m, a, b, C, g = 1.0, 0.1, 0.2, 0.001, 9.81
 L, phi0, Io = np.hypot(a, b) / 2, np.arctan(a / b), m * (a ** 2 + b ** 2) / 3
 ref = solve_ivp(lambda t, y: [y[1], (m * g * L * np.sin(y[0] + phi0) - C * y[1]) / Io],
                 (0, res.time[-1]), [0.0, 0.0], t_eval=res.time, method="DOP853", rtol=1e-11, atol=1e-12)
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["theta"], label="mbcomp")
 ax.plot(res.time, ref.y[0], "--", label="(1.61) with I about the corner")
 ax.set_xlabel("t (s)")
@@ -38,7 +39,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The box at the end of the run (animation: ``ex1_5_falling_box.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex1_5_falling_box.png")))
 ax.set_axis_off()
 res.animate("ex1_5_falling_box.html")

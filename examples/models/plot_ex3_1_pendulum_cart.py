@@ -21,7 +21,8 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex3_1_pendulum_cart.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 
@@ -39,7 +40,7 @@ ref = solve_ivp(lambda t, y: [y[1], (-m * g * L / 2 * np.sin(y[0]) - m * L / 2 *
 th, thd, t = ref.y[0], ref.y[1], res.time
 Fr = m * L / 2 * thd ** 2 + m * g * np.cos(th) - m * udd(t) * np.sin(th)
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 axs[0].plot(t, res["theta"], label="mbcomp")
 axs[0].plot(t, th, "--", label="(3.18), corrected sign")
 axs[0].set_ylabel("theta (rad)")
@@ -52,7 +53,7 @@ axs[1].legend(fontsize=8)
 
 # %%
 # The mechanism at the end of the run (animation: ``ex3_1_pendulum_cart.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_1_pendulum_cart.png")))
 ax.set_axis_off()
 res.animate("ex3_1_pendulum_cart.html")

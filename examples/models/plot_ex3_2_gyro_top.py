@@ -20,7 +20,8 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex3_2_gyro_top.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 slow, fast = mod.steady_precession_rates(0.5, 0.04, 5e-4, 1e-3, 9.81, 1.0, 40.0)
@@ -35,7 +36,7 @@ e3 = np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)
 theta = np.arccos(e3[2])
 azimuth = np.unwrap(np.arctan2(e3[1], e3[0]))
 rate = np.polyfit(res.time, azimuth, 1)[0]
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 axs[0].plot(res.time, theta)
 axs[0].set_ylabel("nutation (rad)")
 axs[1].plot(res.time, azimuth - azimuth[0], label="mbcomp")
@@ -46,7 +47,7 @@ axs[1].legend(fontsize=8)
 
 # %%
 # The top at the end of the run (animation: ``ex3_2_gyro_top.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_2_gyro_top.png")))
 ax.set_axis_off()
 res.animate("ex3_2_gyro_top.html")

@@ -18,12 +18,13 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex3_2_top_euler.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 slow, _ = mod.steady_precession_rates(0.5, 0.04, 5e-4, 1e-3, 9.81, 1.0, 40.0)
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 for name in ("psi_dot", "theta_dot", "phi_dot"):
     ax.plot(res.time, res[name], label=name)
 ax.axhline(slow, color="gray", ls="--", lw=0.8, label="(3.33) slow root")
@@ -39,7 +40,7 @@ print("eigenvalues:", np.round(lin.eigenvalues, 4))
 
 # %%
 # The top at the end of the run (animation: ``ex3_2_top_euler.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_2_top_euler.png")))
 ax.set_axis_off()
 res.animate("ex3_2_top_euler.html")

@@ -17,7 +17,8 @@ from scipy.linalg import expm
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex3_3_spinning_plate.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, t_end=0.6, n_out=61))
 
@@ -30,7 +31,7 @@ eta0 = np.array([res["omega_x"][0], res["omega_z"][0]])
 lin = np.array([expm(A * t) @ eta0 for t in res.time])
 print(f"lambda = {lam:.4f} 1/s (eigenvalues of (3.39): {np.linalg.eigvals(A).real.round(4)})")
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.semilogy(res.time, np.hypot(res["omega_x"], res["omega_z"]), label="mbcomp |(w_x, w_z)|")
 ax.semilogy(res.time, np.hypot(*lin.T), "--", label="linear theory (3.39)")
 ax.set_xlabel("t (s)")
@@ -39,7 +40,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The plate at the end of the run (animation: ``ex3_3_spinning_plate.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_3_spinning_plate.png")))
 ax.set_axis_off()
 res.animate("ex3_3_spinning_plate.html")

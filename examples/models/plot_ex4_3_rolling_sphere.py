@@ -17,14 +17,15 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex4_3_rolling_sphere.py")
 m, F, g = 1.0, 1.0, 9.81
 res = mbcomp.simulate(mod.build(push=F), **dict(mod.SIMULATION, n_out=101))
 t = res.time
 x_closed = 0.5 * t + 0.5 * (5 / 7) * F / m * t ** 2       # from vx0 = 0.5 m/s
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 axs[0].plot(t, res["r_cx"], label="mbcomp")
 axs[0].plot(t, x_closed, "--", label="x0 + vx0 t + (5/7) F t^2 / (2 m)")
 axs[0].set_ylabel("centre x (m)")
@@ -37,7 +38,7 @@ axs[1].legend(fontsize=8)
 
 # %%
 # The ball at the end of the run (animation: ``ex4_3_rolling_sphere.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex4_3_rolling_sphere.png")))
 ax.set_axis_off()
 res.animate("ex4_3_rolling_sphere.html")

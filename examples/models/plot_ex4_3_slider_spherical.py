@@ -15,13 +15,14 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex4_3_slider_spherical.py")
 system = mbcomp.assemble(mod.build())
 print("coordinates:", system.nq, " speeds:", system.nu)
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 axs[0].plot(res.time, res["r_y"], label="r_y (m)")
 axs[0].plot(res.time, res["phi"], label="phi (rad)")
 axs[0].legend(fontsize=8)
@@ -32,7 +33,7 @@ axs[1].set_xlabel("t (s)")
 
 # %%
 # The mechanism at the end of the run (animation: ``ex4_3_slider_spherical.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex4_3_slider_spherical.png")))
 ax.set_axis_off()
 res.animate("ex4_3_slider_spherical.html")

@@ -17,7 +17,8 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex4_7_two_link_arm.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 
@@ -34,7 +35,7 @@ def book(t, y):
 
 
 ref = solve_ivp(book, (0, res.time[-1]), [0, 0, 0, 0], t_eval=res.time, method="DOP853", rtol=1e-11, atol=1e-12)
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 for ax, name, row in zip(axs, ("omega", "beta"), (ref.y[2], ref.y[1])):
     ax.plot(res.time, res[name], label="mbcomp")
     ax.plot(res.time, row, "--", label="(4.20)-(4.21)")
@@ -44,7 +45,7 @@ axs[1].set_xlabel("t (s)")
 
 # %%
 # The arm at the end of the run (animation: ``ex4_7_two_link_arm.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex4_7_two_link_arm.png")))
 ax.set_axis_off()
 res.animate("ex4_7_two_link_arm.html")

@@ -22,7 +22,8 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex5_5_slotted_disk.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 
@@ -38,7 +39,7 @@ def book(t, y):
 
 ref = solve_ivp(book, (0, res.time[-1]), [0.3, 0.15, 0.0, 0.2], t_eval=res.time, method="DOP853",
                 rtol=1e-11, atol=1e-12)
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 for i, name in enumerate(("rho1", "rho2")):
     axs[0].plot(res.time, res[name], label=f"{name}, mbcomp")
     axs[0].plot(res.time, ref.y[i], "--", label=f"{name}, (5.35)-(5.40)")
@@ -51,7 +52,7 @@ axs[1].set_xlabel("t (s)")
 
 # %%
 # The disk at the end of the run (animation: ``ex5_5_slotted_disk.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex5_5_slotted_disk.png")))
 ax.set_axis_off()
 res.animate("ex5_5_slotted_disk.html")

@@ -19,7 +19,8 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex6_1_pendulum.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 print(res.status, res.stats["steps"], "steps")
@@ -30,7 +31,7 @@ print(res.status, res.stats["steps"], "steps")
 m, l, g, theta0 = 1.0, 0.8, 9.81, 1.2
 book = solve_ivp(lambda t, y: [y[1], -g / l * np.sin(y[0])], (0, res.time[-1]), [theta0, 0.0],
                  t_eval=res.time, method="DOP853", rtol=1e-11, atol=1e-12)
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["theta"], label="mbcomp")
 ax.plot(res.time, book.y[0], "--", label="book (6.20), scipy")
 ax.set_xlabel("t (s)")
@@ -42,7 +43,7 @@ ax.legend()
 # -----------------------------------------------------
 # ``res.snapshot`` draws one frame with matplotlib; ``res.animate`` writes a self-contained
 # three.js player (open ``ex6_1_pendulum.html`` in a browser).
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_1_pendulum.png")))
 ax.set_axis_off()
 res.animate("ex6_1_pendulum.html")

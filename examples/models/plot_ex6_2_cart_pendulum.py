@@ -23,7 +23,8 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex6_2_cart_pendulum.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 print(res.status, res.stats["steps"], "steps")
@@ -43,7 +44,7 @@ def book(t, y):
 
 ref = solve_ivp(book, (0, res.time[-1]), [0.15, 1.1, -0.3, 0.8], t_eval=res.time, method="DOP853",
                 rtol=1e-11, atol=1e-12)
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 for ax, name, row in zip(axs, ("x", "theta"), ref.y):
     ax.plot(res.time, res[name], label="mbcomp")
     ax.plot(res.time, row, "--", label="book (6.36)-(6.37)")
@@ -53,7 +54,7 @@ axs[1].set_xlabel("t (s)")
 
 # %%
 # The mechanism at the end of the run (an animation is in ``ex6_2_cart_pendulum.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_2_cart_pendulum.png")))
 ax.set_axis_off()
 res.animate("ex6_2_cart_pendulum.html")

@@ -17,7 +17,8 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex6_3_robot_arm.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 
@@ -37,7 +38,7 @@ def book(t, y):
 
 
 ref = solve_ivp(book, (0, res.time[-1]), [0, 0, 0, 0], t_eval=res.time, method="DOP853", rtol=1e-11, atol=1e-12)
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["alpha1"], label="alpha1, mbcomp")
 ax.plot(res.time, ref.y[0], "--", label="alpha1, (6.53)-(6.54)")
 ax.plot(res.time, res["alpha1"] + res["elbow_angle"], label="alpha2, mbcomp")
@@ -48,7 +49,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The arm at the end of the run (animation: ``ex6_3_robot_arm.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_3_robot_arm.png")))
 ax.set_axis_off()
 res.animate("ex6_3_robot_arm.html")

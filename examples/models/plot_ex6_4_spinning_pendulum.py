@@ -20,7 +20,8 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex6_4_spinning_pendulum.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 
@@ -30,7 +31,7 @@ ref = solve_ivp(lambda t, y: [y[1], Omega ** 2 * np.sin(y[0]) * np.cos(y[0]) - m
                 (0, res.time[-1]), [beta0, 0.0], t_eval=res.time, method="DOP853", rtol=1e-11, atol=1e-12)
 beta_star = np.arccos(3 * g / (2 * l * Omega ** 2))
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 axs[0].plot(res.time, res["beta"], label="mbcomp")
 axs[0].plot(res.time, ref.y[0], "--", label="book (6.63)")
 axs[0].axhline(beta_star, color="gray", lw=0.8, label="tilted equilibrium")
@@ -45,7 +46,7 @@ axs[1].legend(fontsize=8)
 
 # %%
 # The mechanism at the end of the run (animation: ``ex6_4_spinning_pendulum.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_4_spinning_pendulum.png")))
 ax.set_axis_off()
 res.animate("ex6_4_spinning_pendulum.html")

@@ -19,13 +19,14 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex6_5_pendulum.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 m, l, g = 1.3, 0.8, 9.81
 tension = m * l * res["theta_dot"] ** 2 + m * g * np.cos(res["theta"])
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, -res["lambda.pin.y"], label="-lambda.pin.y (mbcomp's multiplier)")
 ax.plot(res.time, tension, "--", label="(6.79) from the run's theta")
 ax.set_xlabel("t (s)")
@@ -34,7 +35,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The pendulum at the end of the run (animation: ``ex6_5_pendulum.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_5_pendulum.png")))
 ax.set_axis_off()
 res.animate("ex6_5_pendulum.html")

@@ -20,7 +20,8 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "textbook" / "ex7_1_bead_on_ring.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 
@@ -31,7 +32,7 @@ alpha_star = np.arccos(g / (r * omega ** 2))
 lam2 = omega ** 2 * np.cos(2 * alpha_star) - g / r * np.cos(alpha_star)
 print(f"alpha* = {alpha_star:.4f} rad, small oscillation period {2 * np.pi / np.sqrt(-lam2):.4f} s")
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["alpha"], label="mbcomp")
 ax.plot(res.time, ref.y[0], "--", label="book (7.23)")
 ax.axhline(alpha_star, color="gray", lw=0.8, label="steady state alpha*")
@@ -41,7 +42,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The mechanism at the end of the run (animation: ``ex7_1_bead_on_ring.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex7_1_bead_on_ring.png")))
 ax.set_axis_off()
 res.animate("ex7_1_bead_on_ring.html")

@@ -16,12 +16,13 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "four_bar.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=401))
 rocker_closed = np.array([mod.assembly(p)[1] for p in res["crank_angle"]])
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 axs[0].plot(res.time, res["rocker_angle"], label="mbcomp")
 axs[0].plot(res.time, rocker_closed, "--", label="assembly(crank angle)")
 axs[0].set_ylabel("rocker (rad)")
@@ -32,7 +33,7 @@ axs[1].set_xlabel("t (s)")
 
 # %%
 # The linkage at the end of the run (animation: ``four_bar.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("four_bar.png")))
 ax.set_axis_off()
 res.animate("four_bar.html")

@@ -20,14 +20,15 @@ from scipy.integrate import solve_ivp
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "n_four_bar.py")
 res = mbcomp.simulate(mod.build(N=2), **dict(mod.SIMULATION, t_end=5.0, n_out=251))
 theta0 = res["theta"][0]
 ref = solve_ivp(lambda t, y: [y[1], mod.exact_rate(y[0], N=2)], (0, res.time[-1]), [theta0, 1.0],
                 t_eval=res.time, method="DOP853", rtol=1e-11, atol=1e-12)
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["theta"], label="mbcomp (singular='pass')")
 ax.plot(res.time, ref.y[0], "--", label="one-DOF equation")
 for k in range(0, 3):
@@ -38,7 +39,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The chain at the end of the run (animation: ``n_four_bar.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("n_four_bar.png")))
 ax.set_axis_off()
 res.animate("n_four_bar.html")

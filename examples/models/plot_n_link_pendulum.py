@@ -14,12 +14,13 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "n_link_pendulum.py")
 res = mbcomp.simulate(mod.build(N=5), **dict(mod.SIMULATION, n_out=301))
 E = res["energy.total"]
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 for k in range(1, 6):
     axs[0].plot(res.time, res[f"phi{k}"], lw=0.8, label=f"phi{k}")
 axs[0].set_ylabel("relative angle (rad)")
@@ -30,7 +31,7 @@ axs[1].set_xlabel("t (s)")
 
 # %%
 # The chain at the end of the run (animation: ``n_link_pendulum.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("n_link_pendulum.png")))
 ax.set_axis_off()
 res.animate("n_link_pendulum.html")

@@ -18,12 +18,13 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "robot_arm_pd.py")
 target = (0.5, 0.8, -0.6, 0.4)
 res = mbcomp.simulate(mod.build(target=target, gravity_compensation=True), **dict(mod.SIMULATION, n_out=501))
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 for joint, q in zip(mod.JOINTS, target):
     line, = ax.plot(res.time, res[f"{joint}.phi"], label=joint)
     ax.axhline(q, color=line.get_color(), ls="--", lw=0.8)
@@ -33,7 +34,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The arm at the end of the run (animation: ``robot_arm_pd.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("robot_arm_pd.png")))
 ax.set_axis_off()
 res.animate("robot_arm_pd.html")

@@ -20,7 +20,8 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "rolling_disk.py")
 r, m, g, W, push = 0.3, 2.0, 9.81, 6.0, 0.05
 res = mbcomp.simulate(mod.build(spin=W, lean_rate0=push), **dict(mod.SIMULATION, n_out=251))
@@ -31,7 +32,7 @@ lean_linear = push / omega * np.sin(omega * res.time)
 lin = mbcomp.analysis.linearize(mod.build(spin=W), t=0.0)
 print(f"sqrt(K/J) = {omega:.6f} rad/s; linearize: {np.round(lin.eigenvalues, 6)}")
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["lean.phi"], label="mbcomp")
 ax.plot(res.time, lean_linear, "--", label="linear theory")
 ax.set_xlabel("t (s)")
@@ -40,7 +41,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The disk at the end of the run (animation: ``rolling_disk.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("rolling_disk.png")))
 ax.set_axis_off()
 res.animate("rolling_disk.html")

@@ -18,14 +18,15 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "slider_crank.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, t_end=3.0, n_out=301))
 c, L = 0.2, 0.6
 phi = res["crank_angle"]
 x_closed = c * np.cos(phi) + np.sqrt(L ** 2 - (c * np.sin(phi)) ** 2)
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 axs[0].plot(res.time, res["slider_position"], label="mbcomp")
 axs[0].plot(res.time, x_closed, "--", label="closed form of the crank angle")
 axs[0].set_ylabel("slider x (m)")
@@ -36,7 +37,7 @@ axs[1].set_xlabel("t (s)")
 
 # %%
 # The mechanism at the end of the run (animation: ``slider_crank.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("slider_crank.png")))
 ax.set_axis_off()
 res.animate("slider_crank.html")

@@ -19,12 +19,13 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "spatial_slider_crank.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=201))
 s_closed = np.array([mod.slider_position(p) for p in res["crank_angle"]])
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["slider_position"], label="mbcomp")
 ax.plot(res.time, s_closed, "--", label="slider_position(crank angle)")
 ax.set_xlabel("t (s)")
@@ -33,7 +34,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The mechanism at the end of the run (animation: ``spatial_slider_crank.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("spatial_slider_crank.png")))
 ax.set_axis_off()
 res.animate("spatial_slider_crank.html")

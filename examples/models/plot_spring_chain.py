@@ -15,13 +15,14 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 mod = mbcomp.load_model_file(ROOT / "models" / "spring_chain.py")
 res = mbcomp.simulate(mod.build(), **dict(mod.SIMULATION, n_out=401))
 print(res.status, "|", res.stats["steps"], "steps, method", res.stats["method"])
 E = res["energy.total"]
 
-fig, axs = plt.subplots(2, 1, figsize=(6, 4), sharex=True)
+fig, axs = plt.subplots(2, 1, layout="constrained", figsize=(6, 4), sharex=True)
 for k in range(4):
     axs[0].plot(res.time, res[f"s{k}.s"] * 1e3, lw=0.8, label=f"s{k}")
 axs[0].set_ylabel("spring stretch (mm)")
@@ -32,7 +33,7 @@ axs[1].set_xlabel("t (s)")
 
 # %%
 # The chain at the end of the run (animation: ``spring_chain.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("spring_chain.png")))
 ax.set_axis_off()
 res.animate("spring_chain.html")

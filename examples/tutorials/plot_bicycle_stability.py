@@ -16,13 +16,14 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 bicycle = mbcomp.load_model_file(ROOT / "models" / "bicycle.py")
 sw = mbcomp.sweep(lambda v: bicycle.build(v=v), "v", [3.0, 5.0, 7.0])
 for change in sw.changes:
     print(f"{change['kind']:12s} at v = {change['value']:.9f} m/s: {change['from']} -> {change['to']}")
 
-fig, ax = plt.subplots(figsize=(6, 3.5))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3.5))
 for v, eig in zip(sw.values, sw.eigenvalues):
     ax.plot([v] * len(eig), np.real(eig), "k.", ms=3)
 ax.axhline(0.0, color="gray", lw=0.8)

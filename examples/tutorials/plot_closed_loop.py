@@ -63,7 +63,7 @@ res = mbcomp.simulate(model, t_end=2.0, rtol=1e-10, atol=1e-12, n_out=201)
 J, G = 2 / 3 * m * L ** 2 + mc * L ** 2, g * (m * L + mc * L)
 ref = solve_ivp(lambda t, y: [y[1], -G * np.cos(y[0]) / J], (0, 2.0), [phi0, 0.0], t_eval=res.time,
                 method="DOP853", rtol=1e-11, atol=1e-12)
-fig, axs = plt.subplots(3, 1, figsize=(6, 5), sharex=True)
+fig, axs = plt.subplots(3, 1, layout="constrained", figsize=(6, 5), sharex=True)
 axs[0].plot(res.time, res["crank_joint.phi"], label="crank")
 axs[0].plot(res.time, res["rocker_joint.phi"], ":", label="rocker")
 axs[0].plot(res.time, ref.y[0], "--", label="one-DOF equation")

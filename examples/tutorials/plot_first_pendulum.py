@@ -39,7 +39,7 @@ print(res.status, "|", len(res.names), "columns, e.g.", res.names[:4])
 print("unit of hinge.phi:", res.units["hinge.phi"])
 closed = theta0 * np.cos(np.sqrt(g / l) * res.time)
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["hinge.phi"], label="mbcomp")
 ax.plot(res.time, closed, "--", label="small-angle closed form")
 ax.set_xlabel("t (s)")

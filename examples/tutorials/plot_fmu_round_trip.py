@@ -17,7 +17,8 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 crank = mbcomp.load_model_file(ROOT / "models" / "slider_crank.py")
 info = mbcomp.export_fmu(crank.build(), "slider_crank.fmu", kind="cs", outputs=["energy.total"],
                          stop_time=2.0, derivatives=False)
@@ -35,7 +36,7 @@ if fmpy is not None:
     out = fmpy.simulate_fmu("slider_crank.fmu", stop_time=2.0, output_interval=0.01, relative_tolerance=1e-10,
                             output=["slider_joint.s", "energy.total"])
     fmu_x = np.interp(res.time, out["time"], out["slider_joint.s"])
-    fig, ax = plt.subplots(figsize=(6, 3))
+    fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
     ax.plot(res.time, res["slider_position"], label="mbcomp.simulate")
     ax.plot(out["time"], out["slider_joint.s"], "--", label="the FMU in FMPy")
     ax.set_xlabel("t (s)")

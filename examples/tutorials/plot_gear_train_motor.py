@@ -38,7 +38,7 @@ model.connect(motor.flange_b, motor_shaft.axis)
 res = mbcomp.simulate(model, t_end=2.0, rtol=1e-10, atol=1e-12, n_out=201)
 T = (J1 + J2 / n ** 2) * w0 / tau0
 w1 = w0 * (1 - np.exp(-res.time / T))
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["motor_shaft.w"], label="motor shaft, mbcomp")
 ax.plot(res.time, w1, "--", label="closed form")
 ax.plot(res.time, res["load_shaft.w"], label="load shaft, mbcomp")

@@ -50,7 +50,7 @@ def theta_T(**kw):
 h = 1e-5
 fd = np.array([(theta_T(theta0=theta0 + h) - theta_T(theta0=theta0 - h)) / (2 * h),
                -(theta_T(l=l + h) - theta_T(l=l - h)) / (2 * h)])
-fig, ax = plt.subplots(figsize=(5, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(5, 3))
 x = np.arange(2)
 ax.bar(x - 0.25, gr.gradient, 0.25, label="adjoint")
 ax.bar(x, fd, 0.25, label="finite differences")

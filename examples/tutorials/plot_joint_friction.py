@@ -39,7 +39,7 @@ while k * abs(x) > Fs:
     x = -np.sign(x) * (abs(x) - 2 * Fk / k)
     turns.append(x)
 print("turning points (m):", np.round(turns, 6), "-> sticks at", turns[-1])
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["slide.s"], label="mbcomp")
 ax.plot(half * np.arange(1, len(turns) + 1), turns, "o", label="closed-form turning points")
 ax.set_xlabel("t (s)")

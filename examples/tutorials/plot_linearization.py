@@ -32,7 +32,7 @@ up = mbcomp.linearize(pendulum(np.pi))
 print("hanging:", down.eigenvalues, " standing:", up.eigenvalues)
 print("A (hanging) =\n", down.A)
 
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.plot(down.eigenvalues.real, down.eigenvalues.imag, "o", label="hanging")
 ax.plot(up.eigenvalues.real, up.eigenvalues.imag, "s", label="standing")
 ax.axvline(0.0, color="gray", lw=0.8)

@@ -18,7 +18,8 @@ import numpy as np
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 with warnings.catch_warnings():   # the loader warns of what it leaves out: here the damping, on purpose
     warnings.simplefilter("ignore")
     arm = mbcomp.load_urdf(ROOT / "models" / "data" / "robot_arm.urdf", damping=False)
@@ -37,7 +38,7 @@ Iyy = np.array([0.02045, 0.010433, 0.0005])          # about their centres (kg m
 omega = np.sqrt(9.81 * m @ d / (Iyy + m * d ** 2).sum())
 print(f"omega = {omega:.6f} rad/s; linearize: {lin.eigenvalues}")
 
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 ax.plot(res.time, res["shoulder.phi"] - np.pi, label="shoulder - pi, mbcomp")
 ax.plot(res.time, 0.1 * np.cos(omega * res.time), "--", label="0.1 cos(omega t)")
 ax.set_xlabel("t (s)")
@@ -46,7 +47,7 @@ ax.legend(fontsize=8)
 
 # %%
 # The locked arm at the end of the run (animation: ``robot_urdf_lock.html``)
-fig, ax = plt.subplots(figsize=(4, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("robot_urdf_lock.png")))
 ax.set_axis_off()
 res.animate("robot_urdf_lock.html")

@@ -22,7 +22,8 @@ from scipy.special import ellipk
 
 import mbcomp
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 MODEL = ROOT / "models" / "textbook" / "ex6_1_pendulum.py"   # build(m, l, g, theta0, theta_dot0)
 
 
@@ -58,7 +59,7 @@ print(len(study), "runs; periods:", study["period"])
 l, g = 0.8, 9.81
 closed = 4 * np.sqrt(l / g) * ellipk(np.sin(np.array(amplitudes) / 2) ** 2)
 T = np.asarray(study["period"], float)
-fig, ax = plt.subplots(figsize=(5, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(5, 3))
 ax.plot(amplitudes, T, "o", label="mbcomp study")
 ax.plot(amplitudes, closed, "--", label="4 sqrt(l/g) K(sin^2(theta0/2))")
 ax.set_xlabel("amplitude theta0 (rad)")

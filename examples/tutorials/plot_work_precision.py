@@ -21,7 +21,8 @@ from scipy.special import ellipj, ellipk
 
 from mbcomp.analysis.workprecision import Combo, fastest, work_precision
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+HERE = pathlib.Path(__file__).parent if "__file__" in globals() else pathlib.Path.cwd()  # sphinx-gallery: no __file__,
+ROOT = HERE.resolve().parents[1]                                               # the cwd is this folder
 MODEL = ROOT / "models" / "textbook" / "ex6_1_pendulum.py"     # l = 0.8 m, theta0 = 1.2 rad
 l, g, theta0, t_end = 0.8, 9.81, 1.2, 2.0
 k = np.sin(theta0 / 2)
@@ -34,7 +35,7 @@ combos = [Combo("DOP853 (C)", dict(method="DOP853")), Combo("RADAU5 (C)", dict(m
 rows = work_precision(MODEL, combos=combos, tols=[1e-4, 1e-6, 1e-8, 1e-10], t_end=t_end,
                       reference=(t_end, {"hinge.phi": exact}, "elliptic functions"), log=lambda *a: None)
 
-fig, ax = plt.subplots(figsize=(6, 3.5))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3.5))
 for combo in combos:
     mine = [r for r in rows if r["combo"] == combo.label and r["status"] == "success"]
     ax.loglog([r["nfev"] for r in mine], [r["error"] for r in mine], "o-", label=combo.label)

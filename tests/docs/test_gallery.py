@@ -32,7 +32,10 @@ def test_every_model_has_a_gallery_script():
 
 
 def test_gallery_folders_hold_what_sphinx_gallery_needs():
-    """Each gallery folder has its README.rst; each script opens with a titled docstring."""
+    """Each gallery folder has its README.rst; script names are unique across folders; each
+    script opens with a titled docstring."""
+    names = [pathlib.PurePath(s).name for s in SCRIPTS]
+    assert len(set(names)) == len(names), f"two scripts of one name break sphinx-gallery's links: {sorted(names)}"
     for folder in (EXAMPLES, EXAMPLES / "models", EXAMPLES / "tutorials"):
         assert (folder / "README.rst").exists(), folder
     assert len([s for s in SCRIPTS if s.startswith("tutorials/")]) >= 10

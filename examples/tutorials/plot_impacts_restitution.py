@@ -17,7 +17,7 @@ from mbcomp.library import PlaneContact, PointMass, World
 from mbcomp.modeling.free_joint import FreeTranslation
 
 m, r, h0, g = 0.2, 0.05, 0.5, 9.81
-fig, ax = plt.subplots(figsize=(6, 3))
+fig, ax = plt.subplots(layout="constrained", figsize=(6, 3))
 CHECKS = {}
 for e in (0.5, 0.8):
     model = mbcomp.Model()
