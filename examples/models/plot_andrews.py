@@ -26,13 +26,14 @@ for name, joint in mod.COORDINATES.items():
 ax.set_xlabel("t (ms)")
 ax.set_ylabel("angle, wrapped (rad)")
 ax.legend(fontsize=7, ncol=4)
+plt.show()
 
 # %%
 # The mechanism at the end of the run (animation: ``andrews.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("andrews.png")))
 ax.set_axis_off()
-res.animate("andrews.html")
+print("animation (open it in a browser):", res.animate("andrews.html"))
 
 # %%
 # The check: every published coordinate at t = 0.03 s, relative to its size (the reference is

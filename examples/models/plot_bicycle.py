@@ -49,13 +49,14 @@ axs[1].plot(res.time[late], fit, "--", label="capsize + weave modes")
 axs[1].set_ylabel("roll (rad)")
 axs[1].set_xlabel("t (s)")
 axs[1].legend(fontsize=8)
+plt.show()
 
 # %%
 # The bicycle at the end of the run (animation: ``bicycle.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bicycle.png")))
 ax.set_axis_off()
-res.animate("bicycle.html")
+print("animation (open it in a browser):", res.animate("bicycle.html"))
 
 # %%
 # The check: the late roll is the two linear modes to 0.1 % of its size (what is left is the

@@ -37,13 +37,14 @@ ax.plot(closed, 0 * closed, "x", label="closed-form impact times")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("height (m)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The ball at the end of the run (animation: ``bouncing_ball.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bouncing_ball.png", t=0.3)))
 ax.set_axis_off()
-res.animate("bouncing_ball.html")
+print("animation (open it in a browser):", res.animate("bouncing_ball.html"))
 
 # %%
 # The check: the impact times; the rest comes after the last impact and no later than the

@@ -8,7 +8,7 @@ ends at :math:`t^* = |s_0| / (\\mu_k g (1 + 1/k))` (the contact's ``stick`` even
 rolling); from then on it rolls at :math:`v^* = 5 v_0 / 7` (a uniform sphere, no spin). The
 model file throws it down an oiled lane (:math:`\\mu_k = 0.04`: 5.8 s of sliding, 8 s run);
 here a dry lane, :math:`\\mu_k = 0.2`, 2 s -- the same physics in a quarter of the time.
-:func:`reference` in the model file is the closed form.
+``reference()`` in the model file is the closed form.
 """
 import pathlib
 
@@ -31,13 +31,14 @@ ax.plot(res.time, -0.109 * res["ball.w.y"], label="r w (m/s)")
 ax.axvline(ref["t_roll"], color="gray", lw=0.8, label="t* (closed form)")
 ax.set_xlabel("t (s)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The ball at the end of the run (animation: ``bowling.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bowling.png")))
 ax.set_axis_off()
-res.animate("bowling.html")
+print("animation (open it in a browser):", res.animate("bowling.html"))
 
 # %%
 # The check: the slide's end and the state at 2 s against the closed form.

@@ -30,13 +30,14 @@ axs[0].legend(fontsize=7, ncol=3)
 axs[1].semilogy(res.time, np.maximum(res["residual.position"], 1e-17))
 axs[1].set_ylabel("loop residual (m)")
 axs[1].set_xlabel("t (s)")
+plt.show()
 
 # %%
 # The linkage at the end of the run (animation: ``bricard.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bricard.png")))
 ax.set_axis_off()
-res.animate("bricard.html")
+print("animation (open it in a browser):", res.animate("bricard.html"))
 
 # %%
 # The check: it moves (a joint turns by more than 0.5 rad) with its loop closed and its

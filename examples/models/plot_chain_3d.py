@@ -27,13 +27,14 @@ axs[0].legend(fontsize=8)
 axs[1].plot(res.time, res["energy.kinetic"], label="kinetic energy (J)")
 axs[1].set_xlabel("t (s)")
 axs[1].legend(fontsize=8)
+plt.show()
 
 # %%
 # The chain at the end of the run (animation: ``chain_3d.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("chain_3d.png")))
 ax.set_axis_off()
-res.animate("chain_3d.html")
+print("animation (open it in a browser):", res.animate("chain_3d.html"))
 
 # %%
 # The check: both conserved quantities, to what rtol = 1e-8 leaves open.

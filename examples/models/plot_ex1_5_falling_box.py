@@ -36,13 +36,14 @@ ax.plot(res.time, ref.y[0], "--", label="(1.61) with I about the corner")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("theta (rad, clockwise)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The box at the end of the run (animation: ``ex1_5_falling_box.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex1_5_falling_box.png")))
 ax.set_axis_off()
-res.animate("ex1_5_falling_box.html")
+print("animation (open it in a browser):", res.animate("ex1_5_falling_box.html"))
 
 # %%
 # The check: the angle follows (1.61); the damper can only take energy out.

@@ -50,13 +50,14 @@ axs[1].plot(t, Fr, "--", label="tension (3.19)")
 axs[1].set_ylabel("F_r (N)")
 axs[1].set_xlabel("t (s)")
 axs[1].legend(fontsize=8)
+plt.show()
 
 # %%
 # The mechanism at the end of the run (animation: ``ex3_1_pendulum_cart.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_1_pendulum_cart.png")))
 ax.set_axis_off()
-res.animate("ex3_1_pendulum_cart.html")
+print("animation (open it in a browser):", res.animate("ex3_1_pendulum_cart.html"))
 
 # %%
 # The check: the angle and the rod tension against the book's formulas.

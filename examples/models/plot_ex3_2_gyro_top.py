@@ -44,13 +44,14 @@ axs[1].plot(res.time, slow * res.time, "--", label="slow root of (3.33)")
 axs[1].set_ylabel("precession (rad)")
 axs[1].set_xlabel("t (s)")
 axs[1].legend(fontsize=8)
+plt.show()
 
 # %%
 # The top at the end of the run (animation: ``ex3_2_gyro_top.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_2_gyro_top.png")))
 ax.set_axis_off()
-res.animate("ex3_2_gyro_top.html")
+print("animation (open it in a browser):", res.animate("ex3_2_gyro_top.html"))
 
 # %%
 # The check: the nutation angle stays at 1 rad and the axis precesses at the slow root.

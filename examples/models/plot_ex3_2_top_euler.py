@@ -31,6 +31,7 @@ ax.axhline(slow, color="gray", ls="--", lw=0.8, label="(3.33) slow root")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("rate (rad/s)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # Linearized about the steady precession: eigenvalues on the imaginary axis (a stable,
@@ -43,7 +44,7 @@ print("eigenvalues:", np.round(lin.eigenvalues, 4))
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_2_top_euler.png")))
 ax.set_axis_off()
-res.animate("ex3_2_top_euler.html")
+print("animation (open it in a browser):", res.animate("ex3_2_top_euler.html"))
 
 # %%
 # The check: the rates stay constant at their (3.33) values; the linearization is neutrally

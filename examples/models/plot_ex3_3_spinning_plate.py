@@ -37,13 +37,14 @@ ax.semilogy(res.time, np.hypot(*lin.T), "--", label="linear theory (3.39)")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("perturbation (rad/s)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The plate at the end of the run (animation: ``ex3_3_spinning_plate.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_3_spinning_plate.png")))
 ax.set_axis_off()
-res.animate("ex3_3_spinning_plate.html")
+print("animation (open it in a browser):", res.animate("ex3_3_spinning_plate.html"))
 
 # %%
 # The check: while the perturbation is small the run follows the linear theory (to

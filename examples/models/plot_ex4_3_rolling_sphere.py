@@ -35,13 +35,14 @@ for name in ("ball.contact.N", "ball.contact.F_1", "ball.contact.F_2"):
 axs[1].set_ylabel("reaction (N)")
 axs[1].set_xlabel("t (s)")
 axs[1].legend(fontsize=8)
+plt.show()
 
 # %%
 # The ball at the end of the run (animation: ``ex4_3_rolling_sphere.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex4_3_rolling_sphere.png")))
 ax.set_axis_off()
-res.animate("ex4_3_rolling_sphere.html")
+print("animation (open it in a browser):", res.animate("ex4_3_rolling_sphere.html"))
 
 # %%
 # The check: the centre moves as (5/7) F/m, the contact holds the weight and pulls back with

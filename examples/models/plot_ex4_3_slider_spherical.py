@@ -30,13 +30,14 @@ for name in ("R_x", "R_z", "M_x", "M_z"):
     axs[1].plot(res.time, res[name], label=f"{name} ({res.units[name]})")
 axs[1].legend(fontsize=8, ncol=2)
 axs[1].set_xlabel("t (s)")
+plt.show()
 
 # %%
 # The mechanism at the end of the run (animation: ``ex4_3_slider_spherical.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex4_3_slider_spherical.png")))
 ax.set_axis_off()
-res.animate("ex4_3_slider_spherical.html")
+print("animation (open it in a browser):", res.animate("ex4_3_slider_spherical.html"))
 
 # %%
 # The check: five speeds; body 1 stays on the slider's axis (x = z = 0 for its origin);

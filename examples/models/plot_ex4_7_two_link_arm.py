@@ -42,13 +42,14 @@ for ax, name, row in zip(axs, ("omega", "beta"), (ref.y[2], ref.y[1])):
     ax.set_ylabel(f"{name} ({res.units[name]})")
 axs[0].legend(fontsize=8)
 axs[1].set_xlabel("t (s)")
+plt.show()
 
 # %%
 # The arm at the end of the run (animation: ``ex4_7_two_link_arm.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex4_7_two_link_arm.png")))
 ax.set_axis_off()
-res.animate("ex4_7_two_link_arm.html")
+print("animation (open it in a browser):", res.animate("ex4_7_two_link_arm.html"))
 
 # %%
 # The check: the arm's rate and the rod's swing against the corrected equations.

@@ -49,13 +49,14 @@ Hrun = (m1 * res["rho1"] ** 2 + m2 * res["rho2"] ** 2) * res["theta_dot"]
 axs[1].plot(res.time, Hrun - H)
 axs[1].set_ylabel("H - H(0) (kg m^2/s)")
 axs[1].set_xlabel("t (s)")
+plt.show()
 
 # %%
 # The disk at the end of the run (animation: ``ex5_5_slotted_disk.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex5_5_slotted_disk.png")))
 ax.set_axis_off()
-res.animate("ex5_5_slotted_disk.html")
+print("animation (open it in a browser):", res.animate("ex5_5_slotted_disk.html"))
 
 # %%
 # The check: both radii follow the book, and the angular momentum (5.40) is kept.

@@ -37,6 +37,7 @@ ax.plot(res.time, book.y[0], "--", label="book (6.20), scipy")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("theta (rad)")
 ax.legend()
+plt.show()
 
 # %%
 # The mechanism at the end of the run, and an animation
@@ -46,7 +47,7 @@ ax.legend()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_1_pendulum.png")))
 ax.set_axis_off()
-res.animate("ex6_1_pendulum.html")
+print("animation (open it in a browser):", res.animate("ex6_1_pendulum.html"))
 
 # %%
 # The check

@@ -51,13 +51,14 @@ for ax, name, row in zip(axs, ("x", "theta"), ref.y):
     ax.set_ylabel(f"{name} ({res.units[name]})")
 axs[0].legend()
 axs[1].set_xlabel("t (s)")
+plt.show()
 
 # %%
 # The mechanism at the end of the run (an animation is in ``ex6_2_cart_pendulum.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_2_cart_pendulum.png")))
 ax.set_axis_off()
-res.animate("ex6_2_cart_pendulum.html")
+print("animation (open it in a browser):", res.animate("ex6_2_cart_pendulum.html"))
 
 # %%
 # The check: both coordinates follow the book's equations; no friction, so the energy is kept.

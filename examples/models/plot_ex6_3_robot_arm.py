@@ -46,13 +46,14 @@ ax.plot(res.time, ref.y[1], "--", label="alpha2, (6.53)-(6.54)")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("angle (rad)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The arm at the end of the run (animation: ``ex6_3_robot_arm.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_3_robot_arm.png")))
 ax.set_axis_off()
-res.animate("ex6_3_robot_arm.html")
+print("animation (open it in a browser):", res.animate("ex6_3_robot_arm.html"))
 
 # %%
 # The check: both absolute angles against the book's equations.

@@ -43,13 +43,14 @@ axs[1].plot(res.time, torque, "--", label="2 I Omega sin cos beta'")
 axs[1].set_ylabel("torque (N m)")
 axs[1].set_xlabel("t (s)")
 axs[1].legend(fontsize=8)
+plt.show()
 
 # %%
 # The mechanism at the end of the run (animation: ``ex6_4_spinning_pendulum.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_4_spinning_pendulum.png")))
 ax.set_axis_off()
-res.animate("ex6_4_spinning_pendulum.html")
+print("animation (open it in a browser):", res.animate("ex6_4_spinning_pendulum.html"))
 
 # %%
 # The check: the angle follows (6.63) and the drive torque is the angular momentum's rate.

@@ -32,13 +32,14 @@ ax.plot(res.time, tension, "--", label="(6.79) from the run's theta")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("tension (N)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The pendulum at the end of the run (animation: ``ex6_5_pendulum.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_5_pendulum.png")))
 ax.set_axis_off()
-res.animate("ex6_5_pendulum.html")
+print("animation (open it in a browser):", res.animate("ex6_5_pendulum.html"))
 
 # %%
 # The check: the multiplier is the tension (6.79), and the radial coordinate stays at l.

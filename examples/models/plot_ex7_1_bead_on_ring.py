@@ -39,13 +39,14 @@ ax.axhline(alpha_star, color="gray", lw=0.8, label="steady state alpha*")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("alpha (rad)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The mechanism at the end of the run (animation: ``ex7_1_bead_on_ring.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex7_1_bead_on_ring.png")))
 ax.set_axis_off()
-res.animate("ex7_1_bead_on_ring.html")
+print("animation (open it in a browser):", res.animate("ex7_1_bead_on_ring.html"))
 
 # %%
 # The check: the run follows (7.23), and ``mbcomp.linearize`` at the steady state gives the

@@ -30,13 +30,14 @@ axs[0].legend(fontsize=8)
 axs[1].plot(res.time, np.cos(res["crank_angle"]))
 axs[1].set_ylabel("cos(crank)")
 axs[1].set_xlabel("t (s)")
+plt.show()
 
 # %%
 # The linkage at the end of the run (animation: ``four_bar.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("four_bar.png")))
 ax.set_axis_off()
-res.animate("four_bar.html")
+print("animation (open it in a browser):", res.animate("four_bar.html"))
 
 # %%
 # The check: the rocker where the loop puts it, through the near-flat passages; the energy kept.

@@ -36,13 +36,14 @@ for k in range(0, 3):
 ax.set_xlabel("t (s)")
 ax.set_ylabel("theta (rad)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The chain at the end of the run (animation: ``n_four_bar.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("n_four_bar.png")))
 ax.set_axis_off()
-res.animate("n_four_bar.html")
+print("animation (open it in a browser):", res.animate("n_four_bar.html"))
 
 # %%
 # The check: the crank angle follows the one-degree-of-freedom equation through every flat

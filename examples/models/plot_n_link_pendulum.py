@@ -28,13 +28,14 @@ axs[0].legend(fontsize=7, ncol=5)
 axs[1].plot(res.time, E - E[0])
 axs[1].set_ylabel("E - E(0) (J)")
 axs[1].set_xlabel("t (s)")
+plt.show()
 
 # %%
 # The chain at the end of the run (animation: ``n_link_pendulum.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("n_link_pendulum.png")))
 ax.set_axis_off()
-res.animate("n_link_pendulum.html")
+print("animation (open it in a browser):", res.animate("n_link_pendulum.html"))
 
 # %%
 # The check: the energy is kept to what the tolerances leave open (rtol = 1e-8).

@@ -31,13 +31,14 @@ for joint, q in zip(mod.JOINTS, target):
 ax.set_xlabel("t (s)")
 ax.set_ylabel("joint angle (rad)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The arm at the end of the run (animation: ``robot_arm_pd.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("robot_arm_pd.png")))
 ax.set_axis_off()
-res.animate("robot_arm_pd.html")
+print("animation (open it in a browser):", res.animate("robot_arm_pd.html"))
 
 # %%
 # The check: with gravity compensated, every joint ends at its target (the PD laws' decay

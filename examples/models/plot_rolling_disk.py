@@ -38,13 +38,14 @@ ax.plot(res.time, lean_linear, "--", label="linear theory")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("lean (rad)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The disk at the end of the run (animation: ``rolling_disk.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("rolling_disk.png")))
 ax.set_axis_off()
-res.animate("rolling_disk.html")
+print("animation (open it in a browser):", res.animate("rolling_disk.html"))
 
 # %%
 # The check: ``linearize`` finds the frequency :math:`\\sqrt{K/J}`; the run follows the linear

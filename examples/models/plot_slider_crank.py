@@ -34,13 +34,14 @@ axs[0].legend(fontsize=8)
 axs[1].semilogy(res.time, np.maximum(res["residual.position"], 1e-17))
 axs[1].set_ylabel("loop residual (m)")
 axs[1].set_xlabel("t (s)")
+plt.show()
 
 # %%
 # The mechanism at the end of the run (animation: ``slider_crank.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("slider_crank.png")))
 ax.set_axis_off()
-res.animate("slider_crank.html")
+print("animation (open it in a browser):", res.animate("slider_crank.html"))
 
 # %%
 # The check: the slider where the loop puts it (to the run's tolerances, rtol = 1e-8), and the

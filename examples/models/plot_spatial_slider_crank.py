@@ -31,13 +31,14 @@ ax.plot(res.time, s_closed, "--", label="slider_position(crank angle)")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("slider s (m)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The mechanism at the end of the run (animation: ``spatial_slider_crank.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("spatial_slider_crank.png")))
 ax.set_axis_off()
-res.animate("spatial_slider_crank.html")
+print("animation (open it in a browser):", res.animate("spatial_slider_crank.html"))
 
 # %%
 # The check: the slider where the loop puts it; the energy kept.

@@ -30,13 +30,14 @@ axs[0].legend(fontsize=7, ncol=4)
 axs[1].plot(res.time, E - E[0])
 axs[1].set_ylabel("E - E(0) (J)")
 axs[1].set_xlabel("t (s)")
+plt.show()
 
 # %%
 # The chain at the end of the run (animation: ``spring_chain.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("spring_chain.png")))
 ax.set_axis_off()
-res.animate("spring_chain.html")
+print("animation (open it in a browser):", res.animate("spring_chain.html"))
 
 # %%
 # The check: the dampers never put energy in (to what rtol = 1e-6 leaves open), and they do

@@ -32,6 +32,7 @@ for change in sw.changes:
 ax.set_ylim(-10, 10)
 ax.set_xlabel("v (m/s)")
 ax.set_ylabel("Re(eigenvalue) (1/s)")
+plt.show()
 
 # %%
 # The check: both critical speeds against the paper's Table 2 (the printed weave speed carries

@@ -79,6 +79,7 @@ axs[2].plot(res.time, crank_force, "--", label="|crank pivot force|")
 axs[2].set_ylabel("reaction (N)")
 axs[2].set_xlabel("t (s)")
 axs[2].legend(fontsize=8)
+plt.show()
 
 # %%
 # The check: the rocker turns with the crank, the crank follows the equation, the loop stays

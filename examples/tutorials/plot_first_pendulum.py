@@ -45,6 +45,7 @@ ax.plot(res.time, closed, "--", label="small-angle closed form")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("theta (rad)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The check: the closed form neglects :math:`\\theta^3/6` against :math:`\\theta`, a relative

@@ -45,6 +45,7 @@ ax.plot(res.time, res["load_shaft.w"], label="load shaft, mbcomp")
 ax.set_xlabel("t (s)")
 ax.set_ylabel("rate (rad/s)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The check: the motor's rate follows the closed form; the load turns :math:`n` times slower.

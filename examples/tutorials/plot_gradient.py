@@ -57,6 +57,7 @@ ax.bar(x, fd, 0.25, label="finite differences")
 ax.bar(x + 0.25, closed, 0.25, label="small-angle closed form")
 ax.set_xticks(x, ["d theta(T) / d theta0", "d theta(T) / d r[1]"])
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The check: the adjoint agrees with the differences to their truncation error, and with the

@@ -45,6 +45,7 @@ for e in (0.5, 0.8):
 ax.set_xlabel("t (s)")
 ax.set_ylabel("height (m)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The check: the apex heights (read off outputs 1 ms apart, so to a few 1e-6 m) and the energy

@@ -45,6 +45,7 @@ ax.plot(half * np.arange(1, len(turns) + 1), turns, "o", label="closed-form turn
 ax.set_xlabel("t (s)")
 ax.set_ylabel("x (m)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The check: the block ends where the closed form stops it, at the predicted time.

@@ -39,6 +39,7 @@ ax.axvline(0.0, color="gray", lw=0.8)
 ax.set_xlabel("Re (1/s)")
 ax.set_ylabel("Im (1/s)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The check: both pairs are :math:`\\sqrt{g/l}` in size, on the axis the closed form says.

@@ -44,13 +44,14 @@ ax.plot(res.time, 0.1 * np.cos(omega * res.time), "--", label="0.1 cos(omega t)"
 ax.set_xlabel("t (s)")
 ax.set_ylabel("angle (rad)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The locked arm at the end of the run (animation: ``robot_urdf_lock.html``)
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("robot_urdf_lock.png")))
 ax.set_axis_off()
-res.animate("robot_urdf_lock.html")
+print("animation (open it in a browser):", res.animate("robot_urdf_lock.html"))
 
 # %%
 # The check: one coordinate left; the linearization's frequency is the compound pendulum's.

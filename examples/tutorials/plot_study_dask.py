@@ -65,6 +65,7 @@ ax.plot(amplitudes, closed, "--", label="4 sqrt(l/g) K(sin^2(theta0/2))")
 ax.set_xlabel("amplitude theta0 (rad)")
 ax.set_ylabel("period (s)")
 ax.legend(fontsize=8)
+plt.show()
 
 # %%
 # The check: every period against the elliptic integral (the crossings are located linearly
