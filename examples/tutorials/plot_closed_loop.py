@@ -14,6 +14,11 @@ The loop forces the rocker to turn with the crank and keeps the coupler level; t
 rows' multipliers are the force the cut joint transmits (``lambda.<joint>.x``, ``.y``, N): by
 symmetry crank and rocker carry the same load, so it equals the crank pivot's force
 (``crank_joint.f.*``, a tree joint's reaction output) in size.
+
+At :math:`\\varphi = 0` and :math:`\\pi` the parallelogram lies flat, every link on the ground
+line: the loop's Jacobian loses rank there and a run stops, naming the position (the N-four-bar
+example passes such positions with ``singular="pass"``). Released 0.6 rad from hanging down,
+this one swings below them.
 """
 import matplotlib.pyplot as plt
 import numpy as np
@@ -23,7 +28,7 @@ import mbcomp
 from mbcomp import Guess
 from mbcomp.library import Fixed, FixedTranslation, Revolute, RigidBody, World
 
-L, D, m, mc, g, phi0 = 0.5, 1.0, 1.0, 2.0, 9.81, 1.2
+L, D, m, mc, g, phi0 = 0.5, 1.0, 1.0, 2.0, 9.81, -np.pi / 2 + 0.6   # 0.6 rad from hanging down
 
 
 def rod(mass, length):

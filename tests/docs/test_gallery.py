@@ -3,7 +3,8 @@
 Each sphinx-gallery script ends with ``CHECKS = {label: (error, tolerance)}`` -- its numbers
 against a closed form, a published reference or an independent integration -- which it prints
 and asserts; here each script runs (as sphinx-gallery runs it, in a temporary folder, matplotlib's Agg backend)
-and the test asserts that it ended and that every shown error is within its tolerance. A model
+and the test asserts that it ended, that every run it left in its namespace succeeded, and that
+every shown error is within its tolerance. A model
 file in ``models/`` without its gallery script fails :func:`test_every_model_has_a_gallery_script`.
 """
 import os
@@ -69,6 +70,11 @@ def test_gallery_script(script, tmp_path, monkeypatch):
         ns = _run(EXAMPLES / script)
     finally:
         plt.close("all")
+    from mbcomp.simulation.result import Result
+
+    for name, value in ns.items():  # a run that ended early would leave its checks on a shorter span
+        if isinstance(value, Result):
+            assert value.success, f"{script}: the run {name!r} ended {value.status}: {value.message}"
     checks = ns.get("CHECKS")
     assert checks, f"{script} shows no CHECKS against a closed form or reference"
     for name, (err, tol) in checks.items():
