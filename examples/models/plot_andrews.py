@@ -33,7 +33,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("andrews.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("andrews.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: every published coordinate at t = 0.03 s, relative to its size (the reference is

@@ -56,7 +56,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bicycle.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("bicycle.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the late roll is the two linear modes to 0.1 % of its size (what is left is the

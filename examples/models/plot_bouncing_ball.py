@@ -44,7 +44,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bouncing_ball.png", t=0.3)))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("bouncing_ball.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the impact times; the rest comes after the last impact and no later than the

@@ -38,7 +38,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bowling.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("bowling.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the slide's end and the state at 2 s against the closed form.

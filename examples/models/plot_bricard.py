@@ -37,7 +37,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("bricard.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("bricard.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: it moves (a joint turns by more than 0.5 rad) with its loop closed and its

@@ -34,7 +34,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("chain_3d.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("chain_3d.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: both conserved quantities, to what rtol = 1e-8 leaves open.

@@ -36,7 +36,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("door.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("door.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the impact times and the state at the end against ``reference()``.

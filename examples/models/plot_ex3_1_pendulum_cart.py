@@ -57,7 +57,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_1_pendulum_cart.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex3_1_pendulum_cart.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the angle and the rod tension against the book's formulas.

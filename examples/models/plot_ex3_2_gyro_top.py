@@ -51,7 +51,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_2_gyro_top.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex3_2_gyro_top.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the nutation angle stays at 1 rad and the axis precesses at the slow root.

@@ -44,7 +44,10 @@ print("eigenvalues:", np.round(lin.eigenvalues, 4))
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_2_top_euler.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex3_2_top_euler.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the rates stay constant at their (3.33) values; the linearization is neutrally

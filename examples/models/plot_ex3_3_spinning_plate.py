@@ -44,7 +44,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex3_3_spinning_plate.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex3_3_spinning_plate.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: while the perturbation is small the run follows the linear theory (to

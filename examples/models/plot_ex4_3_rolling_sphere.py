@@ -42,7 +42,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex4_3_rolling_sphere.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex4_3_rolling_sphere.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the centre moves as (5/7) F/m, the contact holds the weight and pulls back with

@@ -37,7 +37,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex4_3_slider_spherical.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex4_3_slider_spherical.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: five speeds; body 1 stays on the slider's axis (x = z = 0 for its origin);

@@ -49,7 +49,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex4_7_two_link_arm.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex4_7_two_link_arm.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the arm's rate and the rod's swing against the corrected equations.

@@ -56,7 +56,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex5_5_slotted_disk.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex5_5_slotted_disk.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: both radii follow the book, and the angular momentum (5.40) is kept.

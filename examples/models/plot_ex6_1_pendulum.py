@@ -42,12 +42,15 @@ plt.show()
 # %%
 # The mechanism at the end of the run, and an animation
 # -----------------------------------------------------
-# ``res.snapshot`` draws one frame with matplotlib; ``res.animate`` writes a self-contained
-# three.js player (open ``ex6_1_pendulum.html`` in a browser).
+# ``res.snapshot`` draws one frame with matplotlib; ``res.animate()`` shows the self-contained
+# three.js player below (with a path it writes the page to a file).
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_1_pendulum.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex6_1_pendulum.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check

@@ -39,7 +39,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex6_5_pendulum.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex6_5_pendulum.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the multiplier is the tension (6.79), and the radial coordinate stays at l.

@@ -46,7 +46,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("ex7_1_bead_on_ring.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("ex7_1_bead_on_ring.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the run follows (7.23), and ``mbcomp.linearize`` at the steady state gives the

@@ -37,7 +37,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("four_bar.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("four_bar.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the rocker where the loop puts it, through the near-flat passages; the energy kept.

@@ -35,7 +35,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("n_link_pendulum.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("n_link_pendulum.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the energy is kept to what the tolerances leave open (rtol = 1e-8).

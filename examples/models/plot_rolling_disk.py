@@ -45,7 +45,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("rolling_disk.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("rolling_disk.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: ``linearize`` finds the frequency :math:`\\sqrt{K/J}`; the run follows the linear

@@ -38,7 +38,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("spatial_slider_crank.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("spatial_slider_crank.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the slider where the loop puts it; the energy kept.

@@ -37,7 +37,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("spring_chain.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("spring_chain.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: the dampers never put energy in (to what rtol = 1e-6 leaves open), and they do

@@ -51,7 +51,10 @@ plt.show()
 fig, ax = plt.subplots(layout="constrained", figsize=(4, 3))
 ax.imshow(plt.imread(res.snapshot("robot_urdf_lock.png")))
 ax.set_axis_off()
-print("animation (open it in a browser):", res.animate("robot_urdf_lock.html"))
+# %%
+# The motion in the HTML player (drag to turn the view, the slider scrubs time; the
+# same page as ``res.animate("motion.html")`` writes):
+res.animate()
 
 # %%
 # The check: one coordinate left; the linearization's frequency is the compound pendulum's.
