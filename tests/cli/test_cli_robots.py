@@ -11,18 +11,11 @@ import pytest
 
 from mbcomp.cli import main
 
-
-def _robots_dir():
-    try:
-        from importlib.metadata import PackageNotFoundError, files
-        found = [f for f in (files("example-robot-data") or []) if str(f).endswith("ur5_robot.urdf")]
-    except PackageNotFoundError:
-        found = []
-    return str(found[0].locate()) if found else None
+import robot_files
 
 
-UR5 = _robots_dir()
-needs_ur5 = pytest.mark.skipif(UR5 is None, reason="example-robot-data is not installed (pip install mbcomp[robots])")
+UR5 = robot_files.UR5
+needs_ur5 = robot_files.needs_robots
 
 
 def _moving_joints(path):

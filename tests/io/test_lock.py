@@ -20,20 +20,7 @@ from mbcomp.io.urdf import load_urdf
 pin = pytest.importorskip("pinocchio", reason="Pinocchio is not installed (the reference engine of these checks)")
 
 
-def _robots_dir():
-    try:
-        from importlib.metadata import PackageNotFoundError, files
-        found = [f for f in (files("example-robot-data") or []) if str(f).endswith("ur5_robot.urdf")]
-    except PackageNotFoundError:
-        found = []
-    if not found:
-        return None
-    return str(found[0].locate()).split("/ur_description/")[0]
-
-
-ROBOTS = _robots_dir()
-needs_robots = pytest.mark.skipif(ROBOTS is None, reason="example-robot-data is not installed "
-                                                         "(pip install mbcomp[robots])")
+from robot_files import ROBOTS, needs_robots  # noqa: E402
 
 TALOS_ARM = [f"arm_left_{k}_joint" for k in range(1, 8)]
 #: (file, floating, what to do: ("lock", joints) or ("keep", joints), coordinates left)

@@ -18,6 +18,7 @@ from mbcomp.io.urdf_visuals import resolve_mesh
 from mbcomp.visual.meshes import read_mesh
 from mbcomp.visual.render import frame_geometry
 from mbcomp.visual.scene import build_scene, mesh_triangles
+from robot_files import ROBOTS
 
 CORNERS = np.array(list(itertools.product((0.0, 1.0), repeat=3)))  # index = 4x + 2y + z
 QUADS = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]  # outward, ccw
@@ -296,16 +297,6 @@ def test_a_collada_mesh_without_its_reader_is_noted_with_the_install(tmp_path, m
     assert model["arm"].look.shape is None
 
 
-def _robots_dir():
-    try:
-        from importlib.metadata import PackageNotFoundError, files
-        found = [f for f in (files("example-robot-data") or []) if str(f).endswith("ur5_robot.urdf")]
-    except PackageNotFoundError:
-        found = []
-    return str(found[0].locate()).split("/ur_description/")[0] if found else None
-
-
-ROBOTS = _robots_dir()
 UR5_LINKS = ["base_link", "shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link",
              "wrist_3_link"]
 

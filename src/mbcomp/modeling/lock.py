@@ -219,25 +219,10 @@ def _pose(path, joint, value):
     return q, R, r, None
 
 
-def _flange_groups(flat):
-    """Union-find roots of the flange ports: ``find(port)`` -> the port standing for its group."""
-    parent = {}
-
-    def find(x):
-        while parent.setdefault(x, x) != x:
-            x = parent[x]
-        return x
-
-    for a, b in flat.connections:
-        if a.kind == "flange" and b.kind == "flange":
-            parent[find(a)] = find(b)
-    return find, parent
-
-
 def _on_flanges(flat, locked):
     """What hangs on the locked joints' flanges: ``(dropped, rotors, problems)``, with
     ``dropped`` ``{path: (why, the locked joints it was on)}``, ``rotors`` ``{path: (inertia, joint path, port)}``."""
-    find, parent = _flange_groups(flat)
+    find, parent = flat.flange_groups()
     path_of = {id(c): p for p, c in flat.components.items()}  # paths in the model being locked (maybe nested)
     owner = {}  # group -> [(joint path, port name)]
     for x in list(parent):

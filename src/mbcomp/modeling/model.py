@@ -338,16 +338,7 @@ def _rotor_carried(flat):
     """Ids of the joints whose ``axis`` flange carries a rotor (a ``FlangeInertia`` connected to
     it, directly or through other flange ports): their frame_b turns the rotor, so it may stay
     open (a shaft without a body, :class:`~mbcomp.library.Inertia`)."""
-    parent = {}
-
-    def find(x):
-        while parent.setdefault(x, x) != x:
-            x = parent[x]
-        return x
-
-    for a, b in flat.connections:
-        if a.kind == "flange" and b.kind == "flange":
-            parent[find(a)] = find(b)
+    find, parent = flat.flange_groups()
     rotors = {find(x) for x in list(parent) if x.component.role == "flange_inertia"}
     return {id(x.component) for x in list(parent)
             if x.component.role == "joint" and x.name == "axis" and find(x) in rotors}
@@ -415,6 +406,22 @@ class FlatModel:
         self.aliases = dict(aliases)
         self.outputs = dict(outputs or {})
         self._structure = None
+
+    def flange_groups(self):
+        """The flange ports joined by connections: ``(find, parent)``, a union-find whose
+        ``find(port)`` is the port standing for its group and whose ``parent`` holds every
+        connected flange port (a port connected to nothing is in no group)."""
+        parent = {}
+
+        def find(x):
+            while parent.setdefault(x, x) != x:
+                x = parent[x]
+            return x
+
+        for a, b in self.connections:
+            if a.kind == "flange" and b.kind == "flange":
+                parent[find(a)] = find(b)
+        return find, parent
 
     def structure(self):
         """``(key, refs)``: the structure of the components, connections and free bodies as a
