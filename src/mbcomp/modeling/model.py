@@ -33,6 +33,22 @@ class Model(Component):
 
     A ``Model`` is a component: add it to another model and reach its inner ports through
     :meth:`expose` (``sub.frame_a``) or directly (``sub["link"].frame_a``).
+
+    Examples
+    --------
+    A pendulum of length 1 m, then the same pendulum as a sub-model of a larger one:
+
+    >>> import mbcomp
+    >>> from mbcomp.library import World, Revolute, FixedTranslation, PointMass
+    >>> m = mbcomp.Model()
+    >>> world = m.add("world", World()); hinge = m.add("hinge", Revolute(n=(0, 0, 1), phi0=0.1))
+    >>> rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0))); bob = m.add("bob", PointMass(m=1.0))
+    >>> m.connect(world.frame_b, hinge.frame_a); m.connect(hinge.frame_b, rod.frame_a)
+    >>> m.connect(rod.frame_b, bob.frame_a)
+    >>> mbcomp.assemble(m).q_names
+    ['hinge.phi']
+    >>> scene = mbcomp.Model(); scene.add("left", m)["bob"].p.m
+    1.0
     """
 
     role = "model"
