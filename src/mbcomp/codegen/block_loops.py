@@ -168,14 +168,20 @@ def find_blocks(prog, nodes, guards, where_out, min_repeats=None, min_cover=None
     if n < min_cover:
         return []
     H = _window_hash(c, WINDOW)
+    Hl = H.tolist()  # the windows' hashes as Python ints: the cheap first test of each candidate
     out, p = [], 0
     while p + min_cover <= n:
         lim = min(n, p + max_period + 1)
         cands = np.flatnonzero(H[p + min_period:lim] == H[p]) + min_period
-        best = []
+        best, h0 = [], Hl[p]
         for L in cands[:MAX_CANDIDATES].tolist():
-            if p + min_repeats * L > n or not np.array_equal(c[p:p + (min_repeats - 1) * L],
-                                                              c[p + L:p + min_repeats * L]):
+            if p + min_repeats * L > n:
+                continue
+            # equal blocks of L >= WINDOW statements start equal windows: where one of the
+            # repeats' first windows differs, the blocks do (no array compared)
+            if L >= WINDOW and any(Hl[p + k * L] != h0 for k in range(2, min_repeats)):
+                continue
+            if not np.array_equal(c[p:p + (min_repeats - 1) * L], c[p + L:p + min_repeats * L]):
                 continue
             R = (_period_run(c, p, L) + L) // L
             if R * L >= min_cover:
