@@ -41,15 +41,16 @@ by joint name (a floating base: Pinocchio's velocities are in base axes, ``u = T
 MuJoCo's free joint has mbcomp's speeds). Pinocchio on an MJCF builds composite joints and its
 own armature model: timed, not compared (``-``).
 
-Measured (2026-11-29, 2-core VM shared with other jobs, pin 4.1.0, MuJoCo 4.0.0; two full runs,
-the ratios within 0.05 of each other but the warm builds): every cross-check within 5e-13 (M
-within 1.1e-15); **forward dynamics** mbcomp / Pinocchio 0.41-0.70 on the URDFs (0.19-0.53 on
-the MJCFs), mbcomp / MuJoCo 0.42-0.77 (0.22-0.56); **M + bias** through ``system.evaluate``
-1.0-3.2 times Pinocchio's ``crba + rnea`` and 1.4-2.7 times MuJoCo's (a floor of ~2.5 us is the
-``Evaluation`` object: the program alone is 1.6-7.2 us, 0.68-1.5 times Pinocchio); **build**:
-``load_urdf + assemble`` 40-75 ms, the whole build to compiled calls 0.3-4.2 s cold and 0.06-0.9 s
-warm, 220-880 times Pinocchio's parse (0.2-2 ms) and 1.5-900 times MuJoCo's (0.3 ms without
-meshes to 0.26 s with the G1's).
+Measured (2026-11-29, 2-core VM shared with other jobs, pin 4.1.0, MuJoCo 4.0.0; mimic joints
+free and no meshes on mbcomp's side, armature on both sides of the MJCFs): every cross-check
+within 4.5e-13 (M within 1.1e-15); **forward dynamics** mbcomp / Pinocchio 0.39-0.63 on the
+URDFs (0.18-0.51 on the MJCFs), mbcomp / MuJoCo 0.42-0.80 (0.21-0.54); **M + bias** through
+``system.evaluate`` 1.0-3.1 times Pinocchio's ``crba + rnea`` and 1.4-2.7 times MuJoCo's (a
+floor of ~2.5 us is the ``Evaluation`` object: the program alone is 1.6-7.0 us, 0.7-1.4 times
+Pinocchio); **build**: ``load_urdf + assemble`` 39-70 ms, the whole build to compiled calls
+0.28-3.5 s cold and 0.056-0.54 s warm (the printing of the C, hashed to find the cached
+library, is most of it), 210-590 times Pinocchio's parse (0.2-2 ms) and 1.4-630 times MuJoCo's
+(0.3 ms without meshes to 0.25 s with the G1's).
 
 Writes bench/robots.csv (one row per robot) and bench/robots.png (per-call ratios); both
 git-ignored like every bench output.
