@@ -20,6 +20,7 @@ from mbcomp.codegen import c_compiler
 from mbcomp.library import FixedTranslation, PointMass, Revolute, World
 
 from conftest import load_model, turntable
+from pendulum_model import pendulum
 
 import fmusim_tool
 
@@ -53,18 +54,6 @@ GetOutputDerivatives DoStep ActivateModelPartition""".split()
 FUNCTIONS = {"2.0": ["fmi2" + f for f in FMI2_FUNCTIONS], "3.0": ["fmi3" + f for f in FMI3_FUNCTIONS]}
 PLATFORM = {"2.0": "linux64", "3.0": "x86_64-linux"}
 VERSIONS = ["3.0", "2.0"]
-
-
-def pendulum():
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j = m.add("j", Revolute(phi0=0.5))
-    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", PointMass(m=2.0))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    return m
 
 
 @pytest.fixture(scope="module")

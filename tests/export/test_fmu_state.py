@@ -19,11 +19,10 @@ import zipfile
 import numpy as np
 import pytest
 
-import mbcomp
 from mbcomp.codegen import c_compiler
-from mbcomp.library import FixedTranslation, PointMass, Revolute, World
 
 from conftest import load_model
+from pendulum_model import pendulum
 
 fmpy = pytest.importorskip("fmpy")
 pytestmark = pytest.mark.skipif(c_compiler() is None, reason="needs a C compiler")
@@ -39,18 +38,6 @@ CHILD = pathlib.Path(__file__).with_name("fmu_state_child.py")
 #: what a Co-Simulation comparison reads: states and an output of the evaluation program
 READ = {"pendulum": ["j.phi", "j.w", "bob.r.x", "energy.total"],
         "slider_crank": ["crank_joint.phi", "slider_joint.s", "crank_joint.w", "rod_joint.f.x", "residual.position"]}
-
-
-def pendulum(r=-1.0):
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j = m.add("j", Revolute(phi0=0.5))
-    rod = m.add("rod", FixedTranslation(r=(0, r, 0)))
-    bob = m.add("bob", PointMass(m=2.0))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    return m
 
 
 MODELS = {"pendulum": pendulum, "pendulum_2m": lambda: pendulum(-2.0),

@@ -15,6 +15,7 @@ import mbcomp
 from mbcomp.codegen import c_compiler
 
 from conftest import stop_pendulum
+from pendulum_model import pendulum
 
 import sanitized
 
@@ -48,19 +49,6 @@ def floor(t, y):
 
 
 floor.terminal, floor.direction = True, -1
-
-
-def pendulum():
-    """A 2 kg bob on a 1 m rod released at 0.5 rad (g = 9.81 along -y)."""
-    m = mbcomp.Model()
-    w = m.add("world", World())
-    j = m.add("j", Revolute(phi0=0.5))
-    rod = m.add("rod", FixedTranslation(r=(0, -1.0, 0)))
-    bob = m.add("bob", PointMass(m=2.0))
-    m.connect(w.frame_b, j.frame_a)
-    m.connect(j.frame_b, rod.frame_a)
-    m.connect(rod.frame_b, bob.frame_a)
-    return m
 
 
 def rising(t, y):  # the swing's speed rising through zero: the left turning points only
