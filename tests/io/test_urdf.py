@@ -290,6 +290,12 @@ def test_bad_files_are_refused_with_the_reason(tmp_path):
     odd_kind = ODD.replace('type="prismatic"', 'type="screw"')
     with pytest.raises(ValueError, match="'slide': type 'screw'"):
         load_urdf(_write(tmp_path, odd_kind, "c.urdf"))
+    bad_mass = PENDULUM.format(m="two", l=0.5, Iyy=0.1)
+    with pytest.raises(ValueError, match=r"link 'arm': <mass value='two'> is not a number -> fix the file"):
+        load_urdf(_write(tmp_path, bad_mass, "m.urdf"))
+    bad_axis = PENDULUM.format(m=2, l=0.5, Iyy=0.1).replace('<axis xyz="0 1 0"/>', '<axis xyz="0 1"/>')
+    with pytest.raises(ValueError, match=r"joint 'hinge': <axis xyz='0 1'> must hold three numbers -> fix the file"):
+        load_urdf(_write(tmp_path, bad_axis, "a.urdf"))
 
 
 def test_top_level_name():

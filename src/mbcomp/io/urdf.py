@@ -103,12 +103,27 @@ def rpy_matrix(rpy):
     return euler_to_matrix("321", (y, p, r))
 
 
+def _num(el, attr, default):
+    """The number ``attr`` of element ``el`` (``default`` where absent); a text that is no
+    number is an error naming the element and the attribute (the caller adds the link or joint)."""
+    text = el.get(attr)
+    if text is None:
+        return float(default)
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f"<{el.tag} {attr}={text!r}> is not a number") from None
+
+
 def _vec(el, attr, default):
     if el is None or el.get(attr) is None:
         return np.array(default, dtype=float)
-    v = np.array([float(x) for x in el.get(attr).split()], dtype=float)
+    try:
+        v = np.array([float(x) for x in el.get(attr).split()], dtype=float)
+    except ValueError:
+        v = np.zeros(0)
     if v.shape != (3,):
-        raise ValueError(f"URDF: {attr}={el.get(attr)!r} must hold three numbers")
+        raise ValueError(f"<{el.tag} {attr}={el.get(attr)!r}> must hold three numbers")
     return v
 
 
@@ -123,10 +138,10 @@ def _inertial(link):
     if inertial is None:
         return None
     mass = inertial.find("mass")
-    m = float(mass.get("value")) if mass is not None else 0.0
+    m = _num(mass, "value", 0.0) if mass is not None else 0.0
     r_cm, R = _origin(inertial)
     i = inertial.find("inertia")
-    get = (lambda k: float(i.get(k, 0.0))) if i is not None else (lambda k: 0.0)
+    get = (lambda k: _num(i, k, 0.0)) if i is not None else (lambda k: 0.0)
     Ii = np.array([[get("ixx"), get("ixy"), get("ixz")],
                    [get("ixy"), get("iyy"), get("iyz")],
                    [get("ixz"), get("iyz"), get("izz")]])
@@ -140,7 +155,7 @@ def _stops(kind, jel, limits):
     lim = jel.find("limit")
     if limits and kind in ("revolute", "prismatic") and lim is not None \
             and lim.get("lower") is not None and lim.get("upper") is not None:
-        lo, hi = float(lim.get("lower")), float(lim.get("upper"))
+        lo, hi = _num(lim, "lower", 0.0), _num(lim, "upper", 0.0)
         if lo < hi:
             return (lo, hi)
     return None
@@ -193,7 +208,7 @@ def _note_dynamics(jel, jname, kind, damping, friction, notes):
     dyn = jel.find("dynamics")
     d = f = 0.0
     if dyn is not None:
-        d, f = float(dyn.get("damping", 0.0)), float(dyn.get("friction", 0.0))
+        d, f = _num(dyn, "damping", 0.0), _num(dyn, "friction", 0.0)
         if f != 0.0 and (not friction or kind not in ("revolute", "continuous", "prismatic") or f < 0.0):
             notes.append(f"joint {jname!r}: <dynamics friction={f:g}> not imported"
                          + ("" if friction else " (friction=False)"))
@@ -370,8 +385,13 @@ def _add_tree(model, lib, bodies, parsed, base, joint_names, link_frame, opts, n
                              "massless): held at 0 as a fixed joint")  # its motion would be undetermined
                 held.add(jel.get("name"))
                 jel = _as_fixed(jel)
-            frame = _add_joint(model, lib, jel, cname, link_frame[parent], names, notes, opts,
-                               opts["starts"].get(jel.get("name")))
+            try:
+                frame = _add_joint(model, lib, jel, cname, link_frame[parent], names, notes, opts,
+                                   opts["starts"].get(jel.get("name")))
+            except ValueError as e:  # a text of the file that is no number (not a component's ModelError)
+                if type(e) is not ValueError or str(e).startswith("URDF joint"):
+                    raise
+                raise ValueError(f"URDF joint {jel.get('name')!r}: {e} -> fix the file") from None
             _add_link(model, bodies, links, child, frame, link_frame, names, notes, opts["looks"])
             stack.append(child)
     return held
@@ -450,7 +470,10 @@ class _Bodies:
     def __init__(self, lib, links, inertia, path, notes):
         self._lib = lib
         for name, el in links.items():
-            mp = _inertial(el)
+            try:
+                mp = _inertial(el)
+            except ValueError as e:
+                raise ValueError(f"{path}: link {name!r}: {e} -> fix the file") from None
             why = None if mp is None else inertia_problem(mp[2])
             if why is None:
                 continue
@@ -474,7 +497,7 @@ def _mimic_of(jel):
     mim = jel.find("mimic")
     if mim is None:
         return None
-    return mim.get("joint"), float(mim.get("multiplier", 1.0)), float(mim.get("offset", 0.0))
+    return mim.get("joint"), _num(mim, "multiplier", 1.0), _num(mim, "offset", 0.0)
 
 
 def _mimic_starts(tree, limits):
@@ -577,7 +600,7 @@ def _note_loop_extras(el, name, kind, limits, notes):
     """Notes of what a loop-closing joint carries beyond its closure (not imported on a cut joint)."""
     dyn = el.find("dynamics")
     for what in ("damping", "friction"):
-        if dyn is not None and float(dyn.get(what, 0.0)) != 0.0:
+        if dyn is not None and _num(dyn, what, 0.0) != 0.0:
             notes.append(f"loop joint {name!r}: <dynamics {what}> not imported (it closes a loop)")
     if el.find("mimic") is not None:
         notes.append(f"loop joint {name!r}: <mimic> not imported (it closes a loop)")
