@@ -290,6 +290,8 @@ def test_bad_files_are_refused_with_the_reason(tmp_path):
     odd_kind = ODD.replace('type="prismatic"', 'type="screw"')
     with pytest.raises(ValueError, match="'slide': type 'screw'"):
         load_urdf(_write(tmp_path, odd_kind, "c.urdf"))
+    with pytest.raises(ValueError, match=r"not XML \(unclosed token: line 1, column 7\) -> is it a URDF file"):
+        load_urdf(_write(tmp_path, "<robot><link", "x.urdf"))
     bad_mass = PENDULUM.format(m="two", l=0.5, Iyy=0.1)
     with pytest.raises(ValueError, match=r"link 'arm': <mass value='two'> is not a number -> fix the file"):
         load_urdf(_write(tmp_path, bad_mass, "m.urdf"))

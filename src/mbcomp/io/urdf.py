@@ -223,7 +223,10 @@ def _note_dynamics(jel, jname, kind, damping, friction, notes):
 def _parse(path):
     """``(robot, links, children, root, loops)``: the tree joints by parent link, the root link
     and the loop-closing elements (the mbcomp convention of the module notes), in file order."""
-    root = ET.parse(str(path)).getroot()
+    try:
+        root = ET.parse(str(path)).getroot()
+    except ET.ParseError as e:
+        raise ValueError(f"{path}: not XML ({e}) -> is it a URDF file?") from None
     if root.tag != "robot":
         raise ValueError(f"{path}: the root element is <{root.tag}>, not <robot> -> is it a URDF file?")
     links = {el.get("name"): el for el in root.findall("link")}
