@@ -27,7 +27,6 @@ Examples
 """
 from __future__ import annotations
 
-import importlib
 from collections import Counter
 import inspect
 import pathlib
@@ -37,6 +36,8 @@ import warnings
 import xml.etree.ElementTree as ET
 
 from ..errors import ModelError, Problem
+from ..io.mjcf import load_mjcf
+from ..io.urdf import load_urdf
 
 __all__ = ["SUFFIXES", "is_robot_file", "robot_module", "portable_build", "import_notes"]
 
@@ -62,27 +63,13 @@ def _root_tag(path):
     raise ModelError([Problem(str(path), "is empty", "give a URDF or MJCF file")], _HEADER)
 
 
-def _mjcf_loader(path):
-    try:
-        mod = importlib.import_module("mbcomp.io.mjcf")
-    except ModuleNotFoundError as exc:
-        if exc.name != "mbcomp.io.mjcf":
-            raise
-        raise ModelError([Problem(str(path), "is an MJCF file, and MJCF import is not available in this mbcomp "
-                                             "(no module mbcomp.io.mjcf)",
-                                  "update mbcomp, or give the robot as a .urdf file")], _HEADER) from None
-    return mod.load_mjcf
-
-
 def _loader(path):
     """``(loader, kind)`` of the robot file: ``load_urdf`` or ``load_mjcf`` by its root element."""
     tag = _root_tag(path)
     if tag == "robot":
-        from ..io.urdf import load_urdf
-
         return load_urdf, "URDF"
     if tag == "mujoco":
-        return _mjcf_loader(path), "MJCF"
+        return load_mjcf, "MJCF"
     raise ModelError([Problem(str(path), f"has the root element <{tag}>: neither a URDF (<robot>) nor an MJCF "
                                          "(<mujoco>) file", "give a URDF or MJCF robot description, or a .py "
                                                             "model file defining build(**params) -> Model")], _HEADER)
@@ -107,8 +94,8 @@ def robot_module(path):
     Raises
     ------
     ModelError
-        The file does not exist, is not well-formed XML, is neither URDF nor MJCF, or is MJCF
-        while this mbcomp has no MJCF import; the problem names the file and the fix.
+        The file does not exist, is not well-formed XML, or is neither URDF nor MJCF; the
+        problem names the file and the fix.
     """
     p = pathlib.Path(path)
     if not p.is_file():
