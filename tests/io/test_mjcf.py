@@ -23,6 +23,7 @@ import pytest
 
 import mbcomp
 from mbcomp.io.mjcf import body_frames, load_mjcf
+from mujoco_matrices import full_mass_matrix
 
 mujoco = pytest.importorskip("mujoco", reason="MuJoCo is not installed (the reference engine of these checks)")
 
@@ -112,16 +113,7 @@ def _mujoco_terms(mj, qpos, qvel):
     d = mujoco.MjData(mj)
     d.qpos[:], d.qvel[:] = qpos, qvel
     mujoco.mj_forward(mj, d)
-    return _full_mass_matrix(mj, d), -d.qfrc_bias + d.qfrc_spring + d.qfrc_damper
-
-
-def _full_mass_matrix(mj, d):
-    M = np.zeros((mj.nv, mj.nv))
-    if hasattr(d, "qM"):  # MuJoCo 3: mj_fullM(m, dst, qM)
-        mujoco.mj_fullM(mj, M, d.qM)
-    else:  # MuJoCo 4: mj_fullM(m, d, dst)
-        mujoco.mj_fullM(mj, d, M)
-    return M
+    return full_mass_matrix(mujoco, mj, d), -d.qfrc_bias + d.qfrc_spring + d.qfrc_damper
 
 
 def _differences(path, n_states=3, armature=True):
@@ -352,7 +344,7 @@ def test_the_compiled_program_carries_the_armature():
     d = mujoco.MjData(mj)
     d.qpos[:], d.qvel[:] = qpos, qvel
     mujoco.mj_forward(mj, d)
-    M = _full_mass_matrix(mj, d)
+    M = full_mass_matrix(mujoco, mj, d)
     assert np.abs(P.T @ fast.evaluate(0.0, q, u).M @ P - M).max() < 1e-12 * np.abs(M).max()
     ud = fast.evaluator.lagrange_fun(0.0, np.concatenate((q, u)), 0.0, 0.0)[len(q):]
     assert np.abs(P.T @ ud - d.qacc).max() < 1e-9 * np.abs(d.qacc).max()

@@ -14,6 +14,7 @@ import pytest
 import mbcomp
 from mbcomp.geometry.kinematics import quat_to_matrix
 from mbcomp.io.mjcf import load_mjcf
+from mujoco_matrices import full_mass_matrix
 
 mujoco = pytest.importorskip("mujoco", reason="MuJoCo is not installed (the reference engine of these checks)")
 
@@ -87,15 +88,6 @@ def _write(tmp_path, text, name="loop.xml"):
     return str(path)
 
 
-def _full_M(mj, d):
-    M = np.zeros((mj.nv, mj.nv))
-    if hasattr(d, "qM"):  # MuJoCo 3: mj_fullM(m, dst, qM)
-        mujoco.mj_fullM(mj, M, d.qM)
-    else:  # MuJoCo 4: mj_fullM(m, d, dst)
-        mujoco.mj_fullM(mj, d, M)
-    return M
-
-
 def _tree_matches_mujoco(path, mj, n_states=5):
     """Largest relative differences of the tree's M and bias forces (the file without its
     ``<equality>``: mbcomp may cut another joint of a loop than MuJoCo's equality) against
@@ -119,7 +111,7 @@ def _tree_matches_mujoco(path, mj, n_states=5):
         q[order], u[order] = d.qpos, d.qvel
         ev = system.evaluate(0.0, q, u)
         M, b = ev.M[np.ix_(order, order)], -ev.f[order]
-        Mj = _full_M(mj, d)
+        Mj = full_mass_matrix(mujoco, mj, d)
         dM = max(dM, np.abs(M - Mj).max() / np.abs(Mj).max())
         db = max(db, np.abs(b - d.qfrc_bias).max() / np.abs(d.qfrc_bias).max())
     return dM, db
