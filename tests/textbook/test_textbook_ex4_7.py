@@ -23,6 +23,9 @@ correct i2 acceleration the book's own elimination (4.11), (4.19) gives the Lagr
 equation. The mass-matrix terms of (4.20), the motor term, and all of (4.21) (= f3 of the
 program) are right. The book's equations violate the power balance; the model satisfies it.
 """
+import functools
+import types
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -36,58 +39,58 @@ P = dict(m=2.0, a=0.1, l=0.5, dM=0.5, M0=1.0, g=9.81)  # the book's program (Fig
 T_END = 10.0
 
 # ---------------------------------------------------------------- independent Lagrange derivation
-t = sp.Symbol("t", real=True)
-m, a, l, g, M0, dM = sp.symbols("m a l g M0 dM", positive=True)
-al, be = sp.Function("alpha")(t), sp.Function("beta")(t)
-ald, bed = al.diff(t), be.diff(t)
-A1, B1, A2, B2 = sp.symbols("alpha_d beta_d alpha_dd beta_dd")  # plain symbols for rates, accelerations
+@functools.cache
+def _derivation():
+    """The symbolic derivation (sympy) as a namespace of its names (``S.EQ``, ...), made once on
+    first use: not at import, which pytest does in every worker while it collects."""
+    t = sp.Symbol("t", real=True)
+    m, a, l, g, M0, dM = sp.symbols("m a l g M0 dM", positive=True)
+    al, be = sp.Function("alpha")(t), sp.Function("beta")(t)
+    ald, bed = al.diff(t), be.diff(t)
+    A1, B1, A2, B2 = sp.symbols("alpha_d beta_d alpha_dd beta_dd")  # plain symbols for rates, accelerations
 
+    def _rz(q):
+        return sp.Matrix([[sp.cos(q), -sp.sin(q), 0], [sp.sin(q), sp.cos(q), 0], [0, 0, 1]])
 
-def _rz(q):
-    return sp.Matrix([[sp.cos(q), -sp.sin(q), 0], [sp.sin(q), sp.cos(q), 0], [0, 0, 1]])
+    def _rx(q):
+        return sp.Matrix([[1, 0, 0], [0, sp.cos(q), -sp.sin(q)], [0, sp.sin(q), sp.cos(q)]])
 
+    R1 = _rz(al)                # link 1 -> world: rotation alpha about the vertical Z
+    R2 = R1 * _rx(be)           # link 2 -> world: then beta about x1 (hinge A)
+    r_A = R1 * sp.Matrix([0, a, 0])
+    r_G = r_A + R2 * sp.Matrix([0, 0, -l / 2])  # rod hangs from A; beta > 0 swings it outwards
+    v_G = r_G.diff(t)
+    W = sp.simplify(R2.T * R2.diff(t))  # skew(omega_2) in link-2 axes
+    w2 = sp.Matrix([W[2, 1], W[0, 2], W[1, 0]])
+    I_G = sp.diag(m * l ** 2 / 12, m * l ** 2 / 12, 0)  # slender rod about its centre, link-2 axes
+    T_kin = sp.simplify((m * v_G.dot(v_G) + (w2.T * I_G * w2)[0]) / 2)
+    V_pot = m * g * r_G[2]
+    Lag = T_kin - V_pot
+    Q = {al: M0 - dM * ald, be: 0}  # motor torque Md does virtual work Md*delta(alpha); hinge A is free
 
-def _rx(q):
-    return sp.Matrix([[1, 0, 0], [0, sp.cos(q), -sp.sin(q)], [0, sp.sin(q), sp.cos(q)]])
+    def _plain(expr):
+        """Replace derivatives by plain symbols (accelerations first)."""
+        return expr.subs({al.diff(t, 2): A2, be.diff(t, 2): B2}).subs({ald: A1, bed: B1})
 
+    EQ = {q: sp.expand(_plain(sp.diff(Lag.diff(q.diff(t)), t) - Lag.diff(q) - Q[q])) for q in (al, be)}
+    EQ_ALPHA, EQ_BETA = EQ[al], EQ[be]
+    _acc = sp.solve([EQ_ALPHA, EQ_BETA], [A2, B2], dict=True)[0]
+    _args = (al, be, A1, B1, m, a, l, g, M0, dM)
+    _f = sp.lambdify(_args, [_plain(_acc[A2]), _plain(_acc[B2])], "numpy")
+    _energy = sp.lambdify(_args, _plain(T_kin + V_pot), "numpy")
+    _denergy = sp.lambdify(_args[:4] + (A2, B2) + _args[4:], _plain((T_kin + V_pot).diff(t)), "numpy")
+    sb, cb = sp.sin(be), sp.cos(be)
 
-R1 = _rz(al)                # link 1 -> world: rotation alpha about the vertical Z
-R2 = R1 * _rx(be)           # link 2 -> world: then beta about x1 (hinge A)
-r_A = R1 * sp.Matrix([0, a, 0])
-r_G = r_A + R2 * sp.Matrix([0, 0, -l / 2])  # rod hangs from A; beta > 0 swings it outwards
-v_G = r_G.diff(t)
-W = sp.simplify(R2.T * R2.diff(t))  # skew(omega_2) in link-2 axes
-w2 = sp.Matrix([W[2, 1], W[0, 2], W[1, 0]])
-I_G = sp.diag(m * l ** 2 / 12, m * l ** 2 / 12, 0)  # slender rod about its centre, link-2 axes
-T_kin = sp.simplify((m * v_G.dot(v_G) + (w2.T * I_G * w2)[0]) / 2)
-V_pot = m * g * r_G[2]
-Lag = T_kin - V_pot
-Q = {al: M0 - dM * ald, be: 0}  # motor torque Md does virtual work Md*delta(alpha); hinge A is free
-
-
-def _plain(expr):
-    """Replace derivatives by plain symbols (accelerations first)."""
-    return expr.subs({al.diff(t, 2): A2, be.diff(t, 2): B2}).subs({ald: A1, bed: B1})
-
-
-EQ = {q: sp.expand(_plain(sp.diff(Lag.diff(q.diff(t)), t) - Lag.diff(q) - Q[q])) for q in (al, be)}
-EQ_ALPHA, EQ_BETA = EQ[al], EQ[be]
-_acc = sp.solve([EQ_ALPHA, EQ_BETA], [A2, B2], dict=True)[0]
-_args = (al, be, A1, B1, m, a, l, g, M0, dM)
-_f = sp.lambdify(_args, [_plain(_acc[A2]), _plain(_acc[B2])], "numpy")
-_energy = sp.lambdify(_args, _plain(T_kin + V_pot), "numpy")
-_denergy = sp.lambdify(_args[:4] + (A2, B2) + _args[4:], _plain((T_kin + V_pot).diff(t)), "numpy")
-sb, cb = sp.sin(be), sp.cos(be)
-
-# ---------------------------------------------------------------- the book, as printed
-BOOK_4_20 = (m * a ** 2 * A2 + m * l ** 2 / 3 * A2 * sb ** 2 + m * a * l * A2 * sb
-             + sp.Rational(5, 12) * m * l ** 2 * A1 * B1 * sb * cb + m * a * l / 2 * A1 * B1 * cb
-             - (M0 - dM * A1))
-BOOK_4_21 = sp.Rational(2, 3) * l * B2 - sp.Rational(2, 3) * l * A1 ** 2 * sb * cb - a * A1 ** 2 * cb + g * sb
-# acceleration of the rod's centre, link-2 components (i2, j2, k2), eq. (4.4)
-BOOK_4_4 = sp.Matrix([-a * A2 - l / 2 * A2 * sb - l / 2 * A1 * B1 * cb,
-                      l / 2 * B2 - a * A1 ** 2 * cb - l / 2 * A1 ** 2 * sb * cb,
-                      l / 2 * B1 ** 2 + a * A1 ** 2 * sb + l / 2 * A1 ** 2 * sb ** 2])
+    # ---------------------------------------------------------------- the book, as printed
+    BOOK_4_20 = (m * a ** 2 * A2 + m * l ** 2 / 3 * A2 * sb ** 2 + m * a * l * A2 * sb
+                 + sp.Rational(5, 12) * m * l ** 2 * A1 * B1 * sb * cb + m * a * l / 2 * A1 * B1 * cb
+                 - (M0 - dM * A1))
+    BOOK_4_21 = sp.Rational(2, 3) * l * B2 - sp.Rational(2, 3) * l * A1 ** 2 * sb * cb - a * A1 ** 2 * cb + g * sb
+    # acceleration of the rod's centre, link-2 components (i2, j2, k2), eq. (4.4)
+    BOOK_4_4 = sp.Matrix([-a * A2 - l / 2 * A2 * sb - l / 2 * A1 * B1 * cb,
+                          l / 2 * B2 - a * A1 ** 2 * cb - l / 2 * A1 ** 2 * sb * cb,
+                          l / 2 * B1 ** 2 + a * A1 ** 2 * sb + l / 2 * A1 ** 2 * sb ** 2])
+    return types.SimpleNamespace(**locals())
 
 
 def book_rhs(_, x, p=P):
@@ -103,8 +106,9 @@ def book_rhs(_, x, p=P):
 
 def lagrange_rhs(_, y, p=P):
     """y = (alpha, beta, alpha', beta') from the sympy Lagrange equations."""
+    S = _derivation()
     aa, bb, ad, bd = y
-    add, bdd = _f(aa, bb, ad, bd, p["m"], p["a"], p["l"], p["g"], p["M0"], p["dM"])
+    add, bdd = S._f(aa, bb, ad, bd, p["m"], p["a"], p["l"], p["g"], p["M0"], p["dM"])
     return [ad, bd, add, bdd]
 
 
@@ -146,12 +150,13 @@ def test_trajectory_matches_independent_lagrange_equations(result, lagrange):
 def test_power_balance_motor_work_equals_energy_change(result):
     """dE/dt = Md omega at every output point (E = T + V from sympy, differentiated along the
     model's own rates and accelerations), and mbcomp's energy equals the sympy T + V."""
+    S = _derivation()
     p = P
     pars = (p["m"], p["a"], p["l"], p["g"], p["M0"], p["dM"])
     state = (result["alpha"], result["beta"], result["omega"], result["beta_dot"])
     E = result["energy.total"]
-    np.testing.assert_allclose(E, _energy(*state, *pars), rtol=0, atol=1e-12)
-    dE = _denergy(*state, result["base.w.der"], result["hinge_A.w.der"], *pars)
+    np.testing.assert_allclose(E, S._energy(*state, *pars), rtol=0, atol=1e-12)
+    dE = S._denergy(*state, result["base.w.der"], result["hinge_A.w.der"], *pars)
     power = _motor_power(result["omega"])
     assert np.abs(power).max() > 0.4 and np.ptp(E) > 0.05  # the motor spins the arm up and lifts the rod
     np.testing.assert_allclose(dE, power, rtol=0, atol=1e-9)
@@ -162,50 +167,55 @@ def test_power_balance_motor_work_equals_energy_change(result):
 
 
 def test_lagrange_mass_matrix_and_beta_equation_agree_with_book():
+    S = _derivation()
     # (4.20): the alpha'' coefficient m (a^2 + l^2/3 sin^2 b + a l sin b) and the motor term are right
-    assert sp.simplify(EQ_ALPHA.coeff(A2) - BOOK_4_20.coeff(A2)) == 0
-    assert sp.simplify(EQ_ALPHA.subs({A1: 0, A2: 0, B1: 0}) - BOOK_4_20.subs({A1: 0, A2: 0, B1: 0})) == 0
-    assert sp.simplify(EQ_ALPHA.coeff(B2)) == 0 and BOOK_4_20.coeff(B2) == 0
+    assert sp.simplify(S.EQ_ALPHA.coeff(S.A2) - S.BOOK_4_20.coeff(S.A2)) == 0
+    rest = {S.A1: 0, S.A2: 0, S.B1: 0}
+    assert sp.simplify(S.EQ_ALPHA.subs(rest) - S.BOOK_4_20.subs(rest)) == 0
+    assert sp.simplify(S.EQ_ALPHA.coeff(S.B2)) == 0 and S.BOOK_4_20.coeff(S.B2) == 0
     # (4.21) = Lagrange beta equation / (m l / 2): beta'', centrifugal and gravity terms all right
-    assert sp.simplify(_plain(EQ_BETA) - m * l / 2 * BOOK_4_21) == 0
+    assert sp.simplify(S._plain(S.EQ_BETA) - S.m * S.l / 2 * S.BOOK_4_21) == 0
 
 
 def test_book_velocity_product_coefficients_in_4_20_are_wrong():
     """The alpha' beta' terms of (4.20) are not d/dt(J) alpha' with J the Z-inertia of the rod."""
-    lag = sp.expand(_plain(EQ_ALPHA)).coeff(A1 * B1)
-    book = sp.expand(BOOK_4_20).coeff(A1 * B1)
-    J = sp.expand(_plain(EQ_ALPHA)).coeff(A2)                  # = m (a^2 + a l sin b + l^2/3 sin^2 b)
-    assert sp.simplify(lag - sp.diff(J, be)) == 0               # Lagrange: d(J alpha')/dt = Md
-    assert sp.simplify(book - sp.diff(J, be)) != 0              # the book's is not
-    lag_a, book_a = sp.Poly(lag, a).all_coeffs(), sp.Poly(book, a).all_coeffs()
+    S = _derivation()
+    lag = sp.expand(S._plain(S.EQ_ALPHA)).coeff(S.A1 * S.B1)
+    book = sp.expand(S.BOOK_4_20).coeff(S.A1 * S.B1)
+    J = sp.expand(S._plain(S.EQ_ALPHA)).coeff(S.A2)                  # = m (a^2 + a l sin b + l^2/3 sin^2 b)
+    assert sp.simplify(lag - sp.diff(J, S.be)) == 0               # Lagrange: d(J alpha')/dt = Md
+    assert sp.simplify(book - sp.diff(J, S.be)) != 0              # the book's is not
+    lag_a, book_a = sp.Poly(lag, S.a).all_coeffs(), sp.Poly(book, S.a).all_coeffs()
     # the a-term: book m a l/2 cos b, correct m a l cos b  (wrong)
-    assert sp.simplify(lag_a[0] - m * l * cb) == 0
-    assert sp.simplify(book_a[0] - m * l / 2 * cb) == 0
+    assert sp.simplify(lag_a[0] - S.m * S.l * S.cb) == 0
+    assert sp.simplify(book_a[0] - S.m * S.l / 2 * S.cb) == 0
     # the a-free term: book 5/12 m l^2 sin b cos b, correct 2/3 m l^2 sin b cos b  (wrong)
-    assert sp.simplify(lag_a[1] - sp.Rational(2, 3) * m * l ** 2 * sb * cb) == 0
-    assert sp.simplify(book_a[1] - sp.Rational(5, 12) * m * l ** 2 * sb * cb) == 0
+    assert sp.simplify(lag_a[1] - sp.Rational(2, 3) * S.m * S.l ** 2 * S.sb * S.cb) == 0
+    assert sp.simplify(book_a[1] - sp.Rational(5, 12) * S.m * S.l ** 2 * S.sb * S.cb) == 0
     # both errors are the same omission: book - correct = -(m l/2) cos b (a + (l/2) sin b)
-    assert sp.simplify(book - lag + m * l / 2 * cb * (a + l / 2 * sb)) == 0
+    assert sp.simplify(book - lag + S.m * S.l / 2 * S.cb * (S.a + S.l / 2 * S.sb)) == 0
 
 
 def test_error_comes_from_the_i2_component_of_acceleration_4_4():
-    acc2 = _plain(R2.T * v_G.diff(t))  # true acceleration of G in link-2 axes
-    diff = (BOOK_4_4 - acc2).applyfunc(sp.simplify)
+    S = _derivation()
+    acc2 = S._plain(S.R2.T * S.v_G.diff(S.t))  # true acceleration of G in link-2 axes
+    diff = (S.BOOK_4_4 - acc2).applyfunc(sp.simplify)
     assert diff[1] == 0 and diff[2] == 0                      # j2, k2 components right
     # i2: the book lacks the Coriolis part (Omega_2 x v_G).i2 = -(l/2) alpha' beta' cos b
-    om2 = _plain(w2)
-    vG2 = _plain(R2.T * v_G)
+    om2 = S._plain(S.w2)
+    vG2 = S._plain(S.R2.T * S.v_G)
     assert sp.simplify(diff[0] - (-om2.cross(vG2)[0])) == 0
-    assert sp.simplify(diff[0] - l / 2 * A1 * B1 * cb) == 0
+    assert sp.simplify(diff[0] - S.l / 2 * S.A1 * S.B1 * S.cb) == 0
     # the book's elimination (4.11), (4.15)-(4.19): Md sin b = (m l^2/12)(alpha'' sin^2 b + 2 alpha' beta' sin b cos b)
     # - R_Ax (a + (l/2) sin b), with R_Ax = m * (i2 acceleration). With the true acceleration it is Lagrange's
     # equation, with the printed (4.4) it is (4.20).
     def eliminated(acc_x):
-        Md = M0 - dM * A1
-        return (m * l ** 2 / 12 * (A2 * sb ** 2 + 2 * A1 * B1 * sb * cb) - m * acc_x * (a + l / 2 * sb)) - Md
+        Md = S.M0 - S.dM * S.A1
+        return (S.m * S.l ** 2 / 12 * (S.A2 * S.sb ** 2 + 2 * S.A1 * S.B1 * S.sb * S.cb)
+                - S.m * acc_x * (S.a + S.l / 2 * S.sb)) - Md
 
-    assert sp.simplify(eliminated(acc2[0]) - _plain(EQ_ALPHA)) == 0
-    assert sp.simplify(eliminated(BOOK_4_4[0]) - BOOK_4_20) == 0
+    assert sp.simplify(eliminated(acc2[0]) - S._plain(S.EQ_ALPHA)) == 0
+    assert sp.simplify(eliminated(S.BOOK_4_4[0]) - S.BOOK_4_20) == 0
 
 
 def test_model_accelerations_satisfy_4_21_and_violate_4_20_by_the_coriolis_error(result):

@@ -12,6 +12,9 @@ Misprint: (6.57) prints ``T = 1/2 I_Z w^2 + 1/2 (beta'^2 + w^2 sin^2 beta)``; th
 lacks the factor ``I`` (the bar's inertia about the hinge), as (6.59)-(6.61) and the matrix
 form (6.56) show. (6.63) itself is right.
 """
+import functools
+import types
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -26,49 +29,48 @@ B0, BD0 = 0.2, 0.0
 T_END = 5.0
 
 # ------------------------------------------------------------- independent Lagrange derivation
-t = sp.Symbol("t", real=True)
-m, l, g, Om, IZ = sp.symbols("m l g Omega I_Z", positive=True)
-be = sp.Function("beta")(t)
-B, BD, BDD = sp.symbols("beta beta_d beta_dd")
+@functools.cache
+def _derivation():
+    """The symbolic derivation (sympy) as a namespace of its names (``S.EQ``, ...), made once on
+    first use: not at import, which pytest does in every worker while it collects."""
+    t = sp.Symbol("t", real=True)
+    m, l, g, Om, IZ = sp.symbols("m l g Omega I_Z", positive=True)
+    be = sp.Function("beta")(t)
+    B, BD, BDD = sp.symbols("beta beta_d beta_dd")
 
+    def _rz(q):
+        return sp.Matrix([[sp.cos(q), -sp.sin(q), 0], [sp.sin(q), sp.cos(q), 0], [0, 0, 1]])
 
-def _rz(q):
-    return sp.Matrix([[sp.cos(q), -sp.sin(q), 0], [sp.sin(q), sp.cos(q), 0], [0, 0, 1]])
+    def _rx(q):
+        return sp.Matrix([[1, 0, 0], [0, sp.cos(q), -sp.sin(q)], [0, sp.sin(q), sp.cos(q)]])
 
+    def _omega(R):
+        W = sp.simplify(R.T * R.diff(t))
+        return sp.Matrix([W[2, 1], W[0, 2], W[1, 0]])  # body components
 
-def _rx(q):
-    return sp.Matrix([[1, 0, 0], [0, sp.cos(q), -sp.sin(q)], [0, sp.sin(q), sp.cos(q)]])
+    R1 = _rz(Om * t)
+    R2 = R1 * _rx(be)
+    r_G = R2 * sp.Matrix([0, 0, -l / 2])
+    v_G = r_G.diff(t)
+    w1, w2 = _omega(R1), _omega(R2)
+    I_G = sp.diag(m * l ** 2 / 12, m * l ** 2 / 12, 0)
+    T_kin = sp.simplify((IZ * w1[2] ** 2 + m * v_G.dot(v_G) + (w2.T * I_G * w2)[0]) / 2)
+    V_pot = m * g * r_G[2]
+    Lag = T_kin - V_pot
 
+    def _plain(expr):
+        return expr.subs({be.diff(t, 2): BDD}).subs({be.diff(t): BD}).subs({be: B})
 
-def _omega(R):
-    W = sp.simplify(R.T * R.diff(t))
-    return sp.Matrix([W[2, 1], W[0, 2], W[1, 0]])  # body components
-
-
-R1 = _rz(Om * t)
-R2 = R1 * _rx(be)
-r_G = R2 * sp.Matrix([0, 0, -l / 2])
-v_G = r_G.diff(t)
-w1, w2 = _omega(R1), _omega(R2)
-I_G = sp.diag(m * l ** 2 / 12, m * l ** 2 / 12, 0)
-T_kin = sp.simplify((IZ * w1[2] ** 2 + m * v_G.dot(v_G) + (w2.T * I_G * w2)[0]) / 2)
-V_pot = m * g * r_G[2]
-Lag = T_kin - V_pot
-
-
-def _plain(expr):
-    return expr.subs({be.diff(t, 2): BDD}).subs({be.diff(t): BD}).subs({be: B})
-
-
-EQ = sp.expand(_plain(sp.diff(Lag.diff(be.diff(t)), t) - Lag.diff(be)))
-I_A = m * l ** 2 / 3  # the book's I: bar about hinge A, transverse axis
-BOOK_6_63 = I_A * BDD - I_A * Om ** 2 * sp.sin(B) * sp.cos(B) + m * g * l / 2 * sp.sin(B)
-# angular momentum about Z (world), all bodies, about the origin (A is on the axis)
-H_world = sp.simplify((m * r_G.cross(v_G) + R2 * I_G * w2)[2] + IZ * w1[2])
-_vals = {m: M, l: L, g: G, Om: OMEGA, IZ: I_Z}
-_H = sp.lambdify((B, BD), _plain(H_world).subs(_vals), "numpy")
-_dH = sp.lambdify((B, BD, BDD), _plain(H_world.diff(t)).subs(_vals), "numpy")
-_E = sp.lambdify((B, BD), _plain(T_kin + V_pot).subs(_vals), "numpy")
+    EQ = sp.expand(_plain(sp.diff(Lag.diff(be.diff(t)), t) - Lag.diff(be)))
+    I_A = m * l ** 2 / 3  # the book's I: bar about hinge A, transverse axis
+    BOOK_6_63 = I_A * BDD - I_A * Om ** 2 * sp.sin(B) * sp.cos(B) + m * g * l / 2 * sp.sin(B)
+    # angular momentum about Z (world), all bodies, about the origin (A is on the axis)
+    H_world = sp.simplify((m * r_G.cross(v_G) + R2 * I_G * w2)[2] + IZ * w1[2])
+    _vals = {m: M, l: L, g: G, Om: OMEGA, IZ: I_Z}
+    _H = sp.lambdify((B, BD), _plain(H_world).subs(_vals), "numpy")
+    _dH = sp.lambdify((B, BD, BDD), _plain(H_world.diff(t)).subs(_vals), "numpy")
+    _E = sp.lambdify((B, BD), _plain(T_kin + V_pot).subs(_vals), "numpy")
+    return types.SimpleNamespace(**locals())
 
 
 def eq_6_63(_, y):
@@ -105,9 +107,11 @@ def result():
 
 
 def test_lagrange_derivation_gives_eq_6_63():
-    assert sp.simplify(EQ - BOOK_6_63) == 0
+    S = _derivation()
+    assert sp.simplify(S.EQ - S.BOOK_6_63) == 0
     # the kinetic energy (6.57) with the factor I restored: T = I_Z W^2/2 + I (beta'^2 + W^2 sin^2 beta)/2
-    assert sp.simplify(_plain(T_kin) - (IZ * Om ** 2 + I_A * (BD ** 2 + Om ** 2 * sp.sin(B) ** 2)) / 2) == 0
+    book_T = (S.IZ * S.Om ** 2 + S.I_A * (S.BD ** 2 + S.Om ** 2 * sp.sin(S.B) ** 2)) / 2
+    assert sp.simplify(S._plain(S.T_kin) - book_T) == 0
 
 
 def test_summary_one_dof_spin_prescribed():
@@ -134,16 +138,18 @@ def test_beta_matches_eq_6_63(result):
 
 
 def test_model_acceleration_satisfies_eq_6_63(result):
-    f = sp.lambdify((B, BD, BDD), BOOK_6_63.subs(_vals), "numpy")
+    S = _derivation()
+    f = sp.lambdify((S.B, S.BD, S.BDD), S.BOOK_6_63.subs(S._vals), "numpy")
     np.testing.assert_allclose(f(result["beta"], result["beta_dot"], result["hinge_A.w.der"]), 0.0, atol=1e-10)
 
 
 def test_jacobi_integral_is_conserved_energy_is_not(result):
+    S = _derivation()
     E = result["energy.total"]
-    np.testing.assert_allclose(E, _E(result["beta"], result["beta_dot"]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(E, S._E(result["beta"], result["beta_dot"]), rtol=0, atol=1e-12)
     Hz = (_body_Hz(result, "bar", M, (0, 0, -L / 2), np.diag([M * L ** 2 / 12] * 2 + [0.0]))
           + _body_Hz(result, "link1", M1, (0, 0, 0), np.diag([I_Z / 2, I_Z / 2, I_Z])))
-    np.testing.assert_allclose(Hz, _H(result["beta"], result["beta_dot"]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(Hz, S._H(result["beta"], result["beta_dot"]), rtol=0, atol=1e-12)
     h = E - OMEGA * Hz
     assert np.ptp(E) > 1.0  # the drive pumps energy in and out
     assert np.abs(h - h[0]).max() < 1e-9 * np.ptp(E)
@@ -155,8 +161,9 @@ def test_jacobi_integral_is_conserved_energy_is_not(result):
 
 
 def test_drive_torque_is_rate_of_angular_momentum_and_its_power_is_dE_dt(result):
+    S = _derivation()
     tau = result["drive_torque"]
-    dH = _dH(result["beta"], result["beta_dot"], result["hinge_A.w.der"])
+    dH = S._dH(result["beta"], result["beta_dot"], result["hinge_A.w.der"])
     b, bd = result["beta"], result["beta_dot"]
     np.testing.assert_allclose(dH, 2 * M * L ** 2 / 3 * OMEGA * np.sin(b) * np.cos(b) * bd, rtol=0, atol=1e-10)
     assert np.abs(tau).max() > 1.0
