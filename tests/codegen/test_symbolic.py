@@ -126,8 +126,9 @@ def test_ex6_4_spinning_pendulum_is_eq_6_63():
 # ------------------------------------------------------------------------------ Example 4.7
 @pytest.fixture(scope="module")
 def ex47():
-    """The independent Lagrange derivation and the book's (4.20), (4.21) of test_textbook_ex4_7."""
-    return load_module("tests/textbook/test_textbook_ex4_7.py")
+    """The independent Lagrange derivation and the book's (4.20), (4.21) of test_textbook_ex4_7
+    (its namespace of symbols and equations)."""
+    return load_module("tests/textbook/test_textbook_ex4_7.py").derivation()
 
 
 def test_ex4_7_equals_lagrange_and_shows_the_book_4_20_error(ex47):

@@ -40,7 +40,7 @@ T_END = 10.0
 
 # ---------------------------------------------------------------- independent Lagrange derivation
 @functools.cache
-def _derivation():
+def derivation():
     """The symbolic derivation (sympy) as a namespace of its names (``S.EQ``, ...), made once on
     first use: not at import, which pytest does in every worker while it collects."""
     t = sp.Symbol("t", real=True)
@@ -106,7 +106,7 @@ def book_rhs(_, x, p=P):
 
 def lagrange_rhs(_, y, p=P):
     """y = (alpha, beta, alpha', beta') from the sympy Lagrange equations."""
-    S = _derivation()
+    S = derivation()
     aa, bb, ad, bd = y
     add, bdd = S._f(aa, bb, ad, bd, p["m"], p["a"], p["l"], p["g"], p["M0"], p["dM"])
     return [ad, bd, add, bdd]
@@ -150,7 +150,7 @@ def test_trajectory_matches_independent_lagrange_equations(result, lagrange):
 def test_power_balance_motor_work_equals_energy_change(result):
     """dE/dt = Md omega at every output point (E = T + V from sympy, differentiated along the
     model's own rates and accelerations), and mbcomp's energy equals the sympy T + V."""
-    S = _derivation()
+    S = derivation()
     p = P
     pars = (p["m"], p["a"], p["l"], p["g"], p["M0"], p["dM"])
     state = (result["alpha"], result["beta"], result["omega"], result["beta_dot"])
@@ -167,7 +167,7 @@ def test_power_balance_motor_work_equals_energy_change(result):
 
 
 def test_lagrange_mass_matrix_and_beta_equation_agree_with_book():
-    S = _derivation()
+    S = derivation()
     # (4.20): the alpha'' coefficient m (a^2 + l^2/3 sin^2 b + a l sin b) and the motor term are right
     assert sp.simplify(S.EQ_ALPHA.coeff(S.A2) - S.BOOK_4_20.coeff(S.A2)) == 0
     rest = {S.A1: 0, S.A2: 0, S.B1: 0}
@@ -179,7 +179,7 @@ def test_lagrange_mass_matrix_and_beta_equation_agree_with_book():
 
 def test_book_velocity_product_coefficients_in_4_20_are_wrong():
     """The alpha' beta' terms of (4.20) are not d/dt(J) alpha' with J the Z-inertia of the rod."""
-    S = _derivation()
+    S = derivation()
     lag = sp.expand(S._plain(S.EQ_ALPHA)).coeff(S.A1 * S.B1)
     book = sp.expand(S.BOOK_4_20).coeff(S.A1 * S.B1)
     J = sp.expand(S._plain(S.EQ_ALPHA)).coeff(S.A2)                  # = m (a^2 + a l sin b + l^2/3 sin^2 b)
@@ -197,7 +197,7 @@ def test_book_velocity_product_coefficients_in_4_20_are_wrong():
 
 
 def test_error_comes_from_the_i2_component_of_acceleration_4_4():
-    S = _derivation()
+    S = derivation()
     acc2 = S._plain(S.R2.T * S.v_G.diff(S.t))  # true acceleration of G in link-2 axes
     diff = (S.BOOK_4_4 - acc2).applyfunc(sp.simplify)
     assert diff[1] == 0 and diff[2] == 0                      # j2, k2 components right

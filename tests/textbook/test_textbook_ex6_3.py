@@ -25,7 +25,7 @@ T_END = 5.0
 
 # ------------------------------------------------------------- independent Lagrange derivation
 @functools.cache
-def _derivation():
+def derivation():
     """The symbolic derivation (sympy) as a namespace of its names (``S.EQ``, ...), made once on
     first use: not at import, which pytest does in every worker while it collects."""
     t = sp.Symbol("t", real=True)
@@ -134,7 +134,7 @@ def case(request):
 
 
 def test_lagrange_derivation_reproduces_eqs_6_53_6_54():
-    S = _derivation()
+    S = derivation()
     assert sp.simplify(S.EQ[0] - S.BOOK_6_53) == 0
     assert sp.simplify(S.EQ[1] - S.BOOK_6_54) == 0
     # generalized forces (6.43)-(6.44)
@@ -158,7 +158,7 @@ def test_trajectory_matches_eqs_6_53_6_54(case):
 
 
 def test_model_accelerations_satisfy_eqs_6_53_6_54(case):
-    S = _derivation()
+    S = derivation()
     res, _, law1, law2 = case
     a1_, a2_, w1_, w2_, d1_, d2_ = _absolute(res)
     T1 = np.array([law1(ti, x, w) for ti, x, w in zip(res.time, a1_, w1_)])
@@ -171,7 +171,7 @@ def test_model_accelerations_satisfy_eqs_6_53_6_54(case):
 
 
 def test_energy_balance_input_power_of_the_torques(case):
-    S = _derivation()
+    S = derivation()
     res, _, law1, law2 = case
     a1_, a2_, w1_, w2_, d1_, d2_ = _absolute(res)
     T1 = np.array([law1(ti, x, w) for ti, x, w in zip(res.time, a1_, w1_)])
@@ -189,7 +189,7 @@ def test_energy_balance_input_power_of_the_torques(case):
 
 
 def test_torque_free_arm_conserves_energy_and_angular_momentum():
-    S = _derivation()
+    S = derivation()
     res = mbcomp.simulate(_build(tau1=0.0, tau2=0.0, alpha1_0=0.3, alpha2_0=1.2, alpha1_dot0=2.0,
                                  alpha2_dot0=-3.0), t_end=T_END, rtol=1e-11, atol=1e-12, n_out=501, method="DOP853")
     assert res.success, res.message

@@ -30,7 +30,7 @@ T_END = 5.0
 
 # ------------------------------------------------------------- independent Lagrange derivation
 @functools.cache
-def _derivation():
+def derivation():
     """The symbolic derivation (sympy) as a namespace of its names (``S.EQ``, ...), made once on
     first use: not at import, which pytest does in every worker while it collects."""
     t = sp.Symbol("t", real=True)
@@ -107,7 +107,7 @@ def result():
 
 
 def test_lagrange_derivation_gives_eq_6_63():
-    S = _derivation()
+    S = derivation()
     assert sp.simplify(S.EQ - S.BOOK_6_63) == 0
     # the kinetic energy (6.57) with the factor I restored: T = I_Z W^2/2 + I (beta'^2 + W^2 sin^2 beta)/2
     book_T = (S.IZ * S.Om ** 2 + S.I_A * (S.BD ** 2 + S.Om ** 2 * sp.sin(S.B) ** 2)) / 2
@@ -138,13 +138,13 @@ def test_beta_matches_eq_6_63(result):
 
 
 def test_model_acceleration_satisfies_eq_6_63(result):
-    S = _derivation()
+    S = derivation()
     f = sp.lambdify((S.B, S.BD, S.BDD), S.BOOK_6_63.subs(S._vals), "numpy")
     np.testing.assert_allclose(f(result["beta"], result["beta_dot"], result["hinge_A.w.der"]), 0.0, atol=1e-10)
 
 
 def test_jacobi_integral_is_conserved_energy_is_not(result):
-    S = _derivation()
+    S = derivation()
     E = result["energy.total"]
     np.testing.assert_allclose(E, S._E(result["beta"], result["beta_dot"]), rtol=0, atol=1e-12)
     Hz = (_body_Hz(result, "bar", M, (0, 0, -L / 2), np.diag([M * L ** 2 / 12] * 2 + [0.0]))
@@ -161,7 +161,7 @@ def test_jacobi_integral_is_conserved_energy_is_not(result):
 
 
 def test_drive_torque_is_rate_of_angular_momentum_and_its_power_is_dE_dt(result):
-    S = _derivation()
+    S = derivation()
     tau = result["drive_torque"]
     dH = S._dH(result["beta"], result["beta_dot"], result["hinge_A.w.der"])
     b, bd = result["beta"], result["beta_dot"]
